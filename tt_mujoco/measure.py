@@ -1,0 +1,149 @@
+"""Measurement layer: MuJoCo's ``qpos``/``qvel`` -> the controller's view of the vehicle.
+
+Pure arithmetic on the two state vectors and the joint addresses in :class:`Layout`. Every
+quantity is computed from ``qpos``/``qvel`` themselves, never from ``xpos``/``xmat``/``cvel``:
+after ``mj_step`` those derived arrays still describe the start of the step while ``qpos``/``qvel``
+are at its end (SPEC Section 5), so mixing them would give readings half a step apart.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+__all__ = ["Layout", "Measurement", "measure"]
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Addresses of the model's joints in ``qpos``/``qvel`` and of its actuators.
+
+    The free joint is at ``qpos[root_q:root_q + 7]`` (position, quaternion w x y z) and
+    ``qvel[root_v:root_v + 6]`` (world linear velocity, body-frame angular velocity).
+    """
+
+    root_q: int
+    root_v: int
+    hitch_q: int
+    hitch_v: int
+    steer_q: int
+    steer_v: int
+    wheel_left_v: int
+    wheel_right_v: int
+    trailer_wheel_left_v: int
+    trailer_wheel_right_v: int
+    wheel_left_q: int
+    wheel_right_q: int
+    act_right: int
+    act_left: int
+    L: float
+    L0: float
+    r: float
+    d: float
+
+
+class Measurement(NamedTuple):
+    """What the controllers and the metrics see (SI units, radians).
+
+    ``slip_lateral`` is the side velocity of P (ideally 0), ``slip_lateral_trailer`` that of P0
+    across its rolling direction alpha; ``slip_left``/``slip_right`` are the tractor wheels' rim
+    speed minus their ground speed along the heading (positive: spinning).
+    """
+
+    x: float
+    y: float
+    theta: float
+    phi: float
+    beta: float
+    v: float
+    omega: float
+    x0: float
+    y0: float
+    theta0: float
+    v0: float
+    theta_l: float
+    theta_r: float
+    theta_l_dot: float
+    theta_r_dot: float
+    slip_lateral: float
+    slip_lateral_trailer: float
+    slip_left: float
+    slip_right: float
+
+
+def yaw_from_quat(w: float, x: float, y: float, z: float) -> float:
+    """Heading (rotation about world z) of a body with unit quaternion (w, x, y, z)."""
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def measure(qpos, qvel, lay: Layout) -> Measurement:
+    """The vehicle's planar state from MuJoCo's generalized coordinates.
+
+    Parameters
+    ----------
+    qpos, qvel : array_like
+        ``MjData.qpos`` and ``MjData.qvel`` (read together, after the same step).
+    lay : Layout
+
+    Returns
+    -------
+    Measurement
+    """
+    i = lay.root_q
+    x, y = float(qpos[i]), float(qpos[i + 1])
+    qw, qx, qy, qz = (float(qpos[i + k]) for k in range(3, 7))
+    theta = yaw_from_quat(qw, qx, qy, qz)
+    phi = -float(qpos[lay.hitch_q])  # hitch axis +z: q_hitch = theta0 - theta
+    beta = float(qpos[lay.steer_q])
+
+    j = lay.root_v
+    vx, vy = float(qvel[j]), float(qvel[j + 1])
+    # World z component of the body-frame angular velocity: third row of R(quat).
+    wx, wy, wz = float(qvel[j + 3]), float(qvel[j + 4]), float(qvel[j + 5])
+    r20 = 2.0 * (qx * qz - qw * qy)
+    r21 = 2.0 * (qy * qz + qw * qx)
+    r22 = 1.0 - 2.0 * (qx * qx + qy * qy)
+    omega = r20 * wx + r21 * wy + r22 * wz
+
+    c, s = math.cos(theta), math.sin(theta)
+    v = vx * c + vy * s
+    slip_lateral = -vx * s + vy * c
+
+    theta0 = theta - phi
+    c0, s0 = math.cos(theta0), math.sin(theta0)
+    # O = P - L e(theta), P0 = O - L0 e(theta0); rigid-body velocities in the plane.
+    ox, oy = x - lay.L * c, y - lay.L * s
+    x0, y0 = ox - lay.L0 * c0, oy - lay.L0 * s0
+    vox, voy = vx + omega * lay.L * s, vy - omega * lay.L * c
+    theta0_dot = omega + float(qvel[lay.hitch_v])  # phi_dot = -q_hitch_dot
+    v0x, v0y = vox + theta0_dot * lay.L0 * s0, voy - theta0_dot * lay.L0 * c0
+    alpha = theta0 + beta
+    ca, sa = math.cos(alpha), math.sin(alpha)
+    v0 = v0x * ca + v0y * sa
+    slip_lateral_trailer = -v0x * sa + v0y * ca
+
+    thl_dot = float(qvel[lay.wheel_left_v])
+    thr_dot = float(qvel[lay.wheel_right_v])
+    half = 0.5 * lay.d * omega
+    return Measurement(
+        x=x,
+        y=y,
+        theta=theta,
+        phi=phi,
+        beta=beta,
+        v=v,
+        omega=omega,
+        x0=x0,
+        y0=y0,
+        theta0=theta0,
+        v0=v0,
+        theta_l=float(qpos[lay.wheel_left_q]),
+        theta_r=float(qpos[lay.wheel_right_q]),
+        theta_l_dot=thl_dot,
+        theta_r_dot=thr_dot,
+        slip_lateral=slip_lateral,
+        slip_lateral_trailer=slip_lateral_trailer,
+        slip_left=lay.r * thl_dot - (v - half),
+        slip_right=lay.r * thr_dot - (v + half),
+    )

@@ -1,0 +1,345 @@
+"""The analytic reduced model: kinematics q_dot = S(q) V and dynamics V_dot = f + g tau.
+
+Conventions are those of ``SPEC.md`` Sections 1-4: ``q = (x, y, theta, phi, theta_l, theta_r)``,
+``V = (v, omega)``, ``tau = (T_r, T_l)``, ``phi = theta - theta0``, ``beta = eta * phi``.
+
+Kinematics follow the paper's eqs. (12), (13) and (16)-(17) with the signs restored. The
+dynamics are derived body by body (Kane's method), *not* from the paper's Appendix A, which is
+wrong in several entries. With every body's velocity written in the tractor frame as
+``A_b(phi) V`` (translation) and ``c_b(phi) . V`` (rotation or wheel spin), the reduced equations
+are
+
+    Mbar(phi) V_dot + Cbar(phi, V) V = B tau,
+    Mbar = sum_b m_b A_b^T A_b + I_b c_b^T c_b,
+    Cbar V = omega * gamma * Omega V + phi_dot * N(phi) V,
+
+where ``Omega = [[0, -1], [1, 0]]`` comes from the rotation of the tractor frame,
+``gamma = sum_b m_b det(A_b) = -(Mc1 + Mc2) L / 2`` (only the two rods have a full-rank A_b) and
+``N = sum_b m_b A_b^T dA_b/dphi + I_b c_b^T dc_b/dphi``, so that ``N + N^T = dMbar/dphi``
+(which makes the model conserve energy). The closed forms of Mbar and N are in
+:func:`_inertia_terms`.
+
+Everything here is plain float arithmetic on scalars, because the controllers call
+:func:`dynamics` at every control step.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from tt_mujoco.params import Params
+
+__all__ = [
+    "ReducedPlant",
+    "SingularityError",
+    "coriolis_force",
+    "dynamics",
+    "input_matrix",
+    "kinematics",
+    "kinetic_energy",
+    "mass_matrix",
+    "phi_rate",
+    "trailer_pose",
+    "trailer_velocity",
+]
+
+#: cos(beta) below this is treated as the singularity |eta phi| = pi/2 (SPEC Section 2).
+COS_BETA_MIN = 1e-3
+
+
+class SingularityError(FloatingPointError):
+    """The articulation reached |eta * phi| = pi/2, where the trailer kinematics are singular."""
+
+    def __init__(self, phi: float, eta: float):
+        self.phi = phi
+        self.eta = eta
+        super().__init__(
+            f"phi={math.degrees(phi):.2f} deg with eta={eta:g} puts beta=eta*phi at "
+            f"{math.degrees(eta * phi):.2f} deg: the trailer kinematics are singular at "
+            "|beta| = 90 deg (jackknife)"
+        )
+
+
+def _cos_beta(phi: float, eta: float) -> float:
+    cb = math.cos(eta * phi)
+    if cb < COS_BETA_MIN:
+        raise SingularityError(phi, eta)
+    return cb
+
+
+def phi_rate(phi: float, p: Params) -> tuple[float, float]:
+    """Row ``s`` of S for the articulation: ``phi_dot = s[0] v + s[1] omega`` (paper eq. 13).
+
+    ``phi_dot = [sin(beta - phi) v + (L0 cos(beta) + L cos(beta - phi)) omega] / (L0 cos(beta))``.
+    """
+    cb = _cos_beta(phi, p.eta)
+    psi = (p.eta - 1.0) * phi  # beta - phi
+    return math.sin(psi) / (p.L0 * cb), 1.0 + p.L * math.cos(psi) / (p.L0 * cb)
+
+
+def kinematics(q, V, p: Params) -> np.ndarray:
+    """``q_dot = S(q) V`` (paper eqs. 16-17 with signs restored, SPEC Section 2).
+
+    Parameters
+    ----------
+    q : array_like, shape (6,)
+        ``(x, y, theta, phi, theta_l, theta_r)``.
+    V : array_like, shape (2,)
+        ``(v, omega)``.
+    p : Params
+
+    Returns
+    -------
+    ndarray, shape (6,)
+    """
+    theta, phi = float(q[2]), float(q[3])
+    v, omega = float(V[0]), float(V[1])
+    s1, s2 = phi_rate(phi, p)
+    spin = p.d * omega / (2.0 * p.r)
+    return np.array(
+        [
+            v * math.cos(theta),
+            v * math.sin(theta),
+            omega,
+            s1 * v + s2 * omega,
+            v / p.r - spin,
+            v / p.r + spin,
+        ]
+    )
+
+
+def selection_matrix(q, p: Params) -> np.ndarray:
+    """S(q), shape (6, 2), so that ``q_dot = S(q) V``."""
+    theta, phi = float(q[2]), float(q[3])
+    s1, s2 = phi_rate(phi, p)
+    return np.array(
+        [
+            [math.cos(theta), 0.0],
+            [math.sin(theta), 0.0],
+            [0.0, 1.0],
+            [s1, s2],
+            [1.0 / p.r, -p.d / (2.0 * p.r)],
+            [1.0 / p.r, p.d / (2.0 * p.r)],
+        ]
+    )
+
+
+def constraint_matrix(q, p: Params) -> np.ndarray:
+    """F(q), shape (4, 6): the rolling constraints ``F(q) q_dot = 0`` (paper eqs. 14-15).
+
+    Rows: no side slip of P; right and left wheel rolling; the articulation (eq. 13) written
+    as a constraint. ``F(q) S(q) = 0`` (paper eq. 18).
+    """
+    theta, phi = float(q[2]), float(q[3])
+    s1, s2 = phi_rate(phi, p)
+    c, s = math.cos(theta), math.sin(theta)
+    half = p.d / 2.0
+    return np.array(
+        [
+            [-s, c, 0.0, 0.0, 0.0, 0.0],
+            [c, s, half, 0.0, 0.0, -p.r],
+            [c, s, -half, 0.0, -p.r, 0.0],
+            [s1 * c, s1 * s, s2, -1.0, 0.0, 0.0],
+        ]
+    )
+
+
+def trailer_velocity(phi: float, V, p: Params) -> tuple[float, float]:
+    """Trailer axle speed ``v0`` and heading rate ``theta0_dot`` (paper eq. 12 and Section 6.1).
+
+    ``v0 = (v cos(phi) + L omega sin(phi)) / cos(beta)``, ``theta0_dot = omega - phi_dot``.
+    """
+    v, omega = float(V[0]), float(V[1])
+    cb = _cos_beta(phi, p.eta)
+    s1, s2 = phi_rate(phi, p)
+    v0 = (v * math.cos(phi) + p.L * omega * math.sin(phi)) / cb
+    return v0, omega - (s1 * v + s2 * omega)
+
+
+def trailer_pose(x: float, y: float, theta: float, phi: float, p: Params):
+    """Hitch O, trailer axle midpoint P0 and trailer heading theta0 (SPEC Section 1).
+
+    Returns
+    -------
+    O : ndarray, shape (2,)
+    P0 : ndarray, shape (2,)
+    theta0 : float
+    """
+    theta0 = theta - phi
+    O = np.array([x - p.L * math.cos(theta), y - p.L * math.sin(theta)])
+    P0 = O - p.L0 * np.array([math.cos(theta0), math.sin(theta0)])
+    return O, P0, theta0
+
+
+def input_matrix(p: Params) -> np.ndarray:
+    """B, mapping ``tau = (T_r, T_l)`` to generalized forces on ``(v, omega)`` (SPEC Section 4)."""
+    k = p.d / (2.0 * p.r)
+    return np.array([[1.0 / p.r, 1.0 / p.r], [k, -k]])
+
+
+def _lumped(p: Params) -> tuple[float, float, float, float, float, float]:
+    """Lumped inertias of SPEC Section 4: m_t, J_t, m_0, J_a, J_0, gamma."""
+    spin = p.Iw / p.r**2
+    m_t = p.Mf + 2 * p.Mw + p.Mc1 + 2 * spin
+    J_t = p.Ifd + 2 * p.Iwd + p.Ic1 + p.Mc1 * p.L**2 / 4 + p.Mw * p.d**2 / 2 + spin * p.d**2 / 2
+    m_0 = p.Mr + 2 * p.Mw + 2 * spin
+    J_a = 2 * p.Iwd + p.Mw * p.d**2 / 2 + spin * p.d**2 / 2
+    J_0 = p.Ird + p.Ic2
+    gamma = -(p.Mc1 + p.Mc2) * p.L / 2
+    return m_t, J_t, m_0, J_a, J_0, gamma
+
+
+def _inertia_terms(phi: float, p: Params):
+    """Mbar(phi) and N(phi) as nested tuples, plus the articulation row s.
+
+    Velocity maps (tractor frame), with psi = beta - phi = (eta - 1) phi:
+    ``v0 = kappa.V``, ``kappa = (cos phi, L sin phi) / cos beta``; ``phi_dot = s.V``;
+    ``theta0_dot = sigma.V``, ``sigma = (0, 1) - s``; ``alpha_dot = a.V``,
+    ``a = (0, 1) + (eta - 1) s``; rod 2's cross term uses ``n = (cos psi, -L sin psi)`` and
+    ``dn/dphi = (eta - 1) m``, ``m = (-sin psi, -L cos psi)``.
+    """
+    eta, L, L0 = p.eta, p.L, p.L0
+    cb = _cos_beta(phi, eta)
+    sb = math.sin(eta * phi)
+    cphi, sphi = math.cos(phi), math.sin(phi)
+    psi = (eta - 1.0) * phi
+    cpsi, spsi = math.cos(psi), math.sin(psi)
+    cb2 = cb * cb
+
+    k1, k2 = cphi / cb, L * sphi / cb
+    dk1 = (-sphi * cb + cphi * eta * sb) / cb2
+    dk2 = L * (cphi * cb + sphi * eta * sb) / cb2
+
+    s1, s2 = spsi / (L0 * cb), 1.0 + L * cpsi / (L0 * cb)
+    ds1 = ((eta - 1.0) * cpsi * cb + spsi * eta * sb) / (L0 * cb2)
+    ds2 = L * (-(eta - 1.0) * spsi * cb + cpsi * eta * sb) / (L0 * cb2)
+
+    g1, g2 = -s1, 1.0 - s2  # sigma
+    dg1, dg2 = -ds1, -ds2
+    a1, a2 = (eta - 1.0) * s1, 1.0 + (eta - 1.0) * s2
+    da1, da2 = (eta - 1.0) * ds1, (eta - 1.0) * ds2
+    n1, n2 = cpsi, -L * spsi
+    m1, m2 = -spsi, -L * cpsi
+
+    m_t, J_t, m_0, J_a, J_0, _ = _lumped(p)
+    q = p.Mc2 / 4.0
+    mk = m_0 + q  # kappa kappa^T collects the trailer's translation and rod 2's
+
+    M11 = m_t + q + mk * k1 * k1 + J_a * a1 * a1 + J_0 * g1 * g1 + 2 * q * n1 * k1
+    M22 = J_t + q * L * L + mk * k2 * k2 + J_a * a2 * a2 + J_0 * g2 * g2 + 2 * q * n2 * k2
+    M12 = mk * k1 * k2 + J_a * a1 * a2 + J_0 * g1 * g2 + q * (n1 * k2 + k1 * n2)
+
+    e1 = eta - 1.0
+    N11 = mk * k1 * dk1 + J_a * a1 * da1 + J_0 * g1 * dg1 + q * (e1 * m1 * k1 + n1 * dk1)
+    N12 = mk * k1 * dk2 + J_a * a1 * da2 + J_0 * g1 * dg2 + q * (e1 * m1 * k2 + n1 * dk2)
+    N21 = mk * k2 * dk1 + J_a * a2 * da1 + J_0 * g2 * dg1 + q * (e1 * m2 * k1 + n2 * dk1)
+    N22 = mk * k2 * dk2 + J_a * a2 * da2 + J_0 * g2 * dg2 + q * (e1 * m2 * k2 + n2 * dk2)
+    return (M11, M12, M22), (N11, N12, N21, N22), (s1, s2)
+
+
+def mass_matrix(phi: float, p: Params) -> np.ndarray:
+    """Reduced mass matrix Mbar(phi), shape (2, 2), symmetric positive definite (SPEC Section 4).
+
+    At the paper's parameters, eta = 3, phi = 0: ``diag(133.0, 12.844)``.
+    """
+    (M11, M12, M22), _, _ = _inertia_terms(phi, p)
+    return np.array([[M11, M12], [M12, M22]])
+
+
+def _coriolis(phi: float, v: float, omega: float, p: Params):
+    (M11, M12, M22), (N11, N12, N21, N22), (s1, s2) = _inertia_terms(phi, p)
+    gamma = _lumped(p)[5]
+    phi_dot = s1 * v + s2 * omega
+    c1 = -gamma * omega * omega + phi_dot * (N11 * v + N12 * omega)
+    c2 = gamma * omega * v + phi_dot * (N21 * v + N22 * omega)
+    return (M11, M12, M22), (c1, c2)
+
+
+def coriolis_force(phi: float, V, p: Params) -> np.ndarray:
+    """``Cbar(phi, V) V``, the velocity-product forces of the reduced model, shape (2,)."""
+    _, c = _coriolis(phi, float(V[0]), float(V[1]), p)
+    return np.array(c)
+
+
+def dynamics(phi: float, V, p: Params) -> tuple[np.ndarray, np.ndarray]:
+    """``V_dot = f + g tau`` (SPEC Section 4; the paper's eqs. 21-22 in exact form).
+
+    Parameters
+    ----------
+    phi : float
+        Articulation angle theta - theta0 (rad).
+    V : array_like, shape (2,)
+        ``(v, omega)``.
+    p : Params
+
+    Returns
+    -------
+    f : ndarray, shape (2,)
+        ``-Mbar^-1 Cbar V``; homogeneous quadratic in V, so ``f(phi, 0) = 0``.
+    g : ndarray, shape (2, 2)
+        ``Mbar^-1 B``, columns for ``(T_r, T_l)``.
+    """
+    (M11, M12, M22), (c1, c2) = _coriolis(phi, float(V[0]), float(V[1]), p)
+    det = M11 * M22 - M12 * M12
+    i11, i12, i22 = M22 / det, -M12 / det, M11 / det
+    b = 1.0 / p.r
+    k = p.d / (2.0 * p.r)
+    f = np.array([-(i11 * c1 + i12 * c2), -(i12 * c1 + i22 * c2)])
+    g = np.array(
+        [
+            [i11 * b + i12 * k, i11 * b - i12 * k],
+            [i12 * b + i22 * k, i12 * b - i22 * k],
+        ]
+    )
+    return f, g
+
+
+def kinetic_energy(phi: float, V, p: Params) -> float:
+    """``0.5 V^T Mbar(phi) V``: the whole vehicle's kinetic energy under rolling."""
+    V = np.asarray(V, dtype=float)
+    return 0.5 * float(V @ mass_matrix(phi, p) @ V)
+
+
+class ReducedPlant:
+    """The reduced model as a plant: state ``(x, y, theta, phi, theta_l, theta_r, v, omega)``.
+
+    Integrated with classical RK4 at a fixed step, holding the torque and the disturbance
+    constant over the step (zero-order hold, as a digital controller applies them).
+
+    Parameters
+    ----------
+    params : Params
+        The plant's (true) parameters; a controller may use different, nominal ones.
+    state : array_like, shape (8,), optional
+        Initial state, zeros by default.
+    """
+
+    STATE_NAMES = ("x", "y", "theta", "phi", "theta_l", "theta_r", "v", "omega")
+
+    def __init__(self, params: Params, state=None):
+        self.params = params
+        self.state = np.zeros(8) if state is None else np.array(state, dtype=float)
+        self.time = 0.0
+
+    def derivative(self, state: np.ndarray, tau, accel_disturbance=(0.0, 0.0)) -> np.ndarray:
+        """Time derivative of the state for wheel torques ``tau`` and an additive
+        disturbance ``accel_disturbance`` in ``(v_dot, omega_dot)`` (SPEC Section 8)."""
+        p = self.params
+        V = state[6:8]
+        q_dot = kinematics(state[:6], V, p)
+        f, g = dynamics(float(state[3]), V, p)
+        V_dot = f + g @ np.asarray(tau, dtype=float) + np.asarray(accel_disturbance, dtype=float)
+        return np.concatenate([q_dot, V_dot])
+
+    def step(self, tau, dt: float, accel_disturbance=(0.0, 0.0)) -> np.ndarray:
+        """Advance by ``dt`` with RK4; raises :class:`SingularityError` at a jackknife."""
+        y = self.state
+        k1 = self.derivative(y, tau, accel_disturbance)
+        k2 = self.derivative(y + 0.5 * dt * k1, tau, accel_disturbance)
+        k3 = self.derivative(y + 0.5 * dt * k2, tau, accel_disturbance)
+        k4 = self.derivative(y + dt * k3, tau, accel_disturbance)
+        self.state = y + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        self.time += dt
+        return self.state
