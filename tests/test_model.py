@@ -1,0 +1,104 @@
+"""The MJCF model: generated files, menagerie-style stepping test, steering sign, parameters."""
+
+import math
+
+import mujoco
+import numpy as np
+import pytest
+
+from tt_mujoco import model, reduced
+from tt_mujoco.params import Params, same_path_eta
+from tt_mujoco.physics import Vehicle
+
+
+def test_checked_in_models_match_generator():
+    # `python -m tt_mujoco.model` regenerates them; a stale file fails here.
+    assert (model.MODELS_DIR / model.VEHICLE_FILE).read_text() == model.vehicle_xml(Params())
+    assert (model.MODELS_DIR / model.SCENE_FILE).read_text() == model.scene_xml()
+
+
+def test_scene_steps_with_random_controls_without_warnings():
+    # mujoco_menagerie's model test: load the scene file, 1 s of random controls in ctrlrange.
+    m = mujoco.MjModel.from_xml_path(str(model.MODELS_DIR / model.SCENE_FILE))
+    d = mujoco.MjData(m)
+    rng = np.random.default_rng(0)
+    lo, hi = m.actuator_ctrlrange[:, 0], m.actuator_ctrlrange[:, 1]
+    for _ in range(int(1.0 / m.opt.timestep)):
+        d.ctrl[:] = rng.uniform(lo, hi)
+        mujoco.mj_step(m, d)
+    assert np.all(d.warning.number == 0), [w.number for w in d.warning]
+    assert np.all(np.isfinite(d.qpos))
+
+
+def test_mass_layout_totals():
+    p = Params()
+    veh = Vehicle(p)
+    assert veh.model.body_subtreemass[veh.model.body("tractor").id] == pytest.approx(33.0)
+    assert p.total_mass == 33.0
+
+
+def test_equality_sign_gives_beta_equal_eta_phi():
+    # Drive a turn: the hitch swings, and MuJoCo's beta must follow +eta*phi, not -eta*phi.
+    p = Params(eta=-3.0)
+    veh = Vehicle(p)
+    veh.set_state(v=0.3)
+    for _ in range(1500):
+        veh.set_torque(0.5, -0.1)
+        mujoco.mj_step(veh.model, veh.data)
+    me = veh.measure()
+    assert abs(me.phi) > math.radians(2)
+    assert me.beta == pytest.approx(p.eta * me.phi, abs=1e-4)
+    # And phi_dot agrees with SPEC's formula in sign and size.
+    phi_dot = -veh.data.qvel[veh.layout.hitch_v]
+    assert phi_dot == pytest.approx(np.dot(reduced.phi_rate(me.phi, p), (me.v, me.omega)), rel=0.02)
+
+
+def test_static_normal_load_per_tractor_wheel():
+    # SPEC Section 5: about 88 N per tractor wheel.
+    veh = Vehicle(Params())
+    veh.set_state()
+    for _ in range(200):
+        mujoco.mj_step(veh.model, veh.data)
+    force = np.zeros(6)
+    loads = {}
+    for i in range(veh.data.ncon):
+        c = veh.data.contact[i]
+        mujoco.mj_contactForce(veh.model, veh.data, i, force)
+        loads[veh.model.geom(c.geom2).name] = force[0]
+    assert loads["tractor_wheel_left"] == pytest.approx(88.6, abs=0.5)
+    assert sum(loads.values()) == pytest.approx(33.0 * 9.81, rel=1e-3)
+
+
+def test_presets():
+    assert Params(eta="paper").eta == 3.0
+    assert Params().eta == pytest.approx(-0.125)
+    assert Params().steering == "same_path"
+    assert Params(eta="1.5").eta == 1.5
+    assert same_path_eta(0.3, 0.4) == pytest.approx(-0.125)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "fragment"),
+    [
+        ({"Mf": 0.0}, "Mf=0.0"),
+        ({"L": -1}, "L=-1"),
+        ({"Iw": float("nan")}, "Iw=nan"),
+        ({"r": 0.15}, "r=0.15"),
+        ({"eta": "banana"}, "eta='banana'"),
+        ({"eta": float("inf")}, "eta=inf"),
+        ({"timestep": 0.5}, "timestep=0.5"),
+        ({"Iw": 0.05}, "Iw=0.05"),
+    ],
+)
+def test_bad_params_name_the_field(kwargs, fragment):
+    with pytest.raises(ValueError, match="not allowed") as err:
+        Params(**kwargs)
+    assert fragment in str(err.value)
+
+
+def test_scaled_params():
+    p = Params().scaled(1.2)
+    assert p.Mf == pytest.approx(10.8)
+    assert p.Iw == pytest.approx(0.012)
+    assert p.L == 0.3
+    assert p.eta == Params().eta

@@ -1,0 +1,316 @@
+"""URDF text for the vehicle (``models/tractor_trailer.urdf``), for ROS and Gazebo users.
+
+It mirrors the MJCF of :mod:`tt_mujoco.model` link for link, built from the same
+:class:`~tt_mujoco.params.Params`, with the mass layout of SPEC Section 4:
+
+- ``tractor`` (root link, frame at P, the tractor's wheel-axle midpoint): Mf, yaw inertia Ifd.
+  The MJCF's free joint ``root`` has no URDF counterpart: the root link simply floats.
+- ``tractor_rod`` (fixed), centred between P and O: Mc1, Ic1.
+- ``tractor_wheel_left/right`` (continuous, axis y) at P +- (d/2) n(theta): Mw, spin Iw,
+  diametral Iwd; effort limit ``torque_limit`` (paper Section 6.2, |T| <= 15 N m).
+- ``trailer`` (frame at the hitch O, ``hitch`` revolute about z, ``q_hitch = -phi``): rod 2,
+  Mc2, Ic2, centred between O and P0.
+- ``trailer_body`` (fixed) at P0: Mr, Ird.
+- ``trailer_axle`` at P0 (``steer`` revolute about z, ``q_steer = beta``) with the trailer
+  wheels (continuous, axis y). As in the MJCF, the axle carries ``AXLE_MASS`` taken from the two
+  trailer wheels, so the mass matrix is identical to the MJCF's.
+
+The passive steering coupling beta = eta * phi (paper eq. 2; ``steer = -eta * hitch``) is a
+closed kinematic constraint that URDF cannot express. The nearest thing, a ``<mimic>`` on
+``steer``, is written; it is kinematic only (ROS tools and yourdfpy compute ``steer`` from
+``hitch``), and simulators enforce it as a constraint only if they choose to (see the comment
+at the top of the generated file).
+
+Joint names: ``hitch`` and ``steer`` as in the MJCF; the wheel joints are ``<wheel link>_joint``
+(the MJCF names them like their bodies) because SDFormat, and so Gazebo, rejects a joint and a
+link with the same name. Nothing here imports MuJoCo.
+"""
+
+from __future__ import annotations
+
+import math
+
+from tt_mujoco import model as mjcf
+from tt_mujoco.params import Params
+
+__all__ = ["URDF_FILE", "VELOCITY_LIMIT", "urdf_xml", "wheel_joint_name"]
+
+URDF_FILE = "tractor_trailer.urdf"
+
+#: Joint speed limit (rad/s) written where URDF requires one. The paper gives none; this is a
+#: placeholder far above any run (the 0.8 m/s cruise is a 40 rad/s wheel rate for r = 0.02 m),
+#: so it never binds.
+VELOCITY_LIMIT = 1000.0
+
+#: |beta| limit of ``steer``: the reduced model is singular at cos(beta) = 0 (SPEC Section 2).
+STEER_LIMIT = math.pi / 2
+
+WHEELS = ("tractor_wheel_left", "tractor_wheel_right", "trailer_wheel_left", "trailer_wheel_right")
+
+# Visual-only sizes, the MJCF's (tt_mujoco.model.vehicle_xml).
+CHASSIS_HALF_HEIGHT = 0.02
+MATERIALS = {
+    "chassis": "0.85 0.45 0.1 1",
+    "trailer": "0.2 0.45 0.8 1",
+    "rod": "0.3 0.3 0.3 1",
+    "tire": "0.1 0.1 0.1 1",
+    "hub": "0.7 0.7 0.7 1",
+}
+
+# Cylinders in URDF lie along their z axis: these turn z onto x and onto y.
+ALONG_X = f"0 {math.pi / 2!r} 0"
+ALONG_Y = f"{math.pi / 2!r} 0 0"
+
+
+def wheel_joint_name(link: str) -> str:
+    """URDF name of a wheel's spin joint (the MJCF calls it like the body, ``link``)."""
+    return f"{link}_joint"
+
+
+def _g(x: float) -> str:
+    """Compact, round-trip exact number formatting (as in the MJCF), without a "-0"."""
+    x = float(x) + 0.0  # -0.0 + 0.0 == +0.0
+    return repr(x).removesuffix(".0") if x.is_integer() else repr(x)
+
+
+def _inertial(mass: float, ixx: float, iyy: float, izz: float, xyz: str = "0 0 0") -> str:
+    return (
+        "  <inertial>\n"
+        f'    <origin xyz="{xyz}" rpy="0 0 0"/>\n'
+        f'    <mass value="{_g(mass)}"/>\n'
+        f'    <inertia ixx="{_g(ixx)}" ixy="0" ixz="0" iyy="{_g(iyy)}" iyz="0" izz="{_g(izz)}"/>\n'
+        "  </inertial>\n"
+    )
+
+
+def _shape(kind: str, geometry: str, xyz: str = "0 0 0", rpy: str = "0 0 0", material=None) -> str:
+    material_tag = f'    <material name="{material}"/>\n' if material else ""
+    return (
+        f"  <{kind}>\n"
+        f'    <origin xyz="{xyz}" rpy="{rpy}"/>\n'
+        f"    <geometry>{geometry}</geometry>\n"
+        f"{material_tag}"
+        f"  </{kind}>\n"
+    )
+
+
+def _link(name: str, body: str) -> str:
+    return f'<link name="{name}">\n{body}</link>\n'
+
+
+def _joint(name: str, kind: str, parent: str, child: str, xyz: str, extra: str = "") -> str:
+    return (
+        f'<joint name="{name}" type="{kind}">\n'
+        f'  <parent link="{parent}"/>\n'
+        f'  <child link="{child}"/>\n'
+        f'  <origin xyz="{xyz}" rpy="0 0 0"/>\n'
+        f"{extra}"
+        "</joint>\n"
+    )
+
+
+def _indent(block: str, n: int) -> str:
+    pad = " " * n
+    return "".join(pad + line + "\n" if line else "\n" for line in block.splitlines())
+
+
+def urdf_xml(p: Params | None = None) -> str:
+    """The vehicle's URDF (``models/tractor_trailer.urdf``) for parameters ``p``.
+
+    Parameters
+    ----------
+    p : Params, optional
+        Vehicle parameters; ``Params()`` (paper Section 6.1 values, same-path steering) if
+        omitted.
+
+    Returns
+    -------
+    str
+        The URDF document. Links, masses, inertias and joint frames equal the MJCF's of
+        :func:`tt_mujoco.model.vehicle_xml` for the same ``p``; the steering coupling is only a
+        kinematic ``<mimic>`` (see the module docstring).
+
+    Raises
+    ------
+    ValueError
+        If ``p`` is neither ``None`` nor a :class:`~tt_mujoco.params.Params`.
+    """
+    if p is None:
+        p = Params()
+    elif not isinstance(p, Params):
+        raise ValueError(f"p={p!r} is not allowed: pass a tt_mujoco.params.Params or None")
+    r, d, L, L0 = p.r, p.d, p.L, p.L0
+    tilt = p.body_tilt_inertia_ratio
+    h = CHASSIS_HALF_HEIGHT
+    rod_radius = 0.15 * r  # the MJCF's capsule radius
+    axle_mass = mjcf.AXLE_MASS
+    axle_yaw = axle_mass * d**2 / 4
+    # Hitch range: up to the singularity |eta phi| = pi/2 (SPEC Section 2), at most a full fold.
+    hitch_limit = min(p.phi_singular, math.pi)
+    passive = '  <dynamics damping="0" friction="0"/>\n'  # as the MJCF: no frictionloss
+
+    def revolute_z(limit: float, effort: float) -> str:
+        return (
+            '  <axis xyz="0 0 1"/>\n'
+            f'  <limit lower="{_g(-limit)}" upper="{_g(limit)}" effort="{_g(effort)}" '
+            f'velocity="{_g(VELOCITY_LIMIT)}"/>\n'
+        )
+
+    def wheel_link(name: str, mass: float) -> str:
+        body = (
+            _inertial(mass, p.Iwd, p.Iw, p.Iwd)
+            + _shape("visual", f'<sphere radius="{_g(r)}"/>', material="tire")
+            + _shape(
+                "visual",
+                f'<cylinder radius="{_g(0.6 * r)}" length="{_g(0.6 * r)}"/>',
+                rpy=ALONG_Y,
+                material="hub",
+            )
+            + _shape("collision", f'<sphere radius="{_g(r)}"/>')
+        )
+        return _link(name, body)
+
+    def wheel_joint(name: str, parent: str, y: float, effort: float | None) -> str:
+        limit = (
+            ""
+            if effort is None
+            else f'  <limit effort="{_g(effort)}" velocity="{_g(VELOCITY_LIMIT)}"/>\n'
+        )
+        extra = '  <axis xyz="0 1 0"/>\n' + limit + passive
+        return _joint(wheel_joint_name(name), "continuous", parent, name, f"0 {_g(y)} 0", extra)
+
+    trailer_wheel_mass = p.Mw - axle_mass / 2
+    parts = [
+        "<!-- Materials of the MJCF. -->\n",
+        *(
+            f'<material name="{name}"><color rgba="{rgba}"/></material>\n'
+            for name, rgba in MATERIALS.items()
+        ),
+        "\n<!-- Tractor: frame at P, x forward, z up; spawn with P at height r. -->\n",
+        _link(
+            "tractor",
+            _inertial(p.Mf, tilt * p.Ifd, tilt * p.Ifd, p.Ifd)
+            + _shape(
+                "visual",
+                f'<box size="{_g(2 * (0.5 * L))} {_g(2 * (0.3 * d))} {_g(2 * h)}"/>',
+                xyz=f"{_g(0.25 * L)} 0 {_g(r + h)}",
+                material="chassis",
+            )
+            + _shape(
+                "visual",
+                f'<cylinder radius="{_g(rod_radius)}" length="{_g(d)}"/>',
+                rpy=ALONG_Y,
+                material="rod",
+            ),
+        ),
+        _link(
+            "tractor_rod",
+            # Slender rod: pitch inertia equal to yaw, roll nearly nothing (as the MJCF).
+            _inertial(p.Mc1, 0.01 * p.Ic1, p.Ic1, p.Ic1)
+            + _shape(
+                "visual",
+                f'<cylinder radius="{_g(rod_radius)}" length="{_g(L)}"/>',
+                rpy=ALONG_X,
+                material="rod",
+            ),
+        ),
+        _joint("tractor_rod_joint", "fixed", "tractor", "tractor_rod", f"{_g(-L / 2)} 0 0"),
+        wheel_link("tractor_wheel_left", p.Mw),
+        wheel_joint("tractor_wheel_left", "tractor", d / 2, p.torque_limit),
+        wheel_link("tractor_wheel_right", p.Mw),
+        wheel_joint("tractor_wheel_right", "tractor", -d / 2, p.torque_limit),
+        "\n<!-- Trailer: frame at the hitch O; hitch angle q_hitch = -phi. -->\n",
+        _link(
+            "trailer",
+            _inertial(p.Mc2, 0.01 * p.Ic2, p.Ic2, p.Ic2, xyz=f"{_g(-L0 / 2)} 0 0")
+            + _shape(
+                "visual",
+                f'<cylinder radius="{_g(rod_radius)}" length="{_g(L0)}"/>',
+                xyz=f"{_g(-L0 / 2)} 0 0",
+                rpy=ALONG_X,
+                material="rod",
+            ),
+        ),
+        _joint(
+            "hitch",
+            "revolute",
+            "tractor",
+            "trailer",
+            f"{_g(-L)} 0 0",
+            revolute_z(hitch_limit, 0.0) + passive,
+        ),
+        _link(
+            "trailer_body",
+            _inertial(p.Mr, tilt * p.Ird, tilt * p.Ird, p.Ird)
+            + _shape(
+                "visual",
+                f'<box size="{_g(2 * (0.35 * L0))} {_g(2 * (0.35 * d))} {_g(2 * h)}"/>',
+                xyz=f"{_g(0.1 * L0)} 0 {_g(r + 3 * h)}",
+                material="trailer",
+            ),
+        ),
+        _joint("trailer_body_joint", "fixed", "trailer", "trailer_body", f"{_g(-L0)} 0 0"),
+        "\n<!-- Steering axle at P0: q_steer = beta. AXLE_MASS is taken from the two trailer\n"
+        "     wheels, with the yaw inertia that mass had at the wheel centres (as the MJCF). -->\n",
+        _link(
+            "trailer_axle",
+            _inertial(axle_mass, axle_yaw, axle_yaw, axle_yaw)
+            + _shape(
+                "visual",
+                f'<cylinder radius="{_g(rod_radius)}" length="{_g(d)}"/>',
+                rpy=ALONG_Y,
+                material="rod",
+            ),
+        ),
+        _joint(
+            "steer",
+            "revolute",
+            "trailer",
+            "trailer_axle",
+            f"{_g(-L0)} 0 0",
+            revolute_z(STEER_LIMIT, 0.0)
+            + passive
+            + "  <!-- Kinematic only: beta = eta * phi, see the top of this file. -->\n"
+            + f'  <mimic joint="hitch" multiplier="{_g(-p.eta)}" offset="0"/>\n',
+        ),
+        wheel_link("trailer_wheel_left", trailer_wheel_mass),
+        wheel_joint("trailer_wheel_left", "trailer_axle", d / 2, None),
+        wheel_link("trailer_wheel_right", trailer_wheel_mass),
+        wheel_joint("trailer_wheel_right", "trailer_axle", -d / 2, None),
+        "\n<!-- Gazebo: wheel-floor friction (Params.friction). -->\n",
+        *(
+            f'<gazebo reference="{name}"><mu1>{_g(p.friction)}</mu1>'
+            f"<mu2>{_g(p.friction)}</mu2></gazebo>\n"
+            for name in WHEELS
+        ),
+    ]
+    body = _indent("".join(parts), 2)
+
+    return f"""<?xml version="1.0"?>
+<!-- Generated by `python -m tt_mujoco.model` from tt_mujoco.params.Params (tt_mujoco.urdf);
+     do not edit. The same Params build models/tractor_trailer.xml (MJCF), which this file
+     mirrors link for link: masses, centres of mass, inertias and joint frames are equal.
+     Off-axle tractor-trailer with a passively steered trailer axle. eta = {p.eta!r}
+     ({p.steering}); L = {_g(L)} m, L0 = {_g(L0)} m, r = {_g(r)} m, d = {_g(d)} m,
+     total mass {_g(p.total_mass)} kg.
+
+     THE PASSIVE STEERING COUPLING CANNOT BE EXPRESSED IN URDF. The trailer axle must obey
+     beta = eta * phi, i.e. steer = -eta * hitch (q_hitch = -phi, q_steer = beta): a closed
+     kinematic constraint. URDF describes trees only. The <mimic> on `steer` is the nearest
+     thing and is KINEMATIC ONLY: robot_state_publisher, MoveIt and yourdfpy compute `steer`
+     from `hitch` with it, but it adds no force. Gazebo Classic ignores it unless a mimic-joint
+     plugin is loaded; newer Gazebo (SDFormat >= 1.11) turns it into a mimic constraint that
+     only some physics engines enforce. Without an enforced constraint `steer` swings freely
+     and the trailer does not steer as modelled. The MuJoCo model (equality constraint
+     `steering`) is the reference.
+
+     Joint limits: `hitch` |phi| <= min(pi / (2 |eta|), pi) (the kinematic singularity, or a
+     full fold), `steer` |beta| <= pi/2 (the singularity). Passive joints have effort 0; the
+     tractor wheel joints have effort = torque_limit = {_g(p.torque_limit)} N m. Velocity limits
+     ({_g(VELOCITY_LIMIT)} rad/s) are placeholders URDF requires; they never bind.
+     Wheel joints are named <wheel link>_joint (the MJCF names them like their bodies).
+     The root link `tractor` floats (the MJCF's free joint); robot_state_publisher (KDL) warns
+     that a root link has an inertia, which does not affect TF. -->
+<robot name="tractor_trailer">
+{body}</robot>
+"""
