@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.optimize import brentq
 
 from tt_mujoco import reduced
 from tt_mujoco.params import Params
@@ -80,10 +81,12 @@ def test_steady_turn_offtracking_matches_spec():
     for eta, mm in expected_mm.items():
         p = Params(eta=eta)
         # Steady state: phi_dot = 0 with omega = v / R.
-        from scipy.optimize import brentq
-
         lim = 0.99 * min(p.phi_singular, 1.2)
-        phi = brentq(lambda ph: np.dot(reduced.phi_rate(ph, p), (1.0, 1.0 / R)), -lim, lim)
+
+        def phi_dot(ph, p=p):
+            return np.dot(reduced.phi_rate(ph, p), (1.0, 1.0 / R))
+
+        phi = brentq(phi_dot, -lim, lim)
         _, P0, _ = reduced.trailer_pose(0.0, -R, 0.0, phi, p)  # circle centred at the origin
         assert (np.hypot(*P0) - R) * 1e3 == pytest.approx(mm, abs=0.6)
 

@@ -271,7 +271,7 @@ def urdf_xml(p: Params | None = None) -> str:
             revolute_z(STEER_LIMIT, 0.0)
             + passive
             + "  <!-- Kinematic only: beta = eta * phi, see the top of this file. -->\n"
-            + f'  <mimic joint="hitch" multiplier="{_g(-p.eta)}" offset="0"/>\n',
+            + f'  <mimic joint="hitch" multiplier="{_g(p.eta)}" offset="0"/>\n',
         ),
         wheel_link("trailer_wheel_left", trailer_wheel_mass),
         wheel_joint("trailer_wheel_left", "trailer_axle", d / 2, None),
