@@ -214,10 +214,13 @@ def scene_xml(vehicle_file: str = VEHICLE_FILE) -> str:
 
 
 def write_models(p: Params | None = None, directory: Path = MODELS_DIR) -> list[Path]:
-    """Write ``tractor_trailer.xml`` and ``scene.xml`` for ``p`` (default parameters)."""
+    """Write ``tractor_trailer.xml``, ``scene.xml`` and ``tractor_trailer.urdf`` for ``p``."""
+    from tt_mujoco.urdf import URDF_FILE, urdf_xml
+
     directory.mkdir(parents=True, exist_ok=True)
     written = []
-    for name, text in ((VEHICLE_FILE, vehicle_xml(p)), (SCENE_FILE, scene_xml())):
+    files = ((VEHICLE_FILE, vehicle_xml(p)), (SCENE_FILE, scene_xml()), (URDF_FILE, urdf_xml(p)))
+    for name, text in files:
         path = directory / name
         path.write_text(text)
         written.append(path)
@@ -227,7 +230,7 @@ def write_models(p: Params | None = None, directory: Path = MODELS_DIR) -> list[
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m tt_mujoco.model",
-        description="Regenerate models/tractor_trailer.xml and models/scene.xml from Params().",
+        description="Regenerate models/ (MJCF, scene and URDF) from Params().",
     )
     parser.parse_args(argv)
     for path in write_models():

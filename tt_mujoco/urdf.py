@@ -30,7 +30,6 @@ from __future__ import annotations
 
 import math
 
-from tt_mujoco import model as mjcf
 from tt_mujoco.params import Params
 
 __all__ = ["URDF_FILE", "VELOCITY_LIMIT", "urdf_xml", "wheel_joint_name"]
@@ -143,7 +142,10 @@ def urdf_xml(p: Params | None = None) -> str:
     tilt = p.body_tilt_inertia_ratio
     h = CHASSIS_HALF_HEIGHT
     rod_radius = 0.15 * r  # the MJCF's capsule radius
-    axle_mass = mjcf.AXLE_MASS
+    # Imported here, not at the top, so that tt_mujoco.model can import this module.
+    from tt_mujoco.model import AXLE_MASS
+
+    axle_mass = AXLE_MASS
     axle_yaw = axle_mass * d**2 / 4
     # Hitch range: up to the singularity |eta phi| = pi/2 (SPEC Section 2), at most a full fold.
     hitch_limit = min(p.phi_singular, math.pi)
@@ -271,7 +273,7 @@ def urdf_xml(p: Params | None = None) -> str:
             revolute_z(STEER_LIMIT, 0.0)
             + passive
             + "  <!-- Kinematic only: beta = eta * phi, see the top of this file. -->\n"
-            + f'  <mimic joint="hitch" multiplier="{_g(p.eta)}" offset="0"/>\n',
+            + f'  <mimic joint="hitch" multiplier="{_g(-p.eta)}" offset="0"/>\n',
         ),
         wheel_link("trailer_wheel_left", trailer_wheel_mass),
         wheel_joint("trailer_wheel_left", "trailer_axle", d / 2, None),
