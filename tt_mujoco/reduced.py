@@ -36,6 +36,7 @@ __all__ = [
     "SingularityError",
     "coriolis_force",
     "dynamics",
+    "dynamics_scalar",
     "input_matrix",
     "kinematics",
     "kinetic_energy",
@@ -263,6 +264,24 @@ def coriolis_force(phi: float, V, p: Params) -> np.ndarray:
     return np.array(c)
 
 
+def dynamics_scalar(phi: float, v: float, omega: float, p: Params):
+    """:func:`dynamics` as six plain floats ``(f1, f2, g11, g12, g21, g22)``: the controllers'
+    per-step call, without array allocation."""
+    (M11, M12, M22), (c1, c2) = _coriolis(phi, v, omega, p)
+    det = M11 * M22 - M12 * M12
+    i11, i12, i22 = M22 / det, -M12 / det, M11 / det
+    b = 1.0 / p.r
+    k = p.d / (2.0 * p.r)
+    return (
+        -(i11 * c1 + i12 * c2),
+        -(i12 * c1 + i22 * c2),
+        i11 * b + i12 * k,
+        i11 * b - i12 * k,
+        i12 * b + i22 * k,
+        i12 * b - i22 * k,
+    )
+
+
 def dynamics(phi: float, V, p: Params) -> tuple[np.ndarray, np.ndarray]:
     """``V_dot = f + g tau`` (SPEC Section 4; the paper's eqs. 21-22 in exact form).
 
@@ -281,19 +300,8 @@ def dynamics(phi: float, V, p: Params) -> tuple[np.ndarray, np.ndarray]:
     g : ndarray, shape (2, 2)
         ``Mbar^-1 B``, columns for ``(T_r, T_l)``.
     """
-    (M11, M12, M22), (c1, c2) = _coriolis(phi, float(V[0]), float(V[1]), p)
-    det = M11 * M22 - M12 * M12
-    i11, i12, i22 = M22 / det, -M12 / det, M11 / det
-    b = 1.0 / p.r
-    k = p.d / (2.0 * p.r)
-    f = np.array([-(i11 * c1 + i12 * c2), -(i12 * c1 + i22 * c2)])
-    g = np.array(
-        [
-            [i11 * b + i12 * k, i11 * b - i12 * k],
-            [i12 * b + i22 * k, i12 * b - i22 * k],
-        ]
-    )
-    return f, g
+    f1, f2, g11, g12, g21, g22 = dynamics_scalar(phi, float(V[0]), float(V[1]), p)
+    return np.array([f1, f2]), np.array([[g11, g12], [g21, g22]])
 
 
 def kinetic_energy(phi: float, V, p: Params) -> float:

@@ -1,0 +1,294 @@
+"""Shared machinery of the velocity controllers: nominal model adapter, gains, g^-1, saturation.
+
+Every controller tracks ``z = (v, omega)`` of the reduced model ``z_dot = f + g tau`` (SPEC
+Section 4; the paper's eq. 22) with ``tau = (T_r, T_l)``, and computes
+
+    tau = sat(g^-1 r),    r = z_d_dot - f - (feedback),
+
+where ``r`` is the closed-loop acceleration the law asks for. The controllers never see MuJoCo:
+they get the *nominal* model as a callable ``model(phi, v, omega) -> (f1, f2, g11, g12, g21, g22)``
+of plain floats (see :func:`reduced_model`), so a plant with other parameters, noise or a
+disturbance is uncertainty the law has to cope with.
+
+Timing convention (shared by all controllers). ``step(dt, ...)`` is called once per control
+period with the measurement at time ``t_k``; ``dt`` is the time elapsed since the previous call
+(the control period). Integrators advance with explicit Euler and a zero-order hold of what
+they integrate: ``I(t_k) = I(t_(k-1)) + dt * x(t_(k-1))``; the torque at ``t_k`` then uses
+``I(t_k)``. On the first call after :meth:`Controller.reset` there is nothing to integrate yet.
+
+Saturation and anti-windup. Each torque is clipped to ``|T_i| <= torque_limit`` (15 N m, paper
+Section 6.2). With ``anti_windup=True`` (the default) the integrators use *conditional
+integration* (clamping): if a torque saturated at ``t_k``, an integrator is frozen over the next
+interval when its increment would push a saturated torque further into saturation. An
+increment ``+dt * x_i`` in channel ``i`` (v or omega) enters ``r_i`` with a negative sign in
+every law here, so it moves torque ``j`` by ``-c * ginv[j][i] * x_i`` (``c > 0``); it is
+frozen when ``s_j * ginv[j][i] * x_i < 0`` for a torque ``j`` saturated with sign ``s_j``.
+Integrators that would *unwind* the saturation keep integrating, so nothing sticks.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from numbers import Real
+from typing import ClassVar
+
+__all__ = [
+    "Controller",
+    "ModelFn",
+    "reduced_model",
+    "resolve_gains",
+]
+
+#: The nominal model as the controllers see it: ``(phi, v, omega) -> (f1, f2, g11, g12, g21, g22)``.
+ModelFn = Callable[[float, float, float], tuple[float, float, float, float, float, float]]
+
+_INF = math.inf
+
+# |det g| below this fraction of |g11 g22| + |g12 g21| is treated as singular: g^-1 would then
+# amplify rounding errors in f and z_d_dot by more than 1e12.
+_SINGULAR_RTOL = 1e-12
+
+
+def reduced_model(params) -> ModelFn:
+    """Wrap :func:`tt_mujoco.reduced.dynamics` into the plain-float callable the controllers use.
+
+    Parameters
+    ----------
+    params : tt_mujoco.params.Params
+        The controller's *nominal* parameters (they may differ from the plant's).
+
+    Returns
+    -------
+    callable
+        ``model(phi, v, omega) -> (f1, f2, g11, g12, g21, g22)`` with ``V_dot = f + g tau`` and
+        ``tau = (T_r, T_l)`` (SPEC Section 4). Raises
+        :class:`tt_mujoco.reduced.SingularityError` at a jackknife, like ``dynamics``.
+    """
+    # Imported here so that importing ``controllers`` stays free of tt_mujoco and numpy.
+    from tt_mujoco.reduced import dynamics_scalar
+
+    def model(phi: float, v: float, omega: float):
+        return dynamics_scalar(phi, v, omega, params)
+
+    return model
+
+
+def _check_positive(key: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, Real):
+        raise ValueError(f"gain {key}={value!r} is not allowed: it must be a finite number > 0")
+    value = float(value)
+    if not (math.isfinite(value) and value > 0.0):
+        raise ValueError(f"gain {key}={value!r} is not allowed: it must be a finite number > 0")
+    return value
+
+
+def resolve_gains(
+    controller: str,
+    presets: Mapping[str, Mapping[str, float]],
+    default_preset: str,
+    gains: str | Mapping | None,
+) -> tuple[dict[str, float], str]:
+    """Turn a ``gains`` argument into a full, validated gain dict.
+
+    Parameters
+    ----------
+    controller : str
+        Controller name, for error messages.
+    presets : mapping
+        Preset name -> complete gain dict.
+    default_preset : str
+        Preset used when ``gains`` is None or a dict without a ``"preset"`` key.
+    gains : str, dict or None
+        A preset name; or a dict overriding individual gains of a preset (the dict may name its
+        base preset under the key ``"preset"``); or None for the default preset.
+
+    Returns
+    -------
+    values : dict
+        Gain name -> float, every key of the preset.
+    preset : str
+        The base preset's name.
+    """
+    allowed_presets = ", ".join(repr(k) for k in presets)
+    overrides: Mapping = {}
+    preset = default_preset
+    if gains is None:
+        pass
+    elif isinstance(gains, str):
+        preset = gains
+    elif isinstance(gains, Mapping):
+        overrides = dict(gains)
+        preset = overrides.pop("preset", default_preset)
+        if not isinstance(preset, str):
+            raise ValueError(
+                f"gains preset={preset!r} for {controller} is not allowed: use one of "
+                f"{allowed_presets}"
+            )
+    else:
+        raise ValueError(
+            f"gains={gains!r} for {controller} is not allowed: use a preset name "
+            f"({allowed_presets}), a dict of gains or None"
+        )
+    if preset not in presets:
+        raise ValueError(
+            f"gains preset={preset!r} for {controller} is not allowed: use one of {allowed_presets}"
+        )
+    values = dict(presets[preset])
+    for key, value in overrides.items():
+        if key not in values:
+            allowed_keys = ", ".join(repr(k) for k in values)
+            raise ValueError(
+                f"gain {key!r} (value {value!r}) is not a gain of {controller}: allowed keys are "
+                f"{allowed_keys} and 'preset'"
+            )
+        values[key] = _check_positive(key, value)
+    return values, preset
+
+
+class Controller:
+    """Base class: validation, the 2x2 solve, saturation and the anti-windup test.
+
+    Subclasses set :attr:`name`, :attr:`PRESETS` and :attr:`DEFAULT_PRESET` and implement
+    :meth:`step`, :meth:`reset` and :meth:`state`.
+
+    Parameters
+    ----------
+    model : callable
+        Nominal model ``(phi, v, omega) -> (f1, f2, g11, g12, g21, g22)``.
+    torque_limit : float
+        Saturation of each wheel torque, N m (paper Section 6.2: 15).
+    gains : str, dict or None
+        Preset name, dict of overrides (see :func:`resolve_gains`) or None.
+    anti_windup : bool
+        Conditional integration under saturation (module docstring). False integrates
+        regardless, for comparison.
+    """
+
+    name = "controller"
+    PRESETS: ClassVar[dict[str, dict[str, float]]] = {}
+    DEFAULT_PRESET: ClassVar[str] = ""
+
+    def __init__(
+        self,
+        model: ModelFn,
+        torque_limit: float = 15.0,
+        gains: str | Mapping | None = None,
+        anti_windup: bool = True,
+    ):
+        if not callable(model):
+            raise ValueError(
+                f"model={model!r} is not allowed: it must be a callable "
+                "(phi, v, omega) -> (f1, f2, g11, g12, g21, g22), e.g. reduced_model(params)"
+            )
+        if (
+            isinstance(torque_limit, bool)
+            or not isinstance(torque_limit, Real)
+            or not (math.isfinite(torque_limit) and torque_limit > 0)
+        ):
+            raise ValueError(
+                f"torque_limit={torque_limit!r} is not allowed: it must be a finite number > 0 "
+                "(N m)"
+            )
+        if not isinstance(anti_windup, bool):
+            raise ValueError(f"anti_windup={anti_windup!r} is not allowed: use True or False")
+        self.model = model
+        self.torque_limit = float(torque_limit)
+        self.anti_windup = anti_windup
+        self._gains, self.preset = resolve_gains(
+            self.name, self.PRESETS, self.DEFAULT_PRESET, gains
+        )
+        self._set_gains(self._gains)
+        self.saturated = False
+        #: The last unsaturated torque request (T_r, T_l), for logging saturation.
+        self.command = (0.0, 0.0)
+        self.reset()
+
+    def _set_gains(self, gains: dict[str, float]) -> None:
+        """Copy the gains into float attributes (attribute reads are cheaper than dict lookups)."""
+        raise NotImplementedError
+
+    @property
+    def gains(self) -> dict:
+        """The gains in use plus the base preset's name, JSON-serialisable; accepted back as
+        ``gains=`` to rebuild the same controller."""
+        return {"preset": self.preset, **self._gains}
+
+    def reset(self) -> None:
+        """Zero every integrator and forget the previous step."""
+        raise NotImplementedError
+
+    def state(self) -> dict[str, float]:
+        """Integrator values (and related internals) for logging."""
+        raise NotImplementedError
+
+    def step(
+        self,
+        dt: float,
+        phi: float,
+        v: float,
+        omega: float,
+        v_d: float,
+        omega_d: float,
+        v_d_dot: float,
+        omega_d_dot: float,
+    ) -> tuple[float, float]:
+        """Saturated wheel torques ``(T_r, T_l)`` for the measurement at this control step.
+
+        Parameters
+        ----------
+        dt : float
+            Time since the previous call, s (> 0).
+        phi : float
+            Measured articulation angle, rad.
+        v, omega : float
+            Measured forward speed (m/s) and yaw rate (rad/s).
+        v_d, omega_d : float
+            Targets.
+        v_d_dot, omega_d_dot : float
+            Target time derivatives (feedforward).
+        """
+        raise NotImplementedError
+
+    def __repr__(self) -> str:
+        return (
+            f"{type(self).__name__}(torque_limit={self.torque_limit!r}, gains={self.gains!r}, "
+            f"anti_windup={self.anti_windup!r})"
+        )
+
+    # --- helpers for subclasses ------------------------------------------------------------
+    @staticmethod
+    def _inverse(g11: float, g12: float, g21: float, g22: float):
+        """``g^-1`` by hand; FloatingPointError if g is singular or not finite."""
+        det = g11 * g22 - g12 * g21
+        if not abs(det) > _SINGULAR_RTOL * (abs(g11 * g22) + abs(g12 * g21)):
+            raise FloatingPointError(
+                f"the nominal input matrix g = [[{g11!r}, {g12!r}], [{g21!r}, {g22!r}]] is "
+                f"singular (det = {det!r}): the torques cannot be computed"
+            )
+        return g22 / det, -g12 / det, -g21 / det, g11 / det
+
+    def _saturate(self, u1: float, u2: float):
+        """Clip ``(u1, u2)``; return the torques and the saturation signs (+1, -1 or 0)."""
+        lim = self.torque_limit
+        if not (-_INF < u1 < _INF and -_INF < u2 < _INF):
+            raise FloatingPointError(
+                f"{self.name}: the unsaturated torques ({u1!r}, {u2!r}) are not finite "
+                "(check the measurement and the target for nan/inf)"
+            )
+        s1 = 1.0 if u1 > lim else (-1.0 if u1 < -lim else 0.0)
+        s2 = 1.0 if u2 > lim else (-1.0 if u2 < -lim else 0.0)
+        self.saturated = s1 != 0.0 or s2 != 0.0
+        self.command = (u1, u2)
+        return (s1 * lim if s1 else u1), (s2 * lim if s2 else u2), s1, s2
+
+    @staticmethod
+    def _deepens(x: float, gi_1: float, gi_2: float, s1: float, s2: float) -> bool:
+        """Whether an integrator increment ``+x`` in a channel with g^-1 column ``(gi_1, gi_2)``
+        would push a saturated torque further out (module docstring)."""
+        return s1 * gi_1 * x < 0.0 or s2 * gi_2 * x < 0.0
+
+    @staticmethod
+    def _check_dt(dt: float) -> None:
+        if not (0.0 < dt < _INF):
+            raise ValueError(f"dt={dt!r} is not allowed: it must be a finite number > 0 (s)")

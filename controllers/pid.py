@@ -1,0 +1,93 @@
+"""PID with nominal-model feedforward, paper Section 6.2.
+
+With ``e = z - z_d``, ``z = (v, omega)`` and the nominal model ``z_dot = f + g tau``:
+
+    u = g^-1 (z_d_dot - f - KP e - KI int(e) - KD e_dot)
+
+(the paper's PID law in Section 6.2, signs restored). Gains (``"paper_6_2"``, the only preset):
+KP = diag(5, 3), KI = diag(2, 1.5), KD = diag(0.1, 0.05).
+
+``e_dot`` is the backward difference ``(e(t_k) - e(t_(k-1))) / dt`` of the measured error, 0 on
+the first call after :meth:`~PidController.reset` (no previous error). On the exact nominal
+model the closed loop per channel is ``(1 + KD) e_dot = -KP e - KI int(e)``: both channels are
+overdamped (poles -0.44 and -4.1 for v, -0.65 and -2.2 for omega with the paper's gains). A
+constant disturbance d leaves no steady error (the integral absorbs it), a time-varying one
+does: PID has no explicit disturbance compensation.
+
+Anti-windup (see :mod:`controllers.base`): ``int(e_i)`` is frozen over an interval when its
+increment would push a saturated torque further out.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import ClassVar
+
+from controllers.base import Controller
+
+__all__ = ["PidController"]
+
+
+class PidController(Controller):
+    """PID velocity controller with feedforward (paper Section 6.2). See the module docstring.
+
+    Gain keys: ``kp_v``, ``kp_omega``, ``ki_v``, ``ki_omega``, ``kd_v``, ``kd_omega``. Other
+    parameters as :class:`controllers.base.Controller`.
+    """
+
+    name = "pid"
+    PRESETS: ClassVar[dict[str, dict[str, float]]] = {
+        "paper_6_2": {
+            "kp_v": 5.0,
+            "kp_omega": 3.0,
+            "ki_v": 2.0,
+            "ki_omega": 1.5,
+            "kd_v": 0.1,
+            "kd_omega": 0.05,
+        },
+    }
+    DEFAULT_PRESET = "paper_6_2"
+
+    def _set_gains(self, gains):
+        self._kp1, self._kp2 = gains["kp_v"], gains["kp_omega"]
+        self._ki1, self._ki2 = gains["ki_v"], gains["ki_omega"]
+        self._kd1, self._kd2 = gains["kd_v"], gains["kd_omega"]
+
+    def reset(self):
+        self.int_e_v = self.int_e_omega = 0.0
+        self._prev_e1 = self._prev_e2 = None  # previous error, for the backward difference
+        self._rate1 = self._rate2 = 0.0  # integrand held over the coming interval
+        self.saturated = False
+
+    def state(self):
+        return {"int_e_v": self.int_e_v, "int_e_omega": self.int_e_omega}
+
+    def step(self, dt, phi, v, omega, v_d, omega_d, v_d_dot, omega_d_dot):
+        if not 0.0 < dt < math.inf:
+            self._check_dt(dt)
+        I1 = self.int_e_v + dt * self._rate1
+        I2 = self.int_e_omega + dt * self._rate2
+        self.int_e_v, self.int_e_omega = I1, I2
+
+        f1, f2, g11, g12, g21, g22 = self.model(phi, v, omega)
+        e1 = v - v_d
+        e2 = omega - omega_d
+        if self._prev_e1 is None:
+            de1 = de2 = 0.0
+        else:
+            de1 = (e1 - self._prev_e1) / dt
+            de2 = (e2 - self._prev_e2) / dt
+        self._prev_e1, self._prev_e2 = e1, e2
+        r1 = v_d_dot - f1 - self._kp1 * e1 - self._ki1 * I1 - self._kd1 * de1
+        r2 = omega_d_dot - f2 - self._kp2 * e2 - self._ki2 * I2 - self._kd2 * de2
+
+        a11, a12, a21, a22 = self._inverse(g11, g12, g21, g22)
+        T_r, T_l, s1, s2 = self._saturate(a11 * r1 + a12 * r2, a21 * r1 + a22 * r2)
+
+        if self.saturated and self.anti_windup:
+            if self._deepens(e1, a11, a21, s1, s2):
+                e1 = 0.0
+            if self._deepens(e2, a12, a22, s1, s2):
+                e2 = 0.0
+        self._rate1, self._rate2 = e1, e2
+        return T_r, T_l
