@@ -41,6 +41,7 @@ __all__ = [
     "kinematics",
     "kinetic_energy",
     "mass_matrix",
+    "matched_torque",
     "phi_rate",
     "trailer_pose",
     "trailer_velocity",
@@ -181,7 +182,11 @@ def input_matrix(p: Params) -> np.ndarray:
 
 
 def _lumped(p: Params) -> tuple[float, float, float, float, float, float]:
-    """Lumped inertias of SPEC Section 4: m_t, J_t, m_0, J_a, J_0, gamma."""
+    """Lumped inertias of SPEC Section 4: m_t, J_t, m_0, J_a, J_0, gamma (cached on ``p``,
+    which is frozen, because the controllers ask for them every step)."""
+    cached = p.__dict__.get("_lumped_cache")
+    if cached is not None:
+        return cached
     spin = p.Iw / p.r**2
     m_t = p.Mf + 2 * p.Mw + p.Mc1 + 2 * spin
     J_t = p.Ifd + 2 * p.Iwd + p.Ic1 + p.Mc1 * p.L**2 / 4 + p.Mw * p.d**2 / 2 + spin * p.d**2 / 2
@@ -189,7 +194,9 @@ def _lumped(p: Params) -> tuple[float, float, float, float, float, float]:
     J_a = 2 * p.Iwd + p.Mw * p.d**2 / 2 + spin * p.d**2 / 2
     J_0 = p.Ird + p.Ic2
     gamma = -(p.Mc1 + p.Mc2) * p.L / 2
-    return m_t, J_t, m_0, J_a, J_0, gamma
+    lumped = (m_t, J_t, m_0, J_a, J_0, gamma)
+    object.__setattr__(p, "_lumped_cache", lumped)
+    return lumped
 
 
 def _inertia_terms(phi: float, p: Params):
@@ -256,6 +263,18 @@ def _coriolis(phi: float, v: float, omega: float, p: Params):
     c1 = -gamma * omega * omega + phi_dot * (N11 * v + N12 * omega)
     c2 = gamma * omega * v + phi_dot * (N21 * v + N22 * omega)
     return (M11, M12, M22), (c1, c2)
+
+
+def matched_torque(phi: float, a_v: float, a_omega: float, p: Params) -> tuple[float, float]:
+    """Wheel torques ``(T_r, T_l) = g(phi)^-1 (a_v, a_omega) = B^-1 Mbar(phi) a``: the matched
+    input that adds the acceleration ``a`` to ``(v_dot, omega_dot)`` (SPEC Section 8)."""
+    (M11, M12, M22), _, _ = _inertia_terms(phi, p)
+    force = M11 * a_v + M12 * a_omega  # generalized force on v
+    moment = M12 * a_v + M22 * a_omega  # ... and on omega
+    # B^-1 with B = [[1/r, 1/r], [d/(2r), -d/(2r)]].
+    common = 0.5 * p.r * force
+    diff = p.r * moment / p.d
+    return common + diff, common - diff
 
 
 def coriolis_force(phi: float, V, p: Params) -> np.ndarray:
@@ -331,23 +350,45 @@ class ReducedPlant:
         self.state = np.zeros(8) if state is None else np.array(state, dtype=float)
         self.time = 0.0
 
-    def derivative(self, state: np.ndarray, tau, accel_disturbance=(0.0, 0.0)) -> np.ndarray:
+    def derivative(self, state, tau, accel_disturbance=(0.0, 0.0)) -> list[float]:
         """Time derivative of the state for wheel torques ``tau`` and an additive
-        disturbance ``accel_disturbance`` in ``(v_dot, omega_dot)`` (SPEC Section 8)."""
+        disturbance ``accel_disturbance`` in ``(v_dot, omega_dot)`` (SPEC Section 8).
+
+        Plain float arithmetic (this is the plant's inner loop): kinematics of eq. 16-17,
+        dynamics ``f + g tau`` of SPEC Section 4.
+        """
         p = self.params
-        V = state[6:8]
-        q_dot = kinematics(state[:6], V, p)
-        f, g = dynamics(float(state[3]), V, p)
-        V_dot = f + g @ np.asarray(tau, dtype=float) + np.asarray(accel_disturbance, dtype=float)
-        return np.concatenate([q_dot, V_dot])
+        theta, phi, v, omega = state[2], state[3], state[6], state[7]
+        f1, f2, g11, g12, g21, g22 = dynamics_scalar(phi, v, omega, p)
+        s1, s2 = phi_rate(phi, p)
+        T_r, T_l = tau
+        spin = p.d * omega / (2.0 * p.r)
+        return [
+            v * math.cos(theta),
+            v * math.sin(theta),
+            omega,
+            s1 * v + s2 * omega,
+            v / p.r - spin,
+            v / p.r + spin,
+            f1 + g11 * T_r + g12 * T_l + accel_disturbance[0],
+            f2 + g21 * T_r + g22 * T_l + accel_disturbance[1],
+        ]
 
     def step(self, tau, dt: float, accel_disturbance=(0.0, 0.0)) -> np.ndarray:
         """Advance by ``dt`` with RK4; raises :class:`SingularityError` at a jackknife."""
-        y = self.state
-        k1 = self.derivative(y, tau, accel_disturbance)
-        k2 = self.derivative(y + 0.5 * dt * k1, tau, accel_disturbance)
-        k3 = self.derivative(y + 0.5 * dt * k2, tau, accel_disturbance)
-        k4 = self.derivative(y + dt * k3, tau, accel_disturbance)
-        self.state = y + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        y = [float(c) for c in self.state]
+        tau = (float(tau[0]), float(tau[1]))
+        acc = (float(accel_disturbance[0]), float(accel_disturbance[1]))
+        k1 = self.derivative(y, tau, acc)
+        k2 = self.derivative([a + 0.5 * dt * b for a, b in zip(y, k1, strict=True)], tau, acc)
+        k3 = self.derivative([a + 0.5 * dt * b for a, b in zip(y, k2, strict=True)], tau, acc)
+        k4 = self.derivative([a + dt * b for a, b in zip(y, k3, strict=True)], tau, acc)
+        h = dt / 6.0
+        self.state = np.array(
+            [
+                a + h * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
+                for a, b1, b2, b3, b4 in zip(y, k1, k2, k3, k4, strict=True)
+            ]
+        )
         self.time += dt
         return self.state
