@@ -47,13 +47,13 @@ SUMMARY_KEYS = (
 )
 
 
-class BadInput(Exception):
+class BadInputError(Exception):
     """A user's mistake: reported as one line, exit code 2."""
 
 
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str):  # argparse's own errors: same exit code, no usage dump
-        raise BadInput(message)
+        raise BadInputError(message)
 
 
 def _snr(text: str) -> float:
@@ -200,7 +200,7 @@ def _scenario(args) -> Scenario:
         try:
             gains = json.loads(gains)
         except json.JSONDecodeError as err:
-            raise BadInput(f"--gains {args.gains!r} is not valid JSON: {err.msg}") from None
+            raise BadInputError(f"--gains {args.gains!r} is not valid JSON: {err.msg}") from None
     traj = args.traj
     if traj.lower().endswith(".csv"):
         traj = str(Path(traj))
@@ -237,7 +237,7 @@ def _output_dir(out: Path | None, scenario: Scenario) -> Path:
             out = base.with_name(f"{base.name}-{i}")
             i += 1
     elif out.exists() and (not out.is_dir() or any(out.iterdir())):
-        raise BadInput(
+        raise BadInputError(
             f"--out {str(out)!r} already exists and is not empty: outputs are never overwritten; "
             "name a new folder"
         )
@@ -247,7 +247,7 @@ def _output_dir(out: Path | None, scenario: Scenario) -> Path:
         probe.write_text("")
         probe.unlink()
     except OSError as err:
-        raise BadInput(f"--out {str(out)!r} cannot be written: {err.strerror}") from None
+        raise BadInputError(f"--out {str(out)!r} cannot be written: {err.strerror}") from None
     return out
 
 
@@ -357,14 +357,14 @@ def main(argv: list[str] | None = None) -> int:
         scenario.validate()
         scenario.nominal_params()  # parameter errors before any folder is made
         out = _output_dir(args.out, scenario)
-    except (BadInput, ValueError) as err:
+    except (BadInputError, ValueError) as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
 
     update, bar = _progress_bar("simulating", args.quiet)
     try:
         result = sim.simulate(scenario, progress=update)
-    except (BadInput, ValueError, reduced.SingularityError) as err:
+    except (BadInputError, ValueError, reduced.SingularityError) as err:
         if bar is not None:
             bar.close()
         _cleanup_empty(out)

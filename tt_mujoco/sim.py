@@ -182,7 +182,7 @@ class Result:
         return self.status == "ok"
 
 
-class _Stop(Exception):
+class _StopRunError(Exception):
     def __init__(self, status: str, message: str):
         super().__init__(message)
         self.status = status
@@ -234,7 +234,7 @@ class _MujocoPlant:
         if numbers.any():
             i = int(np.flatnonzero(numbers)[0])
             name = self._mujoco.mjtWarning(i).name
-            raise _Stop("diverged", f"MuJoCo warning {name} by t={self.data.time:.3f} s")
+            raise _StopRunError("diverged", f"MuJoCo warning {name} by t={self.data.time:.3f} s")
 
 
 class _ReducedPlantAdapter:
@@ -373,9 +373,9 @@ def simulate(scenario: Scenario, progress=None) -> Result:
                 not (math.isfinite(me.x) and math.isfinite(me.v) and math.isfinite(me.omega))
                 or abs(me.v) > MAX_SPEED
             ):
-                raise _Stop("diverged", f"state blew up at t={t:.3f} s: v={me.v!r}")
+                raise _StopRunError("diverged", f"state blew up at t={t:.3f} s: v={me.v!r}")
             if abs(me.phi) >= jk_phi or abs(me.beta) >= jk:
-                raise _Stop(
+                raise _StopRunError(
                     "jackknife",
                     f"jackknife at t={t:.3f} s: phi={math.degrees(me.phi):.1f} deg, "
                     f"beta={math.degrees(me.beta):.1f} deg (eta={eta:g}; singular at "
@@ -387,7 +387,8 @@ def simulate(scenario: Scenario, progress=None) -> Result:
             try:
                 T_r, T_l = ctrl.step(dt, me.phi, v_m, w_m, v_d, w_d, v_d_dot, w_d_dot)
             except FloatingPointError as err:
-                raise _Stop("diverged", f"controller failed at t={t:.3f} s: {err}") from None
+                msg = f"controller failed at t={t:.3f} s: {err}"
+                raise _StopRunError("diverged", msg) from None
             T_r_cmd, T_l_cmd = ctrl.command
             dist_r = dist_l = force = torque = 0.0
             if use_dist:
@@ -445,10 +446,10 @@ def simulate(scenario: Scenario, progress=None) -> Result:
             try:
                 plant.advance(substeps)
             except reduced.SingularityError as err:
-                raise _Stop("jackknife", f"jackknife at t={t + dt:.3f} s: {err}") from None
+                raise _StopRunError("jackknife", f"jackknife at t={t + dt:.3f} s: {err}") from None
             if progress is not None and k % report_every == 0:
                 progress(k, n)
-    except _Stop as stop:
+    except _StopRunError as stop:
         status, message = stop.status, stop.message
         log = log[: k + (1 if not np.isnan(log[k, 0]) else 0)]
     wall = time.perf_counter() - start_wall
