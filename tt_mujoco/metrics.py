@@ -27,7 +27,9 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 __all__ = [
+    "CORE_COLUMNS",
     "DEFAULT_SUMMARY_KEYS",
+    "DIAGNOSTIC_COLUMNS",
     "REQUIRED_COLUMNS",
     "Polyline",
     "PolylineProjection",
@@ -537,13 +539,13 @@ def distance_to_polyline(points, polyline) -> np.ndarray:
 
     Returns
     -------
-    ndarray, shape (N,) (0-d for a single point); NaN for non-finite points.
+    ndarray, shape (N,) (a scalar for a single point); NaN for non-finite points.
     """
     return _as_polyline(polyline).project(points).distance
 
 
 def signed_lateral_error(
-    points, polyline, *, extend_ends: bool = False
+    points, polyline, *, extend_ends: bool = False, interior_only: bool = False
 ) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance to a path and the arc length of the nearest path point.
 
@@ -555,6 +557,11 @@ def signed_lateral_error(
         The path, vertices in the direction of travel.
     extend_ends : bool
         Continue the first and last segments as rays (see :meth:`Polyline.project`).
+    interior_only : bool
+        If True, the signed distance is NaN where the nearest path point is not strictly inside
+        the path (arc length <= 0 or >= the path's length): there the distance is mostly
+        along-track (e.g. the trailer behind the path's start). :func:`compute_metrics` uses
+        this for the trailer's lateral error.
 
     Returns
     -------
@@ -563,8 +570,14 @@ def signed_lateral_error(
     arc_length : ndarray, shape (N,)
         Path length from the path's start to the nearest path point.
     """
-    proj = _as_polyline(polyline).project(points, extend_ends=extend_ends)
-    return proj.signed_distance, proj.arc_length
+    line = _as_polyline(polyline)
+    proj = line.project(points, extend_ends=extend_ends)
+    if not interior_only:
+        return proj.signed_distance, proj.arc_length
+    # Exact comparisons: a foot clamped to the start has arc length 0.0, one clamped to the end
+    # has arc_length[-2] + 1.0 * length[-1], the same sum that built the total length.
+    inside = (proj.arc_length > 0.0) & (proj.arc_length < line.length)
+    return np.where(inside, proj.signed_distance, np.nan), proj.arc_length
 
 
 def trailer_offtrack(tractor_xy, trailer_xy) -> np.ndarray:
@@ -572,10 +585,12 @@ def trailer_offtrack(tractor_xy, trailer_xy) -> np.ndarray:
 
     At sample i the tractor's path is the polyline of P over samples 0..i (the causal path: a
     path the tractor drives later, e.g. on its next lap or on a crossing, does not count). The
-    distance is reported only once P0 has passed the tractor's starting point, i.e. when the
-    nearest point of that path lies strictly beyond P's first sample (arc length > 0). Before
-    that the nearest point is the start point itself and the distance is mostly along-track
-    spacing, not off-tracking: those samples are NaN.
+    distance is reported only when the nearest point of that path lies strictly inside it: its
+    arc length is > 0 (P0 has passed the tractor's starting point) and below the length driven
+    so far (P0 is not beyond the tractor's current position). Otherwise the nearest point is an
+    end of the path and the distance is mostly along-track spacing, not off-tracking: those
+    samples are NaN. This covers the start of every forward run; when reversing, the trailer
+    leads and no sample qualifies.
 
     Parameters
     ----------
@@ -585,7 +600,8 @@ def trailer_offtrack(tractor_xy, trailer_xy) -> np.ndarray:
     Returns
     -------
     ndarray, shape (N,)
-        Off-tracking distance (metres), NaN where P0 has not passed the start.
+        Off-tracking distance (metres); NaN where the nearest path point is an end of the
+        path driven so far (see above).
     """
     p = np.asarray(tractor_xy, dtype=float)
     p0 = np.asarray(trailer_xy, dtype=float)
@@ -599,7 +615,10 @@ def trailer_offtrack(tractor_xy, trailer_xy) -> np.ndarray:
     path = Polyline(p)
     # Sample i may use the de-duplicated segments that end at or before P_i.
     proj = path.project(p0, segment_count=path.vertex_index)
-    passed = proj.arc_length > 0.0
+    # Exact comparisons: a foot clamped to the start has arc length 0.0, one clamped to the end
+    # of segment s has arc_length[s] + 1.0 * length[s], the same sum that built arc_length[s + 1].
+    driven = path.arc_length[path.vertex_index]
+    passed = (proj.arc_length > 0.0) & (proj.arc_length < driven)
     out[passed] = proj.distance[passed]
     return out
 
@@ -612,7 +631,7 @@ def _finite_prefix_length(columns: Mapping[str, np.ndarray], names: Sequence[str
     return int(hits[0]) if hits.size else bad.size
 
 
-def _check_inputs(ts, reference_polyline, torque_limit) -> tuple[dict[str, np.ndarray], int]:
+def _check_inputs(ts, torque_limit) -> tuple[dict[str, np.ndarray], int]:
     if not isinstance(ts, Mapping):
         raise ValueError(f"ts must be a mapping of column name -> array, got {type(ts).__name__}")
     missing = [name for name in REQUIRED_COLUMNS if name not in ts]
@@ -668,10 +687,15 @@ def compute_metrics(
         - ``rmse_lateral``, ``max_lateral``: P to the reference polyline (m). Beyond the path's
           ends this is the distance to the end vertex.
         - ``rmse_position``, ``max_position``: P to the reference point (x_ref, y_ref) (m).
-        - ``trailer_rmse_lateral``, ``trailer_max_lateral``: P0 to the reference polyline (m).
+        - ``trailer_rmse_lateral``, ``trailer_max_lateral``: P0 to the reference polyline (m),
+          over the ``trailer_lateral_samples`` samples whose nearest path point lies strictly
+          inside the path (not clamped to an end: at the start the trailer is L + L0 behind the
+          path's first point, and that spacing is not a lateral error); NaN if there are none.
         - ``trailer_offtrack_rms``, ``trailer_offtrack_max``: P0 to the tractor's own path,
-          over the ``trailer_offtrack_samples`` samples after P0 passed the tractor's starting
-          point (see :func:`trailer_offtrack`); NaN if there are none (e.g. reversing).
+          over the ``trailer_offtrack_samples`` samples where P0 has passed the tractor's
+          starting point and is not ahead of the tractor (see :func:`trailer_offtrack`); NaN if
+          there are none (e.g. reversing).
+          NaN values are Python floats: ``json.dump`` writes them as ``NaN``.
         - ``eq_violation_max`` (rad): max ``|beta - eta phi|``.
         - ``slip_lateral_max``: max of ``|slip_lateral|`` and ``|slip_lateral_trailer|``;
           ``slip_longitudinal_max``: max of ``|slip_left|`` and ``|slip_right|`` (m/s).
@@ -692,7 +716,7 @@ def compute_metrics(
         On missing or malformed columns, a bad polyline or torque limit, or a ``t`` that does not
         strictly increase over the finite prefix.
     """
-    columns, n_total = _check_inputs(ts, reference_polyline, torque_limit)
+    columns, n_total = _check_inputs(ts, torque_limit)
     reference = _as_polyline(reference_polyline)
     n = _finite_prefix_length(columns, CORE_COLUMNS)
     c = {name: col[:n] for name, col in columns.items()}
@@ -722,9 +746,14 @@ def compute_metrics(
     position = np.hypot(c["x"] - c["x_ref"], c["y"] - c["y_ref"])
     metrics["rmse_position"] = rmse(position)
     metrics["max_position"] = max_abs(position)
-    trailer_lateral = reference.project(trailer_xy).distance
+    # The trailer starts L + L0 behind the path's start: there its nearest path point is the
+    # start vertex and the distance is along-track spacing, so only samples whose nearest point
+    # lies strictly inside the path count.
+    trailer_signed, _ = signed_lateral_error(trailer_xy, reference, interior_only=True)
+    trailer_lateral = np.abs(trailer_signed[~np.isnan(trailer_signed)])
     metrics["trailer_rmse_lateral"] = rmse(trailer_lateral)
     metrics["trailer_max_lateral"] = max_abs(trailer_lateral)
+    metrics["trailer_lateral_samples"] = int(trailer_lateral.size)
     offtrack = trailer_offtrack(tractor_xy, trailer_xy)
     offtrack = offtrack[~np.isnan(offtrack)]
     metrics["trailer_offtrack_rms"] = rmse(offtrack)

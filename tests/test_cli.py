@@ -1,0 +1,132 @@
+"""CLI smoke tests: outputs exist, and agree with metrics recomputed from timeseries.csv."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from tt_mujoco import metrics, paths, run
+
+
+@pytest.fixture(scope="module")
+def s_curve_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cli") / "run"
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "tt_mujoco.run",
+            "--traj",
+            "s_curve",
+            "--no-video",
+            "--quiet",
+            "--duration",
+            "6",
+            "--out",
+            str(out),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    return out, proc
+
+
+def test_cli_writes_outputs(s_curve_run):
+    out, proc = s_curve_run
+    assert proc.returncode == 0, proc.stderr
+    for name in ("metrics.json", "timeseries.csv", "path.png", "errors.png"):
+        assert (out / name).stat().st_size > 0, name
+    assert "rmse_position" in proc.stdout  # the printed summary table
+    doc = json.loads((out / "metrics.json").read_text())
+    for key in (
+        "rmse_v",
+        "max_abs_v",
+        "rmse_omega",
+        "max_abs_omega",
+        "rmse_lateral",
+        "max_lateral",
+        "rmse_position",
+        "max_position",
+        "trailer_rmse_lateral",
+        "trailer_offtrack_rms",
+        "eq_violation_max",
+        "slip_lateral_max",
+        "torque_saturation_fraction",
+        "steps",
+        "sim_time_s",
+        "wall_time_s",
+    ):
+        assert key in doc, key
+    assert doc["config"]["scenario"]["traj"] == "s_curve"
+    assert doc["status"] == "ok"
+
+
+def test_metrics_agree_with_timeseries(s_curve_run):
+    out, _ = s_curve_run
+    doc = json.loads((out / "metrics.json").read_text())
+    ts = run.read_timeseries(out / "timeseries.csv")
+    again = metrics.compute_metrics(ts, paths.get_path("s_curve").dense(), 15.0)
+    for key, value in again.items():
+        if isinstance(value, float) and np.isfinite(value):
+            # The CSV holds every float with repr precision: agreement is exact up to
+            # summation order.
+            assert doc[key] == pytest.approx(value, rel=1e-12, abs=1e-15), key
+    assert len(ts["t"]) == doc["steps"]
+
+
+def test_cli_refuses_to_overwrite(s_curve_run):
+    out, _ = s_curve_run
+    before = (out / "metrics.json").read_bytes()
+    code = run.main(["--traj", "s_curve", "--no-video", "--quiet", "--out", str(out)])
+    assert code == 2
+    assert (out / "metrics.json").read_bytes() == before
+
+
+def test_cli_jackknife_exit_code(tmp_path):
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "tt_mujoco.run",
+            "--traj",
+            "s_curve",
+            "--eta",
+            "paper",
+            "--no-video",
+            "--no-plots",
+            "--quiet",
+            "--out",
+            str(tmp_path / "jk"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 3
+    assert "jackknife at t=" in proc.stderr
+    assert "Traceback" not in proc.stderr
+    # What was computed is kept.
+    assert (tmp_path / "jk" / "timeseries.csv").stat().st_size > 0
+    assert json.loads((tmp_path / "jk" / "metrics.json").read_text())["status"] == "jackknife"
+
+
+def test_help_lists_every_option():
+    text = run.build_parser().format_help()
+    for opt in (
+        "--traj",
+        "--controller",
+        "--target",
+        "--plant",
+        "--eta",
+        "--no-disturbance",
+        "--noise-snr",
+        "--param-scale",
+        "--duration",
+        "--seed",
+        "--out",
+        "--no-video",
+    ):
+        assert opt in text

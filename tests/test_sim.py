@@ -1,0 +1,83 @@
+"""The closed loop on both plants (issue: closed loop, must-show 2-5)."""
+
+import itertools
+
+import pytest
+
+from tt_mujoco.sim import Scenario, simulate
+
+PATHS = ("cycloid", "s_curve", "circle")
+CONTROLLERS = ("ismc_sta", "pid", "fbl")
+TARGETS = ("dynamic", "static")
+PLANTS = ("mujoco", "reduced")
+
+
+@pytest.fixture(scope="module")
+def grid():
+    """Every path x controller x target on both plants, paper disturbances, same_path eta.
+
+    Table 3's comparison uses the paper's Section 6.2 ISMC-STA gains for ISMC-STA."""
+    results = {}
+    for path, ctrl, target, plant in itertools.product(PATHS, CONTROLLERS, TARGETS, PLANTS):
+        gains = "paper_6_2" if ctrl == "ismc_sta" else None
+        scenario = Scenario(traj=path, controller=ctrl, gains=gains, target=target, plant=plant)
+        results[path, ctrl, target, plant] = simulate(scenario)
+    return results
+
+
+def test_every_combination_completes_without_divergence(grid):
+    failed = {k: r.message for k, r in grid.items() if r.status != "ok"}
+    assert not failed
+    for r in grid.values():
+        assert r.metrics["finite_samples"] == r.metrics["steps"]
+        assert r.metrics["sim_time_s"] == pytest.approx(r.config["target"]["duration_s"], abs=2e-3)
+
+
+@pytest.mark.parametrize("plant", PLANTS)
+def test_ismc_sta_beats_pid_and_fbl_on_cycloid(grid, plant):
+    # Paper Table 3. Measured (reduced / MuJoCo), see the issue note for the full table.
+    ismc = grid["cycloid", "ismc_sta", "dynamic", plant].metrics
+    for other in ("pid", "fbl"):
+        m = grid["cycloid", other, "dynamic", plant].metrics
+        assert ismc["rmse_v"] < m["rmse_v"]
+        assert ismc["rmse_omega"] < m["rmse_omega"]
+
+
+@pytest.mark.parametrize("plant", PLANTS)
+def test_dynamic_target_beats_static_on_s_curve_position(plant):
+    # Paper Table 4 (0.0091 vs 0.0261 m), Section 6.1 gains. Ours (measured, MuJoCo / reduced):
+    # 0.01412 vs 0.01452 / 0.01420 vs 0.01454 m: a 2-3 % gain, because our static target is the
+    # exact time-parameterised reference and ISMC-STA holds v so well that s barely drifts.
+    dynamic = simulate(Scenario(traj="s_curve", target="dynamic", plant=plant))
+    static = simulate(Scenario(traj="s_curve", target="static", plant=plant))
+    assert dynamic.metrics["rmse_position"] < 0.99 * static.metrics["rmse_position"]
+    assert dynamic.metrics["max_position"] < static.metrics["max_position"]
+
+
+@pytest.mark.parametrize("path", ("s_curve", "circle"))
+@pytest.mark.parametrize("ctrl", CONTROLLERS)
+def test_plants_agree_where_traction_holds(grid, path, ctrl):
+    # On the gentle paths the tyres stay far from their traction limit (lateral creep at most
+    # 19 mm/s, measured), so contact physics and the reduced ODE should agree: measured
+    # relative differences of the position error <= 3.2 % and of e_v <= 2.7 %.
+    # Bounds: 15 % / 25 %.
+    mj = grid[path, ctrl, "dynamic", "mujoco"].metrics
+    rd = grid[path, ctrl, "dynamic", "reduced"].metrics
+    assert mj["slip_lateral_max"] < 0.03
+    assert mj["rmse_position"] == pytest.approx(rd["rmse_position"], rel=0.15)
+    assert mj["rmse_v"] == pytest.approx(rd["rmse_v"], rel=0.25)
+
+
+def test_paper_eta_jackknifes_forward_and_keeps_partial_results():
+    result = simulate(Scenario(traj="s_curve", eta="paper", plant="mujoco"))
+    assert result.status == "jackknife"
+    assert "jackknife at t=" in result.message
+    n = result.metrics["steps"]
+    assert 100 < n < 5000  # stopped early (measured at t = 1.13 s), samples kept
+    assert len(result.timeseries["t"]) == n
+
+
+def test_reduced_plant_jackknifes_too():
+    result = simulate(Scenario(traj="s_curve", eta="paper", plant="reduced"))
+    assert result.status == "jackknife"
+    assert result.metrics["steps"] < 5000
