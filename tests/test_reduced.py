@@ -127,3 +127,12 @@ def test_mass_matrix_positive_definite(frac, eta):
     phi = frac * min(p.phi_singular, 1.5)
     eig = np.linalg.eigvalsh(reduced.mass_matrix(phi, p))
     assert eig.min() > 0
+
+
+@settings(max_examples=100, deadline=None)
+@given(frac=st.floats(-0.99, 0.99), eta=etas)
+def test_mass_only_fast_path_equals_full_terms(frac, eta):
+    p = Params(eta=eta)
+    phi = frac * min(p.phi_singular, 1.5)
+    (M11, M12, M22), _, _ = reduced._inertia_terms(phi, p)
+    assert reduced._mass_terms(phi, p) == pytest.approx((M11, M12, M22), rel=1e-14)

@@ -90,17 +90,20 @@ def measure(qpos, qvel, lay: Layout) -> Measurement:
     -------
     Measurement
     """
+    # One conversion to Python floats: indexing numpy arrays element by element is slower.
+    qpos = qpos.tolist() if hasattr(qpos, "tolist") else list(qpos)
+    qvel = qvel.tolist() if hasattr(qvel, "tolist") else list(qvel)
     i = lay.root_q
-    x, y = float(qpos[i]), float(qpos[i + 1])
-    qw, qx, qy, qz = (float(qpos[i + k]) for k in range(3, 7))
+    x, y = qpos[i], qpos[i + 1]
+    qw, qx, qy, qz = qpos[i + 3], qpos[i + 4], qpos[i + 5], qpos[i + 6]
     theta = yaw_from_quat(qw, qx, qy, qz)
-    phi = -float(qpos[lay.hitch_q])  # hitch axis +z: q_hitch = theta0 - theta
-    beta = float(qpos[lay.steer_q])
+    phi = -qpos[lay.hitch_q]  # hitch axis +z: q_hitch = theta0 - theta
+    beta = qpos[lay.steer_q]
 
     j = lay.root_v
-    vx, vy = float(qvel[j]), float(qvel[j + 1])
+    vx, vy = qvel[j], qvel[j + 1]
     # World z component of the body-frame angular velocity: third row of R(quat).
-    wx, wy, wz = float(qvel[j + 3]), float(qvel[j + 4]), float(qvel[j + 5])
+    wx, wy, wz = qvel[j + 3], qvel[j + 4], qvel[j + 5]
     r20 = 2.0 * (qx * qz - qw * qy)
     r21 = 2.0 * (qy * qz + qw * qx)
     r22 = 1.0 - 2.0 * (qx * qx + qy * qy)
@@ -116,15 +119,15 @@ def measure(qpos, qvel, lay: Layout) -> Measurement:
     ox, oy = x - lay.L * c, y - lay.L * s
     x0, y0 = ox - lay.L0 * c0, oy - lay.L0 * s0
     vox, voy = vx + omega * lay.L * s, vy - omega * lay.L * c
-    theta0_dot = omega + float(qvel[lay.hitch_v])  # phi_dot = -q_hitch_dot
+    theta0_dot = omega + qvel[lay.hitch_v]  # phi_dot = -q_hitch_dot
     v0x, v0y = vox + theta0_dot * lay.L0 * s0, voy - theta0_dot * lay.L0 * c0
     alpha = theta0 + beta
     ca, sa = math.cos(alpha), math.sin(alpha)
     v0 = v0x * ca + v0y * sa
     slip_lateral_trailer = -v0x * sa + v0y * ca
 
-    thl_dot = float(qvel[lay.wheel_left_v])
-    thr_dot = float(qvel[lay.wheel_right_v])
+    thl_dot = qvel[lay.wheel_left_v]
+    thr_dot = qvel[lay.wheel_right_v]
     half = 0.5 * lay.d * omega
     return Measurement(
         x=x,
@@ -138,8 +141,8 @@ def measure(qpos, qvel, lay: Layout) -> Measurement:
         y0=y0,
         theta0=theta0,
         v0=v0,
-        theta_l=float(qpos[lay.wheel_left_q]),
-        theta_r=float(qpos[lay.wheel_right_q]),
+        theta_l=qpos[lay.wheel_left_q],
+        theta_r=qpos[lay.wheel_right_q],
         theta_l_dot=thl_dot,
         theta_r_dot=thr_dot,
         slip_lateral=slip_lateral,

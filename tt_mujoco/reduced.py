@@ -265,10 +265,31 @@ def _coriolis(phi: float, v: float, omega: float, p: Params):
     return (M11, M12, M22), (c1, c2)
 
 
+def _mass_terms(phi: float, p: Params) -> tuple[float, float, float]:
+    """Mbar(phi) alone, as (M11, M12, M22): the same sums as :func:`_inertia_terms`."""
+    eta, L, L0 = p.eta, p.L, p.L0
+    cb = _cos_beta(phi, eta)
+    psi = (eta - 1.0) * phi
+    cpsi, spsi = math.cos(psi), math.sin(psi)
+    k1, k2 = math.cos(phi) / cb, L * math.sin(phi) / cb
+    s1, s2 = spsi / (L0 * cb), 1.0 + L * cpsi / (L0 * cb)
+    g1, g2 = -s1, 1.0 - s2
+    a1, a2 = (eta - 1.0) * s1, 1.0 + (eta - 1.0) * s2
+    n1, n2 = cpsi, -L * spsi
+    m_t, J_t, m_0, J_a, J_0, _ = _lumped(p)
+    q = p.Mc2 / 4.0
+    mk = m_0 + q
+    return (
+        m_t + q + mk * k1 * k1 + J_a * a1 * a1 + J_0 * g1 * g1 + 2 * q * n1 * k1,
+        mk * k1 * k2 + J_a * a1 * a2 + J_0 * g1 * g2 + q * (n1 * k2 + k1 * n2),
+        J_t + q * L * L + mk * k2 * k2 + J_a * a2 * a2 + J_0 * g2 * g2 + 2 * q * n2 * k2,
+    )
+
+
 def matched_torque(phi: float, a_v: float, a_omega: float, p: Params) -> tuple[float, float]:
     """Wheel torques ``(T_r, T_l) = g(phi)^-1 (a_v, a_omega) = B^-1 Mbar(phi) a``: the matched
     input that adds the acceleration ``a`` to ``(v_dot, omega_dot)`` (SPEC Section 8)."""
-    (M11, M12, M22), _, _ = _inertia_terms(phi, p)
+    M11, M12, M22 = _mass_terms(phi, p)
     force = M11 * a_v + M12 * a_omega  # generalized force on v
     moment = M12 * a_v + M22 * a_omega  # ... and on omega
     # B^-1 with B = [[1/r, 1/r], [d/(2r), -d/(2r)]].
