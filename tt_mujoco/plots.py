@@ -1,0 +1,339 @@
+"""Figures of a finished run: the kinds of the paper's Figs. 2-8, as PNG files.
+
+Matplotlib through :class:`matplotlib.figure.Figure` objects only (no ``pyplot``, so no global
+figure state and no GUI backend; ``savefig`` uses Agg). Every file is written under a temporary
+name in its folder and renamed into place, so a reader never sees half a PNG.
+
+A run is a mapping column -> 1-D array with the columns of ``timeseries.csv`` (SI units,
+radians); the errors are ``e_v = v - v_d`` and ``e_omega = omega - omega_d`` (paper eq. 37's
+tracking errors). Lateral errors are signed distances to a polyline, positive to the left of
+its direction of travel (:func:`distance_to_polyline`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import tempfile
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from tt_mujoco import metrics
+from tt_mujoco.params import Params
+
+__all__ = [
+    "FIGURES",
+    "plot_comparison",
+    "plot_run",
+    "tracking_errors",
+]
+
+#: The files :func:`plot_run` writes, in order.
+FIGURES = ("path.png", "errors.png", "torques.png", "articulation.png")
+
+DPI = 120
+TRACTOR_COLOR = "tab:orange"
+TRAILER_COLOR = "tab:blue"
+REFERENCE_COLOR = "0.2"
+
+
+# --- error signals -------------------------------------------------------------------------------
+def tracking_errors(ts: Mapping, reference_polyline=None) -> dict[str, np.ndarray]:
+    """Error signals of a run, the same quantities as :func:`tt_mujoco.metrics.compute_metrics`.
+
+    Returns
+    -------
+    dict
+        ``e_v``, ``e_omega``; when a reference polyline is given, ``lateral`` (P to the path)
+        and ``trailer_lateral`` (P0 to the path, NaN while its nearest path point is an end
+        of the path), signed, positive left of the path's direction of travel
+        (:func:`tt_mujoco.metrics.signed_lateral_error`; their magnitudes are the metrics'
+        distances); always ``trailer_offtrack``, P0 to the path the tractor has driven so far,
+        NaN until P0 has passed the tractor's start (:func:`tt_mujoco.metrics.trailer_offtrack`).
+        Samples after the first non-finite position are NaN.
+    """
+    c = _columns(ts, ("t", "x", "y", "x0", "y0", "v", "v_d", "omega", "omega_d"))
+    out = {"e_v": c["v"] - c["v_d"], "e_omega": c["omega"] - c["omega_d"]}
+    # Positions up to the first non-finite one (a run that diverged ends in NaN rows); the
+    # distances after it are NaN.
+    positions = np.column_stack([c["x"], c["y"], c["x0"], c["y0"]])
+    finite = np.all(np.isfinite(positions), axis=1)
+    n = len(finite) if finite.all() else int(np.argmin(finite))
+    tractor, trailer = positions[:n, :2], positions[:n, 2:]
+
+    def padded(values: np.ndarray) -> np.ndarray:
+        return np.concatenate([values, np.full(len(finite) - n, np.nan)])
+
+    if reference_polyline is not None:
+        path = metrics.Polyline(reference_polyline)  # one k-d tree for both queries
+        out["lateral"] = padded(metrics.signed_lateral_error(tractor, path)[0])
+        # Only where P0's nearest path point is inside the path (NaN while P0 is still behind
+        # the path's start, L + L0 behind P at t = 0), as in the metrics.
+        trailer_lateral = metrics.signed_lateral_error(trailer, path, interior_only=True)[0]
+        out["trailer_lateral"] = padded(trailer_lateral)
+    out["trailer_offtrack"] = padded(metrics.trailer_offtrack(tractor, trailer))
+    return out
+
+
+# --- helpers --------------------------------------------------------------------------------------
+def _columns(ts: Mapping, names) -> dict[str, np.ndarray]:
+    out = {}
+    for name in names:
+        if name not in ts:
+            raise ValueError(f"time series has no column {name!r}; this figure needs {names}")
+        out[name] = np.asarray(ts[name], dtype=float)
+    n = len(out[names[0]])
+    for name, col in out.items():
+        if col.ndim != 1 or len(col) != n:
+            raise ValueError(
+                f"time series column {name!r} has shape {col.shape}: all columns must be 1-D "
+                f"with {n} samples"
+            )
+    if n < 2:
+        raise ValueError(f"time series has {n} samples: a figure needs >= 2")
+    return out
+
+
+def _rms(x: np.ndarray) -> float:
+    x = x[np.isfinite(x)]
+    return float(np.sqrt(np.mean(x**2))) if len(x) else math.nan
+
+
+def _save(fig: Figure, path: Path) -> Path:
+    """Write ``fig`` as PNG to ``path`` atomically (temporary file in the folder, rename)."""
+    fd, tmp_name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp.png")
+    os.close(fd)
+    tmp = Path(tmp_name)
+    try:
+        fig.savefig(tmp, format="png", dpi=DPI)
+        umask = os.umask(0)
+        os.umask(umask)
+        tmp.chmod(0o666 & ~umask)  # mkstemp made it private
+        os.replace(tmp, path)
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+    return path
+
+
+def _reference(reference_polyline) -> np.ndarray | None:
+    if reference_polyline is None:
+        return None
+    ref = np.asarray(reference_polyline, dtype=float)
+    if ref.ndim != 2 or ref.shape[1] != 2 or len(ref) < 2:
+        raise ValueError(
+            f"reference_polyline of shape {ref.shape} is not allowed: it must be (M, 2), M >= 2"
+        )
+    return ref
+
+
+# --- figures of one run ---------------------------------------------------------------------------
+def _path_figure(c: dict, ref: np.ndarray) -> Figure:
+    fig = Figure(figsize=(7, 6), layout="constrained")
+    ax = fig.add_subplot()
+    ax.plot(ref[:, 0], ref[:, 1], "--", color=REFERENCE_COLOR, lw=1.2, label="reference path")
+    ax.plot(c["x"], c["y"], color=TRACTOR_COLOR, lw=1.6, label="tractor P")
+    ax.plot(c["x0"], c["y0"], color=TRAILER_COLOR, lw=1.2, label="trailer P0")
+    for xs, ys, color in ((c["x"], c["y"], TRACTOR_COLOR), (c["x0"], c["y0"], TRAILER_COLOR)):
+        ax.plot(xs[0], ys[0], "o", color=color, ms=7, mfc="white", mew=1.5)
+        ax.plot(xs[-1], ys[-1], "s", color=color, ms=6)
+    ax.plot([], [], "ko", mfc="white", label="start")
+    ax.plot([], [], "ks", label="end")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_title("Path: reference, tractor and trailer")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize=9)
+    return fig
+
+
+def _errors_figure(c: dict, err: dict) -> Figure:
+    t = c["t"]
+    fig = Figure(figsize=(8, 9), layout="constrained")
+    axes = fig.subplots(4, 1, sharex=True)
+    rows = (
+        ("e_v", "e_v (m/s)", "velocity error v - v_d"),
+        ("e_omega", "e_omega (rad/s)", "yaw-rate error omega - omega_d"),
+        ("lateral", "lateral (m)", "tractor P to the reference path"),
+    )
+    for ax, (key, ylabel, label) in zip(axes, rows, strict=False):
+        ax.plot(
+            t, err[key], color=TRACTOR_COLOR, lw=1.2, label=f"{label}, RMS {_rms(err[key]):.4g}"
+        )
+        ax.axhline(0.0, color="0.5", lw=0.8)
+        ax.set_ylabel(ylabel)
+    ax = axes[3]
+    ax.plot(
+        t,
+        err["trailer_lateral"],
+        color=TRAILER_COLOR,
+        lw=1.2,
+        label=f"P0 to the reference path, RMS {_rms(err['trailer_lateral']):.4g}",
+    )
+    ax.plot(
+        t,
+        err["trailer_offtrack"],
+        "--",
+        color=TRAILER_COLOR,
+        lw=1.2,
+        label=f"P0 to the tractor's path (off-tracking, unsigned), "
+        f"RMS {_rms(err['trailer_offtrack']):.4g}",
+    )
+    ax.axhline(0.0, color="0.5", lw=0.8)
+    ax.set_ylabel("trailer (m)")
+    ax.set_xlabel("t (s)")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    fig.suptitle("Tracking errors (lateral: positive left of the path)")
+    return fig
+
+
+def _torques_figure(c: dict, limit: float) -> Figure:
+    t = c["t"]
+    fig = Figure(figsize=(8, 5), layout="constrained")
+    axes = fig.subplots(2, 1, sharex=True)
+    for ax, side, color in ((axes[0], "r", "tab:red"), (axes[1], "l", "tab:green")):
+        name = "right" if side == "r" else "left"
+        ax.plot(t, c[f"T_{side}"], color=color, lw=1.3, label=f"T_{side} applied")
+        ax.plot(t, c[f"T_{side}_cmd"], "--", color="k", lw=1.0, label=f"T_{side} commanded")
+        # The saturation lines only when the torques come near them (else they flatten the plot).
+        peak = max(np.max(np.abs(c[f"T_{side}"])), np.max(np.abs(c[f"T_{side}_cmd"])))
+        if peak >= 0.5 * limit:
+            for sign in (1, -1):
+                ax.axhline(sign * limit, color="0.4", ls=":", lw=1.0)
+        ax.set_ylabel(f"{name} wheel (N m)")
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    axes[1].set_xlabel("t (s)")
+    fig.suptitle(f"Wheel torques (saturation +-{limit:g} N m, dotted when approached)")
+    return fig
+
+
+def _articulation_figure(c: dict, params: Params) -> Figure:
+    t = c["t"]
+    fig = Figure(figsize=(8, 4), layout="constrained")
+    ax = fig.add_subplot()
+    ax.plot(t, np.degrees(c["phi"]), color=TRACTOR_COLOR, lw=1.4, label="phi = theta - theta0")
+    ax.plot(t, np.degrees(c["beta"]), color=TRAILER_COLOR, lw=1.4, label="beta (trailer steer)")
+    ax.plot(
+        t,
+        np.degrees(params.eta * c["phi"]),
+        "--",
+        color="k",
+        lw=1.0,
+        label=f"eta * phi (eta = {params.eta:.4g})",
+    )
+    # The jackknife singularity |eta phi| = 90 deg (SPEC Section 2), once phi gets near it.
+    limit = math.degrees(params.phi_singular)
+    if math.isfinite(limit) and np.max(np.abs(np.degrees(c["phi"]))) > 0.5 * limit:
+        for sign in (1, -1):
+            ax.axhline(sign * limit, color="tab:red", ls=":", lw=1.0)
+        ax.plot([], [], ":", color="tab:red", label=f"phi singular (+-{limit:.1f} deg)")
+    ax.axhline(0.0, color="0.5", lw=0.8)
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("angle (deg)")
+    ax.set_title("Articulation and passive steering")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    return fig
+
+
+def plot_run(ts: Mapping, reference_polyline, out_dir, params: Params | None = None) -> list[Path]:
+    """Write the run's figures (:data:`FIGURES`) into ``out_dir`` (created if missing).
+
+    - ``path.png``: reference path, tractor P and trailer P0, equal axes, start (circle) and
+      end (square) markers (paper Figs. 2a, 7a, 8a).
+    - ``errors.png``: e_v, e_omega, P's lateral error, P0's lateral error and off-tracking
+      (paper Figs. 2-3, 7b-c, 8b-c), each labelled with its RMS.
+    - ``torques.png``: applied (solid) and commanded (dashed) T_r, T_l with the saturation.
+    - ``articulation.png``: phi and beta in degrees, eta * phi dashed.
+
+    Parameters
+    ----------
+    ts : mapping of str to 1-D arrays
+        The run's time series (columns of ``timeseries.csv``).
+    reference_polyline : array_like, shape (M, 2)
+    out_dir : str or Path
+    params : Params, optional
+        The run's parameters (torque limit, eta); ``Params()`` if not given.
+
+    Returns
+    -------
+    list of Path
+        The files written, in :data:`FIGURES` order.
+    """
+    p = Params() if params is None else params
+    ref = _reference(reference_polyline)
+    if ref is None:
+        raise ValueError("reference_polyline=None is not allowed: plot_run needs the path")
+    names = ("t", "x", "y", "x0", "y0", "v", "v_d", "omega", "omega_d", "phi", "beta")
+    names += ("T_r", "T_l", "T_r_cmd", "T_l_cmd")
+    c = _columns(ts, names)
+    err = tracking_errors(ts, ref)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    figures = (
+        _path_figure(c, ref),
+        _errors_figure(c, err),
+        _torques_figure(c, p.torque_limit),
+        _articulation_figure(c, p),
+    )
+    return [_save(fig, out / name) for fig, name in zip(figures, FIGURES, strict=True)]
+
+
+def plot_comparison(
+    runs: Mapping[str, Mapping],
+    out_path,
+    reference_polyline=None,
+    title: str = "Tracking errors",
+) -> Path:
+    """Overlay several runs' errors in one figure (paper Figs. 3-6 style).
+
+    Rows: e_v, e_omega and, when ``reference_polyline`` is given, P's lateral error; one
+    colour per run, its RMS in the legend.
+
+    Parameters
+    ----------
+    runs : mapping of label to time series
+        At least one run; labels are shown in the legend.
+    out_path : str or Path
+        The ``.png`` to write (its folder is created if missing).
+    reference_polyline : array_like, shape (M, 2), optional
+    title : str
+
+    Returns
+    -------
+    Path
+    """
+    if not runs:
+        raise ValueError("runs={} is not allowed: give at least one labelled time series")
+    out = Path(out_path)
+    if out.suffix.lower() != ".png":
+        raise ValueError(f"out_path={str(out)!r} is not allowed: it must end in .png")
+    ref = _reference(reference_polyline)
+    rows = [("e_v", "e_v (m/s)"), ("e_omega", "e_omega (rad/s)")]
+    if ref is not None:
+        rows.append(("lateral", "lateral (m)"))
+    fig = Figure(figsize=(8, 2.6 * len(rows) + 0.6), layout="constrained")
+    axes = fig.subplots(len(rows), 1, sharex=True, squeeze=False)[:, 0]
+    colors = [f"C{i % 10}" for i in range(len(runs))]
+    for (label, ts), color in zip(runs.items(), colors, strict=True):
+        t = _columns(ts, ("t",))["t"]
+        err = tracking_errors(ts, ref)
+        for ax, (key, _) in zip(axes, rows, strict=True):
+            ax.plot(t, err[key], color=color, lw=1.1, label=f"{label} (RMS {_rms(err[key]):.4g})")
+    for ax, (_, ylabel) in zip(axes, rows, strict=True):
+        ax.axhline(0.0, color="0.5", lw=0.8)
+        ax.set_ylabel(ylabel)
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8)
+    axes[-1].set_xlabel("t (s)")
+    fig.suptitle(title)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    return _save(fig, out)
