@@ -74,6 +74,9 @@ def test_presets():
     assert Params().eta == pytest.approx(-0.125)
     assert Params().steering == "same_path"
     assert Params(eta="1.5").eta == 1.5
+    assert Params(eta="-3").eta == -3.0
+    assert Params(eta="1e-3").eta == 1e-3
+    assert Params(eta="same-path").steering == "same_path"
     assert same_path_eta(0.3, 0.4) == pytest.approx(-0.125)
 
 

@@ -57,13 +57,13 @@ def resolve_eta(eta: float | str, L: float, L0: float) -> tuple[float, str]:
         ``"paper"``, ``"same_path"`` or ``"custom"``.
     """
     if isinstance(eta, str):
-        key = eta.strip().lower().replace("-", "_")
+        key = eta.strip().lower().replace("-", "_")  # also accept "same-path"
         if key == "paper":
             return PAPER_ETA, "paper"
         if key == "same_path":
             return same_path_eta(L, L0), "same_path"
         try:
-            value = float(key)
+            value = float(eta)  # the original text: "-3" and "1e-3" are numbers
         except ValueError:
             raise ValueError(
                 f"eta={eta!r} is not allowed: use 'paper', 'same_path' or a finite number"
