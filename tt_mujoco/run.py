@@ -1,31 +1,52 @@
 """``python -m tt_mujoco.run``: one closed-loop run, with metrics, time series, plots and video.
 
-Exit codes (SPEC Section 11): 0 done; 2 bad input (one message, no traceback); 3 the run
-diverged or jackknifed (the message gives the time and state; everything computed up to then
-is still written).
+Exit codes (SPEC Section 11): 0 done; 2 bad input (one message, no traceback, nothing
+written); 3 the run diverged or jackknifed (the message gives the time and state; everything
+computed up to then is still written); 130 interrupted (Ctrl-C, or the live viewer closed):
+files already written are complete, and ``metrics.json``, written last, is absent.
+
+Options can come from a TOML file (``--config FILE``, see :mod:`tt_mujoco.config`); the
+command line overrides it, and every run writes its resolved options to ``config.toml`` so
+that ``--config RUN_DIR/config.toml`` repeats it exactly. ``--viewer`` shows the run live in
+MuJoCo's passive viewer (:mod:`tt_mujoco.viewer`).
+
+Outputs are written atomically (a temporary file, then a rename) into a new folder, never an
+existing non-empty one; ``metrics.json`` is written last, so its presence marks a complete run.
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
 import io
 import json
 import math
 import os
+import shutil
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
+from tt_mujoco.faults import RECOVERY_S
+from tt_mujoco.params import Params
 from tt_mujoco.sim import COLUMNS, DISTURBANCE_MODES, PLANTS, TARGETS, Scenario
 
-__all__ = ["build_parser", "main", "write_outputs"]
+__all__ = ["build_parser", "main", "read_timeseries", "timeseries_csv", "write_outputs"]
 
 RENDERS = Path("renders")
 CONTROLLERS = ("ismc_sta", "pid", "fbl")
-EXIT_OK, EXIT_BAD_INPUT, EXIT_DIVERGED = 0, 2, 3
+EXIT_OK, EXIT_BAD_INPUT, EXIT_DIVERGED, EXIT_INTERRUPTED = 0, 2, 3, 130
+#: Params fields settable with --param / [params] (eta, timestep and friction have options).
+PARAM_NAMES = tuple(
+    f.name
+    for f in dataclasses.fields(Params)
+    if f.init and f.name not in ("eta", "timestep", "friction")
+)
+#: Hidden folder inside the output folder where figures and video are made before the rename.
+STAGING = ".partial"
 
 SUMMARY_KEYS = (
     "rmse_v",
@@ -40,6 +61,7 @@ SUMMARY_KEYS = (
     "trailer_offtrack_rms",
     "eq_violation_max",
     "slip_lateral_max",
+    "slip_longitudinal_max",
     "torque_saturation_fraction",
     "steps",
     "sim_time_s",
@@ -56,6 +78,13 @@ class _Parser(argparse.ArgumentParser):
         raise BadInputError(message)
 
 
+def _number(name: str, text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{name} {text!r} is not a number") from None
+
+
 def _snr(text: str) -> float:
     try:
         value = float(text)
@@ -70,12 +99,19 @@ def _snr(text: str) -> float:
 
 def _positive(name: str):
     def parse(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{name} {text!r} is not a number") from None
+        value = _number(name, text)
         if not (math.isfinite(value) and value > 0):
             raise argparse.ArgumentTypeError(f"{name} {text!r} must be a finite number > 0")
+        return value
+
+    return parse
+
+
+def _finite(name: str):
+    def parse(text: str) -> float:
+        value = _number(name, text)
+        if not math.isfinite(value):
+            raise argparse.ArgumentTypeError(f"{name} {text!r} must be a finite number")
         return value
 
     return parse
@@ -91,15 +127,39 @@ def _seed(text: str) -> int:
     return value
 
 
+def _param(text: str) -> tuple[str, float]:
+    name, sep, value = text.partition("=")
+    name = name.strip()
+    if not sep or name not in PARAM_NAMES:
+        raise argparse.ArgumentTypeError(
+            f"--param {text!r} is not allowed: write NAME=VALUE with NAME one of "
+            f"{', '.join(PARAM_NAMES)}"
+        )
+    try:
+        return name, float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"--param {text!r} is not allowed: {value.strip()!r} is not a number"
+        ) from None
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(
         prog="python -m tt_mujoco.run",
         description=(
             "Run one closed-loop tracking scenario of the off-axle tractor-trailer on the MuJoCo "
-            "plant or the analytic reduced model, and write metrics.json, timeseries.csv, plots "
-            "and a video into a new folder."
+            "plant or the analytic reduced model, and write metrics.json, timeseries.csv, "
+            "config.toml, plots and a video into a new folder."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument(
+        "--config",
+        type=Path,
+        default=None,
+        metavar="FILE",
+        help="read options from this TOML file (e.g. a previous run's config.toml); "
+        "options given here override it",
     )
     g = p.add_argument_group("scenario")
     g.add_argument(
@@ -128,13 +188,20 @@ def build_parser() -> argparse.ArgumentParser:
         "(-(L0-L)/(2 L0)), or a number",
     )
     g.add_argument(
-        "--no-disturbance", action="store_true", help="switch off the paper's disturbance"
+        "--no-disturbance",
+        dest="disturbance",
+        action="store_const",
+        const="none",
+        default=argparse.SUPPRESS,  # the default is --disturbance-mode's
+        help="switch off the paper's disturbance (same as --disturbance-mode none)",
     )
     g.add_argument(
         "--disturbance-mode",
+        dest="disturbance",
         default="matched",
-        choices=[m for m in DISTURBANCE_MODES if m != "none"],
-        help="matched: wheel torques g^-1 Delta; wrench: force and moment on the chassis",
+        choices=DISTURBANCE_MODES,
+        help="matched: wheel torques g^-1 Delta; wrench: force and moment on the chassis "
+        "(can exceed traction); none",
     )
     g.add_argument(
         "--noise-snr",
@@ -151,11 +218,20 @@ def build_parser() -> argparse.ArgumentParser:
         help="scale the plant's masses and inertias (the controller keeps the nominal model)",
     )
     g.add_argument(
+        "--param",
+        action="append",
+        type=_param,
+        default=None,
+        metavar="NAME=VALUE",
+        help="override a vehicle parameter of both plant and controller model, e.g. Mr=7.5 "
+        "(repeatable; see tt_mujoco.params.Params)",
+    )
+    g.add_argument(
         "--duration",
         type=_positive("--duration"),
         default=None,
         metavar="S",
-        help="run length in s (default: the path's own duration)",
+        help="run length in s, at most 600 (default: the path's own duration)",
     )
     g.add_argument("--seed", type=_seed, default=0, help="seed for the measurement noise")
     g.add_argument(
@@ -165,16 +241,35 @@ def build_parser() -> argparse.ArgumentParser:
         help="cycloid only: start on the path, or at the paper's pose (0, 0, pi/4)",
     )
     g.add_argument(
+        "--phi0",
+        type=_finite("--phi0"),
+        default=0.0,
+        metavar="DEG",
+        help="initial articulation phi (deg), short of the jackknife",
+    )
+    g.add_argument(
         "--friction", type=_positive("--friction"), default=1.0, help="tyre friction coefficient"
     )
     g.add_argument(
-        "--timestep", type=_positive("--timestep"), default=0.001, help="physics step (s)"
+        "--timestep",
+        type=_positive("--timestep"),
+        default=0.001,
+        help="physics step (s), in [1e-5, 0.01]",
     )
     g.add_argument(
         "--control-dt",
         type=_positive("--control-dt"),
         default=None,
-        help="control period (s), a multiple of the timestep; default: the timestep",
+        help="control period (s), a multiple of the timestep, at most 0.05; default: the timestep",
+    )
+    g.add_argument(
+        "--fault",
+        action="append",
+        default=None,
+        metavar="KIND:K=V,...",
+        help="inject a fault (repeatable; replaces a config file's faults): "
+        "payload:t=S[,factor=1.5] | dropout:t=S[,duration=0.1] | "
+        "actuator:t=S[,duration=1,scale=0.3,wheel=both|right|left]",
     )
     o = p.add_argument_group("outputs")
     o.add_argument(
@@ -184,80 +279,179 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="DIR",
         help="output folder (must not exist or be empty); default: a new folder under renders/",
     )
-    o.add_argument("--no-video", action="store_true", help="skip the MP4")
-    o.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    o.add_argument(
+        "--video", action=argparse.BooleanOptionalAction, default=True, help="write video.mp4"
+    )
+    o.add_argument(
+        "--plots", action=argparse.BooleanOptionalAction, default=True, help="write PNG figures"
+    )
     o.add_argument(
         "--camera", default="follow", choices=("follow", "overview"), help="video camera"
     )
     o.add_argument("--fps", type=_positive("--fps"), default=30.0, help="video frame rate")
-    o.add_argument("--quiet", action="store_true", help="no progress bar")
+    o.add_argument(
+        "--quiet", action=argparse.BooleanOptionalAction, default=False, help="no progress bar"
+    )
+    o.add_argument(
+        "--viewer",
+        action=argparse.BooleanOptionalAction,
+        default=False,
+        help="show the run live in MuJoCo's viewer (needs a display; MuJoCo plant only)",
+    )
     return p
 
 
-def _scenario(args) -> Scenario:
+def _parse(argv) -> tuple[argparse.Namespace, argparse.ArgumentParser, dict, list]:
+    """Command line over config file over defaults; returns (args, parser, params, faults)."""
+    from tt_mujoco import config as config_mod
+    from tt_mujoco.faults import parse_fault
+
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    params, faults = {}, []
+    if args.config is not None:
+        table = config_mod.load_config(args.config)
+        found = config_mod.options_from_file(table, parser, args.config, PARAM_NAMES)
+        parser.set_defaults(**found.defaults)
+        args = parser.parse_args(argv)
+        params = dict(found.params)
+        faults = found.faults or []
+    params.update(dict(args.param or []))
+    if args.fault is not None:
+        faults = list(args.fault)
+    faults = [parse_fault(f).to_dict() for f in faults]
     gains = args.gains
-    if gains is not None and gains.strip().startswith("{"):
+    if isinstance(gains, str) and gains.strip().startswith("{"):
         try:
             gains = json.loads(gains)
         except json.JSONDecodeError as err:
             raise BadInputError(f"--gains {args.gains!r} is not valid JSON: {err.msg}") from None
+        if not isinstance(gains, dict):
+            raise BadInputError(f"--gains {args.gains!r} is not a JSON object")
+    args.gains = gains
+    if args.control_dt is None:
+        args.control_dt = args.timestep
+    return args, parser, params, faults
+
+
+def _scenario(args, params: dict, faults: list) -> Scenario:
     traj = args.traj
     if traj.lower().endswith(".csv"):
         traj = str(Path(traj))
+    eta = args.eta
+    try:
+        # A number goes through as a float: Params' string parsing takes '-' for '_'.
+        eta = float(eta)
+    except ValueError:
+        pass
     return Scenario(
         traj=traj,
         controller=args.controller,
-        gains=gains,
+        gains=args.gains,
         target=args.target,
         plant=args.plant,
-        eta=args.eta,
-        disturbance="none" if args.no_disturbance else args.disturbance_mode,
+        eta=eta,
+        disturbance=args.disturbance,
         noise_snr_db=args.noise_snr,
         param_scale=args.param_scale,
         duration=args.duration,
         seed=args.seed,
         timestep=args.timestep,
-        control_dt=args.control_dt if args.control_dt is not None else args.timestep,
+        control_dt=args.control_dt,
         start=args.start,
         friction=args.friction,
+        params=dict(params),
+        phi0_deg=args.phi0,
+        faults=list(faults),
     )
 
 
-def _output_dir(out: Path | None, scenario: Scenario) -> Path:
-    """A new, writable, empty folder; never one with files in it."""
+def _preflight(scenario: Scenario) -> np.ndarray:
+    """Everything ``simulate`` checks before it starts, so bad input is refused before an
+    output folder exists. Returns the reference polyline."""
+    from controllers import make_controller, reduced_model
+    from tt_mujoco.faults import FaultSchedule, parse_faults
+    from tt_mujoco.targets import make_target
+
+    scenario.validate()
+    nominal = scenario.nominal_params()
+    scenario.plant_params()
+    path, target, _ = make_target(
+        scenario.traj, kind=scenario.target, duration=scenario.duration, start=scenario.start
+    )
+    make_controller(
+        scenario.controller,
+        reduced_model(nominal),
+        torque_limit=nominal.torque_limit,
+        gains=scenario.gains,
+    )
+    FaultSchedule(parse_faults(scenario.faults), scenario.control_dt, float(target.duration))
+    return path.dense()
+
+
+def _output_dir(out: Path | None, scenario: Scenario) -> tuple[Path, bool]:
+    """A new (or existing but empty), writable folder; never one with files in it.
+
+    Returns the folder and whether this call created it (so that only such a folder is
+    removed again when the run is abandoned).
+    """
     if out is None:
         stem = Path(scenario.traj).stem if scenario.traj.endswith(".csv") else scenario.traj
         base = RENDERS / (
             f"{stem}-{scenario.controller}-{scenario.target}-{scenario.plant}-"
             f"{time.strftime('%Y%m%d-%H%M%S')}"
         )
-        out = base
-        i = 2
-        while out.exists():
-            out = base.with_name(f"{base.name}-{i}")
-            i += 1
-    elif out.exists() and (not out.is_dir() or any(out.iterdir())):
+        for i in range(1, 1000):
+            out = base if i == 1 else base.with_name(f"{base.name}-{i}")
+            try:
+                out.mkdir(parents=True)  # not exist_ok: parallel runs never share a folder
+            except FileExistsError:
+                continue
+            except OSError as err:
+                raise BadInputError(
+                    f"output folder {str(out)!r} cannot be created: {err.strerror}"
+                ) from None
+            _probe(out, created=True)
+            return out, True
+        raise BadInputError(f"no free output folder name under {str(RENDERS)!r}")
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise BadInputError(
             f"--out {str(out)!r} already exists and is not empty: outputs are never overwritten; "
             "name a new folder"
         )
+    created = not out.exists()
     try:
         out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise BadInputError(f"--out {str(out)!r} cannot be written: {err.strerror}") from None
+    _probe(out, created)
+    return out, created
+
+
+def _probe(out: Path, created: bool) -> None:
+    try:
         probe = out / ".write-test"
         probe.write_text("")
         probe.unlink()
     except OSError as err:
+        if created:
+            _remove_if_empty(out)
         raise BadInputError(f"--out {str(out)!r} cannot be written: {err.strerror}") from None
-    return out
 
 
 def _atomic_write(path: Path, data: str | bytes) -> None:
+    """Write to a temporary file in the same folder, flush it to disk, then rename: a reader
+    (or a crash) sees either no file or the complete one, never a partial one."""
     tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    if isinstance(data, str):
-        tmp.write_text(data)
-    else:
-        tmp.write_bytes(data)
-    os.replace(tmp, path)
+    try:
+        with open(tmp, "wb") as handle:
+            handle.write(data.encode() if isinstance(data, str) else data)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def _json_default(obj):
@@ -289,39 +483,70 @@ def read_timeseries(path: Path) -> dict[str, np.ndarray]:
     return {name: data[:, i] for i, name in enumerate(header)}
 
 
-def write_outputs(result, out: Path, video: bool, plots: bool, camera: str, fps: float, quiet):
-    """Write the time series, figures, video and (last) metrics.json into ``out``."""
+def write_outputs(
+    result,
+    out: Path,
+    video: bool,
+    plots: bool,
+    camera: str,
+    fps: float,
+    quiet,
+    config_toml: str | None = None,
+):
+    """Write ``config.toml`` (if given), the time series, figures, video and, last,
+    ``metrics.json`` into ``out``.
+
+    Every file appears complete or not at all: text files through a temporary file and a
+    rename; figures and video are made in a hidden staging folder and renamed into ``out``.
+    An interruption therefore leaves complete files and no ``metrics.json``.
+    """
     written = []
+    notes = []
+    if config_toml is not None:
+        from tt_mujoco.config import CONFIG_FILE
+
+        _atomic_write(out / CONFIG_FILE, config_toml)
+        written.append(out / CONFIG_FILE)
     _atomic_write(out / "timeseries.csv", timeseries_csv(result.timeseries))
     written.append(out / "timeseries.csv")
-    notes = []
-    if plots:
-        try:
-            from tt_mujoco import plots as plots_mod
-
-            written += plots_mod.plot_run(result.timeseries, result.reference_polyline, out)
-        except ImportError:
-            notes.append("plots skipped: tt_mujoco.plots is not available")
-    if video:
-        try:
-            from tt_mujoco import render
-
-            path = render.render_video(
-                result.timeseries,
-                result.scenario.plant_params(),
-                result.reference_polyline,
-                out / "video.mp4",
-                camera=camera,
-                fps=fps,
-                progress=not quiet,
-            )
-            written.append(path)
-        except ImportError:
-            notes.append("video skipped: tt_mujoco.render is not available")
-        except Exception as err:  # a missing GL backend must not lose the run's results
-            if type(err).__name__ != "RenderUnavailable":
-                raise
-            notes.append(f"video skipped: {err}")
+    staging = out / STAGING
+    try:
+        if plots:
+            try:
+                from tt_mujoco import plots as plots_mod
+            except ImportError:
+                notes.append("plots skipped: tt_mujoco.plots is not available")
+            else:
+                staging.mkdir(exist_ok=True)
+                made = plots_mod.plot_run(
+                    result.timeseries,
+                    result.reference_polyline,
+                    staging,
+                    params=result.scenario.plant_params(),
+                )
+                written += [_publish(Path(f), out) for f in made]
+        if video:
+            try:
+                from tt_mujoco import render
+            except ImportError:
+                notes.append("video skipped: tt_mujoco.render is not available")
+            else:
+                staging.mkdir(exist_ok=True)
+                try:
+                    path = render.render_video(
+                        result.timeseries,
+                        result.scenario.plant_params(),
+                        result.reference_polyline,
+                        staging / "video.mp4",
+                        camera=camera,
+                        fps=fps,
+                        progress=not quiet,
+                    )
+                    written.append(_publish(Path(path), out))
+                except render.RenderUnavailable as err:  # no GL must not lose the results
+                    notes.append(f"video skipped: {err}")
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
     doc = {
         **result.metrics,
         "message": result.message,
@@ -331,6 +556,13 @@ def write_outputs(result, out: Path, video: bool, plots: bool, camera: str, fps:
     _atomic_write(out / "metrics.json", json.dumps(doc, indent=2, default=_json_default) + "\n")
     written.append(out / "metrics.json")
     return written, notes
+
+
+def _publish(made: Path, out: Path) -> Path:
+    """Move a finished file from the staging folder into ``out`` (an atomic rename)."""
+    final = out / made.name
+    os.replace(made, final)
+    return final
 
 
 def _progress_bar(total_label: str, quiet: bool):
@@ -348,47 +580,90 @@ def _progress_bar(total_label: str, quiet: bool):
     return update, bar
 
 
+def _fail(message: str, code: int = EXIT_BAD_INPUT) -> int:
+    print(f"error: {message}", file=sys.stderr)
+    return code
+
+
 def main(argv: list[str] | None = None) -> int:
+    from tt_mujoco import config as config_mod
     from tt_mujoco import reduced, sim
+    from tt_mujoco import viewer as viewer_mod
 
     try:
-        args = build_parser().parse_args(argv)
-        scenario = _scenario(args)
-        scenario.validate()
-        scenario.nominal_params()  # parameter errors before any folder is made
-        out = _output_dir(args.out, scenario)
-    except (BadInputError, ValueError) as err:
-        print(f"error: {err}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-
-    update, bar = _progress_bar("simulating", args.quiet)
-    try:
-        result = sim.simulate(scenario, progress=update)
+        args, parser, params, faults = _parse(argv)
+        scenario = _scenario(args, params, faults)
+        polyline = _preflight(scenario)
+        config_toml = config_mod.dump_config(
+            config_mod.resolved_options(args, parser, params, faults)
+        )
+        live = None
+        if args.viewer:
+            if scenario.plant != "mujoco":
+                raise BadInputError(
+                    f"--viewer shows the MuJoCo plant; --plant {scenario.plant!r} has no "
+                    "MuJoCo model to show (use --plant mujoco)"
+                )
+            viewer_mod.check_display()
+            live = viewer_mod.LiveViewer(reference=polyline)
+        out, created = _output_dir(args.out, scenario)
     except (BadInputError, ValueError, reduced.SingularityError) as err:
+        return _fail(str(err))
+    except viewer_mod.ViewerUnavailable as err:
+        return _fail(str(err))
+
+    update, bar = _progress_bar("simulating", args.quiet or args.viewer)
+    try:
+        result = sim.simulate(scenario, progress=update, on_step=live)
+    except (BadInputError, ValueError, reduced.SingularityError) as err:
+        return _abandon(out, created, live, str(err), EXIT_BAD_INPUT)
+    except viewer_mod.ViewerUnavailable as err:
+        return _abandon(out, created, live, str(err), EXIT_BAD_INPUT)
+    except viewer_mod.ViewerClosed as err:
+        return _abandon(out, created, live, f"{err}: run abandoned", EXIT_INTERRUPTED)
+    except KeyboardInterrupt:
+        return _abandon(out, created, live, "interrupted: run abandoned", EXIT_INTERRUPTED)
+    finally:
         if bar is not None:
             bar.close()
-        _cleanup_empty(out)
-        print(f"error: {err}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    if bar is not None:
-        bar.close()
-    written, notes = write_outputs(
-        result,
-        out,
-        video=not args.no_video,
-        plots=not args.no_plots,
-        camera=args.camera,
-        fps=args.fps,
-        quiet=args.quiet,
-    )
+    try:
+        written, notes = write_outputs(
+            result,
+            out,
+            video=args.video,
+            plots=args.plots,
+            camera=args.camera,
+            fps=args.fps,
+            quiet=args.quiet,
+            config_toml=config_toml,
+        )
+    except KeyboardInterrupt:
+        if live is not None:
+            live.close()
+        return _fail(
+            f"interrupted while writing outputs: the files in {out}/ are complete, but "
+            "metrics.json was not written, so the run's outputs are incomplete",
+            EXIT_INTERRUPTED,
+        )
     _print_summary(result, out, written, notes)
+    if live is not None:
+        live.wait_closed()
     if not result.ok:
-        print(f"error: the run stopped: {result.message}", file=sys.stderr)
-        return EXIT_DIVERGED
+        return _fail(f"the run stopped: {result.message}", EXIT_DIVERGED)
     return EXIT_OK
 
 
-def _cleanup_empty(out: Path) -> None:
+def _abandon(out: Path, created: bool, live, message: str, code: int) -> int:
+    """A run that produced no result: close the viewer, remove the folder made for it."""
+    if live is not None:
+        live.close()
+    if created:
+        _remove_if_empty(out)
+    nothing = "nothing was written" if not out.exists() or not any(out.iterdir()) else ""
+    return _fail(f"{message}{'; ' + nothing if nothing else ''}", code)
+
+
+def _remove_if_empty(out: Path) -> None:
     try:
         if out.is_dir() and not any(out.iterdir()):
             out.rmdir()
@@ -406,6 +681,13 @@ def _print_summary(result, out: Path, written, notes) -> None:
         f"status={result.status}"
     )
     print(summary_table(result.metrics, keys=[k for k in SUMMARY_KEYS if k in result.metrics]))
+    for fault in result.metrics.get("faults", []):
+        w = fault["window"]
+        print(
+            f"fault {fault['kind']} at t={fault['t']:g} s, until {RECOVERY_S:g} s after its end: "
+            f"max|e_v| {w['max_abs_v']:.4g} m/s, max|e_omega| {w['max_abs_omega']:.4g} rad/s, "
+            f"max lateral {w['max_lateral']:.4g} m"
+        )
     for note in notes:
         print(f"note: {note}")
     print(f"wrote {len(written)} files to {out}/")

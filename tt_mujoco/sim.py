@@ -15,6 +15,10 @@ like for like:
 Divergence is detected, never hidden: a jackknife (|beta| or |phi| near 90 deg), a singular
 nominal model, non-finite numbers or MuJoCo warnings stop the run, which keeps every sample up
 to that point and reports the time and state.
+
+Faults (:mod:`tt_mujoco.faults`: a payload step, sensor dropout, an actuator losing torque)
+hook into the loop only when ``Scenario.faults`` lists some; a run without faults takes none of
+those branches.
 """
 
 from __future__ import annotations
@@ -86,6 +90,12 @@ JACKKNIFE_DEG = 85.0
 MAX_SPEED = 20.0
 
 
+def jackknife_phi_deg(eta: float) -> float:
+    """|phi| (deg) at which a run stops as a jackknife: |beta| = |eta phi| reaches
+    :data:`JACKKNIFE_DEG`, or |phi| reaches 90 deg (the trailer across the tractor)."""
+    return min(JACKKNIFE_DEG / abs(eta), 90.0) if eta else 90.0
+
+
 def disturbance(t: float) -> tuple[float, float]:
     """The paper's multi-frequency disturbance (Section 6.1), in (v_dot, omega_dot):
     ``Delta1 = 3.5 + sin(0.3 t) + 0.5 cos(2 t)`` m/s^2, ``Delta2 = 1.5 sin(0.3 t) + 0.5 cos(5 t)``
@@ -118,6 +128,18 @@ class Scenario:
     start: str = "on_path"
     friction: float = 1.0
     params: dict = field(default_factory=dict)
+    #: Initial articulation phi (deg), with beta = eta phi; must stay short of the jackknife.
+    phi0_deg: float = 0.0
+    #: Fault specs (dicts or ``KIND:key=value,...`` strings), see :mod:`tt_mujoco.faults`.
+    faults: list = field(default_factory=list)
+    #: Outer path-feedback loop on omega_d (:mod:`tt_mujoco.feedback`): None (off) or a dict
+    #: of gains, ``{}`` for the defaults (k_y, k_psi, c_max).
+    path_feedback: dict | None = None
+    #: Curvature-scheduled steering (:class:`tt_mujoco.steering.EtaScheduler`): the plant's eta
+    #: follows the exact same-path gain of the target's curvature; the controller keeps ``eta``.
+    eta_schedule: bool = False
+    #: Drive the path backwards, trailer first (:class:`tt_mujoco.steering.ReverseTarget`).
+    reverse: bool = False
 
     def validate(self) -> None:
         """Raise ValueError naming the first bad field and what is allowed."""
@@ -151,6 +173,32 @@ class Scenario:
             )
         if not isinstance(self.seed, int) or isinstance(self.seed, bool) or self.seed < 0:
             raise ValueError(f"seed={self.seed!r} is not allowed: it must be an integer >= 0")
+        for name in ("eta_schedule", "reverse"):
+            value = getattr(self, name)
+            if not isinstance(value, bool):
+                raise ValueError(f"{name}={value!r} is not allowed: use True or False")
+        if self.path_feedback is not None:
+            from tt_mujoco.feedback import check_config
+
+            check_config(self.path_feedback)
+        from tt_mujoco.faults import parse_faults
+
+        parse_faults(self.faults)
+        self._check_phi0()
+
+    def _check_phi0(self) -> None:
+        phi0 = self.phi0_deg
+        if isinstance(phi0, bool) or not isinstance(phi0, int | float) or not math.isfinite(phi0):
+            raise ValueError(f"phi0={phi0!r} deg is not allowed: it must be a finite number")
+        eta = self.nominal_params().eta
+        limit = jackknife_phi_deg(eta)
+        if abs(phi0) >= limit:
+            singular = math.inf if eta == 0 else 90.0 / abs(eta)
+            raise ValueError(
+                f"phi0={phi0!r} deg is not allowed: with eta={eta:g} the model is singular at "
+                f"|phi| = {singular:.4g} deg (|beta| = |eta phi| = 90 deg) and a run stops as a "
+                f"jackknife at |phi| = {limit:.4g} deg; use |phi0| < {limit:.4g} deg"
+            )
 
     def nominal_params(self) -> Params:
         """The controller's model: paper values, this steering and timestep, plus overrides."""
@@ -192,14 +240,14 @@ class _StopRunError(Exception):
 class _MujocoPlant:
     """MuJoCo behind the loop's small plant interface."""
 
-    def __init__(self, params: Params, pose, v_init: float, wrench: bool):
+    def __init__(self, params: Params, pose, v_init: float, wrench: bool, phi0: float = 0.0):
         import mujoco
 
         from tt_mujoco.physics import Vehicle
 
         self._mujoco = mujoco
         self.vehicle = Vehicle(params)
-        self.vehicle.set_state(x=pose[0], y=pose[1], theta=pose[2], v=v_init)
+        self.vehicle.set_state(x=pose[0], y=pose[1], theta=pose[2], phi=phi0, v=v_init)
         self.model, self.data = self.vehicle.model, self.vehicle.data
         lay = self.vehicle.layout
         self._wheel_r, self._wheel_l = lay.wheel_right_v, lay.wheel_left_v
@@ -210,6 +258,15 @@ class _MujocoPlant:
 
     def measure(self):
         return self.vehicle.measure()
+
+    def scale_trailer_mass(self, factor: float) -> None:
+        """Payload step: trailer body mass and inertia times ``factor``. MuJoCo builds the
+        mass matrix from ``body_mass``/``body_inertia`` every step, so this acts at once
+        (only the solver's compile-time ``body_invweight0``, which scales contact softness,
+        keeps its old value)."""
+        body = self.model.body("trailer_body").id
+        self.model.body_mass[body] *= factor
+        self.model.body_inertia[body] *= factor
 
     def apply(self, T_r, T_l, dist_r, dist_l, wrench_force, wrench_torque, theta):
         d = self.data
@@ -240,9 +297,9 @@ class _MujocoPlant:
 class _ReducedPlantAdapter:
     """The reduced ODE behind the same interface; measurements are exact (no slip)."""
 
-    def __init__(self, params: Params, pose, v_init: float, timestep: float):
+    def __init__(self, params: Params, pose, v_init: float, timestep: float, phi0: float = 0.0):
         self.params = params
-        state = [pose[0], pose[1], pose[2], 0.0, 0.0, 0.0, v_init, 0.0]
+        state = [pose[0], pose[1], pose[2], phi0, 0.0, 0.0, v_init, 0.0]
         self.plant = reduced.ReducedPlant(params, state=state)
         self.timestep = timestep
         self._tau = (0.0, 0.0)
@@ -280,6 +337,12 @@ class _ReducedPlantAdapter:
     def apply(self, T_r, T_l, dist_r, dist_l, wrench_force, wrench_torque, theta):
         self._tau = (T_r + dist_r, T_l + dist_l)
 
+    def scale_trailer_mass(self, factor: float) -> None:
+        """Payload step: the trailer body's ``Mr`` and ``Ird`` times ``factor``."""
+        p = self.params
+        self.params = p.replace(Mr=p.Mr * factor, Ird=p.Ird * factor)
+        self.plant.params = self.params
+
     def advance(self, substeps: int) -> None:
         for _ in range(substeps):
             self.plant.step(self._tau, self.timestep)
@@ -301,7 +364,42 @@ def _noise_std(target, duration: float, snr_db: float) -> tuple[float, float]:
     return math.sqrt(np.mean(v**2) * scale), math.sqrt(np.mean(w**2) * scale)
 
 
-def simulate(scenario: Scenario, progress=None) -> Result:
+_LOOP_COLUMNS = (
+    "t",
+    "s",
+    "v_d",
+    "omega_d",
+    "v_d_dot",
+    "omega_d_dot",
+    "v_meas",
+    "omega_meas",
+    "T_r",
+    "T_l",
+    "T_r_cmd",
+    "T_l_cmd",
+    "dist_T_r",
+    "dist_T_l",
+    "kappa_d",
+)
+
+
+def _assemble_columns(measured: list, logged: list, eta: float) -> dict[str, np.ndarray]:
+    """The time series in :data:`COLUMNS` order from the per-step measurement tuples and the
+    loop's own values (``x_ref``/``y_ref`` are left NaN for the caller to fill)."""
+    from tt_mujoco.measure import Measurement
+
+    n = len(logged)
+    meas = np.array(measured, dtype=float).reshape(n, len(Measurement._fields))
+    loop = np.array(logged, dtype=float).reshape(n, len(_LOOP_COLUMNS))
+    cols = {name: meas[:, i] for i, name in enumerate(Measurement._fields)}
+    cols.update({name: loop[:, i] for i, name in enumerate(_LOOP_COLUMNS)})
+    cols["eq_violation"] = cols["beta"] - eta * cols["phi"]
+    cols["x_ref"] = np.full(n, np.nan)
+    cols["y_ref"] = np.full(n, np.nan)
+    return {name: np.ascontiguousarray(cols[name]) for name in COLUMNS}
+
+
+def simulate(scenario: Scenario, progress=None, on_step=None) -> Result:
     """Run one scenario. Never raises for a diverging run: see ``Result.status``.
 
     Parameters
@@ -309,6 +407,10 @@ def simulate(scenario: Scenario, progress=None) -> Result:
     scenario : Scenario
     progress : callable, optional
         Called as ``progress(steps_done, steps_total)`` about every 1 % of the run.
+    on_step : callable, optional
+        Called as ``on_step(t, plant)`` after every control step, ``t`` the new time and
+        ``plant`` the loop's plant (``.model``/``.data`` on the MuJoCo plant); the live viewer
+        uses it. An exception it raises ends the run and propagates.
 
     Raises
     ------
@@ -316,6 +418,7 @@ def simulate(scenario: Scenario, progress=None) -> Result:
         For bad configuration values (before anything is simulated).
     """
     from controllers import make_controller, reduced_model
+    from tt_mujoco import faults as faults_mod
     from tt_mujoco import metrics as metrics_mod
     from tt_mujoco.targets import make_target
 
@@ -326,6 +429,21 @@ def simulate(scenario: Scenario, progress=None) -> Result:
         scenario.traj, kind=scenario.target, duration=scenario.duration, start=scenario.start
     )
     duration = float(target.duration)
+    if scenario.reverse:
+        from tt_mujoco.steering import ReverseTarget
+
+        target = ReverseTarget(target)
+        pose = target.initial_pose
+    feedback = None
+    if scenario.path_feedback is not None:
+        from tt_mujoco.feedback import PathFeedback
+
+        feedback = PathFeedback.from_config(target, scenario.path_feedback)
+    faults = None
+    if scenario.faults:
+        faults = faults_mod.FaultSchedule(
+            faults_mod.parse_faults(scenario.faults), scenario.control_dt, duration
+        )
     # The controller is built before the plant so that bad gains fail before any work.
     ctrl = make_controller(
         scenario.controller,
@@ -343,15 +461,23 @@ def simulate(scenario: Scenario, progress=None) -> Result:
     # Section 6.3). The paper's static cycloid target starts at 0.765 m/s while its vehicle is
     # at rest; that step spins the wheels in contact physics. "paper" reproduces it.
     v_init = target.reference_speed(0.0) if scenario.start == "on_path" else 0.0
+    phi0 = math.radians(scenario.phi0_deg)
     if scenario.plant == "mujoco":
-        plant = _MujocoPlant(plant_p, pose, v_init, wrench=scenario.disturbance == "wrench")
+        wrench_mode = scenario.disturbance == "wrench"
+        plant = _MujocoPlant(plant_p, pose, v_init, wrench=wrench_mode, phi0=phi0)
     else:
-        plant = _ReducedPlantAdapter(plant_p, pose, v_init, scenario.timestep)
+        plant = _ReducedPlantAdapter(plant_p, pose, v_init, scenario.timestep, phi0=phi0)
+    scheduler = None
+    if scenario.eta_schedule:
+        from tt_mujoco.steering import EtaScheduler
+
+        scheduler = EtaScheduler(plant, plant_p)
 
     dt = scenario.control_dt
     substeps = round(dt / scenario.timestep)
     n = round(duration / dt)
-    log = np.full((n + 1, len(COLUMNS)), np.nan)
+    measured: list = []
+    logged: list[tuple] = []
     use_dist = scenario.disturbance != "none"
     wrench = scenario.disturbance == "wrench"
     eta = nominal.eta
@@ -383,13 +509,24 @@ def simulate(scenario: Scenario, progress=None) -> Result:
                 )
             v_m = me.v + (noise_v * rng.standard_normal() if noise_v else 0.0)
             w_m = me.omega + (noise_w * rng.standard_normal() if noise_w else 0.0)
-            v_d, w_d, v_d_dot, w_d_dot = target.update(t, dt, v_m)
+            phi_m = me.phi
+            if faults is not None:
+                phi_m, v_m, w_m = faults.sensor(k, phi_m, v_m, w_m)
+            if feedback is None:
+                v_d, w_d, v_d_dot, w_d_dot = target.update(t, dt, v_m)
+            else:
+                v_d, w_d, v_d_dot, w_d_dot = feedback.update(t, dt, v_m, me.x, me.y, me.theta)
             try:
-                T_r, T_l = ctrl.step(dt, me.phi, v_m, w_m, v_d, w_d, v_d_dot, w_d_dot)
+                T_r, T_l = ctrl.step(dt, phi_m, v_m, w_m, v_d, w_d, v_d_dot, w_d_dot)
             except FloatingPointError as err:
                 msg = f"controller failed at t={t:.3f} s: {err}"
                 raise _StopRunError("diverged", msg) from None
             T_r_cmd, T_l_cmd = ctrl.command
+            if faults is not None:
+                T_r, T_l = faults.torque(k, T_r, T_l)
+                factor = faults.payload_factor(k)
+                if factor is not None:
+                    plant.scale_trailer_mass(factor)
             dist_r = dist_l = force = torque = 0.0
             if use_dist:
                 a_v, a_w = disturbance(t)
@@ -401,66 +538,60 @@ def simulate(scenario: Scenario, progress=None) -> Result:
                     torque = M[1, 0] * a_v + M[1, 1] * a_w
                 else:
                     dist_r, dist_l = matched_torque(me.phi, a_v, a_w, nominal)
-            ref_x, ref_y = target.reference_point(t)
-            log[k] = (
-                t,
-                me.x,
-                me.y,
-                me.theta,
-                me.phi,
-                me.beta,
-                me.v,
-                me.omega,
-                me.x0,
-                me.y0,
-                me.theta0,
-                me.v0,
-                me.theta_l,
-                me.theta_r,
-                target.arc_length,
-                ref_x,
-                ref_y,
-                v_d,
-                w_d,
-                v_d_dot,
-                w_d_dot,
-                v_m,
-                w_m,
-                T_r,
-                T_l,
-                T_r_cmd,
-                T_l_cmd,
-                dist_r,
-                dist_l,
-                me.slip_lateral,
-                me.slip_lateral_trailer,
-                me.slip_left,
-                me.slip_right,
-                me.beta - eta * me.phi,
-                target.curvature,
+            # Log the measurement tuple as it is and the loop's own values beside it:
+            # columns are assembled once after the loop (per-step attribute access is costly).
+            measured.append(me)
+            logged.append(
+                (
+                    t,
+                    target.arc_length,
+                    v_d,
+                    w_d,
+                    v_d_dot,
+                    w_d_dot,
+                    v_m,
+                    w_m,
+                    T_r,
+                    T_l,
+                    T_r_cmd,
+                    T_l_cmd,
+                    dist_r,
+                    dist_l,
+                    target.curvature,
+                )
             )
             if k == n:
                 plant.check_warnings()
                 break
+            if scheduler is not None:
+                scheduler.update(target.curvature, k)
             plant.apply(T_r, T_l, dist_r, dist_l, force, torque, me.theta)
             try:
                 plant.advance(substeps)
             except reduced.SingularityError as err:
                 raise _StopRunError("jackknife", f"jackknife at t={t + dt:.3f} s: {err}") from None
+            if on_step is not None:
+                on_step(t + dt, plant)
             if progress is not None and k % report_every == 0:
                 progress(k, n)
     except _StopRunError as stop:
         status, message = stop.status, stop.message
-        log = log[: k + (1 if not np.isnan(log[k, 0]) else 0)]
     wall = time.perf_counter() - start_wall
     if progress is not None:
         progress(n, n)
 
-    ts = {name: log[:, i].copy() for i, name in enumerate(COLUMNS)}
+    ts = _assemble_columns(measured, logged, eta)
+    if scheduler is not None:
+        ts["eq_violation"] = ts["beta"] - scheduler.eta_series(len(logged)) * ts["phi"]
+    if len(logged):
+        ref = target.reference_point(ts["t"])
+        ts["x_ref"], ts["y_ref"] = (np.asarray(c, dtype=float) for c in ref)
     polyline = path.dense()
     metrics = metrics_mod.compute_metrics(ts, polyline, nominal.torque_limit)
     metrics["wall_time_s"] = wall
     metrics["status"] = status
+    if faults is not None:
+        metrics["faults"] = faults_mod.fault_report(faults, ts, polyline, nominal.torque_limit)
     config = {
         "scenario": scenario.to_dict(),
         "nominal_params": nominal.to_dict(),

@@ -1,0 +1,158 @@
+"""Scenario files: options from TOML, command line over file, and exact repeats from a run's
+own config.toml."""
+
+import json
+import tomllib
+
+import pytest
+
+from tt_mujoco import config, run
+
+SCENARIO_TOML = """
+traj = "circle"
+controller = "pid"
+duration = 1.5
+noise-snr = 20        # hyphenated keys are accepted too
+seed = 3
+video = false
+plots = false
+quiet = true
+
+[params]
+Mr = 7.0
+Ird = 0.025
+
+[[faults]]
+kind = "dropout"
+t = 0.5
+duration = 0.05
+"""
+
+
+def without_wall_time(doc: dict) -> dict:
+    return {k: v for k, v in doc.items() if k != "wall_time_s"}
+
+
+def test_run_writes_its_config_and_repeats_exactly_from_it(tmp_path):
+    scenario = tmp_path / "scenario.toml"
+    scenario.write_text(SCENARIO_TOML)
+    first, second = tmp_path / "first", tmp_path / "second"
+    # The command line overrides the file: fbl instead of pid, and one more parameter.
+    code = run.main(
+        ["--config", str(scenario), "--controller", "fbl", "--param", "Mf=9.5", "--out", str(first)]
+    )
+    assert code == 0
+    doc = json.loads((first / "metrics.json").read_text())
+    used = doc["config"]["scenario"]
+    assert used["controller"] == "fbl"
+    assert used["traj"] == "circle" and used["duration"] == 1.5 and used["seed"] == 3
+    assert used["noise_snr_db"] == 20.0
+    assert used["params"] == {"Mr": 7.0, "Ird": 0.025, "Mf": 9.5}
+    assert used["faults"] == [{"kind": "dropout", "t": 0.5, "duration": 0.05}]
+    assert doc["faults"][0]["held_steps"] == 50  # 0.05 s at 1 kHz
+
+    written = tomllib.loads((first / "config.toml").read_text())
+    assert written["controller"] == "fbl"
+    assert written["params"] == {"Mr": 7.0, "Ird": 0.025, "Mf": 9.5}
+    assert "out" not in written and "quiet" not in written and "viewer" not in written
+
+    assert run.main(["--config", str(first / "config.toml"), "--out", str(second), "--quiet"]) == 0
+    assert (first / "timeseries.csv").read_bytes() == (second / "timeseries.csv").read_bytes()
+    again = json.loads((second / "metrics.json").read_text())
+    assert without_wall_time(again) == without_wall_time(doc)
+    assert (second / "config.toml").read_text() == (first / "config.toml").read_text()
+
+
+def parse(argv):
+    args, _, params, faults = run._parse(argv)
+    return args, params, faults
+
+
+def test_command_line_overrides_file_key_by_key(tmp_path):
+    path = tmp_path / "c.toml"
+    path.write_text(SCENARIO_TOML)
+    args, params, faults = parse(["--config", str(path)])
+    assert (args.traj, args.controller, args.duration, args.noise_snr) == ("circle", "pid", 1.5, 20)
+    assert not args.video and not args.plots and args.quiet
+    assert params == {"Mr": 7.0, "Ird": 0.025}
+    assert faults == [{"kind": "dropout", "t": 0.5, "duration": 0.05}]
+
+    args, params, faults = parse(
+        [
+            "--config",
+            str(path),
+            "--duration",
+            "2",
+            "--video",
+            "--no-quiet",
+            "--param",
+            "Mr=8",
+            "--fault",
+            "actuator:t=1,wheel=left",
+        ]
+    )
+    assert args.duration == 2.0 and args.video and not args.quiet
+    assert args.traj == "circle"  # untouched keys still come from the file
+    assert params == {"Mr": 8.0, "Ird": 0.025}  # per key
+    # --fault replaces the file's list (an override, not an addition).
+    assert faults == [
+        {"kind": "actuator", "t": 1.0, "duration": 1.0, "scale": 0.3, "wheel": "left"}
+    ]
+
+
+def test_no_disturbance_flag_overrides_file_mode(tmp_path):
+    path = tmp_path / "c.toml"
+    path.write_text('disturbance = "wrench"\n')
+    assert parse(["--config", str(path)])[0].disturbance == "wrench"
+    assert parse(["--config", str(path), "--no-disturbance"])[0].disturbance == "none"
+    assert parse([])[0].disturbance == "matched"
+
+
+def test_relative_csv_path_is_relative_to_the_file(tmp_path, monkeypatch):
+    folder = tmp_path / "scenarios"
+    folder.mkdir()
+    (folder / "lane.csv").write_text("x,y\n0,0\n1,0\n2,0.2\n3,0.6\n4,1.2\n")
+    (folder / "lane.toml").write_text('traj = "lane.csv"\n')
+    monkeypatch.chdir(tmp_path)  # not the file's folder
+    args, _, _ = parse(["--config", "scenarios/lane.toml"])
+    assert args.traj == str(folder / "lane.csv")
+
+
+def test_resolved_options_round_trip_through_toml(tmp_path):
+    argv = [
+        "--traj",
+        "cycloid",
+        "--eta",
+        "-0.2",
+        "--gains",
+        '{"k1_v": 12.5}',
+        "--control-dt",
+        "0.002",
+        "--phi0",
+        "-3.25",
+        "--param",
+        "Mw=3.5",
+        "--fault",
+        "payload:t=1,factor=1.25",
+        "--no-plots",
+    ]
+    args, parser, params, faults = run._parse(argv)
+    options = config.resolved_options(args, parser, params, faults)
+    path = tmp_path / config.CONFIG_FILE
+    path.write_text(config.dump_config(options))
+    assert path.read_text().startswith("# Resolved options")
+    again, _, params2, faults2 = run._parse(["--config", str(path)])
+    for key in options:
+        if key not in ("params", "faults"):
+            assert getattr(again, key) == getattr(args, key), key
+    assert again.gains == {"k1_v": 12.5} and again.control_dt == 0.002
+    assert again.eta == "-0.2" and again.phi0 == -3.25
+    assert params2 == params == {"Mw": 3.5}
+    assert faults2 == faults == [{"kind": "payload", "t": 1.0, "factor": 1.25}]
+
+
+def test_unknown_fault_key_in_file_names_it(tmp_path):
+    path = tmp_path / "c.toml"
+    path.write_text('[[faults]]\nkind = "payload"\nt = 1.0\nmass = 3.0\n')
+    with pytest.raises(ValueError, match="option 'mass' is not allowed"):
+        parse(["--config", str(path)])

@@ -1,0 +1,109 @@
+"""The Gymnasium environment: API conformance, and that it is the same plant as ``simulate``."""
+
+import math
+
+import numpy as np
+import pytest
+
+gymnasium = pytest.importorskip("gymnasium")
+
+from gymnasium.utils.env_checker import check_env  # noqa: E402
+
+from controllers import make_controller, reduced_model  # noqa: E402
+from tt_mujoco import gym_env  # noqa: E402
+from tt_mujoco.sim import Scenario, simulate  # noqa: E402
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")  # advisory: unbounded obs, torque units
+def test_gymnasium_env_checker_passes():
+    env = gym_env.TractorTrailerEnv(duration=0.5)
+    check_env(env, skip_render_check=True)
+
+
+def test_registered_and_makes_the_reduced_plant_too():
+    env = gymnasium.make(gym_env.ENV_ID, traj="circle", plant="reduced", duration=0.2)
+    obs, _ = env.reset(seed=3)
+    assert obs.shape == (len(gym_env.OBSERVATION_NAMES),)
+    obs, _, terminated, _, info = env.step(np.zeros(2, dtype=np.float32))
+    assert info["status"] == "running" and not terminated
+    assert np.all(np.isfinite(obs))
+    env.close()
+
+
+def test_reward_is_negative_squared_tracking_error_and_episode_truncates():
+    env = gym_env.TractorTrailerEnv(traj="circle", duration=0.3)
+    env.reset(seed=0)
+    names = gym_env.OBSERVATION_NAMES
+    steps = 0
+    while True:
+        obs, reward, terminated, truncated, info = env.step(np.array([1.0, 1.0]))
+        steps += 1
+        o = dict(zip(names, obs, strict=True))
+        # No noise: the observed v, omega are the true ones the reward uses.
+        e_v, e_omega = o["v"] - o["v_d"], o["omega"] - o["omega_d"]
+        assert reward == pytest.approx(-(e_v**2 + e_omega**2), rel=1e-12, abs=1e-300)
+        assert reward == -(info["e_v"] ** 2 + info["e_omega"] ** 2)
+        if terminated or truncated:
+            break
+    assert truncated and not terminated
+    assert steps == round(0.3 / gym_env.DEFAULT_CONTROL_DT)
+    assert info["t"] == pytest.approx(0.3)
+
+
+def test_same_seed_same_observations_with_noise():
+    def rollout(seed):
+        env = gym_env.TractorTrailerEnv(duration=0.2, noise_snr_db=20.0)
+        obs, _ = env.reset(seed=seed)
+        seen = [obs]
+        for _ in range(20):
+            seen.append(env.step(np.array([2.0, 1.0]))[0])
+        return np.array(seen)
+
+    a, b, c = rollout(7), rollout(7), rollout(8)
+    assert np.array_equal(a, b)
+    assert not np.array_equal(a, c)  # the noise follows the seed
+
+
+def test_jackknife_terminates_with_a_penalty_worse_than_any_tracking():
+    # The paper's eta = 3 jackknifes forward (SPEC 3); start close to it and push hard.
+    env = gym_env.TractorTrailerEnv(eta="paper", duration=5.0)
+    env.reset(seed=0, options={"phi0_deg": 20.0})
+    for _ in range(500):
+        _, reward, terminated, truncated, info = env.step(np.array([15.0, -15.0]))
+        if terminated or truncated:
+            break
+    assert terminated and info["status"] == "jackknife"
+    assert reward <= -1.0
+
+
+def test_env_is_the_simulate_plant():
+    """The ISMC-STA controller driven through the env reproduces ``simulate`` exactly."""
+    scenario = Scenario(
+        traj="s_curve", duration=1.0, disturbance="matched", control_dt=0.01, noise_snr_db=20.0
+    )
+    reference = simulate(scenario).timeseries
+    env = gym_env.TractorTrailerEnv(scenario)
+    nominal = scenario.nominal_params()
+    ctrl = make_controller("ismc_sta", reduced_model(nominal), torque_limit=nominal.torque_limit)
+    ctrl.reset()
+    names = gym_env.OBSERVATION_NAMES
+    obs, info = env.reset(seed=scenario.seed)  # same noise stream as simulate's default_rng
+    xs, vs = [], []
+    while True:
+        o = dict(zip(names, obs, strict=True))
+        xs.append(o["x"])
+        vs.append(o["v"])
+        torques = ctrl.step(
+            env.dt, o["phi"], o["v"], o["omega"], o["v_d"], o["omega_d"],
+            info["v_d_dot"], info["omega_d_dot"],
+        )  # fmt: skip
+        obs, _, terminated, truncated, info = env.step(np.array(torques))
+        if terminated or truncated:
+            o = dict(zip(names, obs, strict=True))
+            xs.append(o["x"])
+            vs.append(o["v"])
+            break
+    assert len(xs) == len(reference["t"])
+    assert np.array_equal(np.array(xs), reference["x"])
+    assert np.array_equal(np.array(vs), reference["v_meas"])  # noisy v, bit for bit
+    assert math.isfinite(xs[-1])

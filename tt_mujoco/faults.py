@@ -1,0 +1,278 @@
+"""Fault injection for the closed loop: a payload step, sensor dropout, an actuator losing torque.
+
+A fault is a small spec, given as a dict (a TOML ``[[faults]]`` table) or as the text of
+``--fault KIND:key=value,...``:
+
+- ``payload``: at time ``t`` the trailer body's mass and yaw inertia (``Mr``, ``Ird``; the
+  payload bed at P0) are multiplied by ``factor`` (default 1.5, "+50 %") for the rest of the
+  run. The controller keeps its nominal model, so it does not know.
+- ``dropout``: from ``t`` for ``duration`` s (default 0.1) the controller's measurements
+  (phi, v, omega, after any noise) hold the last value received before the dropout; the
+  dynamic target integrates the held speed too, as it would on a vehicle.
+- ``actuator``: from ``t`` for ``duration`` s (default 1) the ``wheel`` ("right", "left" or
+  "both") delivers ``scale`` (default 0.3) of the torque the controller asked for.
+
+Two further faults of the issue are ordinary scenario options, not specs: low friction is
+``Scenario.friction`` (``--friction 0.3``) and the disturbance that exceeds traction is
+``Scenario.disturbance = "wrench"`` (``--disturbance-mode wrench``, SPEC Section 8).
+
+Timing is by control step: a fault starting at ``t`` acts from the first control step at or
+after ``t``, and a ``duration`` covers ``round(duration / control_dt)`` steps, so runs are
+exactly repeatable. :func:`fault_report` summarises each fault's effect for ``metrics.json``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+__all__ = [
+    "FAULT_KINDS",
+    "RECOVERY_S",
+    "Fault",
+    "FaultSchedule",
+    "fault_report",
+    "parse_fault",
+    "parse_faults",
+    "window_errors",
+]
+
+#: Each kind's options and their defaults (``t`` is required for all).
+FAULT_KINDS: dict[str, dict[str, float | str]] = {
+    "payload": {"factor": 1.5},
+    "dropout": {"duration": 0.1},
+    "actuator": {"duration": 1.0, "scale": 0.3, "wheel": "both"},
+}
+WHEELS = ("right", "left", "both")
+#: A fault's report window runs this long past its end: the controller's recovery.
+RECOVERY_S = 1.0
+
+
+@dataclass(frozen=True)
+class Fault:
+    """One fault, validated. ``duration`` is ``inf`` for a payload step (it stays)."""
+
+    kind: str
+    t: float
+    duration: float = math.inf
+    factor: float = 1.0
+    scale: float = 1.0
+    wheel: str = "both"
+
+    def to_dict(self) -> dict:
+        """The spec as it would be written in TOML: only the kind's own options."""
+        full = asdict(self)
+        return {"kind": self.kind, "t": self.t, **{k: full[k] for k in FAULT_KINDS[self.kind]}}
+
+    @property
+    def label(self) -> str:
+        opts = ", ".join(f"{k}={v}" for k, v in self.to_dict().items() if k != "kind")
+        return f"{self.kind}({opts})"
+
+
+def _number(kind: str, key: str, value, low: float, high: float, low_open: bool = False):
+    text = value
+    if isinstance(value, str):
+        try:
+            value = float(value)
+        except ValueError:
+            raise ValueError(f"fault {kind}: {key}={text!r} is not a number") from None
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ValueError(f"fault {kind}: {key}={text!r} is not a number")
+    value = float(value)
+    ok = math.isfinite(value) and (value > low if low_open else value >= low) and value <= high
+    if not ok:
+        interval = f"{'(' if low_open else '['}{low:g}, {high:g}]"
+        raise ValueError(f"fault {kind}: {key}={text!r} is not allowed: it must be in {interval}")
+    return value
+
+
+def _split_text(spec: str) -> dict:
+    """``"actuator:t=2,scale=0.3"`` -> ``{"kind": "actuator", "t": "2", "scale": "0.3"}``."""
+    kind, _, rest = spec.partition(":")
+    out: dict = {"kind": kind.strip()}
+    for item in filter(None, (part.strip() for part in rest.split(","))):
+        key, sep, value = item.partition("=")
+        if not sep or not key.strip():
+            raise ValueError(
+                f"fault {spec!r}: {item!r} is not key=value; write e.g. 'actuator:t=2,scale=0.3'"
+            )
+        out[key.strip()] = value.strip()
+    return out
+
+
+def parse_fault(spec) -> Fault:
+    """A :class:`Fault` from a dict, a ``KIND:key=value,...`` string or a Fault.
+
+    Raises
+    ------
+    ValueError
+        Unknown kind or option, a missing ``t``, or a value out of range; the message names it.
+    """
+    if isinstance(spec, Fault):
+        return spec
+    if isinstance(spec, str):
+        spec = _split_text(spec)
+    if not isinstance(spec, dict):
+        raise ValueError(f"fault {spec!r} is not allowed: give a table or 'KIND:key=value,...'")
+    kind = spec.get("kind")
+    if kind not in FAULT_KINDS:
+        raise ValueError(f"fault kind={kind!r} is not allowed: use one of {', '.join(FAULT_KINDS)}")
+    allowed = ("kind", "t", *FAULT_KINDS[kind])
+    unknown = [k for k in spec if k not in allowed]
+    if unknown:
+        raise ValueError(
+            f"fault {kind}: option {unknown[0]!r} is not allowed: use {', '.join(allowed[1:])}"
+        )
+    if "t" not in spec:
+        raise ValueError(f"fault {kind}: the start time t (s) is missing")
+    options = {**FAULT_KINDS[kind], **{k: v for k, v in spec.items() if k != "kind"}}
+    t = _number(kind, "t", options["t"], 0.0, 600.0)
+    if kind == "payload":
+        factor = _number(kind, "factor", options["factor"], 0.0, 100.0, low_open=True)
+        return Fault(kind, t, factor=factor)
+    duration = _number(kind, "duration", options["duration"], 0.0, 600.0, low_open=True)
+    if kind == "dropout":
+        return Fault(kind, t, duration=duration)
+    scale = _number(kind, "scale", options["scale"], 0.0, 1.0)
+    wheel = options["wheel"]
+    if wheel not in WHEELS:
+        raise ValueError(f"fault actuator: wheel={wheel!r} is not allowed: use one of {WHEELS}")
+    return Fault(kind, t, duration=duration, scale=scale, wheel=wheel)
+
+
+def parse_faults(specs) -> tuple[Fault, ...]:
+    """Validate a list of specs (see :func:`parse_fault`)."""
+    if specs is None:
+        return ()
+    if isinstance(specs, str | dict) or not hasattr(specs, "__iter__"):
+        raise ValueError(f"faults={specs!r} is not allowed: give a list of fault specs")
+    return tuple(parse_fault(s) for s in specs)
+
+
+class FaultSchedule:
+    """The faults of one run, applied by control-step index inside the loop.
+
+    Parameters
+    ----------
+    faults : sequence of Fault
+    control_dt : float
+        Control period (s).
+    duration : float
+        Run length (s); a fault starting after it is refused.
+    """
+
+    def __init__(self, faults, control_dt: float, duration: float):
+        self.faults = tuple(faults)
+        for f in self.faults:
+            if f.t > duration:
+                raise ValueError(
+                    f"fault {f.label}: t={f.t!r} s is after the end of the run ({duration:.6g} s)"
+                )
+        # First step at or after t (the 1e-9 forgives t = k dt written in decimal).
+        self._windows = []
+        for f in self.faults:
+            k0 = math.ceil(f.t / control_dt - 1e-9)
+            k1 = math.inf if math.isinf(f.duration) else k0 + round(f.duration / control_dt)
+            self._windows.append((f, k0, k1))
+        self._dropouts = [(k0, k1) for f, k0, k1 in self._windows if f.kind == "dropout"]
+        self._actuators = [(f, k0, k1) for f, k0, k1 in self._windows if f.kind == "actuator"]
+        self._payloads = {}
+        for f, k0, _ in self._windows:
+            if f.kind == "payload":
+                self._payloads[k0] = self._payloads.get(k0, 1.0) * f.factor
+        self._held = None
+        self.held_steps = 0
+
+    def sensor(self, k: int, phi: float, v: float, omega: float) -> tuple[float, float, float]:
+        """The controller's (phi, v, omega) at step k: held during a dropout."""
+        if any(k0 <= k < k1 for k0, k1 in self._dropouts):
+            if self._held is None:  # a dropout from the first step holds the first sample
+                self._held = (phi, v, omega)
+            self.held_steps += 1
+            return self._held
+        self._held = (phi, v, omega)
+        return phi, v, omega
+
+    def torque(self, k: int, T_r: float, T_l: float) -> tuple[float, float]:
+        """The torques the wheels deliver at step k for the controller's (saturated) ones."""
+        for f, k0, k1 in self._actuators:
+            if k0 <= k < k1:
+                if f.wheel in ("right", "both"):
+                    T_r *= f.scale
+                if f.wheel in ("left", "both"):
+                    T_l *= f.scale
+        return T_r, T_l
+
+    def payload_factor(self, k: int) -> float | None:
+        """The trailer-mass factor taking effect at step k, or None."""
+        return self._payloads.get(k)
+
+
+def window_errors(ts, polyline, t_start: float, t_end: float) -> dict:
+    """Tracking errors over ``t_start <= t <= t_end`` of a run's time series.
+
+    Returns ``max_abs_v`` (m/s), ``max_abs_omega`` (rad/s), ``max_lateral`` (m, P to the
+    reference polyline) and ``rmse_v``, ``rmse_omega`` over the finite samples in the window
+    (NaN if there are none), and ``samples``.
+    """
+    from tt_mujoco.metrics import distance_to_polyline
+
+    t = np.asarray(ts["t"])
+    sel = (t >= t_start - 1e-12) & (t <= t_end + 1e-12)
+    e_v = (np.asarray(ts["v"]) - np.asarray(ts["v_d"]))[sel]
+    e_w = (np.asarray(ts["omega"]) - np.asarray(ts["omega_d"]))[sel]
+    finite = np.isfinite(e_v) & np.isfinite(e_w)
+    e_v, e_w = e_v[finite], e_w[finite]
+    if e_v.size == 0:
+        nan = math.nan
+        return {k: nan for k in ("max_abs_v", "max_abs_omega", "max_lateral", "rmse_v")} | {
+            "rmse_omega": nan,
+            "samples": 0,
+        }
+    points = np.column_stack([np.asarray(ts["x"])[sel], np.asarray(ts["y"])[sel]])[finite]
+    lateral = distance_to_polyline(points, polyline)
+    return {
+        "max_abs_v": float(np.max(np.abs(e_v))),
+        "max_abs_omega": float(np.max(np.abs(e_w))),
+        "max_lateral": float(np.max(lateral)),
+        "rmse_v": float(np.sqrt(np.mean(e_v**2))),
+        "rmse_omega": float(np.sqrt(np.mean(e_w**2))),
+        "samples": int(e_v.size),
+    }
+
+
+def fault_report(schedule: FaultSchedule, ts, polyline, torque_limit: float) -> list[dict]:
+    """Per fault: its spec, the window it acted in and the tracking errors over that window
+    plus :data:`RECOVERY_S` (payload: to the end of the run), for ``metrics.json``.
+
+    Kind-specific entries: dropout ``held_steps`` (all dropouts together: control steps whose
+    measurement was held); actuator ``torque_shortfall_max`` (N m, largest torque asked for
+    and not delivered); payload ``factor``.
+    """
+    t = np.asarray(ts["t"])
+    t_last = float(t[-1]) if t.size else 0.0
+    report = []
+    for f in schedule.faults:
+        t_end = t_last if math.isinf(f.duration) else f.t + f.duration
+        entry = {
+            **f.to_dict(),
+            "t_end": t_end,
+            "reached": bool(t.size and t_last >= f.t),
+            "window": window_errors(ts, polyline, f.t, min(t_last, t_end + RECOVERY_S)),
+        }
+        if f.kind == "dropout":
+            entry["held_steps"] = schedule.held_steps
+        elif f.kind == "actuator":
+            sel = (t >= f.t - 1e-12) & (t < t_end - 1e-12)
+            asked = np.clip(
+                np.stack([ts["T_r_cmd"][sel], ts["T_l_cmd"][sel]]), -torque_limit, torque_limit
+            )
+            got = np.stack([ts["T_r"][sel], ts["T_l"][sel]])
+            gap = np.abs(asked - got)
+            gap = gap[np.isfinite(gap)]
+            entry["torque_shortfall_max"] = float(gap.max()) if gap.size else 0.0
+        report.append(entry)
+    return report
