@@ -1,0 +1,198 @@
+"""Passive steering: exact same-path gains, the scheduler, reverse driving (tt_mujoco.steering)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tt_mujoco import reduced
+from tt_mujoco.metrics import trailer_offtrack
+from tt_mujoco.params import Params
+from tt_mujoco.sim import Scenario, simulate
+from tt_mujoco.steering import (
+    EtaScheduler,
+    ReverseTarget,
+    exact_same_path_eta,
+    follower_offtrack,
+    same_path_eta_limit,
+    steady_offtrack,
+)
+from tt_mujoco.targets import make_target
+
+L, L0 = 0.3, 0.4
+
+
+def test_exact_gain_tends_to_minus_one_seventh_not_spec_minus_one_eighth():
+    # Linearised kinematics and geometry give 1 - eta = 2 L0 / (L + L0): -1/7 for the paper's
+    # links. The closed form is exact; at kappa = 1e-4 the O(kappa^2) term is ~1e-10.
+    assert same_path_eta_limit(L, L0) == pytest.approx(-1.0 / 7.0, abs=1e-15)
+    assert exact_same_path_eta(1e-4, L, L0) == pytest.approx(-1.0 / 7.0, abs=1e-8)
+    assert exact_same_path_eta(0.0, L, L0) == same_path_eta_limit(L, L0)
+    assert abs(exact_same_path_eta(1e-4, L, L0) - (-0.125)) > 0.017
+
+
+@pytest.mark.parametrize("kappa", [0.25, 0.653, 2.0 / 3.0, 1.0, 2.0])
+def test_exact_gain_puts_p0_on_the_tractor_path(kappa):
+    eta = exact_same_path_eta(kappa, L, L0)
+    assert exact_same_path_eta(-kappa, L, L0) == eta  # even in kappa
+    # The steady articulation of the kinematics (independent root finder) with this gain puts
+    # P0 on the circle of radius 1/kappa: 1e-9 m covers the root finder's xtol = 1e-13 rad.
+    assert abs(steady_offtrack(kappa, Params(eta=eta))) < 1e-9
+
+
+def test_steady_offtracking_values_against_spec_section_3():
+    # SPEC Section 3 (R = 1.5 m): same-path -0.125 gives -2.9 mm, plain -23.5 mm, eta = -3
+    # +114 mm (R = 3 m: -1.3 / -11.7 / +58 mm). SPEC rounds to 0.1 mm (0.5 mm for the last).
+    cases = [(1.5, -0.125, -2.9e-3), (1.5, 0.0, -23.5e-3), (1.5, -3.0, 114e-3)]
+    cases += [(3.0, -0.125, -1.3e-3), (3.0, 0.0, -11.7e-3), (3.0, -3.0, 58e-3)]
+    for R, eta, spec in cases:
+        assert steady_offtrack(1.0 / R, Params(eta=eta)) == pytest.approx(spec, abs=5e-4)
+    # The exact limit -1/7 is ten times closer than -0.125 at R = 1.5 m (measured -0.275 mm).
+    assert steady_offtrack(1.0 / 1.5, Params(eta=-1.0 / 7.0)) == pytest.approx(-2.75e-4, abs=2e-6)
+    # eta = 3: the steady turn exists (unstable forward, stable reversing) with P0 0.30 m
+    # outside the unit circle, as the reversing runs of the steering study measure.
+    assert steady_offtrack(1.0, Params(eta=3.0)) == pytest.approx(0.3036, abs=1e-4)
+
+
+def test_exact_gain_checked_by_integrating_the_reduced_kinematics():
+    # Independent of the geometry above: drive the reduced kinematics (paper eq. 13) round a
+    # circle of R = 1.5 m for 24 m (67 articulation time constants L0 / (1 - eta) = 0.35 m)
+    # and measure P0's radius. RK4 at 5 mm steps: error ~1e-12 m.
+    R, v = 1.5, 0.8
+    p = Params(eta=exact_same_path_eta(1.0 / R, L, L0))
+    q = np.array([R, 0.0, math.pi / 2, 0.0, 0.0, 0.0])
+    dt, V = 0.00625, (v, v / R)
+    for _ in range(4800):
+        k1 = reduced.kinematics(q, V, p)
+        k2 = reduced.kinematics(q + dt / 2 * k1, V, p)
+        k3 = reduced.kinematics(q + dt / 2 * k2, V, p)
+        k4 = reduced.kinematics(q + dt * k3, V, p)
+        q = q + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    _, P0, _ = reduced.trailer_pose(q[0], q[1], q[2], q[3], p)
+    assert abs(math.hypot(P0[0], P0[1]) - R) < 1e-8
+
+
+def test_exact_gain_rejects_impossible_curvatures():
+    with pytest.raises(ValueError, match="kappa=20"):
+        exact_same_path_eta(20.0, L, L0)
+    with pytest.raises(ValueError, match="finite"):
+        exact_same_path_eta(math.nan, L, L0)
+
+
+class _FakeReduced:
+    def __init__(self, params):
+        self.params = params
+        self.plant = reduced.ReducedPlant(params)
+
+
+def test_scheduler_on_the_reduced_plant_swaps_params_and_logs_eta():
+    adapter = _FakeReduced(Params())
+    sched = EtaScheduler(adapter, adapter.params)
+    assert sched.update(1.0, step=0) == pytest.approx(exact_same_path_eta(1.0, L, L0))
+    assert adapter.params.eta == adapter.plant.params.eta == sched.eta
+    assert sched.update(1.0, step=1) == sched.eta and sched.updates == 1  # same kappa: no work
+    # A change below the tolerance (1e-5) is not applied.
+    tiny = 1e-3  # eta(kappa) - eta(1) ~ 1e-6 here
+    assert abs(exact_same_path_eta(1.0 + tiny, L, L0) - sched.eta) < 1e-5
+    sched.update(1.0 + tiny, step=2)
+    assert sched.updates == 1
+    sched.update(0.0, step=4)
+    series = sched.eta_series(7)
+    assert series[0] == pytest.approx(-0.125)  # before the first update: the params' eta
+    assert np.all(series[1:5] == pytest.approx(exact_same_path_eta(1.0, L, L0)))
+    assert np.all(series[5:] == pytest.approx(-1.0 / 7.0))
+    with pytest.raises(ValueError, match="plant"):
+        EtaScheduler(object(), Params())
+
+
+def test_scheduled_runs_hold_beta_at_the_exact_gain_on_both_plants():
+    # Circle, 4 s: kappa = 1 all along. The MuJoCo equality follows eq_data (a soft
+    # constraint: |beta - eta phi| measured 2.8e-5 rad at most, beta / phi within 4e-8 of the
+    # gain at the end); the reduced plant holds it exactly.
+    exact = exact_same_path_eta(1.0, L, L0)
+    for plant, tol in (("reduced", 1e-12), ("mujoco", 1e-4)):
+        sc = Scenario(plant=plant, traj="circle", duration=4.0, eta_schedule=True)
+        res = simulate(sc)
+        assert res.status == "ok"
+        ts = res.timeseries
+        assert res.metrics["eq_violation_max"] < tol
+        assert ts["beta"][-1] / ts["phi"][-1] == pytest.approx(exact, abs=1e-6)
+        assert abs(exact - (-0.125)) > 0.02  # so the check above sees the schedule act
+
+
+def test_scheduler_writes_the_steering_equality_polycoef():
+    from tt_mujoco.physics import Vehicle
+
+    vehicle = Vehicle(Params())
+
+    class _Plant:
+        model = vehicle.model
+
+    sched = EtaScheduler(_Plant(), vehicle.params)
+    row = vehicle.model.eq_data[vehicle.model.equality("steering").id]
+    assert row[1] == pytest.approx(0.125)  # polycoef = (0, -eta, 0, 0, 0)
+    sched.update(2.0)
+    assert row[1] == pytest.approx(-exact_same_path_eta(2.0, L, L0))
+    assert row[0] == row[2] == 0.0
+
+
+def test_reverse_target_runs_the_path_backwards():
+    _, forward, _ = make_target("circle", "dynamic")
+    rev = ReverseTarget(forward)
+    assert rev.s_end == pytest.approx(forward.path.length)
+    pose = rev.initial_pose
+    assert (pose.x, pose.y) == pytest.approx(forward.path.pose_at(rev.s_end)[:2])
+    # Feed it v = -v_ref: s runs back by the profile's distance (trapezoid error < 1e-6 m).
+    dt, t = 0.001, 0.0
+    rev.reset()
+    for k in range(5001):
+        t = k * dt
+        v_d, w_d, _, _ = rev.update(t, dt, -forward.reference_speed(t))
+        assert v_d == pytest.approx(-forward.reference_speed(t))
+        assert w_d == pytest.approx(rev.curvature * v_d)
+    assert rev.arc_length == pytest.approx(rev.s_end - forward.profile.distance(t), abs=1e-6)
+    ts = np.array([0.0, 2.5, 5.0])
+    xs, ys = rev.reference_point(ts)
+    for i, ti in enumerate(ts):
+        assert (xs[i], ys[i]) == pytest.approx(rev.reference_point(float(ti)))
+    assert rev.reference_speed(1.0) == pytest.approx(-forward.reference_speed(1.0))
+
+
+def test_paper_eta_jackknifes_forward_and_tracks_reversing():
+    # SPEC Section 3: phi_dot ~ (eta - 1) v phi / L0. Circle, no disturbance, reduced plant:
+    # forward jackknifes at ~1.0 s (measured), reversing tracks (lateral RMSE ~1e-6 m measured).
+    fwd = simulate(Scenario(plant="reduced", traj="circle", eta="paper", disturbance="none"))
+    assert fwd.status == "jackknife" and fwd.timeseries["t"][-1] < 1.5
+    rev = simulate(
+        Scenario(
+            plant="reduced",
+            traj="circle",
+            eta="paper",
+            disturbance="none",
+            reverse=True,
+            duration=5.0,
+        )
+    )
+    assert rev.status == "ok"
+    assert rev.metrics["rmse_lateral"] < 1e-3
+    # Backwards all the way (the stop at the end overshoots by ~2e-6 m/s, measured).
+    assert np.max(rev.timeseries["v"]) < 1e-4 and np.min(rev.timeseries["v"]) < -0.7
+    # The leading trailer stays on the outside, short of the eta = 3 singularity at 30 deg.
+    assert rev.metrics["phi_max_abs_deg"] < 20.0
+
+
+def test_follower_offtrack_swaps_roles_when_reversing():
+    t = np.linspace(0, 1, 50)
+    p = np.column_stack([t, np.zeros_like(t)])
+    p0 = np.column_stack([t - 0.5, 0.01 * np.ones_like(t)])
+    ts = {"x": p[:, 0], "y": p[:, 1], "x0": p0[:, 0], "y0": p0[:, 1]}
+    np.testing.assert_array_equal(follower_offtrack(ts), trailer_offtrack(p, p0))
+    np.testing.assert_array_equal(follower_offtrack(ts, reverse=True), trailer_offtrack(p0, p))
+
+
+@pytest.mark.parametrize("field", ["eta_schedule", "reverse"])
+def test_scenario_rejects_non_bool_switches(field):
+    with pytest.raises(ValueError, match=field):
+        Scenario(**{field: "yes"}).validate()

@@ -1,0 +1,313 @@
+"""Passive trailer steering beyond a constant gear: exact same-path gains, a curvature-scheduled
+eta, reverse driving, and off-tracking measures (SPEC Section 3).
+
+The trailer axle is steered by ``beta = eta * phi`` (paper eq. 2). Three facts drive this module:
+
+- **Exact same-path gain.** In a steady turn of radius R every body rotates about one centre C.
+  The trailer axle midpoint P0 lies on the tractor's own path when ``|C P0| = R``; with the hitch
+  O at ``|C O| = sqrt(R^2 + L^2)`` and ``|O P0| = L0`` this fixes the articulation,
+  ``2 L0 (R sin(phi) - L cos(phi)) = L^2 + L0^2`` (law of cosines in the triangle C, O, P0),
+  and the rolling direction of P0 (perpendicular to C P0) fixes beta. ``eta = beta / phi`` is then
+  the gain that holds P0 on the path at curvature 1/R: :func:`exact_same_path_eta`.
+- **Its small-curvature limit is (L - L0) / (L + L0)** = -1/7 = -0.1429 for the paper's L = 0.3 m,
+  L0 = 0.4 m, not the ``-(L0 - L) / (2 L0)`` = -0.125 of SPEC Section 3 (``params.same_path_eta``).
+  Linearising gives ``phi = kappa (L + L0) / (1 - eta)`` from the kinematics (paper eq. 13 at
+  phi_dot = 0) and ``phi = kappa (L + L0)^2 / (2 L0)`` from the geometry; equating them gives
+  ``1 - eta = 2 L0 / (L + L0)``. With eta = -0.125 the steady off-tracking at R = 1.5 m is
+  -2.87 mm (SPEC's -2.9 mm); with -1/7 it is -0.27 mm, and with the exact eta(1/R) zero
+  (``tests/test_steering.py`` checks all three against the reduced kinematics).
+- **eta > 1 is stable only in reverse** (SPEC Section 3): :class:`ReverseTarget` drives a path
+  backwards, trailer first, so that the paper's eta = 3 can be shown doing what it is good at.
+
+:class:`EtaScheduler` updates eta every control step from the target's curvature: in MuJoCo by
+writing the ``steering`` equality's polynomial coefficient (``model.eq_data[i, 1] = -eta``, the
+``polycoef`` of ``q_steer = -eta q_hitch``), in the reduced plant by swapping its ``Params``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from tt_mujoco.params import Params
+
+__all__ = [
+    "EtaScheduler",
+    "ReverseTarget",
+    "exact_same_path_eta",
+    "follower_offtrack",
+    "same_path_eta_limit",
+    "steady_offtrack",
+]
+
+#: Below this |kappa| (1/m) the exact gain is its limit (the error is O(kappa^2), < 1e-12 here).
+_KAPPA_TINY = 1e-6
+#: The scheduler re-applies eta only when it moved by more than this. The constraint then lags the
+#: schedule by at most 1e-5 * |phi| < 1e-5 rad, below MuJoCo's own equality violation (~3e-5 rad,
+#: SPEC Section 5), and the reduced plant rebuilds its Params (23 us) only when needed.
+SCHEDULE_TOLERANCE = 1e-5
+
+
+def same_path_eta_limit(L: float, L0: float) -> float:
+    """The exact same-path gain for gentle turns: ``(L - L0) / (L + L0)`` (see module docstring).
+
+    -1/7 for the paper's L = 0.3 m, L0 = 0.4 m (Section 6.1).
+    """
+    return (L - L0) / (L + L0)
+
+
+def _same_path_geometry(kappa: float, L: float, L0: float) -> tuple[float, float]:
+    """``(phi, beta)`` of the steady turn at |kappa| in which P0 runs on the tractor's path."""
+    R = 1.0 / abs(kappa)
+    hyp = math.hypot(R, L)
+    ratio = (L * L + L0 * L0) / (2.0 * L0 * hyp)
+    if ratio > 1.0:
+        r_min = math.sqrt(max(((L * L + L0 * L0) / (2.0 * L0)) ** 2 - L * L, 0.0))
+        raise ValueError(
+            f"kappa={kappa!r} is not allowed: no trailer pose puts P0 on a path of radius "
+            f"{R:.4g} m (it needs R >= {r_min:.4g} m)"
+        )
+    # 2 L0 (R sin(phi) - L cos(phi)) = L^2 + L0^2  <=>  sin(phi - atan2(L, R)) = ratio.
+    phi = math.atan2(L, R) + math.asin(ratio)
+    # Tractor at P = (R, 0) heading +y, turning about C = 0; O = (R, -L); P0 = O - L0 e(theta0),
+    # theta0 = pi/2 - phi. P0 rolls along the tangent of its circle, atan2(P0) + pi/2, so
+    # beta = alpha - theta0 = atan2(P0) + phi.
+    x0 = R - L0 * math.sin(phi)
+    y0 = -L - L0 * math.cos(phi)
+    beta = math.atan2(y0, x0) + phi
+    return phi, beta
+
+
+def exact_same_path_eta(kappa: float, L: float, L0: float) -> float:
+    """The constant-curvature steering gain that puts P0 exactly on the tractor's path.
+
+    Parameters
+    ----------
+    kappa : float
+        Curvature of the tractor's path (1/m); the gain is even in kappa.
+    L, L0 : float
+        Link lengths P-O and O-P0 (m).
+
+    Returns
+    -------
+    float
+        ``eta = beta / phi`` of the steady turn with ``|C P0| = R`` (module docstring);
+        :func:`same_path_eta_limit` for ``|kappa| < 1e-6``.
+
+    Raises
+    ------
+    ValueError
+        If the curvature is so tight that no such pose exists.
+    """
+    kappa = float(kappa)
+    if not math.isfinite(kappa):
+        raise ValueError(f"kappa={kappa!r} is not allowed: it must be finite")
+    if abs(kappa) < _KAPPA_TINY:
+        return same_path_eta_limit(L, L0)
+    phi, beta = _same_path_geometry(kappa, L, L0)
+    return beta / phi
+
+
+def steady_offtrack(kappa: float, params: Params) -> float:
+    """Analytic steady-state off-tracking (m): P0's turning radius minus the tractor's.
+
+    Negative: P0 runs inside the tractor's path; positive: outside. Uses the steady articulation
+    of the kinematics (``tt_mujoco.paths.steady_articulation``), NaN where there is none. The
+    steady turn is the same in either direction of travel; for eta > 1 it is stable only
+    reversing (SPEC Section 3).
+    """
+    from tt_mujoco.paths import steady_articulation
+
+    kappa = float(kappa)
+    if kappa == 0.0:
+        return 0.0
+    phi = steady_articulation(abs(kappa), params)
+    if not math.isfinite(phi):
+        return math.nan
+    R = 1.0 / abs(kappa)
+    # Same frame as _same_path_geometry: P0 = O - L0 e(pi/2 - phi).
+    return math.hypot(R - params.L0 * math.sin(phi), -params.L - params.L0 * math.cos(phi)) - R
+
+
+class EtaScheduler:
+    """Curvature-scheduled passive steering: eta = :func:`exact_same_path_eta` of the local
+    curvature, applied to a running plant (the paper's eta(s) idea, SPEC Section 3).
+
+    Parameters
+    ----------
+    plant : object
+        The simulation loop's plant: MuJoCo (has ``model``, the compiled model with the
+        ``steering`` equality) or the reduced ODE adapter (has ``params`` and ``plant``, a
+        :class:`tt_mujoco.reduced.ReducedPlant`).
+    params : Params
+        The plant's parameters (L, L0 and the initial eta).
+    tolerance : float
+        Re-apply eta only when it moved by more than this (see :data:`SCHEDULE_TOLERANCE`).
+
+    Notes
+    -----
+    The controllers' nominal model keeps the scenario's constant eta; eta enters Mbar only
+    through the trailer wheels (SPEC Section 4), and the scheduled gains stay within
+    [-0.160, -0.143] for |kappa| <= 2 1/m, so the mismatch is a small model error the controllers
+    treat like any other.
+    """
+
+    def __init__(self, plant, params: Params, tolerance: float = SCHEDULE_TOLERANCE):
+        if not (isinstance(tolerance, int | float) and math.isfinite(tolerance) and tolerance >= 0):
+            raise ValueError(f"tolerance={tolerance!r} is not allowed: it must be a number >= 0")
+        self.L, self.L0 = params.L, params.L0
+        self.tolerance = float(tolerance)
+        self.eta = params.eta
+        self.updates = 0
+        self._kappa: float | None = None
+        # (first sample, eta) for every change: sample j was reached under the eta in force
+        # during the step before it.
+        self._changes: list[tuple[int, float]] = [(0, self.eta)]
+        model = getattr(plant, "model", None)
+        if model is not None:
+            # eq_data row of the joint equality q_steer = polycoef(q_hitch): polycoef[1] = -eta.
+            self._eq_row = model.eq_data[model.equality("steering").id]
+            self._reduced = None
+        elif hasattr(plant, "plant") and hasattr(plant, "params"):
+            self._eq_row = None
+            self._reduced = plant
+        else:
+            raise ValueError(
+                f"plant={type(plant).__name__} is not allowed: use the MuJoCo or the reduced "
+                "plant of tt_mujoco.sim"
+            )
+
+    def update(self, kappa: float, step: int = 0) -> float:
+        """Schedule eta for curvature ``kappa`` (1/m) before the step after sample ``step``.
+
+        Returns the eta now in force (it governs the plant from sample ``step + 1`` on).
+        """
+        if kappa == self._kappa:  # arcs: constant curvature, nothing to recompute
+            return self.eta
+        self._kappa = kappa
+        eta = exact_same_path_eta(kappa, self.L, self.L0)
+        if abs(eta - self.eta) > self.tolerance:
+            self._apply(eta)
+            self._changes.append((step + 1, eta))
+        return self.eta
+
+    def eta_series(self, n: int) -> np.ndarray:
+        """The eta in force at each of ``n`` logged samples (for ``beta - eta phi``)."""
+        out = np.empty(n)
+        for (start, eta), (stop, _) in zip(
+            self._changes, [*self._changes[1:], (n, 0.0)], strict=True
+        ):
+            out[start : max(start, min(stop, n))] = eta
+        return out
+
+    def _apply(self, eta: float) -> None:
+        if self._eq_row is not None:
+            self._eq_row[1] = -eta
+        else:
+            adapter = self._reduced
+            new = adapter.params.replace(eta=eta)
+            adapter.params = new
+            adapter.plant.params = new
+        self.eta = eta
+        self.updates += 1
+
+
+class ReverseTarget:
+    """Drive a target's path backwards: from where the forward run would end, back to its start.
+
+    The tractor faces along the path and reverses (v < 0), so the trailer leads. The kinematics
+    are those of the forward targets with the sign of v: the path's arc length runs as
+    ``s_path = s_end + int v dt``, and ``omega = kappa(s_path) v`` keeps P on the path (heading
+    along the path's tangent, moving backwards). For a dynamic target (paper eq. 33) s_path
+    integrates the measured v; for a static one (eq. 32) ``s_path = s_end - s_ref(t)``.
+    ``v_d = -v_ref(t)``.
+
+    Parameters
+    ----------
+    target : tt_mujoco.targets.Target
+        The forward target (its path, speed profile, kind and duration are reused).
+    """
+
+    def __init__(self, target):
+        self.forward = target
+        self.kind = target.kind
+        self.path = target.path
+        self.profile = target.profile
+        self.duration = target.duration
+        self.s_end = min(self.path.length, self.profile.distance(self.duration))
+        self._profile_state = self.profile.state
+        self._curvature_and_rate = self.path.curvature_and_rate
+        self.reset()
+
+    @property
+    def initial_pose(self):
+        """Start pose: the path at ``s_end``, heading along the path (the vehicle backs up)."""
+        from tt_mujoco.paths import Pose
+
+        return Pose(*self.path.pose_at(self.s_end))
+
+    def reset(self) -> None:
+        self._s = self.s_end
+        self._kappa = self._curvature_and_rate(self.s_end)[0]
+        self._v_prev: float | None = None
+
+    @property
+    def arc_length(self) -> float:
+        """The path arc length s_path (m) used at the last update."""
+        return self._s
+
+    @property
+    def curvature(self) -> float:
+        return self._kappa
+
+    def update(self, t: float, dt: float, v_measured: float) -> tuple[float, float, float, float]:
+        """``(v_d, omega_d, v_d_dot, omega_d_dot)``, all for reversing (v_d <= 0)."""
+        s_ref, v_ref, a_ref = self._profile_state(t)
+        if self.kind == "dynamic":
+            v = float(v_measured)
+            if self._v_prev is not None:
+                self._s += 0.5 * (self._v_prev + v) * dt
+            self._v_prev = v
+        else:
+            v = -v_ref
+            self._s = self.s_end - s_ref
+        kappa, rate = self._curvature_and_rate(self._s)
+        self._kappa = kappa
+        # d/dt kappa(s_path) v = kappa' v^2 + kappa v_dot, with v_dot ~ -a_ref (as forward).
+        return -v_ref, kappa * v, -a_ref, rate * v * v - kappa * a_ref
+
+    def reference_speed(self, t):
+        return -self.forward.reference_speed(t)
+
+    def reference_yaw_rate(self, t):
+        s_ref, v_ref = self.profile.distance(t), self.profile.speed(t)
+        return self.path.curvature(self.s_end - s_ref) * -v_ref
+
+    def reference_point(self, t):
+        """``(x, y)`` where P should be at time t (float or array t), reversing on schedule."""
+        if isinstance(t, float | int):
+            x, y, _ = self.path.pose_at(self.s_end - self._profile_state(float(t))[0])
+            return x, y
+        x, y, _ = self.path.pose(self.s_end - self.profile.distance(t))
+        return x, y
+
+
+def follower_offtrack(ts, reverse: bool = False) -> np.ndarray:
+    """Off-tracking of the following axle from the leading axle's path, sample by sample (m).
+
+    Forward the trailer (P0) follows the tractor (P): this is
+    :func:`tt_mujoco.metrics.trailer_offtrack`. Reversing, the trailer leads, so the roles swap:
+    the distance from P to the path P0 has driven so far. NaN until the follower has passed the
+    leader's starting point.
+    """
+    from tt_mujoco.metrics import trailer_offtrack
+
+    p = np.column_stack([ts["x"], ts["y"]])
+    p0 = np.column_stack([ts["x0"], ts["y0"]])
+    ok = np.all(np.isfinite(p), axis=1) & np.all(np.isfinite(p0), axis=1)
+    n = int(np.argmin(ok)) if not ok.all() else len(ok)
+    out = np.full(len(ok), np.nan)
+    if n >= 2:
+        out[:n] = trailer_offtrack(p0[:n], p[:n]) if reverse else trailer_offtrack(p[:n], p0[:n])
+    return out
