@@ -56,16 +56,21 @@ def test_same_seed_gives_identical_outputs(tmp_path):
 
 
 # --- low friction --------------------------------------------------------------------------------
-def test_low_friction_reports_slip(baseline):
-    icy = simulate(Scenario(**S_CURVE, friction=0.3))
+def test_low_friction_reports_slip():
+    # Circle, 4 s, paper disturbance. At mu = 0.3 the tractor wheels can push only about
+    # 0.6 m/s^2 and the S-curve (same ramp) spins them up into a jackknife at 4.0 s, so the
+    # circle is the case that completes and shows the slip.
+    circle = {"traj": "circle", "duration": 4.0}
+    base = simulate(Scenario(**circle))
+    icy = simulate(Scenario(**circle, friction=0.3))
     assert icy.status == "ok"  # the run completes
-    # Measured: longitudinal slip 10.19 m/s at mu = 0.3 vs 0.056 at mu = 1 (182x); lateral
-    # 1.565 vs 0.00136 m/s (1150x): the matched disturbance's torque spins the wheels.
-    b, m = baseline.metrics, icy.metrics
+    # Measured: longitudinal slip 7.49 m/s at mu = 0.3 vs 0.056 at mu = 1 (133x); lateral
+    # 0.557 vs 0.00135 m/s (413x); max lateral error 0.158 m vs 2.2e-4 m (732x).
+    b, m = base.metrics, icy.metrics
     assert m["slip_longitudinal_max"] > 20 * b["slip_longitudinal_max"]
     assert m["slip_longitudinal_max"] > 1.0
     assert m["slip_lateral_max"] > 100 * b["slip_lateral_max"]
-    assert m["max_lateral"] > 50 * b["max_lateral"]  # measured 0.887 m vs 2.5e-4 m
+    assert m["max_lateral"] > 50 * b["max_lateral"]
 
 
 # --- payload step --------------------------------------------------------------------------------

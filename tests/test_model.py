@@ -71,13 +71,13 @@ def test_static_normal_load_per_tractor_wheel():
 
 def test_presets():
     assert Params(eta="paper").eta == 3.0
-    assert Params().eta == pytest.approx(-0.125)
+    assert Params().eta == pytest.approx(-1.0 / 7.0)
     assert Params().steering == "same_path"
     assert Params(eta="1.5").eta == 1.5
     assert Params(eta="-3").eta == -3.0
     assert Params(eta="1e-3").eta == 1e-3
     assert Params(eta="same-path").steering == "same_path"
-    assert same_path_eta(0.3, 0.4) == pytest.approx(-0.125)
+    assert same_path_eta(0.3, 0.4) == pytest.approx(-1.0 / 7.0)
 
 
 @pytest.mark.parametrize(

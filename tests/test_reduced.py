@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from scipy.optimize import brentq
 
 from tt_mujoco import reduced
-from tt_mujoco.params import Params
+from tt_mujoco.params import Params, spec_same_path_eta
 
 PAPER = Params(eta="paper")
 
@@ -136,3 +136,35 @@ def test_mass_only_fast_path_equals_full_terms(frac, eta):
     phi = frac * min(p.phi_singular, 1.5)
     (M11, M12, M22), _, _ = reduced._inertia_terms(phi, p)
     assert reduced._mass_terms(phi, p) == pytest.approx((M11, M12, M22), rel=1e-14)
+
+
+def _steady_offtrack(eta: float, R: float) -> float:
+    """P0's turning radius minus the tractor's, analytic steady turn of radius R."""
+    p = Params(eta=eta)
+    lim = 0.99 * min(p.phi_singular, 1.2)
+
+    def phi_dot(ph):
+        return np.dot(reduced.phi_rate(ph, p), (1.0, 1.0 / R))
+
+    phi = brentq(phi_dot, -lim, lim)
+    _, P0, _ = reduced.trailer_pose(0.0, -R, 0.0, phi, p)
+    return float(np.hypot(*P0) - R)
+
+
+def test_spec_same_path_formula_is_not_the_small_curvature_limit():
+    # SPEC Section 3 calls -(L0 - L)/(2 L0) = -0.125 the small-curvature limit of the same-path
+    # gain. If it were, the off-tracking would vanish faster than the curvature. It does not:
+    # R x off-tracking tends to a constant (measured -3.889e-3 m^2), i.e. the error is
+    # O(kappa). (L - L0)/(L + L0) = -1/7, the project's same_path, gives O(kappa^3):
+    # R^3 x off-tracking tends to -9.38e-4 m^4.
+    spec = spec_same_path_eta(0.3, 0.4)
+    assert spec == pytest.approx(-0.125)
+    for R in (10.0, 30.0, 100.0):
+        assert R * _steady_offtrack(spec, R) == pytest.approx(-3.889e-3, rel=0.01)
+    ours = Params().eta
+    assert ours == pytest.approx(-1.0 / 7.0)
+    for R in (10.0, 30.0, 100.0):
+        assert R**3 * _steady_offtrack(ours, R) == pytest.approx(-9.38e-4, rel=0.01)
+    # And at the paper's S-curve radius: -2.87 mm against -0.27 mm.
+    assert _steady_offtrack(spec, 1.5) == pytest.approx(-2.87e-3, abs=0.02e-3)
+    assert _steady_offtrack(ours, 1.5) == pytest.approx(-0.275e-3, abs=0.01e-3)

@@ -100,7 +100,7 @@ def test_scheduler_on_the_reduced_plant_swaps_params_and_logs_eta():
     assert sched.updates == 1
     sched.update(0.0, step=4)
     series = sched.eta_series(7)
-    assert series[0] == pytest.approx(-0.125)  # before the first update: the params' eta
+    assert series[0] == pytest.approx(-1.0 / 7.0)  # before the first update: the params' eta
     assert np.all(series[1:5] == pytest.approx(exact_same_path_eta(1.0, L, L0)))
     assert np.all(series[5:] == pytest.approx(-1.0 / 7.0))
     with pytest.raises(ValueError, match="plant"):
@@ -119,7 +119,7 @@ def test_scheduled_runs_hold_beta_at_the_exact_gain_on_both_plants():
         ts = res.timeseries
         assert res.metrics["eq_violation_max"] < tol
         assert ts["beta"][-1] / ts["phi"][-1] == pytest.approx(exact, abs=1e-6)
-        assert abs(exact - (-0.125)) > 0.02  # so the check above sees the schedule act
+        assert abs(exact - (-1.0 / 7.0)) > 1e-3  # so the check above sees the schedule act
 
 
 def test_scheduler_writes_the_steering_equality_polycoef():
@@ -132,7 +132,7 @@ def test_scheduler_writes_the_steering_equality_polycoef():
 
     sched = EtaScheduler(_Plant(), vehicle.params)
     row = vehicle.model.eq_data[vehicle.model.equality("steering").id]
-    assert row[1] == pytest.approx(0.125)  # polycoef = (0, -eta, 0, 0, 0)
+    assert row[1] == pytest.approx(1.0 / 7.0)  # polycoef = (0, -eta, 0, 0, 0)
     sched.update(2.0)
     assert row[1] == pytest.approx(-exact_same_path_eta(2.0, L, L0))
     assert row[0] == row[2] == 0.0

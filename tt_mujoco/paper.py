@@ -198,8 +198,8 @@ STEERING_VARIANTS: dict[str, dict] = {
     "paper eta = 3, forward": {"eta": "paper"},
     "paper eta = 3, reverse": {"eta": "paper", "reverse": True},
     "eta = -3": {"eta": -3.0},
-    "same_path (-0.125)": {"eta": "same_path"},
-    "same-path limit (-1/7)": {"eta": -1.0 / 7.0},
+    "SPEC formula (-0.125)": {"eta": -0.125},
+    "same_path (-1/7)": {"eta": "same_path"},
     "scheduled eta(kappa)": {"eta": "same_path", "eta_schedule": True},
 }
 STEERING_BASE = {"controller": "ismc_sta", "gains": "paper_6_1", "disturbance": "none"}
@@ -255,10 +255,10 @@ def suite(quick: bool = False) -> list[RunSpec]:
         sc = _scenario("reduced", traj="circle", **STEERING_BASE, **short)
         specs.append(
             RunSpec(
-                "steer:circle:same_path (-0.125)@reduced",
+                "steer:circle:same_path (-1/7)@reduced",
                 "steering",
                 sc,
-                info={"path": "circle", "variant": "same_path (-0.125)", "label": ""},
+                info={"path": "circle", "variant": "same_path (-1/7)", "label": ""},
             )
         )
         sc = _scenario("reduced", **FEEDBACK_CASES["circle"], path_feedback={}, **short)
@@ -1129,7 +1129,7 @@ def _steering_ratio(rows, path: str, plant: str, field_name: str) -> float:
                     return r.get(field_name)
         return None
 
-    plain, same = get("plain (eta = 0)"), get("same_path (-0.125)")
+    plain, same = get("plain (eta = 0)"), get("same_path (-1/7)")
     if plain is None or same is None or not same:
         return math.nan
     return float(plain) / float(same)
@@ -1331,7 +1331,7 @@ def _suite_setup_lines(seed: int) -> list[str]:
         "- Plants: `reduced` = the exact reduced ODE (SPEC Section 4, RK4, pure rolling); `MuJoCo` "
         "= the multibody model with tyre contact (SPEC Section 5). Timestep and control period "
         "1 ms on both.",
-        "- Steering: **eta = same_path (-0.125)** in every table run. The paper uses eta = 3, "
+        "- Steering: **eta = same_path (-1/7)** in every table run. The paper uses eta = 3, "
         "which jackknifes driving forward within about 1 s (SPEC Section 3; steering study "
         "below), so its tables cannot have been produced with it in the stated convention.",
         "- Disturbance: the paper's Delta1, Delta2 (Section 6.1) as matched wheel torques "
@@ -1574,8 +1574,9 @@ STEERING_NOTES = [
     "cycloid's start and after the S-curve's curvature step: the strongly counter-steered "
     "trailer axle asks for more lateral tyre force than the contact gives (lateral slip "
     "column); friction 3 cures the cycloid, not the S-curve. (iii) (L - L0)/(L + L0) = -1/7 "
-    "is the exact small-curvature same-path gain (`steering.same_path_eta_limit`); SPEC's "
-    "-(L0 - L)/(2 L0) = -0.125 leaves the analytic 2.9 mm at R = 1.5 m and 4.8 mm at R = 1 m, "
+    "is the exact small-curvature same-path gain and the project's same_path default "
+    "(`params.same_path_eta`); SPEC's -(L0 - L)/(2 L0) = -0.125 leaves the analytic 2.9 mm "
+    "at R = 1.5 m and 4.8 mm at R = 1 m, "
     "-1/7 leaves 0.27 mm and 0.92 mm, the scheduled exact gain 0 (the measured steady-arc "
     "values agree). (iv) Over a whole S-curve run the off-tracking is dominated by transients "
     "that no steering gain removes: at the curvature step the articulation has to swing from "
@@ -1616,14 +1617,14 @@ def _summary_markdown(rows, steering, feedback, checks, info) -> str:
     md += _tables_markdown(rows)
     md += ["### Passive steering: trailer off-tracking (m, rms over the run / on steady arcs)", ""]
     md += [
-        "| path | plant | plain eta = 0 | same_path -0.125 | limit -1/7 | scheduled "
+        "| path | plant | plain eta = 0 | SPEC -0.125 | same_path -1/7 | scheduled "
         "| eta = -3 | eta = 3 forward | eta = 3 reverse |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     names = (
         "plain (eta = 0)",
-        "same_path (-0.125)",
-        "same-path limit (-1/7)",
+        "SPEC formula (-0.125)",
+        "same_path (-1/7)",
         "scheduled eta(kappa)",
         "eta = -3",
         "paper eta = 3, forward",

@@ -17,6 +17,7 @@ __all__ = [
     "Params",
     "resolve_eta",
     "same_path_eta",
+    "spec_same_path_eta",
 ]
 
 #: Named passive-steering designs accepted wherever an ``eta`` is asked for.
@@ -33,9 +34,21 @@ INERTIA_FIELDS = ("Ifd", "Ird", "Iwd", "Ic1", "Ic2", "Iw")
 def same_path_eta(L: float, L0: float) -> float:
     """Constant steering gain that puts P0 on the tractor's path in gentle steady turns.
 
-    Small-curvature limit ``eta* = -(L0 - L) / (2 L0)`` (SPEC Section 3); -0.125 for the paper's
-    L = 0.3 m, L0 = 0.4 m.
+    The small-curvature limit of the exact same-path gain (:func:`tt_mujoco.steering.
+    exact_same_path_eta`): ``eta* = (L - L0) / (L + L0)``, -1/7 = -0.1429 for the paper's
+    L = 0.3 m, L0 = 0.4 m. With it the steady off-tracking vanishes like kappa^3 (-0.27 mm at
+    R = 1.5 m).
+
+    SPEC Section 3 gives ``-(L0 - L) / (2 L0)`` (-0.125) as this limit; that is wrong: it leaves
+    an off-tracking proportional to kappa (-2.87 mm at R = 1.5 m, -0.39 mm at R = 10 m), see
+    :func:`spec_same_path_eta` and ``tests/test_reduced.py``.
     """
+    return (L - L0) / (L + L0)
+
+
+def spec_same_path_eta(L: float, L0: float) -> float:
+    """SPEC Section 3's ``-(L0 - L) / (2 L0)`` (-0.125), kept to show why it was replaced:
+    it is not the small-curvature limit of the same-path gain (see :func:`same_path_eta`)."""
     return -(L0 - L) / (2.0 * L0)
 
 
@@ -107,7 +120,8 @@ class Params:
     r, d : float
         Wheel radius and track (distance between left and right wheels).
     eta : float or str
-        Passive steering gain, beta = eta * phi (paper eq. 2). ``"same_path"`` (default),
+        Passive steering gain, beta = eta * phi (paper eq. 2). ``"same_path"`` (default,
+        (L - L0)/(L + L0) = -1/7, see :func:`same_path_eta`),
         ``"paper"`` (3.0) or a number. Stored resolved to a float; the preset name is kept in
         :attr:`steering`.
     torque_limit : float

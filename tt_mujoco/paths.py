@@ -69,8 +69,8 @@ CYCLOID_LENGTH = 8.0 * math.cos(math.pi / 8.0)
 _CYCLOID_MID = 4.0 * math.cos(math.pi / 8.0)
 
 #: Largest |kappa| (1/m) a user path may have by default: a turn radius of 0.5 m. With the
-#: default same-path steering (eta = -0.125) the steady-state articulation there is 65.5 deg
-#: (the rod O-P0 would stand perpendicular to the tractor, phi = 90 deg, near kappa = 2.94 1/m);
+#: default same-path steering (eta = -1/7) the steady-state articulation there is 64.4 deg
+#: (the rod O-P0 would stand perpendicular to the tractor, phi = 90 deg, near kappa = 3.02 1/m);
 #: with the paper's eta = 3 it is -22.8 deg, clear of that design's singular 30 deg. The paper's
 #: own paths stay below 1 1/m. See :func:`steady_articulation` and docs/paper-notes.md.
 DEFAULT_MAX_CURVATURE = 2.0
