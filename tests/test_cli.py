@@ -130,3 +130,38 @@ def test_help_lists_every_option():
         "--no-video",
     ):
         assert opt in text
+
+
+def test_cli_steering_and_feedback_options_reach_the_scenario(tmp_path):
+    out = tmp_path / "opts"
+    code = run.main(
+        [
+            "--traj",
+            "circle",
+            "--plant",
+            "reduced",
+            "--duration",
+            "2",
+            "--eta",
+            "scheduled",
+            "--path-feedback",
+            "--no-video",
+            "--no-plots",
+            "--quiet",
+            "--out",
+            str(out),
+        ]
+    )
+    assert code == 0
+    doc = json.loads((out / "metrics.json").read_text())
+    scenario = doc["config"]["scenario"]
+    assert scenario["eta_schedule"] is True
+    assert scenario["path_feedback"] == {}
+    assert scenario["reverse"] is False
+    # The scheduled gain at kappa = 1 is the exact same-path gain, not the constant -1/7.
+    ts = run.read_timeseries(out / "timeseries.csv")
+    assert ts["beta"][-1] / ts["phi"][-1] == pytest.approx(-0.14714, abs=1e-4)
+    # config.toml repeats it.
+    again = tmp_path / "again"
+    assert run.main(["--config", str(out / "config.toml"), "--out", str(again)]) == 0
+    assert (again / "timeseries.csv").read_bytes() == (out / "timeseries.csv").read_bytes()

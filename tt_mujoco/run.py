@@ -185,7 +185,21 @@ def build_parser() -> argparse.ArgumentParser:
         "--eta",
         default="same_path",
         help="passive steering gain: paper (3, jackknifes forward), same_path "
-        "(-(L0-L)/(2 L0)), or a number",
+        "((L-L0)/(L+L0) = -1/7), scheduled (the exact same-path gain for the local "
+        "curvature, updated every step), or a number",
+    )
+    g.add_argument(
+        "--reverse",
+        action=argparse.BooleanOptionalAction,
+        default=False,
+        help="drive the path backwards, trailer first (where eta > 1 is stable)",
+    )
+    g.add_argument(
+        "--path-feedback",
+        action=argparse.BooleanOptionalAction,
+        default=False,
+        help="outer loop: lateral and heading errors feed the yaw-rate target "
+        "(tt_mujoco.feedback; k_y = k_psi = 4)",
     )
     g.add_argument(
         "--no-disturbance",
@@ -339,8 +353,10 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
     if traj.lower().endswith(".csv"):
         traj = str(Path(traj))
     eta = args.eta
+    eta_schedule = isinstance(eta, str) and eta.strip().lower() == "scheduled"
+    if eta_schedule:
+        eta = "same_path"  # the nominal model's gain; the plant's follows the curvature
     try:
-        # A number goes through as a float: Params' string parsing takes '-' for '_'.
         eta = float(eta)
     except ValueError:
         pass
@@ -363,6 +379,9 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
         params=dict(params),
         phi0_deg=args.phi0,
         faults=list(faults),
+        eta_schedule=eta_schedule,
+        reverse=bool(args.reverse),
+        path_feedback={} if args.path_feedback else None,
     )
 
 
