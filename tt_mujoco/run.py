@@ -48,26 +48,6 @@ PARAM_NAMES = tuple(
 #: Hidden folder inside the output folder where figures and video are made before the rename.
 STAGING = ".partial"
 
-SUMMARY_KEYS = (
-    "rmse_v",
-    "max_abs_v",
-    "rmse_omega",
-    "max_abs_omega",
-    "rmse_lateral",
-    "max_lateral",
-    "rmse_position",
-    "max_position",
-    "trailer_rmse_lateral",
-    "trailer_offtrack_rms",
-    "eq_violation_max",
-    "slip_lateral_max",
-    "slip_longitudinal_max",
-    "torque_saturation_fraction",
-    "steps",
-    "sim_time_s",
-    "wall_time_s",
-)
-
 
 class BadInputError(Exception):
     """A user's mistake: reported as one line, exit code 2."""
@@ -691,7 +671,7 @@ def _remove_if_empty(out: Path) -> None:
 
 
 def _print_summary(result, out: Path, written, notes) -> None:
-    from tt_mujoco.metrics import summary_table
+    from tt_mujoco.metrics import DEFAULT_SUMMARY_KEYS, summary_table
 
     s = result.scenario
     print(
@@ -699,7 +679,9 @@ def _print_summary(result, out: Path, written, notes) -> None:
         f"eta={result.config['nominal_params']['eta']:g} | disturbance={s.disturbance} | "
         f"status={result.status}"
     )
-    print(summary_table(result.metrics, keys=[k for k in SUMMARY_KEYS if k in result.metrics]))
+    print(
+        summary_table(result.metrics, keys=[k for k in DEFAULT_SUMMARY_KEYS if k in result.metrics])
+    )
     for fault in result.metrics.get("faults", []):
         w = fault["window"]
         print(
