@@ -95,7 +95,6 @@ DEFAULT_SUMMARY_KEYS = (
     "sim_time_s",
     "steps",
     "finite_samples",
-    "wall_time_s",
 )
 
 # Relative margin under which a commanded torque counts as saturated: a controller that clips its

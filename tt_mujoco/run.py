@@ -679,9 +679,8 @@ def _print_summary(result, out: Path, written, notes) -> None:
         f"eta={result.config['nominal_params']['eta']:g} | disturbance={s.disturbance} | "
         f"status={result.status}"
     )
-    print(
-        summary_table(result.metrics, keys=[k for k in DEFAULT_SUMMARY_KEYS if k in result.metrics])
-    )
+    keys = [k for k in (*DEFAULT_SUMMARY_KEYS, "wall_time_s") if k in result.metrics]
+    print(summary_table(result.metrics, keys=keys))
     for fault in result.metrics.get("faults", []):
         w = fault["window"]
         print(
