@@ -105,3 +105,13 @@ def test_scaled_params():
     assert p.Iw == pytest.approx(0.012)
     assert p.L == 0.3
     assert p.eta == Params().eta
+
+
+def test_compiled_models_are_private_copies():
+    from tt_mujoco.physics import compile_model
+
+    a = compile_model(Params())
+    a.body_mass[a.body("trailer_body").id] = 99.0
+    b = compile_model(Params())
+    assert b.body_mass[b.body("trailer_body").id] == 6.0
+    assert compile_model(Params(Mr=7.0)).body_mass[b.body("trailer_body").id] == 7.0

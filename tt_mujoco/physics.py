@@ -7,6 +7,7 @@ MuJoCo.
 
 from __future__ import annotations
 
+import copy
 import math
 
 import mujoco
@@ -20,10 +21,26 @@ from tt_mujoco.params import Params
 __all__ = ["Vehicle", "compile_model", "layout_of"]
 
 
+#: Compiled models by their vehicle XML: compiling takes ~27 ms, copying ~4 ms, and sweeps
+#: build thousands of vehicles with a handful of distinct parameter sets.
+_COMPILED: dict[str, mujoco.MjModel] = {}
+_COMPILED_MAX = 16
+
+
 def compile_model(p: Params) -> mujoco.MjModel:
-    """Compile the scene for ``p`` from the generated XML (no files are read or written)."""
-    assets = {VEHICLE_FILE: vehicle_xml(p).encode()}
-    return mujoco.MjModel.from_xml_string(scene_xml(), assets=assets)
+    """Compile the scene for ``p`` from the generated XML (no files are read or written).
+
+    Returns a private copy: callers may change it (faults edit ``body_mass``, the steering
+    schedule ``eq_data``) without touching the cached original.
+    """
+    xml = vehicle_xml(p)
+    model = _COMPILED.get(xml)
+    if model is None:
+        model = mujoco.MjModel.from_xml_string(scene_xml(), assets={VEHICLE_FILE: xml.encode()})
+        if len(_COMPILED) >= _COMPILED_MAX:
+            _COMPILED.pop(next(iter(_COMPILED)))
+        _COMPILED[xml] = model
+    return copy.copy(model)
 
 
 def layout_of(model: mujoco.MjModel, p: Params) -> Layout:
