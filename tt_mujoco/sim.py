@@ -128,6 +128,9 @@ class Scenario:
     start: str = "on_path"
     friction: float = 1.0
     params: dict = field(default_factory=dict)
+    #: Per-field factors on the *plant's* masses and inertias only (e.g. ``{"Mr": 1.2}``), on
+    #: top of ``param_scale``: a model mismatch the controller does not know about.
+    plant_scale: dict = field(default_factory=dict)
     #: Initial articulation phi (deg), with beta = eta phi; must stay short of the jackknife.
     phi0_deg: float = 0.0
     #: Fault specs (dicts or ``KIND:key=value,...`` strings), see :mod:`tt_mujoco.faults`.
@@ -205,8 +208,27 @@ class Scenario:
         return Params(eta=self.eta, timestep=self.timestep, friction=self.friction, **self.params)
 
     def plant_params(self) -> Params:
-        nominal = self.nominal_params()
-        return nominal if self.param_scale == 1.0 else nominal.scaled(self.param_scale)
+        """The plant's parameters: nominal, times ``param_scale`` on every mass and inertia,
+        times ``plant_scale[field]`` on single ones (SPEC Section 8)."""
+        from tt_mujoco.params import INERTIA_FIELDS, MASS_FIELDS
+
+        p = self.nominal_params()
+        if self.param_scale != 1.0:
+            p = p.scaled(self.param_scale)
+        if self.plant_scale:
+            allowed = MASS_FIELDS + INERTIA_FIELDS
+            for name, factor in self.plant_scale.items():
+                if name not in allowed:
+                    raise ValueError(
+                        f"plant_scale field {name!r} is not allowed: use one of {allowed}"
+                    )
+                if not (isinstance(factor, int | float) and math.isfinite(factor) and factor > 0):
+                    raise ValueError(
+                        f"plant_scale[{name!r}]={factor!r} is not allowed: "
+                        "it must be finite and > 0"
+                    )
+            p = p.replace(**{k: getattr(p, k) * f for k, f in self.plant_scale.items()})
+        return p
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)

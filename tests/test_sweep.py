@@ -1,0 +1,239 @@
+"""Sweeps: specification, seeds, executors (process pool and Dask) and resume after a kill."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from tt_mujoco import sweep
+from tt_mujoco.params import Params
+from tt_mujoco.sweep import BadSpecError, parse_spec
+
+EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "sweep_example.toml"
+
+# The executor tests' sweep: 8 short MuJoCo runs with noise. With phi0 = 25 deg the paper's
+# eta = 3 jackknifes within 1 s (a failure row) and the stable same_path design finishes (ok);
+# the slow ok runs come last so that a kill after the first rows leaves work to resume.
+ITEMS = ["duration=1.0", "phi0_deg=25", "noise_snr_db=20", "eta=paper,same_path"]
+REPEATS = 4
+N_RUNS = 2 * REPEATS
+
+
+def _table(path: Path) -> list[dict]:
+    """runs.csv without the columns that measure the machine's load."""
+    return [
+        {k: v for k, v in row.items() if k not in sweep.WALL_COLUMNS}
+        for row in sweep.read_table(path)
+    ]
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory) -> Path:
+    """The sweep run uninterrupted through the local process pool (2 workers)."""
+    spec = parse_spec(ITEMS, repeats=REPEATS, seed=7)
+    out = tmp_path_factory.mktemp("pool") / "sweep"
+    result = sweep.run_sweep(spec, out, workers=2)
+    assert result.reused == 0
+    return out
+
+
+# --- specification -------------------------------------------------------------------------------
+def test_values_lists_generators_and_toml_agree():
+    assert sweep.parse_item("gain.k1_v=5,10,20").values == (5.0, 10.0, 20.0)
+    assert sweep.parse_item("scale.Mr=lin:0.8:1.2:5").values == (0.8, 0.9, 1.0, 1.1, 1.2)
+    assert sweep.parse_item("gain.k1_v=log:1:100:3").values == (1.0, 10.0, 100.0)
+    assert sweep.parse_item("seed=range:0:10:3").values == (0, 3, 6, 9)
+    assert sweep.parse_item("noise_snr_db=none,20").values == (None, 20.0)
+    assert sweep.parse_item("eta=same_path,paper,-0.2").values == ("same_path", "paper", -0.2)
+    # A fault spec keeps its commas: one value.
+    assert sweep.parse_item("faults=payload:t=2,factor=1.5").values == ("payload:t=2,factor=1.5",)
+
+    from_file = sweep.expand(parse_spec(config=EXAMPLE))
+    from_cli = sweep.expand(
+        parse_spec(
+            [
+                "traj=s_curve",
+                "controller=ismc_sta",
+                "duration=10",
+                "disturbance=matched",
+                "noise_snr_db=20,30",
+                "gain.k1_v=5,10,20",
+                "scale.Mr=lin:0.8:1.2:3",
+            ],
+            seed=1,
+            repeats=4,
+        )
+    )
+    assert len(from_file) == 72
+    assert [r["run_id"] for r in from_file] == [r["run_id"] for r in from_cli]
+
+
+@pytest.mark.parametrize(
+    ("items", "kwargs", "message"),
+    [
+        (["foo=1"], {}, "option 'foo' is not allowed"),
+        (["scale.L=1.1"], {}, "option 'scale.L' is not allowed"),
+        (["controller=lqr"], {}, "controller='lqr' is not allowed"),
+        (["duration=-1"], {}, "duration=-1.0 is not allowed"),
+        (["gain.k1_v=5,x"], {}, "gain.k1_v='x' is not allowed"),
+        (["gain.kp_v=2"], {}, "'kp_v' (value 2.0) is not a gain of ismc_sta"),
+        (["scale.Mr=uniform:0.8:1.2"], {}, "give --samples N"),
+        (["scale.Mr=uniform:1.2:0.8"], {"samples": 3}, "needs A < B"),
+        (["gain.k1_v=5,5"], {}, "lists a value twice"),
+        (["seed=1,2"], {"repeats": 2}, "would run identical copies"),
+        (["traj=missing.csv"], {}, "missing.csv"),
+        (["eta=paper", "phi0_deg=40"], {}, "phi0=40.0 deg is not allowed"),
+        (["faults=payload:t=20", "duration=3"], {}, "after the end of the run"),
+        (["scale.Mx=1.1"], {}, "scale.Mx"),
+        (["Mr"], {}, "write OPTION=VALUES"),
+    ],
+)
+def test_bad_specs_raise_one_clear_error(items, kwargs, message):
+    with pytest.raises(BadSpecError) as info:
+        sweep.expand(parse_spec(items, **kwargs))
+    assert message in str(info.value)
+
+
+def test_cli_bad_spec_is_exit_2_with_one_line(tmp_path, capsys):
+    assert sweep.main(["gain.k1_v=-3", "--out", str(tmp_path / "s")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "gain.k1_v=-3.0 is not allowed" in err
+    assert not (tmp_path / "s").exists()  # nothing made for a bad spec
+    (tmp_path / "used").mkdir()
+    (tmp_path / "used" / "x").write_text("")
+    assert sweep.main(["duration=1", "--out", str(tmp_path / "used")]) == 2
+    assert "pass --resume" in capsys.readouterr().err
+
+
+def test_scales_gains_and_timestep_reach_the_scenario():
+    defaults = Params()
+    scenario = sweep.build_scenario(
+        {"scale.Mr": 1.2, "scale.Ird": 0.5, "param.L0": 0.5, "gain.k1_v": 12.0, "timestep": 0.002}
+    )
+    # scale.* is a plant-only mismatch; param.* changes vehicle and nominal model alike.
+    assert scenario.params == {"L0": 0.5}
+    assert scenario.plant_scale == {"Mr": 1.2, "Ird": 0.5}
+    plant, nominal = scenario.plant_params(), scenario.nominal_params()
+    assert plant.Mr == pytest.approx(defaults.Mr * 1.2) and nominal.Mr == defaults.Mr
+    assert plant.Ird == pytest.approx(defaults.Ird * 0.5) and nominal.Ird == defaults.Ird
+    assert plant.L0 == nominal.L0 == 0.5
+    assert scenario.gains == {"k1_v": 12.0}
+    assert scenario.control_dt == 0.002  # the control period follows the timestep
+    assert sweep.build_scenario({"gains": "paper_6_2", "gain.eps": 0.1}).gains == {
+        "eps": 0.1,
+        "preset": "paper_6_2",
+    }
+    # Boolean and optional-dict Scenario fields: on/off switches and single entries.
+    feedback = []
+    for item in ("path_feedback=on", "path_feedback.k_y=2", "path_feedback=off"):
+        axis = sweep.parse_item(item)
+        feedback.append(sweep.build_scenario({axis.name: axis.values[0]}).path_feedback)
+    assert feedback == [{}, {"k_y": 2.0}, None]
+    assert sweep.parse_item("reverse=true,false").values == (True, False)
+    with pytest.raises(BadSpecError, match="reverse='maybe' is not allowed"):
+        sweep.parse_item("reverse=maybe")
+
+
+# --- seeds -------------------------------------------------------------------------------------
+def test_grid_seeds_are_common_random_numbers_and_follow_the_sweep_seed():
+    runs = sweep.expand(parse_spec(["gain.k1_v=5,10,20"], repeats=3, seed=5))
+    seeds = [
+        [r["options"]["seed"] for r in runs if r["options"]["gain.k1_v"] == k] for k in (5, 10, 20)
+    ]
+    # Repeat j has the same noise at every grid point (paired comparison of the gains)...
+    assert seeds[0] == seeds[1] == seeds[2]
+    assert len(set(seeds[0])) == 3  # ...and a different one per repeat
+    other = sweep.expand(parse_spec(["gain.k1_v=5,10,20"], repeats=3, seed=6))
+    assert not set(seeds[0]) & {r["options"]["seed"] for r in other}
+
+
+def test_random_samples_are_stable_when_the_sweep_grows():
+    items = ["scale.Mr=uniform:0.8:1.2", "gain.k1_v=loguniform:2:50", "eta=paper,same_path"]
+    small = sweep.expand(parse_spec(items, samples=5, seed=3))
+    large = sweep.expand(parse_spec(items, samples=9, seed=3))
+    assert [r["run_id"] for r in large[:5]] == [r["run_id"] for r in small]
+    for run in large:
+        assert 0.8 <= run["options"]["scale.Mr"] < 1.2
+        assert 2.0 <= run["options"]["gain.k1_v"] < 50.0
+    assert len({r["options"]["seed"] for r in large}) == 9
+
+
+def test_a_crashing_run_is_a_row_with_its_error():
+    result = sweep.run_one({"controller": "nope", "duration": 0.1})
+    assert result["status"] == "error"
+    assert result["error"].startswith("ValueError: controller name='nope' is not allowed")
+    assert result["metrics"] == {}
+
+
+def test_nested_metrics_become_flat_columns():
+    # The per-fault report is a list of dicts in metrics.json: one column per entry here.
+    result = sweep.run_one({"duration": 0.4, "faults": "payload:t=0.1;dropout:t=0.2"})
+    assert result["status"] == "ok"
+    m = result["metrics"]
+    assert m["faults.0.kind"] == "payload" and m["faults.1.kind"] == "dropout"
+    assert m["faults.1.window.rmse_v"] >= 0.0
+    assert not any(isinstance(v, dict | list) for v in m.values())
+
+
+# --- executors and resume ----------------------------------------------------------------------
+def test_pool_sweep_writes_table_summary_and_figures(reference):
+    rows = sweep.read_table(reference / "runs.csv")
+    assert len(rows) == N_RUNS and [int(r["index"]) for r in rows] == list(range(N_RUNS))
+    assert [r["status"] for r in rows] == ["jackknife"] * REPEATS + ["ok"] * REPEATS
+    assert all("jackknife at t=" in r["message"] for r in rows[:REPEATS])
+    # The full configuration and every metric are columns.
+    for column in ("eta_value", "gain.k1_v", "seed", "phi0_deg", "rmse_lateral", "steps"):
+        assert column in rows[0]
+    assert len({r["seed"] for r in rows}) == REPEATS  # paired across the two eta values
+    summary = json.loads((reference / "summary.json").read_text())
+    assert summary["failed"] == REPEATS and summary["by_status"] == {"jackknife": 4, "ok": 4}
+    assert summary["metrics"]["rmse_lateral"]["n"] == REPEATS
+    for name in ("summary.csv", "histograms.png", "scatter.png", "sweep.toml"):
+        assert (reference / name).stat().st_size > 0
+
+
+def test_dask_local_cluster_gives_the_same_table(reference, tmp_path):
+    pytest.importorskip("distributed")
+    spec = parse_spec(ITEMS, repeats=REPEATS, seed=7)
+    out = tmp_path / "dask"
+    sweep.run_sweep(spec, out, workers=2, scheduler="local", figures=False)
+    assert _table(out / "runs.csv") == _table(reference / "runs.csv")
+
+
+def test_killed_sweep_resumes_to_the_uninterrupted_table(reference, tmp_path):
+    out = tmp_path / "killed"
+    cmd = [sys.executable, "-m", "tt_mujoco.sweep", *ITEMS, "--repeats", str(REPEATS)]
+    cmd += ["--seed", "7", "--workers", "1", "--quiet", "--no-figures", "--out", str(out)]
+    # A session of its own, so that the kill takes the pool's worker processes with it.
+    proc = subprocess.Popen(cmd, start_new_session=True, stdout=subprocess.PIPE, text=True)
+    journal = out / sweep.JOURNAL
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and proc.poll() is None:
+        if journal.exists() and journal.read_text().count("\n") >= 2:
+            break
+        time.sleep(0.01)
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.communicate()
+    finished = sweep._read_journal(journal)
+    assert 2 <= len(finished) < N_RUNS, "the sweep must be killed part way for this test"
+    assert not (out / sweep.TABLE).exists()  # the final table only appears at the end
+
+    # Resume from the folder alone: its saved spec, only the runs not in the journal.
+    done = subprocess.run(
+        [sys.executable, "-m", "tt_mujoco.sweep", "--resume", "--out", str(out), "--quiet"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    assert f"{N_RUNS} runs ({len(finished)} reused)" in done.stdout
+    ids = [json.loads(line)["run_id"] for line in journal.read_text().splitlines()]
+    assert len(ids) == len(set(ids)) == N_RUNS  # nothing redone, nothing lost
+    assert _table(out / "runs.csv") == _table(reference / "runs.csv")
