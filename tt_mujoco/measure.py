@@ -72,6 +72,9 @@ class Measurement(NamedTuple):
     slip_right: float
 
 
+_new_measurement = Measurement._make
+
+
 def yaw_from_quat(w: float, x: float, y: float, z: float) -> float:
     """Heading (rotation about world z) of a body with unit quaternion (w, x, y, z)."""
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
@@ -129,24 +132,27 @@ def measure(qpos, qvel, lay: Layout) -> Measurement:
     thl_dot = qvel[lay.wheel_left_v]
     thr_dot = qvel[lay.wheel_right_v]
     half = 0.5 * lay.d * omega
-    return Measurement(
-        x=x,
-        y=y,
-        theta=theta,
-        phi=phi,
-        beta=beta,
-        v=v,
-        omega=omega,
-        x0=x0,
-        y0=y0,
-        theta0=theta0,
-        v0=v0,
-        theta_l=qpos[lay.wheel_left_q],
-        theta_r=qpos[lay.wheel_right_q],
-        theta_l_dot=thl_dot,
-        theta_r_dot=thr_dot,
-        slip_lateral=slip_lateral,
-        slip_lateral_trailer=slip_lateral_trailer,
-        slip_left=lay.r * thl_dot - (v - half),
-        slip_right=lay.r * thr_dot - (v + half),
+    # Positional construction (field order of Measurement): keywords cost ~1.5 us a call.
+    return _new_measurement(
+        (
+            x,
+            y,
+            theta,
+            phi,
+            beta,
+            v,
+            omega,
+            x0,
+            y0,
+            theta0,
+            v0,
+            qpos[lay.wheel_left_q],
+            qpos[lay.wheel_right_q],
+            thl_dot,
+            thr_dot,
+            slip_lateral,
+            slip_lateral_trailer,
+            lay.r * thl_dot - (v - half),
+            lay.r * thr_dot - (v + half),
+        )
     )
