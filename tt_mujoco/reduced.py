@@ -199,7 +199,35 @@ def _lumped(p: Params) -> tuple[float, float, float, float, float, float]:
     return lumped
 
 
+def _constants(p: Params) -> tuple:
+    """(eta, L, L0, m_t, J_t, J_a, J_0, Mc2/4, m_0 + Mc2/4), cached on ``p`` like
+    :func:`_lumped`; ``kappa kappa^T`` collects the trailer's translation and rod 2's."""
+    cached = p.__dict__.get("_constants_cache")
+    if cached is None:
+        m_t, J_t, m_0, J_a, J_0, _ = _lumped(p)
+        q = p.Mc2 / 4.0
+        cached = (p.eta, p.L, p.L0, m_t, J_t, J_a, J_0, q, m_0 + q)
+        object.__setattr__(p, "_constants_cache", cached)
+    return cached
+
+
+# The last (params, phi) -> terms: within a control step the controller's model and the
+# matched disturbance ask for the same articulation angle; a hit saves ~2 us.
+_last_terms: list = [None, None, None]
+
+
 def _inertia_terms(phi: float, p: Params):
+    """Mbar(phi) and N(phi) as nested tuples, plus the articulation row s (memoised for the
+    last call; see :func:`_compute_inertia_terms`)."""
+    last = _last_terms
+    if last[0] is p and last[1] == phi:
+        return last[2]
+    terms = _compute_inertia_terms(phi, p)
+    last[0], last[1], last[2] = p, phi, terms
+    return terms
+
+
+def _compute_inertia_terms(phi: float, p: Params):
     """Mbar(phi) and N(phi) as nested tuples, plus the articulation row s.
 
     Velocity maps (tractor frame), with psi = beta - phi = (eta - 1) phi:
@@ -208,8 +236,10 @@ def _inertia_terms(phi: float, p: Params):
     ``a = (0, 1) + (eta - 1) s``; rod 2's cross term uses ``n = (cos psi, -L sin psi)`` and
     ``dn/dphi = (eta - 1) m``, ``m = (-sin psi, -L cos psi)``.
     """
-    eta, L, L0 = p.eta, p.L, p.L0
-    cb = _cos_beta(phi, eta)
+    eta, L, L0, m_t, J_t, J_a, J_0, q, mk = _constants(p)
+    cb = math.cos(eta * phi)
+    if cb < COS_BETA_MIN:
+        raise SingularityError(phi, eta)
     sb = math.sin(eta * phi)
     cphi, sphi = math.cos(phi), math.sin(phi)
     psi = (eta - 1.0) * phi
@@ -230,10 +260,6 @@ def _inertia_terms(phi: float, p: Params):
     da1, da2 = (eta - 1.0) * ds1, (eta - 1.0) * ds2
     n1, n2 = cpsi, -L * spsi
     m1, m2 = -spsi, -L * cpsi
-
-    m_t, J_t, m_0, J_a, J_0, _ = _lumped(p)
-    q = p.Mc2 / 4.0
-    mk = m_0 + q  # kappa kappa^T collects the trailer's translation and rod 2's
 
     M11 = m_t + q + mk * k1 * k1 + J_a * a1 * a1 + J_0 * g1 * g1 + 2 * q * n1 * k1
     M22 = J_t + q * L * L + mk * k2 * k2 + J_a * a2 * a2 + J_0 * g2 * g2 + 2 * q * n2 * k2
@@ -265,31 +291,10 @@ def _coriolis(phi: float, v: float, omega: float, p: Params):
     return (M11, M12, M22), (c1, c2)
 
 
-def _mass_terms(phi: float, p: Params) -> tuple[float, float, float]:
-    """Mbar(phi) alone, as (M11, M12, M22): the same sums as :func:`_inertia_terms`."""
-    eta, L, L0 = p.eta, p.L, p.L0
-    cb = _cos_beta(phi, eta)
-    psi = (eta - 1.0) * phi
-    cpsi, spsi = math.cos(psi), math.sin(psi)
-    k1, k2 = math.cos(phi) / cb, L * math.sin(phi) / cb
-    s1, s2 = spsi / (L0 * cb), 1.0 + L * cpsi / (L0 * cb)
-    g1, g2 = -s1, 1.0 - s2
-    a1, a2 = (eta - 1.0) * s1, 1.0 + (eta - 1.0) * s2
-    n1, n2 = cpsi, -L * spsi
-    m_t, J_t, m_0, J_a, J_0, _ = _lumped(p)
-    q = p.Mc2 / 4.0
-    mk = m_0 + q
-    return (
-        m_t + q + mk * k1 * k1 + J_a * a1 * a1 + J_0 * g1 * g1 + 2 * q * n1 * k1,
-        mk * k1 * k2 + J_a * a1 * a2 + J_0 * g1 * g2 + q * (n1 * k2 + k1 * n2),
-        J_t + q * L * L + mk * k2 * k2 + J_a * a2 * a2 + J_0 * g2 * g2 + 2 * q * n2 * k2,
-    )
-
-
 def matched_torque(phi: float, a_v: float, a_omega: float, p: Params) -> tuple[float, float]:
     """Wheel torques ``(T_r, T_l) = g(phi)^-1 (a_v, a_omega) = B^-1 Mbar(phi) a``: the matched
     input that adds the acceleration ``a`` to ``(v_dot, omega_dot)`` (SPEC Section 8)."""
-    M11, M12, M22 = _mass_terms(phi, p)
+    M11, M12, M22 = _inertia_terms(phi, p)[0]
     force = M11 * a_v + M12 * a_omega  # generalized force on v
     moment = M12 * a_v + M22 * a_omega  # ... and on omega
     # B^-1 with B = [[1/r, 1/r], [d/(2r), -d/(2r)]].
