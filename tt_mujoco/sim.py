@@ -6,7 +6,8 @@ The same controller object, target and disturbance drive both plants, so their r
 like for like:
 
 - the controller sees the measurement (plus optional noise) and the *nominal* reduced model;
-- the plant is built from ``nominal.scaled(param_scale)`` (parameter uncertainty, SPEC Section 8);
+- the plant is built from ``nominal.scaled(param_scale)``, times ``plant_scale`` per field
+  (parameter uncertainty, SPEC Section 8);
 - the paper's disturbance (Section 6.1) enters as matched wheel torques
   ``g_nominal(phi)^-1 Delta(t)`` added outside the actuators' saturation, on both plants; in
   ``wrench`` mode MuJoCo instead gets the equivalent force and yaw moment on the chassis, which
