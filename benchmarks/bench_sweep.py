@@ -38,7 +38,7 @@ from tt_mujoco.sim import Scenario, simulate
 ITEMS = ["traj=s_curve", "duration=10", "noise_snr_db=20"]
 
 
-def episode_breakdown(n: int) -> dict:
+def episode_breakdown(n: int, control_dt: float = 0.001) -> dict:
     """Median time per part of one episode, in this process (seconds)."""
     real_step = mujoco.mj_step
     spent = [0.0]
@@ -55,7 +55,11 @@ def episode_breakdown(n: int) -> dict:
         for seed in range(n):
             spent[0] = 0.0
             t = time.perf_counter()
-            result = simulate(Scenario(traj="s_curve", duration=10.0, noise_snr_db=20, seed=seed))
+            result = simulate(
+                Scenario(
+                    traj="s_curve", duration=10.0, noise_snr_db=20, seed=seed, control_dt=control_dt
+                )
+            )
             episode = time.perf_counter() - t
             t = time.perf_counter()
             metrics.compute_metrics(result.timeseries, result.reference_polyline, 15.0)
@@ -104,10 +108,16 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2, help="workers of the big sweep")
     ap.add_argument("--dask", action="store_true", help="also time a Dask LocalCluster")
     ap.add_argument("--json", type=Path, default=None, help="write the numbers here too")
+    ap.add_argument(
+        "--control-dt", type=float, default=0.001, help="control period of every episode (s)"
+    )
     args = ap.parse_args()
+    if args.control_dt != 0.001:
+        ITEMS.append(f"control_dt={args.control_dt}")
 
     print(f"mujoco {mujoco.__version__}, {os.cpu_count()} CPUs, load {os.getloadavg()[0]:.2f}")
-    b = episode_breakdown(args.profile)
+    print(f"control period {1e3 * args.control_dt:g} ms, physics step 1 ms")
+    b = episode_breakdown(args.profile, args.control_dt)
     ms = {k: 1e3 * v for k, v in b.items() if k != "steps"}
     print(
         f"one 10 s episode ({b['steps']} control steps), median of {args.profile}, in-process:\n"
