@@ -1121,13 +1121,25 @@ def _steering_rows(records) -> list[dict]:
     return rows
 
 
+def _steering_row(rows, path: str, plant: str, variant: str) -> dict | None:
+    """The steering study's main (unlabelled) row for a path, plant and variant, or None."""
+    return next(
+        (
+            r
+            for r in rows
+            if r["path"] == path
+            and r["plant"] == plant
+            and r["variant"] == variant
+            and not r["label"]
+        ),
+        None,
+    )
+
+
 def _steering_ratio(rows, path: str, plant: str, field_name: str) -> float:
     def get(variant):
-        for r in rows:
-            if r["path"] == path and r["plant"] == plant and r["variant"] == variant:
-                if not r["label"]:
-                    return r.get(field_name)
-        return None
+        r = _steering_row(rows, path, plant, variant)
+        return None if r is None else r.get(field_name)
 
     plain, same = get("plain (eta = 0)"), get("same_path (-1/7)")
     if plain is None or same is None or not same:
@@ -1634,17 +1646,7 @@ def _summary_markdown(rows, steering, feedback, checks, info) -> str:
         for plant in PLANTS:
             cells = []
             for name in names:
-                r = next(
-                    (
-                        x
-                        for x in steering
-                        if x["path"] == path
-                        and x["plant"] == plant
-                        and x["variant"] == name
-                        and not x["label"]
-                    ),
-                    None,
-                )
+                r = _steering_row(steering, path, plant, name)
                 if r is None:
                     cells.append("—")
                 elif r["status"] == "jackknife":
@@ -1760,17 +1762,7 @@ def _draw_figures(records, rows, steering, out: Path) -> list[str]:
                 for j, name in enumerate(STEERING_VARIANTS):
                     vals = []
                     for path in STUDY_PATHS:
-                        r = next(
-                            (
-                                x
-                                for x in steering
-                                if x["path"] == path
-                                and x["plant"] == plant
-                                and x["variant"] == name
-                                and not x["label"]
-                            ),
-                            None,
-                        )
+                        r = _steering_row(steering, path, plant, name)
                         ok = r is not None and r["status"] == "ok"
                         value = r.get(field_name) if ok else None
                         vals.append(np.nan if value is None else value)

@@ -142,9 +142,3 @@ class Vehicle:
         M = np.zeros((self.model.nv, self.model.nv))
         mujoco.mj_fullM(self.model, self.data, M)
         return M
-
-    def wheel_torque_for_acceleration(self, phi: float, accel) -> np.ndarray:
-        """Matched torques ``g(phi)^-1 accel`` that produce ``accel`` in ``(v_dot, omega_dot)``
-        under the reduced model with these parameters (SPEC Section 8)."""
-        _, g = reduced.dynamics(phi, (0.0, 0.0), self.params)
-        return np.linalg.solve(g, np.asarray(accel, dtype=float))

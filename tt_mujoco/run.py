@@ -232,7 +232,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--start",
         default="on_path",
         choices=("on_path", "paper"),
-        help="cycloid only: start on the path, or at the paper's pose (0, 0, pi/4)",
+        help="on_path: start in the reference's initial state (pose and speed); paper: the "
+        "paper's initial condition, at rest (on the cycloid at its pose (0, 0, pi/4))",
     )
     g.add_argument(
         "--phi0",

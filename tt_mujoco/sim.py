@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from tt_mujoco import reduced
+from tt_mujoco.measure import Measurement
 from tt_mujoco.params import Params
 
 __all__ = [
@@ -329,8 +330,6 @@ class _ReducedPlantAdapter:
         self._accel = (0.0, 0.0)
 
     def measure(self):
-        from tt_mujoco.measure import Measurement
-
         p = self.params
         x, y, theta, phi, th_l, th_r, v, omega = (float(c) for c in self.plant.state)
         _, P0, theta0 = reduced.trailer_pose(x, y, theta, phi, p)
@@ -409,8 +408,6 @@ _LOOP_COLUMNS = (
 def _assemble_columns(measured: list, logged: list, eta: float) -> dict[str, np.ndarray]:
     """The time series in :data:`COLUMNS` order from the per-step measurement tuples and the
     loop's own values (``x_ref``/``y_ref`` are left NaN for the caller to fill)."""
-    from tt_mujoco.measure import Measurement
-
     n = len(logged)
     meas = np.array(measured, dtype=float).reshape(n, len(Measurement._fields))
     loop = np.array(logged, dtype=float).reshape(n, len(_LOOP_COLUMNS))
