@@ -10,13 +10,13 @@ import time
 import timeit
 
 import mujoco
+from tt_mujoco.controllers import make_controller, reduced_model
 
-from controllers import make_controller, reduced_model
-from tt_mujoco import reduced
-from tt_mujoco.params import Params
-from tt_mujoco.physics import Vehicle
+from tt_mujoco.reference.targets import make_target
 from tt_mujoco.sim import Scenario, simulate
-from tt_mujoco.targets import make_target
+from tt_mujoco.sim.physics import Vehicle
+from tt_mujoco.vehicle import reduced
+from tt_mujoco.vehicle.params import Params
 
 
 def best_of(fn, repeats=3):

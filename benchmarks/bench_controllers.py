@@ -13,8 +13,9 @@ from __future__ import annotations
 import argparse
 import timeit
 
-from controllers import CONTROLLERS, make_controller, reduced_model
-from tt_mujoco.params import Params
+from tt_mujoco.controllers import CONTROLLERS, make_controller, reduced_model
+
+from tt_mujoco.vehicle.params import Params
 
 # A representative operating point: turning, small articulation, a small tracking error.
 PHI, V, OMEGA = 0.1, 0.52, 0.28

@@ -2,10 +2,10 @@
 
     python benchmarks/bench_render.py [--frames 150] [--width 640 --height 480] [--rounds 3]
 
-A frame is everything :meth:`tt_mujoco.render.RunRenderer.render_frame` does: pose the vehicle
+A frame is everything :meth:`tt_mujoco.viz.render.RunRenderer.render_frame` does: pose the vehicle
 (mj_kinematics), build the scene with the path and traces, render offscreen, read the pixels
 back and draw the text overlay. Encoding is timed separately, on frames held in memory, with
-the same ffmpeg (imageio-ffmpeg's) and settings as :func:`tt_mujoco.render.render_video`; in a
+the same ffmpeg (imageio-ffmpeg's) and settings as :func:`tt_mujoco.viz.render.render_video`; in a
 real render the encoder runs in its own process, in parallel with the rendering. The series is
 the reduced model under constant torques (10 s), so the numbers do not depend on the simulation
 loop. On a shared machine the load average is printed with the results: the minimum over
@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tt_mujoco import render
-from tt_mujoco.params import Params
+from tt_mujoco.vehicle.params import Params
+from tt_mujoco.viz import render
 
 
 def time_frames(renderer: render.RunRenderer, frames: int, rounds: int) -> list[float]:

@@ -8,8 +8,8 @@ import time
 
 import mujoco
 
-from tt_mujoco.params import Params
-from tt_mujoco.physics import Vehicle
+from tt_mujoco.sim.physics import Vehicle
+from tt_mujoco.vehicle.params import Params
 
 
 def bare_rate(p: Params, sim_seconds: float = 10.0, repeats: int = 3) -> float:

@@ -32,7 +32,8 @@ from pathlib import Path
 
 import mujoco
 
-from tt_mujoco import metrics, sweep
+from tt_mujoco import sweep
+from tt_mujoco.analysis import metrics
 from tt_mujoco.sim import Scenario, simulate
 
 ITEMS = ["traj=s_curve", "duration=10", "noise_snr_db=20"]

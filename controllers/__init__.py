@@ -4,7 +4,7 @@ They track ``z = (v, omega)`` with wheel torques ``(T_r, T_l)`` using the *nomin
 ``z_dot = f + g tau`` given as a plain-float callable (:func:`reduced_model`). Nothing here
 imports MuJoCo.
 
->>> from tt_mujoco.params import Params
+>>> from tt_mujoco.vehicle.params import Params
 >>> ctrl = make_controller("ismc_sta", reduced_model(Params()))
 >>> T_r, T_l = ctrl.step(0.001, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0)
 """
@@ -13,10 +13,10 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from controllers.base import Controller, ModelFn, reduced_model
-from controllers.fbl import FblController
-from controllers.ismc_sta import IsmcStaController
-from controllers.pid import PidController
+from tt_mujoco.controllers.base import Controller, ModelFn, reduced_model
+from tt_mujoco.controllers.fbl import FblController
+from tt_mujoco.controllers.ismc_sta import IsmcStaController
+from tt_mujoco.controllers.pid import PidController
 
 __all__ = [
     "CONTROLLERS",

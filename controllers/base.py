@@ -51,11 +51,11 @@ _SINGULAR_RTOL = 1e-12
 
 
 def reduced_model(params) -> ModelFn:
-    """Wrap :func:`tt_mujoco.reduced.dynamics` into the plain-float callable the controllers use.
+    """Wrap :func:`tt_mujoco.vehicle.reduced.dynamics` into the plain-float callable the controllers use.
 
     Parameters
     ----------
-    params : tt_mujoco.params.Params
+    params : tt_mujoco.vehicle.params.Params
         The controller's *nominal* parameters (they may differ from the plant's).
 
     Returns
@@ -63,10 +63,10 @@ def reduced_model(params) -> ModelFn:
     callable
         ``model(phi, v, omega) -> (f1, f2, g11, g12, g21, g22)`` with ``V_dot = f + g tau`` and
         ``tau = (T_r, T_l)`` (SPEC Section 4). Raises
-        :class:`tt_mujoco.reduced.SingularityError` at a jackknife, like ``dynamics``.
+        :class:`tt_mujoco.vehicle.reduced.SingularityError` at a jackknife, like ``dynamics``.
     """
     # Imported here so that importing ``controllers`` stays free of tt_mujoco and numpy.
-    from tt_mujoco.reduced import dynamics_scalar
+    from tt_mujoco.vehicle.reduced import dynamics_scalar
 
     def model(phi: float, v: float, omega: float):
         return dynamics_scalar(phi, v, omega, params)

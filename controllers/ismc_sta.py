@@ -38,7 +38,7 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from controllers.base import Controller
+from tt_mujoco.controllers.base import Controller
 
 __all__ = ["IsmcStaController"]
 

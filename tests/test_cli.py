@@ -7,7 +7,9 @@ import sys
 import numpy as np
 import pytest
 
-from tt_mujoco import metrics, paths, run
+from tt_mujoco import run
+from tt_mujoco.analysis import metrics
+from tt_mujoco.reference import paths
 
 
 @pytest.fixture(scope="module")

@@ -1,6 +1,6 @@
 """Tests of the velocity controllers (SPEC Section 9) on the reduced plant.
 
-The plant is :class:`tt_mujoco.reduced.ReducedPlant` with ``Params()`` (eta = same_path, stable
+The plant is :class:`tt_mujoco.vehicle.reduced.ReducedPlant` with ``Params()`` (eta = same_path, stable
 forward), stepped with RK4 at the control period DT = 1 ms, torques and disturbance held over
 each step. The controllers' nominal model is the same reduced model, so without a disturbance
 the error dynamics are exactly the laws' linear ones (FBL: ``e_dot = -K e``; PID: ``(1 + KD)
@@ -18,8 +18,7 @@ import sys
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
-
-from controllers import (
+from tt_mujoco.controllers import (
     CONTROLLERS,
     FblController,
     IsmcStaController,
@@ -27,8 +26,9 @@ from controllers import (
     make_controller,
     reduced_model,
 )
-from tt_mujoco.params import Params
-from tt_mujoco.reduced import ReducedPlant, dynamics
+
+from tt_mujoco.vehicle.params import Params
+from tt_mujoco.vehicle.reduced import ReducedPlant, dynamics
 
 DT = 1e-3
 NAMES = tuple(CONTROLLERS)
@@ -119,10 +119,10 @@ def test_reduced_model_adapter_matches_dynamics():
 def test_controllers_do_not_import_mujoco():
     code = (
         "import sys, controllers\n"
-        "from tt_mujoco.params import Params\n"
+        "from tt_mujoco.vehicle.params import Params\n"
         "c = controllers.make_controller('ismc_sta', controllers.reduced_model(Params()))\n"
         "c.step(0.001, 0.0, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0)\n"
-        "bad = [m for m in ('mujoco', 'tt_mujoco.physics') if m in sys.modules]\n"
+        "bad = [m for m in ('mujoco', 'tt_mujoco.sim.physics') if m in sys.modules]\n"
         "assert not bad, bad\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True, timeout=60)

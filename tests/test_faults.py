@@ -11,8 +11,8 @@ import os
 import numpy as np
 import pytest
 
-from tt_mujoco import faults, run
-from tt_mujoco.sim import Scenario, simulate
+from tt_mujoco import run
+from tt_mujoco.sim import Scenario, faults, simulate
 
 # S-curve, 4 s: the ramp (0-2 s) and 2 s of cruising on the first arc, paper disturbance on.
 S_CURVE = {"traj": "s_curve", "duration": 4.0}
@@ -167,7 +167,7 @@ def test_body_wrench_beyond_traction_stops_reported_and_written(baseline, tmp_pa
 
 # --- atomic outputs ------------------------------------------------------------------------------
 def test_interrupted_output_leaves_no_metrics(tmp_path, monkeypatch, capsys):
-    from tt_mujoco import plots
+    from tt_mujoco.viz import plots
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
@@ -184,7 +184,7 @@ def test_interrupted_output_leaves_no_metrics(tmp_path, monkeypatch, capsys):
 
 
 def test_exception_inside_write_outputs_after_the_csv(tmp_path, monkeypatch):
-    from tt_mujoco import plots
+    from tt_mujoco.viz import plots
 
     def broken(*args, **kwargs):
         raise RuntimeError("disk on fire")

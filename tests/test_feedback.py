@@ -1,4 +1,4 @@
-"""The outer path-feedback loop (tt_mujoco.feedback)."""
+"""The outer path-feedback loop (tt_mujoco.reference.feedback)."""
 
 from __future__ import annotations
 
@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from tt_mujoco.feedback import DEFAULT_GAINS, PathFeedback, check_config
+from tt_mujoco.reference.feedback import DEFAULT_GAINS, PathFeedback, check_config
+from tt_mujoco.reference.targets import make_target
 from tt_mujoco.sim import Scenario, simulate
-from tt_mujoco.steering import ReverseTarget
-from tt_mujoco.targets import make_target
+from tt_mujoco.vehicle.steering import ReverseTarget
 
 
 def _drive(target, pose, duration, dt=0.001, **gains):
@@ -108,7 +108,7 @@ def test_paper_start_pose_converges_with_feedback_on_the_reduced_plant():
     on = simulate(Scenario(**base, path_feedback={}))
     assert off.status == on.status == "ok"
     assert off.metrics["rmse_lateral"] > 0.2
-    from tt_mujoco.metrics import distance_to_polyline
+    from tt_mujoco.analysis.metrics import distance_to_polyline
 
     end = (on.timeseries["x"][-1], on.timeseries["y"][-1])
     assert distance_to_polyline(np.array(end), on.reference_polyline) < 5e-3

@@ -8,8 +8,8 @@ import pytest
 gymnasium = pytest.importorskip("gymnasium")
 
 from gymnasium.utils.env_checker import check_env  # noqa: E402
+from tt_mujoco.controllers import make_controller, reduced_model  # noqa: E402
 
-from controllers import make_controller, reduced_model  # noqa: E402
 from tt_mujoco import gym_env  # noqa: E402
 from tt_mujoco.sim import Scenario, simulate  # noqa: E402
 

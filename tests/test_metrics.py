@@ -1,4 +1,4 @@
-"""Tests of tt_mujoco.metrics on hand-made time series with known answers (SPEC Section 11)."""
+"""Tests of tt_mujoco.analysis.metrics on hand-made time series with known answers (SPEC Section 11)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from matplotlib.path import Path
 
-from tt_mujoco.metrics import (
+from tt_mujoco.analysis.metrics import (
     REQUIRED_COLUMNS,
     Polyline,
     compute_metrics,

@@ -23,8 +23,8 @@ from tt_mujoco.paper import (
     run_suite,
     suite,
 )
+from tt_mujoco.reference.targets import make_target
 from tt_mujoco.sim import Scenario
-from tt_mujoco.targets import make_target
 
 #: SPEC Section 10, transcribed independently of paper.py: (table, case) -> {metric: value}.
 SPEC_10 = {

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from tt_mujoco import paths
-from tt_mujoco.params import Params
+from tt_mujoco.reference import paths
+from tt_mujoco.vehicle.params import Params
 
 L_CYCLOID = 8.0 * math.cos(math.pi / 8.0)
 

@@ -10,9 +10,10 @@ import pytest
 from matplotlib import _pylab_helpers
 from PIL import Image
 
-from tt_mujoco import metrics, plots
-from tt_mujoco.params import Params
-from tt_mujoco.render import open_loop_timeseries
+from tt_mujoco.analysis import metrics
+from tt_mujoco.vehicle.params import Params
+from tt_mujoco.viz import plots
+from tt_mujoco.viz.render import open_loop_timeseries
 
 OFFSET = 0.02  # m: the test reference runs this far to the right of the tractor's path
 

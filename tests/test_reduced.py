@@ -8,8 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.optimize import brentq
 
-from tt_mujoco import reduced
-from tt_mujoco.params import Params, spec_same_path_eta
+from tt_mujoco.vehicle import reduced
+from tt_mujoco.vehicle.params import Params, spec_same_path_eta
 
 PAPER = Params(eta="paper")
 

@@ -15,8 +15,10 @@ import mujoco
 import numpy as np
 import pytest
 
-from tt_mujoco import reduced, render
-from tt_mujoco.params import Params
+from tt_mujoco import render as render_cli
+from tt_mujoco.vehicle import reduced
+from tt_mujoco.vehicle.params import Params
+from tt_mujoco.viz import render
 
 WIDTH, HEIGHT, FPS, DURATION = 160, 120, 30, 2.0
 
@@ -165,7 +167,7 @@ def test_scene_draws_path_reference_point_and_traces_up_to_now(
 
 
 def test_pose_vehicle_puts_the_sites_at_P_and_P0():
-    from tt_mujoco.physics import Vehicle
+    from tt_mujoco.sim.physics import Vehicle
 
     p = Params(eta="paper")
     vehicle = Vehicle(p)
@@ -284,18 +286,18 @@ def run_dir(tmp_path):
 def test_cli_refuses_to_overwrite(run_dir, capsys):
     existing = run_dir / "video.mp4"
     existing.write_bytes(b"old video")
-    assert render.main([str(run_dir), "--no-progress"]) == 2
+    assert render_cli.main([str(run_dir), "--no-progress"]) == 2
     assert "--out" in capsys.readouterr().err
     other = run_dir / "other.mp4"
     other.write_bytes(b"other")
-    assert render.main([str(run_dir), "--out", str(other), "--no-progress"]) == 2
+    assert render_cli.main([str(run_dir), "--out", str(other), "--no-progress"]) == 2
     assert existing.read_bytes() == b"old video" and other.read_bytes() == b"other"
 
 
 def test_cli_rerenders_a_run_to_a_new_file(run_dir):
     out = run_dir / "small.mp4"
     argv = [str(run_dir), "--out", str(out), "--width", "64", "--height", "48", "--fps", "10"]
-    code = render.main([*argv, "--camera", "overview", "--no-progress"])
+    code = render_cli.main([*argv, "--camera", "overview", "--no-progress"])
     if code == 1:
         pytest.skip("no OpenGL backend here")
     assert code == 0
@@ -305,7 +307,7 @@ def test_cli_rerenders_a_run_to_a_new_file(run_dir):
 
 
 def test_cli_rejects_a_folder_that_is_not_a_run(tmp_path, capsys):
-    assert render.main([str(tmp_path), "--no-progress"]) == 2
+    assert render_cli.main([str(tmp_path), "--no-progress"]) == 2
     assert "timeseries.csv" in capsys.readouterr().err
 
 

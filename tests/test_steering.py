@@ -1,4 +1,4 @@
-"""Passive steering: exact same-path gains, the scheduler, reverse driving (tt_mujoco.steering)."""
+"""Passive steering: exact same-path gains, the scheduler, reverse driving (tt_mujoco.vehicle.steering)."""
 
 from __future__ import annotations
 
@@ -7,11 +7,12 @@ import math
 import numpy as np
 import pytest
 
-from tt_mujoco import reduced
-from tt_mujoco.metrics import trailer_offtrack
-from tt_mujoco.params import Params
+from tt_mujoco.analysis.metrics import trailer_offtrack
+from tt_mujoco.reference.targets import make_target
 from tt_mujoco.sim import Scenario, simulate
-from tt_mujoco.steering import (
+from tt_mujoco.vehicle import reduced
+from tt_mujoco.vehicle.params import Params
+from tt_mujoco.vehicle.steering import (
     EtaScheduler,
     ReverseTarget,
     exact_same_path_eta,
@@ -19,7 +20,6 @@ from tt_mujoco.steering import (
     same_path_eta_limit,
     steady_offtrack,
 )
-from tt_mujoco.targets import make_target
 
 L, L0 = 0.3, 0.4
 
@@ -123,7 +123,7 @@ def test_scheduled_runs_hold_beta_at_the_exact_gain_on_both_plants():
 
 
 def test_scheduler_writes_the_steering_equality_polycoef():
-    from tt_mujoco.physics import Vehicle
+    from tt_mujoco.sim.physics import Vehicle
 
     vehicle = Vehicle(Params())
 

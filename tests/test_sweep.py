@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 
 from tt_mujoco import sweep
-from tt_mujoco.params import Params
 from tt_mujoco.sweep import BadSpecError, parse_spec
+from tt_mujoco.vehicle.params import Params
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "sweep_example.toml"
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from tt_mujoco import paths, targets
-from tt_mujoco.targets import (
+from tt_mujoco.reference import paths, targets
+from tt_mujoco.reference.targets import (
     CycloidDynamicSpeed,
     CycloidStaticSpeed,
     DynamicTarget,

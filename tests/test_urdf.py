@@ -1,4 +1,4 @@
-"""The URDF export (tt_mujoco.urdf) against the MJCF it mirrors and SPEC Sections 1 and 4."""
+"""The URDF export (tt_mujoco.vehicle.urdf) against the MJCF it mirrors and SPEC Sections 1 and 4."""
 
 from __future__ import annotations
 
@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 import yourdfpy
 
-from tt_mujoco import reduced
-from tt_mujoco.model import AXLE_MASS, MODELS_DIR
-from tt_mujoco.params import Params
-from tt_mujoco.physics import Vehicle
-from tt_mujoco.urdf import STEER_LIMIT, URDF_FILE, urdf_xml, wheel_joint_name
+from tt_mujoco.sim.physics import Vehicle
+from tt_mujoco.vehicle import reduced
+from tt_mujoco.vehicle.mjcf import AXLE_MASS, MODELS_DIR
+from tt_mujoco.vehicle.params import Params
+from tt_mujoco.vehicle.urdf import STEER_LIMIT, URDF_FILE, urdf_xml, wheel_joint_name
 
 LINKS = (
     "tractor",

@@ -8,8 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from tt_mujoco import reduced, validate
-from tt_mujoco.params import Params
+from tt_mujoco.analysis import validate
+from tt_mujoco.vehicle import reduced
+from tt_mujoco.vehicle.params import Params
 
 PRESETS = {"paper": Params(eta="paper"), "same_path": Params(), "plain": Params(eta=0.0)}
 

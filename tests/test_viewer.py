@@ -12,7 +12,8 @@ import mujoco
 import mujoco.viewer
 import pytest
 
-from tt_mujoco import run, viewer
+from tt_mujoco import run
+from tt_mujoco.viz import viewer
 
 
 def test_no_display_exits_2_without_traceback(tmp_path):

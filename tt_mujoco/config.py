@@ -11,7 +11,7 @@ A config file holds the run's options under their long names with ``_`` for ``-`
     Mr = 7.5
     [gains]             # or gains = "paper_6_2"; as --gains
     k1_v = 12.0
-    [[faults]]          # as --fault KIND:key=value,...  (see tt_mujoco.faults)
+    [[faults]]          # as --fault KIND:key=value,...  (see tt_mujoco.sim.faults)
     kind = "dropout"
     t = 2.0
 
@@ -36,8 +36,8 @@ from pathlib import Path
 
 import tomli_w
 
-from tt_mujoco.faults import parse_fault
-from tt_mujoco.params import Params
+from tt_mujoco.sim.faults import parse_fault
+from tt_mujoco.vehicle.params import Params
 
 __all__ = [
     "CONFIG_FILE",

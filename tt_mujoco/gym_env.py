@@ -7,7 +7,7 @@ chooses the wheel torques:
 
 - **action**: ``(T_r, T_l)`` in N m, a ``Box(-torque_limit, torque_limit, (2,))``; the
   actuators saturate, so values outside are clipped, as a real motor driver would.
-- **observation**: the measurement layer (:class:`tt_mujoco.measure.Measurement`, its 19
+- **observation**: the measurement layer (:class:`tt_mujoco.sim.measure.Measurement`, its 19
   fields in order, with the scenario's measurement noise on v and omega and any sensor dropout
   applied) followed by the tracking target ``(v_d, omega_d)``; names in
   :data:`OBSERVATION_NAMES`.
@@ -43,8 +43,9 @@ try:
 except ImportError as err:  # pragma: no cover - depends on the optional extra
     raise ImportError("tt_mujoco.gym_env needs gymnasium: pip install 'tt-mujoco[gym]'") from err
 
-from tt_mujoco import reduced, sim
-from tt_mujoco.measure import Measurement
+from tt_mujoco import sim
+from tt_mujoco.sim.measure import Measurement
+from tt_mujoco.vehicle import reduced
 
 __all__ = ["ENV_ID", "OBSERVATION_NAMES", "TractorTrailerEnv"]
 
@@ -65,7 +66,7 @@ class TractorTrailerEnv(gymnasium.Env):
         ``Scenario(disturbance="none", control_dt=0.01)``.
     render_mode : {None, "rgb_array"}
         ``"rgb_array"`` renders the MuJoCo plant offscreen (needs an OpenGL backend, see
-        :func:`tt_mujoco.render.select_gl_backend`).
+        :func:`tt_mujoco.viz.render.select_gl_backend`).
     **overrides
         Scenario fields to replace, e.g. ``traj="circle", plant="reduced"``.
     """
@@ -113,8 +114,8 @@ class TractorTrailerEnv(gymnasium.Env):
         self._setup_target()
 
     def _setup_target(self) -> None:
-        from tt_mujoco.faults import FaultSchedule, parse_faults
-        from tt_mujoco.targets import make_target
+        from tt_mujoco.reference.targets import make_target
+        from tt_mujoco.sim.faults import FaultSchedule, parse_faults
 
         s = self.scenario
         self.path, self.target, self._pose = make_target(
@@ -209,7 +210,7 @@ class TractorTrailerEnv(gymnasium.Env):
         if self._renderer is None:
             import mujoco
 
-            from tt_mujoco.render import select_gl_backend
+            from tt_mujoco.viz.render import select_gl_backend
 
             select_gl_backend()
             self._renderer = mujoco.Renderer(self._plant.model, 480, 640)

@@ -8,7 +8,7 @@ files already written are complete, and ``metrics.json``, written last, is absen
 Options can come from a TOML file (``--config FILE``, see :mod:`tt_mujoco.config`); the
 command line overrides it, and every run writes its resolved options to ``config.toml`` so
 that ``--config RUN_DIR/config.toml`` repeats it exactly. ``--viewer`` shows the run live in
-MuJoCo's passive viewer (:mod:`tt_mujoco.viewer`).
+MuJoCo's passive viewer (:mod:`tt_mujoco.viz.viewer`).
 
 Outputs are written atomically (a temporary file, then a rename) into a new folder, never an
 existing non-empty one; ``metrics.json`` is written last, so its presence marks a complete run.
@@ -30,9 +30,9 @@ from pathlib import Path
 
 import numpy as np
 
-from tt_mujoco.faults import RECOVERY_S
-from tt_mujoco.params import Params
 from tt_mujoco.sim import COLUMNS, DISTURBANCE_MODES, PLANTS, TARGETS, Scenario
+from tt_mujoco.sim.faults import RECOVERY_S
+from tt_mujoco.vehicle.params import Params
 
 __all__ = ["build_parser", "main", "read_timeseries", "timeseries_csv", "write_outputs"]
 
@@ -179,7 +179,7 @@ def build_parser() -> argparse.ArgumentParser:
         action=argparse.BooleanOptionalAction,
         default=False,
         help="outer loop: lateral and heading errors feed the yaw-rate target "
-        "(tt_mujoco.feedback; k_y = k_psi = 4)",
+        "(tt_mujoco.reference.feedback; k_y = k_psi = 4)",
     )
     g.add_argument(
         "--no-disturbance",
@@ -218,7 +218,7 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         metavar="NAME=VALUE",
         help="override a vehicle parameter of both plant and controller model, e.g. Mr=7.5 "
-        "(repeatable; see tt_mujoco.params.Params)",
+        "(repeatable; see tt_mujoco.vehicle.params.Params)",
     )
     g.add_argument(
         "--duration",
@@ -299,7 +299,7 @@ def build_parser() -> argparse.ArgumentParser:
 def _parse(argv) -> tuple[argparse.Namespace, argparse.ArgumentParser, dict, list]:
     """Command line over config file over defaults; returns (args, parser, params, faults)."""
     from tt_mujoco import config as config_mod
-    from tt_mujoco.faults import parse_fault
+    from tt_mujoco.sim.faults import parse_fault
 
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -369,9 +369,9 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
 def _preflight(scenario: Scenario) -> np.ndarray:
     """Everything ``simulate`` checks before it starts, so bad input is refused before an
     output folder exists. Returns the reference polyline."""
-    from controllers import make_controller, reduced_model
-    from tt_mujoco.faults import FaultSchedule, parse_faults
-    from tt_mujoco.targets import make_target
+    from tt_mujoco.controllers import make_controller, reduced_model
+    from tt_mujoco.reference.targets import make_target
+    from tt_mujoco.sim.faults import FaultSchedule, parse_faults
 
     scenario.validate()
     nominal = scenario.nominal_params()
@@ -513,9 +513,9 @@ def write_outputs(
     try:
         if plots:
             try:
-                from tt_mujoco import plots as plots_mod
+                from tt_mujoco.viz import plots as plots_mod
             except ImportError:
-                notes.append("plots skipped: tt_mujoco.plots is not available")
+                notes.append("plots skipped: tt_mujoco.viz.plots is not available")
             else:
                 staging.mkdir(exist_ok=True)
                 made = plots_mod.plot_run(
@@ -527,9 +527,9 @@ def write_outputs(
                 written += [_publish(Path(f), out) for f in made]
         if video:
             try:
-                from tt_mujoco import render
+                from tt_mujoco.viz import render
             except ImportError:
-                notes.append("video skipped: tt_mujoco.render is not available")
+                notes.append("video skipped: tt_mujoco.viz.render is not available")
             else:
                 staging.mkdir(exist_ok=True)
                 try:
@@ -587,8 +587,9 @@ def _fail(message: str, code: int = EXIT_BAD_INPUT) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     from tt_mujoco import config as config_mod
-    from tt_mujoco import reduced, sim
-    from tt_mujoco import viewer as viewer_mod
+    from tt_mujoco import sim
+    from tt_mujoco.vehicle import reduced
+    from tt_mujoco.viz import viewer as viewer_mod
 
     try:
         args, parser, params, faults = _parse(argv)
@@ -672,7 +673,7 @@ def _remove_if_empty(out: Path) -> None:
 
 
 def _print_summary(result, out: Path, written, notes) -> None:
-    from tt_mujoco.metrics import DEFAULT_SUMMARY_KEYS, summary_table
+    from tt_mujoco.analysis.metrics import DEFAULT_SUMMARY_KEYS, summary_table
 
     s = result.scenario
     print(

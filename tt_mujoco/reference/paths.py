@@ -3,7 +3,7 @@
 A :class:`ReferencePath` describes where the tractor's axle midpoint P should go, as a function
 of the arc length ``s`` in ``[0, length]``: the pose ``(x, y, heading)``, the signed curvature
 ``kappa`` (positive counter-clockwise) and its rate ``dkappa/ds``. Timing (how fast ``s``
-advances) is not part of a path; it lives in :mod:`tt_mujoco.targets`.
+advances) is not part of a path; it lives in :mod:`tt_mujoco.reference.targets`.
 
 Paths of the paper (Section 6) and user paths:
 
@@ -34,7 +34,7 @@ from scipy.integrate import cumulative_simpson
 from scipy.interpolate import CubicHermiteSpline, CubicSpline, make_smoothing_spline
 from scipy.optimize import brentq
 
-from tt_mujoco.params import Params
+from tt_mujoco.vehicle.params import Params
 
 __all__ = [
     "CYCLOID_LENGTH",
@@ -650,7 +650,7 @@ def from_csv(
 
     The file has a header row naming the columns ``x`` and ``y`` (metres) and optionally ``v``
     (desired speed, m/s), in any order, then one waypoint per row; blank lines are skipped.
-    Timing (cruise speed, start and stop) is chosen by :mod:`tt_mujoco.targets`.
+    Timing (cruise speed, start and stop) is chosen by :mod:`tt_mujoco.reference.targets`.
 
     Parameters
     ----------

@@ -58,9 +58,9 @@ from pathlib import Path
 
 import numpy as np
 
-from controllers import CONTROLLERS
-from tt_mujoco.params import INERTIA_FIELDS, MASS_FIELDS, Params
+from tt_mujoco.controllers import CONTROLLERS
 from tt_mujoco.sim import DISTURBANCE_MODES, PLANTS, TARGETS, Scenario
+from tt_mujoco.vehicle.params import INERTIA_FIELDS, MASS_FIELDS, Params
 
 __all__ = [
     "RESULT_COLUMNS",
@@ -686,7 +686,7 @@ def build_scenario(options: Mapping) -> Scenario:
 
 
 def _resolved_gains(scenario: Scenario) -> tuple[str, dict]:
-    from controllers.base import resolve_gains
+    from tt_mujoco.controllers.base import resolve_gains
 
     cls = CONTROLLERS[scenario.controller]
     values, preset = resolve_gains(cls.name, cls.PRESETS, cls.DEFAULT_PRESET, scenario.gains)
@@ -695,7 +695,7 @@ def _resolved_gains(scenario: Scenario) -> tuple[str, dict]:
 
 def _validate_runs(runs: Sequence[dict]) -> None:
     """Every run's scenario, parameters, gains and path, before any work (exit 2 on a bad one)."""
-    from tt_mujoco.targets import make_target
+    from tt_mujoco.reference.targets import make_target
 
     durations: dict[tuple, float] = {}  # one target per distinct path: CSV paths cost a fit
     for run in runs:
@@ -716,7 +716,7 @@ def _validate_runs(runs: Sequence[dict]) -> None:
                 )
                 durations[key] = float(target.duration)
             if scenario.faults:
-                from tt_mujoco.faults import FaultSchedule, parse_faults
+                from tt_mujoco.sim.faults import FaultSchedule, parse_faults
 
                 # a fault after the end of the run is refused by simulate(): refuse it now
                 faults = parse_faults(scenario.faults)
@@ -1085,10 +1085,10 @@ _PRELOAD = [
     "mujoco",
     "scipy.integrate",
     "tt_mujoco.sim",
-    "tt_mujoco.physics",
-    "tt_mujoco.targets",
-    "tt_mujoco.metrics",
-    "tt_mujoco.faults",
+    "tt_mujoco.sim.physics",
+    "tt_mujoco.reference.targets",
+    "tt_mujoco.analysis.metrics",
+    "tt_mujoco.sim.faults",
     "controllers",
 ]
 
@@ -1552,7 +1552,3 @@ def main(argv: list[str] | None = None) -> int:
         f"wrote {', '.join(p.name for p in result.files)} to {result.out}/"
     )
     return EXIT_OK
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -17,7 +17,7 @@ Divergence is detected, never hidden: a jackknife (|beta| or |phi| near 90 deg),
 nominal model, non-finite numbers or MuJoCo warnings stop the run, which keeps every sample up
 to that point and reports the time and state.
 
-Faults (:mod:`tt_mujoco.faults`: a payload step, sensor dropout, an actuator losing torque)
+Faults (:mod:`tt_mujoco.sim.faults`: a payload step, sensor dropout, an actuator losing torque)
 hook into the loop only when ``Scenario.faults`` lists some; a run without faults takes none of
 those branches.
 """
@@ -31,9 +31,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from tt_mujoco import reduced
-from tt_mujoco.measure import Measurement
-from tt_mujoco.params import Params
+from tt_mujoco.sim.measure import Measurement
+from tt_mujoco.vehicle import reduced
+from tt_mujoco.vehicle.params import Params
 
 __all__ = [
     "COLUMNS",
@@ -135,15 +135,15 @@ class Scenario:
     plant_scale: dict = field(default_factory=dict)
     #: Initial articulation phi (deg), with beta = eta phi; must stay short of the jackknife.
     phi0_deg: float = 0.0
-    #: Fault specs (dicts or ``KIND:key=value,...`` strings), see :mod:`tt_mujoco.faults`.
+    #: Fault specs (dicts or ``KIND:key=value,...`` strings), see :mod:`tt_mujoco.sim.faults`.
     faults: list = field(default_factory=list)
-    #: Outer path-feedback loop on omega_d (:mod:`tt_mujoco.feedback`): None (off) or a dict
+    #: Outer path-feedback loop on omega_d (:mod:`tt_mujoco.reference.feedback`): None (off) or a dict
     #: of gains, ``{}`` for the defaults (k_y, k_psi, c_max).
     path_feedback: dict | None = None
-    #: Curvature-scheduled steering (:class:`tt_mujoco.steering.EtaScheduler`): the plant's eta
+    #: Curvature-scheduled steering (:class:`tt_mujoco.vehicle.steering.EtaScheduler`): the plant's eta
     #: follows the exact same-path gain of the target's curvature; the controller keeps ``eta``.
     eta_schedule: bool = False
-    #: Drive the path backwards, trailer first (:class:`tt_mujoco.steering.ReverseTarget`).
+    #: Drive the path backwards, trailer first (:class:`tt_mujoco.vehicle.steering.ReverseTarget`).
     reverse: bool = False
 
     def validate(self) -> None:
@@ -183,10 +183,10 @@ class Scenario:
             if not isinstance(value, bool):
                 raise ValueError(f"{name}={value!r} is not allowed: use True or False")
         if self.path_feedback is not None:
-            from tt_mujoco.feedback import check_config
+            from tt_mujoco.reference.feedback import check_config
 
             check_config(self.path_feedback)
-        from tt_mujoco.faults import parse_faults
+        from tt_mujoco.sim.faults import parse_faults
 
         parse_faults(self.faults)
         self._check_phi0()
@@ -212,7 +212,7 @@ class Scenario:
     def plant_params(self) -> Params:
         """The plant's parameters: nominal, times ``param_scale`` on every mass and inertia,
         times ``plant_scale[field]`` on single ones (SPEC Section 8)."""
-        from tt_mujoco.params import INERTIA_FIELDS, MASS_FIELDS
+        from tt_mujoco.vehicle.params import INERTIA_FIELDS, MASS_FIELDS
 
         p = self.nominal_params()
         if self.param_scale != 1.0:
@@ -267,7 +267,7 @@ class _MujocoPlant:
     def __init__(self, params: Params, pose, v_init: float, wrench: bool, phi0: float = 0.0):
         import mujoco
 
-        from tt_mujoco.physics import Vehicle
+        from tt_mujoco.sim.physics import Vehicle
 
         self._mujoco = mujoco
         self.vehicle = Vehicle(params)
@@ -437,10 +437,10 @@ def simulate(scenario: Scenario, progress=None, on_step=None) -> Result:
     ValueError
         For bad configuration values (before anything is simulated).
     """
-    from controllers import make_controller, reduced_model
-    from tt_mujoco import faults as faults_mod
-    from tt_mujoco import metrics as metrics_mod
-    from tt_mujoco.targets import make_target
+    from tt_mujoco.analysis import metrics as metrics_mod
+    from tt_mujoco.controllers import make_controller, reduced_model
+    from tt_mujoco.reference.targets import make_target
+    from tt_mujoco.sim import faults as faults_mod
 
     scenario.validate()
     nominal = scenario.nominal_params()
@@ -450,13 +450,13 @@ def simulate(scenario: Scenario, progress=None, on_step=None) -> Result:
     )
     duration = float(target.duration)
     if scenario.reverse:
-        from tt_mujoco.steering import ReverseTarget
+        from tt_mujoco.vehicle.steering import ReverseTarget
 
         target = ReverseTarget(target)
         pose = target.initial_pose
     feedback = None
     if scenario.path_feedback is not None:
-        from tt_mujoco.feedback import PathFeedback
+        from tt_mujoco.reference.feedback import PathFeedback
 
         feedback = PathFeedback.from_config(target, scenario.path_feedback)
     faults = None
@@ -489,7 +489,7 @@ def simulate(scenario: Scenario, progress=None, on_step=None) -> Result:
         plant = _ReducedPlantAdapter(plant_p, pose, v_init, scenario.timestep, phi0=phi0)
     scheduler = None
     if scenario.eta_schedule:
-        from tt_mujoco.steering import EtaScheduler
+        from tt_mujoco.vehicle.steering import EtaScheduler
 
         scheduler = EtaScheduler(plant, plant_p)
 

@@ -9,10 +9,10 @@ Runs every scenario behind Tables 1-5 of Wen, Chen and Zhou (Axioms 2026, 15, 59
   run the curvature error ``omega / v - kappa_d`` is split exactly into the yaw-tracking part
   ``e_omega / v`` and the target's mismatch part ``omega_d / v - kappa_d``
   (:func:`curvature_split`);
-- a **passive-steering study** (:mod:`tt_mujoco.steering`): trailer off-tracking for eta = 0,
+- a **passive-steering study** (:mod:`tt_mujoco.vehicle.steering`): trailer off-tracking for eta = 0,
   the paper's eta = 3 (forward and reversing), eta = -3, the same-path gains and the
   curvature-scheduled eta;
-- a **path-feedback study** (:mod:`tt_mujoco.feedback`): the outer lateral/heading loop on all
+- a **path-feedback study** (:mod:`tt_mujoco.reference.feedback`): the outer lateral/heading loop on all
   three paths under the paper's disturbances and 20 dB noise.
 
 The runs go to a ``concurrent.futures.ProcessPoolExecutor`` (``--workers``, default 2) with a
@@ -337,7 +337,7 @@ def curvature_split(ts: Mapping[str, np.ndarray], path, polyline, v_min: float =
     """
     from scipy.integrate import cumulative_trapezoid
 
-    from tt_mujoco.metrics import signed_lateral_error
+    from tt_mujoco.analysis.metrics import signed_lateral_error
 
     t, v, w, wd = (np.asarray(ts[k], dtype=float) for k in ("t", "v", "omega", "omega_d"))
     n = _finite_length(ts)
@@ -415,7 +415,7 @@ def _steady_mask(path, s_tractor: np.ndarray, reverse: bool, spacing: float) -> 
 
 def _offtrack_summary(ts, path, scenario: Scenario, plant_params) -> dict:
     """Follower off-tracking (full run and steady arcs), jackknife time, analytic steady value."""
-    from tt_mujoco.steering import follower_offtrack, steady_offtrack
+    from tt_mujoco.vehicle.steering import follower_offtrack, steady_offtrack
 
     n = _finite_length(ts)
     columns = {k: np.asarray(ts[k])[:n] for k in ("x", "y", "x0", "y0")}
@@ -465,9 +465,9 @@ def execute(key: str, scenario: Scenario, keep_series: bool = False) -> dict:
     Runs in a worker process. ``simulate`` never raises for a diverging run; any other
     exception is recorded as status ``"error"`` so that one bad run cannot stop the suite.
     """
-    from tt_mujoco.metrics import signed_lateral_error
+    from tt_mujoco.analysis.metrics import signed_lateral_error
+    from tt_mujoco.reference.targets import make_target
     from tt_mujoco.sim import simulate
-    from tt_mujoco.targets import make_target
 
     start = time.perf_counter()
     record = {"key": key, "scenario": _json_safe(scenario.to_dict())}
@@ -1515,7 +1515,7 @@ def build_report(
 
     md += ["## Beyond the paper: path feedback", ""]
     md += [
-        "The outer loop of `tt_mujoco.feedback` adds v (-k_y e_y - k_psi e_psi) to the dynamic "
+        "The outer loop of `tt_mujoco.reference.feedback` adds v (-k_y e_y - k_psi e_psi) to the dynamic "
         "target's omega_d (k_y = 4 1/m^2, k_psi = 4 1/m, critically damped in arc length). "
         "Paper disturbances on; 20 dB noise unless the case says otherwise. 'Cross-track' "
         "measures P against the path continued along its end tangents (a vehicle that "
@@ -1871,7 +1871,3 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{len(errors)} run(s) failed, see the report: {', '.join(errors)}", file=sys.stderr)
         return 1
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

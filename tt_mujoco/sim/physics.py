@@ -13,10 +13,10 @@ import math
 import mujoco
 import numpy as np
 
-from tt_mujoco import reduced
-from tt_mujoco.measure import Layout, Measurement, measure
-from tt_mujoco.model import VEHICLE_FILE, scene_xml, vehicle_xml
-from tt_mujoco.params import Params
+from tt_mujoco.sim.measure import Layout, Measurement, measure
+from tt_mujoco.vehicle import reduced
+from tt_mujoco.vehicle.mjcf import VEHICLE_FILE, scene_xml, vehicle_xml
+from tt_mujoco.vehicle.params import Params
 
 __all__ = ["Vehicle", "compile_model", "layout_of"]
 

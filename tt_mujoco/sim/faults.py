@@ -218,7 +218,7 @@ def window_errors(ts, polyline, t_start: float, t_end: float) -> dict:
     reference polyline) and ``rmse_v``, ``rmse_omega`` over the finite samples in the window
     (NaN if there are none), and ``samples``.
     """
-    from tt_mujoco.metrics import distance_to_polyline
+    from tt_mujoco.analysis.metrics import distance_to_polyline
 
     t = np.asarray(ts["t"])
     sel = (t >= t_start - 1e-12) & (t <= t_end + 1e-12)

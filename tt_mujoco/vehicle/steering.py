@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-from tt_mujoco.params import Params, same_path_eta
+from tt_mujoco.vehicle.params import Params, same_path_eta
 
 __all__ = [
     "EtaScheduler",
@@ -114,11 +114,11 @@ def steady_offtrack(kappa: float, params: Params) -> float:
     """Analytic steady-state off-tracking (m): P0's turning radius minus the tractor's.
 
     Negative: P0 runs inside the tractor's path; positive: outside. Uses the steady articulation
-    of the kinematics (``tt_mujoco.paths.steady_articulation``), NaN where there is none. The
+    of the kinematics (``tt_mujoco.reference.paths.steady_articulation``), NaN where there is none. The
     steady turn is the same in either direction of travel; for eta > 1 it is stable only
     reversing (SPEC Section 3).
     """
-    from tt_mujoco.paths import steady_articulation
+    from tt_mujoco.reference.paths import steady_articulation
 
     kappa = float(kappa)
     if kappa == 0.0:
@@ -140,7 +140,7 @@ class EtaScheduler:
     plant : object
         The simulation loop's plant: MuJoCo (has ``model``, the compiled model with the
         ``steering`` equality) or the reduced ODE adapter (has ``params`` and ``plant``, a
-        :class:`tt_mujoco.reduced.ReducedPlant`).
+        :class:`tt_mujoco.vehicle.reduced.ReducedPlant`).
     params : Params
         The plant's parameters (L, L0 and the initial eta).
     tolerance : float
@@ -226,7 +226,7 @@ class ReverseTarget:
 
     Parameters
     ----------
-    target : tt_mujoco.targets.Target
+    target : tt_mujoco.reference.targets.Target
         The forward target (its path, speed profile, kind and duration are reused).
     """
 
@@ -244,7 +244,7 @@ class ReverseTarget:
     @property
     def initial_pose(self):
         """Start pose: the path at ``s_end``, heading along the path (the vehicle backs up)."""
-        from tt_mujoco.paths import Pose
+        from tt_mujoco.reference.paths import Pose
 
         return Pose(*self.path.pose_at(self.s_end))
 
@@ -298,11 +298,11 @@ def follower_offtrack(ts, reverse: bool = False) -> np.ndarray:
     """Off-tracking of the following axle from the leading axle's path, sample by sample (m).
 
     Forward the trailer (P0) follows the tractor (P): this is
-    :func:`tt_mujoco.metrics.trailer_offtrack`. Reversing, the trailer leads, so the roles swap:
+    :func:`tt_mujoco.analysis.metrics.trailer_offtrack`. Reversing, the trailer leads, so the roles swap:
     the distance from P to the path P0 has driven so far. NaN until the follower has passed the
     leader's starting point.
     """
-    from tt_mujoco.metrics import trailer_offtrack
+    from tt_mujoco.analysis.metrics import trailer_offtrack
 
     p = np.column_stack([ts["x"], ts["y"]])
     p0 = np.column_stack([ts["x0"], ts["y0"]])

@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-from tt_mujoco.params import Params
+from tt_mujoco.vehicle.params import Params
 
 __all__ = [
     "ReducedPlant",

@@ -34,7 +34,7 @@ INERTIA_FIELDS = ("Ifd", "Ird", "Iwd", "Ic1", "Ic2", "Iw")
 def same_path_eta(L: float, L0: float) -> float:
     """Constant steering gain that puts P0 on the tractor's path in gentle steady turns.
 
-    The small-curvature limit of the exact same-path gain (:func:`tt_mujoco.steering.
+    The small-curvature limit of the exact same-path gain (:func:`tt_mujoco.vehicle.steering.
     exact_same_path_eta`): ``eta* = (L - L0) / (L + L0)``, -1/7 = -0.1429 for the paper's
     L = 0.3 m, L0 = 0.4 m. With it the steady off-tracking vanishes like kappa^3 (-0.27 mm at
     R = 1.5 m).

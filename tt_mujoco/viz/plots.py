@@ -22,8 +22,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from tt_mujoco import metrics
-from tt_mujoco.params import Params
+from tt_mujoco.analysis import metrics
+from tt_mujoco.vehicle.params import Params
 
 __all__ = [
     "FIGURES",
@@ -43,7 +43,7 @@ REFERENCE_COLOR = "0.2"
 
 # --- error signals -------------------------------------------------------------------------------
 def tracking_errors(ts: Mapping, reference_polyline=None) -> dict[str, np.ndarray]:
-    """Error signals of a run, the same quantities as :func:`tt_mujoco.metrics.compute_metrics`.
+    """Error signals of a run, the same quantities as :func:`tt_mujoco.analysis.metrics.compute_metrics`.
 
     Returns
     -------
@@ -51,9 +51,9 @@ def tracking_errors(ts: Mapping, reference_polyline=None) -> dict[str, np.ndarra
         ``e_v``, ``e_omega``; when a reference polyline is given, ``lateral`` (P to the path)
         and ``trailer_lateral`` (P0 to the path, NaN while its nearest path point is an end
         of the path), signed, positive left of the path's direction of travel
-        (:func:`tt_mujoco.metrics.signed_lateral_error`; their magnitudes are the metrics'
+        (:func:`tt_mujoco.analysis.metrics.signed_lateral_error`; their magnitudes are the metrics'
         distances); always ``trailer_offtrack``, P0 to the path the tractor has driven so far,
-        NaN until P0 has passed the tractor's start (:func:`tt_mujoco.metrics.trailer_offtrack`).
+        NaN until P0 has passed the tractor's start (:func:`tt_mujoco.analysis.metrics.trailer_offtrack`).
         Samples after the first non-finite position are NaN.
     """
     c = _columns(ts, ("t", "x", "y", "x0", "y0", "v", "v_d", "omega", "omega_d"))

@@ -1,0 +1,1 @@
+"""What a run did: metrics from time series; the model validation."""

@@ -1,0 +1,7 @@
+"""``python -m tt_mujoco.paper``."""
+
+import sys
+
+from tt_mujoco.paper import main
+
+sys.exit(main())

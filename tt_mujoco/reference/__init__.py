@@ -1,0 +1,1 @@
+"""What the vehicle should do: reference paths, tracking targets, path feedback."""

@@ -1,0 +1,7 @@
+"""``python -m tt_mujoco.sweep``."""
+
+import sys
+
+from tt_mujoco.sweep import main
+
+sys.exit(main())

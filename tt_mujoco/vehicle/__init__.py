@@ -1,0 +1,1 @@
+"""The vehicle: parameters, MJCF/URDF generation, the reduced model, steering gains."""

@@ -1,0 +1,1 @@
+"""Seeing runs: video, figures, the live viewer."""

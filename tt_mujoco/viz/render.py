@@ -1,0 +1,983 @@
+"""Headless H.264 videos of a finished run, rendered offscreen with MuJoCo.
+
+A run is replayed, not re-simulated: for every video frame the vehicle is posed from the time
+series (:func:`pose_vehicle`), MuJoCo computes the kinematics and renders the scene offscreen,
+with the reference path, the growing traces of P and P0 and a text overlay added as user geoms
+of the :class:`mujoco.MjvScene`. Frames stream into ``ffmpeg`` (the binary shipped by
+``imageio-ffmpeg``, no system ffmpeg) through :class:`mediapy.VideoWriter`; the file is written
+under a temporary name in the target folder and published atomically, never over an existing file.
+
+OpenGL backend
+--------------
+The OpenGL platform of a process is fixed when PyOpenGL first loads one (``OpenGL.platform``),
+not when MuJoCo is imported: ``import mujoco`` with ``MUJOCO_GL`` unset only loads GLFW, and this
+module creates its own context instead of using :class:`mujoco.Renderer` (whose context class
+was chosen at MuJoCo's import). So the choice is made at the first render by
+:func:`select_gl_backend`:
+
+- ``MUJOCO_GL`` set by the user: that backend (``egl``, ``osmesa`` or ``glfw``) and no other.
+- unset: EGL (headless, through Mesa's llvmpipe on a CPU-only machine), else OSMesa. EGL is
+  tried in a child interpreter first, because a failed EGL attempt in this process would leave
+  PyOpenGL committed to EGL and make the OSMesa fallback impossible (and a broken driver may
+  crash the process instead of raising).
+- nothing works: :class:`RenderUnavailable`, with each backend's reason.
+
+``python -m tt_mujoco.render RUN_DIR`` re-renders a finished run (see :func:`main`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import ctypes.util
+import dataclasses
+import math
+import os
+import subprocess
+import sys
+import tempfile
+from collections.abc import Mapping
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from tt_mujoco.vehicle import reduced
+from tt_mujoco.vehicle.params import Params
+
+__all__ = [
+    "CAMERAS",
+    "GL_BACKENDS",
+    "TIMESERIES_COLUMNS",
+    "VIDEO_COLUMNS",
+    "RenderUnavailable",
+    "RunRenderer",
+    "frame_schedule",
+    "open_loop_timeseries",
+    "overview_camera",
+    "params_from_config",
+    "pose_vehicle",
+    "project_to_pixel",
+    "read_timeseries",
+    "reference_polyline_for",
+    "render_video",
+    "select_gl_backend",
+    "trailer_wheel_angles",
+]
+
+#: Backends tried, in order, when ``MUJOCO_GL`` is unset.
+GL_BACKENDS = ("egl", "osmesa")
+#: Backends accepted from ``MUJOCO_GL`` (glfw needs a display).
+USER_GL_BACKENDS = ("egl", "osmesa", "glfw")
+#: Camera modes of :func:`render_video`.
+CAMERAS = ("follow", "overview")
+
+#: Columns a video needs (SI units, radians).
+VIDEO_COLUMNS = (
+    "t",
+    "x",
+    "y",
+    "theta",
+    "phi",
+    "beta",
+    "v",
+    "omega",
+    "x0",
+    "y0",
+    "theta0",
+    "v0",
+    "theta_l",
+    "theta_r",
+)
+
+# Scene budget. The reference path and the traces are decimated to these many segments, so a
+# long run costs the same per frame as a short one (each line segment is one user geom).
+MAX_PATH_SEGMENTS = 400
+MAX_TRACE_POINTS = 600
+# Heights (m) of the drawn lines above the floor: high enough to avoid depth fighting with the
+# plane at the overview distance, low enough to look painted on the ground.
+PATH_Z = 0.002
+TRACE_Z = 0.004
+
+PATH_RGBA = np.array([1.0, 1.0, 1.0, 1.0], dtype=np.float32)
+TRACTOR_TRACE_RGBA = np.array([1.0, 0.45, 0.05, 1.0], dtype=np.float32)  # tractor orange
+TRAILER_TRACE_RGBA = np.array([0.2, 0.6, 1.0, 1.0], dtype=np.float32)  # trailer blue
+REFERENCE_POINT_RGBA = np.array([0.1, 0.9, 0.2, 1.0], dtype=np.float32)
+REFERENCE_POINT_RADIUS = 0.015  # m
+
+# Follow camera: fixed azimuth/elevation/distance, so the vehicle's turning shows as rotation.
+FOLLOW_DISTANCE = 1.6
+FOLLOW_AZIMUTH = 45.0  # looking towards +x+y: from behind for the built-in paths' travel
+FOLLOW_ELEVATION = -40.0
+# Overview camera: from -y looking towards +y (world x to the right, y up the image), steep.
+OVERVIEW_AZIMUTH = 90.0
+OVERVIEW_ELEVATION = -65.0
+OVERVIEW_MARGIN = 1.08
+
+# Multisample anti-aliasing of the offscreen buffer. On Mesa's llvmpipe, 4 samples make
+# mjr_readPixels resolve the buffer in software: 14 ms instead of 3 ms a 640x480 frame.
+OFFSCREEN_SAMPLES = 0
+
+_PROBE_TIMEOUT_S = 60.0
+_ZERO3 = np.zeros(3)
+_EYE9 = np.eye(3).ravel()
+
+
+class RenderUnavailable(RuntimeError):  # noqa: N818 (name fixed by the CLI contract)
+    """No OpenGL backend can render offscreen here; the message says what was tried and why."""
+
+
+# --- OpenGL backend -------------------------------------------------------------------------------
+_selected_backend: tuple[str, type] | None = None
+
+# A child interpreter that creates a context and a MuJoCo render context (the fonts and the
+# offscreen buffer are the first things to fail on a broken driver), then exits 0.
+_PROBE = """
+import sys
+backend = sys.argv[1]
+if backend == "egl":
+    from mujoco.egl import GLContext
+elif backend == "osmesa":
+    from mujoco.osmesa import GLContext
+else:
+    from mujoco.glfw import GLContext
+import mujoco
+ctx = GLContext(32, 32)
+ctx.make_current()
+model = mujoco.MjModel.from_xml_string("<mujoco><worldbody><geom size='1'/></worldbody></mujoco>")
+con = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_100)
+con.free()
+ctx.free()
+"""
+
+
+def _import_gl_context(backend: str) -> type:
+    if backend == "egl":
+        from mujoco.egl import GLContext
+    elif backend == "osmesa":
+        from mujoco.osmesa import GLContext
+    else:
+        from mujoco.glfw import GLContext
+    return GLContext
+
+
+def _committed_platform() -> str | None:
+    """The backend PyOpenGL has already loaded its platform for (it cannot change), or None."""
+    platform = sys.modules.get("OpenGL.platform")
+    if platform is None or getattr(platform, "PLATFORM", None) is None:
+        return None
+    name = type(platform.PLATFORM).__name__.lower()
+    for backend in ("egl", "osmesa"):
+        if backend in name:
+            return backend
+    return "glfw"  # GLX and the other window-system platforms serve GLFW contexts
+
+
+#: Shared library each backend loads, and the Debian package that provides it.
+_GL_LIBRARIES = {"egl": ("EGL", "libegl1 and libegl-mesa0"), "osmesa": ("OSMesa", "libosmesa6")}
+
+
+def _missing_library(backend: str) -> str | None:
+    """Why ``backend`` cannot load, if its shared library is not installed (else None)."""
+    if backend not in _GL_LIBRARIES:
+        return None
+    name, package = _GL_LIBRARIES[backend]
+    if ctypes.util.find_library(name) is None:
+        return f"lib{name} is not installed (Debian: {package})"
+    return None
+
+
+def _probe(backend: str) -> str | None:
+    """Try ``backend`` in a fresh interpreter: None if it works, else the reason."""
+    env = dict(os.environ, MUJOCO_GL=backend)
+    if backend in ("egl", "osmesa"):
+        env["PYOPENGL_PLATFORM"] = backend
+    else:
+        env.pop("PYOPENGL_PLATFORM", None)
+    try:
+        proc = subprocess.run(
+            [sys.executable, "-c", _PROBE, backend],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=_PROBE_TIMEOUT_S,
+            check=False,
+        )
+    except (OSError, subprocess.TimeoutExpired) as exc:
+        return f"probe failed: {exc}"
+    if proc.returncode == 0:
+        return None
+    lines = (proc.stderr or proc.stdout).strip().splitlines()
+    return lines[-1] if lines else f"probe exited with code {proc.returncode}"
+
+
+def _check_in_process(backend: str) -> type:
+    cls = _import_gl_context(backend)
+    ctx = cls(32, 32)
+    try:
+        ctx.make_current()
+    finally:
+        ctx.free()
+    return cls
+
+
+def select_gl_backend() -> str:
+    """Choose, check and cache the OpenGL backend for offscreen rendering (see module doc).
+
+    Returns
+    -------
+    str
+        ``"egl"``, ``"osmesa"`` or ``"glfw"``.
+
+    Raises
+    ------
+    RenderUnavailable
+        If no backend can create a context; the message lists each backend's failure.
+    """
+    global _selected_backend
+    if _selected_backend is not None:
+        return _selected_backend[0]
+    requested = os.environ.get("MUJOCO_GL", "").strip().lower()
+    if requested:
+        if requested not in USER_GL_BACKENDS:
+            raise RenderUnavailable(
+                f"MUJOCO_GL={requested!r} cannot render offscreen here: use one of "
+                f"{', '.join(USER_GL_BACKENDS)} (or unset it to try {' then '.join(GL_BACKENDS)})"
+            )
+        candidates = [requested]
+    else:
+        candidates = list(GL_BACKENDS)
+    committed = _committed_platform()
+    if committed is not None:
+        if committed not in candidates:
+            raise RenderUnavailable(
+                f"PyOpenGL already loaded its {committed!r} platform in this process, so "
+                f"{'/'.join(candidates)} cannot be used: set MUJOCO_GL before starting Python"
+            )
+        candidates = [committed]
+    reasons = []
+    for i, backend in enumerate(candidates):
+        missing = _missing_library(backend)
+        if missing is not None:
+            reasons.append(f"{backend}: {missing}")
+            continue
+        if i < len(candidates) - 1:
+            # Not the last resort: check in a child so that a failure leaves PyOpenGL free.
+            reason = _probe(backend)
+            if reason is not None:
+                reasons.append(f"{backend}: {reason}")
+                continue
+        try:
+            cls = _check_in_process(backend)
+        except Exception as exc:  # any failure of a GL stack means "not here"
+            reasons.append(f"{backend}: {type(exc).__name__}: {exc}")
+            break
+        _selected_backend = (backend, cls)
+        return backend
+    raise RenderUnavailable(
+        "no OpenGL backend can render offscreen here (" + "; ".join(reasons) + "). "
+        "EGL needs libegl1 and libegl-mesa0 (Debian), OSMesa needs libosmesa6; "
+        "set MUJOCO_GL to choose a backend"
+    )
+
+
+# --- time series ----------------------------------------------------------------------------------
+def _column(ts: Mapping, name: str) -> np.ndarray:
+    if name not in ts:
+        raise ValueError(f"time series has no column {name!r}; it needs {', '.join(VIDEO_COLUMNS)}")
+    return np.asarray(ts[name], dtype=float)
+
+
+def _validated(ts: Mapping, names) -> dict[str, np.ndarray]:
+    """The columns ``names`` up to the first non-finite value in any of them.
+
+    A run that diverged is written up to where it stopped, possibly with NaN rows at the end
+    (SPEC Section 11): the video shows what was computed.
+    """
+    cols = {name: _column(ts, name) for name in names}
+    n = len(cols["t"])
+    for name, col in cols.items():
+        if col.ndim != 1 or len(col) != n:
+            raise ValueError(
+                f"time series column {name!r} has shape {col.shape}: every column must be "
+                f"1-D with the {n} samples of 't'"
+            )
+    finite = np.logical_and.reduce([np.isfinite(col) for col in cols.values()])
+    n = n if finite.all() else int(np.argmin(finite))
+    cols = {name: col[:n] for name, col in cols.items()}
+    if n < 2 or not np.all(np.diff(cols["t"]) > 0):
+        raise ValueError(
+            "time series column 't' must have >= 2 strictly increasing samples (before the "
+            "first non-finite value)"
+        )
+    return cols
+
+
+def frame_schedule(t, fps: float) -> tuple[np.ndarray, np.ndarray]:
+    """Video frame times and the time-series sample shown in each.
+
+    Frame ``k`` is at ``t[0] + k / fps`` for ``k = 0 .. floor(duration * fps)``, so a run of
+    duration ``D = t[-1] - t[0]`` gives ``floor(D * fps) + 1`` frames (both ends shown; 1e-9
+    absorbs round-off in ``D * fps``). Each frame shows the sample nearest in time.
+
+    Returns
+    -------
+    times : ndarray, shape (n,)
+    index : ndarray of int, shape (n,)
+    """
+    t = np.asarray(t, dtype=float)
+    n = math.floor((t[-1] - t[0]) * fps + 1e-9) + 1
+    times = t[0] + np.arange(n) / fps
+    right = np.clip(np.searchsorted(t, times), 1, len(t) - 1)
+    left = right - 1
+    index = np.where(times - t[left] <= t[right] - times, left, right)
+    return times, index
+
+
+def _cumulative_trapezoid(y: np.ndarray, t: np.ndarray) -> np.ndarray:
+    out = np.zeros_like(y)
+    out[1:] = np.cumsum(0.5 * (y[1:] + y[:-1]) * np.diff(t))
+    return out
+
+
+def trailer_wheel_angles(ts: Mapping, params: Params) -> tuple[np.ndarray, np.ndarray]:
+    """Trailer wheel spin angles (left, right) by integrating their rolling rates.
+
+    The wheels at P0 +- (d/2) n(alpha) roll at ``(v0 -+ (d/2) alpha_dot) / r`` with
+    ``alpha = theta0 + beta`` (SPEC Section 4), so the angles are
+    ``(integral(v0) -+ (d/2) (alpha - alpha(0))) / r``.
+    """
+    cols = _validated(ts, ("t", "v0", "theta0", "beta"))
+    rolled = _cumulative_trapezoid(cols["v0"], cols["t"])
+    alpha = cols["theta0"] + cols["beta"]
+    turned = 0.5 * params.d * (alpha - alpha[0])
+    return (rolled - turned) / params.r, (rolled + turned) / params.r
+
+
+def pose_vehicle(vehicle, x, y, theta, phi, beta, wheels) -> None:
+    """Put a :class:`~tt_mujoco.sim.physics.Vehicle` in a planar pose and compute its kinematics.
+
+    Free joint at (x, y, r) with yaw ``theta``; ``q_hitch = -phi``; ``q_steer = beta`` (the
+    recorded angle, so an equality-constraint violation shows); ``wheels`` are the spin angles
+    (tractor left, tractor right, trailer left, trailer right).
+    """
+    lay, d, p = vehicle.layout, vehicle.data, vehicle.params
+    i = lay.root_q
+    d.qpos[i : i + 7] = [x, y, p.r, math.cos(theta / 2), 0.0, 0.0, math.sin(theta / 2)]
+    d.qpos[lay.hitch_q] = -phi
+    d.qpos[lay.steer_q] = beta
+    for address, angle in zip(_wheel_qpos(vehicle), wheels, strict=True):
+        d.qpos[address] = angle
+    mujoco.mj_kinematics(vehicle.model, d)
+    mujoco.mj_camlight(vehicle.model, d)
+
+
+def _wheel_qpos(vehicle) -> tuple[int, int, int, int]:
+    m = vehicle.model
+    names = ("tractor_wheel_left", "tractor_wheel_right", "trailer_wheel_left")
+    names += ("trailer_wheel_right",)
+    return tuple(int(m.jnt_qposadr[m.joint(name).id]) for name in names)
+
+
+def _decimate(points: np.ndarray, max_segments: int) -> np.ndarray:
+    """Every k-th point, keeping the last, so that at most ``max_segments`` segments remain."""
+    stride = max(1, math.ceil((len(points) - 1) / max_segments))
+    kept = points[::stride]
+    if (len(points) - 1) % stride:
+        kept = np.vstack([kept, points[-1]])
+    return kept
+
+
+# --- offscreen rendering --------------------------------------------------------------------------
+def _camera_axes(azimuth: float, elevation: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Forward, up and right unit vectors of a MuJoCo free camera (as in mjv_updateCamera)."""
+    az, el = math.radians(azimuth), math.radians(elevation)
+    forward = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+    up = np.array([-math.sin(el) * math.cos(az), -math.sin(el) * math.sin(az), math.cos(el)])
+    return forward, up, np.cross(forward, up)
+
+
+def overview_camera(
+    points_xy: np.ndarray, fovy_deg: float, aspect: float, pad: float = 0.0
+) -> dict:
+    """Free-camera settings that frame all ``points_xy``, widened by ``pad`` (m) on every side,
+    and 0.1 m of height above them.
+
+    For a point at offset ``q`` from the look-at point and a camera at distance ``D``, the
+    point is inside the frustum when ``|q.right| <= tan(fovx/2) (D + q.forward)`` and likewise
+    with ``up``/``fovy``; the smallest such ``D`` over the bounding-box corners, times a margin.
+    """
+    lo, hi = points_xy.min(axis=0) - pad, points_xy.max(axis=0) + pad
+    centre = np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, 0.0])
+    forward, up, right = _camera_axes(OVERVIEW_AZIMUTH, OVERVIEW_ELEVATION)
+    ty = math.tan(math.radians(fovy_deg) / 2)
+    tx = ty * aspect
+    distance = 0.5  # at least this close a view, even for a vehicle that stood still
+    for cx in (lo[0], hi[0]):
+        for cy in (lo[1], hi[1]):
+            for cz in (0.0, 0.1):
+                q = np.array([cx, cy, cz]) - centre
+                need = max(abs(q @ right) / tx, abs(q @ up) / ty) - q @ forward
+                distance = max(distance, need)
+    return {
+        "lookat": centre,
+        "distance": OVERVIEW_MARGIN * distance,
+        "azimuth": OVERVIEW_AZIMUTH,
+        "elevation": OVERVIEW_ELEVATION,
+    }
+
+
+def project_to_pixel(point, camera: dict, fovy_deg: float, width: int, height: int):
+    """Pixel (column, row) of a world point seen by a free camera described as in
+    :func:`overview_camera` (row 0 at the top). Used by the tests and for overlays."""
+    forward, up, right = _camera_axes(camera["azimuth"], camera["elevation"])
+    eye = np.asarray(camera["lookat"], dtype=float) - camera["distance"] * forward
+    q = np.asarray(point, dtype=float) - eye
+    depth = q @ forward
+    ty = math.tan(math.radians(fovy_deg) / 2)
+    tx = ty * width / height
+    col = (0.5 + 0.5 * (q @ right) / (depth * tx)) * width
+    row = (0.5 - 0.5 * (q @ up) / (depth * ty)) * height
+    return col, row
+
+
+# MuJoCo's overlay text is at least 18 px a line (it raises font scale 50 to 100), so its
+# four-line box would cover a third of a small frame: below this height a compact two-line
+# overlay is drawn with Pillow instead.
+MUJOCO_OVERLAY_MIN_HEIGHT = 360
+
+
+def _font_scale(height: int) -> int:
+    if height < 720:
+        return int(mujoco.mjtFontScale.mjFONTSCALE_100)
+    return int(mujoco.mjtFontScale.mjFONTSCALE_150)
+
+
+class _CompactOverlay:
+    """Two lines of white text on a black box in the top-left corner, drawn with Pillow."""
+
+    def __init__(self, height: int):
+        from PIL import ImageFont
+
+        self.font = ImageFont.load_default(size=max(7, height // 12))
+
+    def draw(self, image: np.ndarray, text: str) -> np.ndarray:
+        from PIL import Image, ImageDraw
+
+        im = Image.fromarray(image)
+        draw = ImageDraw.Draw(im)
+        _, _, right, bottom = draw.multiline_textbbox((2, 1), text, font=self.font)
+        draw.rectangle((0, 0, right + 2, bottom + 2), fill=(0, 0, 0))
+        draw.multiline_text((2, 1), text, fill=(255, 255, 255), font=self.font)
+        return np.asarray(im).copy()
+
+
+class _Offscreen:
+    """An OpenGL context, MuJoCo's render context (offscreen buffer) and a scene."""
+
+    def __init__(self, model: mujoco.MjModel, width: int, height: int, maxgeom: int):
+        backend = select_gl_backend()
+        cls = _selected_backend[1]
+        # The model belongs to our own Vehicle, so its visual settings are ours to change.
+        model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
+        model.vis.global_.offheight = max(model.vis.global_.offheight, height)
+        model.vis.quality.offsamples = OFFSCREEN_SAMPLES
+        self._gl = None
+        self.context = None
+        try:
+            self._gl = cls(width, height)
+            self._gl.make_current()
+            self.context = mujoco.MjrContext(model, _font_scale(height))
+        except Exception as exc:
+            self.close()
+            raise RenderUnavailable(
+                f"the {backend} OpenGL backend could not create a {width}x{height} render "
+                f"context: {type(exc).__name__}: {exc}"
+            ) from exc
+        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self.context)
+        self.scene = mujoco.MjvScene(model, maxgeom=maxgeom)
+        # Shadows and reflections off: together they cost more than the rest of a frame. The
+        # skybox too: both cameras look down steeply enough never to see the sky (~1 ms).
+        self.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
+        self.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
+        self.scene.flags[mujoco.mjtRndFlag.mjRND_SKYBOX] = False
+        self.rect = mujoco.MjrRect(0, 0, width, height)
+        self._pixels = np.empty((height, width, 3), dtype=np.uint8)
+
+    def render(self, labels: str = "", values: str = "") -> np.ndarray:
+        """Render the scene, with MuJoCo's top-left text overlay if ``labels`` is not empty;
+        a new (H, W, 3) uint8 image."""
+        self._gl.make_current()
+        mujoco.mjr_render(self.rect, self.scene, self.context)
+        if labels:
+            mujoco.mjr_overlay(
+                mujoco.mjtFont.mjFONT_NORMAL,
+                mujoco.mjtGridPos.mjGRID_TOPLEFT,
+                self.rect,
+                labels,
+                values,
+                self.context,
+            )
+        mujoco.mjr_readPixels(self._pixels, None, self.rect, self.context)
+        return np.flipud(self._pixels).copy()  # OpenGL's rows run bottom-up
+
+    def close(self) -> None:
+        if self.context is not None:
+            self.context.free()
+            self.context = None
+        if self._gl is not None:
+            self._gl.free()
+            self._gl = None
+
+
+class RunRenderer:
+    """Frames of one run: the vehicle posed from the time series, the reference path, the
+    traces of P (orange) and P0 (blue), the reference point (green) and a text overlay.
+
+    Frames are fastest in increasing order (each adds a few geoms to those of the previous
+    frame); any order is correct. Use as a context manager, or call :meth:`close`.
+
+    Parameters
+    ----------
+    ts : mapping of str to 1-D arrays
+        The run's time series; needs :data:`VIDEO_COLUMNS`; ``x_ref``/``y_ref`` are optional.
+        Only the samples before the first non-finite value are shown.
+    params : Params
+        Parameters the vehicle is built from.
+    reference_polyline : array_like, shape (M, 2)
+        The reference path (m); may be empty (shape (0, 2)).
+    width, height : int
+        Frame size in pixels, even (H.264's 4:2:0 chroma), 16 to 4096.
+    fps : float
+        Frames per second of the video the frames are for (see :func:`frame_schedule`).
+    camera : {"follow", "overview"}
+    """
+
+    def __init__(
+        self,
+        ts: Mapping,
+        params: Params,
+        reference_polyline,
+        width: int = 640,
+        height: int = 480,
+        fps: float = 30.0,
+        camera: str = "follow",
+    ):
+        from tt_mujoco.sim.physics import Vehicle  # MuJoCo model compilation, only when rendering
+
+        _check_video_args(width, height, fps, camera)
+        self.has_reference_point = "x_ref" in ts and "y_ref" in ts
+        extra = ("x_ref", "y_ref") if self.has_reference_point else ()
+        self.cols = _validated(ts, VIDEO_COLUMNS + extra)
+        polyline = np.asarray(reference_polyline, dtype=float).reshape(-1, 2)
+        if not np.all(np.isfinite(polyline)):
+            raise ValueError("reference_polyline has non-finite values")
+        self.path = _decimate(polyline, MAX_PATH_SEGMENTS) if len(polyline) > 1 else polyline
+        self.width, self.height, self.fps, self.camera_mode = width, height, fps, camera
+        self.params = params
+        self.vehicle = Vehicle(params)
+        self.model = self.vehicle.model
+        self.times, self.index = frame_schedule(self.cols["t"], fps)
+        self.n_frames = len(self.times)
+        self._wheels = np.column_stack(
+            [self.cols["theta_l"], self.cols["theta_r"], *trailer_wheel_angles(self.cols, params)]
+        )
+
+        # Traces: one point a frame, every stride-th point kept, plus a live segment to "now".
+        self.trace_stride = max(1, math.ceil(self.n_frames / MAX_TRACE_POINTS))
+        self._tractor_xy = np.column_stack([self.cols["x"], self.cols["y"]])[self.index]
+        self._trailer_xy = np.column_stack([self.cols["x0"], self.cols["y0"]])[self.index]
+        max_committed = (self.n_frames - 1) // self.trace_stride + 1
+        self._n_fixed = max(len(self.path) - 1, 0)
+        n_user = self._n_fixed + 1 + 2 * (max_committed + 1)
+        # Room for the model's geoms twice over (mjv_updateScene may add decor) plus ours.
+        maxgeom = 2 * self.model.ngeom + 100 + n_user
+
+        fovy = float(self.model.vis.global_.fovy)
+        drawn = np.vstack([self._tractor_xy, self._trailer_xy, self.path])
+        if camera == "overview":
+            # The bodies reach past P and P0 (the tractor's chassis 0.75 L ahead of P).
+            pad = 0.75 * params.L + 0.5 * params.d
+            self.camera = overview_camera(drawn, fovy, width / height, pad)
+        else:
+            self.camera = {
+                "lookat": np.zeros(3),
+                "distance": FOLLOW_DISTANCE,
+                "azimuth": FOLLOW_AZIMUTH,
+                "elevation": FOLLOW_ELEVATION,
+            }
+        # Far clipping plane beyond everything drawn (MuJoCo's zfar is relative to the extent).
+        far = 2.0 * (self.camera["distance"] + np.ptp(drawn, axis=0).max())
+        extent = float(self.model.stat.extent)
+        self.model.vis.map.zfar = max(float(self.model.vis.map.zfar), far / extent)
+
+        self._mjv_camera = mujoco.MjvCamera()
+        self._mjv_camera.type = mujoco.mjtCamera.mjCAMERA_FREE
+        self._mjv_camera.distance = self.camera["distance"]
+        self._mjv_camera.azimuth = self.camera["azimuth"]
+        self._mjv_camera.elevation = self.camera["elevation"]
+        self._option = mujoco.MjvOption()
+        self._option.geomgroup[3] = 1  # the wheels' spheres (collision geoms, group 3)
+        self._perturb = mujoco.MjvPerturb()
+        self._line_px = max(1.0, round(height / 200))
+
+        self._compact = _CompactOverlay(height) if height < MUJOCO_OVERLAY_MIN_HEIGHT else None
+        self._off = _Offscreen(self.model, width, height, maxgeom)
+        self._geoms = self._off.scene.geoms  # the tuple is rebuilt on each attribute access
+        self._base = -1  # geoms mjv_updateScene wrote in the previous frame
+        self._committed = 0  # trace points already in the scene after the fixed geoms
+
+    # --- context management -----------------------------------------------------------------------
+    def __enter__(self) -> RunRenderer:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self._off.close()
+
+    # --- geoms ------------------------------------------------------------------------------------
+    def _segment(self, slot: int, a, b, z: float, rgba: np.ndarray) -> None:
+        g = self._geoms[slot]
+        mujoco.mjv_initGeom(g, mujoco.mjtGeom.mjGEOM_LINE, _ZERO3, _ZERO3, _EYE9, rgba)
+        mujoco.mjv_connector(
+            g,
+            mujoco.mjtGeom.mjGEOM_LINE,
+            self._line_px,
+            np.array([a[0], a[1], z]),
+            np.array([b[0], b[1], z]),
+        )
+
+    def _user_geoms(self, frame: int, rewrite: bool) -> None:
+        """Append the path, the reference point and the traces after the model's geoms.
+
+        Layout: path segments, reference point (if recorded), committed trace segments (P and
+        P0 pairs), then the live pair from the last committed point to "now". The user geoms
+        lie beyond the ones ``mjv_updateScene`` writes, which it leaves alone, so the path and
+        the pairs committed for earlier frames are still in place: a frame writes only the
+        newly committed pairs, the reference point and the live pair.
+        """
+        scn = self._off.scene
+        base = scn.ngeom
+        committed = frame // self.trace_stride + 1
+        if rewrite or base != self._base or committed < self._committed:
+            for i in range(self._n_fixed):
+                self._segment(base + i, self.path[i], self.path[i + 1], PATH_Z, PATH_RGBA)
+            self._committed = 1
+            self._base = base
+        slot = base + self._n_fixed
+        if self.has_reference_point:
+            i = self.index[frame]
+            pos = np.array([self.cols["x_ref"][i], self.cols["y_ref"][i], TRACE_Z])
+            mujoco.mjv_initGeom(
+                self._geoms[slot],
+                mujoco.mjtGeom.mjGEOM_SPHERE,
+                np.full(3, REFERENCE_POINT_RADIUS),
+                pos,
+                _EYE9,
+                REFERENCE_POINT_RGBA,
+            )
+            slot += 1
+        trace0 = slot
+        stride = self.trace_stride
+        for j in range(self._committed, committed):
+            self._trace_pair(trace0 + 2 * (j - 1), (j - 1) * stride, j * stride)
+        self._committed = committed
+        slot = trace0 + 2 * (committed - 1)
+        last = (committed - 1) * stride
+        if frame > last:  # a zero-length line would take its direction from stale memory
+            self._trace_pair(slot, last, frame)
+            slot += 2
+        scn.ngeom = slot
+
+    def _trace_pair(self, slot: int, a: int, b: int) -> None:
+        """Trace segments from frame ``a`` to frame ``b``: P at ``slot``, P0 at ``slot + 1``."""
+        self._segment(slot, self._tractor_xy[a], self._tractor_xy[b], TRACE_Z, TRACTOR_TRACE_RGBA)
+        self._segment(
+            slot + 1, self._trailer_xy[a], self._trailer_xy[b], TRACE_Z, TRAILER_TRACE_RGBA
+        )
+
+    # --- frames -----------------------------------------------------------------------------------
+    def overlay_text(self, frame: int) -> tuple[str, str]:
+        """Labels and values of the text overlay for ``frame``."""
+        i = self.index[frame]
+        c = self.cols
+        labels = "t\nv\nomega\nphi"
+        values = (
+            f"{self.times[frame]:6.2f} s\n{c['v'][i]:+.3f} m/s\n{c['omega'][i]:+.3f} rad/s\n"
+            f"{math.degrees(c['phi'][i]):+.2f} deg"
+        )
+        return labels, values
+
+    def compact_text(self, frame: int) -> str:
+        """The two-line overlay of small frames (see :data:`MUJOCO_OVERLAY_MIN_HEIGHT`)."""
+        i = self.index[frame]
+        c = self.cols
+        return (
+            f"t {self.times[frame]:.2f} s  phi {math.degrees(c['phi'][i]):+.1f} deg\n"
+            f"v {c['v'][i]:+.2f} m/s  w {c['omega'][i]:+.2f} rad/s"
+        )
+
+    def render_frame(self, frame: int, *, rewrite: bool = False) -> np.ndarray:
+        """The RGB image (height, width, 3) of video frame ``frame``.
+
+        ``rewrite=True`` rebuilds every user geom instead of reusing those already in the
+        scene (the result is the same; the tests use it to check that reuse is exact).
+        """
+        if not 0 <= frame < self.n_frames:
+            raise ValueError(f"frame={frame!r} is not allowed: it must be in [0, {self.n_frames})")
+        i = self.index[frame]
+        c = self.cols
+        pose_vehicle(
+            self.vehicle,
+            c["x"][i],
+            c["y"][i],
+            c["theta"][i],
+            c["phi"][i],
+            c["beta"][i],
+            self._wheels[i],
+        )
+        if self.camera_mode == "follow":
+            # Look at the middle of the vehicle (between P and P0), so both units stay framed.
+            self._mjv_camera.lookat[:] = [
+                0.5 * (c["x"][i] + c["x0"][i]),
+                0.5 * (c["y"][i] + c["y0"][i]),
+                0.05,
+            ]
+        else:
+            self._mjv_camera.lookat[:] = self.camera["lookat"]
+        mujoco.mjv_updateScene(
+            self.model,
+            self.vehicle.data,
+            self._option,
+            self._perturb,
+            self._mjv_camera,
+            mujoco.mjtCatBit.mjCAT_ALL,
+            self._off.scene,
+        )
+        self._user_geoms(frame, rewrite)
+        if self._compact is None:
+            return self._off.render(*self.overlay_text(frame))
+        return self._compact.draw(self._off.render(), self.compact_text(frame))
+
+    def camera_at(self, frame: int) -> dict:
+        """The free camera (as in :func:`overview_camera`) used for ``frame``."""
+        cam = dict(self.camera)
+        if self.camera_mode == "follow":
+            i = self.index[frame]
+            c = self.cols
+            cam["lookat"] = np.array(
+                [0.5 * (c["x"][i] + c["x0"][i]), 0.5 * (c["y"][i] + c["y0"][i]), 0.05]
+            )
+        return cam
+
+
+def _check_video_args(width, height, fps, camera) -> None:
+    for name, value in (("width", width), ("height", height)):
+        if isinstance(value, bool) or not isinstance(value, int | np.integer):
+            raise ValueError(f"{name}={value!r} is not allowed: it must be an even integer")
+        if not (16 <= value <= 4096 and value % 2 == 0):
+            raise ValueError(
+                f"{name}={value!r} is not allowed: it must be even (H.264 4:2:0) and in [16, 4096]"
+            )
+    if isinstance(fps, bool) or not isinstance(fps, int | float) or not 0 < fps <= 240:
+        raise ValueError(f"fps={fps!r} is not allowed: it must be a number in (0, 240]")
+    if camera not in CAMERAS:
+        raise ValueError(f"camera={camera!r} is not allowed: use one of {', '.join(CAMERAS)}")
+
+
+def _publish(tmp: Path, out: Path) -> None:
+    """Move ``tmp`` to ``out`` atomically, never replacing an existing ``out``."""
+    umask = os.umask(0)
+    os.umask(umask)
+    tmp.chmod(0o666 & ~umask)  # mkstemp made it private; give it a normal file's mode
+    try:
+        os.link(tmp, out)  # fails if out exists: no race between the check and the move
+    except FileExistsError:
+        raise FileExistsError(f"{out} exists; it is not overwritten") from None
+    except OSError:  # a file system without hard links
+        if out.exists():
+            raise FileExistsError(f"{out} exists; it is not overwritten") from None
+        os.replace(tmp, out)
+        return
+    tmp.unlink()
+
+
+def render_video(
+    ts: Mapping,
+    params: Params,
+    reference_polyline,
+    out_path,
+    width: int = 640,
+    height: int = 480,
+    fps: float = 30,
+    camera: str = "follow",
+    progress: bool = True,
+) -> Path:
+    """Render a run to an H.264 MP4 (see :class:`RunRenderer` for what is drawn).
+
+    The number of frames is ``floor(duration * fps) + 1`` (:func:`frame_schedule`). The video
+    is encoded while it is rendered (ffmpeg runs in its own process), written to a temporary
+    file in the target folder and moved into place at the end.
+
+    Parameters
+    ----------
+    ts, params, reference_polyline, width, height, fps, camera
+        As for :class:`RunRenderer`.
+    out_path : str or Path
+        The ``.mp4`` to write, in an existing folder; never overwritten.
+    progress : bool
+        Show a tqdm progress bar (on stderr).
+
+    Returns
+    -------
+    Path
+        ``out_path``.
+
+    Raises
+    ------
+    ValueError
+        Bad arguments or time series.
+    FileExistsError
+        ``out_path`` exists.
+    RenderUnavailable
+        No OpenGL backend works here.
+    """
+    import imageio_ffmpeg
+    import mediapy
+    from tqdm import tqdm
+
+    out = Path(out_path)
+    if out.suffix.lower() != ".mp4":
+        raise ValueError(f"out_path={str(out)!r} is not allowed: it must end in .mp4")
+    if not out.parent.is_dir():
+        raise ValueError(
+            f"out_path={str(out)!r} is not allowed: folder {out.parent} does not exist"
+        )
+    if out.exists():
+        raise FileExistsError(f"{out} exists; it is not overwritten")
+    _check_video_args(width, height, fps, camera)
+    mediapy.set_ffmpeg(imageio_ffmpeg.get_ffmpeg_exe())
+
+    with RunRenderer(ts, params, reference_polyline, width, height, fps, camera) as renderer:
+        fd, tmp_name = tempfile.mkstemp(dir=out.parent, prefix=f".{out.stem}.", suffix=".tmp.mp4")
+        os.close(fd)
+        tmp = Path(tmp_name)
+        try:
+            with mediapy.VideoWriter(tmp, shape=(height, width), fps=fps, codec="h264") as writer:
+                frames = tqdm(
+                    range(renderer.n_frames),
+                    desc=f"video {out.name}",
+                    unit="frame",
+                    disable=not progress,
+                    leave=False,
+                )
+                for k in frames:
+                    writer.add_image(renderer.render_frame(k))
+            _publish(tmp, out)
+        finally:
+            with contextlib.suppress(FileNotFoundError):
+                tmp.unlink()
+    return out
+
+
+# --- demo data ------------------------------------------------------------------------------------
+#: Every column of a run's ``timeseries.csv`` (the simulation loop's contract).
+TIMESERIES_COLUMNS = (
+    "t x y theta phi beta v omega x0 y0 theta0 v0 theta_l theta_r s x_ref y_ref v_d omega_d "
+    "v_d_dot omega_d_dot v_meas omega_meas T_r T_l T_r_cmd T_l_cmd slip_lateral "
+    "slip_lateral_trailer slip_left slip_right eq_violation kappa_d"
+).split()
+
+
+def open_loop_timeseries(
+    params: Params | None = None,
+    torques=(0.6, 0.4),
+    duration: float = 3.0,
+    dt: float = 0.01,
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """A run-shaped time series of the reduced model under constant wheel torques.
+
+    For tests and benchmarks until (and besides) the simulation loop: the reduced plant
+    (:class:`~tt_mujoco.vehicle.reduced.ReducedPlant`) from rest, ``beta = eta phi``, the reference
+    point and targets equal to the motion itself, columns without a model value zero.
+
+    Returns
+    -------
+    ts : dict of str to ndarray
+        All :data:`TIMESERIES_COLUMNS`.
+    reference_polyline : ndarray, shape (n, 2)
+        The path P drove.
+    """
+    p = Params() if params is None else params
+    n = round(duration / dt) + 1
+    plant = reduced.ReducedPlant(p)
+    states = np.empty((n, 8))
+    states[0] = plant.state
+    for k in range(1, n):
+        states[k] = plant.step(torques, dt)
+    x, y, theta, phi, theta_l, theta_r, v, omega = states.T
+    ts = {name: np.zeros(n) for name in TIMESERIES_COLUMNS}
+    ts.update(t=np.arange(n) * dt, x=x, y=y, theta=theta, phi=phi, beta=p.eta * phi, v=v)
+    ts.update(omega=omega, theta_l=theta_l, theta_r=theta_r, x_ref=x, y_ref=y, v_d=v)
+    ts.update(omega_d=omega, v_meas=v, omega_meas=omega)
+    ts["T_r"][:], ts["T_l"][:] = torques
+    ts["T_r_cmd"][:], ts["T_l_cmd"][:] = torques
+    for k in range(n):
+        _, P0, theta0 = reduced.trailer_pose(x[k], y[k], theta[k], phi[k], p)
+        ts["x0"][k], ts["y0"][k], ts["theta0"][k] = P0[0], P0[1], theta0
+        ts["v0"][k] = reduced.trailer_velocity(phi[k], (v[k], omega[k]), p)[0]
+    ts["s"] = _cumulative_trapezoid(v, ts["t"])
+    return ts, np.column_stack([x, y])
+
+
+# --- re-rendering a finished run --------------------------------------------------------------
+def read_timeseries(path) -> dict[str, np.ndarray]:
+    """A ``timeseries.csv`` (header row, then numbers) as column name -> 1-D array."""
+    path = Path(path)
+    with path.open(newline="") as f:
+        header = next(csv.reader(f), None)
+    if not header:
+        raise ValueError(f"{path} is empty: a time series needs a header row")
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    if data.shape[1] != len(header):
+        raise ValueError(f"{path} has {len(header)} header names but {data.shape[1]} columns")
+    return {name.strip(): data[:, j].copy() for j, name in enumerate(header)}
+
+
+def params_from_config(params: Mapping) -> Params:
+    """``Params`` from ``metrics.json["config"]["params"]`` (non-init fields such as
+    ``steering`` are ignored; unknown names are an error)."""
+    init = {f.name for f in dataclasses.fields(Params) if f.init}
+    computed = {f.name for f in dataclasses.fields(Params) if not f.init}
+    unknown = sorted(set(params) - init - computed)
+    if unknown:
+        raise ValueError(
+            f"config params {unknown} are not Params fields; allowed: {', '.join(sorted(init))}"
+        )
+    return Params(**{k: v for k, v in params.items() if k in init})
+
+
+def reference_polyline_for(config: Mapping, ts: Mapping) -> tuple[np.ndarray, str]:
+    """The run's reference path: ``tt_mujoco.reference.paths.get_path(traj).dense()`` when that module
+    exists and knows ``traj`` (``config["traj"]`` or ``config["scenario"]["traj"]``), else the
+    recorded reference point ``(x_ref, y_ref)``.
+
+    Returns the polyline and a note on where it came from.
+    """
+    traj = config.get("traj", config.get("scenario", {}).get("traj"))
+    note = "the recorded reference point (x_ref, y_ref)"
+    if traj is not None:
+        try:
+            from tt_mujoco.reference import paths
+        except ImportError:
+            paths = None
+        if paths is not None:
+            try:
+                return np.asarray(paths.get_path(traj).dense(), dtype=float)[:, :2], f"{traj}"
+            except (ValueError, OSError, KeyError) as exc:
+                note += f" (path {traj!r} unavailable: {exc})"
+    if "x_ref" not in ts or "y_ref" not in ts:
+        raise ValueError("the run has no reference path: no known 'traj' and no x_ref/y_ref")
+    return np.column_stack([ts["x_ref"], ts["y_ref"]]), note
