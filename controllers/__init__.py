@@ -1,8 +1,13 @@
-"""Velocity controllers for the tractor-trailer (SPEC Section 9): ISMC-STA, PID, FBL.
+"""Controllers for the tractor-trailer: the protocol, the registry, and ISMC-STA, PID and FBL.
 
-They track ``z = (v, omega)`` with wheel torques ``(T_r, T_l)`` using the *nominal* reduced model
-``z_dot = f + g tau`` given as a plain-float callable (:func:`reduced_model`). Nothing here
+Every controller implements :class:`Controller` (``compute(t, measurement, reference) ->
+(T_r, T_l)``, built from a :class:`ControllerSetup`). The built-in laws track ``z = (v, omega)``
+with the *nominal* reduced model ``z_dot = f + g tau`` (docs/model.md Section 9). Nothing here
 imports MuJoCo.
+
+A controller is chosen by name from :data:`CONTROLLERS` or by hook
+(``package.module:Class`` or ``path/to/file.py:Class``); :func:`controller_class` resolves
+either, :func:`build_controller` builds it for a run.
 
 >>> from tt_mujoco.vehicle.params import Params
 >>> ctrl = make_controller("ismc_sta", reduced_model(Params()))
@@ -13,28 +18,67 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from tt_mujoco.controllers.base import Controller, ModelFn, reduced_model
+from tt_mujoco.controllers.base import (
+    Controller,
+    ControllerSetup,
+    ModelFn,
+    Reference,
+    VelocityController,
+    reduced_model,
+)
 from tt_mujoco.controllers.fbl import FblController
 from tt_mujoco.controllers.ismc_sta import IsmcStaController
 from tt_mujoco.controllers.pid import PidController
 
+from tt_mujoco.registry import Registry
+
 __all__ = [
     "CONTROLLERS",
     "Controller",
+    "ControllerSetup",
     "FblController",
     "IsmcStaController",
     "ModelFn",
     "PidController",
+    "Reference",
+    "VelocityController",
+    "build_controller",
+    "controller_class",
     "make_controller",
     "reduced_model",
 ]
 
-#: Controller name -> class, in the order the paper introduces them.
-CONTROLLERS: dict[str, type[Controller]] = {
-    "ismc_sta": IsmcStaController,
-    "pid": PidController,
-    "fbl": FblController,
-}
+#: Controller name -> class, in the order the paper introduces them. ``CONTROLLERS.register``
+#: adds one; a hook ``module:Class`` or ``file.py:Class`` needs no registration.
+CONTROLLERS = Registry("controller")
+CONTROLLERS.register("ismc_sta", IsmcStaController)
+CONTROLLERS.register("pid", PidController)
+CONTROLLERS.register("fbl", FblController)
+
+
+def controller_class(spec: str) -> type[Controller]:
+    """The controller class a name or hook stands for.
+
+    Raises
+    ------
+    ValueError
+        Unknown name, a hook that does not load, or an object that is not a
+        :class:`Controller` subclass.
+    """
+    cls = CONTROLLERS.resolve(spec)
+    if not (isinstance(cls, type) and issubclass(cls, Controller)):
+        raise ValueError(
+            f"controller {spec!r} is not allowed: {cls!r} is not a subclass of "
+            "tt_mujoco.controllers.Controller"
+        )
+    return cls
+
+
+def build_controller(
+    spec: str, setup: ControllerSetup, gains: str | Mapping | None = None
+) -> Controller:
+    """Build the controller named ``spec`` (name or hook) for a run."""
+    return controller_class(spec).from_setup(setup, gains)
 
 
 def make_controller(
@@ -43,8 +87,8 @@ def make_controller(
     torque_limit: float = 15.0,
     gains: str | Mapping | None = None,
     anti_windup: bool = True,
-) -> Controller:
-    """Build a controller by name.
+) -> VelocityController:
+    """Build a built-in velocity controller by name, outside a run.
 
     Parameters
     ----------
@@ -60,14 +104,15 @@ def make_controller(
         ``"paper_6_2"``), a dict overriding individual gains (optionally with a ``"preset"``
         key naming the base), or None for the default.
     anti_windup : bool
-        Conditional integration under saturation (see :mod:`controllers.base`).
+        Conditional integration under saturation (see :mod:`tt_mujoco.controllers.base`).
 
     Returns
     -------
-    Controller
+    VelocityController
     """
+    builtin = ("ismc_sta", "pid", "fbl")
     key = name.strip().lower().replace("-", "_") if isinstance(name, str) else None
-    if key not in CONTROLLERS:
-        allowed = ", ".join(repr(k) for k in CONTROLLERS)
+    if key not in builtin:
+        allowed = ", ".join(repr(k) for k in builtin)
         raise ValueError(f"controller name={name!r} is not allowed: use one of {allowed}")
     return CONTROLLERS[key](model, torque_limit=torque_limit, gains=gains, anti_windup=anti_windup)

@@ -1,4 +1,18 @@
-"""Shared machinery of the velocity controllers: nominal model adapter, gains, g^-1, saturation.
+"""The controller protocol, and the shared machinery of the built-in velocity controllers.
+
+**The protocol** (:class:`Controller`). A controller is built once per run from a
+:class:`ControllerSetup` (the nominal parameters and model, the torque limit, the control period
+and the reference path) and its gains, and is then asked at every control step for the wheel
+torques ``(T_r, T_l)`` given the time, the full measurement (:class:`tt_mujoco.sim.measure.
+Measurement`, with the scenario's measurement noise and sensor faults already applied) and the
+target (:class:`Reference`: the reference point, its arc length and curvature, the velocity
+targets and their derivatives, and the path itself for nearest-point queries). The loop clips
+the torques at the torque limit. A user controller subclasses :class:`Controller`, implements
+:meth:`Controller.compute` and is named ``--controller package.module:Class`` or
+``--controller path/to/file.py:Class``; see ``examples/pure_pursuit.py``.
+
+**The built-in laws** (:class:`VelocityController`: ISMC-STA, PID, FBL) track ``z = (v, omega)``
+of the reduced model.
 
 Every controller tracks ``z = (v, omega)`` of the reduced model ``z_dot = f + g tau`` (SPEC
 Section 4; the paper's eq. 22) with ``tau = (T_r, T_l)``, and computes
@@ -29,13 +43,18 @@ Integrators that would *unwind* the saturation keep integrating, so nothing stic
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from numbers import Real
-from typing import ClassVar
+from typing import Any, ClassVar
 
 __all__ = [
     "Controller",
+    "ControllerSetup",
     "ModelFn",
+    "Reference",
+    "VelocityController",
     "reduced_model",
     "resolve_gains",
 ]
@@ -72,6 +91,130 @@ def reduced_model(params) -> ModelFn:
         return dynamics_scalar(phi, v, omega, params)
 
     return model
+
+
+@dataclass(frozen=True)
+class ControllerSetup:
+    """What a controller is built with, once per run.
+
+    Attributes
+    ----------
+    params : tt_mujoco.vehicle.params.Params
+        The controller's *nominal* parameters (the plant's may differ).
+    model : ModelFn
+        The nominal reduced model ``(phi, v, omega) -> (f1, f2, g11, g12, g21, g22)``.
+    torque_limit : float
+        Wheel torque saturation (N m); the loop clips at it whatever the controller returns.
+    control_dt : float
+        The control period (s): ``compute`` is called every ``control_dt``.
+    path : tt_mujoco.reference.paths.ReferencePath or None
+        The reference path (``pose_at(s)``, ``curvature(s)``, ``dense()``, ``length``).
+    """
+
+    params: Any
+    model: ModelFn
+    torque_limit: float = 15.0
+    control_dt: float = 0.001
+    path: Any = None
+
+
+class Reference:
+    """The target at one control step.
+
+    Attributes
+    ----------
+    t : float
+        Time (s).
+    s : float
+        Arc length of the reference point on the path (m).
+    kappa : float
+        Signed path curvature at ``s`` (1/m).
+    v_d, omega_d, v_d_dot, omega_d_dot : float
+        Velocity targets and their time derivatives (with path feedback on: the modified ones).
+    path : ReferencePath
+        The reference path.
+    pose : tuple
+        ``(x_ref, y_ref, theta_ref)``, the path at ``s`` (computed on first access).
+    """
+
+    __slots__ = ("_pose", "kappa", "omega_d", "omega_d_dot", "path", "s", "t", "v_d", "v_d_dot")
+
+    def __init__(self, t, s, kappa, v_d, omega_d, v_d_dot, omega_d_dot, path):
+        self.t, self.s, self.kappa, self.path = t, s, kappa, path
+        self.v_d, self.omega_d, self.v_d_dot, self.omega_d_dot = v_d, omega_d, v_d_dot, omega_d_dot
+        self._pose = None
+
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        if self._pose is None:
+            self._pose = tuple(self.path.pose_at(self.s))
+        return self._pose
+
+    def __repr__(self) -> str:
+        return (
+            f"Reference(t={self.t!r}, s={self.s!r}, kappa={self.kappa!r}, v_d={self.v_d!r}, "
+            f"omega_d={self.omega_d!r})"
+        )
+
+
+class Controller(ABC):
+    """The controller protocol: every controller, built-in or the user's, implements it.
+
+    Subclasses set :attr:`name` and, for tunable gains, :attr:`PRESETS` (preset name -> gain
+    dict) and :attr:`DEFAULT_PRESET`; ``gains`` is then a preset name or a dict of overrides
+    (``--gains``, a TOML ``[gains]`` table, ``gain.<name>=...`` in a sweep), validated here.
+    They implement :meth:`compute` and, if they keep state, :meth:`reset`.
+
+    Parameters
+    ----------
+    setup : ControllerSetup
+    gains : str, dict or None
+    """
+
+    name: ClassVar[str] = "controller"
+    PRESETS: ClassVar[dict[str, dict[str, float]]] = {"default": {}}
+    DEFAULT_PRESET: ClassVar[str] = "default"
+    #: The last unsaturated torque request (T_r, T_l), for logging; None: what compute returned.
+    command: tuple[float, float] | None = None
+
+    def __init__(self, setup: ControllerSetup, gains: str | Mapping | None = None):
+        if not isinstance(setup, ControllerSetup):
+            raise ValueError(
+                f"setup={setup!r} is not allowed: controllers are built with a ControllerSetup"
+            )
+        self.setup = setup
+        self._gains, self.preset = resolve_gains(
+            self.name, self.PRESETS, self.DEFAULT_PRESET, gains
+        )
+
+    @classmethod
+    def from_setup(cls, setup: ControllerSetup, gains: str | Mapping | None = None) -> Controller:
+        """Build the controller for a run (the loop calls this)."""
+        return cls(setup, gains=gains)
+
+    @property
+    def gains(self) -> dict:
+        """The gains in use plus the base preset's name, JSON-serialisable; accepted back as
+        ``gains=`` to rebuild the same controller."""
+        return {"preset": self.preset, **self._gains}
+
+    def reset(self) -> None:  # noqa: B027 - optional hook: stateless controllers need none
+        """Forget everything from a previous run (called before the first step)."""
+
+    @abstractmethod
+    def compute(self, t: float, measurement, reference: Reference) -> tuple[float, float]:
+        """Wheel torques ``(T_r, T_l)`` in N m for this control step.
+
+        Parameters
+        ----------
+        t : float
+            Time (s).
+        measurement : tt_mujoco.sim.measure.Measurement
+            The vehicle as measured: tractor pose ``x, y, theta`` and velocities ``v, omega``;
+            hitch and steering angles ``phi, beta``; trailer axle ``x0, y0, theta0, v0``;
+            wheel angles and rates; slips. Noise and sensor faults are already applied.
+        reference : Reference
+        """
 
 
 def _check_positive(key: str, value) -> float:
@@ -146,8 +289,8 @@ def resolve_gains(
     return values, preset
 
 
-class Controller:
-    """Base class: validation, the 2x2 solve, saturation and the anti-windup test.
+class VelocityController(Controller):
+    """The built-in laws' base: validation, the 2x2 solve, saturation and the anti-windup test.
 
     Subclasses set :attr:`name`, :attr:`PRESETS` and :attr:`DEFAULT_PRESET` and implement
     :meth:`step`, :meth:`reset` and :meth:`state`.
@@ -165,7 +308,6 @@ class Controller:
         regardless, for comparison.
     """
 
-    name = "controller"
     PRESETS: ClassVar[dict[str, dict[str, float]]] = {}
     DEFAULT_PRESET: ClassVar[str] = ""
 
@@ -202,7 +344,29 @@ class Controller:
         self.saturated = False
         #: The last unsaturated torque request (T_r, T_l), for logging saturation.
         self.command = (0.0, 0.0)
+        self.setup = None
         self.reset()
+
+    @classmethod
+    def from_setup(cls, setup: ControllerSetup, gains: str | Mapping | None = None):
+        ctrl = cls(setup.model, torque_limit=setup.torque_limit, gains=gains)
+        ctrl.setup = setup
+        return ctrl
+
+    def compute(self, t: float, measurement, reference: Reference) -> tuple[float, float]:
+        """The protocol's step: :meth:`step` on the measured (phi, v, omega) and the target,
+        with the setup's control period."""
+        r = reference
+        return self.step(
+            self.setup.control_dt,
+            measurement.phi,
+            measurement.v,
+            measurement.omega,
+            r.v_d,
+            r.omega_d,
+            r.v_d_dot,
+            r.omega_d_dot,
+        )
 
     def _set_gains(self, gains: dict[str, float]) -> None:
         """Copy the gains into float attributes (attribute reads are cheaper than dict lookups)."""

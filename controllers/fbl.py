@@ -14,15 +14,15 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from tt_mujoco.controllers.base import Controller
+from tt_mujoco.controllers.base import VelocityController
 
 __all__ = ["FblController"]
 
 
-class FblController(Controller):
+class FblController(VelocityController):
     """Feedback-linearizing velocity controller (paper Section 6.2). See the module docstring.
 
-    Gain keys: ``k_v``, ``k_omega``. Other parameters as :class:`controllers.base.Controller`
+    Gain keys: ``k_v``, ``k_omega``. Other parameters as :class:`tt_mujoco.controllers.base.VelocityController`
     (``anti_windup`` has no effect: there is no integrator).
     """
 

@@ -38,18 +38,18 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from tt_mujoco.controllers.base import Controller
+from tt_mujoco.controllers.base import VelocityController
 
 __all__ = ["IsmcStaController"]
 
 _sqrt = math.sqrt
 
 
-class IsmcStaController(Controller):
+class IsmcStaController(VelocityController):
     """ISMC-STA velocity controller (paper Section 5, eqs. 23-30). See the module docstring.
 
     Gain keys: ``lambda_v``, ``lambda_omega``, ``k1_v``, ``k1_omega``, ``k2_v``, ``k2_omega``,
-    ``eps``. Other parameters as :class:`controllers.base.Controller`.
+    ``eps``. Other parameters as :class:`tt_mujoco.controllers.base.VelocityController`.
     """
 
     name = "ismc_sta"

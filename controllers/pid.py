@@ -23,16 +23,16 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from tt_mujoco.controllers.base import Controller
+from tt_mujoco.controllers.base import VelocityController
 
 __all__ = ["PidController"]
 
 
-class PidController(Controller):
+class PidController(VelocityController):
     """PID velocity controller with feedforward (paper Section 6.2). See the module docstring.
 
     Gain keys: ``kp_v``, ``kp_omega``, ``ki_v``, ``ki_omega``, ``kd_v``, ``kd_omega``. Other
-    parameters as :class:`controllers.base.Controller`.
+    parameters as :class:`tt_mujoco.controllers.base.VelocityController`.
     """
 
     name = "pid"

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from tt_mujoco.reference.feedback import DEFAULT_GAINS, PathFeedback, check_config
+from tt_mujoco.reference.reverse import ReverseTarget
 from tt_mujoco.reference.targets import make_target
 from tt_mujoco.sim import Scenario, simulate
-from tt_mujoco.vehicle.steering import ReverseTarget
 
 
 def _drive(target, pose, duration, dt=0.001, **gains):

@@ -8,13 +8,14 @@ import numpy as np
 import pytest
 
 from tt_mujoco.analysis.metrics import trailer_offtrack
+from tt_mujoco.reference.reverse import ReverseTarget
 from tt_mujoco.reference.targets import make_target
 from tt_mujoco.sim import Scenario, simulate
+from tt_mujoco.sim.plant_reduced import ReducedPlant
+from tt_mujoco.sim.schedule import EtaScheduler
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.steering import (
-    EtaScheduler,
-    ReverseTarget,
     exact_same_path_eta,
     follower_offtrack,
     same_path_eta_limit,
@@ -81,17 +82,11 @@ def test_exact_gain_rejects_impossible_curvatures():
         exact_same_path_eta(math.nan, L, L0)
 
 
-class _FakeReduced:
-    def __init__(self, params):
-        self.params = params
-        self.plant = reduced.ReducedPlant(params)
-
-
 def test_scheduler_on_the_reduced_plant_swaps_params_and_logs_eta():
-    adapter = _FakeReduced(Params())
+    adapter = ReducedPlant(Params(), (0.0, 0.0, 0.0), 0.0, 0.001)
     sched = EtaScheduler(adapter, adapter.params)
     assert sched.update(1.0, step=0) == pytest.approx(exact_same_path_eta(1.0, L, L0))
-    assert adapter.params.eta == adapter.plant.params.eta == sched.eta
+    assert adapter.params.eta == adapter.ode.params.eta == sched.eta
     assert sched.update(1.0, step=1) == sched.eta and sched.updates == 1  # same kappa: no work
     # A change below the tolerance (1e-5) is not applied.
     tiny = 1e-3  # eta(kappa) - eta(1) ~ 1e-6 here
@@ -123,14 +118,11 @@ def test_scheduled_runs_hold_beta_at_the_exact_gain_on_both_plants():
 
 
 def test_scheduler_writes_the_steering_equality_polycoef():
-    from tt_mujoco.sim.physics import Vehicle
+    from tt_mujoco.sim.plant_mujoco import MujocoPlant
 
-    vehicle = Vehicle(Params())
-
-    class _Plant:
-        model = vehicle.model
-
-    sched = EtaScheduler(_Plant(), vehicle.params)
+    plant = MujocoPlant(Params(), (0.0, 0.0, 0.0), 0.0, wrench=False)
+    vehicle = plant.vehicle
+    sched = EtaScheduler(plant, vehicle.params)
     row = vehicle.model.eq_data[vehicle.model.equality("steering").id]
     assert row[1] == pytest.approx(1.0 / 7.0)  # polycoef = (0, -eta, 0, 0, 0)
     sched.update(2.0)

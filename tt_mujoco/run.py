@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tt_mujoco.sim import COLUMNS, DISTURBANCE_MODES, PLANTS, TARGETS, Scenario
+from tt_mujoco.sim import COLUMNS, DISTURBANCE_MODES, PLANTS, TARGETS, Scenario, build
 from tt_mujoco.sim.faults import RECOVERY_S
 from tt_mujoco.vehicle.params import Params
 
@@ -369,24 +369,7 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
 def _preflight(scenario: Scenario) -> np.ndarray:
     """Everything ``simulate`` checks before it starts, so bad input is refused before an
     output folder exists. Returns the reference polyline."""
-    from tt_mujoco.controllers import make_controller, reduced_model
-    from tt_mujoco.reference.targets import make_target
-    from tt_mujoco.sim.faults import FaultSchedule, parse_faults
-
-    scenario.validate()
-    nominal = scenario.nominal_params()
-    scenario.plant_params()
-    path, target, _ = make_target(
-        scenario.traj, kind=scenario.target, duration=scenario.duration, start=scenario.start
-    )
-    make_controller(
-        scenario.controller,
-        reduced_model(nominal),
-        torque_limit=nominal.torque_limit,
-        gains=scenario.gains,
-    )
-    FaultSchedule(parse_faults(scenario.faults), scenario.control_dt, float(target.duration))
-    return path.dense()
+    return build(scenario).path.dense()
 
 
 def _output_dir(out: Path | None, scenario: Scenario) -> tuple[Path, bool]:

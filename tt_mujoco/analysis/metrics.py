@@ -1,4 +1,4 @@
-"""Tracking metrics of a finished run, and exact point-to-polyline projection.
+"""Tracking metrics of a finished run, and the registry of extra metrics.
 
 A run is a mapping of column name -> 1-D array, one sample per control step (SI units, radians),
 as logged by the simulation loop: ``t, x, y, phi, v, omega, x0, y0, x_ref, y_ref, v_d, omega_d,
@@ -7,13 +7,12 @@ used here (other columns are ignored). :func:`compute_metrics` turns it into the
 ``metrics.json`` (SPEC Section 11); the RMS values are the quantities of the paper's Section 6
 tables (SPEC Section 10).
 
-Distances to a path are distances to its polyline: the nearest point on any segment, not only on
-the vertices. :class:`Polyline` does this exactly and vectorised: a k-d tree over short stretches
-of the path proposes candidate segments, exact projection onto those picks the nearest, and a
-distance bound certifies that no segment outside the candidates can be nearer. Points that fail
-the bound are retried with more candidates, then searched exhaustively over the chunks of the
-path that the bound cannot exclude. The result is therefore exact (to rounding), including for
-points near a vertex of a sharply curving path; no point is left to a heuristic.
+Distances to a path are exact distances to its polyline (:mod:`tt_mujoco.analysis.geometry`).
+
+A user metric is a function ``fn(timeseries, path) -> float | dict`` (``path`` a
+:class:`~tt_mujoco.reference.paths.ReferencePath`), named in ``Scenario.metrics`` (``--metric``)
+by a name registered in :data:`METRICS` or by hook ``module:function`` / ``file.py:function``;
+its value lands in ``metrics.json`` under that name, in the summary table and in sweep tables.
 """
 
 from __future__ import annotations
@@ -21,21 +20,31 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Mapping, Sequence
-from typing import NamedTuple
 
 import numpy as np
-from scipy.spatial import cKDTree
+
+from tt_mujoco.analysis.geometry import (
+    Polyline,
+    PolylineProjection,
+    _as_polyline,
+    distance_to_polyline,
+    signed_lateral_error,
+    trailer_offtrack,
+)
+from tt_mujoco.registry import Registry
 
 __all__ = [
     "CORE_COLUMNS",
     "DEFAULT_SUMMARY_KEYS",
     "DIAGNOSTIC_COLUMNS",
+    "METRICS",
     "REQUIRED_COLUMNS",
     "Polyline",
     "PolylineProjection",
     "compute_metrics",
     "distance_to_polyline",
     "max_abs",
+    "resolve_metrics",
     "rmse",
     "signed_lateral_error",
     "summary_table",
@@ -101,32 +110,6 @@ DEFAULT_SUMMARY_KEYS = (
 # own output to exactly the limit must count as saturated despite rounding.
 SATURATION_MARGIN = 1e-9
 
-# Tree entries asked for per point in successive queries; points the distance bound does not
-# settle go on to the next query, then to the chunk search. With 4 pieces per entry, 8 entries
-# settle points up to ~15 segment lengths from a smooth path, 32 up to ~250. Chosen by timing
-# 20,000 points against a 2,000-segment cycloid at lateral scatter 1 cm / 5 cm / 20 cm / far:
-# (8, 32) with 4 pieces took 30 / 42 / ~100 / ~200 ms (CPU), against 28 / 84 / 138 / 439 ms with
-# single pieces; larger first queries cost more on near points (query time grows with k).
-_CANDIDATE_ROUNDS = (8, 32)
-# Consecutive pieces per tree entry: a coarser tree certifies farther points with the same k.
-_GROUP_PIECES = 4
-# Segments per chunk in the fallback search.
-_CHUNK = 16
-# Point-segment pairs evaluated at once: 256 kB per work array stays in cache and in the
-# allocator's pool (measured: whole 20,000 x 16 arrays were 3-4x slower than blocks).
-_WORK_BLOCK = 1 << 15
-# The chunk search works on blocks of at most this many point-segment pairs (bounds the memory).
-_SEARCH_BLOCK = 1 << 20
-
-
-class _Best:
-    """Best projection found so far for each query point (mutable work arrays)."""
-
-    def __init__(self, n: int) -> None:
-        self.d2 = np.full(n, np.inf)
-        self.seg = np.full(n, -1, dtype=np.int64)
-        self.t = np.zeros(n)
-
 
 def rmse(x) -> float:
     """Root of the mean of ``x**2`` over all samples (NaN if empty or if any sample is NaN)."""
@@ -149,478 +132,6 @@ def _nanmax_abs(*arrays: np.ndarray) -> float:
     values = np.concatenate([np.abs(np.asarray(a, dtype=float).ravel()) for a in arrays])
     values = values[~np.isnan(values)]
     return float(values.max()) if values.size else math.nan
-
-
-class PolylineProjection(NamedTuple):
-    """Nearest points of a set of query points on a polyline (arrays over the query points).
-
-    ``distance`` is the Euclidean distance to the foot point ``foot`` (shape (..., 2)).
-    ``signed_distance`` is ``distance`` with the sign of the side: positive left of the path's
-    direction of travel (vertex order), negative right. ``arc_length`` is the path length from the
-    first vertex to the foot. ``segment`` is the index of the segment holding the foot, in the
-    polyline's de-duplicated vertices (:attr:`Polyline.vertices`). Rows whose query point is not
-    finite hold NaN (and segment -1).
-    """
-
-    distance: np.ndarray
-    signed_distance: np.ndarray
-    arc_length: np.ndarray
-    foot: np.ndarray
-    segment: np.ndarray
-
-
-class Polyline:
-    """A planar polyline prepared for fast, exact nearest-point queries.
-
-    Parameters
-    ----------
-    vertices : array_like, shape (M, 2)
-        Finite vertices in path order (metres). Exact consecutive repeats are dropped (a standing
-        vehicle logs the same point many times); at least two distinct points are required.
-
-    Attributes
-    ----------
-    vertices : ndarray, shape (K, 2)
-        The vertices without consecutive repeats.
-    vertex_index : ndarray of int, shape (M,)
-        For each given vertex, its index in :attr:`vertices`.
-    arc_length : ndarray, shape (K,)
-        Path length from the first vertex to each vertex.
-    length : float
-        Total path length.
-    """
-
-    def __init__(self, vertices) -> None:
-        given = np.asarray(vertices, dtype=float)
-        if given.ndim != 2 or given.shape[1] != 2 or given.shape[0] < 2:
-            raise ValueError(
-                f"polyline must have shape (M, 2) with M >= 2 vertices, got shape {given.shape}"
-            )
-        if not np.all(np.isfinite(given)):
-            bad = int(np.flatnonzero(~np.all(np.isfinite(given), axis=1))[0])
-            raise ValueError(
-                f"polyline vertices must be finite, got {given[bad].tolist()} at row {bad}"
-            )
-        keep = np.ones(given.shape[0], dtype=bool)
-        keep[1:] = np.any(given[1:] != given[:-1], axis=1)
-        if keep.sum() < 2:
-            raise ValueError(
-                f"polyline must contain at least two distinct points, got {given.shape[0]} "
-                f"copies of {given[0].tolist()}"
-            )
-        self.vertices = given[keep]
-        self.vertex_index = np.cumsum(keep) - 1
-        starts = self.vertices[:-1]
-        self._starts = starts
-        self._deltas = self.vertices[1:] - starts
-        seg_lengths = np.hypot(self._deltas[:, 0], self._deltas[:, 1])
-        self._seg_lengths = seg_lengths
-        self._sx, self._sy = starts[:, 0].copy(), starts[:, 1].copy()
-        self._dx, self._dy = self._deltas[:, 0].copy(), self._deltas[:, 1].copy()
-        self._inv_len2 = 1.0 / (seg_lengths * seg_lengths)
-        self._seg_tangents = self._deltas / seg_lengths[:, None]
-        self.arc_length = np.concatenate(([0.0], np.cumsum(seg_lengths)))
-        self.length = float(self.arc_length[-1])
-        self._vertex_tangents = self._make_vertex_tangents()
-        self._build_search()
-
-    @property
-    def n_segments(self) -> int:
-        """Number of segments (``len(vertices) - 1``)."""
-        return self._starts.shape[0]
-
-    def _make_vertex_tangents(self) -> np.ndarray:
-        """Direction used for the side of points whose foot is a vertex.
-
-        At an interior vertex it is the sum of the two adjacent unit tangents: for any point whose
-        nearest path point is that vertex, the cross product with this sum is negative on the
-        outside of the turn and positive on the inside for a left turn (and the reverse for a
-        right turn), so the sign is right even beyond a hairpin, where the two adjacent segments
-        alone disagree. A complete reversal (sum 0) falls back to the incoming tangent.
-        """
-        t = self._seg_tangents
-        tangents = np.empty((t.shape[0] + 1, 2))
-        tangents[0] = t[0]
-        tangents[-1] = t[-1]
-        summed = t[:-1] + t[1:]
-        norm = np.hypot(summed[:, 0], summed[:, 1])
-        reversal = norm < 1e-12
-        tangents[1:-1] = np.where(
-            reversal[:, None], t[:-1], summed / np.where(reversal, 1.0, norm)[:, None]
-        )
-        return tangents
-
-    def _build_search(self) -> None:
-        """Search structures: a k-d tree over short stretches of path, and chunk circles.
-
-        Tree: the path is cut into pieces no longer than ``spacing`` (long segments into several
-        pieces, so one long straight does not weaken the bound for the whole path), and runs of
-        ``_GROUP_PIECES`` consecutive pieces form groups. Each group lies inside a circle (centre
-        c, radius R, around its bounding box); the tree holds the centres. A segment whose
-        groups' centres are all at least D from a query point is at least ``D - R_max`` away.
-        The spacing is the median segment length, but at least ``length / (2 * n_segments)``, so
-        there are at most 3 pieces per segment.
-
-        Chunks: runs of ``_CHUNK`` consecutive segments, each inside a circle around its
-        vertices' bounding box (a segment lies in the convex hull of its end points). A chunk
-        whose circle is farther than a known distance cannot hold the nearest point; this prunes
-        the exact search for points far from the path, where the tree's bound is weak.
-        """
-        n_seg = self.n_segments
-        spacing = max(float(np.median(self._seg_lengths)), self.length / (2.0 * n_seg))
-        pieces = np.maximum(1, np.ceil(self._seg_lengths / spacing).astype(np.int64))
-        segment_of_piece = np.repeat(np.arange(n_seg), pieces)
-        first_piece = np.cumsum(pieces) - pieces
-        within = np.arange(segment_of_piece.size) - np.repeat(first_piece, pieces)
-        seg_start = self._starts[segment_of_piece]
-        seg_delta = self._deltas[segment_of_piece]
-        piece_start = seg_start + (within / pieces[segment_of_piece])[:, None] * seg_delta
-        piece_end = seg_start + ((within + 1) / pieces[segment_of_piece])[:, None] * seg_delta
-        # Groups of _GROUP_PIECES consecutive pieces, each inside a circle around its bounding box.
-        n_pieces = segment_of_piece.size
-        n_groups = -(-n_pieces // _GROUP_PIECES)
-        piece_of = np.minimum(
-            np.arange(n_groups)[:, None] * _GROUP_PIECES + np.arange(_GROUP_PIECES), n_pieces - 1
-        )
-        corners = np.concatenate([piece_start[piece_of], piece_end[piece_of]], axis=1)
-        centre = 0.5 * (corners.min(axis=1) + corners.max(axis=1))
-        offset = corners - centre[:, None, :]
-        radius = np.sqrt(np.max(np.einsum("ijk,ijk->ij", offset, offset), axis=1))
-        self._group_segments = segment_of_piece[piece_of]
-        self._group_radius_max = float(radius.max())
-        self._tree = cKDTree(centre)
-
-        n_chunks = -(-n_seg // _CHUNK)
-        self._chunk_first = np.arange(n_chunks) * _CHUNK
-        vertex_of = np.minimum(
-            self._chunk_first[:, None] + np.arange(_CHUNK + 1), self.vertices.shape[0] - 1
-        )
-        chunk_vertices = self.vertices[vertex_of]  # (n_chunks, _CHUNK + 1, 2)
-        centre = 0.5 * (chunk_vertices.min(axis=1) + chunk_vertices.max(axis=1))
-        offset = chunk_vertices - centre[:, None, :]
-        self._chunk_centre = centre
-        self._chunk_radius = np.sqrt(np.max(np.einsum("ijk,ijk->ij", offset, offset), axis=1))
-
-    def project(
-        self, points, *, extend_ends: bool = False, segment_count=None
-    ) -> PolylineProjection:
-        """Nearest point on the polyline for each query point.
-
-        Parameters
-        ----------
-        points : array_like, shape (N, 2) or (2,)
-            Query points (metres). Non-finite rows give NaN results.
-        extend_ends : bool
-            If False (default) the path ends at its end vertices, so a point beyond an end is
-            measured to that vertex. If True the first and last segments continue as rays: a point
-            beyond an end is measured perpendicular to the extension, and its ``arc_length`` is
-            negative (before the start) or exceeds :attr:`length` (after the end). An outer
-            path-feedback loop wants this; the metrics do not.
-        segment_count : array_like of int, shape (N,), optional
-            Only the first ``segment_count[i]`` segments of :attr:`vertices` serve query point
-            i (a path known up to some time). 0 means "the first vertex only". The end extension
-            then applies only to segment 0 and, if available, the last segment.
-
-        Returns
-        -------
-        PolylineProjection
-            Arrays of shape (N,) (feet (N, 2)); scalars (foot (2,)) for a single (2,) point.
-        """
-        pts = np.asarray(points, dtype=float)
-        single = pts.ndim == 1
-        if single:
-            pts = pts[None, :]
-        if pts.ndim != 2 or pts.shape[1] != 2:
-            raise ValueError(f"points must have shape (N, 2) or (2,), got shape {np.shape(points)}")
-        n = pts.shape[0]
-        n_seg = self.n_segments
-        if segment_count is None:
-            limit = np.full(n, n_seg, dtype=np.int64)
-        else:
-            limit = np.asarray(segment_count)
-            if limit.shape != (n,) or not np.issubdtype(limit.dtype, np.integer):
-                raise ValueError(
-                    f"segment_count must be an integer array of shape ({n},), got dtype "
-                    f"{limit.dtype} and shape {limit.shape}"
-                )
-            if np.any((limit < 0) | (limit > n_seg)):
-                raise ValueError(
-                    f"segment_count must lie in [0, {n_seg}], got values in "
-                    f"[{limit.min()}, {limit.max()}]"
-                )
-            limit = limit.astype(np.int64)
-
-        best = _Best(n)
-        finite = np.all(np.isfinite(pts), axis=1)
-
-        # Points that may only see the first vertex.
-        only_start = finite & (limit == 0)
-        if np.any(only_start):
-            diff = pts[only_start] - self.vertices[0]
-            best.d2[only_start] = np.einsum("ij,ij->i", diff, diff)
-            best.seg[only_start] = 0
-
-        pending = np.flatnonzero(finite & (limit > 0))
-        for k in _CANDIDATE_ROUNDS:
-            if pending.size == 0 or k >= self._tree.n:
-                break
-            group_dist, group_idx = self._tree.query(pts[pending], k=k)
-            candidates = self._group_segments[group_idx].reshape(pending.size, -1)
-            if extend_ends:
-                # The rays are not covered by the tree's distance bound: always try them.
-                ends = np.broadcast_to(np.array([0, n_seg - 1]), (pending.size, 2))
-                candidates = np.concatenate([candidates, ends], axis=1)
-            self._try(pts[pending], pending, candidates, limit[pending], extend_ends, best)
-            # Every segment outside the candidate groups is at least this far away.
-            bound = group_dist[:, -1] - self._group_radius_max
-            pending = pending[np.sqrt(best.d2[pending]) > bound]
-        if pending.size:
-            self._chunk_search(pts, pending, limit, extend_ends, best)
-        return self._assemble(pts, finite, best, single)
-
-    def _segment_distance2(
-        self, px: np.ndarray, py: np.ndarray, candidates: np.ndarray, extend_ends: bool
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Squared distance from point i to segment ``candidates[i, j]``, and the foot parameter.
-
-        ``px``, ``py`` have shape (P,), ``candidates`` (P, C). Plain x/y arrays: several times
-        faster than gathering (P, C, 2) blocks.
-        """
-        dx = self._dx[candidates]
-        dy = self._dy[candidates]
-        rx = px[:, None] - self._sx[candidates]
-        ry = py[:, None] - self._sy[candidates]
-        t = (rx * dx + ry * dy) * self._inv_len2[candidates]
-        if extend_ends:
-            lower = np.where(candidates == 0, -np.inf, 0.0)
-            upper = np.where(candidates == self.n_segments - 1, np.inf, 1.0)
-            t = np.clip(t, lower, upper)
-        else:
-            np.clip(t, 0.0, 1.0, out=t)
-        rx -= t * dx
-        ry -= t * dy
-        return rx * rx + ry * ry, t
-
-    def _try(
-        self,
-        pts: np.ndarray,
-        rows: np.ndarray,
-        candidates: np.ndarray,
-        limit: np.ndarray,
-        extend_ends: bool,
-        best: _Best,
-    ) -> None:
-        """Project ``pts[i]`` onto segments ``candidates[i]``; keep what beats ``best[rows[i]]``.
-
-        ``rows`` may repeat (several candidate sets for one point); ``limit`` is per row of
-        ``pts``.
-        """
-        n_rows, width = candidates.shape
-        px = np.ascontiguousarray(pts[:, 0])
-        py = np.ascontiguousarray(pts[:, 1])
-        d2_min = np.empty(n_rows)
-        seg_min = np.empty(n_rows, dtype=np.int64)
-        t_min = np.empty(n_rows)
-        step = max(1, _WORK_BLOCK // width)
-        for lo in range(0, n_rows, step):
-            part = slice(lo, lo + step)
-            cand = candidates[part]
-            d2, t = self._segment_distance2(px[part], py[part], cand, extend_ends)
-            d2[cand >= limit[part, None]] = np.inf
-            col = np.argmin(d2, axis=1)
-            i = np.arange(cand.shape[0])
-            d2_min[part], seg_min[part], t_min[part] = d2[i, col], cand[i, col], t[i, col]
-        if rows.size > 1 and np.any(rows[1:] <= rows[:-1]):
-            # Repeated rows: keep each point's smallest (stable: first on ties).
-            order = np.lexsort((d2_min, rows))
-            rows, d2_min, seg_min, t_min = rows[order], d2_min[order], seg_min[order], t_min[order]
-            first = np.ones(rows.size, dtype=bool)
-            first[1:] = rows[1:] != rows[:-1]
-            rows, d2_min, seg_min, t_min = rows[first], d2_min[first], seg_min[first], t_min[first]
-        better = d2_min < best.d2[rows]
-        rows = rows[better]
-        best.d2[rows] = d2_min[better]
-        best.seg[rows] = seg_min[better]
-        best.t[rows] = t_min[better]
-
-    def _chunk_search(
-        self,
-        pts: np.ndarray,
-        pending: np.ndarray,
-        limit: np.ndarray,
-        extend_ends: bool,
-        best: _Best,
-    ) -> None:
-        """Exact search over every chunk whose bounding circle is not beyond the best so far."""
-        offsets = np.arange(_CHUNK)
-        n_chunks = self._chunk_first.size
-        block = max(1, _SEARCH_BLOCK // (n_chunks * _CHUNK))
-        for lo in range(0, pending.size, block):
-            idx = pending[lo : lo + block]
-            p = pts[idx]
-            lower_bound = (
-                np.hypot(
-                    p[:, 0, None] - self._chunk_centre[:, 0],
-                    p[:, 1, None] - self._chunk_centre[:, 1],
-                )
-                - self._chunk_radius
-            )
-            upper_bound = np.sqrt(best.d2[idx])
-            keep = (lower_bound <= upper_bound[:, None]) & (self._chunk_first < limit[idx, None])
-            pair_point, pair_chunk = np.nonzero(keep)
-            if pair_point.size == 0:
-                continue
-            candidates = np.minimum(
-                self._chunk_first[pair_chunk, None] + offsets, self.n_segments - 1
-            )
-            self._try(
-                p[pair_point],
-                idx[pair_point],
-                candidates,
-                limit[idx][pair_point],
-                extend_ends,
-                best,
-            )
-
-    def _assemble(
-        self,
-        pts: np.ndarray,
-        finite: np.ndarray,
-        best: _Best,
-        single: bool,
-    ) -> PolylineProjection:
-        n = pts.shape[0]
-        distance = np.full(n, np.nan)
-        signed = np.full(n, np.nan)
-        arc = np.full(n, np.nan)
-        foot = np.full((n, 2), np.nan)
-        seg = np.where(finite, best.seg, -1)
-        f = np.flatnonzero(finite)
-        if f.size:
-            s = best.seg[f]
-            t = best.t[f]
-            foot_f = self._starts[s] + t[:, None] * self._deltas[s]
-            # The side is judged against the segment's direction, or the vertex tangent when the
-            # foot is a vertex (see _make_vertex_tangents).
-            tangent = self._seg_tangents[s].copy()
-            at_start = t <= 0.0
-            at_end = t >= 1.0
-            # On an extended end ray the segment's own direction is the right one.
-            at_start &= ~((s == 0) & (t < 0.0))
-            at_end &= ~((s == self.n_segments - 1) & (t > 1.0))
-            tangent[at_start] = self._vertex_tangents[s[at_start]]
-            tangent[at_end] = self._vertex_tangents[s[at_end] + 1]
-            rel = pts[f] - foot_f
-            cross = tangent[:, 0] * rel[:, 1] - tangent[:, 1] * rel[:, 0]
-            dist_f = np.sqrt(best.d2[f])
-            distance[f] = dist_f
-            # A zero cross product (on the path, or on the line through an end segment beyond
-            # that end) counts as left.
-            signed[f] = np.where(cross < 0.0, -dist_f, dist_f)
-            arc[f] = self.arc_length[s] + t * self._seg_lengths[s]
-            foot[f] = foot_f
-        if single:
-            return PolylineProjection(distance[0], signed[0], arc[0], foot[0], seg[0])
-        return PolylineProjection(distance, signed, arc, foot, seg)
-
-
-def _as_polyline(polyline) -> Polyline:
-    return polyline if isinstance(polyline, Polyline) else Polyline(polyline)
-
-
-def distance_to_polyline(points, polyline) -> np.ndarray:
-    """Distance from each point to the nearest point of a polyline's segments (metres).
-
-    Parameters
-    ----------
-    points : array_like, shape (N, 2) or (2,)
-    polyline : array_like, shape (M, 2), or Polyline
-        Build a :class:`Polyline` once to query the same path repeatedly.
-
-    Returns
-    -------
-    ndarray, shape (N,) (a scalar for a single point); NaN for non-finite points.
-    """
-    return _as_polyline(polyline).project(points).distance
-
-
-def signed_lateral_error(
-    points, polyline, *, extend_ends: bool = False, interior_only: bool = False
-) -> tuple[np.ndarray, np.ndarray]:
-    """Signed distance to a path and the arc length of the nearest path point.
-
-    Parameters
-    ----------
-    points : array_like, shape (N, 2) or (2,)
-        Query points (metres), e.g. the tractor axle midpoint P over a run.
-    polyline : array_like, shape (M, 2), or Polyline
-        The path, vertices in the direction of travel.
-    extend_ends : bool
-        Continue the first and last segments as rays (see :meth:`Polyline.project`).
-    interior_only : bool
-        If True, the signed distance is NaN where the nearest path point is not strictly inside
-        the path (arc length <= 0 or >= the path's length): there the distance is mostly
-        along-track (e.g. the trailer behind the path's start). :func:`compute_metrics` uses
-        this for the trailer's lateral error.
-
-    Returns
-    -------
-    signed_distance : ndarray, shape (N,)
-        Distance to the path, positive when the point is left of the direction of travel.
-    arc_length : ndarray, shape (N,)
-        Path length from the path's start to the nearest path point.
-    """
-    line = _as_polyline(polyline)
-    proj = line.project(points, extend_ends=extend_ends)
-    if not interior_only:
-        return proj.signed_distance, proj.arc_length
-    # Exact comparisons: a foot clamped to the start has arc length 0.0, one clamped to the end
-    # has arc_length[-2] + 1.0 * length[-1], the same sum that built the total length.
-    inside = (proj.arc_length > 0.0) & (proj.arc_length < line.length)
-    return np.where(inside, proj.signed_distance, np.nan), proj.arc_length
-
-
-def trailer_offtrack(tractor_xy, trailer_xy) -> np.ndarray:
-    """Distance from the trailer axle midpoint P0 to the path its tractor has driven so far.
-
-    At sample i the tractor's path is the polyline of P over samples 0..i (the causal path: a
-    path the tractor drives later, e.g. on its next lap or on a crossing, does not count). The
-    distance is reported only when the nearest point of that path lies strictly inside it: its
-    arc length is > 0 (P0 has passed the tractor's starting point) and below the length driven
-    so far (P0 is not beyond the tractor's current position). Otherwise the nearest point is an
-    end of the path and the distance is mostly along-track spacing, not off-tracking: those
-    samples are NaN. This covers the start of every forward run; when reversing, the trailer
-    leads and no sample qualifies.
-
-    Parameters
-    ----------
-    tractor_xy, trailer_xy : array_like, shape (N, 2)
-        P and P0 at the same samples; finite.
-
-    Returns
-    -------
-    ndarray, shape (N,)
-        Off-tracking distance (metres); NaN where the nearest path point is an end of the
-        path driven so far (see above).
-    """
-    p = np.asarray(tractor_xy, dtype=float)
-    p0 = np.asarray(trailer_xy, dtype=float)
-    if p.ndim != 2 or p.shape[1] != 2 or p0.shape != p.shape:
-        raise ValueError(
-            f"tractor_xy and trailer_xy must both have shape (N, 2), got {p.shape} and {p0.shape}"
-        )
-    out = np.full(p.shape[0], np.nan)
-    if p.shape[0] < 2 or np.all(p == p[0]):
-        return out  # the tractor never moved: P0 cannot have passed its start
-    path = Polyline(p)
-    # Sample i may use the de-duplicated segments that end at or before P_i.
-    proj = path.project(p0, segment_count=path.vertex_index)
-    # Exact comparisons: a foot clamped to the start has arc length 0.0, one clamped to the end
-    # of segment s has arc_length[s] + 1.0 * length[s], the same sum that built arc_length[s + 1].
-    driven = path.arc_length[path.vertex_index]
-    passed = (proj.arc_length > 0.0) & (proj.arc_length < driven)
-    out[passed] = proj.distance[passed]
-    return out
 
 
 def _finite_prefix_length(columns: Mapping[str, np.ndarray], names: Sequence[str]) -> int:
@@ -816,3 +327,19 @@ def summary_table(metrics: Mapping[str, object], keys: Sequence[str] = DEFAULT_S
     return "\n".join(
         f"{k:<{name_width}}  {v:>{value_width}}" for k, v in zip(keys, values, strict=True)
     )
+
+
+#: Extra metric name -> function ``fn(timeseries, path) -> float | dict``. ``METRICS.register``
+#: adds one; a hook ``module:function`` or ``file.py:function`` needs no registration.
+METRICS = Registry("metric")
+
+
+def resolve_metrics(specs) -> dict:
+    """``{name: function}`` for the names and hooks in ``specs`` (ValueError for a bad one)."""
+    out = {}
+    for spec in specs:
+        fn = METRICS.resolve(spec)
+        if not callable(fn):
+            raise ValueError(f"metric {spec!r} is not allowed: {fn!r} is not callable")
+        out[spec.rsplit(":", 1)[-1] if ":" in spec else spec] = fn
+    return out

@@ -34,12 +34,14 @@ from scipy.integrate import cumulative_simpson
 from scipy.interpolate import CubicHermiteSpline, CubicSpline, make_smoothing_spline
 from scipy.optimize import brentq
 
+from tt_mujoco.registry import Registry, is_hook, load_hook
 from tt_mujoco.vehicle.params import Params
 
 __all__ = [
     "CYCLOID_LENGTH",
     "CYCLOID_T_END",
     "DEFAULT_MAX_CURVATURE",
+    "PATHS",
     "PATH_NAMES",
     "ArcsPath",
     "CycloidPath",
@@ -724,36 +726,70 @@ _FACTORY_OPTIONS = {
 }
 
 
-def _path_key(name_or_csv) -> str:
+#: Path name -> factory returning a :class:`ReferencePath`. ``PATHS.register`` adds one; a
+#: hook ``module:NAME`` or ``file.py:NAME`` (a ReferencePath, or a factory taking the path
+#: options as keywords) needs no registration.
+PATHS = Registry("path", also="a path to a .csv file")
+PATHS.register("cycloid", cycloid)
+PATHS.register("s_curve", s_curve)
+PATHS.register("circle", circle)
+
+
+def path_kind(name_or_csv) -> str:
+    """``"csv"`` for a CSV file, ``"hook"`` for ``module:NAME``/``file.py:NAME``, else the
+    registered name (ValueError, with the allowed names, for an unknown one)."""
     text = str(name_or_csv).strip()
     if text.lower().endswith(".csv"):
         return "csv"
+    if is_hook(text):
+        return "hook"
     key = text.lower().replace("-", "_")
-    if key in PATH_NAMES:
+    if key in PATHS:
         return key
-    raise ValueError(
-        f"path {str(name_or_csv)!r} is not allowed: use one of "
-        f"{', '.join(repr(n) for n in PATH_NAMES)} or a path to a .csv file"
-    )
+    PATHS.resolve(text)  # raises, naming the allowed names and the closest one
+    raise AssertionError("unreachable")
+
+
+def _from_hook(spec: str, **kw) -> ReferencePath:
+    obj = load_hook(spec, "path")
+    if not isinstance(obj, ReferencePath):
+        if not callable(obj):
+            raise ValueError(f"path {spec!r} is not allowed: {obj!r} is not a ReferencePath")
+        try:
+            obj = obj(**kw)
+        except TypeError as err:
+            raise ValueError(f"path {spec!r} does not take the options {kw}: {err}") from None
+    elif kw:
+        raise ValueError(f"path {spec!r} is a fixed path: it takes no options ({sorted(kw)})")
+    if not isinstance(obj, ReferencePath):
+        raise ValueError(
+            f"path {spec!r} is not allowed: it gave {type(obj).__name__}, not a "
+            "tt_mujoco.reference.paths.ReferencePath"
+        )
+    return obj
 
 
 def get_path(name_or_csv, **kw) -> ReferencePath:
-    """A path by name (``"cycloid"``, ``"s_curve"``, ``"circle"``) or from a ``.csv`` file.
+    """A path by name (``"cycloid"``, ``"s_curve"``, ``"circle"``, or one registered in
+    :data:`PATHS`), from a ``.csv`` file, or from a hook ``module:NAME`` / ``file.py:NAME``.
 
     Keyword options go to the factory: cycloid ``start``; s_curve ``R``; circle ``R``,
-    ``length``; CSV ``max_curvature``, ``smoothing``.
+    ``length``; CSV ``max_curvature``, ``smoothing``; a hook or registered path, its own.
     """
-    key = _path_key(name_or_csv)
-    allowed = _FACTORY_OPTIONS[key]
-    unknown = sorted(set(kw) - set(allowed))
+    key = path_kind(name_or_csv)
+    text = str(name_or_csv).strip()
+    if key == "hook":
+        return _from_hook(text, **kw)
+    allowed = _FACTORY_OPTIONS.get(key)
+    unknown = sorted(set(kw) - set(allowed)) if allowed is not None else []
     if unknown:
         raise ValueError(
             f"option(s) {', '.join(unknown)} not allowed for path {str(name_or_csv)!r}: "
             f"allowed are {', '.join(allowed)}"
         )
     if key == "csv":
-        return from_csv(str(name_or_csv).strip(), **kw)
-    return {"cycloid": cycloid, "s_curve": s_curve, "circle": circle}[key](**kw)
+        return from_csv(text, **kw)
+    return PATHS[key](**kw)
 
 
 def _positive(name: str, value) -> float:

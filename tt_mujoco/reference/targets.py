@@ -30,14 +30,13 @@ import numpy as np
 from tt_mujoco.reference.paths import (
     CYCLOID_LENGTH,
     CYCLOID_T_END,
-    PATH_NAMES,
     Pose,
     ReferencePath,
     circle,
     cycloid,
     cycloid_arc_length,
-    from_csv,
-    s_curve,
+    get_path,
+    path_kind,
 )
 
 __all__ = [
@@ -551,17 +550,13 @@ def make_target(
     if duration is not None:
         duration = _positive("duration", duration)
     text = str(path_name_or_csv).strip()
-    key = "csv" if text.lower().endswith(".csv") else text.lower().replace("-", "_")
-    if key not in _TARGET_OPTIONS:
-        raise ValueError(
-            f"path {str(path_name_or_csv)!r} is not allowed: use one of "
-            f"{', '.join(repr(n) for n in PATH_NAMES)} or a path to a .csv file"
-        )
-    unknown = sorted(set(kw) - set(_TARGET_OPTIONS[key]))
+    key = path_kind(text)
+    known = _TARGET_OPTIONS.get(key)
+    unknown = sorted(set(kw) - set(known)) if known is not None else []
     if unknown:
         raise ValueError(
             f"option(s) {', '.join(unknown)} not allowed for path {text!r}: allowed are "
-            f"{', '.join(_TARGET_OPTIONS[key])}"
+            f"{', '.join(known)}"
         )
     ramp = {k: kw.pop(k) for k in ("cruise", "ramp_time") if k in kw}
     start = kw.pop("start", "on_path")
@@ -578,15 +573,12 @@ def make_target(
         if choice == "paper":
             choice = kind
         profile = CycloidStaticSpeed() if choice == "static" else CycloidDynamicSpeed()
-    elif key == "s_curve":
-        path = s_curve(**kw)
-        profile = RampSpeed(path.length, **ramp)
     elif key == "circle":
         profile = RampSpeed.for_duration(CIRCLE_DURATION if duration is None else duration, **ramp)
         R = _positive("R", kw.get("R", 1.0))
         path = circle(R, length=max(2.0 * math.pi * R, profile.total_distance))
-    else:
-        path = from_csv(text, **kw)
+    else:  # s_curve, CSV files, registered and hooked paths: ramp profile unless given speeds
+        path = get_path(text, **kw)
         if path.station_speeds is not None:
             profile = StationSpeed(*path.station_speeds)
         else:

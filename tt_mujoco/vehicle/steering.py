@@ -1,5 +1,5 @@
-"""Passive trailer steering beyond a constant gear: exact same-path gains, a curvature-scheduled
-eta, reverse driving, and off-tracking measures (SPEC Section 3).
+"""Passive trailer steering beyond a constant gear: exact same-path gains and off-tracking
+measures (docs/model.md Section 3).
 
 The trailer axle is steered by ``beta = eta * phi`` (paper eq. 2). Three facts drive this module:
 
@@ -17,12 +17,12 @@ The trailer axle is steered by ``beta = eta * phi`` (paper eq. 2). Three facts d
   ``1 - eta = 2 L0 / (L + L0)``. With eta = -0.125 the steady off-tracking at R = 1.5 m is
   -2.87 mm (SPEC's -2.9 mm); with -1/7 it is -0.27 mm, and with the exact eta(1/R) zero
   (``tests/test_steering.py`` checks all three against the reduced kinematics).
-- **eta > 1 is stable only in reverse** (SPEC Section 3): :class:`ReverseTarget` drives a path
-  backwards, trailer first, so that the paper's eta = 3 can be shown doing what it is good at.
+- **eta > 1 is stable only in reverse** (docs/model.md Section 3):
+  :class:`tt_mujoco.reference.reverse.ReverseTarget` drives a path backwards, trailer first, so
+  that the paper's eta = 3 can be shown doing what it is good at.
 
-:class:`EtaScheduler` updates eta every control step from the target's curvature: in MuJoCo by
-writing the ``steering`` equality's polynomial coefficient (``model.eq_data[i, 1] = -eta``, the
-``polycoef`` of ``q_steer = -eta q_hitch``), in the reduced plant by swapping its ``Params``.
+:class:`tt_mujoco.sim.schedule.EtaScheduler` applies the exact gain of the local curvature to a
+running plant.
 """
 
 from __future__ import annotations
@@ -34,8 +34,6 @@ import numpy as np
 from tt_mujoco.vehicle.params import Params, same_path_eta
 
 __all__ = [
-    "EtaScheduler",
-    "ReverseTarget",
     "exact_same_path_eta",
     "follower_offtrack",
     "same_path_eta_limit",
@@ -129,169 +127,6 @@ def steady_offtrack(kappa: float, params: Params) -> float:
     R = 1.0 / abs(kappa)
     # Same frame as _same_path_geometry: P0 = O - L0 e(pi/2 - phi).
     return math.hypot(R - params.L0 * math.sin(phi), -params.L - params.L0 * math.cos(phi)) - R
-
-
-class EtaScheduler:
-    """Curvature-scheduled passive steering: eta = :func:`exact_same_path_eta` of the local
-    curvature, applied to a running plant (the paper's eta(s) idea, SPEC Section 3).
-
-    Parameters
-    ----------
-    plant : object
-        The simulation loop's plant: MuJoCo (has ``model``, the compiled model with the
-        ``steering`` equality) or the reduced ODE adapter (has ``params`` and ``plant``, a
-        :class:`tt_mujoco.vehicle.reduced.ReducedPlant`).
-    params : Params
-        The plant's parameters (L, L0 and the initial eta).
-    tolerance : float
-        Re-apply eta only when it moved by more than this (see :data:`SCHEDULE_TOLERANCE`).
-
-    Notes
-    -----
-    The controllers' nominal model keeps the scenario's constant eta; eta enters Mbar only
-    through the trailer wheels (SPEC Section 4), and the scheduled gains stay within
-    [-0.160, -0.143] for |kappa| <= 2 1/m, so the mismatch is a small model error the controllers
-    treat like any other.
-    """
-
-    def __init__(self, plant, params: Params, tolerance: float = SCHEDULE_TOLERANCE):
-        if not (isinstance(tolerance, int | float) and math.isfinite(tolerance) and tolerance >= 0):
-            raise ValueError(f"tolerance={tolerance!r} is not allowed: it must be a number >= 0")
-        self.L, self.L0 = params.L, params.L0
-        self.tolerance = float(tolerance)
-        self.eta = params.eta
-        self.updates = 0
-        self._kappa: float | None = None
-        # (first sample, eta) for every change: sample j was reached under the eta in force
-        # during the step before it.
-        self._changes: list[tuple[int, float]] = [(0, self.eta)]
-        model = getattr(plant, "model", None)
-        if model is not None:
-            # eq_data row of the joint equality q_steer = polycoef(q_hitch): polycoef[1] = -eta.
-            self._eq_row = model.eq_data[model.equality("steering").id]
-            self._reduced = None
-        elif hasattr(plant, "plant") and hasattr(plant, "params"):
-            self._eq_row = None
-            self._reduced = plant
-        else:
-            raise ValueError(
-                f"plant={type(plant).__name__} is not allowed: use the MuJoCo or the reduced "
-                "plant of tt_mujoco.sim"
-            )
-
-    def update(self, kappa: float, step: int = 0) -> float:
-        """Schedule eta for curvature ``kappa`` (1/m) before the step after sample ``step``.
-
-        Returns the eta now in force (it governs the plant from sample ``step + 1`` on).
-        """
-        if kappa == self._kappa:  # arcs: constant curvature, nothing to recompute
-            return self.eta
-        self._kappa = kappa
-        eta = exact_same_path_eta(kappa, self.L, self.L0)
-        if abs(eta - self.eta) > self.tolerance:
-            self._apply(eta)
-            self._changes.append((step + 1, eta))
-        return self.eta
-
-    def eta_series(self, n: int) -> np.ndarray:
-        """The eta in force at each of ``n`` logged samples (for ``beta - eta phi``)."""
-        out = np.empty(n)
-        for (start, eta), (stop, _) in zip(
-            self._changes, [*self._changes[1:], (n, 0.0)], strict=True
-        ):
-            out[start : max(start, min(stop, n))] = eta
-        return out
-
-    def _apply(self, eta: float) -> None:
-        if self._eq_row is not None:
-            self._eq_row[1] = -eta
-        else:
-            adapter = self._reduced
-            new = adapter.params.replace(eta=eta)
-            adapter.params = new
-            adapter.plant.params = new
-        self.eta = eta
-        self.updates += 1
-
-
-class ReverseTarget:
-    """Drive a target's path backwards: from where the forward run would end, back to its start.
-
-    The tractor faces along the path and reverses (v < 0), so the trailer leads. The kinematics
-    are those of the forward targets with the sign of v: the path's arc length runs as
-    ``s_path = s_end + int v dt``, and ``omega = kappa(s_path) v`` keeps P on the path (heading
-    along the path's tangent, moving backwards). For a dynamic target (paper eq. 33) s_path
-    integrates the measured v; for a static one (eq. 32) ``s_path = s_end - s_ref(t)``.
-    ``v_d = -v_ref(t)``.
-
-    Parameters
-    ----------
-    target : tt_mujoco.reference.targets.Target
-        The forward target (its path, speed profile, kind and duration are reused).
-    """
-
-    def __init__(self, target):
-        self.forward = target
-        self.kind = target.kind
-        self.path = target.path
-        self.profile = target.profile
-        self.duration = target.duration
-        self.s_end = min(self.path.length, self.profile.distance(self.duration))
-        self._profile_state = self.profile.state
-        self._curvature_and_rate = self.path.curvature_and_rate
-        self.reset()
-
-    @property
-    def initial_pose(self):
-        """Start pose: the path at ``s_end``, heading along the path (the vehicle backs up)."""
-        from tt_mujoco.reference.paths import Pose
-
-        return Pose(*self.path.pose_at(self.s_end))
-
-    def reset(self) -> None:
-        self._s = self.s_end
-        self._kappa = self._curvature_and_rate(self.s_end)[0]
-        self._v_prev: float | None = None
-
-    @property
-    def arc_length(self) -> float:
-        """The path arc length s_path (m) used at the last update."""
-        return self._s
-
-    @property
-    def curvature(self) -> float:
-        return self._kappa
-
-    def update(self, t: float, dt: float, v_measured: float) -> tuple[float, float, float, float]:
-        """``(v_d, omega_d, v_d_dot, omega_d_dot)``, all for reversing (v_d <= 0)."""
-        s_ref, v_ref, a_ref = self._profile_state(t)
-        if self.kind == "dynamic":
-            v = float(v_measured)
-            if self._v_prev is not None:
-                self._s += 0.5 * (self._v_prev + v) * dt
-            self._v_prev = v
-        else:
-            v = -v_ref
-            self._s = self.s_end - s_ref
-        kappa, rate = self._curvature_and_rate(self._s)
-        self._kappa = kappa
-        # d/dt kappa(s_path) v = kappa' v^2 + kappa v_dot, with v_dot ~ -a_ref (as forward).
-        return -v_ref, kappa * v, -a_ref, rate * v * v - kappa * a_ref
-
-    def reference_speed(self, t):
-        return -self.forward.reference_speed(t)
-
-    def reference_yaw_rate(self, t):
-        s_ref, v_ref = self.profile.distance(t), self.profile.speed(t)
-        return self.path.curvature(self.s_end - s_ref) * -v_ref
-
-    def reference_point(self, t):
-        """``(x, y)`` where P should be at time t (float or array t), reversing on schedule."""
-        if isinstance(t, float | int):
-            x, y, _ = self.path.pose_at(self.s_end - self._profile_state(float(t))[0])
-            return x, y
-        x, y, _ = self.path.pose(self.s_end - self.profile.distance(t))
-        return x, y
 
 
 def follower_offtrack(ts, reverse: bool = False) -> np.ndarray:

@@ -1,0 +1,26 @@
+"""Project-wide defaults and limits, in one place (SI units, degrees where named so).
+
+The vehicle's physical parameters and their defaults (the paper's Section 6.1) are the fields of
+:class:`tt_mujoco.vehicle.params.Params`; the controllers' gain presets are on their classes.
+Everything else a run falls back on is here.
+"""
+
+from __future__ import annotations
+
+#: Physics timestep (s): the contact and coupling time constants are two steps of it
+#: (docs/model.md Section 5).
+TIMESTEP = 0.001
+#: Control period (s): 1 kHz keeps the discretisation of the paper's continuous-time laws out of
+#: the comparison.
+CONTROL_DT = 0.001
+#: Longest run accepted (s).
+MAX_DURATION = 600.0
+#: A run stops as a jackknife when |beta| or |phi| passes this (deg): just short of the
+#: singularity at 90 deg, where the reduced model is undefined and the controller's g blows up.
+JACKKNIFE_DEG = 85.0
+#: Speeds beyond this (m/s) are a numerical blow-up, not driving.
+MAX_SPEED = 20.0
+#: Default controller of a run.
+CONTROLLER = "ismc_sta"
+#: Default disturbance Delta(t) (docs/model.md Section 8).
+DISTURBANCE_MODEL = "paper"

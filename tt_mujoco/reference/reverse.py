@@ -1,0 +1,85 @@
+"""Driving a path backwards, trailer first."""
+
+from __future__ import annotations
+
+from tt_mujoco.reference.paths import Pose
+
+__all__ = ["ReverseTarget"]
+
+
+class ReverseTarget:
+    """Drive a target's path backwards: from where the forward run would end, back to its start.
+
+    The tractor faces along the path and reverses (v < 0), so the trailer leads. The kinematics
+    are those of the forward targets with the sign of v: the path's arc length runs as
+    ``s_path = s_end + int v dt``, and ``omega = kappa(s_path) v`` keeps P on the path (heading
+    along the path's tangent, moving backwards). For a dynamic target (paper eq. 33) s_path
+    integrates the measured v; for a static one (eq. 32) ``s_path = s_end - s_ref(t)``.
+    ``v_d = -v_ref(t)``.
+
+    Parameters
+    ----------
+    target : tt_mujoco.reference.targets.Target
+        The forward target (its path, speed profile, kind and duration are reused).
+    """
+
+    def __init__(self, target):
+        self.forward = target
+        self.kind = target.kind
+        self.path = target.path
+        self.profile = target.profile
+        self.duration = target.duration
+        self.s_end = min(self.path.length, self.profile.distance(self.duration))
+        self._profile_state = self.profile.state
+        self._curvature_and_rate = self.path.curvature_and_rate
+        self.reset()
+
+    @property
+    def initial_pose(self):
+        """Start pose: the path at ``s_end``, heading along the path (the vehicle backs up)."""
+        return Pose(*self.path.pose_at(self.s_end))
+
+    def reset(self) -> None:
+        self._s = self.s_end
+        self._kappa = self._curvature_and_rate(self.s_end)[0]
+        self._v_prev: float | None = None
+
+    @property
+    def arc_length(self) -> float:
+        """The path arc length s_path (m) used at the last update."""
+        return self._s
+
+    @property
+    def curvature(self) -> float:
+        return self._kappa
+
+    def update(self, t: float, dt: float, v_measured: float) -> tuple[float, float, float, float]:
+        """``(v_d, omega_d, v_d_dot, omega_d_dot)``, all for reversing (v_d <= 0)."""
+        s_ref, v_ref, a_ref = self._profile_state(t)
+        if self.kind == "dynamic":
+            v = float(v_measured)
+            if self._v_prev is not None:
+                self._s += 0.5 * (self._v_prev + v) * dt
+            self._v_prev = v
+        else:
+            v = -v_ref
+            self._s = self.s_end - s_ref
+        kappa, rate = self._curvature_and_rate(self._s)
+        self._kappa = kappa
+        # d/dt kappa(s_path) v = kappa' v^2 + kappa v_dot, with v_dot ~ -a_ref (as forward).
+        return -v_ref, kappa * v, -a_ref, rate * v * v - kappa * a_ref
+
+    def reference_speed(self, t):
+        return -self.forward.reference_speed(t)
+
+    def reference_yaw_rate(self, t):
+        s_ref, v_ref = self.profile.distance(t), self.profile.speed(t)
+        return self.path.curvature(self.s_end - s_ref) * -v_ref
+
+    def reference_point(self, t):
+        """``(x, y)`` where P should be at time t (float or array t), reversing on schedule."""
+        if isinstance(t, float | int):
+            x, y, _ = self.path.pose_at(self.s_end - self._profile_state(float(t))[0])
+            return x, y
+        x, y, _ = self.path.pose(self.s_end - self.profile.distance(t))
+        return x, y

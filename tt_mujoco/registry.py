@@ -1,0 +1,187 @@
+"""Registries of named parts and the ``module:Name`` / ``path/to/file.py:Name`` hooks.
+
+Controllers, paths, metrics and disturbances are each looked up by name in a :class:`Registry`.
+A name that is not registered but has the form ``package.module:Name`` or
+``path/to/file.py:Name`` is imported on first use, so a user adds a part without editing the
+package: the same text works on the command line, in a TOML scenario, in a sweep (its worker
+processes import the hook themselves) and from Python.
+
+>>> from tt_mujoco.registry import Registry
+>>> shapes = Registry("shape")
+>>> @shapes.register("square")
+... def square(side):
+...     return side * side
+>>> shapes.resolve("square")(3)
+9
+"""
+
+from __future__ import annotations
+
+import difflib
+import hashlib
+import importlib
+import importlib.util
+import sys
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+__all__ = ["HookError", "Registry", "is_hook", "load_hook", "normalise_hook"]
+
+
+class HookError(ValueError):
+    """A hook that cannot be loaded: the message names the hook and what was wrong."""
+
+
+def is_hook(spec) -> bool:
+    """Whether ``spec`` names a hook (``module:Name`` or ``file.py:Name``) rather than a name."""
+    return isinstance(spec, str) and ":" in spec.strip()
+
+
+def _split(spec: str, what: str) -> tuple[str, str]:
+    where, _, name = spec.strip().rpartition(":")
+    if not where or not name.isidentifier():
+        raise HookError(
+            f"{what} {spec!r} is not allowed: a hook is 'package.module:Name' or "
+            "'path/to/file.py:Name'"
+        )
+    return where, name
+
+
+def normalise_hook(spec: str, base_dir: Path | None = None) -> str:
+    """The hook with a file path made absolute (relative to ``base_dir``, else the current
+    folder), so that it means the same file from any working directory; module hooks and
+    plain names are returned unchanged."""
+    if not is_hook(spec):
+        return spec
+    where, name = spec.strip().rsplit(":", 1)
+    if not where.endswith(".py"):
+        return spec.strip()
+    path = Path(where).expanduser()
+    if not path.is_absolute():
+        path = (base_dir or Path.cwd()) / path
+    return f"{path.resolve()}:{name}"
+
+
+def _module_from_file(path: Path, what: str, spec: str):
+    try:
+        resolved = path.expanduser().resolve(strict=True)
+    except (OSError, RuntimeError):
+        raise HookError(f"{what} {spec!r}: file {str(path)!r} not found") from None
+    if not resolved.is_file():
+        raise HookError(f"{what} {spec!r}: {str(path)!r} is not a file")
+    digest = hashlib.sha1(str(resolved).encode()).hexdigest()[:12]
+    module_name = f"tt_mujoco_user_{resolved.stem}_{digest}"
+    if module_name in sys.modules:
+        return sys.modules[module_name]
+    loader_spec = importlib.util.spec_from_file_location(module_name, resolved)
+    if loader_spec is None or loader_spec.loader is None:
+        raise HookError(f"{what} {spec!r}: {str(path)!r} cannot be imported")
+    module = importlib.util.module_from_spec(loader_spec)
+    sys.modules[module_name] = module  # before exec: dataclasses and pickling look it up
+    try:
+        loader_spec.loader.exec_module(module)
+    except Exception as err:
+        del sys.modules[module_name]
+        raise HookError(f"{what} {spec!r}: importing {str(path)!r} failed: {err}") from err
+    return module
+
+
+def load_hook(spec: str, what: str = "hook") -> object:
+    """Import the object a hook names.
+
+    Parameters
+    ----------
+    spec : str
+        ``package.module:Name`` or ``path/to/file.py:Name`` (relative to the current folder).
+    what : str
+        What the hook is for ("controller", "path", ...), for messages.
+
+    Raises
+    ------
+    HookError
+        The module or file cannot be imported or has no such name.
+    """
+    where, name = _split(spec, what)
+    if where.endswith(".py"):
+        module = _module_from_file(Path(where), what, spec)
+    else:
+        try:
+            module = importlib.import_module(where)
+        except ImportError as err:
+            raise HookError(f"{what} {spec!r}: module {where!r} cannot be imported: {err}") from None
+    try:
+        return getattr(module, name)
+    except AttributeError:
+        public = sorted(n for n in vars(module) if not n.startswith("_"))
+        hint = difflib.get_close_matches(name, public, n=1)
+        extra = f"; did you mean {hint[0]!r}?" if hint else ""
+        raise HookError(f"{what} {spec!r}: {where!r} has no {name!r}{extra}") from None
+
+
+def _key(name: str) -> str:
+    return name.strip().lower().replace("-", "_")
+
+
+class Registry:
+    """Named parts of one kind, extensible by registration or by hook.
+
+    Parameters
+    ----------
+    what : str
+        The kind of part, for messages ("controller", "path", "metric", "disturbance").
+    also : str
+        Other accepted forms, for messages (e.g. "a path to a .csv file").
+    """
+
+    def __init__(self, what: str, also: str = ""):
+        self.what = what
+        self.also = also
+        self._items: dict[str, object] = {}
+
+    def register(self, name: str, obj: object | None = None) -> Callable | object:
+        """Register ``obj`` under ``name`` (case and ``-``/``_`` are not significant); used
+        without ``obj`` it is a decorator."""
+        if not isinstance(name, str) or not name.strip() or ":" in name:
+            raise ValueError(f"{self.what} name {name!r} is not allowed: use a plain word")
+
+        def add(item):
+            self._items[_key(name)] = item
+            return item
+
+        return add if obj is None else add(obj)
+
+    def names(self) -> tuple[str, ...]:
+        return tuple(self._items)
+
+    def __contains__(self, name) -> bool:
+        return isinstance(name, str) and _key(name) in self._items
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._items)
+
+    def __getitem__(self, name: str):
+        return self._items[_key(name)]
+
+    def resolve(self, spec) -> object:
+        """The registered part named ``spec``, or the object a hook names.
+
+        Raises
+        ------
+        ValueError
+            An unknown name (with the allowed names and a "did you mean" hint), or a hook
+            that cannot be loaded (:class:`HookError`).
+        """
+        if isinstance(spec, str) and _key(spec) in self._items:
+            return self._items[_key(spec)]
+        if is_hook(spec):
+            return load_hook(spec, self.what)
+        allowed = ", ".join(repr(k) for k in self._items)
+        hint = ""
+        if isinstance(spec, str):
+            close = difflib.get_close_matches(_key(spec), list(self._items), n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else ""
+        raise ValueError(
+            f"{self.what} name={spec!r} is not allowed: use one of {allowed}, "
+            f"{self.also + ', ' if self.also else ''}or a hook "
+            f"'package.module:Name' or 'path/to/file.py:Name'{hint}"
+        )

@@ -1,0 +1,78 @@
+"""Disturbances Delta(t) on the reduced dynamics, and how they enter a plant.
+
+A disturbance is an acceleration in the (v, omega) channels, ``z_dot = f + g tau + Delta(t)``
+(docs/model.md Section 8). It is chosen by name from :data:`DISTURBANCES` or by hook
+(``module:Name`` / ``file.py:Name``; a :class:`Disturbance` subclass, or any callable
+``t -> (a_v, a_omega)``). How it enters is the scenario's ``disturbance`` mode: "matched" wheel
+torques ``g_nominal(phi)^-1 Delta`` outside the actuators' saturation (both plants), or a
+"wrench" on the chassis (MuJoCo only) that the tyres must transmit.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+
+from tt_mujoco.registry import Registry
+from tt_mujoco.vehicle import reduced
+
+__all__ = [
+    "DISTURBANCES",
+    "Disturbance",
+    "PaperDisturbance",
+    "disturbance",
+    "injected",
+    "make_disturbance",
+]
+
+
+class Disturbance(ABC):
+    """An acceleration disturbance Delta(t) = (a_v, a_omega) in m/s^2 and rad/s^2."""
+
+    @abstractmethod
+    def __call__(self, t: float) -> tuple[float, float]:
+        """Delta at time ``t`` (s)."""
+
+
+class PaperDisturbance(Disturbance):
+    """The paper's multi-frequency disturbance (Section 6.1):
+    ``Delta1 = 3.5 + sin(0.3 t) + 0.5 cos(2 t)`` m/s^2, ``Delta2 = 1.5 sin(0.3 t) + 0.5 cos(5 t)``
+    rad/s^2 (bounds 5 and 2)."""
+
+    def __call__(self, t: float) -> tuple[float, float]:
+        return (
+            3.5 + math.sin(0.3 * t) + 0.5 * math.cos(2.0 * t),
+            1.5 * math.sin(0.3 * t) + 0.5 * math.cos(5.0 * t),
+        )
+
+
+#: Disturbance name -> class (or callable). ``DISTURBANCES.register`` adds one.
+DISTURBANCES = Registry("disturbance")
+DISTURBANCES.register("paper", PaperDisturbance)
+
+#: The paper's Delta(t) as a function.
+disturbance = PaperDisturbance()
+
+
+def make_disturbance(spec: str):
+    """The disturbance callable ``t -> (a_v, a_omega)`` a name or hook stands for."""
+    obj = DISTURBANCES.resolve(spec)
+    if isinstance(obj, type):
+        obj = obj()
+    if not callable(obj):
+        raise ValueError(f"disturbance {spec!r} is not allowed: {obj!r} is not callable")
+    return obj
+
+
+def injected(mode: str, a_v: float, a_w: float, phi: float, nominal) -> tuple[float, ...]:
+    """What the plant receives for Delta = (a_v, a_w): ``(dist_r, dist_l, force, torque)``.
+
+    "matched": wheel torques ``g(phi)^-1 Delta`` of the nominal model; "wrench": the
+    generalised force ``Mbar Delta`` as a force along the heading at P and a yaw moment (the same
+    effect on (v, omega), but through the tyres).
+    """
+    if mode == "wrench":
+        M = reduced.mass_matrix(phi, nominal)
+        return 0.0, 0.0, M[0, 0] * a_v + M[0, 1] * a_w, M[1, 0] * a_v + M[1, 1] * a_w
+    dist_r, dist_l = reduced.matched_torque(phi, a_v, a_w, nominal)
+    return dist_r, dist_l, 0.0, 0.0

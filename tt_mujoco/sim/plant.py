@@ -1,0 +1,68 @@
+"""The plant protocol: what the stepper needs of a simulated vehicle.
+
+Two plants implement it: :class:`tt_mujoco.sim.plant_mujoco.MujocoPlant` (contact physics) and
+:class:`tt_mujoco.sim.plant_reduced.ReducedPlant` (the reduced ODE of docs/model.md Section 4).
+Nothing outside a plant reaches into its members: options a plant cannot honour are refused by
+:meth:`Plant.check_supported` before any work.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import ClassVar
+
+__all__ = ["Plant", "StopRun"]
+
+
+class StopRun(Exception):  # noqa: N818 - a control-flow signal, not an error
+    """The run must stop: ``status`` is "jackknife" or "diverged", ``message`` says when and why."""
+
+    def __init__(self, status: str, message: str):
+        super().__init__(message)
+        self.status = status
+        self.message = message
+
+
+class Plant(ABC):
+    """A vehicle the stepper drives: measure, apply inputs, advance.
+
+    Class attributes say which scenario options it supports; :meth:`check_supported` refuses the
+    others with a message naming the option.
+    """
+
+    #: Disturbance injection modes the plant can carry out.
+    DISTURBANCE_MODES: ClassVar[tuple[str, ...]] = ("matched", "none")
+
+    @classmethod
+    def check_supported(cls, disturbance_mode: str) -> None:
+        """Raise ValueError if this plant cannot carry out ``disturbance_mode``."""
+        if disturbance_mode not in cls.DISTURBANCE_MODES:
+            raise ValueError(
+                f"disturbance mode {disturbance_mode!r} is not supported by plant {cls.name!r}: "
+                f"use one of {cls.DISTURBANCE_MODES} (a wrench on the chassis needs tyres to "
+                "pass it, which only the MuJoCo plant has)"
+            )
+
+    name: ClassVar[str] = "plant"
+
+    @abstractmethod
+    def measure(self):
+        """The vehicle's state now, a :class:`tt_mujoco.sim.measure.Measurement`."""
+
+    @abstractmethod
+    def apply(self, T_r, T_l, dist_r, dist_l, wrench_force, wrench_torque, theta) -> None:
+        """Set the inputs for the next :meth:`advance`: wheel torques (after saturation and
+        actuator faults), matched disturbance torques, and the chassis wrench (force along the
+        heading ``theta`` and yaw moment) in wrench mode."""
+
+    @abstractmethod
+    def advance(self, substeps: int) -> None:
+        """Advance ``substeps`` physics steps; raise :class:`StopRun` on a numerical failure."""
+
+    @abstractmethod
+    def scale_trailer_mass(self, factor: float) -> None:
+        """Payload step: the trailer body's mass and yaw inertia times ``factor``."""
+
+    @abstractmethod
+    def set_eta(self, eta: float) -> None:
+        """Change the passive steering gain beta = eta phi from the next step on."""

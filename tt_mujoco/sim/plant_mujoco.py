@@ -1,0 +1,88 @@
+"""The MuJoCo plant: the compiled multibody model behind the plant protocol."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from tt_mujoco.sim.physics import Vehicle
+from tt_mujoco.sim.plant import Plant, StopRun
+from tt_mujoco.vehicle.params import Params
+
+__all__ = ["MujocoPlant"]
+
+
+class MujocoPlant(Plant):
+    """Contact physics: four wheels in friction contact, the steering coupling an equality.
+
+    Parameters
+    ----------
+    params : Params
+        The plant's parameters (the MJCF is generated from them).
+    pose : (x, y, theta)
+        Initial tractor pose.
+    v_init : float
+        Initial forward speed (m/s), rolling.
+    wrench : bool
+        Disturbances arrive as a chassis wrench instead of wheel torques.
+    phi0 : float
+        Initial articulation (rad), with beta = eta phi.
+    """
+
+    name = "mujoco"
+    DISTURBANCE_MODES = ("matched", "wrench", "none")
+
+    def __init__(self, params: Params, pose, v_init: float, wrench: bool, phi0: float = 0.0):
+        self.vehicle = Vehicle(params)
+        self.vehicle.set_state(x=pose[0], y=pose[1], theta=pose[2], phi=phi0, v=v_init)
+        self.model, self.data = self.vehicle.model, self.vehicle.data
+        lay = self.vehicle.layout
+        self._wheel_r, self._wheel_l = lay.wheel_right_v, lay.wheel_left_v
+        self._act_r, self._act_l = lay.act_right, lay.act_left
+        self._tractor = self.model.body("tractor").id
+        self._trailer = self.model.body("trailer_body").id
+        # eq_data row of the joint equality q_steer = polycoef(q_hitch): polycoef[1] = -eta.
+        self._steering_row = self.model.eq_data[self.model.equality("steering").id]
+        self._wrench = wrench
+        # Views into MjData, made once: building them costs more than the writes.
+        self._ctrl = self.data.ctrl
+        self._qfrc = self.data.qfrc_applied
+        self._xfrc = self.data.xfrc_applied
+        self._warnings = self.data.warning.number
+
+    def measure(self):
+        return self.vehicle.measure()
+
+    def scale_trailer_mass(self, factor: float) -> None:
+        """MuJoCo builds the mass matrix from ``body_mass``/``body_inertia`` every step, so this
+        acts at once (only the solver's compile-time ``body_invweight0``, which scales contact
+        softness, keeps its old value)."""
+        self.model.body_mass[self._trailer] *= factor
+        self.model.body_inertia[self._trailer] *= factor
+
+    def set_eta(self, eta: float) -> None:
+        self._steering_row[1] = -eta
+
+    def apply(self, T_r, T_l, dist_r, dist_l, wrench_force, wrench_torque, theta) -> None:
+        ctrl = self._ctrl
+        ctrl[self._act_r] = T_r
+        ctrl[self._act_l] = T_l
+        if self._wrench:
+            xfrc = self._xfrc[self._tractor]
+            xfrc[0] = wrench_force * math.cos(theta)
+            xfrc[1] = wrench_force * math.sin(theta)
+            xfrc[5] = wrench_torque
+        else:
+            qfrc = self._qfrc
+            qfrc[self._wheel_r] = dist_r
+            qfrc[self._wheel_l] = dist_l
+
+    def advance(self, substeps: int) -> None:
+        mujoco.mj_step(self.model, self.data, nstep=substeps)
+        # MuJoCo resets the state when a warning fires: stop at once, before it is measured.
+        if self._warnings.any():
+            i = int(np.flatnonzero(self._warnings)[0])
+            name = mujoco.mjtWarning(i).name
+            raise StopRun("diverged", f"MuJoCo warning {name} by t={self.data.time:.3f} s")

@@ -1,0 +1,173 @@
+"""The scenario: everything that defines a run, validated field by field.
+
+Defaults live in :mod:`tt_mujoco.defaults`. A :class:`Scenario` is plain data (it pickles, and
+``to_dict`` gives its TOML/JSON form); :func:`tt_mujoco.sim.build.build` turns it into the
+objects of a run.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+from tt_mujoco.defaults import CONTROL_DT, JACKKNIFE_DEG, MAX_DURATION, TIMESTEP
+from tt_mujoco.reference.feedback import check_config
+from tt_mujoco.sim.faults import parse_faults
+from tt_mujoco.vehicle.params import INERTIA_FIELDS, MASS_FIELDS, Params
+
+__all__ = ["DISTURBANCE_MODES", "PLANTS", "TARGETS", "Scenario", "jackknife_phi_deg"]
+
+PLANTS = ("mujoco", "reduced")
+TARGETS = ("dynamic", "static")
+DISTURBANCE_MODES = ("matched", "wrench", "none")
+
+
+def jackknife_phi_deg(eta: float) -> float:
+    """|phi| (deg) at which a run stops as a jackknife: |beta| = |eta phi| reaches
+    :data:`~tt_mujoco.defaults.JACKKNIFE_DEG`, or |phi| reaches 90 deg (the trailer across
+    the tractor)."""
+    return min(JACKKNIFE_DEG / abs(eta), 90.0) if eta else 90.0
+
+
+@dataclass
+class Scenario:
+    """Everything that defines a run. Defaults are the project's main run."""
+
+    traj: str = "s_curve"
+    controller: str = "ismc_sta"
+    gains: str | dict | None = None
+    target: str = "dynamic"
+    plant: str = "mujoco"
+    eta: str | float = "same_path"
+    #: How the disturbance enters: "matched" (wheel torques g^-1 Delta), "wrench" (a force and
+    #: yaw moment on the chassis, MuJoCo only) or "none".
+    disturbance: str = "matched"
+    #: Which disturbance Delta(t): a name in :data:`tt_mujoco.sim.disturbances.DISTURBANCES`
+    #: ("paper") or a hook ``module:Name`` / ``file.py:Name``.
+    disturbance_model: str = "paper"
+    noise_snr_db: float | None = None
+    param_scale: float = 1.0
+    duration: float | None = None
+    seed: int = 0
+    timestep: float = TIMESTEP
+    control_dt: float = CONTROL_DT
+    #: "on_path": start in the reference's initial state (pose and speed); "paper": the
+    #: paper's initial condition, at rest (and, on the cycloid, at its pose (0, 0, pi/4)).
+    start: str = "on_path"
+    friction: float = 1.0
+    params: dict = field(default_factory=dict)
+    #: Per-field factors on the *plant's* masses and inertias only (e.g. ``{"Mr": 1.2}``), on
+    #: top of ``param_scale``: a model mismatch the controller does not know about.
+    plant_scale: dict = field(default_factory=dict)
+    #: Initial articulation phi (deg), with beta = eta phi; must stay short of the jackknife.
+    phi0_deg: float = 0.0
+    #: Fault specs (dicts or ``KIND:key=value,...`` strings), see :mod:`tt_mujoco.sim.faults`.
+    faults: list = field(default_factory=list)
+    #: Outer path-feedback loop on omega_d (:mod:`tt_mujoco.reference.feedback`): None (off) or a dict
+    #: of gains, ``{}`` for the defaults (k_y, k_psi, c_max).
+    path_feedback: dict | None = None
+    #: Curvature-scheduled steering (:class:`tt_mujoco.vehicle.steering.EtaScheduler`): the plant's eta
+    #: follows the exact same-path gain of the target's curvature; the controller keeps ``eta``.
+    eta_schedule: bool = False
+    #: Drive the path backwards, trailer first (:class:`tt_mujoco.vehicle.steering.ReverseTarget`).
+    reverse: bool = False
+    #: Shape options of the path (``R``, ``cruise``, ``ramp_time``, ... see
+    #: :func:`tt_mujoco.reference.targets.make_target`; for a path hook, its keyword arguments).
+    path_options: dict = field(default_factory=dict)
+    #: Extra metrics: names in :data:`tt_mujoco.analysis.metrics.METRICS` or hooks
+    #: ``module:function`` / ``file.py:function``, each added to ``metrics.json``.
+    metrics: list = field(default_factory=list)
+
+    def validate(self) -> None:
+        """Raise ValueError naming the first bad field and what is allowed."""
+        if self.plant not in PLANTS:
+            raise ValueError(f"plant={self.plant!r} is not allowed: use one of {PLANTS}")
+
+        if self.target not in TARGETS:
+            raise ValueError(f"target={self.target!r} is not allowed: use one of {TARGETS}")
+        if self.disturbance not in DISTURBANCE_MODES:
+            raise ValueError(
+                f"disturbance={self.disturbance!r} is not allowed: use one of {DISTURBANCE_MODES}"
+            )
+        if self.duration is not None and not (
+            isinstance(self.duration, int | float) and 0 < self.duration <= MAX_DURATION
+        ):
+            raise ValueError(
+                f"duration={self.duration!r} is not allowed: it must be in (0, {MAX_DURATION:g}] s"
+            )
+        if self.noise_snr_db is not None and not (
+            isinstance(self.noise_snr_db, int | float) and math.isfinite(self.noise_snr_db)
+        ):
+            raise ValueError(
+                f"noise SNR={self.noise_snr_db!r} is not allowed: it must be a finite number (dB)"
+            )
+        if not (isinstance(self.control_dt, int | float) and 0 < self.control_dt <= 0.05):
+            raise ValueError(
+                f"control_dt={self.control_dt!r} is not allowed: it must be in (0, 0.05] s"
+            )
+        ratio = self.control_dt / self.timestep
+        if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+            raise ValueError(
+                f"control_dt={self.control_dt!r} is not allowed: it must be a whole multiple of "
+                f"the physics timestep {self.timestep!r}"
+            )
+        if not isinstance(self.seed, int) or isinstance(self.seed, bool) or self.seed < 0:
+            raise ValueError(f"seed={self.seed!r} is not allowed: it must be an integer >= 0")
+        for name in ("eta_schedule", "reverse"):
+            value = getattr(self, name)
+            if not isinstance(value, bool):
+                raise ValueError(f"{name}={value!r} is not allowed: use True or False")
+        for name in ("params", "plant_scale", "path_options"):
+            if not isinstance(getattr(self, name), dict):
+                raise ValueError(f"{name}={getattr(self, name)!r} is not allowed: give a table")
+        if not isinstance(self.metrics, list | tuple) or not all(
+            isinstance(m, str) for m in self.metrics
+        ):
+            raise ValueError(f"metrics={self.metrics!r} is not allowed: give a list of names")
+        if self.path_feedback is not None:
+            check_config(self.path_feedback)
+        parse_faults(self.faults)
+        self._check_phi0()
+
+    def _check_phi0(self) -> None:
+        phi0 = self.phi0_deg
+        if isinstance(phi0, bool) or not isinstance(phi0, int | float) or not math.isfinite(phi0):
+            raise ValueError(f"phi0={phi0!r} deg is not allowed: it must be a finite number")
+        eta = self.nominal_params().eta
+        limit = jackknife_phi_deg(eta)
+        if abs(phi0) >= limit:
+            singular = math.inf if eta == 0 else 90.0 / abs(eta)
+            raise ValueError(
+                f"phi0={phi0!r} deg is not allowed: with eta={eta:g} the model is singular at "
+                f"|phi| = {singular:.4g} deg (|beta| = |eta phi| = 90 deg) and a run stops as a "
+                f"jackknife at |phi| = {limit:.4g} deg; use |phi0| < {limit:.4g} deg"
+            )
+
+    def nominal_params(self) -> Params:
+        """The controller's model: paper values, this steering and timestep, plus overrides."""
+        return Params(eta=self.eta, timestep=self.timestep, friction=self.friction, **self.params)
+
+    def plant_params(self) -> Params:
+        """The plant's parameters: nominal, times ``param_scale`` on every mass and inertia,
+        times ``plant_scale[field]`` on single ones (SPEC Section 8)."""
+        p = self.nominal_params()
+        if self.param_scale != 1.0:
+            p = p.scaled(self.param_scale)
+        if self.plant_scale:
+            allowed = MASS_FIELDS + INERTIA_FIELDS
+            for name, factor in self.plant_scale.items():
+                if name not in allowed:
+                    raise ValueError(
+                        f"plant_scale field {name!r} is not allowed: use one of {allowed}"
+                    )
+                if not (isinstance(factor, int | float) and math.isfinite(factor) and factor > 0):
+                    raise ValueError(
+                        f"plant_scale[{name!r}]={factor!r} is not allowed: "
+                        "it must be finite and > 0"
+                    )
+            p = p.replace(**{k: getattr(p, k) * f for k, f in self.plant_scale.items()})
+        return p
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)

@@ -1,0 +1,129 @@
+"""Run a scenario to the end with its controller: the stepper, a controller, the metrics."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from tt_mujoco.analysis.metrics import compute_metrics
+from tt_mujoco.sim import faults as faults_mod
+from tt_mujoco.sim.build import Build, build
+from tt_mujoco.sim.plant import StopRun
+from tt_mujoco.sim.scenario import Scenario
+from tt_mujoco.sim.stepper import Stepper
+
+__all__ = ["Result", "simulate"]
+
+
+@dataclass
+class Result:
+    """A finished (or stopped) run."""
+
+    scenario: Scenario
+    timeseries: dict[str, np.ndarray]
+    metrics: dict
+    status: str  # "ok", "jackknife" or "diverged"
+    message: str
+    reference_polyline: np.ndarray
+    wall_time_s: float
+    config: dict
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "ok"
+
+
+def run_episode(stepper: Stepper, controller, progress=None, on_step=None) -> tuple[str, str]:
+    """Drive ``stepper`` (already reset) with ``controller`` to the end or a stop.
+
+    Returns ``(status, message)``; see :func:`simulate` for ``progress`` and ``on_step``.
+    """
+    n = stepper.steps
+    report_every = max(1, n // 100)
+    sense, actuate, compute = stepper.sense, stepper.actuate, controller.compute
+    try:
+        while True:
+            me, ref = sense()
+            try:
+                T_r, T_l = compute(ref.t, me, ref)
+            except FloatingPointError as err:
+                msg = f"controller failed at t={ref.t:.3f} s: {err}"
+                raise StopRun("diverged", msg) from None
+            if not actuate(T_r, T_l, controller.command):
+                break
+            if on_step is not None:
+                on_step(stepper.t, stepper.plant)
+            k = stepper.k - 1
+            if progress is not None and k % report_every == 0:
+                progress(k, n)
+    except StopRun as stop:
+        return stop.status, stop.message
+    return "ok", f"completed {stepper.built.duration:.3f} s"
+
+
+def simulate(scenario: Scenario, progress=None, on_step=None) -> Result:
+    """Run one scenario. Never raises for a diverging run: see ``Result.status``.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    progress : callable, optional
+        Called as ``progress(steps_done, steps_total)`` about every 1 % of the run.
+    on_step : callable, optional
+        Called as ``on_step(t, plant)`` after every control step, ``t`` the new time and
+        ``plant`` the running :class:`~tt_mujoco.sim.plant.Plant`; the live viewer uses it. An
+        exception it raises ends the run and propagates.
+
+    Raises
+    ------
+    ValueError
+        For bad configuration values (before anything is simulated).
+    """
+    built = build(scenario)
+    stepper = Stepper(built)
+    stepper.reset(np.random.default_rng(scenario.seed))
+    controller = built.new_controller()
+    controller.reset()
+    start_wall = time.perf_counter()
+    status, message = run_episode(stepper, controller, progress, on_step)
+    wall = time.perf_counter() - start_wall
+    if progress is not None:
+        progress(stepper.steps, stepper.steps)
+    return finish(built, stepper, controller, status, message, wall)
+
+
+def finish(built: Build, stepper: Stepper, controller, status, message, wall) -> Result:
+    """The :class:`Result` of an episode: time series, metrics (built-in and the scenario's
+    extra ones) and the configuration."""
+    scenario = built.scenario
+    ts = stepper.timeseries()
+    polyline = built.path.dense()
+    limit = built.nominal.torque_limit
+    metrics = compute_metrics(ts, polyline, limit)
+    for name, fn in built.extra_metrics.items():
+        metrics[name] = fn(ts, built.path) if len(ts["t"]) else float("nan")
+    metrics["wall_time_s"] = wall
+    metrics["status"] = status
+    if stepper.faults is not None:
+        metrics["faults"] = faults_mod.fault_report(stepper.faults, ts, polyline, limit)
+    config = {
+        "scenario": scenario.to_dict(),
+        "nominal_params": built.nominal.to_dict(),
+        "plant_params": built.plant_params.to_dict(),
+        "controller": {"name": controller.name, "gains": controller.gains},
+        "target": {"kind": scenario.target, "duration_s": built.duration, "path": built.path.name},
+        "noise_std": {"v": built.noise_std[0], "omega": built.noise_std[1]},
+        "substeps": built.substeps,
+    }
+    return Result(
+        scenario=scenario,
+        timeseries=ts,
+        metrics=metrics,
+        status=status,
+        message=message,
+        reference_polyline=polyline,
+        wall_time_s=wall,
+        config=config,
+    )

@@ -1,0 +1,208 @@
+"""The closed loop's one step, shared by every route that drives a plant.
+
+:func:`tt_mujoco.sim.simulate.simulate`, the Gymnasium environment and the live viewer all use
+:class:`Stepper`; only who computes the torques differs (a controller, an agent). A control step
+``k`` (time ``t = k dt``) is:
+
+1. :meth:`Stepper.sense`: measure the plant, stop on a blow-up or jackknife, add measurement
+   noise, apply sensor faults, update the target (or the path feedback around it); return the
+   measurement as the controller sees it and the :class:`~tt_mujoco.controllers.Reference`;
+2. :meth:`Stepper.actuate`: clip the torques at the limit, apply actuator faults and payload
+   steps, add the disturbance, log the row, then (unless ``k`` is the last step) update the
+   scheduled eta and advance the plant one control period.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from tt_mujoco.controllers import Reference
+from tt_mujoco.defaults import JACKKNIFE_DEG, MAX_SPEED
+from tt_mujoco.sim.build import Build
+from tt_mujoco.sim.disturbances import injected
+from tt_mujoco.sim.measure import Measurement
+from tt_mujoco.sim.plant import StopRun
+from tt_mujoco.sim.scenario import jackknife_phi_deg
+from tt_mujoco.sim.timeseries import assemble_columns
+from tt_mujoco.vehicle.reduced import SingularityError
+
+__all__ = ["Stepper"]
+
+
+class Stepper:
+    """One episode of a built scenario, step by step.
+
+    Parameters
+    ----------
+    built : Build
+        From :func:`tt_mujoco.sim.build.build`.
+    """
+
+    def __init__(self, built: Build):
+        self.built = built
+        s = built.scenario
+        self.dt = built.control_dt
+        self.steps = built.steps
+        self.eta = built.nominal.eta
+        self._jk = math.radians(JACKKNIFE_DEG)
+        self._jk_phi = math.radians(jackknife_phi_deg(self.eta))
+        self._mode = s.disturbance
+        self._feedback = s.path_feedback is not None
+        self._limit = built.nominal.torque_limit
+        self.plant = None
+
+    def reset(self, rng: np.random.Generator, phi0_deg: float | None = None) -> None:
+        """Start an episode: a fresh plant in the initial state, the target and faults reset,
+        the noise of the whole episode drawn from ``rng`` (v_k, omega_k, ... in step order, the
+        same numbers as drawing them step by step)."""
+        b = self.built
+        self.plant = b.new_plant(phi0_deg)
+        self.faults = b.new_faults()
+        self.scheduler = b.new_scheduler(self.plant)
+        b.target.reset()
+        self.k = 0
+        self.finished = False
+        noise_v, noise_w = b.noise_std
+        self._noise_std = (noise_v, noise_w)
+        self._noise = (
+            rng.standard_normal(2 * (self.steps + 1)).tolist() if noise_v or noise_w else None
+        )
+        self._measured: list = []
+        self._logged: list = []
+        self.measurement = None
+
+    @property
+    def t(self) -> float:
+        return self.k * self.dt
+
+    def sense(self) -> tuple[Measurement, Reference]:
+        """The measurement as the controller sees it and the target, at the current step.
+
+        Raises
+        ------
+        StopRun
+            The state blew up or jackknifed.
+        """
+        k, t = self.k, self.k * self.dt
+        me = self.plant.measure()
+        if (
+            not (math.isfinite(me.x) and math.isfinite(me.v) and math.isfinite(me.omega))
+            or abs(me.v) > MAX_SPEED
+        ):
+            raise StopRun("diverged", f"state blew up at t={t:.3f} s: v={me.v!r}")
+        if abs(me.phi) >= self._jk_phi or abs(me.beta) >= self._jk:
+            raise StopRun(
+                "jackknife",
+                f"jackknife at t={t:.3f} s: phi={math.degrees(me.phi):.1f} deg, "
+                f"beta={math.degrees(me.beta):.1f} deg (eta={self.eta:g}; singular at "
+                f"|beta| = 90 deg), x={me.x:.3f} m, y={me.y:.3f} m, v={me.v:.3f} m/s",
+            )
+        noise = self._noise
+        if noise is not None:
+            noise_v, noise_w = self._noise_std
+            v_m = me.v + noise_v * noise[2 * k]
+            w_m = me.omega + noise_w * noise[2 * k + 1]
+        else:
+            v_m, w_m = me.v, me.omega
+        phi_m = me.phi
+        if self.faults is not None:
+            phi_m, v_m, w_m = self.faults.sensor(k, phi_m, v_m, w_m)
+        target = self.built.target
+        if self._feedback:
+            v_d, w_d, v_d_dot, w_d_dot = target.update(t, self.dt, v_m, me.x, me.y, me.theta)
+        else:
+            v_d, w_d, v_d_dot, w_d_dot = target.update(t, self.dt, v_m)
+        self.measurement = me
+        self._seen = (v_m, w_m)
+        seen = (
+            me
+            if (phi_m, v_m, w_m) == (me.phi, me.v, me.omega)
+            else me._replace(phi=phi_m, v=v_m, omega=w_m)
+        )
+        ref = Reference(
+            t, target.arc_length, target.curvature, v_d, w_d, v_d_dot, w_d_dot, self.built.path
+        )
+        self._ref = ref
+        return seen, ref
+
+    def actuate(self, T_r: float, T_l: float, command: tuple[float, float] | None = None) -> bool:
+        """Apply the torques of the current step and advance; False when the episode is over.
+
+        Parameters
+        ----------
+        T_r, T_l : float
+            Wheel torques (N m); clipped at the torque limit.
+        command : (float, float), optional
+            The unsaturated request, for the log (default: the torques given).
+        """
+        k, t, me, ref = self.k, self.k * self.dt, self.measurement, self._ref
+        T_r_cmd, T_l_cmd = (T_r, T_l) if command is None else command
+        lim = self._limit
+        T_r = -lim if T_r < -lim else (lim if T_r > lim else T_r)
+        T_l = -lim if T_l < -lim else (lim if T_l > lim else T_l)
+        faults = self.faults
+        if faults is not None:
+            T_r, T_l = faults.torque(k, T_r, T_l)
+            factor = faults.payload_factor(k)
+            if factor is not None:
+                self.plant.scale_trailer_mass(factor)
+        dist_r = dist_l = force = torque = 0.0
+        dist = self.built.disturbance
+        if dist is not None:
+            a_v, a_w = dist(t)
+            dist_r, dist_l, force, torque = injected(
+                self._mode, a_v, a_w, me.phi, self.built.nominal
+            )
+        # Log the measurement tuple as it is and the loop's own values beside it: columns are
+        # assembled once after the episode (per-step attribute access is costly).
+        self._measured.append(me)
+        v_m, w_m = self._seen
+        self._logged.append(
+            (
+                t,
+                ref.s,
+                ref.v_d,
+                ref.omega_d,
+                ref.v_d_dot,
+                ref.omega_d_dot,
+                v_m,
+                w_m,
+                T_r,
+                T_l,
+                T_r_cmd,
+                T_l_cmd,
+                dist_r,
+                dist_l,
+                ref.kappa,
+            )
+        )
+        if k == self.steps:
+            self.finished = True
+            return False
+        if self.scheduler is not None:
+            self.scheduler.update(ref.kappa, k)
+        self.plant.apply(T_r, T_l, dist_r, dist_l, force, torque, me.theta)
+        try:
+            self.plant.advance(self.built.substeps)
+        except SingularityError as err:
+            raise StopRun("jackknife", f"jackknife at t={t + self.dt:.3f} s: {err}") from None
+        self.k = k + 1
+        return True
+
+    @property
+    def samples(self) -> int:
+        """Rows logged so far."""
+        return len(self._logged)
+
+    def timeseries(self) -> dict[str, np.ndarray]:
+        """The episode's time series so far, in :data:`tt_mujoco.sim.timeseries.COLUMNS` order."""
+        ts = assemble_columns(self._measured, self._logged, self.eta)
+        n = len(self._logged)
+        if self.scheduler is not None:
+            ts["eq_violation"] = ts["beta"] - self.scheduler.eta_series(n) * ts["phi"]
+        if n:
+            ref = self.built.target.reference_point(ts["t"])
+            ts["x_ref"], ts["y_ref"] = (np.asarray(c, dtype=float) for c in ref)
+        return ts

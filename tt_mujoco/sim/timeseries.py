@@ -1,0 +1,80 @@
+"""The time series of a run: its columns, and their assembly from the logged steps."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tt_mujoco.sim.measure import Measurement
+
+__all__ = ["COLUMNS", "assemble_columns"]
+
+#: Time-series columns, one row per control step (SI units, radians). See :mod:`tt_mujoco.analysis.metrics`.
+COLUMNS = (
+    "t",
+    "x",
+    "y",
+    "theta",
+    "phi",
+    "beta",
+    "v",
+    "omega",
+    "x0",
+    "y0",
+    "theta0",
+    "v0",
+    "theta_l",
+    "theta_r",
+    "s",
+    "x_ref",
+    "y_ref",
+    "v_d",
+    "omega_d",
+    "v_d_dot",
+    "omega_d_dot",
+    "v_meas",
+    "omega_meas",
+    "T_r",
+    "T_l",
+    "T_r_cmd",
+    "T_l_cmd",
+    "dist_T_r",
+    "dist_T_l",
+    "slip_lateral",
+    "slip_lateral_trailer",
+    "slip_left",
+    "slip_right",
+    "eq_violation",
+    "kappa_d",
+)
+
+_LOOP_COLUMNS = (
+    "t",
+    "s",
+    "v_d",
+    "omega_d",
+    "v_d_dot",
+    "omega_d_dot",
+    "v_meas",
+    "omega_meas",
+    "T_r",
+    "T_l",
+    "T_r_cmd",
+    "T_l_cmd",
+    "dist_T_r",
+    "dist_T_l",
+    "kappa_d",
+)
+
+
+def assemble_columns(measured: list, logged: list, eta: float) -> dict[str, np.ndarray]:
+    """The time series in :data:`COLUMNS` order from the per-step measurement tuples and the
+    loop's own values (``x_ref``/``y_ref`` are left NaN for the caller to fill)."""
+    n = len(logged)
+    meas = np.array(measured, dtype=float).reshape(n, len(Measurement._fields))
+    loop = np.array(logged, dtype=float).reshape(n, len(_LOOP_COLUMNS))
+    cols = {name: meas[:, i] for i, name in enumerate(Measurement._fields)}
+    cols.update({name: loop[:, i] for i, name in enumerate(_LOOP_COLUMNS)})
+    cols["eq_violation"] = cols["beta"] - eta * cols["phi"]
+    cols["x_ref"] = np.full(n, np.nan)
+    cols["y_ref"] = np.full(n, np.nan)
+    return {name: np.ascontiguousarray(cols[name]) for name in COLUMNS}
