@@ -72,7 +72,7 @@ def test_command_line_overrides_file_key_by_key(tmp_path):
     path = tmp_path / "c.toml"
     path.write_text(SCENARIO_TOML)
     args, params, faults = parse(["--config", str(path)])
-    assert (args.traj, args.controller, args.duration, args.noise_snr) == ("circle", "pid", 1.5, 20)
+    assert (args.traj, args.controller, args.duration, args.noise_snr_db) == ("circle", "pid", 1.5, 20)
     assert not args.video and not args.plots and args.quiet
     assert params == {"Mr": 7.0, "Ird": 0.025}
     assert faults == [{"kind": "dropout", "t": 0.5, "duration": 0.05}]
@@ -143,10 +143,10 @@ def test_resolved_options_round_trip_through_toml(tmp_path):
     assert path.read_text().startswith("# Resolved options")
     again, _, params2, faults2 = run._parse(["--config", str(path)])
     for key in options:
-        if key not in ("params", "faults"):
+        if key not in ("params", "faults", "path_options"):
             assert getattr(again, key) == getattr(args, key), key
     assert again.gains == {"k1_v": 12.5} and again.control_dt == 0.002
-    assert again.eta == "-0.2" and again.phi0 == -3.25
+    assert again.eta == "-0.2" and again.phi0_deg == -3.25
     assert params2 == params == {"Mw": 3.5}
     assert faults2 == faults == [{"kind": "payload", "t": 1.0, "factor": 1.25}]
 

@@ -36,6 +36,7 @@ from pathlib import Path
 
 import tomli_w
 
+from tt_mujoco.registry import normalise_hook
 from tt_mujoco.sim.faults import parse_fault
 from tt_mujoco.vehicle.params import Params
 
@@ -51,11 +52,11 @@ __all__ = [
 CONFIG_FILE = "config.toml"
 #: Options that are never read from a file: the file itself, where outputs go, and the
 #: repeatable command-line forms of the [params] and [[faults]] tables.
-NOT_READ = ("config", "out", "help", "param", "fault")
+NOT_READ = ("config", "out", "help", "param", "fault", "path_option")
 #: Options read from a file but not written to a run's config.toml: how a run is watched.
 NOT_WRITTEN = ("viewer", "quiet")
 #: Tables handled here rather than by one argparse option.
-TABLES = ("params", "faults", "gains")
+TABLES = ("params", "faults", "gains", "path_options")
 
 
 @dataclasses.dataclass
@@ -134,6 +135,11 @@ def _unknown_key(key: str, known, where: str) -> ValueError:
     )
 
 
+def _relative_hook(spec: str, source) -> str:
+    """A ``file.py:Name`` hook in a config file is relative to the file's folder."""
+    return normalise_hook(spec, Path(source).parent.absolute())
+
+
 def options_from_file(
     table: dict, parser: argparse.ArgumentParser, source, param_names
 ) -> FileOptions:
@@ -159,8 +165,23 @@ def options_from_file(
     actions = _actions(parser)
     known = set(actions) | set(TABLES)
     defaults, params, faults = {}, {}, None
+    # Every long option name is a key (``noise_snr`` and ``noise_snr_db`` both name the option
+    # whose destination is ``noise_snr_db``); giving one option twice is refused.
+    aliases = {
+        opt[2:].replace("-", "_"): a.dest
+        for a in actions.values()
+        for opt in a.option_strings
+        if opt.startswith("--")
+    }
+    seen: dict[str, str] = {}
     for raw_key, value in table.items():
         key = raw_key.replace("-", "_")
+        key = aliases.get(key, key)
+        if key in seen:
+            raise ValueError(
+                f"{where}: keys {seen[key]!r} and {raw_key!r} name the same option: keep one"
+            )
+        seen[key] = raw_key
         if key in NOT_READ:
             raise ValueError(
                 f"{where}: key {raw_key!r} is not allowed in a config file: "
@@ -197,6 +218,21 @@ def options_from_file(
                 faults = [parse_fault(f).to_dict() for f in value]
             except ValueError as err:
                 raise ValueError(f"{where}: {err}") from None
+        elif key == "path_options":
+            if not isinstance(value, dict) or not all(
+                isinstance(v, str | int | float) and not isinstance(v, bool) for v in value.values()
+            ):
+                raise ValueError(
+                    f"{where}: path_options must be a table [path_options] of NAME = value"
+                )
+            defaults["path_option"] = [
+                (k, float(v) if not isinstance(v, str) else v) for k, v in value.items()
+            ]
+        elif key == "metric":
+            items = value if isinstance(value, list) else [value]
+            if not all(isinstance(m, str) and m.strip() for m in items):
+                raise ValueError(f"{where}: metric={value!r} is not allowed: give hook names")
+            defaults["metric"] = [_relative_hook(m, source) for m in items]
         elif key == "gains":
             if not isinstance(value, str | dict):
                 raise ValueError(
@@ -210,6 +246,8 @@ def options_from_file(
                 if not csv.is_absolute():
                     csv = (Path(source).parent / csv).absolute()
                 converted = str(csv)
+            elif key in ("traj", "controller", "disturbance_model"):
+                converted = _relative_hook(converted, source)
             defaults[key] = converted
     return FileOptions(defaults=defaults, params=params, faults=faults)
 
@@ -237,7 +275,13 @@ def resolved_options(args: argparse.Namespace, parser, params: dict, faults: lis
             continue
         if dest == "traj" and str(value).lower().endswith(".csv"):
             value = str(Path(value).absolute())
+        elif dest in ("traj", "controller", "disturbance_model"):
+            value = normalise_hook(value)
+        elif dest == "metric":
+            value = [normalise_hook(m) for m in value]
         out[dest] = _plain(value)
+    if getattr(args, "path_option", None):
+        out["path_options"] = {k: _plain(v) for k, v in args.path_option}
     if params:
         out["params"] = {k: _plain(v) for k, v in params.items()}
     if faults:

@@ -108,7 +108,9 @@ def load_hook(spec: str, what: str = "hook") -> object:
         try:
             module = importlib.import_module(where)
         except ImportError as err:
-            raise HookError(f"{what} {spec!r}: module {where!r} cannot be imported: {err}") from None
+            raise HookError(
+                f"{what} {spec!r}: module {where!r} cannot be imported: {err}"
+            ) from None
     try:
         return getattr(module, name)
     except AttributeError:

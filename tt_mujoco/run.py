@@ -30,6 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
+from tt_mujoco.controllers import CONTROLLERS
+from tt_mujoco.defaults import CONTROLLER, DISTURBANCE_MODEL
 from tt_mujoco.sim import COLUMNS, DISTURBANCE_MODES, PLANTS, TARGETS, Scenario, build
 from tt_mujoco.sim.faults import RECOVERY_S
 from tt_mujoco.vehicle.params import Params
@@ -37,7 +39,6 @@ from tt_mujoco.vehicle.params import Params
 __all__ = ["build_parser", "main", "read_timeseries", "timeseries_csv", "write_outputs"]
 
 RENDERS = Path("renders")
-CONTROLLERS = ("ismc_sta", "pid", "fbl")
 EXIT_OK, EXIT_BAD_INPUT, EXIT_DIVERGED, EXIT_INTERRUPTED = 0, 2, 3, 130
 #: Params fields settable with --param / [params] (eta, timestep and friction have options).
 PARAM_NAMES = tuple(
@@ -123,6 +124,19 @@ def _param(text: str) -> tuple[str, float]:
         ) from None
 
 
+def _path_option(text: str) -> tuple[str, float | str]:
+    name, sep, value = text.partition("=")
+    name, value = name.strip(), value.strip()
+    if not sep or not name.isidentifier() or not value:
+        raise argparse.ArgumentTypeError(
+            f"--path-option {text!r} is not allowed: write NAME=VALUE, e.g. R=2 or cruise=0.5"
+        )
+    try:
+        return name, float(value)
+    except ValueError:
+        return name, value
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(
         prog="python -m tt_mujoco.run",
@@ -145,9 +159,25 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument(
         "--traj",
         default="s_curve",
-        help="reference path: cycloid, s_curve, circle, or a CSV file with header x,y[,v]",
+        help="reference path: cycloid, s_curve, circle, a CSV file with header x,y[,v], or a "
+        "hook package.module:NAME / path/to/file.py:NAME (a ReferencePath or a factory)",
     )
-    g.add_argument("--controller", default="ismc_sta", choices=CONTROLLERS)
+    g.add_argument(
+        "--path-option",
+        action="append",
+        type=_path_option,
+        default=None,
+        metavar="NAME=VALUE",
+        help="a shape option of the path (s_curve/circle: R, cruise, ramp_time; CSV: "
+        "max_curvature, smoothing, cruise, ramp_time; a hook: its keyword arguments); "
+        "repeatable",
+    )
+    g.add_argument(
+        "--controller",
+        default=CONTROLLER,
+        help=f"{', '.join(CONTROLLERS)}, or a hook package.module:Class / "
+        "path/to/file.py:Class (a tt_mujoco.controllers.Controller subclass)",
+    )
     g.add_argument(
         "--gains",
         default=None,
@@ -198,6 +228,20 @@ def build_parser() -> argparse.ArgumentParser:
         "(can exceed traction); none",
     )
     g.add_argument(
+        "--disturbance-model",
+        default=DISTURBANCE_MODEL,
+        help="the disturbance Delta(t): paper, or a hook package.module:Name / file.py:Name",
+    )
+    g.add_argument(
+        "--metric",
+        action="append",
+        default=None,
+        metavar="HOOK",
+        help="an extra metric fn(timeseries, path) added to metrics.json: a registered name or "
+        "a hook package.module:fn / path/to/file.py:fn (repeatable)",
+    )
+    g.add_argument(
+        "--noise-snr-db",
         "--noise-snr",
         type=_snr,
         default=None,
@@ -236,8 +280,9 @@ def build_parser() -> argparse.ArgumentParser:
         "paper's initial condition, at rest (on the cycloid at its pose (0, 0, pi/4))",
     )
     g.add_argument(
+        "--phi0-deg",
         "--phi0",
-        type=_finite("--phi0"),
+        type=_finite("--phi0-deg"),
         default=0.0,
         metavar="DEG",
         help="initial articulation phi (deg), short of the jackknife",
@@ -330,6 +375,7 @@ def _parse(argv) -> tuple[argparse.Namespace, argparse.ArgumentParser, dict, lis
 
 
 def _scenario(args, params: dict, faults: list) -> Scenario:
+    path_options = dict(args.path_option or [])
     traj = args.traj
     if traj.lower().endswith(".csv"):
         traj = str(Path(traj))
@@ -349,7 +395,7 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
         plant=args.plant,
         eta=eta,
         disturbance=args.disturbance,
-        noise_snr_db=args.noise_snr,
+        noise_snr_db=args.noise_snr_db,
         param_scale=args.param_scale,
         duration=args.duration,
         seed=args.seed,
@@ -358,11 +404,14 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
         start=args.start,
         friction=args.friction,
         params=dict(params),
-        phi0_deg=args.phi0,
+        phi0_deg=args.phi0_deg,
         faults=list(faults),
         eta_schedule=eta_schedule,
         reverse=bool(args.reverse),
         path_feedback={} if args.path_feedback else None,
+        disturbance_model=args.disturbance_model,
+        path_options=dict(path_options),
+        metrics=list(args.metric or []),
     )
 
 
