@@ -705,7 +705,7 @@ def _remove_if_empty(out: Path) -> None:
 
 
 def _print_summary(result, out: Path, written, notes) -> None:
-    from tt_mujoco.analysis.metrics import DEFAULT_SUMMARY_KEYS, summary_table
+    from tt_mujoco.analysis.metrics import DEFAULT_SUMMARY_KEYS, resolve_metrics, summary_table
 
     s = result.scenario
     print(
@@ -713,7 +713,8 @@ def _print_summary(result, out: Path, written, notes) -> None:
         f"eta={result.config['nominal_params']['eta']:g} | disturbance={s.disturbance} | "
         f"status={result.status}"
     )
-    keys = [k for k in (*DEFAULT_SUMMARY_KEYS, "wall_time_s") if k in result.metrics]
+    extra = [name for name in resolve_metrics(s.metrics) if name in result.metrics]
+    keys = [k for k in (*DEFAULT_SUMMARY_KEYS, *extra, "wall_time_s") if k in result.metrics]
     print(summary_table(result.metrics, keys=keys))
     for fault in result.metrics.get("faults", []):
         w = fault["window"]

@@ -58,8 +58,10 @@ from pathlib import Path
 
 import numpy as np
 
-from tt_mujoco.controllers import CONTROLLERS
-from tt_mujoco.sim import DISTURBANCE_MODES, PLANTS, TARGETS, Scenario
+from tt_mujoco.controllers import CONTROLLERS, controller_class
+from tt_mujoco.controllers.base import resolve_gains
+from tt_mujoco.registry import is_hook, normalise_hook
+from tt_mujoco.sim import DISTURBANCE_MODES, PLANTS, TARGETS, Scenario, build
 from tt_mujoco.vehicle.params import INERTIA_FIELDS, MASS_FIELDS, Params
 
 __all__ = [
@@ -84,7 +86,6 @@ __all__ = [
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 2, 130
 
-CONTROLLER_NAMES = tuple(CONTROLLERS)
 STARTS = ("on_path", "paper")
 #: Scenario fields that are options, in the table's column order (``params`` is reached through
 #: ``scale.*`` and ``param.*``; ``gains`` here is the preset name, single gains are ``gain.*``).
@@ -211,8 +212,11 @@ def _text(name: str, value) -> str:
 def convert(name: str, value):
     """Check and convert one value of option ``name`` (text from the command line, or a TOML
     value). Raises :class:`BadSpecError` naming the value and what is allowed."""
-    if name in ("controller",):
-        return _choice(name, value, CONTROLLER_NAMES)
+    if name == "controller" and not is_hook(value):
+        return _choice(name, value, tuple(CONTROLLERS))  # the registry as it is now
+    if name in ("controller", "traj", "disturbance_model"):
+        # hook files are made absolute: the workers may run in another folder
+        return normalise_hook(_text(name, value))
     if name == "target":
         return _choice(name, value, TARGETS)
     if name == "plant":
@@ -221,7 +225,7 @@ def convert(name: str, value):
         return _choice(name, value, DISTURBANCE_MODES)
     if name == "start":
         return _choice(name, value, STARTS)
-    if name in ("traj", "gains"):
+    if name == "gains":
         return _text(name, value)
     if name == "eta":
         return _eta(name, value)
@@ -686,44 +690,26 @@ def build_scenario(options: Mapping) -> Scenario:
 
 
 def _resolved_gains(scenario: Scenario) -> tuple[str, dict]:
-    from tt_mujoco.controllers.base import resolve_gains
-
-    cls = CONTROLLERS[scenario.controller]
+    cls = controller_class(scenario.controller)
     values, preset = resolve_gains(cls.name, cls.PRESETS, cls.DEFAULT_PRESET, scenario.gains)
     return preset, values
 
 
 def _validate_runs(runs: Sequence[dict]) -> None:
-    """Every run's scenario, parameters, gains and path, before any work (exit 2 on a bad one)."""
-    from tt_mujoco.reference.targets import make_target
-
-    durations: dict[tuple, float] = {}  # one target per distinct path: CSV paths cost a fit
+    """Every run through the one setup path (:func:`tt_mujoco.sim.build`), before any work
+    (exit 2 on a bad one). Runs that differ only in their seed are checked once."""
+    checked: set[str] = set()
     for run in runs:
         options = run["options"]
+        key = json.dumps({k: v for k, v in options.items() if k != "seed"}, sort_keys=True)
+        if key in checked:
+            continue
         try:
-            scenario = build_scenario(options)
-            scenario.validate()
-            scenario.nominal_params()
-            scenario.plant_params()
-            _resolved_gains(scenario)
-            key = (scenario.traj, scenario.target, scenario.duration, scenario.start)
-            if key not in durations:
-                _, target, _ = make_target(
-                    scenario.traj,
-                    kind=scenario.target,
-                    duration=scenario.duration,
-                    start=scenario.start,
-                )
-                durations[key] = float(target.duration)
-            if scenario.faults:
-                from tt_mujoco.sim.faults import FaultSchedule, parse_faults
-
-                # a fault after the end of the run is refused by simulate(): refuse it now
-                faults = parse_faults(scenario.faults)
-                FaultSchedule(faults, scenario.control_dt, durations[key])
+            build(build_scenario(options))
         except (ValueError, TypeError, OSError) as err:
             shown = {k: v for k, v in options.items() if k != "seed"}
             raise BadSpecError(f"run {run['index']} {shown}: {err}") from None
+        checked.add(key)
 
 
 def config_columns(run: Mapping) -> dict:
