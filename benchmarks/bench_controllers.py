@@ -24,7 +24,7 @@ DT = 0.001
 
 
 def constant_model(phi, v, omega):
-    """Stand-in with the paper's phi = 0 input matrix (SPEC Section 4 check values)."""
+    """Stand-in with the paper's phi = 0 input matrix (docs/model.md Section 4 check values)."""
     return 0.01, -0.02, 0.3759, 0.3759, 0.3893, -0.3893
 
 

@@ -1,7 +1,7 @@
 """Every path x controller x target on both plants, under the paper's disturbance.
 
 Run: ``python benchmarks/closed_loop_grid.py`` (about a minute). Prints one row per run:
-status and the main metrics (SPEC Section 11). ISMC-STA uses the paper's Section 6.2
+status and the main metrics (docs/model.md Section 11). ISMC-STA uses the paper's Section 6.2
 comparison gains (as in Table 3); eta is the project default, same_path.
 """
 

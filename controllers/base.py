@@ -14,8 +14,8 @@ the torques at the torque limit. A user controller subclasses :class:`Controller
 **The built-in laws** (:class:`VelocityController`: ISMC-STA, PID, FBL) track ``z = (v, omega)``
 of the reduced model.
 
-Every controller tracks ``z = (v, omega)`` of the reduced model ``z_dot = f + g tau`` (SPEC
-Section 4; the paper's eq. 22) with ``tau = (T_r, T_l)``, and computes
+Every controller tracks ``z = (v, omega)`` of the reduced model ``z_dot = f + g tau``
+(docs/model.md Section 4; the paper's eq. 22) with ``tau = (T_r, T_l)``, and computes
 
     tau = sat(g^-1 r),    r = z_d_dot - f - (feedback),
 
@@ -81,7 +81,7 @@ def reduced_model(params) -> ModelFn:
     -------
     callable
         ``model(phi, v, omega) -> (f1, f2, g11, g12, g21, g22)`` with ``V_dot = f + g tau`` and
-        ``tau = (T_r, T_l)`` (SPEC Section 4). Raises
+        ``tau = (T_r, T_l)`` (docs/model.md Section 4). Raises
         :class:`tt_mujoco.vehicle.reduced.SingularityError` at a jackknife, like ``dynamics``.
     """
     # Imported here so that importing ``controllers`` stays free of tt_mujoco and numpy.

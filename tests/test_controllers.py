@@ -1,4 +1,4 @@
-"""Tests of the velocity controllers (SPEC Section 9) on the reduced plant.
+"""Tests of the velocity controllers (docs/model.md Section 9) on the reduced plant.
 
 The plant is :class:`tt_mujoco.vehicle.reduced.ReducedPlant` with ``Params()`` (eta = same_path, stable
 forward), stepped with RK4 at the control period DT = 1 ms, torques and disturbance held over
@@ -53,7 +53,7 @@ def smooth_target(t):
 
 
 def paper_disturbance(t):
-    """Delta1, Delta2 of the paper's Section 6.1 (SPEC Section 8), added to (v_dot, omega_dot)."""
+    """Delta1, Delta2 of the paper's Section 6.1 (docs/model.md Section 8), added to (v_dot, omega_dot)."""
     return (
         3.5 + math.sin(0.3 * t) + 0.5 * math.cos(2 * t),
         1.5 * math.sin(0.3 * t) + 0.5 * math.cos(5 * t),
@@ -289,7 +289,7 @@ def test_ismc_sta_rejects_the_paper_disturbance_better(disturbed_runs):
 @pytest.mark.parametrize("name", ["fbl", "pid"])
 def test_linear_laws_under_disturbance_follow_their_closed_form(name, disturbed_runs):
     """FBL: e_dot = -K e + Delta (steady e_v about 3.5 / 8); PID: the integral absorbs Delta's
-    mean but not its oscillation. Checks that Delta enters as SPEC Section 8 says."""
+    mean but not its oscillation. Checks that Delta enters as docs/model.md Section 8 says."""
     run = disturbed_runs[(name, None)]
     t, e = run["t"], run["e"]
     if name == "fbl":

@@ -65,7 +65,7 @@ def test_same_seed_same_observations_with_noise():
 
 
 def test_jackknife_terminates_with_a_penalty_worse_than_any_tracking():
-    # The paper's eta = 3 jackknifes forward (SPEC 3); start close to it and push hard.
+    # The paper's eta = 3 jackknifes forward (docs/model.md Section 3); start close to it and push hard.
     env = gym_env.TractorTrailerEnv(eta="paper", duration=5.0)
     env.reset(seed=0, options={"phi0_deg": 20.0})
     for _ in range(500):

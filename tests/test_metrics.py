@@ -1,4 +1,4 @@
-"""Tests of tt_mujoco.analysis.metrics on hand-made time series with known answers (SPEC Section 11)."""
+"""Tests of tt_mujoco.analysis.metrics on hand-made time series with known answers (docs/model.md Section 11)."""
 
 from __future__ import annotations
 

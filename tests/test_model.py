@@ -55,7 +55,7 @@ def test_equality_sign_gives_beta_equal_eta_phi():
 
 
 def test_static_normal_load_per_tractor_wheel():
-    # SPEC Section 5: about 88 N per tractor wheel.
+    # docs/model.md Section 5: about 88 N per tractor wheel.
     veh = Vehicle(Params())
     veh.set_state()
     for _ in range(200):

@@ -1,4 +1,4 @@
-"""Reference path geometry (SPEC Section 7, paper Sections 6.1 and 6.3)."""
+"""Reference path geometry (docs/model.md Section 7, paper Sections 6.1 and 6.3)."""
 
 from __future__ import annotations
 
@@ -92,7 +92,7 @@ def test_cycloid_start_and_end():
 def test_cycloid_curvature_is_specs_closed_form_and_negative():
     path = paths.cycloid()
     s = np.linspace(0.0, path.length, 1001)
-    spec = 1.0 / np.sqrt(16.0 - (4.0 * math.cos(math.pi / 8.0) - s) ** 2)  # SPEC 7, |kappa|
+    spec = 1.0 / np.sqrt(16.0 - (4.0 * math.cos(math.pi / 8.0) - s) ** 2)  # docs/model.md Section 7, |kappa|
     kappa = path.curvature(s)
     np.testing.assert_allclose(kappa, -spec, rtol=1e-13)
     # Independent: the parametric curvature (x'y'' - y'x'')/|r'|^3 of r(tau) at tau(s).
@@ -436,7 +436,7 @@ def test_default_curvature_bound_keeps_the_trailer_clear():
     phi_paper = paths.steady_articulation(kappa, paper)
     assert math.degrees(phi_paper) == pytest.approx(-22.80, abs=0.01)
     assert abs(phi_paper) < paper.phi_singular
-    # the residual really is zero (phi_dot = 0 with omega = kappa v, SPEC Section 2)
+    # the residual really is zero (phi_dot = 0 with omega = kappa v, docs/model.md Section 2)
     eta, L, L0 = same_path.eta, same_path.L, same_path.L0
     residual = math.sin((eta - 1) * phi) + kappa * (
         L0 * math.cos(eta * phi) + L * math.cos((eta - 1) * phi)

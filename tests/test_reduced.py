@@ -15,7 +15,7 @@ PAPER = Params(eta="paper")
 
 
 def test_spec_check_values():
-    # SPEC Section 4: paper parameters, eta = 3, phi = 0.
+    # docs/model.md Section 4: paper parameters, eta = 3, phi = 0.
     np.testing.assert_allclose(reduced.mass_matrix(0.0, PAPER), np.diag([133.0, 12.844]), atol=1e-3)
     _, g = reduced.dynamics(0.0, (0.0, 0.0), PAPER)
     np.testing.assert_allclose(g, [[0.3759, 0.3759], [0.3893, -0.3893]], atol=1e-4)
@@ -23,7 +23,7 @@ def test_spec_check_values():
 
 @pytest.mark.parametrize("eta", [3.0, -0.125, 0.0, -3.0])
 def test_drift_is_quadratic_in_velocity(eta):
-    # f(phi, 0) = 0 and f(phi, c V) = c^2 f(phi, V): no constant gamma4 (SPEC Section 4).
+    # f(phi, 0) = 0 and f(phi, c V) = c^2 f(phi, V): no constant gamma4 (docs/model.md Section 4).
     p = Params(eta=eta)
     f0, _ = reduced.dynamics(0.2, (0.0, 0.0), p)
     assert np.all(f0 == 0.0)
@@ -49,7 +49,7 @@ def test_velocity_forces_are_consistent_with_mass_matrix_derivative(eta):
 
 
 def test_linearised_articulation_rate():
-    # SPEC Section 3: phi_dot ~ (eta - 1) v phi / L0 at omega = 0.
+    # docs/model.md Section 3: phi_dot ~ (eta - 1) v phi / L0 at omega = 0.
     for eta in (3.0, -0.125):
         p = Params(eta=eta)
         phi = 1e-5
@@ -75,7 +75,7 @@ def test_trailer_velocity_formula_against_pose_derivative():
 
 
 def test_steady_turn_offtracking_matches_spec():
-    # SPEC Section 3, R = 1.5 m: P0 radius minus tractor radius for eta*, 0, -3.
+    # docs/model.md Section 3, R = 1.5 m: P0 radius minus tractor radius for eta*, 0, -3.
     expected_mm = {-0.125: -2.9, 0.0: -23.5, -3.0: 114.0}
     R = 1.5
     for eta, mm in expected_mm.items():
@@ -155,7 +155,7 @@ def _steady_offtrack(eta: float, R: float) -> float:
 
 
 def test_spec_same_path_formula_is_not_the_small_curvature_limit():
-    # SPEC Section 3 calls -(L0 - L)/(2 L0) = -0.125 the small-curvature limit of the same-path
+    # docs/model.md Section 3 calls -(L0 - L)/(2 L0) = -0.125 the small-curvature limit of the same-path
     # gain. If it were, the off-tracking would vanish faster than the curvature. It does not:
     # R x off-tracking tends to a constant (measured -3.889e-3 m^2), i.e. the error is
     # O(kappa). (L - L0)/(L + L0) = -1/7, the project's same_path, gives O(kappa^3):

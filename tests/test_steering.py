@@ -44,7 +44,7 @@ def test_exact_gain_puts_p0_on_the_tractor_path(kappa):
 
 
 def test_steady_offtracking_values_against_spec_section_3():
-    # SPEC Section 3 (R = 1.5 m): same-path -0.125 gives -2.9 mm, plain -23.5 mm, eta = -3
+    # docs/model.md Section 3 (R = 1.5 m): same-path -0.125 gives -2.9 mm, plain -23.5 mm, eta = -3
     # +114 mm (R = 3 m: -1.3 / -11.7 / +58 mm). SPEC rounds to 0.1 mm (0.5 mm for the last).
     cases = [(1.5, -0.125, -2.9e-3), (1.5, 0.0, -23.5e-3), (1.5, -3.0, 114e-3)]
     cases += [(3.0, -0.125, -1.3e-3), (3.0, 0.0, -11.7e-3), (3.0, -3.0, 58e-3)]
@@ -153,7 +153,7 @@ def test_reverse_target_runs_the_path_backwards():
 
 
 def test_paper_eta_jackknifes_forward_and_tracks_reversing():
-    # SPEC Section 3: phi_dot ~ (eta - 1) v phi / L0. Circle, no disturbance, reduced plant:
+    # docs/model.md Section 3: phi_dot ~ (eta - 1) v phi / L0. Circle, no disturbance, reduced plant:
     # forward jackknifes at ~1.0 s (measured), reversing tracks (lateral RMSE ~1e-6 m measured).
     fwd = simulate(Scenario(plant="reduced", traj="circle", eta="paper", disturbance="none"))
     assert fwd.status == "jackknife" and fwd.timeseries["t"][-1] < 1.5

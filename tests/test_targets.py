@@ -1,4 +1,4 @@
-"""Speed profiles and tracking targets (SPEC Section 7, paper eqs. 32-34 and 37)."""
+"""Speed profiles and tracking targets (docs/model.md Section 7, paper eqs. 32-34 and 37)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The URDF export (tt_mujoco.vehicle.urdf) against the MJCF it mirrors and SPEC Sections 1 and 4."""
+"""The URDF export (tt_mujoco.vehicle.urdf) against the MJCF it mirrors and docs/model.md Sections 1 and 4."""
 
 from __future__ import annotations
 
@@ -52,7 +52,7 @@ def load(p: Params, tmp_path) -> yourdfpy.URDF:
 
 
 def mimic_multiplier_for(p: Params) -> float:
-    """steer = -eta * hitch: q_hitch = -phi and q_steer = beta = eta * phi (SPEC Section 5)."""
+    """steer = -eta * hitch: q_hitch = -phi and q_steer = beta = eta * phi (docs/model.md Section 5)."""
     return -p.eta
 
 
@@ -125,7 +125,7 @@ def test_joint_frames_give_link_lengths_and_limits(tmp_path):
     assert (steer.parent, steer.child) == ("trailer", "trailer_axle")
     np.testing.assert_array_equal(hitch.axis, [0, 0, 1])
     np.testing.assert_array_equal(steer.axis, [0, 0, 1])
-    # The kinematic singularity |eta phi| = pi/2 (SPEC Section 2) bounds both.
+    # The kinematic singularity |eta phi| = pi/2 (docs/model.md Section 2) bounds both.
     assert hitch.limit.upper == pytest.approx(math.pi / 6, rel=1e-15)
     assert hitch.limit.lower == -hitch.limit.upper
     assert (steer.limit.lower, steer.limit.upper) == (-STEER_LIMIT, STEER_LIMIT)
@@ -220,7 +220,7 @@ def test_forward_kinematics_match_mujoco(eta, tmp_path):
 
 @pytest.mark.parametrize("eta", ETAS)
 def test_mimic_gives_the_passive_steering(eta, tmp_path):
-    """beta = eta * phi (paper eq. 2) and the SPEC Section 1/4 geometry, MuJoCo-free."""
+    """beta = eta * phi (paper eq. 2) and the docs/model.md Section 1/4 geometry, MuJoCo-free."""
     p = Params(eta=eta)
     urdf = load(p, tmp_path)
     mimic = urdf.joint_map["steer"].mimic
@@ -240,7 +240,7 @@ def test_mimic_gives_the_passive_steering(eta, tmp_path):
         assert beta == pytest.approx(p.eta * phi, abs=ANGLE_TOL)
         assert urdf.cfg[urdf.actuated_joint_names.index("hitch")] == -phi
 
-        # Tractor at the origin heading +x: O, P0 from SPEC Section 1, wheels at
+        # Tractor at the origin heading +x: O, P0 from docs/model.md Section 1, wheels at
         # P0 +- (d/2) n(alpha) with alpha = theta0 + beta (Section 4).
         O, P0, theta0 = reduced.trailer_pose(0.0, 0.0, 0.0, phi, p)
         alpha = theta0 + p.eta * phi

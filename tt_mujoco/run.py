@@ -1,6 +1,6 @@
 """``python -m tt_mujoco.run``: one closed-loop run, with metrics, time series, plots and video.
 
-Exit codes (SPEC Section 11): 0 done; 2 bad input (one message, no traceback, nothing
+Exit codes (docs/model.md Section 11): 0 done; 2 bad input (one message, no traceback, nothing
 written); 3 the run diverged or jackknifed (the message gives the time and state; everything
 computed up to then is still written); 130 interrupted (Ctrl-C, or the live viewer closed):
 files already written are complete, and ``metrics.json``, written last, is absent.

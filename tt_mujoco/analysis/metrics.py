@@ -4,8 +4,8 @@ A run is a mapping of column name -> 1-D array, one sample per control step (SI 
 as logged by the simulation loop: ``t, x, y, phi, v, omega, x0, y0, x_ref, y_ref, v_d, omega_d,
 T_r_cmd, T_l_cmd, slip_lateral, slip_lateral_trailer, slip_left, slip_right, eq_violation`` are
 used here (other columns are ignored). :func:`compute_metrics` turns it into the numbers of
-``metrics.json`` (SPEC Section 11); the RMS values are the quantities of the paper's Section 6
-tables (SPEC Section 10).
+``metrics.json`` (docs/model.md Section 11); the RMS values are the quantities of the paper's Section 6
+tables (docs/model.md Section 10).
 
 Distances to a path are exact distances to its polyline (:mod:`tt_mujoco.analysis.geometry`).
 
@@ -176,7 +176,7 @@ def _check_inputs(ts, torque_limit) -> tuple[dict[str, np.ndarray], int]:
 def compute_metrics(
     ts: Mapping[str, np.ndarray], reference_polyline, torque_limit: float
 ) -> dict[str, float | int]:
-    """Summarise a run (SPEC Section 11, ``metrics.json``).
+    """Summarise a run (docs/model.md Section 11, ``metrics.json``).
 
     Parameters
     ----------
@@ -185,7 +185,7 @@ def compute_metrics(
     reference_polyline : array_like, shape (M, 2), or Polyline
         The reference path, vertices in the direction of travel.
     torque_limit : float
-        Actuator limit (N m; 15 for the paper, SPEC Section 1).
+        Actuator limit (N m; 15 for the paper, docs/model.md Section 1).
 
     Returns
     -------

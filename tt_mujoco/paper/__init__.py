@@ -1,7 +1,7 @@
 """``python -m tt_mujoco.paper``: the paper's Tables 1-5 on both plants, side by side, and beyond.
 
-Runs every scenario behind Tables 1-5 of Wen, Chen and Zhou (Axioms 2026, 15, 598; SPEC Section
-10) on the reduced model and on MuJoCo, plus
+Runs every scenario behind Tables 1-5 of Wen, Chen and Zhou (Axioms 2026, 15, 598;
+docs/model.md Section 10) on the reduced model and on MuJoCo, plus
 
 - **isolation runs** for every cell where our number and the paper's differ by more than a
   factor of two (a cause is only claimed together with a run that isolates it);
@@ -21,7 +21,7 @@ progress bar; identical scenarios run once. The report (``report.md``, ``report.
 ``renders/paper-N`` if that exists (never overwritten), or to ``--out DIR`` (new or empty).
 
 All runs use seed :data:`SUITE_SEED` and the same-path steering preset (the paper's eta = 3
-jackknifes driving forward, SPEC Section 3; the steering study shows it).
+jackknifes driving forward, docs/model.md Section 3; the steering study shows it).
 """
 
 from __future__ import annotations
@@ -75,7 +75,7 @@ SERIES_POINTS = 600
 DEFAULT_OUT = Path("renders") / "paper"
 COMMAND = "python -m tt_mujoco.paper"
 
-# --- the paper's tables (SPEC Section 10; paper Tables 1-5) -----------------------------------
+# --- the paper's tables (docs/model.md Section 10; paper Tables 1-5) -----------------------------------
 #: Scenario of each table row, without the plant. Tables 1-3 on the cycloid (Section 6.1-6.2),
 #: Tables 4-5 on the S-curve and the circle (Section 6.3). Gain set "paper_6_1" (Section 6.1)
 #: except Table 3's comparison set "paper_6_2"; the S-curve runs the paper's stated 10 s.
@@ -198,7 +198,7 @@ STEERING_VARIANTS: dict[str, dict] = {
     "paper eta = 3, forward": {"eta": "paper"},
     "paper eta = 3, reverse": {"eta": "paper", "reverse": True},
     "eta = -3": {"eta": -3.0},
-    "SPEC formula (-0.125)": {"eta": -0.125},
+    "half-difference gain (-0.125)": {"eta": -0.125},
     "same_path (-1/7)": {"eta": "same_path"},
     "scheduled eta(kappa)": {"eta": "same_path", "eta_schedule": True},
 }
@@ -649,7 +649,7 @@ def _applies_traction(cell: Cell, plant: str, records) -> bool:
 def _describe_traction(cells, records) -> str:
     lines = [
         "MuJoCo's tyres have a friction limit the reduced model does not: about 88 N of normal "
-        "load per tractor wheel (SPEC Section 5). On the cycloid the dynamic target asks for "
+        "load per tractor wheel (docs/model.md Section 5). On the cycloid the dynamic target asks for "
         "1.85 m/s^2 at t = 0 while the matched disturbance steps to 4 m/s^2 (Delta1(0) = 3.5 + "
         "0.5) before the controller's integral terms have built up: the wheels spin up "
         "(longitudinal slip in the table) and the error transient is larger and longer. The "
@@ -1339,15 +1339,15 @@ def _cfg(value) -> str:
 
 def _suite_setup_lines(seed: int) -> list[str]:
     return [
-        "- Paper: Wen, Chen, Zhou, *Axioms* 2026, 15, 598; its Tables 1-5 as in SPEC Section 10.",
-        "- Plants: `reduced` = the exact reduced ODE (SPEC Section 4, RK4, pure rolling); `MuJoCo` "
-        "= the multibody model with tyre contact (SPEC Section 5). Timestep and control period "
+        "- Paper: Wen, Chen, Zhou, *Axioms* 2026, 15, 598; its Tables 1-5 as in docs/model.md Section 10.",
+        "- Plants: `reduced` = the exact reduced ODE (docs/model.md Section 4, RK4, pure rolling); `MuJoCo` "
+        "= the multibody model with tyre contact (docs/model.md Section 5). Timestep and control period "
         "1 ms on both.",
         "- Steering: **eta = same_path (-1/7)** in every table run. The paper uses eta = 3, "
-        "which jackknifes driving forward within about 1 s (SPEC Section 3; steering study "
+        "which jackknifes driving forward within about 1 s (docs/model.md Section 3; steering study "
         "below), so its tables cannot have been produced with it in the stated convention.",
         "- Disturbance: the paper's Delta1, Delta2 (Section 6.1) as matched wheel torques "
-        "(SPEC Section 8); noise: Gaussian, 20 dB SNR on measured v and omega; parameter "
+        "(docs/model.md Section 8); noise: Gaussian, 20 dB SNR on measured v and omega; parameter "
         "uncertainty: plant masses and inertias x1.2 / x0.8, nominal model unchanged.",
         "- Cycloid: starts on the path (the paper's pose is 0.30 m off it, docs/paper-notes.md), "
         "dynamic target eq. (34), 3 pi/2 s. S-curve: the paper's 10 s (7.2 m of 9.42 m). "
@@ -1577,7 +1577,7 @@ def build_report(
 
 STEERING_NOTES = [
     "Notes. (i) The paper's eta = 3 jackknifes driving forward on every path within about "
-    "1 s, on both plants (SPEC Section 3). Reversing, trailer first, it is stable in the "
+    "1 s, on both plants (docs/model.md Section 3). Reversing, trailer first, it is stable in the "
     "reduced model and P0 leads on a wider circle (the analytic off-track); in MuJoCo the "
     "reversing S-curve slips at the curvature step and jackknifes unless the friction is "
     "raised (the friction-3 row), and with the paper's disturbance the reversing circle "
@@ -1587,7 +1587,7 @@ STEERING_NOTES = [
     "trailer axle asks for more lateral tyre force than the contact gives (lateral slip "
     "column); friction 3 cures the cycloid, not the S-curve. (iii) (L - L0)/(L + L0) = -1/7 "
     "is the exact small-curvature same-path gain and the project's same_path default "
-    "(`params.same_path_eta`); SPEC's -(L0 - L)/(2 L0) = -0.125 leaves the analytic 2.9 mm "
+    "(`params.same_path_eta`); the half-difference gain -(L0 - L)/(2 L0) = -0.125 leaves the analytic 2.9 mm "
     "at R = 1.5 m and 4.8 mm at R = 1 m, "
     "-1/7 leaves 0.27 mm and 0.92 mm, the scheduled exact gain 0 (the measured steady-arc "
     "values agree). (iv) Over a whole S-curve run the off-tracking is dominated by transients "
@@ -1629,13 +1629,13 @@ def _summary_markdown(rows, steering, feedback, checks, info) -> str:
     md += _tables_markdown(rows)
     md += ["### Passive steering: trailer off-tracking (m, rms over the run / on steady arcs)", ""]
     md += [
-        "| path | plant | plain eta = 0 | SPEC -0.125 | same_path -1/7 | scheduled "
+        "| path | plant | plain eta = 0 | half-difference -0.125 | same_path -1/7 | scheduled "
         "| eta = -3 | eta = 3 forward | eta = 3 reverse |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     names = (
         "plain (eta = 0)",
-        "SPEC formula (-0.125)",
+        "half-difference gain (-0.125)",
         "same_path (-1/7)",
         "scheduled eta(kappa)",
         "eta = -3",

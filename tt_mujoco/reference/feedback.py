@@ -22,7 +22,7 @@ trailer cannot follow (``paths.DEFAULT_MAX_CURVATURE``, 2 1/m).
 
 The speed target v_d is left alone: along-track position is not fed back (so rmse_v measures the
 same speed tracking with and without the loop). The pose (x, y, theta) is taken as measured
-without noise: the paper's noise model covers v and omega only (SPEC Section 8).
+without noise: the paper's noise model covers v and omega only (docs/model.md Section 8).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Reference paths: planar geometry by arc length (SPEC Section 7).
+"""Reference paths: planar geometry by arc length (docs/model.md Section 7).
 
 A :class:`ReferencePath` describes where the tractor's axle midpoint P should go, as a function
 of the arc length ``s`` in ``[0, length]``: the pose ``(x, y, heading)``, the signed curvature
@@ -229,7 +229,7 @@ class CycloidPath(ReferencePath):
     ``r(tau) = (tau - sin tau, 1 - cos tau)``, ``tau = t + pi/4``, ``t in [0, 3 pi/2]``. With
     ``u = 4cos(pi/8) - s = 4 cos(tau/2)``: ``tau = 2 arccos(u/4)``, heading ``pi/2 - tau/2``
     (the arch is traced clockwise, so kappa < 0) and ``kappa(s) = -1/sqrt(16 - u^2)`` (the
-    paper's unsigned |kappa(s)| with the sign restored, SPEC Section 7). ``dkappa/ds =
+    paper's unsigned |kappa(s)| with the sign restored, docs/model.md Section 7). ``dkappa/ds =
     u (16 - u^2)^(-3/2)``.
     """
 
@@ -270,7 +270,7 @@ def cycloid(start: str = "on_path") -> CycloidPath:
     start : {"on_path", "paper"}
         ``"on_path"``: the vehicle starts at the path's start, (0.0783, 0.2929) heading 3pi/8.
         ``"paper"``: at the paper's initial condition q(0) = (0, 0, pi/4) (Section 6.1), which
-        is 0.303 m off the path and 22.5 deg off its heading (SPEC Section 7). The geometry is
+        is 0.303 m off the path and 22.5 deg off its heading (docs/model.md Section 7). The geometry is
         the same either way; only :attr:`~ReferencePath.initial_pose` differs.
     """
     if start == "on_path":
@@ -522,7 +522,7 @@ def from_waypoints(
     smoothing: float | None = None,
     labels=None,
 ) -> SplinePath:
-    """Fit a curvature-continuous path through waypoints (SPEC Section 7, user paths).
+    """Fit a curvature-continuous path through waypoints (docs/model.md Section 7, user paths).
 
     Parameters
     ----------
@@ -648,7 +648,7 @@ def from_csv(
     max_curvature: float = DEFAULT_MAX_CURVATURE,
     smoothing: float | None = None,
 ) -> SplinePath:
-    """Read a user path from CSV and fit it (SPEC Section 7, user paths).
+    """Read a user path from CSV and fit it (docs/model.md Section 7, user paths).
 
     The file has a header row naming the columns ``x`` and ``y`` (metres) and optionally ``v``
     (desired speed, m/s), in any order, then one waypoint per row; blank lines are skipped.
@@ -804,7 +804,7 @@ def _positive(name: str, value) -> float:
 def steady_articulation(kappa: float, params: Params | None = None) -> float:
     """Steady-state articulation phi (rad) while the tractor turns with constant curvature.
 
-    Solves ``phi_dot = 0`` in SPEC Section 2 with ``omega = kappa v``:
+    Solves ``phi_dot = 0`` in docs/model.md Section 2 with ``omega = kappa v``:
     ``sin((eta - 1) phi) + kappa (L0 cos(eta phi) + L cos((eta - 1) phi)) = 0``, taking the
     root that grows continuously from phi = 0 at kappa = 0 and staying where cos(beta) > 0.
     Returns nan if there is none (eta = 1, or the articulation would reach the singularity).

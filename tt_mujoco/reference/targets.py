@@ -1,4 +1,4 @@
-"""Speed profiles and tracking targets z_d = (v_d, omega_d) (SPEC Section 7, paper Section 6).
+"""Speed profiles and tracking targets z_d = (v_d, omega_d) (docs/model.md Section 7, paper Section 6).
 
 The controllers track ``z = (v, omega)``. A target turns a :class:`~tt_mujoco.reference.paths.ReferencePath`
 and a :class:`SpeedProfile` into ``z_d`` and ``z_d_dot`` at every control step:
@@ -440,7 +440,7 @@ class StaticTarget(Target):
     ``v_d = v_ref(t)``, ``omega_d = kappa(s_ref(t)) v_ref(t)``, ``s_ref = int_0^t v_ref``;
     ``z_d_dot = (v_ref_dot, kappa'(s_ref) v_ref^2 + kappa(s_ref) v_ref_dot)``. For the cycloid
     with its eq. (32) speed this is omega_d = -1/2 exactly (to rounding): the paper prints
-    +1/2, but the arch turns clockwise (SPEC Section 7). The measured speed is ignored.
+    +1/2, but the arch turns clockwise (docs/model.md Section 7). The measured speed is ignored.
     """
 
     kind = "static"
@@ -517,7 +517,7 @@ _STARTS = ("on_path", "paper")
 def make_target(
     path_name_or_csv: str, kind: str = "dynamic", duration: float | None = None, **kw
 ) -> TargetSetup:
-    """Build path, target and initial pose for a run (SPEC Section 7).
+    """Build path, target and initial pose for a run (docs/model.md Section 7).
 
     Parameters
     ----------

@@ -14,7 +14,7 @@ A fault is a small spec, given as a dict (a TOML ``[[faults]]`` table) or as the
 
 Two further faults of the issue are ordinary scenario options, not specs: low friction is
 ``Scenario.friction`` (``--friction 0.3``) and the disturbance that exceeds traction is
-``Scenario.disturbance = "wrench"`` (``--disturbance-mode wrench``, SPEC Section 8).
+``Scenario.disturbance = "wrench"`` (``--disturbance-mode wrench``, docs/model.md Section 8).
 
 Timing is by control step: a fault starting at ``t`` acts from the first control step at or
 after ``t``, and a ``duration`` covers ``round(duration / control_dt)`` steps, so runs are

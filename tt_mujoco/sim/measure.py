@@ -3,7 +3,7 @@
 Pure arithmetic on the two state vectors and the joint addresses in :class:`Layout`. Every
 quantity is computed from ``qpos``/``qvel`` themselves, never from ``xpos``/``xmat``/``cvel``:
 after ``mj_step`` those derived arrays still describe the start of the step while ``qpos``/``qvel``
-are at its end (SPEC Section 5), so mixing them would give readings half a step apart.
+are at its end (docs/model.md Section 5), so mixing them would give readings half a step apart.
 """
 
 from __future__ import annotations

@@ -96,7 +96,7 @@ class Vehicle:
 
         Free joint: world linear velocity ``v e(theta)`` and body angular velocity ``omega e_z``;
         hitch ``-phi_dot``; steer ``beta_dot = eta phi_dot``; tractor wheels ``(v -+ d omega/2)/r``;
-        trailer wheels ``(v0 -+ (d/2) alpha_dot)/r`` (SPEC Section 4).
+        trailer wheels ``(v0 -+ (d/2) alpha_dot)/r`` (docs/model.md Section 4).
         """
         p, lay = self.params, self.layout
         s1, s2 = reduced.phi_rate(phi, p)

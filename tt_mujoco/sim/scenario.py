@@ -150,7 +150,7 @@ class Scenario:
 
     def plant_params(self) -> Params:
         """The plant's parameters: nominal, times ``param_scale`` on every mass and inertia,
-        times ``plant_scale[field]`` on single ones (SPEC Section 8)."""
+        times ``plant_scale[field]`` on single ones (docs/model.md Section 8)."""
         p = self.nominal_params()
         if self.param_scale != 1.0:
             p = p.scaled(self.param_scale)

@@ -15,7 +15,7 @@ __all__ = ["EtaScheduler"]
 
 class EtaScheduler:
     """Curvature-scheduled passive steering: eta = :func:`exact_same_path_eta` of the local
-    curvature, applied to a running plant (the paper's eta(s) idea, SPEC Section 3).
+    curvature, applied to a running plant (the paper's eta(s) idea, docs/model.md Section 3).
 
     Parameters
     ----------
@@ -29,7 +29,7 @@ class EtaScheduler:
     Notes
     -----
     The controllers' nominal model keeps the scenario's constant eta; eta enters Mbar only
-    through the trailer wheels (SPEC Section 4), and the scheduled gains stay within
+    through the trailer wheels (docs/model.md Section 4), and the scheduled gains stay within
     [-0.160, -0.143] for |kappa| <= 2 1/m, so the mismatch is a small model error the controllers
     treat like any other.
     """

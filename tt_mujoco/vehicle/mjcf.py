@@ -1,6 +1,6 @@
 """MJCF text for the vehicle and its scene, generated from one :class:`~tt_mujoco.vehicle.params.Params`.
 
-The mass layout is SPEC Section 4's, body for body, so that MuJoCo's mass matrix projected on
+The mass layout is docs/model.md Section 4's, body for body, so that MuJoCo's mass matrix projected on
 the rolling subspace equals the reduced model's Mbar:
 
 - ``tractor`` (free joint), frame at P: tractor body Mf, yaw inertia Ifd.
@@ -13,11 +13,11 @@ the rolling subspace equals the reduced model's Mbar:
   wheels at P0 +- (d/2) n(alpha). MuJoCo refuses a massless moving body, so the axle takes
   ``AXLE_MASS`` from the two trailer wheels (``AXLE_MASS / 2`` each) with the yaw inertia
   ``AXLE_MASS d^2 / 4`` that mass had at the wheel centres: the assembly's mass, centre and yaw
-  inertia are exactly SPEC's, so the projected mass matrix stays exact.
+  inertia are exactly those of docs/model.md Section 4, so the projected mass matrix stays exact.
 
 An equality constraint ``steer = -eta * hitch`` (so beta = eta * phi, paper eq. 2) couples the
 two hinges. Wheels are spheres: a cylinder touches a plane at two rim points and resists
-turning (SPEC Section 5). Nothing here imports MuJoCo; ``python -m tt_mujoco.model`` rewrites
+turning (docs/model.md Section 5). Nothing here imports MuJoCo; ``python -m tt_mujoco.model`` rewrites
 ``models/``.
 """
 
@@ -50,7 +50,7 @@ def vehicle_xml(p: Params | None = None) -> str:
     p = Params() if p is None else p
     r, d, L, L0 = p.r, p.d, p.L, p.L0
     tilt = p.body_tilt_inertia_ratio
-    tc = 2 * p.timestep  # contact and coupling time constant: 2 steps (SPEC Section 5)
+    tc = 2 * p.timestep  # contact and coupling time constant: 2 steps (docs/model.md Section 5)
     chassis_h = 0.02  # visual only
     # Slender rods: pitch inertia equal to yaw, roll nearly nothing.
     rod1 = f"{_g(0.01 * p.Ic1)} {_g(p.Ic1)} {_g(p.Ic1)}"

@@ -1,6 +1,6 @@
 """The analytic reduced model: kinematics q_dot = S(q) V and dynamics V_dot = f + g tau.
 
-Conventions are those of ``SPEC.md`` Sections 1-4: ``q = (x, y, theta, phi, theta_l, theta_r)``,
+Conventions are those of docs/model.md Sections 1-4: ``q = (x, y, theta, phi, theta_l, theta_r)``,
 ``V = (v, omega)``, ``tau = (T_r, T_l)``, ``phi = theta - theta0``, ``beta = eta * phi``.
 
 Kinematics follow the paper's eqs. (12), (13) and (16)-(17) with the signs restored. The
@@ -47,7 +47,7 @@ __all__ = [
     "trailer_velocity",
 ]
 
-#: cos(beta) below this is treated as the singularity |eta phi| = pi/2 (SPEC Section 2).
+#: cos(beta) below this is treated as the singularity |eta phi| = pi/2 (docs/model.md Section 2).
 COS_BETA_MIN = 1e-3
 
 
@@ -82,7 +82,7 @@ def phi_rate(phi: float, p: Params) -> tuple[float, float]:
 
 
 def kinematics(q, V, p: Params) -> np.ndarray:
-    """``q_dot = S(q) V`` (paper eqs. 16-17 with signs restored, SPEC Section 2).
+    """``q_dot = S(q) V`` (paper eqs. 16-17 with signs restored, docs/model.md Section 2).
 
     Parameters
     ----------
@@ -161,7 +161,7 @@ def trailer_velocity(phi: float, V, p: Params) -> tuple[float, float]:
 
 
 def trailer_pose(x: float, y: float, theta: float, phi: float, p: Params):
-    """Hitch O, trailer axle midpoint P0 and trailer heading theta0 (SPEC Section 1).
+    """Hitch O, trailer axle midpoint P0 and trailer heading theta0 (docs/model.md Section 1).
 
     Returns
     -------
@@ -176,13 +176,13 @@ def trailer_pose(x: float, y: float, theta: float, phi: float, p: Params):
 
 
 def input_matrix(p: Params) -> np.ndarray:
-    """B, mapping ``tau = (T_r, T_l)`` to generalized forces on ``(v, omega)`` (SPEC Section 4)."""
+    """B, mapping ``tau = (T_r, T_l)`` to generalized forces on ``(v, omega)`` (docs/model.md Section 4)."""
     k = p.d / (2.0 * p.r)
     return np.array([[1.0 / p.r, 1.0 / p.r], [k, -k]])
 
 
 def _lumped(p: Params) -> tuple[float, float, float, float, float, float]:
-    """Lumped inertias of SPEC Section 4: m_t, J_t, m_0, J_a, J_0, gamma (cached on ``p``,
+    """Lumped inertias of docs/model.md Section 4: m_t, J_t, m_0, J_a, J_0, gamma (cached on ``p``,
     which is frozen, because the controllers ask for them every step)."""
     cached = p.__dict__.get("_lumped_cache")
     if cached is not None:
@@ -274,7 +274,7 @@ def _compute_inertia_terms(phi: float, p: Params):
 
 
 def mass_matrix(phi: float, p: Params) -> np.ndarray:
-    """Reduced mass matrix Mbar(phi), shape (2, 2), symmetric positive definite (SPEC Section 4).
+    """Reduced mass matrix Mbar(phi), shape (2, 2), symmetric positive definite (docs/model.md Section 4).
 
     At the paper's parameters, eta = 3, phi = 0: ``diag(133.0, 12.844)``.
     """
@@ -293,7 +293,7 @@ def _coriolis(phi: float, v: float, omega: float, p: Params):
 
 def matched_torque(phi: float, a_v: float, a_omega: float, p: Params) -> tuple[float, float]:
     """Wheel torques ``(T_r, T_l) = g(phi)^-1 (a_v, a_omega) = B^-1 Mbar(phi) a``: the matched
-    input that adds the acceleration ``a`` to ``(v_dot, omega_dot)`` (SPEC Section 8)."""
+    input that adds the acceleration ``a`` to ``(v_dot, omega_dot)`` (docs/model.md Section 8)."""
     M11, M12, M22 = _inertia_terms(phi, p)[0]
     force = M11 * a_v + M12 * a_omega  # generalized force on v
     moment = M12 * a_v + M22 * a_omega  # ... and on omega
@@ -328,7 +328,7 @@ def dynamics_scalar(phi: float, v: float, omega: float, p: Params):
 
 
 def dynamics(phi: float, V, p: Params) -> tuple[np.ndarray, np.ndarray]:
-    """``V_dot = f + g tau`` (SPEC Section 4; the paper's eqs. 21-22 in exact form).
+    """``V_dot = f + g tau`` (docs/model.md Section 4; the paper's eqs. 21-22 in exact form).
 
     Parameters
     ----------
@@ -378,10 +378,10 @@ class ReducedPlant:
 
     def derivative(self, state, tau, accel_disturbance=(0.0, 0.0)) -> list[float]:
         """Time derivative of the state for wheel torques ``tau`` and an additive
-        disturbance ``accel_disturbance`` in ``(v_dot, omega_dot)`` (SPEC Section 8).
+        disturbance ``accel_disturbance`` in ``(v_dot, omega_dot)`` (docs/model.md Section 8).
 
         Plain float arithmetic (this is the plant's inner loop): kinematics of eq. 16-17,
-        dynamics ``f + g tau`` of SPEC Section 4.
+        dynamics ``f + g tau`` of docs/model.md Section 4.
         """
         p = self.params
         theta, phi, v, omega = state[2], state[3], state[6], state[7]

@@ -10,12 +10,12 @@ The trailer axle is steered by ``beta = eta * phi`` (paper eq. 2). Three facts d
   and the rolling direction of P0 (perpendicular to C P0) fixes beta. ``eta = beta / phi`` is then
   the gain that holds P0 on the path at curvature 1/R: :func:`exact_same_path_eta`.
 - **Its small-curvature limit is (L - L0) / (L + L0)** = -1/7 = -0.1429 for the paper's L = 0.3 m,
-  L0 = 0.4 m, not the ``-(L0 - L) / (2 L0)`` = -0.125 of SPEC Section 3
+  L0 = 0.4 m, not the ``-(L0 - L) / (2 L0)`` = -0.125 of docs/model.md Section 3
   (``params.spec_same_path_eta``); the project's ``same_path`` preset uses this limit.
   Linearising gives ``phi = kappa (L + L0) / (1 - eta)`` from the kinematics (paper eq. 13 at
   phi_dot = 0) and ``phi = kappa (L + L0)^2 / (2 L0)`` from the geometry; equating them gives
   ``1 - eta = 2 L0 / (L + L0)``. With eta = -0.125 the steady off-tracking at R = 1.5 m is
-  -2.87 mm (SPEC's -2.9 mm); with -1/7 it is -0.27 mm, and with the exact eta(1/R) zero
+  -2.87 mm (the -2.9 mm first predicted for it); with -1/7 it is -0.27 mm, and with the exact eta(1/R) zero
   (``tests/test_steering.py`` checks all three against the reduced kinematics).
 - **eta > 1 is stable only in reverse** (docs/model.md Section 3):
   :class:`tt_mujoco.reference.reverse.ReverseTarget` drives a path backwards, trailer first, so
@@ -44,7 +44,7 @@ __all__ = [
 _KAPPA_TINY = 1e-6
 #: The scheduler re-applies eta only when it moved by more than this. The constraint then lags the
 #: schedule by at most 1e-5 * |phi| < 1e-5 rad, below MuJoCo's own equality violation (~3e-5 rad,
-#: SPEC Section 5), and the reduced plant rebuilds its Params (23 us) only when needed.
+#: docs/model.md Section 5), and the reduced plant rebuilds its Params (23 us) only when needed.
 SCHEDULE_TOLERANCE = 1e-5
 
 
@@ -114,7 +114,7 @@ def steady_offtrack(kappa: float, params: Params) -> float:
     Negative: P0 runs inside the tractor's path; positive: outside. Uses the steady articulation
     of the kinematics (``tt_mujoco.reference.paths.steady_articulation``), NaN where there is none. The
     steady turn is the same in either direction of travel; for eta > 1 it is stable only
-    reversing (SPEC Section 3).
+    reversing (docs/model.md Section 3).
     """
     from tt_mujoco.reference.paths import steady_articulation
 

@@ -1,7 +1,7 @@
 """URDF text for the vehicle (``models/tractor_trailer.urdf``), for ROS and Gazebo users.
 
 It mirrors the MJCF of :mod:`tt_mujoco.vehicle.mjcf` link for link, built from the same
-:class:`~tt_mujoco.vehicle.params.Params`, with the mass layout of SPEC Section 4:
+:class:`~tt_mujoco.vehicle.params.Params`, with the mass layout of docs/model.md Section 4:
 
 - ``tractor`` (root link, frame at P, the tractor's wheel-axle midpoint): Mf, yaw inertia Ifd.
   The MJCF's free joint ``root`` has no URDF counterpart: the root link simply floats.
@@ -41,7 +41,7 @@ URDF_FILE = "tractor_trailer.urdf"
 #: so it never binds.
 VELOCITY_LIMIT = 1000.0
 
-#: |beta| limit of ``steer``: the reduced model is singular at cos(beta) = 0 (SPEC Section 2).
+#: |beta| limit of ``steer``: the reduced model is singular at cos(beta) = 0 (docs/model.md Section 2).
 STEER_LIMIT = math.pi / 2
 
 WHEELS = ("tractor_wheel_left", "tractor_wheel_right", "trailer_wheel_left", "trailer_wheel_right")
@@ -147,7 +147,7 @@ def urdf_xml(p: Params | None = None) -> str:
 
     axle_mass = AXLE_MASS
     axle_yaw = axle_mass * d**2 / 4
-    # Hitch range: up to the singularity |eta phi| = pi/2 (SPEC Section 2), at most a full fold.
+    # Hitch range: up to the singularity |eta phi| = pi/2 (docs/model.md Section 2), at most a full fold.
     hitch_limit = min(p.phi_singular, math.pi)
     passive = '  <dynamics damping="0" friction="0"/>\n'  # as the MJCF: no frictionloss
 

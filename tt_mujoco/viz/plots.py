@@ -229,7 +229,7 @@ def _articulation_figure(c: dict, params: Params) -> Figure:
         lw=1.0,
         label=f"eta * phi (eta = {params.eta:.4g})",
     )
-    # The jackknife singularity |eta phi| = 90 deg (SPEC Section 2), once phi gets near it.
+    # The jackknife singularity |eta phi| = 90 deg (docs/model.md Section 2), once phi gets near it.
     limit = math.degrees(params.phi_singular)
     if math.isfinite(limit) and np.max(np.abs(np.degrees(c["phi"]))) > 0.5 * limit:
         for sign in (1, -1):

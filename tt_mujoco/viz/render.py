@@ -292,7 +292,7 @@ def _validated(ts: Mapping, names) -> dict[str, np.ndarray]:
     """The columns ``names`` up to the first non-finite value in any of them.
 
     A run that diverged is written up to where it stopped, possibly with NaN rows at the end
-    (SPEC Section 11): the video shows what was computed.
+    (docs/model.md Section 11): the video shows what was computed.
     """
     cols = {name: _column(ts, name) for name in names}
     n = len(cols["t"])
@@ -344,7 +344,7 @@ def trailer_wheel_angles(ts: Mapping, params: Params) -> tuple[np.ndarray, np.nd
     """Trailer wheel spin angles (left, right) by integrating their rolling rates.
 
     The wheels at P0 +- (d/2) n(alpha) roll at ``(v0 -+ (d/2) alpha_dot) / r`` with
-    ``alpha = theta0 + beta`` (SPEC Section 4), so the angles are
+    ``alpha = theta0 + beta`` (docs/model.md Section 4), so the angles are
     ``(integral(v0) -+ (d/2) (alpha - alpha(0))) / r``.
     """
     cols = _validated(ts, ("t", "v0", "theta0", "beta"))
