@@ -70,7 +70,7 @@ _SINGULAR_RTOL = 1e-12
 
 
 def reduced_model(params) -> ModelFn:
-    """Wrap :func:`tt_mujoco.vehicle.reduced.dynamics` into the plain-float callable the controllers use.
+    """Wrap :func:`~tt_mujoco.vehicle.reduced.dynamics` as the controllers' plain-float model.
 
     Parameters
     ----------

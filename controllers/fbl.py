@@ -22,7 +22,8 @@ __all__ = ["FblController"]
 class FblController(VelocityController):
     """Feedback-linearizing velocity controller (paper Section 6.2). See the module docstring.
 
-    Gain keys: ``k_v``, ``k_omega``. Other parameters as :class:`tt_mujoco.controllers.base.VelocityController`
+    Gain keys: ``k_v``, ``k_omega``. Other parameters as
+    :class:`tt_mujoco.controllers.base.VelocityController`
     (``anti_windup`` has no effect: there is no integrator).
     """
 

@@ -17,7 +17,8 @@ classical super-twisting algorithm, which drives S to 0 only with both terms *ne
 (with a plus sign ``S S_dot > 0`` and S diverges). Writing ``xi = w + Delta``, ``xi_dot = -k2
 sig(S) + Delta_dot``: the integral term absorbs the disturbance itself, and the convergence
 condition concerns the disturbance's *rate*, ``k2 > |Delta_dot|``, rather than the paper's
-``k2 > Delta_max``. For the paper's Delta (Section 6.1, docs/model.md Section 8) ``|Delta1_dot| <= 1.3``
+``k2 > Delta_max``. For the paper's Delta (Section 6.1, docs/model.md Section 8) ``|Delta1_dot| <=
+1.3``
 and ``|Delta2_dot| <= 2.95`` against k2 = (8, 6). With ``sig`` instead of ``sgn`` S converges
 to a boundary layer of width about ``eps`` rather than exactly to 0. On the sliding surface
 ``e_dot = -lambda e``: the error decays exponentially.

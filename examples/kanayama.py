@@ -23,7 +23,7 @@ from tt_mujoco.controllers import Controller
 
 class KanayamaTracker(Controller):
     name = "kanayama"
-    PRESETS = {"default": {"k_x": 4.0, "k_y": 16.0, "k_th": 8.0, "k_v": 20.0, "k_i": 100.0}}
+    PRESETS = {"default": {"k_x": 4.0, "k_y": 16.0, "k_th": 8.0, "k_v": 20.0, "k_i": 100.0}}  # noqa: RUF012
     DEFAULT_PRESET = "default"
 
     def reset(self):

@@ -72,7 +72,12 @@ def test_command_line_overrides_file_key_by_key(tmp_path):
     path = tmp_path / "c.toml"
     path.write_text(SCENARIO_TOML)
     args, params, faults = parse(["--config", str(path)])
-    assert (args.traj, args.controller, args.duration, args.noise_snr_db) == ("circle", "pid", 1.5, 20)
+    assert (args.traj, args.controller, args.duration, args.noise_snr_db) == (
+        "circle",
+        "pid",
+        1.5,
+        20,
+    )
     assert not args.video and not args.plots and args.quiet
     assert params == {"Mr": 7.0, "Ird": 0.025}
     assert faults == [{"kind": "dropout", "t": 0.5, "duration": 0.05}]

@@ -1,6 +1,7 @@
 """Tests of the velocity controllers (docs/model.md Section 9) on the reduced plant.
 
-The plant is :class:`tt_mujoco.vehicle.reduced.ReducedPlant` with ``Params()`` (eta = same_path, stable
+The plant is :class:`tt_mujoco.vehicle.reduced.ReducedPlant` with ``Params()`` (eta = same_path,
+stable
 forward), stepped with RK4 at the control period DT = 1 ms, torques and disturbance held over
 each step. The controllers' nominal model is the same reduced model, so without a disturbance
 the error dynamics are exactly the laws' linear ones (FBL: ``e_dot = -K e``; PID: ``(1 + KD)
@@ -53,7 +54,7 @@ def smooth_target(t):
 
 
 def paper_disturbance(t):
-    """Delta1, Delta2 of the paper's Section 6.1 (docs/model.md Section 8), added to (v_dot, omega_dot)."""
+    """Delta1, Delta2 of the paper's Section 6.1 (docs/model.md §8), added to (v_dot, omega_dot)."""
     return (
         3.5 + math.sin(0.3 * t) + 0.5 * math.cos(2 * t),
         1.5 * math.sin(0.3 * t) + 0.5 * math.cos(5 * t),

@@ -88,7 +88,8 @@ def test_payload_step_half_way_raises_the_errors_after_it():
     after = report["window"]
     # Measured over [2.356, 4.712] s: max|e_v| 4.16e-5 vs 1.85e-6 m/s (22x), max|e_omega|
     # 1.35e-4 vs 8.3e-6 rad/s (16x). Small in absolute terms: +3 kg on the trailer body is
-    # about +2 % of the effective mass (the wheels' spin inertia is 25 kg each, docs/model.md Section 4).
+    # about +2 % of the effective mass (the wheels' spin inertia is 25 kg each, docs/model.md
+    # Section 4).
     assert after["max_abs_v"] > 8 * before["max_abs_v"]
     assert after["max_abs_omega"] > 8 * before["max_abs_omega"]
     # Before the step both runs are the same run.

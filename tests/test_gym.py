@@ -1,5 +1,6 @@
 """The Gymnasium environment: API conformance, and that it is the same plant as ``simulate``."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -65,7 +66,8 @@ def test_same_seed_same_observations_with_noise():
 
 
 def test_jackknife_terminates_with_a_penalty_worse_than_any_tracking():
-    # The paper's eta = 3 jackknifes forward (docs/model.md Section 3); start close to it and push hard.
+    # The paper's eta = 3 jackknifes forward (docs/model.md Section 3); start close to it and push
+    # hard.
     env = gym_env.TractorTrailerEnv(eta="paper", duration=5.0)
     env.reset(seed=0, options={"phi0_deg": 20.0})
     for _ in range(500):
@@ -76,11 +78,24 @@ def test_jackknife_terminates_with_a_penalty_worse_than_any_tracking():
     assert reward <= -1.0
 
 
-def test_env_is_the_simulate_plant():
-    """The ISMC-STA controller driven through the env reproduces ``simulate`` exactly."""
+@pytest.mark.parametrize(
+    "extra",
+    [
+        {},
+        {"reverse": True, "eta": "paper"},
+        {"eta_schedule": True, "traj": "circle"},
+        {"path_feedback": {}},
+        {"plant": "reduced", "reverse": True, "eta": "paper", "path_feedback": {}},
+    ],
+    ids=["plain", "reverse", "eta_schedule", "path_feedback", "reduced-reverse-feedback"],
+)
+def test_env_is_the_simulate_plant(extra):
+    """The ISMC-STA controller driven through the env reproduces ``simulate`` exactly, for
+    every loop option (the env drives the same stepper)."""
     scenario = Scenario(
         traj="s_curve", duration=1.0, disturbance="matched", control_dt=0.01, noise_snr_db=20.0
     )
+    scenario = dataclasses.replace(scenario, **extra)
     reference = simulate(scenario).timeseries
     env = gym_env.TractorTrailerEnv(scenario)
     nominal = scenario.nominal_params()

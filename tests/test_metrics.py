@@ -1,4 +1,4 @@
-"""Tests of tt_mujoco.analysis.metrics on hand-made time series with known answers (docs/model.md Section 11)."""
+"""Metrics on hand-made time series with known answers (docs/model.md §11)."""
 
 from __future__ import annotations
 

@@ -26,7 +26,8 @@ from tt_mujoco.paper import (
 from tt_mujoco.reference.targets import make_target
 from tt_mujoco.sim import Scenario
 
-#: docs/model.md Section 10, transcribed independently of paper.py: (table, case) -> {metric: value}.
+#: docs/model.md Section 10, transcribed independently of paper.py: (table, case) -> {metric:
+#: value}.
 SPEC_10 = {
     (1, "Nominal"): {"rmse_v": 0.0147, "rmse_omega": 0.0224, "rmse_lateral": 0.0368},
     (1, "+20 %"): {"rmse_v": 0.0157, "rmse_omega": 0.0284, "rmse_lateral": 0.0352},

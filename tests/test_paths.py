@@ -92,7 +92,7 @@ def test_cycloid_start_and_end():
 def test_cycloid_curvature_is_specs_closed_form_and_negative():
     path = paths.cycloid()
     s = np.linspace(0.0, path.length, 1001)
-    spec = 1.0 / np.sqrt(16.0 - (4.0 * math.cos(math.pi / 8.0) - s) ** 2)  # docs/model.md Section 7, |kappa|
+    spec = 1.0 / np.sqrt(16.0 - (4.0 * math.cos(math.pi / 8.0) - s) ** 2)  # model.md 7: |kappa|
     kappa = path.curvature(s)
     np.testing.assert_allclose(kappa, -spec, rtol=1e-13)
     # Independent: the parametric curvature (x'y'' - y'x'')/|r'|^3 of r(tau) at tau(s).

@@ -155,7 +155,8 @@ def _steady_offtrack(eta: float, R: float) -> float:
 
 
 def test_spec_same_path_formula_is_not_the_small_curvature_limit():
-    # docs/model.md Section 3 calls -(L0 - L)/(2 L0) = -0.125 the small-curvature limit of the same-path
+    # docs/model.md Section 3 calls -(L0 - L)/(2 L0) = -0.125 the small-curvature limit of the
+    # same-path
     # gain. If it were, the off-tracking would vanish faster than the curvature. It does not:
     # R x off-tracking tends to a constant (measured -3.889e-3 m^2), i.e. the error is
     # O(kappa). (L - L0)/(L + L0) = -1/7, the project's same_path, gives O(kappa^3):

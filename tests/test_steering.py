@@ -1,4 +1,4 @@
-"""Passive steering: exact same-path gains, the scheduler, reverse driving (tt_mujoco.vehicle.steering)."""
+"""Passive steering: exact same-path gains, the scheduler, reverse driving."""
 
 from __future__ import annotations
 
@@ -153,7 +153,8 @@ def test_reverse_target_runs_the_path_backwards():
 
 
 def test_paper_eta_jackknifes_forward_and_tracks_reversing():
-    # docs/model.md Section 3: phi_dot ~ (eta - 1) v phi / L0. Circle, no disturbance, reduced plant:
+    # docs/model.md Section 3: phi_dot ~ (eta - 1) v phi / L0. Circle, no disturbance, reduced
+    # plant:
     # forward jackknifes at ~1.0 s (measured), reversing tracks (lateral RMSE ~1e-6 m measured).
     fwd = simulate(Scenario(plant="reduced", traj="circle", eta="paper", disturbance="none"))
     assert fwd.status == "jackknife" and fwd.timeseries["t"][-1] < 1.5

@@ -1,4 +1,4 @@
-"""The URDF export (tt_mujoco.vehicle.urdf) against the MJCF it mirrors and docs/model.md Sections 1 and 4."""
+"""The URDF export against the MJCF it mirrors and docs/model.md §1 and 4."""
 
 from __future__ import annotations
 
@@ -52,7 +52,7 @@ def load(p: Params, tmp_path) -> yourdfpy.URDF:
 
 
 def mimic_multiplier_for(p: Params) -> float:
-    """steer = -eta * hitch: q_hitch = -phi and q_steer = beta = eta * phi (docs/model.md Section 5)."""
+    """steer = -eta * hitch: q_hitch = -phi and q_steer = beta = eta * phi (docs/model.md §5)."""
     return -p.eta
 
 

@@ -56,7 +56,8 @@ def test_energy_equals_work(name, forced):
 def test_kinematics_long_run(name, direction):
     result = validate.check_kinematics(PRESETS[name], direction)
     assert result["distance_m"] > 6.0
-    # Measured at 1 ms: 0.75 mm for both P and P0 after 7.5 m (contact creep, docs/model.md Section 5).
+    # Measured at 1 ms: 0.75 mm for both P and P0 after 7.5 m (contact creep, docs/model.md Section
+    # 5).
     assert result["final_P_error_m"] < 2e-3
     assert result["final_P0_error_m"] < 2e-3
     # Measured 0.17 % / 0.27 %.

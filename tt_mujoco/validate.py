@@ -1,4 +1,4 @@
-"""``python -m tt_mujoco.validate``: check the MuJoCo model against the reduced model and write a report."""
+"""``python -m tt_mujoco.validate``: MuJoCo against the reduced model, as a report."""
 
 from __future__ import annotations
 

@@ -4,7 +4,8 @@ A run is a mapping of column name -> 1-D array, one sample per control step (SI 
 as logged by the simulation loop: ``t, x, y, phi, v, omega, x0, y0, x_ref, y_ref, v_d, omega_d,
 T_r_cmd, T_l_cmd, slip_lateral, slip_lateral_trailer, slip_left, slip_right, eq_violation`` are
 used here (other columns are ignored). :func:`compute_metrics` turns it into the numbers of
-``metrics.json`` (docs/model.md Section 11); the RMS values are the quantities of the paper's Section 6
+``metrics.json`` (docs/model.md Section 11); the RMS values are the quantities of the paper's
+Section 6
 tables (docs/model.md Section 10).
 
 Distances to a path are exact distances to its polyline (:mod:`tt_mujoco.analysis.geometry`).

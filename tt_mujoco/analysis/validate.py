@@ -52,7 +52,8 @@ def _random_phi(rng: np.random.Generator, p: Params, fraction: float = 0.9) -> f
 def check_inertia(p: Params, samples: int = 100, seed: int = 0) -> dict:
     """Max relative error of ``Sfull^T M Sfull`` against ``Mbar(phi)`` over random poses.
 
-    The MJCF uses docs/model.md Section 4's mass layout body for body, so the only remainder is round-off
+    The MJCF uses docs/model.md Section 4's mass layout body for body, so the only remainder is
+    round-off
     (measured ~1e-14; the massless steering axle's compensation is exact, see ``model.py``).
     """
     rng = np.random.default_rng(seed)
@@ -158,7 +159,8 @@ def check_kinematics(p: Params, direction: int, duration: float = 10.0) -> dict:
 
     The analytic pose ``(x, y, theta, phi)`` is integrated (midpoint rule) with the (v, omega)
     that MuJoCo produced, from the same start; P0 follows from the pose. Reported: distance
-    driven, final P and P0 errors, the RMS of MuJoCo's phi_dot minus the formula of docs/model.md Section 2 relative to
+    driven, final P and P0 errors, the RMS of MuJoCo's phi_dot minus the formula of docs/model.md
+    Section 2 relative to
     the RMS of phi_dot, the max equality violation |beta - eta phi| and the max side slip.
     """
     program = _damped_program(base=0.2 * direction, weave=0.1, yaw_damping=2.0)
@@ -293,7 +295,8 @@ def check_jackknife(
 ) -> dict:
     """Forward drive from a 0.5 deg articulation at 0.8 m/s with 0.5 N m on each wheel.
 
-    Linearised at phi = 0, ``phi_dot ~ (eta - 1) v phi / L0`` (docs/model.md Section 3): eta = 3 grows
+    Linearised at phi = 0, ``phi_dot ~ (eta - 1) v phi / L0`` (docs/model.md Section 3): eta = 3
+    grows
     like exp(4 t) at first and jackknifes (the tractor's yaw response slows it later);
     eta < 1 decays. Returns the first time |phi| passed 20 deg
     (or None) in MuJoCo and in the reduced model, and the max |phi| of each.

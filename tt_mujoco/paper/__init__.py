@@ -9,10 +9,12 @@ docs/model.md Section 10) on the reduced model and on MuJoCo, plus
   run the curvature error ``omega / v - kappa_d`` is split exactly into the yaw-tracking part
   ``e_omega / v`` and the target's mismatch part ``omega_d / v - kappa_d``
   (:func:`curvature_split`);
-- a **passive-steering study** (:mod:`tt_mujoco.vehicle.steering`): trailer off-tracking for eta = 0,
+- a **passive-steering study** (:mod:`tt_mujoco.vehicle.steering`): trailer off-tracking for eta =
+0,
   the paper's eta = 3 (forward and reversing), eta = -3, the same-path gains and the
   curvature-scheduled eta;
-- a **path-feedback study** (:mod:`tt_mujoco.reference.feedback`): the outer lateral/heading loop on all
+- a **path-feedback study** (:mod:`tt_mujoco.reference.feedback`): the outer lateral/heading loop
+on all
   three paths under the paper's disturbances and 20 dB noise.
 
 The runs go to a ``concurrent.futures.ProcessPoolExecutor`` (``--workers``, default 2) with a
@@ -75,7 +77,8 @@ SERIES_POINTS = 600
 DEFAULT_OUT = Path("renders") / "paper"
 COMMAND = "python -m tt_mujoco.paper"
 
-# --- the paper's tables (docs/model.md Section 10; paper Tables 1-5) -----------------------------------
+# --- the paper's tables (docs/model.md Section 10; paper Tables 1-5)
+# -----------------------------------
 #: Scenario of each table row, without the plant. Tables 1-3 on the cycloid (Section 6.1-6.2),
 #: Tables 4-5 on the S-curve and the circle (Section 6.3). Gain set "paper_6_1" (Section 6.1)
 #: except Table 3's comparison set "paper_6_2"; the S-curve runs the paper's stated 10 s.
@@ -649,7 +652,7 @@ def _applies_traction(cell: Cell, plant: str, records) -> bool:
 def _describe_traction(cells, records) -> str:
     lines = [
         "MuJoCo's tyres have a friction limit the reduced model does not: about 88 N of normal "
-        "load per tractor wheel (docs/model.md Section 5). On the cycloid the dynamic target asks for "
+        "load per tractor wheel (docs/model.md §5). On the cycloid the dynamic target asks for "
         "1.85 m/s^2 at t = 0 while the matched disturbance steps to 4 m/s^2 (Delta1(0) = 3.5 + "
         "0.5) before the controller's integral terms have built up: the wheels spin up "
         "(longitudinal slip in the table) and the error transient is larger and longer. The "
@@ -1339,12 +1342,12 @@ def _cfg(value) -> str:
 
 def _suite_setup_lines(seed: int) -> list[str]:
     return [
-        "- Paper: Wen, Chen, Zhou, *Axioms* 2026, 15, 598; its Tables 1-5 as in docs/model.md Section 10.",
-        "- Plants: `reduced` = the exact reduced ODE (docs/model.md Section 4, RK4, pure rolling); `MuJoCo` "
-        "= the multibody model with tyre contact (docs/model.md Section 5). Timestep and control period "
+        "- Paper: Wen, Chen, Zhou, *Axioms* 2026, 15, 598; its Tables 1-5 as in docs/model.md §10.",
+        "- Plants: `reduced` = the exact reduced ODE (RK4, pure rolling); `MuJoCo` "
+        "= the multibody model with tyre contact (docs/model.md §5). Timestep and control period "
         "1 ms on both.",
         "- Steering: **eta = same_path (-1/7)** in every table run. The paper uses eta = 3, "
-        "which jackknifes driving forward within about 1 s (docs/model.md Section 3; steering study "
+        "which jackknifes driving forward within about 1 s (docs/model.md §3; steering study "
         "below), so its tables cannot have been produced with it in the stated convention.",
         "- Disturbance: the paper's Delta1, Delta2 (Section 6.1) as matched wheel torques "
         "(docs/model.md Section 8); noise: Gaussian, 20 dB SNR on measured v and omega; parameter "
@@ -1515,7 +1518,7 @@ def build_report(
 
     md += ["## Beyond the paper: path feedback", ""]
     md += [
-        "The outer loop of `tt_mujoco.reference.feedback` adds v (-k_y e_y - k_psi e_psi) to the dynamic "
+        "The outer path feedback adds v (-k_y e_y - k_psi e_psi) to the dynamic "
         "target's omega_d (k_y = 4 1/m^2, k_psi = 4 1/m, critically damped in arc length). "
         "Paper disturbances on; 20 dB noise unless the case says otherwise. 'Cross-track' "
         "measures P against the path continued along its end tangents (a vehicle that "
@@ -1587,7 +1590,8 @@ STEERING_NOTES = [
     "trailer axle asks for more lateral tyre force than the contact gives (lateral slip "
     "column); friction 3 cures the cycloid, not the S-curve. (iii) (L - L0)/(L + L0) = -1/7 "
     "is the exact small-curvature same-path gain and the project's same_path default "
-    "(`params.same_path_eta`); the half-difference gain -(L0 - L)/(2 L0) = -0.125 leaves the analytic 2.9 mm "
+    "(`params.same_path_eta`); the half-difference -(L0 - L)/(2 L0) = -0.125 leaves the analytic "
+    "2.9 mm "
     "at R = 1.5 m and 4.8 mm at R = 1 m, "
     "-1/7 leaves 0.27 mm and 0.92 mm, the scheduled exact gain 0 (the measured steady-arc "
     "values agree). (iv) Over a whole S-curve run the off-tracking is dominated by transients "

@@ -270,7 +270,8 @@ def cycloid(start: str = "on_path") -> CycloidPath:
     start : {"on_path", "paper"}
         ``"on_path"``: the vehicle starts at the path's start, (0.0783, 0.2929) heading 3pi/8.
         ``"paper"``: at the paper's initial condition q(0) = (0, 0, pi/4) (Section 6.1), which
-        is 0.303 m off the path and 22.5 deg off its heading (docs/model.md Section 7). The geometry is
+        is 0.303 m off the path and 22.5 deg off its heading (docs/model.md Section 7). The
+        geometry is
         the same either way; only :attr:`~ReferencePath.initial_pose` differs.
     """
     if start == "on_path":

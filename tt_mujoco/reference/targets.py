@@ -1,6 +1,7 @@
-"""Speed profiles and tracking targets z_d = (v_d, omega_d) (docs/model.md Section 7, paper Section 6).
+"""Speed profiles and tracking targets z_d = (v_d, omega_d) (docs/model.md §7, paper Section 6).
 
-The controllers track ``z = (v, omega)``. A target turns a :class:`~tt_mujoco.reference.paths.ReferencePath`
+The controllers track ``z = (v, omega)``. A target turns a
+:class:`~tt_mujoco.reference.paths.ReferencePath`
 and a :class:`SpeedProfile` into ``z_d`` and ``z_d_dot`` at every control step:
 
 - :class:`StaticTarget`: a fixed function of time (paper eq. 32 for the cycloid):
@@ -537,7 +538,8 @@ def make_target(
         speed for the static target, eq. 34 for the dynamic one, as in the paper), "static"
         or "dynamic" (that profile for either kind, for a like-for-like comparison).
         s_curve, circle: ``R``, ``cruise`` (0.8 m/s), ``ramp_time`` (2 s).
-        CSV: ``max_curvature``, ``smoothing`` (see :func:`tt_mujoco.reference.paths.from_waypoints`),
+        CSV: ``max_curvature``, ``smoothing`` (see
+        :func:`tt_mujoco.reference.paths.from_waypoints`),
         ``cruise``, ``ramp_time`` (used when the file has no ``v`` column).
 
     Returns

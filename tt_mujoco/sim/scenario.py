@@ -64,10 +64,12 @@ class Scenario:
     phi0_deg: float = 0.0
     #: Fault specs (dicts or ``KIND:key=value,...`` strings), see :mod:`tt_mujoco.sim.faults`.
     faults: list = field(default_factory=list)
-    #: Outer path-feedback loop on omega_d (:mod:`tt_mujoco.reference.feedback`): None (off) or a dict
+    #: Outer path-feedback loop on omega_d (:mod:`tt_mujoco.reference.feedback`): None (off) or a
+    #: dict
     #: of gains, ``{}`` for the defaults (k_y, k_psi, c_max).
     path_feedback: dict | None = None
-    #: Curvature-scheduled steering (:class:`tt_mujoco.vehicle.steering.EtaScheduler`): the plant's eta
+    #: Curvature-scheduled steering (:class:`tt_mujoco.vehicle.steering.EtaScheduler`): the plant's
+    #: eta
     #: follows the exact same-path gain of the target's curvature; the controller keeps ``eta``.
     eta_schedule: bool = False
     #: Drive the path backwards, trailer first (:class:`tt_mujoco.vehicle.steering.ReverseTarget`).

@@ -8,7 +8,8 @@ from tt_mujoco.sim.measure import Measurement
 
 __all__ = ["COLUMNS", "assemble_columns"]
 
-#: Time-series columns, one row per control step (SI units, radians). See :mod:`tt_mujoco.analysis.metrics`.
+#: Time-series columns, one row per control step (SI units, radians). See
+#: :mod:`tt_mujoco.analysis.metrics`.
 COLUMNS = (
     "t",
     "x",

@@ -102,7 +102,8 @@ DICT_OPTIONS = tuple(
     for f in dataclasses.fields(Scenario)
     if f.name not in ("gains", "params", "plant_scale") and str(f.type).startswith("dict")
 )
-#: Fields of :class:`Params` that ``scale.<field>`` multiplies (docs/model.md Section 8 uncertainty).
+#: Fields of :class:`Params` that ``scale.<field>`` multiplies (docs/model.md Section 8
+#: uncertainty).
 SCALABLE = MASS_FIELDS + INERTIA_FIELDS
 #: Fields of :class:`Params` that ``param.<field>`` may set (eta, friction and timestep are
 #: Scenario options of their own).

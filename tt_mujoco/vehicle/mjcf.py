@@ -1,6 +1,7 @@
-"""MJCF text for the vehicle and its scene, generated from one :class:`~tt_mujoco.vehicle.params.Params`.
+"""MJCF text for the vehicle and its scene from one ``Params``.
 
-The mass layout is docs/model.md Section 4's, body for body, so that MuJoCo's mass matrix projected on
+The mass layout is docs/model.md Section 4's, body for body, so that MuJoCo's mass matrix projected
+on
 the rolling subspace equals the reduced model's Mbar:
 
 - ``tractor`` (free joint), frame at P: tractor body Mf, yaw inertia Ifd.
@@ -17,7 +18,8 @@ the rolling subspace equals the reduced model's Mbar:
 
 An equality constraint ``steer = -eta * hitch`` (so beta = eta * phi, paper eq. 2) couples the
 two hinges. Wheels are spheres: a cylinder touches a plane at two rim points and resists
-turning (docs/model.md Section 5). Nothing here imports MuJoCo; ``python -m tt_mujoco.model`` rewrites
+turning (docs/model.md Section 5). Nothing here imports MuJoCo; ``python -m tt_mujoco.model``
+rewrites
 ``models/``.
 """
 

@@ -2,7 +2,8 @@
 
 Every other module (the MJCF generator, the reduced model, the controllers' nominal model) is
 built from a :class:`Params`. The defaults are the paper's values (Section 6.1) except the
-passive steering gain, which defaults to the stable ``same_path`` design (see docs/model.md Section 3:
+passive steering gain, which defaults to the stable ``same_path`` design (see docs/model.md Section
+3:
 the paper's eta = 3 jackknifes when driving forward).
 """
 
@@ -39,7 +40,8 @@ def same_path_eta(L: float, L0: float) -> float:
     L = 0.3 m, L0 = 0.4 m. With it the steady off-tracking vanishes like kappa^3 (-0.27 mm at
     R = 1.5 m).
 
-    docs/model.md Section 3 gives ``-(L0 - L) / (2 L0)`` (-0.125) as this limit; that is wrong: it leaves
+    docs/model.md Section 3 gives ``-(L0 - L) / (2 L0)`` (-0.125) as this limit; that is wrong: it
+    leaves
     an off-tracking proportional to kappa (-2.87 mm at R = 1.5 m, -0.39 mm at R = 10 m), see
     :func:`spec_same_path_eta` and ``tests/test_reduced.py``.
     """
@@ -129,7 +131,8 @@ class Params:
     friction : float
         Sliding friction coefficient between the wheels and the floor.
     timestep : float
-        Physics time step (s). The contact time constant is ``2 * timestep`` (docs/model.md Section 5).
+        Physics time step (s). The contact time constant is ``2 * timestep`` (docs/model.md Section
+        5).
     impratio : float
         MuJoCo's ratio of frictional to normal constraint impedance (high values reduce
         creep in the friction cones).
@@ -227,7 +230,7 @@ class Params:
         return dataclasses.replace(self, **changes)
 
     def scaled(self, scale: float) -> Params:
-        """Masses and inertias multiplied by ``scale`` (docs/model.md Section 8 parameter uncertainty)."""
+        """Masses and inertias multiplied by ``scale`` (docs/model.md §8 parameter uncertainty)."""
         if not (math.isfinite(scale) and scale > 0):
             raise ValueError(f"param scale={scale!r} is not allowed: it must be finite and > 0")
         return self.replace(**{k: getattr(self, k) * scale for k in MASS_FIELDS + INERTIA_FIELDS})

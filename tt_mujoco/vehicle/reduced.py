@@ -176,7 +176,7 @@ def trailer_pose(x: float, y: float, theta: float, phi: float, p: Params):
 
 
 def input_matrix(p: Params) -> np.ndarray:
-    """B, mapping ``tau = (T_r, T_l)`` to generalized forces on ``(v, omega)`` (docs/model.md Section 4)."""
+    """B, mapping ``tau = (T_r, T_l)`` to forces on ``(v, omega)`` (docs/model.md §4)."""
     k = p.d / (2.0 * p.r)
     return np.array([[1.0 / p.r, 1.0 / p.r], [k, -k]])
 
@@ -211,19 +211,20 @@ def _constants(p: Params) -> tuple:
     return cached
 
 
-# The last (params, phi) -> terms: within a control step the controller's model and the
-# matched disturbance ask for the same articulation angle; a hit saves ~2 us.
-_last_terms: list = [None, None, None]
-
-
 def _inertia_terms(phi: float, p: Params):
-    """Mbar(phi) and N(phi) as nested tuples, plus the articulation row s (memoised for the
-    last call; see :func:`_compute_inertia_terms`)."""
-    last = _last_terms
-    if last[0] is p and last[1] == phi:
-        return last[2]
+    """Mbar(phi) and N(phi) as nested tuples, plus the articulation row s (see
+    :func:`_compute_inertia_terms`).
+
+    Within a control step the controller's model and the matched disturbance ask for the same
+    angle, so the last ``(phi, terms)`` is kept on ``p`` itself (a hit saves ~2 us). It is one
+    tuple written in one assignment: runs in threads that share ``p`` read either the old pair
+    or the new one, never a mix, and runs with other parameters never see it.
+    """
+    last = p.__dict__.get("_last_terms")
+    if last is not None and last[0] == phi:
+        return last[1]
     terms = _compute_inertia_terms(phi, p)
-    last[0], last[1], last[2] = p, phi, terms
+    object.__setattr__(p, "_last_terms", (phi, terms))
     return terms
 
 
@@ -274,7 +275,7 @@ def _compute_inertia_terms(phi: float, p: Params):
 
 
 def mass_matrix(phi: float, p: Params) -> np.ndarray:
-    """Reduced mass matrix Mbar(phi), shape (2, 2), symmetric positive definite (docs/model.md Section 4).
+    """Reduced mass matrix Mbar(phi), shape (2, 2), symmetric positive definite (docs/model.md §4).
 
     At the paper's parameters, eta = 3, phi = 0: ``diag(133.0, 12.844)``.
     """

@@ -15,7 +15,8 @@ The trailer axle is steered by ``beta = eta * phi`` (paper eq. 2). Three facts d
   Linearising gives ``phi = kappa (L + L0) / (1 - eta)`` from the kinematics (paper eq. 13 at
   phi_dot = 0) and ``phi = kappa (L + L0)^2 / (2 L0)`` from the geometry; equating them gives
   ``1 - eta = 2 L0 / (L + L0)``. With eta = -0.125 the steady off-tracking at R = 1.5 m is
-  -2.87 mm (the -2.9 mm first predicted for it); with -1/7 it is -0.27 mm, and with the exact eta(1/R) zero
+  -2.87 mm (the -2.9 mm first predicted for it); with -1/7 it is -0.27 mm, and with the exact
+  eta(1/R) zero
   (``tests/test_steering.py`` checks all three against the reduced kinematics).
 - **eta > 1 is stable only in reverse** (docs/model.md Section 3):
   :class:`tt_mujoco.reference.reverse.ReverseTarget` drives a path backwards, trailer first, so
@@ -112,7 +113,8 @@ def steady_offtrack(kappa: float, params: Params) -> float:
     """Analytic steady-state off-tracking (m): P0's turning radius minus the tractor's.
 
     Negative: P0 runs inside the tractor's path; positive: outside. Uses the steady articulation
-    of the kinematics (``tt_mujoco.reference.paths.steady_articulation``), NaN where there is none. The
+    of the kinematics (``tt_mujoco.reference.paths.steady_articulation``), NaN where there is none.
+    The
     steady turn is the same in either direction of travel; for eta > 1 it is stable only
     reversing (docs/model.md Section 3).
     """
@@ -133,7 +135,8 @@ def follower_offtrack(ts, reverse: bool = False) -> np.ndarray:
     """Off-tracking of the following axle from the leading axle's path, sample by sample (m).
 
     Forward the trailer (P0) follows the tractor (P): this is
-    :func:`tt_mujoco.analysis.metrics.trailer_offtrack`. Reversing, the trailer leads, so the roles swap:
+    :func:`tt_mujoco.analysis.metrics.trailer_offtrack`. Reversing, the trailer leads, so the roles
+    swap:
     the distance from P to the path P0 has driven so far. NaN until the follower has passed the
     leader's starting point.
     """

@@ -43,7 +43,7 @@ REFERENCE_COLOR = "0.2"
 
 # --- error signals -------------------------------------------------------------------------------
 def tracking_errors(ts: Mapping, reference_polyline=None) -> dict[str, np.ndarray]:
-    """Error signals of a run, the same quantities as :func:`tt_mujoco.analysis.metrics.compute_metrics`.
+    """Error signals of a run, as :func:`tt_mujoco.analysis.metrics.compute_metrics`.
 
     Returns
     -------
@@ -53,7 +53,8 @@ def tracking_errors(ts: Mapping, reference_polyline=None) -> dict[str, np.ndarra
         of the path), signed, positive left of the path's direction of travel
         (:func:`tt_mujoco.analysis.metrics.signed_lateral_error`; their magnitudes are the metrics'
         distances); always ``trailer_offtrack``, P0 to the path the tractor has driven so far,
-        NaN until P0 has passed the tractor's start (:func:`tt_mujoco.analysis.metrics.trailer_offtrack`).
+        NaN until P0 has passed the tractor's start
+        (:func:`tt_mujoco.analysis.metrics.trailer_offtrack`).
         Samples after the first non-finite position are NaN.
     """
     c = _columns(ts, ("t", "x", "y", "x0", "y0", "v", "v_d", "omega", "omega_d"))

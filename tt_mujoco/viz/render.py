@@ -960,7 +960,7 @@ def params_from_config(params: Mapping) -> Params:
 
 
 def reference_polyline_for(config: Mapping, ts: Mapping) -> tuple[np.ndarray, str]:
-    """The run's reference path: ``tt_mujoco.reference.paths.get_path(traj).dense()`` when that module
+    """The run's reference path: ``paths.get_path(traj).dense()`` when that module
     exists and knows ``traj`` (``config["traj"]`` or ``config["scenario"]["traj"]``), else the
     recorded reference point ``(x_ref, y_ref)``.
 
