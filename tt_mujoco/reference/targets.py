@@ -33,6 +33,7 @@ from tt_mujoco.reference.paths import (
     CYCLOID_T_END,
     Pose,
     ReferencePath,
+    _positive,  # one check for both modules
     circle,
     cycloid,
     cycloid_arc_length,
@@ -589,11 +590,3 @@ def make_target(
     target_cls = DynamicTarget if kind == "dynamic" else StaticTarget
     target = target_cls(path, profile, duration)
     return TargetSetup(path, target, path.initial_pose)
-
-
-def _positive(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"{name}={value!r} is not allowed: it must be a number > 0")
-    if not (math.isfinite(value) and value > 0):
-        raise ValueError(f"{name}={value!r} is not allowed: it must be finite and > 0")
-    return float(value)

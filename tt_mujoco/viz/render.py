@@ -42,6 +42,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from tt_mujoco.sim.timeseries import COLUMNS
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
 
@@ -72,23 +73,8 @@ USER_GL_BACKENDS = ("egl", "osmesa", "glfw")
 #: Camera modes of :func:`render_video`.
 CAMERAS = ("follow", "overview")
 
-#: Columns a video needs (SI units, radians).
-VIDEO_COLUMNS = (
-    "t",
-    "x",
-    "y",
-    "theta",
-    "phi",
-    "beta",
-    "v",
-    "omega",
-    "x0",
-    "y0",
-    "theta0",
-    "v0",
-    "theta_l",
-    "theta_r",
-)
+#: Columns a video needs (SI units, radians): the time series' first 14, t to theta_r.
+VIDEO_COLUMNS = COLUMNS[: COLUMNS.index("theta_r") + 1]
 
 # Scene budget. The reference path and the traces are decimated to these many segments, so a
 # long run costs the same per frame as a short one (each line segment is one user geom).
