@@ -177,12 +177,17 @@ class Registry:
             return self._items[_key(spec)]
         if is_hook(spec):
             return load_hook(spec, self.what)
+        raise self.unknown(spec)
+
+    def unknown(self, spec) -> ValueError:
+        """The error for a name that is neither registered nor a hook: the allowed names, the
+        other accepted forms and the closest name."""
         allowed = ", ".join(repr(k) for k in self._items)
         hint = ""
         if isinstance(spec, str):
             close = difflib.get_close_matches(_key(spec), list(self._items), n=1)
             hint = f"; did you mean {close[0]!r}?" if close else ""
-        raise ValueError(
+        return ValueError(
             f"{self.what} name={spec!r} is not allowed: use one of {allowed}, "
             f"{self.also + ', ' if self.also else ''}or a hook "
             f"'package.module:Name' or 'path/to/file.py:Name'{hint}"

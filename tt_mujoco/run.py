@@ -415,12 +415,6 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
     )
 
 
-def _preflight(scenario: Scenario) -> np.ndarray:
-    """Everything ``simulate`` checks before it starts, so bad input is refused before an
-    output folder exists. Returns the reference polyline."""
-    return build(scenario).path.dense()
-
-
 def _output_dir(out: Path | None, scenario: Scenario) -> tuple[Path, bool]:
     """A new (or existing but empty), writable folder; never one with files in it.
 
@@ -626,7 +620,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         args, parser, params, faults = _parse(argv)
         scenario = _scenario(args, params, faults)
-        polyline = _preflight(scenario)
+        # Everything simulate checks, before an output folder exists; simulate reuses it.
+        built = build(scenario)
         config_toml = config_mod.dump_config(
             config_mod.resolved_options(args, parser, params, faults)
         )
@@ -638,7 +633,7 @@ def main(argv: list[str] | None = None) -> int:
                     "MuJoCo model to show (use --plant mujoco)"
                 )
             viewer_mod.check_display()
-            live = viewer_mod.LiveViewer(reference=polyline)
+            live = viewer_mod.LiveViewer(reference=built.path.dense())
         out, created = _output_dir(args.out, scenario)
     except (BadInputError, ValueError, reduced.SingularityError) as err:
         return _fail(str(err))
@@ -647,7 +642,7 @@ def main(argv: list[str] | None = None) -> int:
 
     update, bar = _progress_bar("simulating", args.quiet or args.viewer)
     try:
-        result = sim.simulate(scenario, progress=update, on_step=live)
+        result = sim.simulate(built, progress=update, on_step=live)
     except (BadInputError, ValueError, reduced.SingularityError) as err:
         return _abandon(out, created, live, str(err), EXIT_BAD_INPUT)
     except viewer_mod.ViewerUnavailable as err:
@@ -705,7 +700,7 @@ def _remove_if_empty(out: Path) -> None:
 
 
 def _print_summary(result, out: Path, written, notes) -> None:
-    from tt_mujoco.analysis.metrics import DEFAULT_SUMMARY_KEYS, resolve_metrics, summary_table
+    from tt_mujoco.analysis.metrics import DEFAULT_SUMMARY_KEYS, metric_name, summary_table
 
     s = result.scenario
     print(
@@ -713,7 +708,7 @@ def _print_summary(result, out: Path, written, notes) -> None:
         f"eta={result.config['nominal_params']['eta']:g} | disturbance={s.disturbance} | "
         f"status={result.status}"
     )
-    extra = [name for name in resolve_metrics(s.metrics) if name in result.metrics]
+    extra = [metric_name(spec) for spec in s.metrics]
     keys = [k for k in (*DEFAULT_SUMMARY_KEYS, *extra, "wall_time_s") if k in result.metrics]
     print(summary_table(result.metrics, keys=keys))
     for fault in result.metrics.get("faults", []):

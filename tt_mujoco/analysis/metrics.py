@@ -45,6 +45,7 @@ __all__ = [
     "compute_metrics",
     "distance_to_polyline",
     "max_abs",
+    "metric_name",
     "resolve_metrics",
     "rmse",
     "signed_lateral_error",
@@ -342,5 +343,11 @@ def resolve_metrics(specs) -> dict:
         fn = METRICS.resolve(spec)
         if not callable(fn):
             raise ValueError(f"metric {spec!r} is not allowed: {fn!r} is not callable")
-        out[spec.rsplit(":", 1)[-1] if ":" in spec else spec] = fn
+        out[metric_name(spec)] = fn
     return out
+
+
+def metric_name(spec: str) -> str:
+    """The key a metric lands under in ``metrics.json``: the registered name, or the
+    function's name of a hook."""
+    return spec.rsplit(":", 1)[-1] if ":" in spec else spec

@@ -747,8 +747,18 @@ def path_kind(name_or_csv) -> str:
     key = text.lower().replace("-", "_")
     if key in PATHS:
         return key
-    PATHS.resolve(text)  # raises, naming the allowed names and the closest one
-    raise AssertionError("unreachable")
+    raise PATHS.unknown(text)
+
+
+def check_options(path: str, options, allowed) -> None:
+    """ValueError naming the options of ``path`` outside ``allowed`` (None: any is allowed,
+    a hooked path's factory checks its own)."""
+    unknown = sorted(set(options) - set(allowed)) if allowed is not None else []
+    if unknown:
+        raise ValueError(
+            f"option(s) {', '.join(unknown)} not allowed for path {path!r}: allowed are "
+            f"{', '.join(allowed)}"
+        )
 
 
 def _from_hook(spec: str, **kw) -> ReferencePath:
@@ -781,13 +791,7 @@ def get_path(name_or_csv, **kw) -> ReferencePath:
     text = str(name_or_csv).strip()
     if key == "hook":
         return _from_hook(text, **kw)
-    allowed = _FACTORY_OPTIONS.get(key)
-    unknown = sorted(set(kw) - set(allowed)) if allowed is not None else []
-    if unknown:
-        raise ValueError(
-            f"option(s) {', '.join(unknown)} not allowed for path {str(name_or_csv)!r}: "
-            f"allowed are {', '.join(allowed)}"
-        )
+    check_options(text, kw, _FACTORY_OPTIONS.get(key))
     if key == "csv":
         return from_csv(text, **kw)
     return PATHS[key](**kw)

@@ -34,6 +34,7 @@ from tt_mujoco.reference.paths import (
     Pose,
     ReferencePath,
     _positive,  # one check for both modules
+    check_options,
     circle,
     cycloid,
     cycloid_arc_length,
@@ -554,13 +555,7 @@ def make_target(
         duration = _positive("duration", duration)
     text = str(path_name_or_csv).strip()
     key = path_kind(text)
-    known = _TARGET_OPTIONS.get(key)
-    unknown = sorted(set(kw) - set(known)) if known is not None else []
-    if unknown:
-        raise ValueError(
-            f"option(s) {', '.join(unknown)} not allowed for path {text!r}: allowed are "
-            f"{', '.join(known)}"
-        )
+    check_options(text, kw, _TARGET_OPTIONS.get(key))
     ramp = {k: kw.pop(k) for k in ("cruise", "ramp_time") if k in kw}
     start = kw.pop("start", "on_path")
     if start not in _STARTS:

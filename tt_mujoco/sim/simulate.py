@@ -63,12 +63,14 @@ def run_episode(stepper: Stepper, controller, progress=None, on_step=None) -> tu
     return "ok", f"completed {stepper.built.duration:.3f} s"
 
 
-def simulate(scenario: Scenario, progress=None, on_step=None) -> Result:
+def simulate(scenario: Scenario | Build, progress=None, on_step=None) -> Result:
     """Run one scenario. Never raises for a diverging run: see ``Result.status``.
 
     Parameters
     ----------
-    scenario : Scenario
+    scenario : Scenario or Build
+        A scenario, or the :class:`~tt_mujoco.sim.build.Build` of one (a caller that built it
+        to check its input first, as the CLI does, need not build it again).
     progress : callable, optional
         Called as ``progress(steps_done, steps_total)`` about every 1 % of the run.
     on_step : callable, optional
@@ -81,9 +83,9 @@ def simulate(scenario: Scenario, progress=None, on_step=None) -> Result:
     ValueError
         For bad configuration values (before anything is simulated).
     """
-    built = build(scenario)
+    built = scenario if isinstance(scenario, Build) else build(scenario)
     stepper = Stepper(built)
-    stepper.reset(np.random.default_rng(scenario.seed))
+    stepper.reset(np.random.default_rng(built.scenario.seed))
     controller = built.new_controller()
     controller.reset()
     start_wall = time.perf_counter()

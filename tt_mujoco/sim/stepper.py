@@ -65,7 +65,6 @@ class Stepper:
         self.k = 0
         self.finished = False
         noise_v, noise_w = b.noise_std
-        self._noise_std = (noise_v, noise_w)
         self._noise = (
             rng.standard_normal(2 * (self.steps + 1)).tolist() if noise_v or noise_w else None
         )
@@ -101,7 +100,7 @@ class Stepper:
             )
         noise = self._noise
         if noise is not None:
-            noise_v, noise_w = self._noise_std
+            noise_v, noise_w = self.built.noise_std
             v_m = me.v + noise_v * noise[2 * k]
             w_m = me.omega + noise_w * noise[2 * k + 1]
         else:
