@@ -7,7 +7,7 @@ import sys
 import numpy as np
 import pytest
 
-from tt_mujoco import run
+from tt_mujoco import outputs, run
 from tt_mujoco.analysis import metrics
 from tt_mujoco.reference import paths
 
@@ -69,7 +69,7 @@ def test_cli_writes_outputs(s_curve_run):
 def test_metrics_agree_with_timeseries(s_curve_run):
     out, _ = s_curve_run
     doc = json.loads((out / "metrics.json").read_text())
-    ts = run.read_timeseries(out / "timeseries.csv")
+    ts = outputs.read_timeseries(out / "timeseries.csv")
     again = metrics.compute_metrics(ts, paths.get_path("s_curve").dense(), 15.0)
     for key, value in again.items():
         if isinstance(value, float) and np.isfinite(value):
@@ -161,7 +161,7 @@ def test_cli_steering_and_feedback_options_reach_the_scenario(tmp_path):
     assert scenario["path_feedback"] == {}
     assert scenario["reverse"] is False
     # The scheduled gain at kappa = 1 is the exact same-path gain, not the constant -1/7.
-    ts = run.read_timeseries(out / "timeseries.csv")
+    ts = outputs.read_timeseries(out / "timeseries.csv")
     assert ts["beta"][-1] / ts["phi"][-1] == pytest.approx(-0.14714, abs=1e-4)
     # config.toml repeats it.
     again = tmp_path / "again"

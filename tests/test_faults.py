@@ -11,7 +11,7 @@ import os
 import numpy as np
 import pytest
 
-from tt_mujoco import run
+from tt_mujoco import outputs, run
 from tt_mujoco.sim import Scenario, faults, simulate
 
 # S-curve, 4 s: the ramp (0-2 s) and 2 s of cruising on the first arc, paper disturbance on.
@@ -162,7 +162,7 @@ def test_body_wrench_beyond_traction_stops_reported_and_written(baseline, tmp_pa
     # disturbance (340x), lateral slip 8.5 vs 0.0014 m/s: the tyres cannot carry ~465 N.
     assert doc["slip_longitudinal_max"] > 100 * baseline.metrics["slip_longitudinal_max"]
     assert doc["slip_lateral_max"] > 1000 * baseline.metrics["slip_lateral_max"]
-    ts = run.read_timeseries(out / "timeseries.csv")
+    ts = outputs.read_timeseries(out / "timeseries.csv")
     assert len(ts["t"]) == doc["steps"] > 500  # everything up to the stop is kept
 
 
@@ -180,7 +180,7 @@ def test_interrupted_output_leaves_no_metrics(tmp_path, monkeypatch, capsys):
     assert "metrics.json was not written" in capsys.readouterr().err
     names = sorted(p.name for p in out.iterdir())
     assert names == ["config.toml", "timeseries.csv"]  # complete files only, no temporaries
-    ts = run.read_timeseries(out / "timeseries.csv")
+    ts = outputs.read_timeseries(out / "timeseries.csv")
     assert len(ts["t"]) == 1001 and ts["t"][-1] == 1.0
 
 
@@ -206,7 +206,7 @@ def test_atomic_write_never_leaves_a_partial_file(tmp_path, monkeypatch):
 
     monkeypatch.setattr(os, "replace", failing_replace)
     with pytest.raises(OSError):
-        run._atomic_write(target, "{}" * 1000)
+        outputs.atomic_write(target, "{}" * 1000)
     assert list(tmp_path.iterdir()) == []
 
 

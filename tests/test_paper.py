@@ -19,7 +19,6 @@ from tt_mujoco.paper import (
     curvature_split,
     execute,
     main,
-    output_dir,
     run_suite,
     suite,
 )
@@ -85,21 +84,6 @@ def test_full_suite_definition():
     assert runs["steer:circle:paper eta = 3, reverse@mujoco"].reverse
     assert runs["fb:cycloid:on@mujoco"].path_feedback == {}
     assert runs["fb:cycloid:off@mujoco"].path_feedback is None
-
-
-def test_output_dir_never_overwrites(tmp_path):
-    base = tmp_path / "renders" / "paper"
-    assert output_dir(None, base) == base
-    base.mkdir(parents=True)
-    assert output_dir(None, base) == base.with_name("paper-2")
-    base.with_name("paper-2").mkdir()
-    assert output_dir(None, base) == base.with_name("paper-3")
-    (base / "x.txt").write_text("x")
-    with pytest.raises(ValueError, match="not an empty folder"):
-        output_dir(base)
-    empty = tmp_path / "empty"
-    empty.mkdir()
-    assert output_dir(empty) == empty
 
 
 def _synthetic_records():

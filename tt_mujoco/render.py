@@ -7,11 +7,11 @@ import json
 import sys
 from pathlib import Path
 
+from tt_mujoco.outputs import read_timeseries
 from tt_mujoco.viz.render import (
     CAMERAS,
     RenderUnavailable,
     params_from_config,
-    read_timeseries,
     reference_polyline_for,
     render_video,
 )

@@ -17,26 +17,30 @@ existing non-empty one; ``metrics.json`` is written last, so its presence marks 
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
-import io
 import json
 import math
-import os
 import shutil
 import sys
+import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
-
 from tt_mujoco.controllers import CONTROLLERS
 from tt_mujoco.defaults import CONTROLLER, DISTURBANCE_MODEL
+from tt_mujoco.outputs import (
+    atomic_write,
+    claim_folder,
+    publish_new,
+    remove_if_empty,
+    timeseries_csv,
+    write_json,
+)
 from tt_mujoco.sim import COLUMNS, DISTURBANCE_MODES, PLANTS, TARGETS, Scenario, build
 from tt_mujoco.sim.faults import RECOVERY_S
 from tt_mujoco.vehicle.params import Params
 
-__all__ = ["build_parser", "main", "read_timeseries", "timeseries_csv", "write_outputs"]
+__all__ = ["build_parser", "main", "write_outputs"]
 
 RENDERS = Path("renders")
 EXIT_OK, EXIT_BAD_INPUT, EXIT_DIVERGED, EXIT_INTERRUPTED = 0, 2, 3, 130
@@ -46,8 +50,9 @@ PARAM_NAMES = tuple(
     for f in dataclasses.fields(Params)
     if f.init and f.name not in ("eta", "timestep", "friction")
 )
-#: Hidden folder inside the output folder where figures and video are made before the rename.
-STAGING = ".partial"
+#: Prefix of the hidden folder, private to one run, where figures and video are made before
+#: they are moved into the output folder.
+STAGING = ".partial-"
 
 
 class BadInputError(Exception):
@@ -416,97 +421,13 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
 
 
 def _output_dir(out: Path | None, scenario: Scenario) -> tuple[Path, bool]:
-    """A new (or existing but empty), writable folder; never one with files in it.
-
-    Returns the folder and whether this call created it (so that only such a folder is
-    removed again when the run is abandoned).
-    """
-    if out is None:
-        stem = Path(scenario.traj).stem if scenario.traj.endswith(".csv") else scenario.traj
-        base = RENDERS / (
-            f"{stem}-{scenario.controller}-{scenario.target}-{scenario.plant}-"
-            f"{time.strftime('%Y%m%d-%H%M%S')}"
-        )
-        for i in range(1, 1000):
-            out = base if i == 1 else base.with_name(f"{base.name}-{i}")
-            try:
-                out.mkdir(parents=True)  # not exist_ok: parallel runs never share a folder
-            except FileExistsError:
-                continue
-            except OSError as err:
-                raise BadInputError(
-                    f"output folder {str(out)!r} cannot be created: {err.strerror}"
-                ) from None
-            _probe(out, created=True)
-            return out, True
-        raise BadInputError(f"no free output folder name under {str(RENDERS)!r}")
-    if out.exists() and (not out.is_dir() or any(out.iterdir())):
-        raise BadInputError(
-            f"--out {str(out)!r} already exists and is not empty: outputs are never overwritten; "
-            "name a new folder"
-        )
-    created = not out.exists()
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as err:
-        raise BadInputError(f"--out {str(out)!r} cannot be written: {err.strerror}") from None
-    _probe(out, created)
-    return out, created
-
-
-def _probe(out: Path, created: bool) -> None:
-    try:
-        probe = out / ".write-test"
-        probe.write_text("")
-        probe.unlink()
-    except OSError as err:
-        if created:
-            _remove_if_empty(out)
-        raise BadInputError(f"--out {str(out)!r} cannot be written: {err.strerror}") from None
-
-
-def _atomic_write(path: Path, data: str | bytes) -> None:
-    """Write to a temporary file in the same folder, flush it to disk, then rename: a reader
-    (or a crash) sees either no file or the complete one, never a partial one."""
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    try:
-        with open(tmp, "wb") as handle:
-            handle.write(data.encode() if isinstance(data, str) else data)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-
-
-def _json_default(obj):
-    if isinstance(obj, np.floating | np.integer):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
-
-
-def timeseries_csv(ts: dict) -> str:
-    """The time series as CSV text, every float with full precision (repr)."""
-    buf = io.StringIO()
-    writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(COLUMNS)
-    cols = [ts[c] for c in COLUMNS]
-    for row in zip(*cols, strict=True):
-        writer.writerow([repr(float(v)) for v in row])
-    return buf.getvalue()
-
-
-def read_timeseries(path: Path) -> dict[str, np.ndarray]:
-    """Read a ``timeseries.csv`` back into column arrays."""
-    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    with open(path) as fh:
-        header = fh.readline().strip().split(",")
-    return {name: data[:, i] for i, name in enumerate(header)}
+    """A new folder named after the run, or the user's ``--out`` if new or empty."""
+    stem = Path(scenario.traj.rpartition(":")[0] or scenario.traj).stem
+    base = RENDERS / (
+        f"{stem}-{Path(scenario.controller.rpartition(':')[2]).stem}-{scenario.target}-"
+        f"{scenario.plant}-{time.strftime('%Y%m%d-%H%M%S')}"
+    )
+    return claim_folder(out, base)
 
 
 def write_outputs(
@@ -531,11 +452,11 @@ def write_outputs(
     if config_toml is not None:
         from tt_mujoco.config import CONFIG_FILE
 
-        _atomic_write(out / CONFIG_FILE, config_toml)
+        atomic_write(out / CONFIG_FILE, config_toml)
         written.append(out / CONFIG_FILE)
-    _atomic_write(out / "timeseries.csv", timeseries_csv(result.timeseries))
+    atomic_write(out / "timeseries.csv", timeseries_csv(result.timeseries, COLUMNS))
     written.append(out / "timeseries.csv")
-    staging = out / STAGING
+    staging = Path(tempfile.mkdtemp(dir=out, prefix=STAGING))  # this run's own
     try:
         if plots:
             try:
@@ -543,21 +464,19 @@ def write_outputs(
             except ImportError:
                 notes.append("plots skipped: tt_mujoco.viz.plots is not available")
             else:
-                staging.mkdir(exist_ok=True)
                 made = plots_mod.plot_run(
                     result.timeseries,
                     result.reference_polyline,
                     staging,
                     params=result.scenario.plant_params(),
                 )
-                written += [_publish(Path(f), out) for f in made]
+                written += [publish_new(Path(f), out / Path(f).name) for f in made]
         if video:
             try:
                 from tt_mujoco.viz import render
             except ImportError:
                 notes.append("video skipped: tt_mujoco.viz.render is not available")
             else:
-                staging.mkdir(exist_ok=True)
                 try:
                     path = render.render_video(
                         result.timeseries,
@@ -568,7 +487,7 @@ def write_outputs(
                         fps=fps,
                         progress=not quiet,
                     )
-                    written.append(_publish(Path(path), out))
+                    written.append(publish_new(Path(path), out / "video.mp4"))
                 except render.RenderUnavailable as err:  # no GL must not lose the results
                     notes.append(f"video skipped: {err}")
     finally:
@@ -579,16 +498,9 @@ def write_outputs(
         "notes": notes,
         "config": result.config,
     }
-    _atomic_write(out / "metrics.json", json.dumps(doc, indent=2, default=_json_default) + "\n")
+    write_json(out / "metrics.json", doc)
     written.append(out / "metrics.json")
     return written, notes
-
-
-def _publish(made: Path, out: Path) -> Path:
-    """Move a finished file from the staging folder into ``out`` (an atomic rename)."""
-    final = out / made.name
-    os.replace(made, final)
-    return final
 
 
 def _progress_bar(total_label: str, quiet: bool):
@@ -635,7 +547,7 @@ def main(argv: list[str] | None = None) -> int:
             viewer_mod.check_display()
             live = viewer_mod.LiveViewer(reference=built.path.dense())
         out, created = _output_dir(args.out, scenario)
-    except (BadInputError, ValueError, reduced.SingularityError) as err:
+    except (BadInputError, ValueError, reduced.SingularityError) as err:  # OutputError too
         return _fail(str(err))
     except viewer_mod.ViewerUnavailable as err:
         return _fail(str(err))
@@ -686,17 +598,9 @@ def _abandon(out: Path, created: bool, live, message: str, code: int) -> int:
     if live is not None:
         live.close()
     if created:
-        _remove_if_empty(out)
+        remove_if_empty(out)
     nothing = "nothing was written" if not out.exists() or not any(out.iterdir()) else ""
     return _fail(f"{message}{'; ' + nothing if nothing else ''}", code)
-
-
-def _remove_if_empty(out: Path) -> None:
-    try:
-        if out.is_dir() and not any(out.iterdir()):
-            out.rmdir()
-    except OSError:
-        pass
 
 
 def _print_summary(result, out: Path, written, notes) -> None:

@@ -3,27 +3,35 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 
 from tt_mujoco.analysis.validate import DEFAULT_OUT, _markdown, run_all
+from tt_mujoco.outputs import OutputError, atomic_write, claim_folder, write_json
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Exit 0 written, 2 a used or unwritable ``--out`` (refused before the checks run)."""
     parser = argparse.ArgumentParser(
         prog="python -m tt_mujoco.validate",
-        description="Check the MuJoCo model against the analytic reduced model.",
+        description="Check the MuJoCo model against the analytic reduced model. Writes "
+        "report.md and report.json into a new folder (never into one with files in it).",
     )
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder")
+    parser.add_argument(
+        "--out", type=Path, default=None, help=f"output folder (default: a new {DEFAULT_OUT}[-N])"
+    )
     args = parser.parse_args(argv)
+    try:
+        out, _ = claim_folder(args.out, DEFAULT_OUT)
+    except OutputError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
     results = run_all()
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "report.json").write_text(json.dumps(results, indent=2) + "\n")
+    write_json(out / "report.json", results)
     text = _markdown(results)
-    (args.out / "report.md").write_text(text + "\n")
+    atomic_write(out / "report.md", text + "\n")
     print(text)
-    print(f"\nwrote {args.out / 'report.md'} and {args.out / 'report.json'}")
+    print(f"\nwrote {out / 'report.md'} and {out / 'report.json'}")
     return 0
 
 

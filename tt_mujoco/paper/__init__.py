@@ -42,6 +42,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tt_mujoco.outputs import atomic_write, claim_folder, json_safe
 from tt_mujoco.sim import Scenario
 
 __all__ = [
@@ -55,7 +56,6 @@ __all__ = [
     "curvature_split",
     "execute",
     "main",
-    "output_dir",
     "run_suite",
     "suite",
 ]
@@ -448,20 +448,6 @@ def _offtrack_summary(ts, path, scenario: Scenario, plant_params) -> dict:
     return out
 
 
-def _json_safe(value):
-    if isinstance(value, Mapping):
-        return {str(k): _json_safe(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_json_safe(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _json_safe(value.tolist())
-    if isinstance(value, np.integer | bool | np.bool_):
-        return value if isinstance(value, bool) else int(value)
-    if isinstance(value, float | np.floating):
-        return float(value) if math.isfinite(value) else None
-    return value
-
-
 def execute(key: str, scenario: Scenario, keep_series: bool = False) -> dict:
     """Run one scenario and reduce it to a record (metrics, analyses, optional series).
 
@@ -473,7 +459,7 @@ def execute(key: str, scenario: Scenario, keep_series: bool = False) -> dict:
     from tt_mujoco.sim import simulate
 
     start = time.perf_counter()
-    record = {"key": key, "scenario": _json_safe(scenario.to_dict())}
+    record = {"key": key, "scenario": json_safe(scenario.to_dict())}
     try:
         result = simulate(scenario)
         ts = result.timeseries
@@ -515,7 +501,7 @@ def execute(key: str, scenario: Scenario, keep_series: bool = False) -> dict:
 
 
 def _scenario_identity(scenario: Scenario) -> str:
-    return json.dumps(_json_safe(scenario.to_dict()), sort_keys=True)
+    return json.dumps(json_safe(scenario.to_dict()), sort_keys=True)
 
 
 def run_suite(
@@ -1321,7 +1307,7 @@ def _config_markdown(records) -> list[str]:
         other = {
             k: v
             for k, v in sc.items()
-            if k not in cols and k not in ("seed",) and v != _json_safe(defaults.get(k))
+            if k not in cols and k not in ("seed",) and v != json_safe(defaults.get(k))
         }
         out.append(
             f"| `{key}` | "
@@ -1361,27 +1347,6 @@ def _suite_setup_lines(seed: int) -> list[str]:
         "to the reference point (`rmse_position`).",
         f"- Seed {seed} for every run; the same command gives the same numbers.",
     ]
-
-
-def output_dir(out: str | os.PathLike | None, base: Path = DEFAULT_OUT) -> Path:
-    """Where the report goes; never an existing non-empty folder.
-
-    ``out`` given: it must not exist or be empty (else ValueError). ``out`` None: ``base`` if it
-    does not exist, else the first free ``base-2``, ``base-3``, ...
-    """
-    if out is not None:
-        path = Path(out)
-        if path.exists() and (not path.is_dir() or any(path.iterdir())):
-            raise ValueError(
-                f"--out {str(path)!r} is not allowed: it exists and is not an empty folder "
-                "(give a new folder)"
-            )
-        return path
-    path, i = base, 1
-    while path.exists():
-        i += 1
-        path = base.with_name(f"{base.name}-{i}")
-    return path
 
 
 def build_report(
@@ -1543,10 +1508,10 @@ def build_report(
         "",
     ]
     report = out / "report.md"
-    report.write_text("\n".join(md) + "\n")
+    atomic_write(report, "\n".join(md) + "\n")
 
     summary = _summary_markdown(rows, steering, feedback, checks, info)
-    (out / "summary.md").write_text(summary)
+    atomic_write(out / "summary.md", summary)
     payload = {
         "command": info.get("command", COMMAND),
         "suite": info,
@@ -1574,7 +1539,7 @@ def build_report(
         "figures": figs,
         "runs": {k: {kk: vv for kk, vv in r.items() if kk != "series"} for k, r in records.items()},
     }
-    (out / "report.json").write_text(json.dumps(_json_safe(payload), indent=1, sort_keys=False))
+    atomic_write(out / "report.json", json.dumps(json_safe(payload), indent=1, sort_keys=False))
     return report
 
 
@@ -1853,7 +1818,7 @@ def main(argv: list[str] | None = None) -> int:
     """Exit 0 done, 2 bad input, 1 if a run raised an error (it is in the report)."""
     try:
         args = build_parser().parse_args(argv)
-        out = output_dir(args.out)
+        out, _ = claim_folder(args.out, DEFAULT_OUT)  # before the suite: a bad --out fails now
     except (_BadInputError, ValueError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2

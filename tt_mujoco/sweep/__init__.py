@@ -60,6 +60,7 @@ import numpy as np
 
 from tt_mujoco.controllers import CONTROLLERS, controller_class
 from tt_mujoco.controllers.base import resolve_gains
+from tt_mujoco.outputs import atomic_write, free_name, save_figure
 from tt_mujoco.registry import is_hook, normalise_hook
 from tt_mujoco.sim import DISTURBANCE_MODES, PLANTS, TARGETS, Scenario, build
 from tt_mujoco.vehicle.params import INERTIA_FIELDS, MASS_FIELDS, Params
@@ -802,15 +803,6 @@ def _read_journal(path: Path) -> dict[str, dict]:
     return done
 
 
-def _atomic_write(path: Path, text: str) -> None:
-    tmp = path.with_name(f".{path.name}.tmp-{os.getpid()}")
-    with open(tmp, "w", encoding="utf-8", newline="") as fh:
-        fh.write(text)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
-
-
 def _cell(value) -> str:
     if value is None:
         return ""
@@ -967,7 +959,7 @@ def plot_summary(
     for ax in axs[len(names) :]:
         ax.set_visible(False)
     fig.suptitle(f"{len(rows)} runs: {len(ok)} ok, {failed} failed (histograms of ok runs)")
-    paths = [_save(fig, out / "histograms.png")]
+    paths = [save_figure(fig, out / "histograms.png", 120)]
 
     axes = [a for a in spec.axes if a.varies and a.name != "seed" and _is_numeric(rows, a.name)]
     axes = axes[:6]
@@ -1021,16 +1013,8 @@ def plot_summary(
         if axes
         else f"{metric} per run ({failed} failed runs not drawn)"
     )
-    paths.append(_save(fig, out / "scatter.png"))
+    paths.append(save_figure(fig, out / "scatter.png", 120))
     return paths
-
-
-def _save(fig, path: Path) -> Path:
-    """PNG written under a temporary name and renamed: a reader never sees half a file."""
-    tmp = path.with_name(f".{path.stem}.tmp-{os.getpid()}.png")
-    fig.savefig(tmp, format="png", dpi=120)
-    os.replace(tmp, path)
-    return path
 
 
 def _is_numeric(rows: Sequence[Mapping], name: str) -> bool:
@@ -1266,19 +1250,19 @@ def run_sweep(
             done = {k: r for k, r in done.items() if r.get("status") != "error"}
         # Rewrite the journal without a line cut by a kill, so appends start on a fresh line.
         if journal_path.exists():
-            _atomic_write(journal_path, "".join(json.dumps(r) + "\n" for r in done.values()))
-        _atomic_write(out / SPEC_FILE, spec.to_toml())
+            atomic_write(journal_path, "".join(json.dumps(r) + "\n" for r in done.values()))
+        atomic_write(out / SPEC_FILE, spec.to_toml())
         todo = deque(r for r in runs if r["run_id"] not in done)
         reused = len(runs) - len(todo)
         if todo:
             _execute(todo, done, journal_path, workers, scheduler, quiet, len(runs), reused)
         header, rows = build_rows(runs, done)
-        _atomic_write(out / TABLE, table_csv(header, rows))
+        atomic_write(out / TABLE, table_csv(header, rows))
         summary = summarize(header, rows)
-        _atomic_write(out / "summary.csv", summary_csv(summary))
+        atomic_write(out / "summary.csv", summary_csv(summary))
         wall = time.perf_counter() - t0
         doc = {**summary, "mode": spec.mode, "seed": spec.seed, "wall_s": wall, "reused": reused}
-        _atomic_write(out / "summary.json", json.dumps(doc, indent=2) + "\n")
+        atomic_write(out / "summary.json", json.dumps(doc, indent=2) + "\n")
         files = [out / TABLE, out / "summary.csv", out / "summary.json"]
         if figures and rows:
             if metric not in header:
@@ -1461,14 +1445,6 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _default_out() -> Path:
-    base = RENDERS / f"sweep-{time.strftime('%Y%m%d-%H%M%S')}"
-    out, i = base, 2
-    while out.exists():
-        out, i = base.with_name(f"{base.name}-{i}"), i + 1
-    return out
-
-
 def _sigterm(signum, frame):
     raise KeyboardInterrupt  # a batch system's stop: same clean, resumable exit as Ctrl-C
 
@@ -1506,7 +1482,9 @@ def main(argv: list[str] | None = None) -> int:
                 print(run["index"], run["run_id"], json.dumps(run["options"]))
             print(f"{len(runs)} runs ({spec.mode})")
             return EXIT_OK
-        out = args.out if args.out is not None else _default_out()
+        out = args.out
+        if out is None:
+            out = free_name(RENDERS / f"sweep-{time.strftime('%Y%m%d-%H%M%S')}")
         signal.signal(signal.SIGTERM, _sigterm)
         result = run_sweep(
             spec,

@@ -12,10 +12,7 @@ its direction of travel (:func:`distance_to_polyline`).
 
 from __future__ import annotations
 
-import contextlib
 import math
-import os
-import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -23,6 +20,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from tt_mujoco.analysis import metrics
+from tt_mujoco.outputs import save_figure
 from tt_mujoco.vehicle.params import Params
 
 __all__ = [
@@ -102,23 +100,6 @@ def _columns(ts: Mapping, names) -> dict[str, np.ndarray]:
 def _rms(x: np.ndarray) -> float:
     x = x[np.isfinite(x)]
     return float(np.sqrt(np.mean(x**2))) if len(x) else math.nan
-
-
-def _save(fig: Figure, path: Path) -> Path:
-    """Write ``fig`` as PNG to ``path`` atomically (temporary file in the folder, rename)."""
-    fd, tmp_name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=".tmp.png")
-    os.close(fd)
-    tmp = Path(tmp_name)
-    try:
-        fig.savefig(tmp, format="png", dpi=DPI)
-        umask = os.umask(0)
-        os.umask(umask)
-        tmp.chmod(0o666 & ~umask)  # mkstemp made it private
-        os.replace(tmp, path)
-    finally:
-        with contextlib.suppress(FileNotFoundError):
-            tmp.unlink()
-    return path
 
 
 def _reference(reference_polyline) -> np.ndarray | None:
@@ -285,7 +266,7 @@ def plot_run(ts: Mapping, reference_polyline, out_dir, params: Params | None = N
         _torques_figure(c, p.torque_limit),
         _articulation_figure(c, p),
     )
-    return [_save(fig, out / name) for fig, name in zip(figures, FIGURES, strict=True)]
+    return [save_figure(fig, out / name, DPI) for fig, name in zip(figures, FIGURES, strict=True)]
 
 
 def plot_comparison(
@@ -337,4 +318,4 @@ def plot_comparison(
     axes[-1].set_xlabel("t (s)")
     fig.suptitle(title)
     out.parent.mkdir(parents=True, exist_ok=True)
-    return _save(fig, out)
+    return save_figure(fig, out, DPI)

@@ -28,7 +28,6 @@ was chosen at MuJoCo's import). So the choice is made at the first render by
 from __future__ import annotations
 
 import contextlib
-import csv
 import ctypes.util
 import dataclasses
 import math
@@ -42,6 +41,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from tt_mujoco.outputs import publish_new
 from tt_mujoco.sim.timeseries import COLUMNS
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
@@ -59,7 +59,6 @@ __all__ = [
     "params_from_config",
     "pose_vehicle",
     "project_to_pixel",
-    "read_timeseries",
     "reference_polyline_for",
     "render_video",
     "select_gl_backend",
@@ -773,23 +772,6 @@ def _check_video_args(width, height, fps, camera) -> None:
         raise ValueError(f"camera={camera!r} is not allowed: use one of {', '.join(CAMERAS)}")
 
 
-def _publish(tmp: Path, out: Path) -> None:
-    """Move ``tmp`` to ``out`` atomically, never replacing an existing ``out``."""
-    umask = os.umask(0)
-    os.umask(umask)
-    tmp.chmod(0o666 & ~umask)  # mkstemp made it private; give it a normal file's mode
-    try:
-        os.link(tmp, out)  # fails if out exists: no race between the check and the move
-    except FileExistsError:
-        raise FileExistsError(f"{out} exists; it is not overwritten") from None
-    except OSError:  # a file system without hard links
-        if out.exists():
-            raise FileExistsError(f"{out} exists; it is not overwritten") from None
-        os.replace(tmp, out)
-        return
-    tmp.unlink()
-
-
 def render_video(
     ts: Mapping,
     params: Params,
@@ -861,7 +843,7 @@ def render_video(
                 )
                 for k in frames:
                     writer.add_image(renderer.render_frame(k))
-            _publish(tmp, out)
+            publish_new(tmp, out)
         finally:
             with contextlib.suppress(FileNotFoundError):
                 tmp.unlink()
@@ -919,19 +901,6 @@ def open_loop_timeseries(
 
 
 # --- re-rendering a finished run --------------------------------------------------------------
-def read_timeseries(path) -> dict[str, np.ndarray]:
-    """A ``timeseries.csv`` (header row, then numbers) as column name -> 1-D array."""
-    path = Path(path)
-    with path.open(newline="") as f:
-        header = next(csv.reader(f), None)
-    if not header:
-        raise ValueError(f"{path} is empty: a time series needs a header row")
-    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
-    if data.shape[1] != len(header):
-        raise ValueError(f"{path} has {len(header)} header names but {data.shape[1]} columns")
-    return {name.strip(): data[:, j].copy() for j, name in enumerate(header)}
-
-
 def params_from_config(params: Mapping) -> Params:
     """``Params`` from ``metrics.json["config"]["params"]`` (non-init fields such as
     ``steering`` are ignored; unknown names are an error)."""

@@ -1,0 +1,75 @@
+"""The output module: folder names and claims, atomic and never-overwriting writes, JSON."""
+
+import json
+import math
+import os
+
+import numpy as np
+import pytest
+
+from tt_mujoco import outputs, validate
+
+
+def test_output_folders_never_overwrite(tmp_path):
+    base = tmp_path / "renders" / "paper"
+    assert outputs.free_name(base) == base
+    base.mkdir(parents=True)
+    assert outputs.free_name(base) == base.with_name("paper-2")
+    base.with_name("paper-2").mkdir()
+    assert outputs.free_name(base) == base.with_name("paper-3")
+    (base / "x.txt").write_text("x")
+    with pytest.raises(ValueError, match="not an empty folder"):
+        outputs.claim_folder(base, base)
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert outputs.claim_folder(empty, base) == (empty, False)
+    made, created = outputs.claim_folder(None, base)
+    assert made == base.with_name("paper-3") and created and made.is_dir()
+
+
+def test_a_symlink_is_never_an_output_folder(tmp_path):
+    (tmp_path / "real").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "real")
+    with pytest.raises(ValueError, match="link"):
+        outputs.claim_folder(tmp_path / "link", tmp_path / "x")
+
+
+def test_publish_new_never_replaces(tmp_path):
+    a, b = tmp_path / "a", tmp_path / "b"
+    a.write_text("new")
+    b.write_text("old")
+    with pytest.raises(FileExistsError):
+        outputs.publish_new(a, b)
+    assert b.read_text() == "old" and a.exists()
+    c = tmp_path / "c"
+    outputs.publish_new(a, c)
+    assert c.read_text() == "new" and not a.exists()
+
+
+def test_atomic_write_leaves_no_temporary_file(tmp_path, monkeypatch):
+    outputs.atomic_write(tmp_path / "f.txt", "hello")
+    assert [p.name for p in tmp_path.iterdir()] == ["f.txt"]
+
+    def failing_replace(src, dst):
+        raise OSError("rename failed")
+
+    monkeypatch.setattr(os, "replace", failing_replace)
+    with pytest.raises(OSError):
+        outputs.atomic_write(tmp_path / "g.txt", "x")
+    assert [p.name for p in tmp_path.iterdir()] == ["f.txt"]
+
+
+def test_strict_json_and_timeseries_round_trip(tmp_path):
+    outputs.write_json(tmp_path / "m.json", {"a": math.nan, "b": np.float64(2.5)}, strict=True)
+    assert json.loads((tmp_path / "m.json").read_text()) == {"a": None, "b": 2.5}
+    ts = {"t": np.array([0.0, 0.1]), "x": np.array([1.0 / 3.0, -2e-300])}
+    (tmp_path / "ts.csv").write_text(outputs.timeseries_csv(ts, ("t", "x")))
+    back = outputs.read_timeseries(tmp_path / "ts.csv")
+    assert np.array_equal(back["x"], ts["x"]) and np.array_equal(back["t"], ts["t"])
+
+
+def test_validate_refuses_a_used_folder_before_running(tmp_path, capsys):
+    (tmp_path / "report.md").write_text("mine")
+    assert validate.main(["--out", str(tmp_path)]) == 2
+    assert "not an empty folder" in capsys.readouterr().err
+    assert (tmp_path / "report.md").read_text() == "mine"

@@ -1,0 +1,235 @@
+"""Writing results: output folders, atomic files, JSON, and the time series on disk.
+
+Every application (run, sweep, paper suite, validation, re-rendering) writes through here, so
+they follow one rule: outputs go to a new folder, or an empty one named by the user, never into
+one with files in it; a file is written under a temporary name in its folder and renamed, so a
+reader (or a crash) sees the complete file or none; a file that exists is never replaced
+unless the caller owns it (:func:`atomic_write` replaces, :func:`publish_new` never does).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import io
+import json
+import os
+import tempfile
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+
+__all__ = [
+    "OutputError",
+    "atomic_write",
+    "claim_folder",
+    "free_name",
+    "json_default",
+    "json_safe",
+    "publish_new",
+    "read_timeseries",
+    "remove_if_empty",
+    "save_figure",
+    "timeseries_csv",
+    "write_json",
+]
+
+
+class OutputError(ValueError):
+    """An output location that cannot be used; the message names it and says why."""
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+@contextlib.contextmanager
+def _temporary_beside(path: Path, suffix: str = ".tmp"):
+    """A fresh, uniquely named temporary file in ``path``'s folder, removed unless renamed."""
+    fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
+    tmp = Path(name)
+    try:
+        os.close(fd)
+        tmp.chmod(0o666 & ~_umask())  # mkstemp made it private; give it a normal file's mode
+        yield tmp
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+
+
+def atomic_write(path: Path, data: str | bytes) -> None:
+    """Write ``data`` to ``path`` through a temporary file in the same folder, flushed to disk,
+    then renamed over ``path``: a reader (or a crash) sees no file or the complete one."""
+    path = Path(path)
+    with _temporary_beside(path) as tmp:
+        with open(tmp, "wb") as handle:
+            handle.write(data.encode() if isinstance(data, str) else data)
+            handle.flush()
+            os.fsync(handle.fileno())
+        os.replace(tmp, path)
+
+
+def publish_new(made: Path, out: Path) -> Path:
+    """Move the finished file ``made`` to ``out`` atomically, never replacing an existing
+    ``out`` (FileExistsError)."""
+    made, out = Path(made), Path(out)
+    made.chmod(0o666 & ~_umask())  # a mkstemp file is private; give it a normal file's mode
+    try:
+        os.link(made, out)  # fails if out exists: no race between a check and the move
+    except FileExistsError:
+        raise FileExistsError(f"{out} exists; it is not overwritten") from None
+    except OSError:  # a file system without hard links
+        if out.exists():
+            raise FileExistsError(f"{out} exists; it is not overwritten") from None
+        os.replace(made, out)
+        return out
+    made.unlink()
+    return out
+
+
+def save_figure(fig, path: Path, dpi: float) -> Path:
+    """Write a matplotlib figure as PNG to ``path`` atomically."""
+    path = Path(path)
+    with _temporary_beside(path, suffix=".tmp.png") as tmp:
+        fig.savefig(tmp, format="png", dpi=dpi)
+        os.replace(tmp, path)
+    return path
+
+
+def free_name(base: Path) -> Path:
+    """``base`` if nothing is there, else the first free ``base-2``, ``base-3``, ..."""
+    path, i = Path(base), 1
+    while path.exists() or path.is_symlink():
+        i += 1
+        path = Path(base).with_name(f"{Path(base).name}-{i}")
+    return path
+
+
+def _writable(out: Path, option: str, created: bool) -> None:
+    try:
+        with _temporary_beside(out / "probe"):
+            pass
+    except OSError as err:
+        if created:
+            remove_if_empty(out)
+        raise OutputError(f"{option} {str(out)!r} cannot be written: {err.strerror}") from None
+
+
+def claim_folder(out: Path | None, default_base: Path, option: str = "--out") -> tuple[Path, bool]:
+    """A new, writable output folder, or an existing empty one named by the user.
+
+    Parameters
+    ----------
+    out : Path or None
+        The user's folder; None for a new one named after ``default_base`` (``-2``, ``-3``,
+        ... appended while taken; created without ``exist_ok``, so parallel runs never share).
+    default_base : Path
+    option : str
+        The option that named ``out``, for messages.
+
+    Returns
+    -------
+    (Path, bool)
+        The folder and whether this call created it (only such a folder is removed again when
+        the work is abandoned).
+
+    Raises
+    ------
+    OutputError
+        ``out`` holds files, is not a folder, or cannot be created or written.
+    """
+    if out is None:
+        for _ in range(1000):
+            path = free_name(default_base)
+            try:
+                path.mkdir(parents=True)
+            except FileExistsError:
+                continue  # taken between the look and the mkdir: try the next name
+            except OSError as err:
+                raise OutputError(
+                    f"output folder {str(path)!r} cannot be created: {err.strerror}"
+                ) from None
+            _writable(path, "output folder", created=True)
+            return path, True
+        raise OutputError(f"no free output folder name for {str(default_base)!r}")
+    out = Path(out)
+    if out.is_symlink() or (out.exists() and (not out.is_dir() or any(out.iterdir()))):
+        raise OutputError(
+            f"{option} {str(out)!r} already exists and is not an empty folder: outputs are "
+            "never overwritten; name a new folder"
+        )
+    created = not out.exists()
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise OutputError(f"{option} {str(out)!r} cannot be written: {err.strerror}") from None
+    _writable(out, option, created)
+    return out, created
+
+
+def remove_if_empty(out: Path) -> None:
+    """Remove ``out`` if it is an empty folder (what an abandoned run leaves)."""
+    with contextlib.suppress(OSError):
+        if out.is_dir() and not any(out.iterdir()):
+            out.rmdir()
+
+
+def json_default(obj):
+    """``json.dumps(default=...)`` for numpy scalars and arrays and paths."""
+    if isinstance(obj, np.floating | np.integer):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+
+
+def json_safe(value):
+    """``value`` with numpy types made plain and non-finite floats made None (strict JSON)."""
+    if isinstance(value, Mapping):
+        return {str(k): json_safe(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [json_safe(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return json_safe(value.tolist())
+    if isinstance(value, np.integer | bool | np.bool_):
+        return value if isinstance(value, bool) else int(value)
+    if isinstance(value, float | np.floating):
+        return float(value) if np.isfinite(value) else None
+    return value
+
+
+def timeseries_csv(ts: Mapping[str, np.ndarray], columns) -> str:
+    """The time series as CSV text in ``columns`` order, every float with full precision."""
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(columns)
+    for row in zip(*(ts[c] for c in columns), strict=True):
+        writer.writerow([repr(float(v)) for v in row])
+    return buf.getvalue()
+
+
+def read_timeseries(path) -> dict[str, np.ndarray]:
+    """A ``timeseries.csv`` (header row, then numbers) as column name -> 1-D array."""
+    path = Path(path)
+    with path.open(newline="") as f:
+        header = next(csv.reader(f), None)
+    if not header:
+        raise ValueError(f"{path} is empty: a time series needs a header row")
+    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    if data.shape[1] != len(header):
+        raise ValueError(f"{path} has {len(header)} header names but {data.shape[1]} columns")
+    return {name.strip(): data[:, j].copy() for j, name in enumerate(header)}
+
+
+def write_json(path: Path, doc, strict: bool = False) -> None:
+    """``doc`` as indented JSON, atomically; ``strict`` turns NaN and infinities into null."""
+    if strict:
+        text = json.dumps(json_safe(doc), indent=2, allow_nan=False)
+    else:
+        text = json.dumps(doc, indent=2, default=json_default)
+    atomic_write(path, text + "\n")
