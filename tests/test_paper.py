@@ -222,7 +222,7 @@ def test_steady_mask_windows_on_the_s_curve():
     path, _, _ = make_target("s_curve")
     half = path.length / 2  # the curvature step
     s = np.linspace(0.0, path.length, 2001)
-    forward = paper._steady_mask(path, s, reverse=False, spacing=0.7)
+    forward = paper.steady_mask(path, s, reverse=False, spacing=0.7)
     # Forward: the trailer settles 2 m after the tractor's start or the step plus the 0.7 m
     # spacing, and stops being steady as soon as the tractor passes the step.
     expected = ((s >= 2.7) & (s < half)) | (s >= half + 2.7)
@@ -232,7 +232,7 @@ def test_steady_mask_windows_on_the_s_curve():
     clear = np.min(np.abs(s[:, None] - edges[None, :]), axis=1) > 2e-3
     assert np.array_equal(forward[clear], expected[clear])
     # Reversing from the end: P0 leads 0.7 m ahead (lower s) and must stay on the path.
-    reverse = paper._steady_mask(path, s[::-1], reverse=True, spacing=0.7)[::-1]
+    reverse = paper.steady_mask(path, s[::-1], reverse=True, spacing=0.7)[::-1]
     expected_rev = ((s <= path.length - 2.0) & (s > half + 0.7)) | (s <= half - 2.0)
     expected_rev &= s >= 0.7
     assert np.array_equal(reverse[clear], expected_rev[clear])

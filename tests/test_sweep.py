@@ -221,7 +221,7 @@ def test_killed_sweep_resumes_to_the_uninterrupted_table(reference, tmp_path):
         time.sleep(0.01)
     os.killpg(proc.pid, signal.SIGKILL)
     proc.communicate()
-    finished = sweep._read_journal(journal)
+    finished = sweep.read_journal(journal)
     assert 2 <= len(finished) < N_RUNS, "the sweep must be killed part way for this test"
     assert not (out / sweep.TABLE).exists()  # the final table only appears at the end
 

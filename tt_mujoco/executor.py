@@ -1,0 +1,124 @@
+"""Where many runs execute: local worker processes or a Dask cluster, for sweeps and the suite."""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import contextlib
+import multiprocessing
+import signal
+
+__all__ = ["PRELOAD", "ExecutorError", "Executors", "ignore_sigint"]
+
+
+class ExecutorError(ValueError):
+    """The executor cannot be opened (Dask missing, scheduler unreachable)."""
+
+
+#: Imported once in the forkserver, so that no worker pays ~1 s of imports on its first run.
+PRELOAD = [
+    "mujoco",
+    "scipy.integrate",
+    "tt_mujoco.sim",
+    "tt_mujoco.sim.physics",
+    "tt_mujoco.reference.targets",
+    "tt_mujoco.analysis.metrics",
+    "tt_mujoco.sim.faults",
+    "tt_mujoco.sim.plant_mujoco",
+    "tt_mujoco.controllers",
+    "tt_mujoco.sweep.runs",
+]
+
+
+def ignore_sigint() -> None:
+    # Ctrl-C reaches the whole process group; only the parent should handle it (it cancels the
+    # rest and stops the workers), or every worker prints a traceback.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+class Executors:
+    """Opens the executor: a process pool, or a Dask client's concurrent.futures executor.
+
+    Parameters
+    ----------
+    workers : int
+        Worker processes (of the pool, or of a local Dask cluster).
+    scheduler : str or None
+        None: local processes (forkserver, with :data:`PRELOAD` imported once); ``"local"``: a
+        Dask ``LocalCluster``; else the address of a running Dask scheduler.
+    initializer : callable, optional
+        Run in each pool worker at start (e.g. :func:`ignore_sigint`).
+    """
+
+    def __init__(self, workers: int, scheduler: str | None, initializer=None):
+        self.workers = workers
+        self.initializer = initializer
+        self.scheduler = scheduler
+        self.client = self.cluster = None
+        self.pool: cf.Executor | None = None
+
+    def open(self) -> cf.Executor:
+        if self.scheduler is None:
+            # forkserver: workers start from a clean preloaded process, not a fork of a parent
+            # that may hold threads (the progress bar's, a Dask client's).
+            if "forkserver" in multiprocessing.get_all_start_methods():
+                ctx = multiprocessing.get_context("forkserver")
+                ctx.set_forkserver_preload(PRELOAD)
+            else:  # Windows
+                ctx = multiprocessing.get_context("spawn")
+            self.pool = cf.ProcessPoolExecutor(
+                max_workers=self.workers, mp_context=ctx, initializer=self.initializer
+            )
+            return self.pool
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError:
+            raise ExecutorError(
+                "--scheduler needs Dask distributed: pip install 'tt-mujoco[dask]'"
+            ) from None
+        if self.scheduler == "local":
+            self.cluster = LocalCluster(
+                n_workers=self.workers,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=":0",  # any free port: never clash with a running one
+            )
+            self.client = Client(self.cluster)
+        else:
+            try:
+                self.client = Client(self.scheduler, timeout="20s")
+            except (OSError, TimeoutError) as err:
+                raise ExecutorError(
+                    f"--scheduler {self.scheduler!r}: cannot connect to a Dask scheduler ({err})"
+                ) from None
+        # pure=False: a resubmitted run must run again, not return a cached failure
+        self.pool = self.client.get_executor(pure=False)
+        return self.pool
+
+    def slots(self) -> int:
+        if self.client is not None:
+            return max(1, sum(self.client.nthreads().values()))
+        return self.workers
+
+    def reopen(self) -> cf.Executor:
+        self.close(cancel=True)
+        return self.open()
+
+    def close(self, cancel: bool = False) -> None:
+        if self.pool is not None:
+            if cancel and isinstance(self.pool, cf.ProcessPoolExecutor):
+                # Python 3.11 has no terminate_workers(): stop runs in flight instead of
+                # waiting for them (their results would be dropped anyway).
+                for proc in list(getattr(self.pool, "_processes", {}).values()):
+                    with contextlib.suppress(Exception):
+                        proc.terminate()
+            if isinstance(self.pool, cf.ProcessPoolExecutor):
+                self.pool.shutdown(wait=not cancel, cancel_futures=True)
+            else:  # Dask's executor cancels what is pending on shutdown(wait=False)
+                self.pool.shutdown(wait=not cancel)
+            self.pool = None
+        if self.client is not None:
+            self.client.close()
+            self.client = None
+        if self.cluster is not None:
+            self.cluster.close()
+            self.cluster = None

@@ -1,0 +1,83 @@
+"""``python -m tt_mujoco.paper``: the command line."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from tt_mujoco.outputs import claim_folder
+from tt_mujoco.paper.execute import run_suite
+from tt_mujoco.paper.report import build_report
+from tt_mujoco.paper.suite import COMMAND, DEFAULT_OUT, suite
+
+
+# --- command line -------------------------------------------------------------------------------
+class _BadInputError(Exception):
+    pass
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str):
+        raise _BadInputError(message)
+
+
+def _workers(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--workers {text!r} is not an integer >= 1") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"--workers {text!r} is not an integer >= 1")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(
+        prog=COMMAND,
+        description=(
+            "Run every scenario behind the paper's Tables 1-5 on the reduced model and MuJoCo, "
+            "with isolation runs, a passive-steering study and a path-feedback study, and write "
+            "report.md, report.json, summary.md and figures."
+        ),
+        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
+    )
+    p.add_argument(
+        "--out",
+        default=None,
+        metavar="DIR",
+        help="output folder, new or empty (default: renders/paper, or renders/paper-N if taken)",
+    )
+    p.add_argument("--workers", type=_workers, default=2, help="worker processes")
+    p.add_argument("--quick", action="store_true", help="a reduced set of short runs (smoke test)")
+    p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Exit 0 done, 2 bad input, 1 if a run raised an error (it is in the report)."""
+    try:
+        args = build_parser().parse_args(argv)
+        out, _ = claim_folder(args.out, DEFAULT_OUT)  # before the suite: a bad --out fails now
+    except (_BadInputError, ValueError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    specs = suite(quick=args.quick)
+    start = time.perf_counter()
+    records = run_suite(specs, workers=args.workers, progress=not args.quiet)
+    wall = time.perf_counter() - start
+    info = {
+        "command": COMMAND + (" --quick" if args.quick else ""),
+        "runs": len(specs),
+        "unique_runs": len({r["same_as"] for r in records.values()}),
+        "workers": args.workers,
+        "wall_time_s": wall,
+    }
+    report = build_report(records, out, info, figures=not args.no_figures)
+    errors = [k for k, r in records.items() if r.get("status") == "error"]
+    print(f"report: {report} ({len(specs)} runs in {wall:.1f} s)")
+    if errors:
+        print(f"{len(errors)} run(s) failed, see the report: {', '.join(errors)}", file=sys.stderr)
+        return 1
+    return 0

@@ -1,0 +1,186 @@
+"""``python -m tt_mujoco.sweep``: the command line."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import signal
+import sys
+import time
+from pathlib import Path
+
+from tt_mujoco.executor import ExecutorError
+from tt_mujoco.outputs import free_name
+from tt_mujoco.sweep.execute import run_sweep
+from tt_mujoco.sweep.options import (
+    DICT_OPTIONS,
+    EXIT_BAD_INPUT,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    JOURNAL,
+    KEY_METRICS,
+    RENDERS,
+    SCALABLE,
+    SCENARIO_OPTIONS,
+    SETTABLE,
+    SPEC_FILE,
+    BadSpecError,
+)
+from tt_mujoco.sweep.runs import expand
+from tt_mujoco.sweep.spec import parse_spec
+from tt_mujoco.sweep.tables import summary_text
+
+
+# --- command line ------------------------------------------------------------------------------
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str):  # argparse's own errors: exit code 2, one line
+        raise BadSpecError(message)
+
+
+_DICT_HELP = "".join(
+    f"  {n:<16} on (its defaults), off, or {n}.<key>=x for one entry (implies on)\n"
+    for n in DICT_OPTIONS
+)
+
+
+EPILOG = f"""\
+options (OPTION=VALUES):
+  Scenario fields: {", ".join(SCENARIO_OPTIONS)}
+  gain.<name>      a controller gain, e.g. gain.k1_v (ISMC-STA), gain.kp_v (PID)
+  scale.<field>    Params default times the factor; field one of {", ".join(SCALABLE)}
+  param.<field>    a Params value; field one of {", ".join(SETTABLE)}
+{_DICT_HELP}  faults           one fault spec per value, several in a run joined by ";" (e.g.
+                   faults="payload:t=2,factor=1.5"); on the command line a single value,
+                   several values as a list in a --config TOML file; "none" for no faults
+VALUES:
+  5                 fixed          5,10,20          a list
+  lin:0.8:1.2:5     5 evenly spaced values, ends included
+  log:1:100:3       geometric      range:0:10       integers 0..9
+  uniform:A:B  loguniform:A:B  normal:MEAN:STD       random mode (--samples) only
+example:
+  python -m tt_mujoco.sweep traj=s_curve duration=10 noise_snr_db=20 \\
+      gain.k1_v=5,10,20 scale.Mr=lin:0.8:1.2:3 --repeats 4 --workers 2 --out renders/sweep1
+"""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = _Parser(
+        prog="python -m tt_mujoco.sweep",
+        description=(
+            "Run a grid or random sweep of closed-loop runs in parallel and write one table "
+            "(runs.csv: configuration and metrics of every run), a summary and figures."
+        ),
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("items", nargs="*", metavar="OPTION=VALUES", help="options (see below)")
+    p.add_argument("--config", type=Path, metavar="FILE.toml", help="sweep specification file")
+    p.add_argument("--repeats", type=int, default=None, help="grid: runs per point (default 1)")
+    p.add_argument("--samples", type=int, default=None, help="random sampling: number of runs")
+    p.add_argument("--seed", type=int, default=None, help="sweep seed (default 0)")
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="output folder (default: a new folder under renders/)",
+    )
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the sweep in --out (without options: with its saved spec)",
+    )
+    p.add_argument(
+        "--retry-errors",
+        action="store_true",
+        help="with --resume: run again the runs that ended with status 'error'",
+    )
+    p.add_argument(
+        "--workers", type=int, default=None, help="worker processes (default: the CPU count)"
+    )
+    p.add_argument(
+        "--scheduler",
+        default=None,
+        metavar="ADDRESS",
+        help="Dask scheduler address, or 'local' for a LocalCluster",
+    )
+    p.add_argument("--metric", default="rmse_lateral", help="metric of the scatter figure")
+    p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
+    p.add_argument("--dry-run", action="store_true", help="check the sweep and list its runs")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    return p
+
+
+def _sigterm(signum, frame):
+    raise KeyboardInterrupt  # a batch system's stop: same clean, resumable exit as Ctrl-C
+
+
+def main(argv: list[str] | None = None) -> int:
+    out = None
+    try:
+        args = build_parser().parse_args(argv)
+        workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+        if workers < 1:
+            raise BadSpecError(f"--workers {workers} is not allowed: it must be >= 1")
+        if args.resume and args.out is None:
+            raise BadSpecError("--resume needs --out DIR, the folder of the sweep to continue")
+        config = args.config
+        if args.resume and not args.items and config is None:
+            config = args.out / SPEC_FILE
+            if not config.exists():
+                raise BadSpecError(f"--out {str(args.out)!r} holds no {SPEC_FILE} to resume")
+        spec = parse_spec(args.items, config, args.seed, args.repeats, args.samples)
+        if not spec.axes and args.samples is None and args.repeats is None:
+            raise BadSpecError(
+                "nothing to sweep: give options as OPTION=VALUES, --repeats N, --samples N or "
+                "--config FILE.toml (see --help)"
+            )
+        noise = spec.axis("noise_snr_db")
+        if spec.mode == "grid" and spec.repeats > 1 and (noise is None or None in noise.values):
+            print(
+                "note: repeats differ only in the noise seed; runs without noise_snr_db are "
+                "identical copies",
+                file=sys.stderr,
+            )
+        if args.dry_run:
+            runs = expand(spec)
+            for run in runs:
+                print(run["index"], run["run_id"], json.dumps(run["options"]))
+            print(f"{len(runs)} runs ({spec.mode})")
+            return EXIT_OK
+        out = args.out
+        if out is None:
+            out = free_name(RENDERS / f"sweep-{time.strftime('%Y%m%d-%H%M%S')}")
+        signal.signal(signal.SIGTERM, _sigterm)
+        result = run_sweep(
+            spec,
+            out,
+            workers=workers,
+            scheduler=args.scheduler,
+            resume=args.resume,
+            quiet=args.quiet,
+            metric=args.metric,
+            figures=not args.no_figures,
+            retry_errors=args.retry_errors,
+        )
+    except (BadSpecError, ExecutorError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        if out is not None:
+            print(
+                f"\ninterrupted: finished runs are in {out / JOURNAL}; continue with "
+                f"python -m tt_mujoco.sweep --resume --out {out}",
+                file=sys.stderr,
+            )
+        return EXIT_INTERRUPTED
+    metric_names = [m for m in dict.fromkeys([*KEY_METRICS, args.metric])]
+    print(summary_text(result.summary, metric_names))
+    ran = len(result.rows) - result.reused
+    rate = f", {ran / result.wall_s:.2f} runs/s" if ran else ""
+    print(
+        f"{len(result.rows)} runs ({result.reused} reused) in {result.wall_s:.1f} s{rate}; "
+        f"wrote {', '.join(p.name for p in result.files)} to {result.out}/"
+    )
+    return EXIT_OK

@@ -1,0 +1,272 @@
+"""Executing a sweep: workers (processes or Dask), the journal, resume and recovery."""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import contextlib
+import json
+import sys
+import time
+from collections import deque
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from tt_mujoco.executor import Executors, ignore_sigint
+from tt_mujoco.outputs import atomic_write
+from tt_mujoco.sweep.options import JOURNAL, SPEC_FILE, TABLE, BadSpecError
+from tt_mujoco.sweep.runs import expand, run_one
+from tt_mujoco.sweep.spec import SweepSpec
+from tt_mujoco.sweep.tables import (
+    build_rows,
+    plot_summary,
+    read_journal,
+    summarize,
+    summary_csv,
+    table_csv,
+)
+
+
+# --- execution ---------------------------------------------------------------------------------
+@dataclass
+class SweepResult:
+    """What :func:`run_sweep` did.
+
+    Attributes
+    ----------
+    out : Path
+    header : list of str
+    rows : list of dict
+        The table, one dict per run (Python values).
+    summary : dict
+        See :func:`summarize`.
+    reused : int
+        Runs taken from the journal instead of being run.
+    wall_s : float
+        Wall time of this call.
+    files : list of Path
+    """
+
+    out: Path
+    header: list[str]
+    rows: list[dict]
+    summary: dict
+    reused: int
+    wall_s: float
+    files: list[Path] = field(default_factory=list)
+
+
+def _progress(total: int, initial: int, quiet: bool):
+    if quiet:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(
+        total=total,
+        initial=initial,
+        unit="run",
+        desc="sweep",
+        dynamic_ncols=True,
+        mininterval=0.5 if sys.stderr.isatty() else 30.0,
+        file=sys.stderr,
+    )
+
+
+def _lock(out: Path):
+    try:
+        import fcntl
+    except ImportError:  # Windows: no advisory lock, the user keeps one sweep per folder
+        return contextlib.nullcontext()
+    fh = open(out / ".lock", "w")  # held open (and locked) for the sweep's lifetime
+    try:
+        fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        fh.close()
+        raise BadSpecError(f"--out {str(out)!r}: another sweep is running in it") from None
+    return fh
+
+
+def prepare_out(out: Path, resume: bool) -> None:
+    """Make the output folder; refuse a used one unless resuming."""
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        if not resume:
+            raise BadSpecError(
+                f"--out {str(out)!r} already exists and is not empty: pass --resume to continue "
+                "the sweep in it, or name a new folder"
+            )
+        if not (out / JOURNAL).exists() and not (out / SPEC_FILE).exists():
+            raise BadSpecError(f"--out {str(out)!r} holds no sweep ({JOURNAL}) to resume")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise BadSpecError(f"--out {str(out)!r} cannot be made: {err.strerror}") from None
+
+
+def run_sweep(
+    spec: SweepSpec,
+    out: str | Path,
+    workers: int = 1,
+    scheduler: str | None = None,
+    resume: bool = False,
+    quiet: bool = True,
+    metric: str = "rmse_lateral",
+    figures: bool = True,
+    retry_errors: bool = False,
+) -> SweepResult:
+    """Run a sweep and write its table, summary and figures into ``out``.
+
+    Parameters
+    ----------
+    spec : SweepSpec
+    out : path
+        Output folder: new or empty, or (``resume=True``) one holding an unfinished sweep.
+    workers : int
+        Local worker processes (``scheduler=None``), or the LocalCluster's workers
+        (``scheduler="local"``); ignored for a remote scheduler.
+    scheduler : str, optional
+        None: a local process pool. ``"local"``: a Dask ``LocalCluster``. Otherwise the address
+        of a running Dask scheduler, e.g. ``tcp://10.0.0.5:8786``.
+    resume : bool
+        Continue a sweep in ``out``: runs whose configuration is in its journal are not run.
+    quiet : bool
+        No progress bar.
+    metric : str
+        The metric of the scatter figure.
+    figures : bool
+        Write ``histograms.png`` and ``scatter.png``.
+    retry_errors : bool
+        With ``resume``: run again the runs whose status is "error" (a raised exception or a
+        lost worker, perhaps transient); jackknifed and diverged runs are results and stay.
+
+    Raises
+    ------
+    BadSpecError
+        For a bad specification, output folder or scheduler, before any run starts.
+    KeyboardInterrupt
+        When interrupted; finished runs are in the journal, and ``resume=True`` continues.
+    """
+    t0 = time.perf_counter()
+    out = Path(out)
+    if not (isinstance(workers, int) and workers >= 1):
+        raise BadSpecError(f"workers={workers!r} is not allowed: it must be an integer >= 1")
+    runs = expand(spec)
+    prepare_out(out, resume)
+    with _lock(out):
+        journal_path = out / JOURNAL
+        done = read_journal(journal_path)
+        if retry_errors:
+            done = {k: r for k, r in done.items() if r.get("status") != "error"}
+        # Rewrite the journal without a line cut by a kill, so appends start on a fresh line.
+        if journal_path.exists():
+            atomic_write(journal_path, "".join(json.dumps(r) + "\n" for r in done.values()))
+        atomic_write(out / SPEC_FILE, spec.to_toml())
+        todo = deque(r for r in runs if r["run_id"] not in done)
+        reused = len(runs) - len(todo)
+        if todo:
+            _execute(todo, done, journal_path, workers, scheduler, quiet, len(runs), reused)
+        header, rows = build_rows(runs, done)
+        atomic_write(out / TABLE, table_csv(header, rows))
+        summary = summarize(header, rows)
+        atomic_write(out / "summary.csv", summary_csv(summary))
+        wall = time.perf_counter() - t0
+        doc = {**summary, "mode": spec.mode, "seed": spec.seed, "wall_s": wall, "reused": reused}
+        atomic_write(out / "summary.json", json.dumps(doc, indent=2) + "\n")
+        files = [out / TABLE, out / "summary.csv", out / "summary.json"]
+        if figures and rows:
+            if metric not in header:
+                print(
+                    f"note: --metric {metric!r} is not a column; drawing rmse_lateral",
+                    file=sys.stderr,
+                )
+                metric = "rmse_lateral"
+            files += plot_summary(rows, spec, out, metric)
+    return SweepResult(out, header, rows, summary, reused, time.perf_counter() - t0, files)
+
+
+def _execute(todo, done, journal_path, workers, scheduler, quiet, total, reused) -> None:
+    """Run ``todo`` through the executor, journalling each result as it arrives."""
+    # The workers import run_one by its module's name (tt_mujoco.sweep.runs), which a Dask
+    # worker on another machine can do too.
+    executors = Executors(workers, scheduler, ignore_sigint)
+    executor = executors.open()
+    bar = _progress(total, reused, quiet)
+    failures = sum(1 for r in done.values() if r.get("status") != "ok")
+    crashes: dict[str, int] = {}
+    inflight: dict[cf.Future, dict] = {}
+    slots, slots_checked = executors.slots(), time.monotonic()
+    try:
+        with open(journal_path, "a", encoding="utf-8") as journal:
+            while todo or inflight:
+                if executors.client is not None and time.monotonic() - slots_checked > 10:
+                    slots, slots_checked = executors.slots(), time.monotonic()  # adaptive
+                # A bounded window keeps memory flat for huge sweeps and makes Ctrl-C prompt.
+                while todo and len(inflight) < 2 * slots + 2:
+                    if any(r["run_id"] in crashes for r in inflight.values()):
+                        break  # a suspect of a worker death runs alone (see _recover)
+                    if todo[0]["run_id"] in crashes and inflight:
+                        break
+                    run = todo.popleft()
+                    inflight[executor.submit(run_one, run["options"])] = run
+                finished, _ = cf.wait(inflight, return_when=cf.FIRST_COMPLETED)
+                broken = []
+                for fut in finished:
+                    run = inflight.pop(fut)
+                    try:
+                        result = fut.result()
+                    except cf.process.BrokenProcessPool:
+                        broken.append(run)
+                        continue
+                    except Exception as err:  # e.g. Dask's KilledWorker after its retries
+                        result = {
+                            "status": "error",
+                            "message": "",
+                            "error": f"{type(err).__name__}: {err}",
+                            "metrics": {},
+                            "run_wall_s": None,
+                        }
+                    record = {"run_id": run["run_id"], "index": run["index"], **result}
+                    journal.write(json.dumps(record) + "\n")
+                    journal.flush()
+                    done[run["run_id"]] = record
+                    failures += result["status"] != "ok"
+                    if bar is not None:
+                        bar.update(1)
+                        bar.set_postfix(failed=failures, refresh=False)
+                if broken:
+                    executor = _recover(executors, broken, inflight, todo, crashes, journal, done)
+                    failures = sum(1 for r in done.values() if r.get("status") != "ok")
+    except BaseException:
+        executors.close(cancel=True)
+        raise
+    finally:
+        if bar is not None:
+            bar.close()
+    executors.close()
+
+
+def _recover(executors, broken, inflight, todo, crashes, journal, done) -> cf.Executor:
+    """A worker process died (segfault, out of memory): every run in flight is suspect.
+
+    Suspects run again one at a time; a run that was alone in flight when a worker died (or in
+    flight at two deaths) is recorded as an error.
+    """
+    suspects = broken + list(inflight.values())
+    inflight.clear()
+    alone = len(suspects) == 1
+    for run in reversed(suspects):
+        crashes[run["run_id"]] = crashes.get(run["run_id"], 0) + 1
+        if alone or crashes[run["run_id"]] >= 2:
+            record = {
+                "run_id": run["run_id"],
+                "index": run["index"],
+                "status": "error",
+                "message": "",
+                "error": "the worker process died during this run",
+                "metrics": {},
+                "run_wall_s": None,
+            }
+            journal.write(json.dumps(record) + "\n")
+            journal.flush()
+            done[run["run_id"]] = record
+        else:
+            todo.appendleft(run)
+    return executors.reopen()

@@ -1,0 +1,243 @@
+"""The runs of a sweep: expansion into options with seeds, scenarios, and running one."""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+import time
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from tt_mujoco.controllers import controller_class
+from tt_mujoco.controllers.base import resolve_gains
+from tt_mujoco.sim import Scenario, build
+from tt_mujoco.sweep.options import (
+    DICT_OPTIONS,
+    LIST_OPTIONS,
+    MAX_RUNS,
+    SCENARIO_OPTIONS,
+    BadSpecError,
+    convert,
+)
+from tt_mujoco.sweep.spec import Axis, SweepSpec
+
+
+# --- the runs ----------------------------------------------------------------------------------
+def run_seed(sweep_seed: int, k: int) -> int:
+    """The noise seed of repeat (grid) or sample (random) ``k``: spawn key (0, k)."""
+    seq = np.random.SeedSequence(sweep_seed, spawn_key=(0, k))
+    return int(seq.generate_state(1, dtype=np.uint32)[0])
+
+
+def _draw(axis: Axis, rng: np.random.Generator):
+    if axis.distribution:
+        kind, a, b = axis.distribution
+        if kind == "uniform":
+            x = rng.uniform(a, b)
+        elif kind == "loguniform":
+            x = math.exp(rng.uniform(math.log(a), math.log(b)))
+        else:
+            x = rng.normal(a, b)
+        return convert(axis.name, float(x))
+    return axis.values[int(rng.integers(len(axis.values)))]
+
+
+def run_id(options: Mapping) -> str:
+    """Stable key of a run: SHA-256 of its options as canonical JSON, 16 hex digits."""
+    text = json.dumps(options, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def expand(spec: SweepSpec) -> list[dict]:
+    """The runs of a sweep, in table order.
+
+    Returns
+    -------
+    list of dict
+        ``{"index", "replicate", "run_id", "options"}``; ``options`` maps every given option
+        (and always ``seed``) to this run's value, JSON-serialisable, and is what
+        :func:`build_scenario` and :func:`run_one` take.
+
+    Raises
+    ------
+    BadSpecError
+        If a run's configuration is not valid (checked for every run before any is started).
+    """
+    explicit_seed = spec.axis("seed") is not None
+    runs = []
+    if spec.mode == "grid":
+        n = math.prod(len(a.values) for a in spec.axes) * spec.repeats
+        _check_count(n)
+        points = itertools.product(*(a.values for a in spec.axes))
+        for point in points:
+            for j in range(spec.repeats):
+                options = dict(zip((a.name for a in spec.axes), point, strict=True))
+                if not explicit_seed:
+                    options["seed"] = run_seed(spec.seed, j)
+                runs.append((j, options))
+    else:
+        _check_count(spec.samples)
+        for k in range(spec.samples):
+            rng = np.random.default_rng(np.random.SeedSequence(spec.seed, spawn_key=(1, k)))
+            options = {a.name: _draw(a, rng) for a in spec.axes}
+            if not explicit_seed:
+                options["seed"] = run_seed(spec.seed, k)
+            runs.append((k, options))
+    out = []
+    seen: dict[str, int] = {}
+    for index, (replicate, options) in enumerate(runs):
+        rid = run_id(options)
+        if rid in seen:
+            raise BadSpecError(
+                f"runs {seen[rid]} and {index} have the same configuration {options}: every run "
+                "must differ (check the seed option)"
+            )
+        seen[rid] = index
+        out.append({"index": index, "replicate": replicate, "run_id": rid, "options": options})
+    _validate_runs(out)
+    return out
+
+
+def _check_count(n: int) -> None:
+    if n > MAX_RUNS:
+        raise BadSpecError(f"the sweep has {n} runs: at most {MAX_RUNS} are allowed")
+
+
+def build_scenario(options: Mapping) -> Scenario:
+    """The :class:`~tt_mujoco.sim.Scenario` of one run's options.
+
+    ``gain.<k>`` go into ``Scenario.gains`` (with ``gains`` as its preset); ``scale.<f>=x`` sets
+    ``Scenario.plant_scale[f] = x``: the plant's mass or inertia times x while the controller
+    keeps the nominal model (a per-parameter model mismatch, like ``param_scale`` for all of
+    them). ``param.<f>=x`` sets ``Scenario.params[f] = x``: vehicle *and* nominal model.
+    Without ``control_dt`` the control period is the ``timestep`` (as in
+    ``python -m tt_mujoco.run``).
+    """
+    kwargs = {k: v for k, v in options.items() if k in SCENARIO_OPTIONS}
+    for name in LIST_OPTIONS:
+        if name in kwargs:
+            text = kwargs[name].strip()
+            kwargs[name] = [] if text.lower() == "none" else [p.strip() for p in text.split(";")]
+    gains = {k[5:]: v for k, v in options.items() if k.startswith("gain.")}
+    if gains:
+        if "gains" in kwargs:
+            gains["preset"] = kwargs["gains"]
+        kwargs["gains"] = gains
+    params = {}
+    plant_scale = {}
+    for k, v in options.items():
+        if k.startswith("scale."):
+            plant_scale[k[6:]] = v
+        elif k.startswith("param."):
+            params[k[6:]] = v
+    for name in DICT_OPTIONS:
+        entries = {k[len(name) + 1 :]: v for k, v in options.items() if k.startswith(name + ".")}
+        switch = options.get(name)
+        if switch == "off" and entries:
+            raise ValueError(f"{name}=off contradicts {', '.join(map(str, entries))} set for it")
+        if switch == "on" or entries:
+            kwargs[name] = entries
+        elif switch == "off":
+            kwargs[name] = None
+    if "timestep" in kwargs and "control_dt" not in kwargs:
+        kwargs["control_dt"] = kwargs["timestep"]
+    return Scenario(params=params, plant_scale=plant_scale, **kwargs)
+
+
+def _resolved_gains(scenario: Scenario) -> tuple[str, dict]:
+    cls = controller_class(scenario.controller)
+    values, preset = resolve_gains(cls.name, cls.PRESETS, cls.DEFAULT_PRESET, scenario.gains)
+    return preset, values
+
+
+def _validate_runs(runs: Sequence[dict]) -> None:
+    """Every run through the one setup path (:func:`tt_mujoco.sim.build`), before any work
+    (exit 2 on a bad one). Runs that differ only in their seed are checked once."""
+    checked: set[str] = set()
+    for run in runs:
+        options = run["options"]
+        key = json.dumps({k: v for k, v in options.items() if k != "seed"}, sort_keys=True)
+        if key in checked:
+            continue
+        try:
+            build(build_scenario(options))
+        except (ValueError, TypeError, OSError) as err:
+            shown = {k: v for k, v in options.items() if k != "seed"}
+            raise BadSpecError(f"run {run['index']} {shown}: {err}") from None
+        checked.add(key)
+
+
+def config_columns(run: Mapping) -> dict:
+    """The configuration part of a run's row: the full Scenario, the resolved eta and gains,
+    and the ``scale.*``/``param.*`` factors given."""
+    options = run["options"]
+    scenario = build_scenario(options)
+    row = {"index": run["index"], "run_id": run["run_id"], "replicate": run["replicate"]}
+    for name in SCENARIO_OPTIONS:
+        value = getattr(scenario, name)
+        if name in LIST_OPTIONS:
+            value = options.get(name, "none")
+        elif name in DICT_OPTIONS and value is None:
+            value = "off"
+        row[name] = value if not isinstance(value, dict | list) else json.dumps(value)
+    preset, gains = _resolved_gains(scenario)
+    row["gains"] = preset
+    row["eta_value"] = scenario.nominal_params().eta
+    for k, v in gains.items():
+        row[f"gain.{k}"] = v
+    for k, v in options.items():
+        if k.startswith(("scale.", "param.")):
+            row[k] = v
+    return row
+
+
+def _flatten_metrics(value, prefix: str = "", out: dict | None = None) -> dict:
+    """Nested metrics (e.g. the per-fault report ``faults: [{..., window: {...}}]``) as flat
+    columns ``faults.0.window.rmse_lateral``; numpy scalars as Python ones."""
+    out = {} if out is None else out
+    if isinstance(value, Mapping):
+        for key, item in value.items():
+            _flatten_metrics(item, f"{prefix}{key}.", out)
+    elif isinstance(value, list | tuple):
+        for i, item in enumerate(value):
+            _flatten_metrics(item, f"{prefix}{i}.", out)
+    else:
+        out[prefix[:-1]] = value.item() if isinstance(value, np.generic) else value
+    return out
+
+
+def run_one(options: Mapping) -> dict:
+    """Simulate one run; never raises for a run's failure (worker entry point).
+
+    Parameters
+    ----------
+    options : mapping
+        One run's options (see :func:`expand`).
+
+    Returns
+    -------
+    dict
+        ``status`` ("ok", "jackknife", "diverged", or "error" when the run raised),
+        ``message``, ``error`` (exception type and text, "" unless status is "error"),
+        ``metrics`` (dict; empty on error) and ``run_wall_s`` (the whole run in this worker:
+        setup, control loop and metrics).
+    """
+    from tt_mujoco.sim import simulate
+
+    start = time.perf_counter()
+    try:
+        result = simulate(build_scenario(options))
+        metrics = _flatten_metrics({k: v for k, v in result.metrics.items() if k != "status"})
+        out = {"status": result.status, "message": result.message, "error": "", "metrics": metrics}
+    except Exception as err:  # a run's crash is a row of the table, not the sweep's end
+        out = {
+            "status": "error",
+            "message": "",
+            "error": f"{type(err).__name__}: {err}",
+            "metrics": {},
+        }
+    out["run_wall_s"] = time.perf_counter() - start
+    return out

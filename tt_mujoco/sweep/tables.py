@@ -1,0 +1,251 @@
+"""The journal, the runs table, the summary and its figures."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from tt_mujoco.outputs import save_figure
+from tt_mujoco.sweep.options import KEY_METRICS, PERCENTILES, RESULT_COLUMNS, WALL_COLUMNS
+from tt_mujoco.sweep.runs import config_columns
+from tt_mujoco.sweep.spec import SweepSpec
+
+
+# --- journal and table -------------------------------------------------------------------------
+def read_journal(path: Path) -> dict[str, dict]:
+    """Finished runs by run_id. A line cut by a kill is dropped (that run runs again)."""
+    done = {}
+    if not path.exists():
+        return done
+    with open(path, encoding="utf-8") as fh:
+        for line in fh:
+            try:
+                record = json.loads(line)
+                done[record["run_id"]] = record
+            except (json.JSONDecodeError, KeyError, TypeError):
+                continue
+    return done
+
+
+def _cell(value) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return repr(value)  # full precision: tables from any executor compare exactly
+    return str(value)
+
+
+def build_rows(runs: Sequence[dict], done: Mapping[str, dict]) -> tuple[list[str], list[dict]]:
+    """The table: header and one row per run (in run order) from the journal's records."""
+    rows = []
+    config_names: list[str] = []
+    metric_names: list[str] = []
+    for run in runs:
+        record = done[run["run_id"]]
+        row = config_columns(run)
+        for name in row:
+            if name not in config_names:
+                config_names.append(name)
+        row.update({k: record.get(k, "") for k in RESULT_COLUMNS})
+        for name, value in record.get("metrics", {}).items():
+            if name not in metric_names and name not in WALL_COLUMNS:
+                metric_names.append(name)
+            row[name] = value
+        row["run_wall_s"] = record.get("run_wall_s")
+        rows.append(row)
+    header = config_names + list(RESULT_COLUMNS) + metric_names + list(WALL_COLUMNS)
+    return header, rows
+
+
+def table_csv(header: Sequence[str], rows: Sequence[Mapping]) -> str:
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(header)
+    for row in rows:
+        writer.writerow([_cell(row.get(name)) for name in header])
+    return buf.getvalue()
+
+
+def read_table(path: str | Path) -> list[dict[str, str]]:
+    """A ``runs.csv`` as a list of rows (column -> text; empty text for missing values)."""
+    with open(path, newline="", encoding="utf-8") as fh:
+        return list(csv.DictReader(fh))
+
+
+# --- summary and figures -------------------------------------------------------------------------
+def _is_number(value) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _numeric(rows: Sequence[Mapping], name: str) -> np.ndarray:
+    """Column ``name`` as floats, NaN where a row has no number."""
+    return np.array([float(v) if _is_number(v := r.get(name)) else math.nan for r in rows])
+
+
+def summarize(header: Sequence[str], rows: Sequence[Mapping]) -> dict:
+    """Counts by status and, per metric, statistics over the runs that finished ``ok``.
+
+    Metrics of stopped runs cover only the time before the stop, so they would mix two
+    populations; their number is in ``failed`` and ``by_status`` instead.
+
+    Returns
+    -------
+    dict
+        ``runs``, ``ok``, ``failed``, ``by_status`` (status -> count), ``errors`` (the first 5
+        distinct error texts), ``metrics`` (name -> ``n``, ``mean``, ``std``, ``min``,
+        ``p5``...``p95``, ``max``; NaN values skipped).
+    """
+    by_status: dict[str, int] = {}
+    for row in rows:
+        by_status[row["status"]] = by_status.get(row["status"], 0) + 1
+    ok_rows = [r for r in rows if r["status"] == "ok"]
+    errors = list(dict.fromkeys(r["error"] for r in rows if r.get("error")))[:5]
+    start = header.index("error") + 1
+    stats = {}
+    for name in header[start:]:
+        if not any(_is_number(r.get(name)) for r in rows):
+            continue  # a text column (e.g. a fault's kind)
+        x = _numeric(ok_rows, name)
+        x = x[np.isfinite(x)]
+        entry = {"n": int(x.size)}
+        if x.size:
+            entry.update(mean=float(x.mean()), std=float(x.std()), min=float(x.min()))
+            for p, v in zip(PERCENTILES, np.percentile(x, PERCENTILES), strict=True):
+                entry[f"p{p}"] = float(v)
+            entry["max"] = float(x.max())
+        stats[name] = entry
+    return {
+        "runs": len(rows),
+        "ok": len(ok_rows),
+        "failed": len(rows) - len(ok_rows),
+        "by_status": dict(sorted(by_status.items())),
+        "errors": errors,
+        "metrics": stats,
+    }
+
+
+def summary_csv(summary: Mapping) -> str:
+    keys = ["n", "mean", "std", "min", *(f"p{p}" for p in PERCENTILES), "max"]
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(["metric", *keys])
+    for name, entry in summary["metrics"].items():
+        writer.writerow([name, *(_cell(entry.get(k)) for k in keys)])
+    return buf.getvalue()
+
+
+def summary_text(summary: Mapping, metric_names: Sequence[str]) -> str:
+    lines = [
+        f"{summary['runs']} runs: {summary['ok']} ok, {summary['failed']} failed"
+        + "".join(
+            f", {count} {status}"
+            for status, count in summary["by_status"].items()
+            if status != "ok"
+        )
+    ]
+    width = max([len(n) for n in metric_names] + [6])
+    lines.append(f"{'metric':<{width}}  {'p5':>10} {'median':>10} {'p95':>10} {'max':>10}")
+    for name in metric_names:
+        e = summary["metrics"].get(name, {})
+        if not e.get("n"):
+            continue
+        lines.append(
+            f"{name:<{width}}  {e['p5']:>10.4g} {e['p50']:>10.4g} {e['p95']:>10.4g} "
+            f"{e['max']:>10.4g}"
+        )
+    for err in summary["errors"]:
+        lines.append(f"error: {err}")
+    return "\n".join(lines)
+
+
+def plot_summary(
+    rows: Sequence[Mapping], spec: SweepSpec, out: Path, metric: str = "rmse_lateral"
+) -> list[Path]:
+    """``histograms.png`` (key metrics over the ok runs) and ``scatter.png`` (``metric``
+    against each numeric option that varies; failed runs drawn as red crosses at the top)."""
+    from matplotlib.figure import Figure
+
+    ok = [r for r in rows if r["status"] == "ok"]
+    failed = len(rows) - len(ok)
+    names = [m for m in dict.fromkeys([*KEY_METRICS, metric]) if np.isfinite(_numeric(ok, m)).any()]
+    names = names[:6]
+    fig = Figure(figsize=(12, 6.5), layout="constrained")
+    axs = fig.subplots(2, 3, squeeze=False).ravel()
+    for ax, name in zip(axs, names, strict=False):
+        x = _numeric(ok, name)
+        x = x[np.isfinite(x)]
+        ax.hist(x, bins=min(40, max(5, int(math.sqrt(x.size)) + 1)), color="tab:blue", alpha=0.8)
+        med = float(np.median(x))
+        ax.axvline(med, color="k", lw=1, ls="--", label=f"median {med:.3g}")
+        ax.set_xlabel(name)
+        ax.set_ylabel("runs")
+        ax.legend(fontsize=8)
+    for ax in axs[len(names) :]:
+        ax.set_visible(False)
+    fig.suptitle(f"{len(rows)} runs: {len(ok)} ok, {failed} failed (histograms of ok runs)")
+    paths = [save_figure(fig, out / "histograms.png", 120)]
+
+    axes = [a for a in spec.axes if a.varies and a.name != "seed" and _is_numeric(rows, a.name)]
+    axes = axes[:6]
+    y_all = _numeric(rows, metric)
+    bad = np.array([r["status"] != "ok" for r in rows])
+    finite = y_all[~bad & np.isfinite(y_all)]
+    top = float(finite.max()) * 1.05 if finite.size else 1.0
+    if axes:
+        n_rows, n_cols = math.ceil(len(axes) / 3), min(3, len(axes))
+        fig = Figure(figsize=(4.2 * n_cols, 3.6 * n_rows), layout="constrained")
+        panels = fig.subplots(n_rows, n_cols, squeeze=False).ravel()
+        # Fixed jitter spreads the runs of a grid value sideways (the same picture every time).
+        jitter = np.random.default_rng(0).uniform(-1.0, 1.0, len(rows))
+        for ax, axis in zip(panels, axes, strict=False):
+            x = np.array([float(r[axis.name]) for r in rows])
+            log = bool(np.all(x > 0) and x.max() >= 10 * x.min())
+            if log:
+                ax.set_xscale("log")
+            u = np.log(x) if log else x  # jitter and medians where the axis is uniform
+            levels = np.unique(u)
+            xs = x
+            if 1 < levels.size <= 12:
+                half = 0.3 * float(np.diff(levels).min())
+                u_jit = u + 0.5 * half * jitter
+                xs = np.exp(u_jit) if log else u_jit
+                for level in levels:  # the median of the ok runs at each grid value
+                    y = y_all[(u == level) & ~bad & np.isfinite(y_all)]
+                    if y.size:
+                        ends = np.array([level - half, level + half])
+                        ends = np.exp(ends) if log else ends
+                        ax.plot(ends, [np.median(y)] * 2, color="k", lw=1.5)
+            ax.scatter(xs[~bad], y_all[~bad], s=12, alpha=0.6, color="tab:blue", label="ok")
+            if bad.any():
+                top_row = np.full(bad.sum(), top)
+                ax.scatter(xs[bad], top_row, marker="x", color="tab:red", label="failed")
+            ax.set_xlabel(axis.name)
+            ax.set_ylabel(metric)
+            ax.legend(fontsize=8)
+        for ax in panels[len(axes) :]:
+            ax.set_visible(False)
+    else:  # nothing numeric varies (e.g. seeds only): two metrics against each other
+        fig = Figure(figsize=(5.5, 4.5), layout="constrained")
+        ax = fig.subplots()
+        other = "rmse_v" if metric != "rmse_v" else "rmse_omega"
+        x_all = _numeric(rows, other)
+        ax.scatter(x_all[~bad], y_all[~bad], s=12, alpha=0.6, color="tab:blue")
+        ax.set_xlabel(other)
+        ax.set_ylabel(metric)
+    fig.suptitle(
+        f"{metric} per run ({failed} failed runs drawn at the top in red; black: median per value)"
+        if axes
+        else f"{metric} per run ({failed} failed runs not drawn)"
+    )
+    paths.append(save_figure(fig, out / "scatter.png", 120))
+    return paths
+
+
+def _is_numeric(rows: Sequence[Mapping], name: str) -> bool:
+    return all(_is_number(r.get(name)) for r in rows)
