@@ -18,7 +18,7 @@ import pytest
 from tt_mujoco import render as render_cli
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
-from tt_mujoco.viz import render
+from tt_mujoco.viz import gl, render
 
 WIDTH, HEIGHT, FPS, DURATION = 160, 120, 30, 2.0
 
@@ -262,7 +262,7 @@ def test_render_video_never_overwrites(series, tmp_path):
 
 
 def test_unknown_gl_backend_is_reported(monkeypatch):
-    monkeypatch.setattr(render, "_selected_backend", None)
+    monkeypatch.setattr(gl, "_selected_backend", None)
     monkeypatch.setenv("MUJOCO_GL", "vulkan")
     with pytest.raises(render.RenderUnavailable, match="MUJOCO_GL='vulkan'"):
         render.select_gl_backend()

@@ -293,7 +293,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="initial articulation phi (deg), short of the jackknife",
     )
     g.add_argument(
-        "--friction", type=_positive("--friction"), default=1.0, help="tyre friction coefficient"
+        "--friction",
+        type=_positive("--friction"),
+        default=1.0,
+        help="tyre friction coefficient",
     )
     g.add_argument(
         "--timestep",

@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from tt_mujoco.analysis.validate import DEFAULT_OUT, _markdown, run_all
+from tt_mujoco.analysis.validate import DEFAULT_OUT, run_all, validation_markdown
 from tt_mujoco.outputs import OutputError, atomic_write, claim_folder, write_json
 
 
@@ -28,7 +28,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     results = run_all()
     write_json(out / "report.json", results)
-    text = _markdown(results)
+    text = validation_markdown(results)
     atomic_write(out / "report.md", text + "\n")
     print(text)
     print(f"\nwrote {out / 'report.md'} and {out / 'report.json'}")

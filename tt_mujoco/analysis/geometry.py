@@ -424,7 +424,7 @@ class Polyline:
         return PolylineProjection(distance, signed, arc, foot, seg)
 
 
-def _as_polyline(polyline) -> Polyline:
+def as_polyline(polyline) -> Polyline:
     return polyline if isinstance(polyline, Polyline) else Polyline(polyline)
 
 
@@ -441,7 +441,7 @@ def distance_to_polyline(points, polyline) -> np.ndarray:
     -------
     ndarray, shape (N,) (a scalar for a single point); NaN for non-finite points.
     """
-    return _as_polyline(polyline).project(points).distance
+    return as_polyline(polyline).project(points).distance
 
 
 def signed_lateral_error(
@@ -470,7 +470,7 @@ def signed_lateral_error(
     arc_length : ndarray, shape (N,)
         Path length from the path's start to the nearest path point.
     """
-    line = _as_polyline(polyline)
+    line = as_polyline(polyline)
     proj = line.project(points, extend_ends=extend_ends)
     if not interior_only:
         return proj.signed_distance, proj.arc_length

@@ -27,7 +27,7 @@ import numpy as np
 from tt_mujoco.analysis.geometry import (
     Polyline,
     PolylineProjection,
-    _as_polyline,
+    as_polyline,
     distance_to_polyline,
     signed_lateral_error,
     trailer_offtrack,
@@ -230,7 +230,7 @@ def compute_metrics(
         strictly increase over the finite prefix.
     """
     columns, n_total = _check_inputs(ts, torque_limit)
-    reference = _as_polyline(reference_polyline)
+    reference = as_polyline(reference_polyline)
     n = _finite_prefix_length(columns, CORE_COLUMNS)
     c = {name: col[:n] for name, col in columns.items()}
     t = c["t"]

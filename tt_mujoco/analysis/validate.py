@@ -349,7 +349,7 @@ def run_all() -> dict:
     }
 
 
-def _markdown(results: dict) -> str:
+def validation_markdown(results: dict) -> str:
     lines = [
         "# Model validation: MuJoCo against the reduced model",
         "",

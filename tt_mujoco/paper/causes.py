@@ -12,7 +12,7 @@ from tt_mujoco.paper.suite import CELLS, FACTOR, PLANT_LABEL, PLANTS, TABLE_RUNS
 
 
 # --- the report ---------------------------------------------------------------------------------
-def _metric(records, key: str, metric: str) -> float:
+def metric_of(records, key: str, metric: str) -> float:
     rec = records.get(key)
     if not rec or rec.get("status") == "error":
         return math.nan
@@ -20,7 +20,7 @@ def _metric(records, key: str, metric: str) -> float:
     return math.nan if value is None else float(value)
 
 
-def _fmt(value, digits: int = 4) -> str:
+def fmt(value, digits: int = 4) -> str:
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
         return "—"
     if isinstance(value, int | np.integer):
@@ -67,9 +67,9 @@ def _applies_traction(cell: Cell, plant: str, records) -> bool:
     iso = f"{cell.run}~mu3@mujoco"
     if iso not in records:
         return False
-    mj = _metric(records, f"{cell.run}@mujoco", cell.metric)
-    red = _metric(records, f"{cell.run}@reduced", cell.metric)
-    slip = _metric(records, f"{cell.run}@mujoco", "slip_longitudinal_max")
+    mj = metric_of(records, f"{cell.run}@mujoco", cell.metric)
+    red = metric_of(records, f"{cell.run}@reduced", cell.metric)
+    slip = metric_of(records, f"{cell.run}@mujoco", "slip_longitudinal_max")
     # MuJoCo too high where the reduced model is not, with the wheels slipping.
     return mj > FACTOR * cell.paper and mj > 1.5 * red and slip > 0.1
 
@@ -90,11 +90,11 @@ def _describe_traction(cells, records) -> str:
     for cell, _ in cells:
         base = f"{cell.run}@mujoco"
         lines.append(
-            f"| `{cell.run}` | {cell.quantity} | {_fmt(cell.paper)} | "
-            f"{_fmt(_metric(records, base, cell.metric))} | "
-            f"{_fmt(_metric(records, base, 'slip_longitudinal_max'), 3)} | "
-            f"{_fmt(_metric(records, f'{cell.run}~mu3@mujoco', cell.metric))} | "
-            f"{_fmt(_metric(records, f'{cell.run}@reduced', cell.metric))} |"
+            f"| `{cell.run}` | {cell.quantity} | {fmt(cell.paper)} | "
+            f"{fmt(metric_of(records, base, cell.metric))} | "
+            f"{fmt(metric_of(records, base, 'slip_longitudinal_max'), 3)} | "
+            f"{fmt(metric_of(records, f'{cell.run}~mu3@mujoco', cell.metric))} | "
+            f"{fmt(metric_of(records, f'{cell.run}@reduced', cell.metric))} |"
         )
     return "\n".join(lines)
 
@@ -103,8 +103,8 @@ def _applies_gains(cell: Cell, plant: str, records) -> bool:
     iso = f"{cell.run}~gains_6_2@{plant}"
     if iso not in records:
         return False
-    ours = _ratio(_metric(records, f"{cell.run}@{plant}", cell.metric), cell.paper)
-    alt = _ratio(_metric(records, iso, cell.metric), cell.paper)
+    ours = _ratio(metric_of(records, f"{cell.run}@{plant}", cell.metric), cell.paper)
+    alt = _ratio(metric_of(records, iso, cell.metric), cell.paper)
     # Ours too low, and the 6.2 set brings it at least 1.5 times closer.
     return (
         ours < 1.0 / FACTOR
@@ -114,7 +114,7 @@ def _applies_gains(cell: Cell, plant: str, records) -> bool:
 
 
 def _describe_gains(cells, records) -> str:
-    ismc_max_v = _fmt(_metric(records, "cycloid_ismc_6_2@reduced", "max_abs_v"))
+    ismc_max_v = fmt(metric_of(records, "cycloid_ismc_6_2@reduced", "max_abs_v"))
     lines = [
         "The paper gives two ISMC-STA gain sets: Section 6.1 (lambda = diag(5, 6), "
         'eps = 0.005), which it states for Tables 1-2 and, in Section 6.3 ("controller '
@@ -123,10 +123,10 @@ def _describe_gains(cells, records) -> str:
         "Yet Table 3's ISMC-STA row repeats Table 1's nominal row digit for digit "
         "(0.0147 / 0.0224), and several numbers fit the 6.2 set, not the 6.1 set: Table 3's "
         f"max |e_v| 0.0971 (ours with 6.2: {ismc_max_v}, "
-        f"with 6.1: {_fmt(_metric(records, 'cycloid_nominal@reduced', 'max_abs_v'))}), and "
+        f"with 6.1: {fmt(metric_of(records, 'cycloid_nominal@reduced', 'max_abs_v'))}), and "
         f"the circle's e_v 0.0131 and max position 0.0174 (ours with 6.2: "
-        f"{_fmt(_metric(records, 'circle_dynamic~gains_6_2@reduced', 'rmse_v'))} and "
-        f"{_fmt(_metric(records, 'circle_dynamic~gains_6_2@reduced', 'max_position'))}). The "
+        f"{fmt(metric_of(records, 'circle_dynamic~gains_6_2@reduced', 'rmse_v'))} and "
+        f"{fmt(metric_of(records, 'circle_dynamic~gains_6_2@reduced', 'max_position'))}). The "
         "small yaw-channel lambda = 0.3 lets more of the yaw disturbance through, hence the "
         "larger e_omega, and it undoes the resulting heading error 20 times more slowly (C3), "
         "hence the larger lateral and position errors. The isolating runs repeat each scenario "
@@ -137,16 +137,16 @@ def _describe_gains(cells, records) -> str:
     ]
     for cell, plant in cells:
         lines.append(
-            f"| `{cell.run}` | {PLANT_LABEL[plant]} | {cell.quantity} | {_fmt(cell.paper)} | "
-            f"{_fmt(_metric(records, f'{cell.run}@{plant}', cell.metric))} | "
-            f"{_fmt(_metric(records, f'{cell.run}~gains_6_2@{plant}', cell.metric))} |"
+            f"| `{cell.run}` | {PLANT_LABEL[plant]} | {cell.quantity} | {fmt(cell.paper)} | "
+            f"{fmt(metric_of(records, f'{cell.run}@{plant}', cell.metric))} | "
+            f"{fmt(metric_of(records, f'{cell.run}~gains_6_2@{plant}', cell.metric))} |"
         )
     lines += [
         "",
         "The S-curve is the exception: with the 6.2 set its curvature step costs e_omega "
-        f"{_fmt(_metric(records, 's_curve_dynamic~gains_6_2@reduced', 'rmse_omega'))} rad/s and "
+        f"{fmt(metric_of(records, 's_curve_dynamic~gains_6_2@reduced', 'rmse_omega'))} rad/s and "
         "a position error of "
-        f"{_fmt(_metric(records, 's_curve_dynamic~gains_6_2@reduced', 'rmse_position'))} m "
+        f"{fmt(metric_of(records, 's_curve_dynamic~gains_6_2@reduced', 'rmse_position'))} m "
         "(paper: 0.0514 and 0.0091), so Table 4 fits the 6.1 set better. Which set produced "
         "which table cannot be settled from the text.",
     ]
@@ -157,11 +157,11 @@ _POSITION_METRICS = ("rmse_lateral", "rmse_position", "max_position")
 
 
 def _applies_open_loop(cell: Cell, plant: str, records) -> bool:
-    ours = _metric(records, f"{cell.run}@{plant}", cell.metric)
+    ours = metric_of(records, f"{cell.run}@{plant}", cell.metric)
     return cell.metric in _POSITION_METRICS and ours < cell.paper / FACTOR
 
 
-def _split(records, key, name):
+def split_of(records, key, name):
     rec = records.get(key) or {}
     value = (rec.get("curvature_split") or {}).get(name)
     return math.nan if value is None else float(value)
@@ -198,19 +198,19 @@ def _describe_open_loop(cells, records) -> str:
         nodist = _nodist_twin(cell, plant)
         alt = f"{cell.run}~gains_6_2@{plant}"
         lines.append(
-            f"| `{cell.run}` | {PLANT_LABEL[plant]} | {cell.quantity} | {_fmt(cell.paper)} | "
-            f"{_fmt(_metric(records, key, cell.metric))} | {_drift(records, key)} | "
-            f"{_fmt(_metric(records, nodist, cell.metric))} | "
-            f"{_fmt(_metric(records, alt, cell.metric))} | "
+            f"| `{cell.run}` | {PLANT_LABEL[plant]} | {cell.quantity} | {fmt(cell.paper)} | "
+            f"{fmt(metric_of(records, key, cell.metric))} | {_drift(records, key)} | "
+            f"{fmt(metric_of(records, nodist, cell.metric))} | "
+            f"{fmt(metric_of(records, alt, cell.metric))} | "
             f"{_drift(records, alt) if alt in records else '—'} |"
         )
     return "\n".join(lines)
 
 
 def _drift(records, key: str) -> str:
-    top = _split(records, key, "heading_drift_e_omega_max")
-    end = _split(records, key, "heading_drift_e_omega_end")
-    return f"{_fmt(top, 2)} / {_fmt(end, 2)}"
+    top = split_of(records, key, "heading_drift_e_omega_max")
+    end = split_of(records, key, "heading_drift_e_omega_end")
+    return f"{fmt(top, 2)} / {fmt(end, 2)}"
 
 
 def _nodist_twin(cell: Cell, plant: str) -> str:
@@ -225,7 +225,7 @@ def _applies_static(cell: Cell, plant: str, records) -> bool:
         return False
     dynamic = cell.run.replace("_static", "_dynamic")
     twin = next((c for c in CELLS if c.run == dynamic and c.metric == cell.metric), None)
-    ours = _metric(records, f"{cell.run}@{plant}", cell.metric)
+    ours = metric_of(records, f"{cell.run}@{plant}", cell.metric)
     return twin is not None and cell.paper > 1.5 * twin.paper and ours < cell.paper / FACTOR
 
 
@@ -253,18 +253,18 @@ def _describe_static(cells, records) -> str:
                 key = f"stiff_yaw_fbl:{traj}_{target}@{plant}"
                 lines.append(
                     f"| {traj} | {PLANT_LABEL[plant]} | {target} | "
-                    f"{_fmt(_metric(records, key, 'rmse_v'))} | "
-                    f"{_fmt(_metric(records, key, 'rmse_omega'))} | "
-                    f"{_fmt(_metric(records, key, 'rmse_lateral'))} | "
-                    f"{_fmt(_split(records, key, 'rms_e_omega_over_v'))} | "
-                    f"{_fmt(_split(records, key, 'rms_mismatch'))} |"
+                    f"{fmt(metric_of(records, key, 'rmse_v'))} | "
+                    f"{fmt(metric_of(records, key, 'rmse_omega'))} | "
+                    f"{fmt(metric_of(records, key, 'rmse_lateral'))} | "
+                    f"{fmt(split_of(records, key, 'rms_e_omega_over_v'))} | "
+                    f"{fmt(split_of(records, key, 'rms_mismatch'))} |"
                 )
     return "\n".join(lines)
 
 
 def _applies_static_start(cell: Cell, plant: str, records) -> bool:
     iso = f"{cell.run}~static_target@{plant}"
-    ours = _ratio(_metric(records, f"{cell.run}@{plant}", cell.metric), cell.paper)
+    ours = _ratio(metric_of(records, f"{cell.run}@{plant}", cell.metric), cell.paper)
     return cell.metric == "max_abs_omega" and iso in records and ours < 1.0 / FACTOR
 
 
@@ -285,9 +285,9 @@ def _describe_static_start(cells, records) -> str:
     ]
     for cell, plant in cells:
         lines.append(
-            f"| `{cell.run}` | {PLANT_LABEL[plant]} | {_fmt(cell.paper)} | "
-            f"{_fmt(_metric(records, f'{cell.run}@{plant}', cell.metric))} | "
-            f"{_fmt(_metric(records, f'{cell.run}~static_target@{plant}', cell.metric))} |"
+            f"| `{cell.run}` | {PLANT_LABEL[plant]} | {fmt(cell.paper)} | "
+            f"{fmt(metric_of(records, f'{cell.run}@{plant}', cell.metric))} | "
+            f"{fmt(metric_of(records, f'{cell.run}~static_target@{plant}', cell.metric))} |"
         )
     lines.append(
         "\nSo the paper's Table 3 maxima were most likely taken from a run whose yaw reference "
@@ -331,7 +331,7 @@ CAUSES = (
 )
 
 
-def _unique(cells: list) -> list:
+def unique_cells(cells: list) -> list:
     """(cell, plant) pairs without repeats of the same run, metric and plant (Table 2's
     first row is Table 1's nominal row)."""
     seen, out = set(), []
@@ -366,7 +366,7 @@ def explain_cells(records) -> tuple[list[dict], dict[str, list]]:
         }
         for plant in PLANTS:
             key = f"{cell.run}@{plant}"
-            value = _metric(records, key, cell.metric)
+            value = metric_of(records, key, cell.metric)
             ratio = _ratio(value, cell.paper)
             causes = []
             if _flagged(ratio):

@@ -6,12 +6,12 @@ from pathlib import Path
 
 import numpy as np
 
-from tt_mujoco.paper.studies import _steering_row
+from tt_mujoco.paper.studies import steering_row
 from tt_mujoco.paper.suite import FACTOR, PLANT_LABEL, PLANTS, STEERING_VARIANTS, STUDY_PATHS
 
 
 # --- figures ------------------------------------------------------------------------------------
-def _draw_figures(records, rows, steering, out: Path) -> list[str]:
+def draw_figures(records, rows, steering, out: Path) -> list[str]:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -95,7 +95,7 @@ def _draw_figures(records, rows, steering, out: Path) -> list[str]:
                 for j, name in enumerate(STEERING_VARIANTS):
                     vals = []
                     for path in STUDY_PATHS:
-                        r = _steering_row(steering, path, plant, name)
+                        r = steering_row(steering, path, plant, name)
                         ok = r is not None and r["status"] == "ok"
                         value = r.get(field_name) if ok else None
                         vals.append(np.nan if value is None else value)

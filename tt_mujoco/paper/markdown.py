@@ -5,8 +5,8 @@ from __future__ import annotations
 import json
 
 from tt_mujoco.outputs import json_safe
-from tt_mujoco.paper.causes import _fmt
-from tt_mujoco.paper.studies import _pair
+from tt_mujoco.paper.causes import fmt
+from tt_mujoco.paper.studies import row_pair
 from tt_mujoco.paper.suite import (
     FEEDBACK_CASES,
     PLANT_LABEL,
@@ -21,7 +21,7 @@ from tt_mujoco.sim import Scenario
 def _cell_text(entry) -> str:
     if entry["status"] in ("not run", "error"):
         return entry["status"]
-    text = _fmt(entry["value"])
+    text = fmt(entry["value"])
     if entry["status"] != "ok":
         text += f" ({entry['status']})"
     return text
@@ -33,11 +33,11 @@ def _why_text(row) -> str:
         e = row[plant]
         if e["flagged"]:
             why = ", ".join(e["causes"]) or "**unexplained**"
-            parts.append(f"{PLANT_LABEL[plant]} x{_fmt(e['ratio'], 2)}: {why}")
+            parts.append(f"{PLANT_LABEL[plant]} x{fmt(e['ratio'], 2)}: {why}")
     return "; ".join(parts)
 
 
-def _tables_markdown(rows, with_why: bool = True) -> list[str]:
+def tables_markdown(rows, with_why: bool = True) -> list[str]:
     out = []
     for table, title in TABLE_TITLES.items():
         out += [f"### {title}", ""]
@@ -49,7 +49,7 @@ def _tables_markdown(rows, with_why: bool = True) -> list[str]:
         out += [head, sep]
         for row in (r for r in rows if r["table"] == table):
             line = (
-                f"| {row['case']} | {row['quantity']} | {_fmt(row['paper'])} | "
+                f"| {row['case']} | {row['quantity']} | {fmt(row['paper'])} | "
                 f"{_cell_text(row['reduced'])} | {_cell_text(row['mujoco'])} |"
             )
             if with_why:
@@ -59,7 +59,7 @@ def _tables_markdown(rows, with_why: bool = True) -> list[str]:
     return out
 
 
-def _steering_markdown(steering) -> list[str]:
+def steering_markdown(steering) -> list[str]:
     out = [
         "| path | steering | plant | status | off-track rms / max (m) | steady-arc rms (m) "
         "| analytic steady (m) | trailer to reference rms / max (m) | max phi (deg) "
@@ -79,18 +79,18 @@ def _steering_markdown(steering) -> list[str]:
         name = r["variant"] + (f", {r['label']}" if r["label"] else "")
         status = r["status"]
         if status == "jackknife":
-            status = f"jackknife at {_fmt(r['end_time_s'], 3)} s"
+            status = f"jackknife at {fmt(r['end_time_s'], 3)} s"
         out.append(
             f"| {r['path']} | {name} | {PLANT_LABEL[r['plant']]} | {status} | "
-            f"{_fmt(r['offtrack_rms'])} / {_fmt(r['offtrack_max'])} | "
-            f"{_fmt(r['offtrack_steady_rms'])} | {_fmt(r['analytic_steady'])} | "
-            f"{_fmt(r['trailer_rmse_lateral'])} / {_fmt(r['trailer_max_lateral'])} | "
-            f"{_fmt(r['phi_max_abs_deg'], 3)} | {_fmt(r['slip_lateral_max'], 3)} |"
+            f"{fmt(r['offtrack_rms'])} / {fmt(r['offtrack_max'])} | "
+            f"{fmt(r['offtrack_steady_rms'])} | {fmt(r['analytic_steady'])} | "
+            f"{fmt(r['trailer_rmse_lateral'])} / {fmt(r['trailer_max_lateral'])} | "
+            f"{fmt(r['phi_max_abs_deg'], 3)} | {fmt(r['slip_lateral_max'], 3)} |"
         )
     return out
 
 
-def _feedback_markdown(feedback) -> list[str]:
+def feedback_markdown(feedback) -> list[str]:
     out = [
         "| case | plant | lateral RMSE off -> on (m) | max lateral off -> on (m) "
         "| cross-track RMS off -> on (m) | cross-track max off -> on (m) "
@@ -99,12 +99,12 @@ def _feedback_markdown(feedback) -> list[str]:
     ]
     for case in FEEDBACK_CASES:
         for plant in PLANTS:
-            off, on = _pair(feedback, case, plant)
+            off, on = row_pair(feedback, case, plant)
             if not (off and on):
                 continue
 
             def both(m, off=off, on=on):
-                return f"{_fmt(off[m])} -> {_fmt(on[m])}"
+                return f"{fmt(off[m])} -> {fmt(on[m])}"
 
             out.append(
                 f"| {case} | {PLANT_LABEL[plant]} | {both('rmse_lateral')} | "
@@ -115,7 +115,7 @@ def _feedback_markdown(feedback) -> list[str]:
     return out
 
 
-def _config_markdown(records) -> list[str]:
+def config_markdown(records) -> list[str]:
     cols = (
         "plant",
         "traj",
@@ -150,7 +150,7 @@ def _config_markdown(records) -> list[str]:
             f"| `{key}` | "
             + " | ".join(cells)
             + f" | {json.dumps(other) if other else ''} | {rec.get('status', 'not run')} | "
-            f"{_fmt(rec.get('wall_time_s'), 2)} |"
+            f"{fmt(rec.get('wall_time_s'), 2)} |"
         )
     return out
 
@@ -159,11 +159,11 @@ def _cfg(value) -> str:
     if value is None:
         return "—"
     if isinstance(value, float):
-        return _fmt(value, 6)
+        return fmt(value, 6)
     return str(value)
 
 
-def _suite_setup_lines(seed: int) -> list[str]:
+def suite_setup_lines(seed: int) -> list[str]:
     return [
         "- Paper: Wen, Chen, Zhou, *Axioms* 2026, 15, 598; its Tables 1-5 as in docs/model.md §10.",
         "- Plants: `reduced` = the exact reduced ODE (RK4, pure rolling); `MuJoCo` "

@@ -9,24 +9,24 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from tt_mujoco.outputs import atomic_write, json_safe
-from tt_mujoco.paper.causes import CAUSES, _fmt, _metric, _unique, explain_cells
-from tt_mujoco.paper.figures import _draw_figures
+from tt_mujoco.paper.causes import CAUSES, explain_cells, fmt, metric_of, unique_cells
+from tt_mujoco.paper.figures import draw_figures
 from tt_mujoco.paper.markdown import (
-    _config_markdown,
-    _feedback_markdown,
-    _steering_markdown,
-    _suite_setup_lines,
-    _tables_markdown,
+    config_markdown,
+    feedback_markdown,
+    steering_markdown,
+    suite_setup_lines,
+    tables_markdown,
 )
 from tt_mujoco.paper.studies import (
-    _checks,
-    _curvature_findings,
-    _curvature_rows,
-    _feedback_rows,
-    _pair,
-    _steering_ratio,
-    _steering_row,
-    _steering_rows,
+    check_rows,
+    curvature_findings,
+    curvature_rows,
+    feedback_rows,
+    row_pair,
+    steering_ratio,
+    steering_row,
+    steering_rows,
 )
 from tt_mujoco.paper.suite import (
     COMMAND,
@@ -69,24 +69,24 @@ def build_report(
     out.mkdir(parents=True, exist_ok=True)
     info = dict(suite_info or {})
     rows, by_cause = explain_cells(records)
-    steering = _steering_rows(records)
-    feedback = _feedback_rows(records)
-    curvature = _curvature_rows(records)
-    checks = _checks(rows, steering, feedback)
-    figs = _draw_figures(records, rows, steering, out) if figures else []
+    steering = steering_rows(records)
+    feedback = feedback_rows(records)
+    curvature = curvature_rows(records)
+    checks = check_rows(rows, steering, feedback)
+    figs = draw_figures(records, rows, steering, out) if figures else []
 
     md = ["# The paper's Tables 1-5 in contact physics", ""]
     md += [
         f"Made by `{info.get('command', COMMAND)}`: {info.get('runs', len(records))} runs "
         f"({info.get('unique_runs', '?')} distinct), {info.get('workers', '?')} worker(s), "
-        f"{_fmt(info.get('wall_time_s'), 3)} s. Every number below is in `report.json` with "
+        f"{fmt(info.get('wall_time_s'), 3)} s. Every number below is in `report.json` with "
         "the full configuration of its run (section *Runs* lists them).",
         "",
         "## Checks",
         "",
     ]
     md += [f"- [{'x' if c['passed'] else ' '}] {c['check']}: {c['detail']}" for c in checks]
-    md += ["", "## Setup common to all runs", "", *_suite_setup_lines(SUITE_SEED), ""]
+    md += ["", "## Setup common to all runs", "", *suite_setup_lines(SUITE_SEED), ""]
     md += ["## Tables 1-5: paper, reduced model, MuJoCo", ""]
     md += [
         f"A cell is flagged when ours / paper is above {FACTOR:g} or below 1/{FACTOR:g}; the "
@@ -94,7 +94,7 @@ def build_report(
         "isolate it.",
         "",
     ]
-    md += _tables_markdown(rows)
+    md += tables_markdown(rows)
     if "fig_ratios.png" in figs:
         md += ["![ours / paper for every cell](fig_ratios.png)", ""]
 
@@ -104,14 +104,14 @@ def build_report(
         if not cells:
             continue
         md += [f"### {cause.code}. {cause.title} ({cause.kind})", ""]
-        md.append(cause.describe(_unique(cells), records))
+        md.append(cause.describe(unique_cells(cells), records))
         listed = ", ".join(f"T{c.table} {c.case} {c.metric} ({PLANT_LABEL[p]})" for c, p in cells)
         md += ["", f"Explains: {listed}.", ""]
     if by_cause["unexplained"]:
         md += ["### Not explained", ""]
         md += [
-            f"- Table {c.table} {c.case}, {c.quantity}, {PLANT_LABEL[p]}: paper {_fmt(c.paper)}, "
-            f"ours {_fmt(_metric(records, f'{c.run}@{p}', c.metric))}"
+            f"- Table {c.table} {c.case}, {c.quantity}, {PLANT_LABEL[p]}: paper {fmt(c.paper)}, "
+            f"ours {fmt(metric_of(records, f'{c.run}@{p}', c.metric))}"
             for c, p in by_cause["unexplained"]
         ]
         md.append("")
@@ -132,12 +132,12 @@ def build_report(
     for r in curvature:
         md.append(
             f"| {r['path']} | {r['target']} | {r['controller']} | {PLANT_LABEL[r['plant']]} | "
-            f"{_fmt(r['rmse_v'])} | {_fmt(r['rmse_lateral'])} | "
-            f"{_fmt(r['rms_e_omega_over_v'])} | {_fmt(r['rms_mismatch'])} | "
-            f"{_fmt(r['mismatch_share'], 2)} | {_fmt(r['heading_drift_e_omega_max'], 3)} | "
-            f"{_fmt(r['heading_drift_mismatch_max'], 3)} |"
+            f"{fmt(r['rmse_v'])} | {fmt(r['rmse_lateral'])} | "
+            f"{fmt(r['rms_e_omega_over_v'])} | {fmt(r['rms_mismatch'])} | "
+            f"{fmt(r['mismatch_share'], 2)} | {fmt(r['heading_drift_e_omega_max'], 3)} | "
+            f"{fmt(r['heading_drift_mismatch_max'], 3)} |"
         )
-    md += ["", *_curvature_findings(records), ""]
+    md += ["", *curvature_findings(records), ""]
     for name, caption in (
         ("fig_curvature_split.png", "curvature error split, ISMC-STA, MuJoCo"),
         ("fig_curvature_split_stiff_yaw.png", "curvature error split, FBL diag(8, 50), MuJoCo"),
@@ -155,18 +155,18 @@ def build_report(
         "is the steady-turn value of `steering.steady_offtrack`; 'trailer to reference' is P0 "
         "to the reference path.",
         "",
-        *_steering_markdown(steering),
+        *steering_markdown(steering),
         "",
     ]
     ratio_lines = []
     for path in ("circle", "s_curve", "cycloid"):
         for plant in PLANTS:
-            full = _steering_ratio(steering, path, plant, "offtrack_rms")
-            steady = _steering_ratio(steering, path, plant, "offtrack_steady_rms")
+            full = steering_ratio(steering, path, plant, "offtrack_rms")
+            steady = steering_ratio(steering, path, plant, "offtrack_steady_rms")
             if math.isfinite(full):
                 ratio_lines.append(
                     f"- {path}, {PLANT_LABEL[plant]}: plain / same_path off-tracking "
-                    f"x{_fmt(full, 3)} over the run, x{_fmt(steady, 3)} on steady arcs"
+                    f"x{fmt(full, 3)} over the run, x{fmt(steady, 3)} on steady arcs"
                 )
     md += ratio_lines
     md += ["", *STEERING_NOTES, ""]
@@ -181,7 +181,7 @@ def build_report(
         "measures P against the path continued along its end tangents (a vehicle that "
         "overshoots the path's end is not counted as lateral error there).",
         "",
-        *_feedback_markdown(feedback),
+        *feedback_markdown(feedback),
         "",
         *FEEDBACK_NOTES,
         "",
@@ -196,7 +196,7 @@ def build_report(
         "with identical scenarios were simulated once. Full configurations, including the "
         "resolved parameters, are in `report.json`.",
         "",
-        *_config_markdown(records),
+        *config_markdown(records),
         "",
     ]
     report = out / "report.md"
@@ -279,7 +279,7 @@ def _summary_markdown(rows, steering, feedback, checks, info) -> str:
         "",
         f"`{info.get('command', COMMAND)}` runs every scenario behind the paper's Tables 1-5 on "
         "the reduced model and on MuJoCo, with isolation runs, a steering study and a path "
-        f"feedback study ({info.get('runs', '?')} runs, {_fmt(info.get('wall_time_s'), 3)} s "
+        f"feedback study ({info.get('runs', '?')} runs, {fmt(info.get('wall_time_s'), 3)} s "
         f"on {info.get('workers', '?')} worker(s)), and writes `report.md` (with the reason for "
         "every difference beyond a factor of two), `report.json` and figures. All table runs "
         "use the same-path steering gain (the paper's eta = 3 jackknifes forward) and seed "
@@ -288,7 +288,7 @@ def _summary_markdown(rows, steering, feedback, checks, info) -> str:
         "C5 yaw reference at t = 0) explained in the report.",
         "",
     ]
-    md += _tables_markdown(rows)
+    md += tables_markdown(rows)
     md += ["### Passive steering: trailer off-tracking (m, rms over the run / on steady arcs)", ""]
     md += [
         "| path | plant | plain eta = 0 | half-difference -0.125 | same_path -1/7 | scheduled "
@@ -308,14 +308,14 @@ def _summary_markdown(rows, steering, feedback, checks, info) -> str:
         for plant in PLANTS:
             cells = []
             for name in names:
-                r = _steering_row(steering, path, plant, name)
+                r = steering_row(steering, path, plant, name)
                 if r is None:
                     cells.append("—")
                 elif r["status"] == "jackknife":
-                    cells.append(f"jackknife {_fmt(r['end_time_s'], 2)} s")
+                    cells.append(f"jackknife {fmt(r['end_time_s'], 2)} s")
                 else:
                     cells.append(
-                        f"{_fmt(r['offtrack_rms'], 2)} / {_fmt(r['offtrack_steady_rms'], 2)}"
+                        f"{fmt(r['offtrack_rms'], 2)} / {fmt(r['offtrack_steady_rms'], 2)}"
                     )
             md.append(f"| {path} | {PLANT_LABEL[plant]} | " + " | ".join(cells) + " |")
     md += ["", "### Path feedback (paper disturbances, 20 dB noise unless stated)", ""]
@@ -326,13 +326,13 @@ def _summary_markdown(rows, steering, feedback, checks, info) -> str:
     ]
     for case in FEEDBACK_CASES:
         for plant in PLANTS:
-            off, on = _pair(feedback, case, plant)
+            off, on = row_pair(feedback, case, plant)
             if off and on:
                 md.append(
-                    f"| {case} | {PLANT_LABEL[plant]} | {_fmt(off['rmse_lateral'])} -> "
-                    f"{_fmt(on['rmse_lateral'])} | {_fmt(off['cross_track_rms'])} -> "
-                    f"{_fmt(on['cross_track_rms'])} | {_fmt(off['rmse_v'])} -> "
-                    f"{_fmt(on['rmse_v'])} |"
+                    f"| {case} | {PLANT_LABEL[plant]} | {fmt(off['rmse_lateral'])} -> "
+                    f"{fmt(on['rmse_lateral'])} | {fmt(off['cross_track_rms'])} -> "
+                    f"{fmt(on['cross_track_rms'])} | {fmt(off['rmse_v'])} -> "
+                    f"{fmt(on['rmse_v'])} |"
                 )
     md += ["", "Checks:", ""]
     md += [f"- [{'x' if c['passed'] else ' '}] {c['check']}: {c['detail']}" for c in checks]

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import math
 
-from tt_mujoco.paper.causes import _fmt, _metric, _split
+from tt_mujoco.paper.causes import fmt, metric_of, split_of
 from tt_mujoco.paper.suite import PLANTS
 
 
-def _curvature_rows(records) -> list[dict]:
+def curvature_rows(records) -> list[dict]:
     """The eq. 37-39 split for the target comparison runs (tables, analysis, stiff-yaw FBL)."""
     cases = [
         ("cycloid", "dynamic", "cycloid_nominal", "ISMC-STA 6.1"),
@@ -36,42 +36,42 @@ def _curvature_rows(records) -> list[dict]:
                     "controller": ctrl,
                     "plant": plant,
                     "run": key,
-                    "rmse_v": _metric(records, key, "rmse_v"),
-                    "rmse_lateral": _metric(records, key, "rmse_lateral"),
+                    "rmse_v": metric_of(records, key, "rmse_v"),
+                    "rmse_lateral": metric_of(records, key, "rmse_lateral"),
                     **{k: split.get(k) for k in _SPLIT_KEYS},
                 }
             )
     return rows
 
 
-def _curvature_findings(records) -> list[str]:
+def curvature_findings(records) -> list[str]:
     """What the split table shows, with its numbers (MuJoCo runs)."""
 
     def lat(key):
-        return _metric(records, f"{key}@mujoco", "rmse_lateral")
+        return metric_of(records, f"{key}@mujoco", "rmse_lateral")
 
     def share(key):
-        return _split(records, f"{key}@mujoco", "mismatch_share")
+        return split_of(records, f"{key}@mujoco", "mismatch_share")
 
     def mism(key):
-        return _split(records, f"{key}@mujoco", "rms_mismatch")
+        return split_of(records, f"{key}@mujoco", "rms_mismatch")
 
     out = ["Findings (MuJoCo; the reduced model agrees):", ""]
     out.append(
         "- With ISMC-STA the speed loop holds e_v near 0.01 m/s, so the static target's "
         "mismatch only acts where v(t) leaves v_ref(t). Circle: it lives in the speed ramps "
-        f"(RMS {_fmt(mism('circle_static'), 2)} 1/m, share {_fmt(share('circle_static'), 2)}) "
-        f"and costs lateral RMSE {_fmt(lat('circle_static'), 2)} m against "
-        f"{_fmt(lat('circle_dynamic'), 2)} m for the dynamic target. S-curve: "
-        f"{_fmt(lat('s_curve_static'), 2)} vs {_fmt(lat('s_curve_dynamic'), 2)} m, the "
+        f"(RMS {fmt(mism('circle_static'), 2)} 1/m, share {fmt(share('circle_static'), 2)}) "
+        f"and costs lateral RMSE {fmt(lat('circle_static'), 2)} m against "
+        f"{fmt(lat('circle_dynamic'), 2)} m for the dynamic target. S-curve: "
+        f"{fmt(lat('s_curve_static'), 2)} vs {fmt(lat('s_curve_dynamic'), 2)} m, the "
         "curvature step dominating both. Millimetres either way, below the along-track error "
         "that makes up the position error of Tables 4-5, so both targets give nearly the same "
         "table numbers."
     )
     out.append(
         "- Cycloid: static lateral RMSE "
-        f"{_fmt(lat('cycloid_static'), 2)} m vs dynamic {_fmt(lat('cycloid_nominal'), 2)} m, "
-        f"but the mismatch share is only {_fmt(share('cycloid_static'), 2)}: the static error "
+        f"{fmt(lat('cycloid_static'), 2)} m vs dynamic {fmt(lat('cycloid_nominal'), 2)} m, "
+        f"but the mismatch share is only {fmt(share('cycloid_static'), 2)}: the static error "
         "is e_omega / v at the start, where the eq. (32) yaw rate of -0.5 rad/s is a step for a "
         "vehicle whose yaw rate is 0."
     )
@@ -79,8 +79,8 @@ def _curvature_findings(records) -> list[str]:
     for traj in ("s_curve", "circle"):
         st, dy = lat(f"stiff_yaw_fbl:{traj}_static"), lat(f"stiff_yaw_fbl:{traj}_dynamic")
         ratios.append(
-            f"{traj} {_fmt(st, 3)} vs {_fmt(dy, 3)} m (mismatch share "
-            f"{_fmt(share(f'stiff_yaw_fbl:{traj}_static'), 2)})"
+            f"{traj} {fmt(st, 3)} vs {fmt(dy, 3)} m (mismatch share "
+            f"{fmt(share(f'stiff_yaw_fbl:{traj}_static'), 2)})"
         )
     out.append(
         "- With a loose speed loop and a tight yaw loop (FBL K = diag(8, 50), e_v ~ 0.5 m/s) the "
@@ -100,7 +100,7 @@ _SPLIT_KEYS = (
 )
 
 
-def _steering_rows(records) -> list[dict]:
+def steering_rows(records) -> list[dict]:
     rows = []
     for key, rec in records.items():
         if rec.get("group") != "steering":
@@ -120,16 +120,16 @@ def _steering_rows(records) -> list[dict]:
                 "offtrack_max": off.get("offtrack_max"),
                 "offtrack_steady_rms": off.get("offtrack_steady_rms"),
                 "analytic_steady": off.get("analytic_steady"),
-                "trailer_rmse_lateral": _metric(records, key, "trailer_rmse_lateral"),
-                "trailer_max_lateral": _metric(records, key, "trailer_max_lateral"),
-                "phi_max_abs_deg": _metric(records, key, "phi_max_abs_deg"),
-                "slip_lateral_max": _metric(records, key, "slip_lateral_max"),
+                "trailer_rmse_lateral": metric_of(records, key, "trailer_rmse_lateral"),
+                "trailer_max_lateral": metric_of(records, key, "trailer_max_lateral"),
+                "phi_max_abs_deg": metric_of(records, key, "phi_max_abs_deg"),
+                "slip_lateral_max": metric_of(records, key, "slip_lateral_max"),
             }
         )
     return rows
 
 
-def _steering_row(rows, path: str, plant: str, variant: str) -> dict | None:
+def steering_row(rows, path: str, plant: str, variant: str) -> dict | None:
     """The steering study's main (unlabelled) row for a path, plant and variant, or None."""
     return next(
         (
@@ -144,9 +144,9 @@ def _steering_row(rows, path: str, plant: str, variant: str) -> dict | None:
     )
 
 
-def _steering_ratio(rows, path: str, plant: str, field_name: str) -> float:
+def steering_ratio(rows, path: str, plant: str, field_name: str) -> float:
     def get(variant):
-        r = _steering_row(rows, path, plant, variant)
+        r = steering_row(rows, path, plant, variant)
         return None if r is None else r.get(field_name)
 
     plain, same = get("plain (eta = 0)"), get("same_path (-1/7)")
@@ -155,7 +155,7 @@ def _steering_ratio(rows, path: str, plant: str, field_name: str) -> float:
     return float(plain) / float(same)
 
 
-def _feedback_rows(records) -> list[dict]:
+def feedback_rows(records) -> list[dict]:
     rows = []
     for key, rec in records.items():
         if rec.get("group") != "feedback":
@@ -169,7 +169,7 @@ def _feedback_rows(records) -> list[dict]:
                 "run": key,
                 "status": rec.get("status", "not run"),
                 **{
-                    m: _metric(records, key, m)
+                    m: metric_of(records, key, m)
                     for m in (
                         "rmse_lateral",
                         "max_lateral",
@@ -186,12 +186,12 @@ def _feedback_rows(records) -> list[dict]:
     return rows
 
 
-def _pair(rows, case, plant):
+def row_pair(rows, case, plant):
     got = {r["feedback"]: r for r in rows if r["case"] == case and r["plant"] == plant}
     return got.get("off"), got.get("on")
 
 
-def _checks(rows_cells, steering, feedback) -> list[dict]:
+def check_rows(rows_cells, steering, feedback) -> list[dict]:
     """The issue's acceptance points, evaluated on this report's numbers."""
     checks = []
     complete = all(
@@ -205,9 +205,9 @@ def _checks(rows_cells, steering, feedback) -> list[dict]:
         }
     )
     for path in ("circle", "s_curve"):
-        full = _steering_ratio(steering, path, "mujoco", "offtrack_rms")
-        steady = _steering_ratio(steering, path, "mujoco", "offtrack_steady_rms")
-        detail = f"whole run x{_fmt(full, 3)}, steady arcs x{_fmt(steady, 3)}"
+        full = steering_ratio(steering, path, "mujoco", "offtrack_rms")
+        steady = steering_ratio(steering, path, "mujoco", "offtrack_steady_rms")
+        detail = f"whole run x{fmt(full, 3)}, steady arcs x{fmt(steady, 3)}"
         if not full >= 5.0 and steady >= 5.0:
             detail += (
                 " (not over the whole run: the transients at the start and at the curvature "
@@ -221,12 +221,12 @@ def _checks(rows_cells, steering, feedback) -> list[dict]:
             }
         )
     for case in ("cycloid, no noise", "cycloid"):
-        off, on = _pair(feedback, case, "mujoco")
+        off, on = row_pair(feedback, case, "mujoco")
         if off and on:
             ok = on["rmse_lateral"] < 0.005 and on["rmse_v"] <= 1.02 * off["rmse_v"]
             detail = (
-                f"rmse_lateral {_fmt(off['rmse_lateral'])} -> {_fmt(on['rmse_lateral'])} m "
-                f"(paper 0.0368), rmse_v {_fmt(off['rmse_v'])} -> {_fmt(on['rmse_v'])} m/s"
+                f"rmse_lateral {fmt(off['rmse_lateral'])} -> {fmt(on['rmse_lateral'])} m "
+                f"(paper 0.0368), rmse_v {fmt(off['rmse_v'])} -> {fmt(on['rmse_v'])} m/s"
             )
         else:
             ok, detail = False, "not run"

@@ -367,7 +367,7 @@ def s_curve(R: float = 1.5) -> ArcsPath:
     Starts at the origin heading 0 (+x); the first arc turns left, the second right, ending at
     (0, 4R) heading 0. Length 2 pi R = 9.42 m for R = 1.5 m.
     """
-    R = _positive("R", R)
+    R = positive_number("R", R)
     return ArcsPath("s_curve", (0.0, 0.0, 0.0), [(math.pi * R, 1.0 / R), (math.pi * R, -1.0 / R)])
 
 
@@ -378,8 +378,8 @@ def circle(R: float = 1.0, length: float | None = None) -> ArcsPath:
     t)``. ``length`` defaults to one lap, 2 pi R; pass more when the run lasts longer (the
     path then overlaps itself).
     """
-    R = _positive("R", R)
-    length = 2.0 * math.pi * R if length is None else _positive("length", length)
+    R = positive_number("R", R)
+    length = 2.0 * math.pi * R if length is None else positive_number("length", length)
     return ArcsPath("circle", (R, 0.0, math.pi / 2.0), [(length, 1.0 / R)])
 
 
@@ -557,7 +557,7 @@ def from_waypoints(
         raise ValueError(f"x and y have different lengths ({x.size} and {y.size})")
     if labels is None:
         labels = [f"waypoint {i}" for i in range(x.size)]
-    max_curvature = _positive("max_curvature", max_curvature)
+    max_curvature = positive_number("max_curvature", max_curvature)
     if x.size < 4:
         raise ValueError(f"{name}: {x.size} waypoints is not allowed: a path needs at least 4")
     for col, values in (("x", x), ("y", y)):
@@ -797,7 +797,7 @@ def get_path(name_or_csv, **kw) -> ReferencePath:
     return PATHS[key](**kw)
 
 
-def _positive(name: str, value) -> float:
+def positive_number(name: str, value) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ValueError(f"{name}={value!r} is not allowed: it must be a number > 0")
     if not (math.isfinite(value) and value > 0):

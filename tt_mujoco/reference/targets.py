@@ -33,13 +33,13 @@ from tt_mujoco.reference.paths import (
     CYCLOID_T_END,
     Pose,
     ReferencePath,
-    _positive,  # one check for both modules
     check_options,
     circle,
     cycloid,
     cycloid_arc_length,
     get_path,
     path_kind,
+    positive_number,  # one check for both modules
 )
 
 __all__ = [
@@ -234,9 +234,9 @@ class RampSpeed(SpeedProfile):
     name = "ramp"
 
     def __init__(self, distance: float, cruise: float = CRUISE_SPEED, ramp_time: float = RAMP_TIME):
-        distance = _positive("distance", distance)
-        cruise = _positive("cruise", cruise)
-        ramp_time = _positive("ramp_time", ramp_time)
+        distance = positive_number("distance", distance)
+        cruise = positive_number("cruise", cruise)
+        ramp_time = positive_number("ramp_time", ramp_time)
         self.ramp_time = ramp_time
         self.peak = min(cruise, distance / ramp_time)
         self.cruise_time = distance / self.peak - ramp_time
@@ -249,9 +249,9 @@ class RampSpeed(SpeedProfile):
         cls, duration: float, cruise: float = CRUISE_SPEED, ramp_time: float = RAMP_TIME
     ) -> RampSpeed:
         """The ramp profile that ends exactly at ``duration`` (ramps shortened to fit if needed)."""
-        duration = _positive("duration", duration)
-        cruise = _positive("cruise", cruise)
-        ramp_time = min(_positive("ramp_time", ramp_time), duration / 2.0)
+        duration = positive_number("duration", duration)
+        cruise = positive_number("cruise", cruise)
+        ramp_time = min(positive_number("ramp_time", ramp_time), duration / 2.0)
         return cls(cruise * (duration - ramp_time), cruise, ramp_time)
 
     def _scalar(self, t):
@@ -371,7 +371,9 @@ class Target:
     def __init__(self, path: ReferencePath, profile: SpeedProfile, duration: float | None = None):
         self.path = path
         self.profile = profile
-        self.duration = profile.duration if duration is None else _positive("duration", duration)
+        self.duration = (
+            profile.duration if duration is None else positive_number("duration", duration)
+        )
         # Bound methods looked up once: update() runs every millisecond.
         self._profile_state = profile.state
         self._curvature_and_rate = path.curvature_and_rate
@@ -552,7 +554,7 @@ def make_target(
     if kind not in TARGET_KINDS:
         raise ValueError(f"kind={kind!r} is not allowed: use 'dynamic' or 'static'")
     if duration is not None:
-        duration = _positive("duration", duration)
+        duration = positive_number("duration", duration)
     text = str(path_name_or_csv).strip()
     key = path_kind(text)
     check_options(text, kw, _TARGET_OPTIONS.get(key))
@@ -573,7 +575,7 @@ def make_target(
         profile = CycloidStaticSpeed() if choice == "static" else CycloidDynamicSpeed()
     elif key == "circle":
         profile = RampSpeed.for_duration(CIRCLE_DURATION if duration is None else duration, **ramp)
-        R = _positive("R", kw.get("R", 1.0))
+        R = positive_number("R", kw.get("R", 1.0))
         path = circle(R, length=max(2.0 * math.pi * R, profile.total_distance))
     else:  # s_curve, CSV files, registered and hooked paths: ramp profile unless given speeds
         path = get_path(text, **kw)

@@ -103,7 +103,7 @@ class BadSpecError(ValueError):
 
 
 # --- option values ---------------------------------------------------------------------------
-def _number(name: str, value, positive: bool = False) -> float:
+def as_number(name: str, value, positive: bool = False) -> float:
     if isinstance(value, str):
         try:
             value = float(value)
@@ -116,7 +116,7 @@ def _number(name: str, value, positive: bool = False) -> float:
     return float(value)
 
 
-def _integer(name: str, value) -> int:
+def as_integer(name: str, value) -> int:
     if isinstance(value, float) and value.is_integer():
         value = int(value)
     if isinstance(value, str):
@@ -140,7 +140,7 @@ def _choice(name: str, value, allowed: Sequence[str]) -> str:
 def _optional_number(name: str, value, positive: bool = False) -> float | None:
     if value is None or (isinstance(value, str) and value.strip().lower() == "none"):
         return None
-    return _number(name, value, positive)
+    return as_number(name, value, positive)
 
 
 def _eta(name: str, value) -> float | str:
@@ -148,7 +148,7 @@ def _eta(name: str, value) -> float | str:
         key = value.strip().lower().replace("-", "_")
         if key in ("paper", "same_path"):
             return key
-    return _number(name, value)
+    return as_number(name, value)
 
 
 def _boolean(name: str, value, extra: str = "true or false") -> bool:
@@ -193,27 +193,27 @@ def convert(name: str, value):
     if name == "duration":
         return _optional_number(name, value, positive=True)
     if name in ("param_scale", "timestep", "control_dt", "friction"):
-        return _number(name, value, positive=True)
+        return as_number(name, value, positive=True)
     if name == "seed":
-        return _integer(name, value)
+        return as_integer(name, value)
     if name.startswith(("gain.", "scale.")):
-        return _number(name, value, positive=True)
+        return as_number(name, value, positive=True)
     if name.startswith("param."):
-        return _number(name, value)
+        return as_number(name, value)
     if name in LIST_OPTIONS:
         return _text(name, value)
     if name in DICT_OPTIONS:
         return "on" if _boolean(name, value, extra="'on' (defaults) or 'off'") else "off"
     if name.partition(".")[0] in DICT_OPTIONS:
-        return _number(name, value)
+        return as_number(name, value)
     if name in SCENARIO_OPTIONS:  # a newer Scenario field: checked by the type of its default
         default = next(f.default for f in dataclasses.fields(Scenario) if f.name == name)
         if isinstance(default, bool):
             return _boolean(name, value)
         if isinstance(default, float):
-            return _number(name, value)
+            return as_number(name, value)
         if isinstance(default, int) and not isinstance(default, bool):
-            return _integer(name, value)
+            return as_integer(name, value)
         if isinstance(default, str):
             return _text(name, value)
     raise BadSpecError(_unknown_option_message(name))

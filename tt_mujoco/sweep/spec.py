@@ -14,8 +14,8 @@ from tt_mujoco.sweep.options import (
     GRID_GENERATORS,
     LIST_OPTIONS,
     BadSpecError,
-    _integer,
-    _number,
+    as_integer,
+    as_number,
     check_option_name,
     convert,
 )
@@ -103,7 +103,7 @@ def _generator(name: str, kind: str, args: Sequence) -> Axis:
             raise BadSpecError(
                 f"{name}: {kind} takes 2 numbers ({kind}:A:B), got {len(args)}: {list(args)}"
             )
-        a, b = (_number(name, x) for x in args)
+        a, b = (as_number(name, x) for x in args)
         if kind in ("uniform", "loguniform") and not a < b:
             raise BadSpecError(f"{name}: {kind}:{a:g}:{b:g} needs A < B")
         if kind == "loguniform" and a <= 0:
@@ -123,7 +123,7 @@ def _generator(name: str, kind: str, args: Sequence) -> Axis:
     else:  # lin, log
         if len(args) != 3:
             raise BadSpecError(f"{name}: {kind} takes {kind}:START:STOP:COUNT, got {list(args)}")
-        a, b = _number(name, args[0]), _number(name, args[1])
+        a, b = as_number(name, args[0]), as_number(name, args[1])
         n = _int_arg(name, args[2])
         if n < 1:
             raise BadSpecError(f"{name}: {kind} COUNT={n} must be >= 1")
@@ -238,12 +238,12 @@ def _make_spec(axes: Sequence[Axis], seed, repeats, samples) -> SweepSpec:
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise BadSpecError(f"option(s) {dup} given twice: give each option once")
-    seed = 0 if seed is None else _integer("sweep seed", seed)
-    repeats = 1 if repeats is None else _integer("repeats", repeats)
+    seed = 0 if seed is None else as_integer("sweep seed", seed)
+    repeats = 1 if repeats is None else as_integer("repeats", repeats)
     if repeats < 1:
         raise BadSpecError(f"repeats={repeats!r} is not allowed: it must be an integer >= 1")
     if samples is not None:
-        samples = _integer("samples", samples)
+        samples = as_integer("samples", samples)
         if samples < 1:
             raise BadSpecError(f"samples={samples!r} is not allowed: it must be an integer >= 1")
     spec = SweepSpec(tuple(axes), seed, repeats, samples)

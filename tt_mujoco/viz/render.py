@@ -7,33 +7,17 @@ of the :class:`mujoco.MjvScene`. Frames stream into ``ffmpeg`` (the binary shipp
 ``imageio-ffmpeg``, no system ffmpeg) through :class:`mediapy.VideoWriter`; the file is written
 under a temporary name in the target folder and published atomically, never over an existing file.
 
-OpenGL backend
---------------
-The OpenGL platform of a process is fixed when PyOpenGL first loads one (``OpenGL.platform``),
-not when MuJoCo is imported: ``import mujoco`` with ``MUJOCO_GL`` unset only loads GLFW, and this
-module creates its own context instead of using :class:`mujoco.Renderer` (whose context class
-was chosen at MuJoCo's import). So the choice is made at the first render by
-:func:`select_gl_backend`:
-
-- ``MUJOCO_GL`` set by the user: that backend (``egl``, ``osmesa`` or ``glfw``) and no other.
-- unset: EGL (headless, through Mesa's llvmpipe on a CPU-only machine), else OSMesa. EGL is
-  tried in a child interpreter first, because a failed EGL attempt in this process would leave
-  PyOpenGL committed to EGL and make the OSMesa fallback impossible (and a broken driver may
-  crash the process instead of raising).
-- nothing works: :class:`RenderUnavailable`, with each backend's reason.
-
-``python -m tt_mujoco.render RUN_DIR`` re-renders a finished run (see :func:`main`).
+The OpenGL backend is chosen by :mod:`tt_mujoco.viz.gl`; posing the vehicle from a time series
+and the cameras are in :mod:`tt_mujoco.viz.scene`. ``python -m tt_mujoco.render RUN_DIR``
+re-renders a finished run.
 """
 
 from __future__ import annotations
 
 import contextlib
-import ctypes.util
 import dataclasses
 import math
 import os
-import subprocess
-import sys
 import tempfile
 from collections.abc import Mapping
 from pathlib import Path
@@ -42,14 +26,36 @@ import mujoco
 import numpy as np
 
 from tt_mujoco.outputs import publish_new
-from tt_mujoco.sim.timeseries import COLUMNS
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
+from tt_mujoco.viz.gl import GL_BACKENDS, RenderUnavailable, gl_context, select_gl_backend
+from tt_mujoco.viz.scene import (
+    CAMERAS,
+    FOLLOW_AZIMUTH,
+    FOLLOW_DISTANCE,
+    FOLLOW_ELEVATION,
+    MUJOCO_OVERLAY_MIN_HEIGHT,
+    VIDEO_COLUMNS,
+    CompactOverlay,
+    cumulative_trapezoid,
+    decimate,
+    font_scale,
+    frame_schedule,
+    overview_camera,
+    pose_vehicle,
+    project_to_pixel,
+    trailer_wheel_angles,
+    validated_columns,
+)
 
 __all__ = [
     "CAMERAS",
     "GL_BACKENDS",
+    "MAX_TRACE_POINTS",
+    "PATH_RGBA",
     "TIMESERIES_COLUMNS",
+    "TRACTOR_TRACE_RGBA",
+    "TRAILER_TRACE_RGBA",
     "VIDEO_COLUMNS",
     "RenderUnavailable",
     "RunRenderer",
@@ -65,404 +71,54 @@ __all__ = [
     "trailer_wheel_angles",
 ]
 
-#: Backends tried, in order, when ``MUJOCO_GL`` is unset.
-GL_BACKENDS = ("egl", "osmesa")
-#: Backends accepted from ``MUJOCO_GL`` (glfw needs a display).
-USER_GL_BACKENDS = ("egl", "osmesa", "glfw")
-#: Camera modes of :func:`render_video`.
-CAMERAS = ("follow", "overview")
-
-#: Columns a video needs (SI units, radians): the time series' first 14, t to theta_r.
-VIDEO_COLUMNS = COLUMNS[: COLUMNS.index("theta_r") + 1]
 
 # Scene budget. The reference path and the traces are decimated to these many segments, so a
 # long run costs the same per frame as a short one (each line segment is one user geom).
 MAX_PATH_SEGMENTS = 400
+
+
 MAX_TRACE_POINTS = 600
+
+
 # Heights (m) of the drawn lines above the floor: high enough to avoid depth fighting with the
 # plane at the overview distance, low enough to look painted on the ground.
 PATH_Z = 0.002
+
+
 TRACE_Z = 0.004
 
+
 PATH_RGBA = np.array([1.0, 1.0, 1.0, 1.0], dtype=np.float32)
+
+
 TRACTOR_TRACE_RGBA = np.array([1.0, 0.45, 0.05, 1.0], dtype=np.float32)  # tractor orange
+
+
 TRAILER_TRACE_RGBA = np.array([0.2, 0.6, 1.0, 1.0], dtype=np.float32)  # trailer blue
+
+
 REFERENCE_POINT_RGBA = np.array([0.1, 0.9, 0.2, 1.0], dtype=np.float32)
+
+
 REFERENCE_POINT_RADIUS = 0.015  # m
 
-# Follow camera: fixed azimuth/elevation/distance, so the vehicle's turning shows as rotation.
-FOLLOW_DISTANCE = 1.6
-FOLLOW_AZIMUTH = 45.0  # looking towards +x+y: from behind for the built-in paths' travel
-FOLLOW_ELEVATION = -40.0
-# Overview camera: from -y looking towards +y (world x to the right, y up the image), steep.
-OVERVIEW_AZIMUTH = 90.0
-OVERVIEW_ELEVATION = -65.0
-OVERVIEW_MARGIN = 1.08
 
 # Multisample anti-aliasing of the offscreen buffer. On Mesa's llvmpipe, 4 samples make
 # mjr_readPixels resolve the buffer in software: 14 ms instead of 3 ms a 640x480 frame.
 OFFSCREEN_SAMPLES = 0
 
-_PROBE_TIMEOUT_S = 60.0
+
 _ZERO3 = np.zeros(3)
+
+
 _EYE9 = np.eye(3).ravel()
-
-
-class RenderUnavailable(RuntimeError):  # noqa: N818 (name fixed by the CLI contract)
-    """No OpenGL backend can render offscreen here; the message says what was tried and why."""
-
-
-# --- OpenGL backend -------------------------------------------------------------------------------
-_selected_backend: tuple[str, type] | None = None
-
-# A child interpreter that creates a context and a MuJoCo render context (the fonts and the
-# offscreen buffer are the first things to fail on a broken driver), then exits 0.
-_PROBE = """
-import sys
-backend = sys.argv[1]
-if backend == "egl":
-    from mujoco.egl import GLContext
-elif backend == "osmesa":
-    from mujoco.osmesa import GLContext
-else:
-    from mujoco.glfw import GLContext
-import mujoco
-ctx = GLContext(32, 32)
-ctx.make_current()
-model = mujoco.MjModel.from_xml_string("<mujoco><worldbody><geom size='1'/></worldbody></mujoco>")
-con = mujoco.MjrContext(model, mujoco.mjtFontScale.mjFONTSCALE_100)
-con.free()
-ctx.free()
-"""
-
-
-def _import_gl_context(backend: str) -> type:
-    if backend == "egl":
-        from mujoco.egl import GLContext
-    elif backend == "osmesa":
-        from mujoco.osmesa import GLContext
-    else:
-        from mujoco.glfw import GLContext
-    return GLContext
-
-
-def _committed_platform() -> str | None:
-    """The backend PyOpenGL has already loaded its platform for (it cannot change), or None."""
-    platform = sys.modules.get("OpenGL.platform")
-    if platform is None or getattr(platform, "PLATFORM", None) is None:
-        return None
-    name = type(platform.PLATFORM).__name__.lower()
-    for backend in ("egl", "osmesa"):
-        if backend in name:
-            return backend
-    return "glfw"  # GLX and the other window-system platforms serve GLFW contexts
-
-
-#: Shared library each backend loads, and the Debian package that provides it.
-_GL_LIBRARIES = {"egl": ("EGL", "libegl1 and libegl-mesa0"), "osmesa": ("OSMesa", "libosmesa6")}
-
-
-def _missing_library(backend: str) -> str | None:
-    """Why ``backend`` cannot load, if its shared library is not installed (else None)."""
-    if backend not in _GL_LIBRARIES:
-        return None
-    name, package = _GL_LIBRARIES[backend]
-    if ctypes.util.find_library(name) is None:
-        return f"lib{name} is not installed (Debian: {package})"
-    return None
-
-
-def _probe(backend: str) -> str | None:
-    """Try ``backend`` in a fresh interpreter: None if it works, else the reason."""
-    env = dict(os.environ, MUJOCO_GL=backend)
-    if backend in ("egl", "osmesa"):
-        env["PYOPENGL_PLATFORM"] = backend
-    else:
-        env.pop("PYOPENGL_PLATFORM", None)
-    try:
-        proc = subprocess.run(
-            [sys.executable, "-c", _PROBE, backend],
-            env=env,
-            capture_output=True,
-            text=True,
-            timeout=_PROBE_TIMEOUT_S,
-            check=False,
-        )
-    except (OSError, subprocess.TimeoutExpired) as exc:
-        return f"probe failed: {exc}"
-    if proc.returncode == 0:
-        return None
-    lines = (proc.stderr or proc.stdout).strip().splitlines()
-    return lines[-1] if lines else f"probe exited with code {proc.returncode}"
-
-
-def _check_in_process(backend: str) -> type:
-    cls = _import_gl_context(backend)
-    ctx = cls(32, 32)
-    try:
-        ctx.make_current()
-    finally:
-        ctx.free()
-    return cls
-
-
-def select_gl_backend() -> str:
-    """Choose, check and cache the OpenGL backend for offscreen rendering (see module doc).
-
-    Returns
-    -------
-    str
-        ``"egl"``, ``"osmesa"`` or ``"glfw"``.
-
-    Raises
-    ------
-    RenderUnavailable
-        If no backend can create a context; the message lists each backend's failure.
-    """
-    global _selected_backend
-    if _selected_backend is not None:
-        return _selected_backend[0]
-    requested = os.environ.get("MUJOCO_GL", "").strip().lower()
-    if requested:
-        if requested not in USER_GL_BACKENDS:
-            raise RenderUnavailable(
-                f"MUJOCO_GL={requested!r} cannot render offscreen here: use one of "
-                f"{', '.join(USER_GL_BACKENDS)} (or unset it to try {' then '.join(GL_BACKENDS)})"
-            )
-        candidates = [requested]
-    else:
-        candidates = list(GL_BACKENDS)
-    committed = _committed_platform()
-    if committed is not None:
-        if committed not in candidates:
-            raise RenderUnavailable(
-                f"PyOpenGL already loaded its {committed!r} platform in this process, so "
-                f"{'/'.join(candidates)} cannot be used: set MUJOCO_GL before starting Python"
-            )
-        candidates = [committed]
-    reasons = []
-    for i, backend in enumerate(candidates):
-        missing = _missing_library(backend)
-        if missing is not None:
-            reasons.append(f"{backend}: {missing}")
-            continue
-        if i < len(candidates) - 1:
-            # Not the last resort: check in a child so that a failure leaves PyOpenGL free.
-            reason = _probe(backend)
-            if reason is not None:
-                reasons.append(f"{backend}: {reason}")
-                continue
-        try:
-            cls = _check_in_process(backend)
-        except Exception as exc:  # any failure of a GL stack means "not here"
-            reasons.append(f"{backend}: {type(exc).__name__}: {exc}")
-            break
-        _selected_backend = (backend, cls)
-        return backend
-    raise RenderUnavailable(
-        "no OpenGL backend can render offscreen here (" + "; ".join(reasons) + "). "
-        "EGL needs libegl1 and libegl-mesa0 (Debian), OSMesa needs libosmesa6; "
-        "set MUJOCO_GL to choose a backend"
-    )
-
-
-# --- time series ----------------------------------------------------------------------------------
-def _column(ts: Mapping, name: str) -> np.ndarray:
-    if name not in ts:
-        raise ValueError(f"time series has no column {name!r}; it needs {', '.join(VIDEO_COLUMNS)}")
-    return np.asarray(ts[name], dtype=float)
-
-
-def _validated(ts: Mapping, names) -> dict[str, np.ndarray]:
-    """The columns ``names`` up to the first non-finite value in any of them.
-
-    A run that diverged is written up to where it stopped, possibly with NaN rows at the end
-    (docs/model.md Section 11): the video shows what was computed.
-    """
-    cols = {name: _column(ts, name) for name in names}
-    n = len(cols["t"])
-    for name, col in cols.items():
-        if col.ndim != 1 or len(col) != n:
-            raise ValueError(
-                f"time series column {name!r} has shape {col.shape}: every column must be "
-                f"1-D with the {n} samples of 't'"
-            )
-    finite = np.logical_and.reduce([np.isfinite(col) for col in cols.values()])
-    n = n if finite.all() else int(np.argmin(finite))
-    cols = {name: col[:n] for name, col in cols.items()}
-    if n < 2 or not np.all(np.diff(cols["t"]) > 0):
-        raise ValueError(
-            "time series column 't' must have >= 2 strictly increasing samples (before the "
-            "first non-finite value)"
-        )
-    return cols
-
-
-def frame_schedule(t, fps: float) -> tuple[np.ndarray, np.ndarray]:
-    """Video frame times and the time-series sample shown in each.
-
-    Frame ``k`` is at ``t[0] + k / fps`` for ``k = 0 .. floor(duration * fps)``, so a run of
-    duration ``D = t[-1] - t[0]`` gives ``floor(D * fps) + 1`` frames (both ends shown; 1e-9
-    absorbs round-off in ``D * fps``). Each frame shows the sample nearest in time.
-
-    Returns
-    -------
-    times : ndarray, shape (n,)
-    index : ndarray of int, shape (n,)
-    """
-    t = np.asarray(t, dtype=float)
-    n = math.floor((t[-1] - t[0]) * fps + 1e-9) + 1
-    times = t[0] + np.arange(n) / fps
-    right = np.clip(np.searchsorted(t, times), 1, len(t) - 1)
-    left = right - 1
-    index = np.where(times - t[left] <= t[right] - times, left, right)
-    return times, index
-
-
-def _cumulative_trapezoid(y: np.ndarray, t: np.ndarray) -> np.ndarray:
-    out = np.zeros_like(y)
-    out[1:] = np.cumsum(0.5 * (y[1:] + y[:-1]) * np.diff(t))
-    return out
-
-
-def trailer_wheel_angles(ts: Mapping, params: Params) -> tuple[np.ndarray, np.ndarray]:
-    """Trailer wheel spin angles (left, right) by integrating their rolling rates.
-
-    The wheels at P0 +- (d/2) n(alpha) roll at ``(v0 -+ (d/2) alpha_dot) / r`` with
-    ``alpha = theta0 + beta`` (docs/model.md Section 4), so the angles are
-    ``(integral(v0) -+ (d/2) (alpha - alpha(0))) / r``.
-    """
-    cols = _validated(ts, ("t", "v0", "theta0", "beta"))
-    rolled = _cumulative_trapezoid(cols["v0"], cols["t"])
-    alpha = cols["theta0"] + cols["beta"]
-    turned = 0.5 * params.d * (alpha - alpha[0])
-    return (rolled - turned) / params.r, (rolled + turned) / params.r
-
-
-def pose_vehicle(vehicle, x, y, theta, phi, beta, wheels) -> None:
-    """Put a :class:`~tt_mujoco.sim.physics.Vehicle` in a planar pose and compute its kinematics.
-
-    Free joint at (x, y, r) with yaw ``theta``; ``q_hitch = -phi``; ``q_steer = beta`` (the
-    recorded angle, so an equality-constraint violation shows); ``wheels`` are the spin angles
-    (tractor left, tractor right, trailer left, trailer right).
-    """
-    lay, d, p = vehicle.layout, vehicle.data, vehicle.params
-    i = lay.root_q
-    d.qpos[i : i + 7] = [x, y, p.r, math.cos(theta / 2), 0.0, 0.0, math.sin(theta / 2)]
-    d.qpos[lay.hitch_q] = -phi
-    d.qpos[lay.steer_q] = beta
-    for address, angle in zip(_wheel_qpos(vehicle), wheels, strict=True):
-        d.qpos[address] = angle
-    mujoco.mj_kinematics(vehicle.model, d)
-    mujoco.mj_camlight(vehicle.model, d)
-
-
-def _wheel_qpos(vehicle) -> tuple[int, int, int, int]:
-    m = vehicle.model
-    names = ("tractor_wheel_left", "tractor_wheel_right", "trailer_wheel_left")
-    names += ("trailer_wheel_right",)
-    return tuple(int(m.jnt_qposadr[m.joint(name).id]) for name in names)
-
-
-def _decimate(points: np.ndarray, max_segments: int) -> np.ndarray:
-    """Every k-th point, keeping the last, so that at most ``max_segments`` segments remain."""
-    stride = max(1, math.ceil((len(points) - 1) / max_segments))
-    kept = points[::stride]
-    if (len(points) - 1) % stride:
-        kept = np.vstack([kept, points[-1]])
-    return kept
-
-
-# --- offscreen rendering --------------------------------------------------------------------------
-def _camera_axes(azimuth: float, elevation: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Forward, up and right unit vectors of a MuJoCo free camera (as in mjv_updateCamera)."""
-    az, el = math.radians(azimuth), math.radians(elevation)
-    forward = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
-    up = np.array([-math.sin(el) * math.cos(az), -math.sin(el) * math.sin(az), math.cos(el)])
-    return forward, up, np.cross(forward, up)
-
-
-def overview_camera(
-    points_xy: np.ndarray, fovy_deg: float, aspect: float, pad: float = 0.0
-) -> dict:
-    """Free-camera settings that frame all ``points_xy``, widened by ``pad`` (m) on every side,
-    and 0.1 m of height above them.
-
-    For a point at offset ``q`` from the look-at point and a camera at distance ``D``, the
-    point is inside the frustum when ``|q.right| <= tan(fovx/2) (D + q.forward)`` and likewise
-    with ``up``/``fovy``; the smallest such ``D`` over the bounding-box corners, times a margin.
-    """
-    lo, hi = points_xy.min(axis=0) - pad, points_xy.max(axis=0) + pad
-    centre = np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, 0.0])
-    forward, up, right = _camera_axes(OVERVIEW_AZIMUTH, OVERVIEW_ELEVATION)
-    ty = math.tan(math.radians(fovy_deg) / 2)
-    tx = ty * aspect
-    distance = 0.5  # at least this close a view, even for a vehicle that stood still
-    for cx in (lo[0], hi[0]):
-        for cy in (lo[1], hi[1]):
-            for cz in (0.0, 0.1):
-                q = np.array([cx, cy, cz]) - centre
-                need = max(abs(q @ right) / tx, abs(q @ up) / ty) - q @ forward
-                distance = max(distance, need)
-    return {
-        "lookat": centre,
-        "distance": OVERVIEW_MARGIN * distance,
-        "azimuth": OVERVIEW_AZIMUTH,
-        "elevation": OVERVIEW_ELEVATION,
-    }
-
-
-def project_to_pixel(point, camera: dict, fovy_deg: float, width: int, height: int):
-    """Pixel (column, row) of a world point seen by a free camera described as in
-    :func:`overview_camera` (row 0 at the top). Used by the tests and for overlays."""
-    forward, up, right = _camera_axes(camera["azimuth"], camera["elevation"])
-    eye = np.asarray(camera["lookat"], dtype=float) - camera["distance"] * forward
-    q = np.asarray(point, dtype=float) - eye
-    depth = q @ forward
-    ty = math.tan(math.radians(fovy_deg) / 2)
-    tx = ty * width / height
-    col = (0.5 + 0.5 * (q @ right) / (depth * tx)) * width
-    row = (0.5 - 0.5 * (q @ up) / (depth * ty)) * height
-    return col, row
-
-
-# MuJoCo's overlay text is at least 18 px a line (it raises font scale 50 to 100), so its
-# four-line box would cover a third of a small frame: below this height a compact two-line
-# overlay is drawn with Pillow instead.
-MUJOCO_OVERLAY_MIN_HEIGHT = 360
-
-
-def _font_scale(height: int) -> int:
-    if height < 720:
-        return int(mujoco.mjtFontScale.mjFONTSCALE_100)
-    return int(mujoco.mjtFontScale.mjFONTSCALE_150)
-
-
-class _CompactOverlay:
-    """Two lines of white text on a black box in the top-left corner, drawn with Pillow."""
-
-    def __init__(self, height: int):
-        from PIL import ImageFont
-
-        self.font = ImageFont.load_default(size=max(7, height // 12))
-
-    def draw(self, image: np.ndarray, text: str) -> np.ndarray:
-        from PIL import Image, ImageDraw
-
-        im = Image.fromarray(image)
-        draw = ImageDraw.Draw(im)
-        _, _, right, bottom = draw.multiline_textbbox((2, 1), text, font=self.font)
-        draw.rectangle((0, 0, right + 2, bottom + 2), fill=(0, 0, 0))
-        draw.multiline_text((2, 1), text, fill=(255, 255, 255), font=self.font)
-        return np.asarray(im).copy()
 
 
 class _Offscreen:
     """An OpenGL context, MuJoCo's render context (offscreen buffer) and a scene."""
 
     def __init__(self, model: mujoco.MjModel, width: int, height: int, maxgeom: int):
-        backend = select_gl_backend()
-        cls = _selected_backend[1]
+        backend, cls = gl_context()
         # The model belongs to our own Vehicle, so its visual settings are ours to change.
         model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
         model.vis.global_.offheight = max(model.vis.global_.offheight, height)
@@ -472,7 +128,7 @@ class _Offscreen:
         try:
             self._gl = cls(width, height)
             self._gl.make_current()
-            self.context = mujoco.MjrContext(model, _font_scale(height))
+            self.context = mujoco.MjrContext(model, font_scale(height))
         except Exception as exc:
             self.close()
             raise RenderUnavailable(
@@ -553,11 +209,11 @@ class RunRenderer:
         _check_video_args(width, height, fps, camera)
         self.has_reference_point = "x_ref" in ts and "y_ref" in ts
         extra = ("x_ref", "y_ref") if self.has_reference_point else ()
-        self.cols = _validated(ts, VIDEO_COLUMNS + extra)
+        self.cols = validated_columns(ts, VIDEO_COLUMNS + extra)
         polyline = np.asarray(reference_polyline, dtype=float).reshape(-1, 2)
         if not np.all(np.isfinite(polyline)):
             raise ValueError("reference_polyline has non-finite values")
-        self.path = _decimate(polyline, MAX_PATH_SEGMENTS) if len(polyline) > 1 else polyline
+        self.path = decimate(polyline, MAX_PATH_SEGMENTS) if len(polyline) > 1 else polyline
         self.width, self.height, self.fps, self.camera_mode = width, height, fps, camera
         self.params = params
         self.vehicle = Vehicle(params)
@@ -606,7 +262,7 @@ class RunRenderer:
         self._perturb = mujoco.MjvPerturb()
         self._line_px = max(1.0, round(height / 200))
 
-        self._compact = _CompactOverlay(height) if height < MUJOCO_OVERLAY_MIN_HEIGHT else None
+        self._compact = CompactOverlay(height) if height < MUJOCO_OVERLAY_MIN_HEIGHT else None
         self._off = _Offscreen(self.model, width, height, maxgeom)
         self._geoms = self._off.scene.geoms  # the tuple is rebuilt on each attribute access
         self._base = -1  # geoms mjv_updateScene wrote in the previous frame
@@ -896,7 +552,7 @@ def open_loop_timeseries(
         _, P0, theta0 = reduced.trailer_pose(x[k], y[k], theta[k], phi[k], p)
         ts["x0"][k], ts["y0"][k], ts["theta0"][k] = P0[0], P0[1], theta0
         ts["v0"][k] = reduced.trailer_velocity(phi[k], (v[k], omega[k]), p)[0]
-    ts["s"] = _cumulative_trapezoid(v, ts["t"])
+    ts["s"] = cumulative_trapezoid(v, ts["t"])
     return ts, np.column_stack([x, y])
 
 
