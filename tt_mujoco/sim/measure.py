@@ -12,6 +12,8 @@ import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
+from tt_mujoco.vehicle.reduced import hitch_and_axle
+
 __all__ = ["Layout", "Measurement", "measure"]
 
 
@@ -118,9 +120,8 @@ def measure(qpos, qvel, lay: Layout) -> Measurement:
 
     theta0 = theta - phi
     c0, s0 = math.cos(theta0), math.sin(theta0)
-    # O = P - L e(theta), P0 = O - L0 e(theta0); rigid-body velocities in the plane.
-    ox, oy = x - lay.L * c, y - lay.L * s
-    x0, y0 = ox - lay.L0 * c0, oy - lay.L0 * s0
+    x0, y0 = hitch_and_axle(x, y, theta, theta0, lay.L, lay.L0)[2:]
+    # Rigid-body velocities in the plane, as MuJoCo moved the bodies (slip included).
     vox, voy = vx + omega * lay.L * s, vy - omega * lay.L * c
     theta0_dot = omega + qvel[lay.hitch_v]  # phi_dot = -q_hitch_dot
     v0x, v0y = vox + theta0_dot * lay.L0 * s0, voy - theta0_dot * lay.L0 * c0

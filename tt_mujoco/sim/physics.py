@@ -99,10 +99,7 @@ class Vehicle:
         trailer wheels ``(v0 -+ (d/2) alpha_dot)/r`` (docs/model.md Section 4).
         """
         p, lay = self.params, self.layout
-        s1, s2 = reduced.phi_rate(phi, p)
-        cb = math.cos(p.eta * phi)
-        kappa = np.array([math.cos(phi), p.L * math.sin(phi)]) / cb
-        a = np.array([(p.eta - 1) * s1, 1 + (p.eta - 1) * s2])
+        kappa, (s1, s2), a = (np.array(row) for row in reduced.trailer_rows(phi, p))
         S = np.zeros((self.model.nv, 2))
         S[lay.root_v + 0] = [math.cos(theta), 0.0]
         S[lay.root_v + 1] = [math.sin(theta), 0.0]

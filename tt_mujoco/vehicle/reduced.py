@@ -37,13 +37,16 @@ __all__ = [
     "coriolis_force",
     "dynamics",
     "dynamics_scalar",
+    "hitch_and_axle",
     "input_matrix",
     "kinematics",
     "kinetic_energy",
     "mass_matrix",
     "matched_torque",
     "phi_rate",
+    "rolling_rates",
     "trailer_pose",
+    "trailer_rows",
     "trailer_velocity",
 ]
 
@@ -96,19 +99,21 @@ def kinematics(q, V, p: Params) -> np.ndarray:
     -------
     ndarray, shape (6,)
     """
-    theta, phi = float(q[2]), float(q[3])
-    v, omega = float(V[0]), float(V[1])
+    return np.array(rolling_rates(float(q[2]), float(q[3]), float(V[0]), float(V[1]), p))
+
+
+def rolling_rates(theta: float, phi: float, v: float, omega: float, p: Params) -> tuple:
+    """``q_dot = S(q) V`` as plain floats: ``(x_dot, y_dot, theta_dot, phi_dot, theta_l_dot,
+    theta_r_dot)`` (docs/model.md Section 2); :func:`kinematics` and the plant use it."""
     s1, s2 = phi_rate(phi, p)
     spin = p.d * omega / (2.0 * p.r)
-    return np.array(
-        [
-            v * math.cos(theta),
-            v * math.sin(theta),
-            omega,
-            s1 * v + s2 * omega,
-            v / p.r - spin,
-            v / p.r + spin,
-        ]
+    return (
+        v * math.cos(theta),
+        v * math.sin(theta),
+        omega,
+        s1 * v + s2 * omega,
+        v / p.r - spin,
+        v / p.r + spin,
     )
 
 
@@ -148,6 +153,17 @@ def constraint_matrix(q, p: Params) -> np.ndarray:
     )
 
 
+def trailer_rows(phi: float, p: Params) -> tuple[tuple, tuple, tuple]:
+    """The trailer's velocity maps, rows over ``V = (v, omega)`` (docs/model.md Section 4):
+    ``k`` (``v0 = k.V``), ``s`` (``phi_dot = s.V``, :func:`phi_rate`) and ``a``
+    (``alpha_dot = a.V``, the trailer axle's heading rate)."""
+    cb = _cos_beta(phi, p.eta)
+    s1, s2 = phi_rate(phi, p)
+    k = (math.cos(phi) / cb, p.L * math.sin(phi) / cb)
+    a = ((p.eta - 1) * s1, 1 + (p.eta - 1) * s2)
+    return k, (s1, s2), a
+
+
 def trailer_velocity(phi: float, V, p: Params) -> tuple[float, float]:
     """Trailer axle speed ``v0`` and heading rate ``theta0_dot`` (paper eq. 12 and Section 6.1).
 
@@ -170,9 +186,15 @@ def trailer_pose(x: float, y: float, theta: float, phi: float, p: Params):
     theta0 : float
     """
     theta0 = theta - phi
-    O = np.array([x - p.L * math.cos(theta), y - p.L * math.sin(theta)])
-    P0 = O - p.L0 * np.array([math.cos(theta0), math.sin(theta0)])
-    return O, P0, theta0
+    ox, oy, x0, y0 = hitch_and_axle(x, y, theta, theta0, p.L, p.L0)
+    return np.array([ox, oy]), np.array([x0, y0]), theta0
+
+
+def hitch_and_axle(x: float, y: float, theta: float, theta0: float, L: float, L0: float):
+    """``(ox, oy, x0, y0)``: the hitch ``O = P - L e(theta)`` and the trailer axle midpoint
+    ``P0 = O - L0 e(theta0)`` as plain floats (docs/model.md Section 1)."""
+    ox, oy = x - L * math.cos(theta), y - L * math.sin(theta)
+    return ox, oy, ox - L0 * math.cos(theta0), oy - L0 * math.sin(theta0)
 
 
 def input_matrix(p: Params) -> np.ndarray:
@@ -387,16 +409,9 @@ class ReducedPlant:
         p = self.params
         theta, phi, v, omega = state[2], state[3], state[6], state[7]
         f1, f2, g11, g12, g21, g22 = dynamics_scalar(phi, v, omega, p)
-        s1, s2 = phi_rate(phi, p)
         T_r, T_l = tau
-        spin = p.d * omega / (2.0 * p.r)
         return [
-            v * math.cos(theta),
-            v * math.sin(theta),
-            omega,
-            s1 * v + s2 * omega,
-            v / p.r - spin,
-            v / p.r + spin,
+            *rolling_rates(theta, phi, v, omega, p),
             f1 + g11 * T_r + g12 * T_l + accel_disturbance[0],
             f2 + g21 * T_r + g22 * T_l + accel_disturbance[1],
         ]
