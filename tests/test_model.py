@@ -116,3 +116,18 @@ def test_compiled_models_are_private_copies():
     b = compile_model(Params())
     assert b.body_mass[b.body("trailer_body").id] == 6.0
     assert compile_model(Params(Mr=7.0)).body_mass[b.body("trailer_body").id] == 7.0
+
+
+def test_export_for_other_parameters_and_never_over_files(tmp_path, capsys):
+    from tt_mujoco import model as model_cli
+
+    out = tmp_path / "long"
+    assert model_cli.main(["--out", str(out), "--param", "L0=0.5", "--eta", "paper"]) == 0
+    m = mujoco.MjModel.from_xml_path(str(out / "scene.xml"))
+    assert m.eq_data[m.equality("steering").id][1] == -3.0  # polycoef = -eta
+    assert "L0 = 0.5" in (out / "tractor_trailer.xml").read_text()
+    assert (out / "tractor_trailer.urdf").is_file()
+    assert model_cli.main(["--out", str(out)]) == 2
+    assert "not an empty folder" in capsys.readouterr().err
+    assert model_cli.main(["--out", str(tmp_path / "bad"), "--param", "L0=-1"]) == 2
+    assert not (tmp_path / "bad").exists()

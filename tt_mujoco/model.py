@@ -1,20 +1,75 @@
-"""``python -m tt_mujoco.model``: write the MJCF, scene and URDF of the vehicle into ``models/``."""
+"""``python -m tt_mujoco.model``: write the vehicle's MJCF, scene and URDF for any parameters.
+
+Without ``--out`` it regenerates the repository's ``models/`` from the default ``Params`` (a
+test keeps those files equal to the generator's output); with ``--out DIR`` it writes the three
+files for the given ``--param`` and ``--eta`` into a new (or empty) folder, never over files.
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
-from tt_mujoco.vehicle.mjcf import write_models
+from tt_mujoco.outputs import OutputError, atomic_write, claim_folder
+from tt_mujoco.run import PARAM_NAMES, parse_param
+from tt_mujoco.vehicle.mjcf import MODELS_DIR, SCENE_FILE, VEHICLE_FILE, scene_xml, vehicle_xml
+from tt_mujoco.vehicle.params import Params
+from tt_mujoco.vehicle.urdf import URDF_FILE, urdf_xml
+
+
+def write_models(p: Params | None = None, directory: Path = MODELS_DIR) -> list[Path]:
+    """Write ``tractor_trailer.xml``, ``scene.xml`` and ``tractor_trailer.urdf`` for ``p``
+    into ``directory`` (each atomically)."""
+    written = []
+    files = ((VEHICLE_FILE, vehicle_xml(p)), (SCENE_FILE, scene_xml()), (URDF_FILE, urdf_xml(p)))
+    for name, text in files:
+        atomic_write(directory / name, text)
+        written.append(directory / name)
+    return written
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Exit 0 written, 2 bad input (a parameter, or an ``--out`` with files in it)."""
     parser = argparse.ArgumentParser(
         prog="python -m tt_mujoco.model",
-        description="Regenerate models/ (MJCF, scene and URDF) from Params().",
+        description="Write the vehicle's MJCF (tractor_trailer.xml), scene.xml and URDF. "
+        "Without --out: regenerate models/ from the default parameters.",
     )
-    parser.parse_args(argv)
-    for path in write_models():
+    parser.add_argument("--out", type=Path, default=None, help="a new or empty folder")
+    parser.add_argument(
+        "--param",
+        action="append",
+        type=parse_param,
+        default=None,
+        metavar="NAME=VALUE",
+        help=f"a vehicle parameter, repeatable; NAME one of {', '.join(PARAM_NAMES)}",
+    )
+    parser.add_argument(
+        "--eta", default=None, help="steering gain: paper, same_path or a number (with --out)"
+    )
+    args = parser.parse_args(argv)
+    try:
+        if args.out is None:
+            if args.param or args.eta is not None:
+                raise OutputError(
+                    "--param and --eta change the model: give --out DIR (models/ holds the "
+                    "default parameters' files, which the tests check)"
+                )
+            params, out = Params(), MODELS_DIR
+            out.mkdir(parents=True, exist_ok=True)
+        else:
+            eta = args.eta if args.eta is not None else "same_path"
+            try:
+                eta = float(eta)
+            except ValueError:
+                pass
+            params = Params(eta=eta, **dict(args.param or []))
+            out, _ = claim_folder(args.out, args.out)
+    except ValueError as err:  # Params' checks and OutputError name the value
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    for path in write_models(params, out):
         print(f"wrote {path}")
     return 0
 

@@ -113,7 +113,7 @@ def _seed(text: str) -> int:
     return value
 
 
-def _param(text: str) -> tuple[str, float]:
+def parse_param(text: str) -> tuple[str, float]:
     name, sep, value = text.partition("=")
     name = name.strip()
     if not sep or name not in PARAM_NAMES:
@@ -263,7 +263,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument(
         "--param",
         action="append",
-        type=_param,
+        type=parse_param,
         default=None,
         metavar="NAME=VALUE",
         help="override a vehicle parameter of both plant and controller model, e.g. Mr=7.5 "

@@ -29,7 +29,7 @@ from pathlib import Path
 
 from tt_mujoco.vehicle.params import Params
 
-__all__ = ["MODELS_DIR", "scene_xml", "vehicle_xml", "write_models"]
+__all__ = ["AXLE_MASS", "MODELS_DIR", "SCENE_FILE", "VEHICLE_FILE", "scene_xml", "vehicle_xml"]
 
 MODELS_DIR = Path(__file__).resolve().parents[2] / "models"
 VEHICLE_FILE = "tractor_trailer.xml"
@@ -211,17 +211,3 @@ def scene_xml(vehicle_file: str = VEHICLE_FILE) -> str:
   </worldbody>
 </mujoco>
 """
-
-
-def write_models(p: Params | None = None, directory: Path = MODELS_DIR) -> list[Path]:
-    """Write ``tractor_trailer.xml``, ``scene.xml`` and ``tractor_trailer.urdf`` for ``p``."""
-    from tt_mujoco.vehicle.urdf import URDF_FILE, urdf_xml
-
-    directory.mkdir(parents=True, exist_ok=True)
-    written = []
-    files = ((VEHICLE_FILE, vehicle_xml(p)), (SCENE_FILE, scene_xml()), (URDF_FILE, urdf_xml(p)))
-    for name, text in files:
-        path = directory / name
-        path.write_text(text)
-        written.append(path)
-    return written

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 
+from tt_mujoco.vehicle.mjcf import AXLE_MASS
 from tt_mujoco.vehicle.params import Params
 
 __all__ = ["URDF_FILE", "VELOCITY_LIMIT", "urdf_xml", "wheel_joint_name"]
@@ -144,9 +145,6 @@ def urdf_xml(p: Params | None = None) -> str:
     tilt = p.body_tilt_inertia_ratio
     h = CHASSIS_HALF_HEIGHT
     rod_radius = 0.15 * r  # the MJCF's capsule radius
-    # Imported here, not at the top, so that tt_mujoco.vehicle.mjcf can import this module.
-    from tt_mujoco.vehicle.mjcf import AXLE_MASS
-
     axle_mass = AXLE_MASS
     axle_yaw = axle_mass * d**2 / 4
     # Hitch range: up to the singularity |eta phi| = pi/2 (docs/model.md Section 2), at most a full
