@@ -9,6 +9,7 @@ import pytest
 from scipy.integrate import quad
 
 from tt_mujoco.reference import paths
+from tt_mujoco.vehicle import steering
 from tt_mujoco.vehicle.params import Params
 
 L_CYCLOID = 8.0 * math.cos(math.pi / 8.0)
@@ -425,15 +426,16 @@ def test_default_curvature_bound_keeps_the_trailer_clear():
     kappa = paths.DEFAULT_MAX_CURVATURE
     assert kappa == 2.0
     same_path = Params()  # eta = -1/7
-    phi = paths.steady_articulation(kappa, same_path)
+    phi = steering.steady_articulation(kappa, same_path)
     assert math.degrees(phi) == pytest.approx(64.39, abs=0.01)  # below 90 deg: rod not across
-    assert math.degrees(paths.steady_articulation(1.0, same_path)) == pytest.approx(34.25, abs=0.01)
-    assert paths.steady_articulation(-kappa, same_path) == pytest.approx(-phi, abs=1e-12)
+    phi_one = steering.steady_articulation(1.0, same_path)
+    assert math.degrees(phi_one) == pytest.approx(34.25, abs=0.01)
+    assert steering.steady_articulation(-kappa, same_path) == pytest.approx(-phi, abs=1e-12)
     # the rod O-P0 would stand perpendicular to the tractor only beyond kappa = 3.016
-    assert paths.steady_articulation(3.0, same_path) < math.pi / 2.0
-    assert paths.steady_articulation(3.05, same_path) > math.pi / 2.0
+    assert steering.steady_articulation(3.0, same_path) < math.pi / 2.0
+    assert steering.steady_articulation(3.05, same_path) > math.pi / 2.0
     paper = Params(eta="paper")
-    phi_paper = paths.steady_articulation(kappa, paper)
+    phi_paper = steering.steady_articulation(kappa, paper)
     assert math.degrees(phi_paper) == pytest.approx(-22.80, abs=0.01)
     assert abs(phi_paper) < paper.phi_singular
     # the residual really is zero (phi_dot = 0 with omega = kappa v, docs/model.md Section 2)
@@ -442,5 +444,5 @@ def test_default_curvature_bound_keeps_the_trailer_clear():
         L0 * math.cos(eta * phi) + L * math.cos((eta - 1) * phi)
     )
     assert abs(residual) < 1e-12
-    assert math.isnan(paths.steady_articulation(1.0, Params(eta=1.0)))
-    assert paths.steady_articulation(0.0) == 0.0
+    assert math.isnan(steering.steady_articulation(1.0, Params(eta=1.0)))
+    assert steering.steady_articulation(0.0) == 0.0

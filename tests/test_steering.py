@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from tt_mujoco.analysis.metrics import trailer_offtrack
+from tt_mujoco.analysis.metrics import follower_offtrack, trailer_offtrack
 from tt_mujoco.reference.reverse import ReverseTarget
 from tt_mujoco.reference.targets import make_target
 from tt_mujoco.sim import Scenario, simulate
@@ -17,7 +17,6 @@ from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.steering import (
     exact_same_path_eta,
-    follower_offtrack,
     same_path_eta_limit,
     steady_offtrack,
 )

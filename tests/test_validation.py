@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from tt_mujoco.analysis import validate
+from tt_mujoco import validate
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
 

@@ -46,8 +46,11 @@ try:
 except ImportError as err:  # pragma: no cover - depends on the optional extra
     raise ImportError("tt_mujoco.gym_env needs gymnasium: pip install 'tt-mujoco[gym]'") from err
 
+import mujoco
+
 from tt_mujoco import sim
 from tt_mujoco.sim.measure import Measurement
+from tt_mujoco.viz.render import select_gl_backend
 
 __all__ = ["ENV_ID", "OBSERVATION_NAMES", "TractorTrailerEnv"]
 
@@ -146,10 +149,6 @@ class TractorTrailerEnv(gymnasium.Env):
         if self.render_mode != "rgb_array" or self._stepper.plant is None:
             return None
         if self._renderer is None:
-            import mujoco
-
-            from tt_mujoco.viz.render import select_gl_backend
-
             select_gl_backend()
             self._renderer = mujoco.Renderer(self._stepper.plant.model, 480, 640)
         self._renderer.update_scene(self._stepper.plant.data, camera="chase")

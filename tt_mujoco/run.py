@@ -26,6 +26,12 @@ import tempfile
 import time
 from pathlib import Path
 
+from tqdm import tqdm
+
+from tt_mujoco import config as config_mod
+from tt_mujoco import sim
+from tt_mujoco.analysis.metrics import DEFAULT_SUMMARY_KEYS, metric_name, summary_table
+from tt_mujoco.config import CONFIG_FILE
 from tt_mujoco.controllers import CONTROLLERS
 from tt_mujoco.defaults import CONTROLLER, DISTURBANCE_MODEL
 from tt_mujoco.outputs import (
@@ -37,8 +43,12 @@ from tt_mujoco.outputs import (
     write_json,
 )
 from tt_mujoco.sim import COLUMNS, DISTURBANCE_MODES, PLANTS, TARGETS, Scenario, build
-from tt_mujoco.sim.faults import RECOVERY_S
+from tt_mujoco.sim.faults import RECOVERY_S, parse_fault
+from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
+from tt_mujoco.viz import plots as plots_mod
+from tt_mujoco.viz import render
+from tt_mujoco.viz import viewer as viewer_mod
 
 __all__ = ["build_parser", "main", "write_outputs"]
 
@@ -351,8 +361,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _parse(argv) -> tuple[argparse.Namespace, argparse.ArgumentParser, dict, list]:
     """Command line over config file over defaults; returns (args, parser, params, faults)."""
-    from tt_mujoco import config as config_mod
-    from tt_mujoco.sim.faults import parse_fault
 
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -453,8 +461,6 @@ def write_outputs(
     written = []
     notes = []
     if config_toml is not None:
-        from tt_mujoco.config import CONFIG_FILE
-
         atomic_write(out / CONFIG_FILE, config_toml)
         written.append(out / CONFIG_FILE)
     atomic_write(out / "timeseries.csv", timeseries_csv(result.timeseries, COLUMNS))
@@ -462,37 +468,27 @@ def write_outputs(
     staging = Path(tempfile.mkdtemp(dir=out, prefix=STAGING))  # this run's own
     try:
         if plots:
-            try:
-                from tt_mujoco.viz import plots as plots_mod
-            except ImportError:
-                notes.append("plots skipped: tt_mujoco.viz.plots is not available")
-            else:
-                made = plots_mod.plot_run(
-                    result.timeseries,
-                    result.reference_polyline,
-                    staging,
-                    params=result.scenario.plant_params(),
-                )
-                written += [publish_new(Path(f), out / Path(f).name) for f in made]
+            made = plots_mod.plot_run(
+                result.timeseries,
+                result.reference_polyline,
+                staging,
+                params=result.scenario.plant_params(),
+            )
+            written += [publish_new(Path(f), out / Path(f).name) for f in made]
         if video:
             try:
-                from tt_mujoco.viz import render
-            except ImportError:
-                notes.append("video skipped: tt_mujoco.viz.render is not available")
-            else:
-                try:
-                    path = render.render_video(
-                        result.timeseries,
-                        result.scenario.plant_params(),
-                        result.reference_polyline,
-                        staging / "video.mp4",
-                        camera=camera,
-                        fps=fps,
-                        progress=not quiet,
-                    )
-                    written.append(publish_new(Path(path), out / "video.mp4"))
-                except render.RenderUnavailable as err:  # no GL must not lose the results
-                    notes.append(f"video skipped: {err}")
+                path = render.render_video(
+                    result.timeseries,
+                    result.scenario.plant_params(),
+                    result.reference_polyline,
+                    staging / "video.mp4",
+                    camera=camera,
+                    fps=fps,
+                    progress=not quiet,
+                )
+                written.append(publish_new(Path(path), out / "video.mp4"))
+            except render.RenderUnavailable as err:  # no GL must not lose the results
+                notes.append(f"video skipped: {err}")
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     doc = {
@@ -509,7 +505,6 @@ def write_outputs(
 def _progress_bar(total_label: str, quiet: bool):
     if quiet:
         return None, None
-    from tqdm import tqdm
 
     bar = tqdm(total=100, desc=total_label, unit="%", leave=False, disable=None)
 
@@ -527,10 +522,6 @@ def _fail(message: str, code: int = EXIT_BAD_INPUT) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from tt_mujoco import config as config_mod
-    from tt_mujoco import sim
-    from tt_mujoco.vehicle import reduced
-    from tt_mujoco.viz import viewer as viewer_mod
 
     try:
         args, parser, params, faults = _parse(argv)
@@ -607,7 +598,6 @@ def _abandon(out: Path, created: bool, live, message: str, code: int) -> int:
 
 
 def _print_summary(result, out: Path, written, notes) -> None:
-    from tt_mujoco.analysis.metrics import DEFAULT_SUMMARY_KEYS, metric_name, summary_table
 
     s = result.scenario
     print(

@@ -44,6 +44,7 @@ __all__ = [
     "PolylineProjection",
     "compute_metrics",
     "distance_to_polyline",
+    "follower_offtrack",
     "max_abs",
     "metric_name",
     "resolve_metrics",
@@ -351,3 +352,22 @@ def metric_name(spec: str) -> str:
     """The key a metric lands under in ``metrics.json``: the registered name, or the
     function's name of a hook."""
     return spec.rsplit(":", 1)[-1] if ":" in spec else spec
+
+
+def follower_offtrack(ts, reverse: bool = False) -> np.ndarray:
+    """Off-tracking of the following axle from the leading axle's path, sample by sample (m).
+
+    Forward the trailer (P0) follows the tractor (P): this is
+    :func:`tt_mujoco.analysis.metrics.trailer_offtrack`. Reversing, the trailer leads, so the roles
+    swap:
+    the distance from P to the path P0 has driven so far. NaN until the follower has passed the
+    leader's starting point.
+    """
+    p = np.column_stack([ts["x"], ts["y"]])
+    p0 = np.column_stack([ts["x0"], ts["y0"]])
+    ok = np.all(np.isfinite(p), axis=1) & np.all(np.isfinite(p0), axis=1)
+    n = int(np.argmin(ok)) if not ok.all() else len(ok)
+    out = np.full(len(ok), np.nan)
+    if n >= 2:
+        out[:n] = trailer_offtrack(p0[:n], p[:n]) if reverse else trailer_offtrack(p[:n], p0[:n])
+    return out

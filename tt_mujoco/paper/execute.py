@@ -10,11 +10,16 @@ from collections.abc import Callable, Iterable, Mapping
 from concurrent.futures import as_completed
 
 import numpy as np
+from scipy.integrate import cumulative_trapezoid
+from tqdm import tqdm
 
+from tt_mujoco.analysis.metrics import follower_offtrack, signed_lateral_error
 from tt_mujoco.executor import Executors, ignore_sigint
 from tt_mujoco.outputs import json_safe
 from tt_mujoco.paper.suite import SERIES_POINTS, SETTLE_DISTANCE, V_MIN, RunSpec
-from tt_mujoco.sim import Scenario
+from tt_mujoco.reference.targets import make_target
+from tt_mujoco.sim import Scenario, simulate
+from tt_mujoco.vehicle.steering import steady_offtrack
 
 
 # --- per-run analysis (runs in the worker processes) -------------------------------------------
@@ -42,9 +47,6 @@ def curvature_split(ts: Mapping[str, np.ndarray], path, polyline, v_min: float =
         ``v_min``, and the arrays
         ``e_omega_over_v``, ``mismatch`` (NaN where |v| < v_min) under ``"series"``.
     """
-    from scipy.integrate import cumulative_trapezoid
-
-    from tt_mujoco.analysis.metrics import signed_lateral_error
 
     t, v, w, wd = (np.asarray(ts[k], dtype=float) for k in ("t", "v", "omega", "omega_d"))
     n = _finite_length(ts)
@@ -122,7 +124,6 @@ def steady_mask(path, s_tractor: np.ndarray, reverse: bool, spacing: float) -> n
 
 def _offtrack_summary(ts, path, scenario: Scenario, plant_params) -> dict:
     """Follower off-tracking (full run and steady arcs), jackknife time, analytic steady value."""
-    from tt_mujoco.vehicle.steering import follower_offtrack, steady_offtrack
 
     n = _finite_length(ts)
     columns = {k: np.asarray(ts[k])[:n] for k in ("x", "y", "x0", "y0")}
@@ -158,9 +159,6 @@ def execute(key: str, scenario: Scenario, keep_series: bool = False) -> dict:
     Runs in a worker process. ``simulate`` never raises for a diverging run; any other
     exception is recorded as status ``"error"`` so that one bad run cannot stop the suite.
     """
-    from tt_mujoco.analysis.metrics import signed_lateral_error
-    from tt_mujoco.reference.targets import make_target
-    from tt_mujoco.sim import simulate
 
     start = time.perf_counter()
     record = {"key": key, "scenario": json_safe(scenario.to_dict())}
@@ -240,7 +238,6 @@ def run_suite(
             unique[ident] = dataclasses.replace(spec)
             alias[spec.key] = spec.key
     todo = sorted(unique.values(), key=_expected_cost, reverse=True)  # long runs first
-    from tqdm import tqdm
 
     bar = tqdm(total=len(todo), desc="paper suite", unit="run", disable=not progress)
     done: dict[str, dict] = {}

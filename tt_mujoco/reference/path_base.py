@@ -21,7 +21,8 @@ __all__ = [
 #: default same-path steering (eta = -1/7) the steady-state articulation there is 64.4 deg
 #: (the rod O-P0 would stand perpendicular to the tractor, phi = 90 deg, near kappa = 3.02 1/m);
 #: with the paper's eta = 3 it is -22.8 deg, clear of that design's singular 30 deg. The paper's
-#: own paths stay below 1 1/m. See :func:`steady_articulation` and docs/paper-notes.md.
+#: own paths stay below 1 1/m. See :func:`tt_mujoco.vehicle.steering.steady_articulation` and
+#: docs/paper-notes.md.
 DEFAULT_MAX_CURVATURE = 2.0
 
 

@@ -29,7 +29,6 @@ import bisect
 import math
 
 import numpy as np
-from scipy.optimize import brentq
 
 from tt_mujoco.reference.path_base import (
     DEFAULT_MAX_CURVATURE,
@@ -39,7 +38,6 @@ from tt_mujoco.reference.path_base import (
 )
 from tt_mujoco.reference.spline import SplinePath, from_csv, from_waypoints
 from tt_mujoco.registry import Registry, is_hook, load_hook
-from tt_mujoco.vehicle.params import Params
 
 __all__ = [
     "CYCLOID_LENGTH",
@@ -62,7 +60,6 @@ __all__ = [
     "path_kind",
     "positive_number",
     "s_curve",
-    "steady_articulation",
 ]
 
 
@@ -334,37 +331,3 @@ def get_path(name_or_csv, **kw) -> ReferencePath:
     if key == "csv":
         return from_csv(text, **kw)
     return PATHS[key](**kw)
-
-
-# --- what the vehicle can follow ---------------------------------------------------------------
-def steady_articulation(kappa: float, params: Params | None = None) -> float:
-    """Steady-state articulation phi (rad) while the tractor turns with constant curvature.
-
-    Solves ``phi_dot = 0`` in docs/model.md Section 2 with ``omega = kappa v``:
-    ``sin((eta - 1) phi) + kappa (L0 cos(eta phi) + L cos((eta - 1) phi)) = 0``, taking the
-    root that grows continuously from phi = 0 at kappa = 0 and staying where cos(beta) > 0.
-    Returns nan if there is none (eta = 1, or the articulation would reach the singularity).
-    Used to justify :data:`DEFAULT_MAX_CURVATURE`.
-    """
-    p = Params() if params is None else params
-    eta, L, L0 = p.eta, p.L, p.L0
-    kappa = float(kappa)
-    if kappa == 0.0:
-        return 0.0
-    if eta == 1.0:
-        return math.nan
-
-    def residual(phi: float) -> float:
-        return math.sin((eta - 1.0) * phi) + kappa * (
-            L0 * math.cos(eta * phi) + L * math.cos((eta - 1.0) * phi)
-        )
-
-    # Near phi = 0 the residual is (eta - 1) phi + kappa (L0 + L): the root's sign follows.
-    sign = math.copysign(1.0, -kappa * (eta - 1.0))
-    reach = min(math.pi, p.phi_singular * (1.0 - 1e-9))
-    grid = np.linspace(0.0, sign * reach, 4001)
-    values = [residual(float(g)) for g in grid]
-    for i in range(len(grid) - 1):
-        if values[i] == 0.0 or values[i] * values[i + 1] < 0.0:
-            return float(brentq(residual, grid[i], grid[i + 1], xtol=1e-13))
-    return math.nan

@@ -28,6 +28,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from tt_mujoco.analysis.metrics import distance_to_polyline
+
 __all__ = [
     "FAULT_KINDS",
     "RECOVERY_S",
@@ -218,7 +220,6 @@ def window_errors(ts, polyline, t_start: float, t_end: float) -> dict:
     reference polyline) and ``rmse_v``, ``rmse_omega`` over the finite samples in the window
     (NaN if there are none), and ``samples``.
     """
-    from tt_mujoco.analysis.metrics import distance_to_polyline
 
     t = np.asarray(ts["t"])
     sel = (t >= t_start - 1e-12) & (t <= t_end + 1e-12)

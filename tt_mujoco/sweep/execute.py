@@ -11,6 +11,8 @@ from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from tqdm import tqdm
+
 from tt_mujoco.executor import Executors, ignore_sigint
 from tt_mujoco.outputs import atomic_write
 from tt_mujoco.sweep.options import JOURNAL, SPEC_FILE, TABLE, BadSpecError
@@ -58,7 +60,6 @@ class SweepResult:
 def _progress(total: int, initial: int, quiet: bool):
     if quiet:
         return None
-    from tqdm import tqdm
 
     return tqdm(
         total=total,

@@ -13,7 +13,7 @@ import numpy as np
 
 from tt_mujoco.controllers import controller_class
 from tt_mujoco.controllers.base import resolve_gains
-from tt_mujoco.sim import Scenario, build
+from tt_mujoco.sim import Scenario, build, simulate
 from tt_mujoco.sweep.options import (
     DICT_OPTIONS,
     LIST_OPTIONS,
@@ -225,7 +225,6 @@ def run_one(options: Mapping) -> dict:
         ``metrics`` (dict; empty on error) and ``run_wall_s`` (the whole run in this worker:
         setup, control loop and metrics).
     """
-    from tt_mujoco.sim import simulate
 
     start = time.perf_counter()
     try:

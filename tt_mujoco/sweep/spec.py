@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import tomli_w
 
 from tt_mujoco.sweep.options import (
     DISTRIBUTIONS,
@@ -81,7 +82,6 @@ class SweepSpec:
         return next((a for a in self.axes if a.name == name), None)
 
     def to_toml(self) -> str:
-        import tomli_w
 
         sweep = {"seed": self.seed, "repeats": self.repeats}
         if self.samples is not None:

@@ -169,7 +169,7 @@ def plot_summary(
 ) -> list[Path]:
     """``histograms.png`` (key metrics over the ok runs) and ``scatter.png`` (``metric``
     against each numeric option that varies; failed runs drawn as red crosses at the top)."""
-    from matplotlib.figure import Figure
+    from matplotlib.figure import Figure  # matplotlib only for sweeps that draw figures
 
     ok = [r for r in rows if r["status"] == "ok"]
     failed = len(rows) - len(ok)

@@ -31,13 +31,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.optimize import brentq
 
 from tt_mujoco.vehicle.params import Params, same_path_eta
 
 __all__ = [
     "exact_same_path_eta",
-    "follower_offtrack",
     "same_path_eta_limit",
+    "steady_articulation",
     "steady_offtrack",
 ]
 
@@ -113,13 +114,11 @@ def steady_offtrack(kappa: float, params: Params) -> float:
     """Analytic steady-state off-tracking (m): P0's turning radius minus the tractor's.
 
     Negative: P0 runs inside the tractor's path; positive: outside. Uses the steady articulation
-    of the kinematics (``tt_mujoco.reference.paths.steady_articulation``), NaN where there is none.
+    of the kinematics ((:func:`steady_articulation`)), NaN where there is none.
     The
     steady turn is the same in either direction of travel; for eta > 1 it is stable only
     reversing (docs/model.md Section 3).
     """
-    from tt_mujoco.reference.paths import steady_articulation
-
     kappa = float(kappa)
     if kappa == 0.0:
         return 0.0
@@ -131,22 +130,34 @@ def steady_offtrack(kappa: float, params: Params) -> float:
     return math.hypot(R - params.L0 * math.sin(phi), -params.L - params.L0 * math.cos(phi)) - R
 
 
-def follower_offtrack(ts, reverse: bool = False) -> np.ndarray:
-    """Off-tracking of the following axle from the leading axle's path, sample by sample (m).
+def steady_articulation(kappa: float, params: Params | None = None) -> float:
+    """Steady-state articulation phi (rad) while the tractor turns with constant curvature.
 
-    Forward the trailer (P0) follows the tractor (P): this is
-    :func:`tt_mujoco.analysis.metrics.trailer_offtrack`. Reversing, the trailer leads, so the roles
-    swap:
-    the distance from P to the path P0 has driven so far. NaN until the follower has passed the
-    leader's starting point.
+    Solves ``phi_dot = 0`` in docs/model.md Section 2 with ``omega = kappa v``:
+    ``sin((eta - 1) phi) + kappa (L0 cos(eta phi) + L cos((eta - 1) phi)) = 0``, taking the
+    root that grows continuously from phi = 0 at kappa = 0 and staying where cos(beta) > 0.
+    Returns nan if there is none (eta = 1, or the articulation would reach the singularity).
+    Used to justify :data:`DEFAULT_MAX_CURVATURE`.
     """
-    from tt_mujoco.analysis.metrics import trailer_offtrack
+    p = Params() if params is None else params
+    eta, L, L0 = p.eta, p.L, p.L0
+    kappa = float(kappa)
+    if kappa == 0.0:
+        return 0.0
+    if eta == 1.0:
+        return math.nan
 
-    p = np.column_stack([ts["x"], ts["y"]])
-    p0 = np.column_stack([ts["x0"], ts["y0"]])
-    ok = np.all(np.isfinite(p), axis=1) & np.all(np.isfinite(p0), axis=1)
-    n = int(np.argmin(ok)) if not ok.all() else len(ok)
-    out = np.full(len(ok), np.nan)
-    if n >= 2:
-        out[:n] = trailer_offtrack(p0[:n], p[:n]) if reverse else trailer_offtrack(p[:n], p0[:n])
-    return out
+    def residual(phi: float) -> float:
+        return math.sin((eta - 1.0) * phi) + kappa * (
+            L0 * math.cos(eta * phi) + L * math.cos((eta - 1.0) * phi)
+        )
+
+    # Near phi = 0 the residual is (eta - 1) phi + kappa (L0 + L): the root's sign follows.
+    sign = math.copysign(1.0, -kappa * (eta - 1.0))
+    reach = min(math.pi, p.phi_singular * (1.0 - 1e-9))
+    grid = np.linspace(0.0, sign * reach, 4001)
+    values = [residual(float(g)) for g in grid]
+    for i in range(len(grid) - 1):
+        if values[i] == 0.0 or values[i] * values[i + 1] < 0.0:
+            return float(brentq(residual, grid[i], grid[i + 1], xtol=1e-13))
+    return math.nan

@@ -24,8 +24,11 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
+from tqdm import tqdm
 
 from tt_mujoco.outputs import publish_new
+from tt_mujoco.reference import paths
+from tt_mujoco.sim.physics import Vehicle
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.viz.gl import GL_BACKENDS, RenderUnavailable, gl_context, select_gl_backend
@@ -204,7 +207,6 @@ class RunRenderer:
         fps: float = 30.0,
         camera: str = "follow",
     ):
-        from tt_mujoco.sim.physics import Vehicle  # MuJoCo model compilation, only when rendering
 
         _check_video_args(width, height, fps, camera)
         self.has_reference_point = "x_ref" in ts and "y_ref" in ts
@@ -468,9 +470,9 @@ def render_video(
     RenderUnavailable
         No OpenGL backend works here.
     """
+    # The encoder's imports (ffmpeg binary lookup, mediapy) load only when a video is made.
     import imageio_ffmpeg
     import mediapy
-    from tqdm import tqdm
 
     out = Path(out_path)
     if out.suffix.lower() != ".mp4":
@@ -580,15 +582,12 @@ def reference_polyline_for(config: Mapping, ts: Mapping) -> tuple[np.ndarray, st
     traj = config.get("traj", config.get("scenario", {}).get("traj"))
     note = "the recorded reference point (x_ref, y_ref)"
     if traj is not None:
+        options = config.get("scenario", {}).get("path_options") or {}
         try:
-            from tt_mujoco.reference import paths
-        except ImportError:
-            paths = None
-        if paths is not None:
-            try:
-                return np.asarray(paths.get_path(traj).dense(), dtype=float)[:, :2], f"{traj}"
-            except (ValueError, OSError, KeyError) as exc:
-                note += f" (path {traj!r} unavailable: {exc})"
+            polyline = paths.get_path(traj, **options).dense()
+            return np.asarray(polyline, dtype=float)[:, :2], f"{traj}"
+        except (ValueError, OSError, KeyError) as exc:
+            note += f" (path {traj!r} unavailable: {exc})"
     if "x_ref" not in ts or "y_ref" not in ts:
         raise ValueError("the run has no reference path: no known 'traj' and no x_ref/y_ref")
     return np.column_stack([ts["x_ref"], ts["y_ref"]]), note
