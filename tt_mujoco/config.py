@@ -29,14 +29,13 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import difflib
 import math
 import tomllib
 from pathlib import Path
 
 import tomli_w
 
-from tt_mujoco.registry import normalise_hook
+from tt_mujoco.registry import closest, normalise_hook
 from tt_mujoco.sim.faults import parse_fault
 from tt_mujoco.vehicle.params import Params
 
@@ -128,8 +127,8 @@ def _convert(key: str, value, action: argparse.Action, where: str):
 
 
 def _unknown_key(key: str, known, where: str) -> ValueError:
-    close = difflib.get_close_matches(key, list(known), n=1)
-    hint = f" (did you mean {close[0]!r}?)" if close else ""
+    close = closest(key, known)
+    hint = f" (did you mean {close!r}?)" if close else ""
     return ValueError(
         f"{where}: unknown key {key!r}{hint}; allowed keys are {', '.join(sorted(known))}"
     )

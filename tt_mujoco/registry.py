@@ -25,7 +25,13 @@ import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
-__all__ = ["HookError", "Registry", "is_hook", "load_hook", "normalise_hook"]
+__all__ = ["HookError", "Registry", "closest", "is_hook", "load_hook", "normalise_hook"]
+
+
+def closest(word: str, choices) -> str | None:
+    """The choice closest to a misspelt ``word`` (for "did you mean" hints), or None."""
+    match = difflib.get_close_matches(word, list(choices), n=1)
+    return match[0] if match else None
 
 
 class HookError(ValueError):
@@ -115,8 +121,8 @@ def load_hook(spec: str, what: str = "hook") -> object:
         return getattr(module, name)
     except AttributeError:
         public = sorted(n for n in vars(module) if not n.startswith("_"))
-        hint = difflib.get_close_matches(name, public, n=1)
-        extra = f"; did you mean {hint[0]!r}?" if hint else ""
+        hint = closest(name, public)
+        extra = f"; did you mean {hint!r}?" if hint else ""
         raise HookError(f"{what} {spec!r}: {where!r} has no {name!r}{extra}") from None
 
 
@@ -185,8 +191,8 @@ class Registry:
         allowed = ", ".join(repr(k) for k in self._items)
         hint = ""
         if isinstance(spec, str):
-            close = difflib.get_close_matches(_key(spec), list(self._items), n=1)
-            hint = f"; did you mean {close[0]!r}?" if close else ""
+            close = closest(_key(spec), self._items)
+            hint = f"; did you mean {close!r}?" if close else ""
         return ValueError(
             f"{self.what} name={spec!r} is not allowed: use one of {allowed}, "
             f"{self.also + ', ' if self.also else ''}or a hook "

@@ -31,6 +31,7 @@ from tqdm import tqdm
 from tt_mujoco import config as config_mod
 from tt_mujoco import sim
 from tt_mujoco.analysis.metrics import DEFAULT_SUMMARY_KEYS, metric_name, summary_table
+from tt_mujoco.cliargs import BadInputError, Parser, finite, integer_at_least, positive
 from tt_mujoco.config import CONFIG_FILE
 from tt_mujoco.controllers import CONTROLLERS
 from tt_mujoco.defaults import CONTROLLER, DISTURBANCE_MODEL
@@ -65,22 +66,6 @@ PARAM_NAMES = tuple(
 STAGING = ".partial-"
 
 
-class BadInputError(Exception):
-    """A user's mistake: reported as one line, exit code 2."""
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str):  # argparse's own errors: same exit code, no usage dump
-        raise BadInputError(message)
-
-
-def _number(name: str, text: str) -> float:
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{name} {text!r} is not a number") from None
-
-
 def _snr(text: str) -> float:
     try:
         value = float(text)
@@ -90,36 +75,6 @@ def _snr(text: str) -> float:
         ) from None
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"--noise-snr {text!r} must be a finite number of dB")
-    return value
-
-
-def _positive(name: str):
-    def parse(text: str) -> float:
-        value = _number(name, text)
-        if not (math.isfinite(value) and value > 0):
-            raise argparse.ArgumentTypeError(f"{name} {text!r} must be a finite number > 0")
-        return value
-
-    return parse
-
-
-def _finite(name: str):
-    def parse(text: str) -> float:
-        value = _number(name, text)
-        if not math.isfinite(value):
-            raise argparse.ArgumentTypeError(f"{name} {text!r} must be a finite number")
-        return value
-
-    return parse
-
-
-def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--seed {text!r} is not an integer >= 0") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"--seed {text!r} is not an integer >= 0")
     return value
 
 
@@ -153,7 +108,7 @@ def _path_option(text: str) -> tuple[str, float | str]:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(
+    p = Parser(
         prog="python -m tt_mujoco.run",
         description=(
             "Run one closed-loop tracking scenario of the off-axle tractor-trailer on the MuJoCo "
@@ -265,7 +220,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     g.add_argument(
         "--param-scale",
-        type=_positive("--param-scale"),
+        type=positive("--param-scale"),
         default=1.0,
         metavar="F",
         help="scale the plant's masses and inertias (the controller keeps the nominal model)",
@@ -281,12 +236,17 @@ def build_parser() -> argparse.ArgumentParser:
     )
     g.add_argument(
         "--duration",
-        type=_positive("--duration"),
+        type=positive("--duration"),
         default=None,
         metavar="S",
         help="run length in s, at most 600 (default: the path's own duration)",
     )
-    g.add_argument("--seed", type=_seed, default=0, help="seed for the measurement noise")
+    g.add_argument(
+        "--seed",
+        type=integer_at_least("--seed", 0),
+        default=0,
+        help="seed for the measurement noise",
+    )
     g.add_argument(
         "--start",
         default="on_path",
@@ -297,26 +257,26 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument(
         "--phi0-deg",
         "--phi0",
-        type=_finite("--phi0-deg"),
+        type=finite("--phi0-deg"),
         default=0.0,
         metavar="DEG",
         help="initial articulation phi (deg), short of the jackknife",
     )
     g.add_argument(
         "--friction",
-        type=_positive("--friction"),
+        type=positive("--friction"),
         default=1.0,
         help="tyre friction coefficient",
     )
     g.add_argument(
         "--timestep",
-        type=_positive("--timestep"),
+        type=positive("--timestep"),
         default=0.001,
         help="physics step (s), in [1e-5, 0.01]",
     )
     g.add_argument(
         "--control-dt",
-        type=_positive("--control-dt"),
+        type=positive("--control-dt"),
         default=None,
         help="control period (s), a multiple of the timestep, at most 0.05; default: the timestep",
     )
@@ -346,7 +306,7 @@ def build_parser() -> argparse.ArgumentParser:
     o.add_argument(
         "--camera", default="follow", choices=("follow", "overview"), help="video camera"
     )
-    o.add_argument("--fps", type=_positive("--fps"), default=30.0, help="video frame rate")
+    o.add_argument("--fps", type=positive("--fps"), default=30.0, help="video frame rate")
     o.add_argument(
         "--quiet", action=argparse.BooleanOptionalAction, default=False, help="no progress bar"
     )

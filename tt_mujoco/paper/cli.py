@@ -6,6 +6,7 @@ import argparse
 import sys
 import time
 
+from tt_mujoco.cliargs import BadInputError, Parser, integer_at_least
 from tt_mujoco.outputs import claim_folder
 from tt_mujoco.paper.execute import run_suite
 from tt_mujoco.paper.report import build_report
@@ -13,27 +14,8 @@ from tt_mujoco.paper.suite import COMMAND, DEFAULT_OUT, suite
 
 
 # --- command line -------------------------------------------------------------------------------
-class _BadInputError(Exception):
-    pass
-
-
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str):
-        raise _BadInputError(message)
-
-
-def _workers(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--workers {text!r} is not an integer >= 1") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"--workers {text!r} is not an integer >= 1")
-    return value
-
-
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(
+    p = Parser(
         prog=COMMAND,
         description=(
             "Run every scenario behind the paper's Tables 1-5 on the reduced model and MuJoCo, "
@@ -48,7 +30,9 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="DIR",
         help="output folder, new or empty (default: renders/paper, or renders/paper-N if taken)",
     )
-    p.add_argument("--workers", type=_workers, default=2, help="worker processes")
+    p.add_argument(
+        "--workers", type=integer_at_least("--workers", 1), default=2, help="worker processes"
+    )
     p.add_argument("--quick", action="store_true", help="a reduced set of short runs (smoke test)")
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -60,7 +44,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         args = build_parser().parse_args(argv)
         out, _ = claim_folder(args.out, DEFAULT_OUT)  # before the suite: a bad --out fails now
-    except (_BadInputError, ValueError) as err:
+    except (BadInputError, ValueError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
     specs = suite(quick=args.quick)

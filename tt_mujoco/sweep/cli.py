@@ -10,6 +10,7 @@ import sys
 import time
 from pathlib import Path
 
+from tt_mujoco.cliargs import BadInputError, Parser
 from tt_mujoco.executor import ExecutorError
 from tt_mujoco.outputs import free_name
 from tt_mujoco.sweep.execute import run_sweep
@@ -31,13 +32,7 @@ from tt_mujoco.sweep.runs import expand
 from tt_mujoco.sweep.spec import parse_spec
 from tt_mujoco.sweep.tables import summary_text
 
-
 # --- command line ------------------------------------------------------------------------------
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str):  # argparse's own errors: exit code 2, one line
-        raise BadSpecError(message)
-
-
 _DICT_HELP = "".join(
     f"  {n:<16} on (its defaults), off, or {n}.<key>=x for one entry (implies on)\n"
     for n in DICT_OPTIONS
@@ -65,7 +60,7 @@ example:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = _Parser(
+    p = Parser(
         prog="python -m tt_mujoco.sweep",
         description=(
             "Run a grid or random sweep of closed-loop runs in parallel and write one table "
@@ -164,7 +159,7 @@ def main(argv: list[str] | None = None) -> int:
             figures=not args.no_figures,
             retry_errors=args.retry_errors,
         )
-    except (BadSpecError, ExecutorError) as err:
+    except (BadSpecError, BadInputError, ExecutorError) as err:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:

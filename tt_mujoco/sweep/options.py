@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from tt_mujoco.controllers import CONTROLLERS
-from tt_mujoco.registry import is_hook, normalise_hook
+from tt_mujoco.registry import closest, is_hook, normalise_hook
 from tt_mujoco.sim import DISTURBANCE_MODES, PLANTS, TARGETS, Scenario
 from tt_mujoco.vehicle.params import INERTIA_FIELDS, MASS_FIELDS, Params
 
@@ -220,11 +220,19 @@ def convert(name: str, value):
 
 
 def _unknown_option_message(name: str) -> str:
+    known = [
+        *SCENARIO_OPTIONS,
+        *(f"scale.{f}" for f in SCALABLE),
+        *(f"param.{f}" for f in SETTABLE),
+    ]
+    close = closest(name, known)
     return (
-        f"option {name!r} is not allowed: use one of {', '.join(SCENARIO_OPTIONS)}, "
+        f"option {name!r} is not allowed"
+        + (f" (did you mean {close!r}?)" if close else "")
+        + f": use one of {', '.join(SCENARIO_OPTIONS)}, "
         f"gain.<name> (a controller gain), scale.<field> (field one of {', '.join(SCALABLE)}: "
         f"Params default times the factor), param.<field> (field one of {', '.join(SETTABLE)})"
-        + "".join(f" or {name}.<key>" for name in DICT_OPTIONS)
+        + "".join(f" or {option}.<key>" for option in DICT_OPTIONS)
     )
 
 
