@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from tt_mujoco import sweep
+from tt_mujoco import outputs, sweep
 from tt_mujoco.sim import Scenario, simulate
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -103,6 +103,8 @@ def test_user_path_and_metric_land_in_metrics_json(tmp_path):
             "width=0.8",
             "--metric",
             "examples/user_parts.py:final_position_error",
+            "--disturbance-model",
+            "examples/user_parts.py:headwind_gusts",
             "--out",
             str(out),
         ]
@@ -113,6 +115,11 @@ def test_user_path_and_metric_land_in_metrics_json(tmp_path):
     assert metrics["config"]["target"]["path"] == "lane_change_0.8"
     assert 0.0 <= metrics["final_position_error"] < 0.05
     assert metrics["rmse_lateral"] < 0.01
+    # the headwind brakes the vehicle: its matched wheel torques are negative
+    ts = outputs.read_timeseries(out / "timeseries.csv")
+    assert ts["dist_T_r"].min() < 0.0 and metrics["config"]["scenario"][
+        "disturbance_model"
+    ].endswith("user_parts.py:headwind_gusts")
 
 
 @pytest.mark.parametrize(

@@ -19,7 +19,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
-import math
 import shutil
 import sys
 import tempfile
@@ -64,18 +63,6 @@ PARAM_NAMES = tuple(
 #: Prefix of the hidden folder, private to one run, where figures and video are made before
 #: they are moved into the output folder.
 STAGING = ".partial-"
-
-
-def _snr(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"--noise-snr {text!r} is not a number: give the SNR in dB, e.g. 20"
-        ) from None
-    if not math.isfinite(value):
-        raise argparse.ArgumentTypeError(f"--noise-snr {text!r} must be a finite number of dB")
-    return value
 
 
 def parse_param(text: str) -> tuple[str, float]:
@@ -213,7 +200,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument(
         "--noise-snr-db",
         "--noise-snr",
-        type=_snr,
+        type=finite("--noise-snr-db"),
         default=None,
         metavar="DB",
         help="Gaussian measurement noise on v and omega at this SNR (dB); none by default",
