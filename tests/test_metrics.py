@@ -27,8 +27,9 @@ TORQUE_LIMIT = 15.0
 
 
 def make_series(n: int, dt: float = 0.01, **columns) -> dict[str, np.ndarray]:
-    """All required columns: t = k dt, zeros elsewhere, then the given overrides."""
-    ts = {name: np.zeros(n) for name in REQUIRED_COLUMNS}
+    """All required columns and the reference heading: t = k dt, zeros elsewhere (a reference
+    heading of 0: along +x), then the given overrides."""
+    ts = {name: np.zeros(n) for name in (*REQUIRED_COLUMNS, "theta_ref")}
     ts["t"] = np.arange(n) * dt
     for name, value in columns.items():
         ts[name] = np.asarray(value, dtype=float)
@@ -524,3 +525,109 @@ def test_default_summary_covers_compute_metrics_output():
     m = compute_metrics(straight_run(), STRAIGHT_REFERENCE, TORQUE_LIMIT)
     text = summary_table(m)
     assert "rmse_lateral" in text and "torque_saturation_fraction" in text
+
+
+# ---------------------------------------------------------------------------------------------
+# Definitions that mean the same on every path, start and direction (docs/metrics.md)
+
+SPACING = 0.7  # L + L0
+
+
+def _rest_then_straight(wiggle: float, n: int = 1201):
+    """A tractor starting from rest at the origin (it rolls back 1e-6 m and wiggles sideways by
+    ``wiggle`` first), then straight along +x; the trailer follows on the same line."""
+    s = np.concatenate([np.zeros(50), np.linspace(0.0, 6.0, n - 50)])
+    s[1:10] = -1e-6  # rolls back a hair
+    x = s.copy()
+    y = np.zeros(n)
+    y[1:20] = wiggle * np.sin(np.arange(19))
+    # The trailer is SPACING behind along the path it follows (x), on the line y = 0.
+    return make_series(n, x=x, y=y, x_ref=x, y_ref=np.zeros(n), x0=x - SPACING, y0=np.zeros(n))
+
+
+def test_offtracking_is_zero_on_a_straight_from_rest_whatever_the_start_wiggles():
+    # The bug this replaces: a 1e-5 m wiggle at rest made the 0.7 m spacing count (max 0.700).
+    for wiggle in (0.0, 1e-6, 1e-5):
+        ts = _rest_then_straight(wiggle)
+        m = compute_metrics(ts, STRAIGHT_REFERENCE, TORQUE_LIMIT)
+        assert m["trailer_offtrack_max"] < 1e-4, wiggle  # the wiggle itself, not the spacing
+        assert m["trailer_offtrack_samples"] == np.count_nonzero(ts["x0"] > 0.0)
+        assert m["trailer_rmse_lateral"] == pytest.approx(0.0, abs=EXACT)
+
+
+def test_offtracking_on_a_steady_circle_over_one_and_a_half_laps():
+    # Tractor on R = 1, trailer on R0 = 0.98 (0.02 inside), 1.5 laps: the previous lap must not
+    # serve (it is the same circle, so the number would hide it; the window is checked below).
+    n = 3000
+    a = np.linspace(0.0, 3.0 * np.pi, n)
+    lag = 0.7
+    p = np.column_stack([np.cos(a), np.sin(a)])
+    p0 = 0.98 * np.column_stack([np.cos(a - lag), np.sin(a - lag)])
+    ts = make_series(
+        n, x=p[:, 0], y=p[:, 1], x_ref=p[:, 0], y_ref=p[:, 1], x0=p0[:, 0], y0=p0[:, 1]
+    )
+    ts["theta_ref"] = a + np.pi / 2
+    circle = np.column_stack([np.cos(a), np.sin(a)])
+    m = compute_metrics(ts, circle, TORQUE_LIMIT)
+    sagitta = 1.0 - math.cos((a[1] - a[0]) / 2)
+    assert m["trailer_offtrack_rms"] == pytest.approx(0.02, abs=sagitta)
+    assert m["trailer_rmse_lateral"] == pytest.approx(0.02, abs=sagitta)
+    assert m["cross_track_max"] < sagitta and m["along_track_max"] < EXACT
+
+
+def _lemniscate(u):
+    """Gerono's figure-eight (2 sin u, 2 sin u cos u): its two branches cross at the origin at
+    right angles (u = 0, pi, 2 pi)."""
+    r = np.column_stack([2.0 * np.sin(u), 2.0 * np.sin(u) * np.cos(u)])
+    d = np.column_stack([2.0 * np.cos(u), 2.0 * np.cos(2.0 * u)])
+    normal = np.column_stack([-d[:, 1], d[:, 0]]) / np.hypot(d[:, 0], d[:, 1])[:, None]
+    return r, normal
+
+
+def test_offtracking_on_a_figure_eight_uses_the_recent_path_only():
+    # The trailer runs 0.02 m right of the tractor's track, 0.35 rad of the parameter behind.
+    # Crossing the origin, it sits on the *other* branch, which the tractor drove half a loop
+    # (about 3 m) earlier: measured against the whole driven path the off-tracking would dip to
+    # 0 there; against the recent path it stays 0.02.
+    n = 6000
+    u = np.linspace(0.0, 2.0 * np.pi, n)
+    p, _ = _lemniscate(u)
+    r0, normal0 = _lemniscate(u - 0.35)
+    p0 = r0 - 0.02 * normal0
+    off = trailer_offtrack(p, p0)
+    counted = ~np.isnan(off)
+    near_crossing = counted & (np.abs(u - 0.35 - np.pi) < 0.05)
+    assert near_crossing.sum() > 50
+    chord = 4e-5  # the polygon of 6000 samples against the smooth curve
+    np.testing.assert_allclose(off[counted], 0.02, atol=chord)
+
+
+def test_reversing_the_follower_is_the_tractor():
+    # Backing up along y = 0 towards -x, the trailer leads 0.7 m ahead; the tractor follows
+    # 0.01 m to its side: the off-tracking is the tractor's, 0.01, never a spacing.
+    n = 800
+    x = np.linspace(0.0, -5.0, n)
+    ts = make_series(
+        n, x=x, y=np.full(n, 0.01), x_ref=x, y_ref=np.zeros(n), x0=x - SPACING, y0=np.zeros(n)
+    )
+    m = compute_metrics(ts, STRAIGHT_REFERENCE[::-1], TORQUE_LIMIT, reverse=True)
+    assert m["offtrack_follower"] == "tractor"
+    assert m["trailer_offtrack_rms"] == pytest.approx(0.01, abs=EXACT)
+    assert m["trailer_offtrack_max"] == pytest.approx(0.01, abs=EXACT)
+    assert m["trailer_offtrack_samples"] > 0.8 * n
+    assert m["trailer_rmse_lateral"] == pytest.approx(0.0, abs=EXACT)
+
+
+def test_overshoot_past_the_end_is_along_track_not_cross_track():
+    # The reference ends at x = 5; P runs on to x = 5.066 on the line (0.066 m of overshoot)
+    # while the reference point waits at the end.
+    n = 600
+    x = np.concatenate([np.linspace(0.0, 5.0, 500), np.linspace(5.0, 5.066, 100)])
+    x_ref = np.minimum(x, 5.0)
+    x_ref[500:] = 5.0
+    ts = make_series(n, x=x, y=np.zeros(n), x_ref=x_ref, y_ref=np.zeros(n), x0=x - SPACING)
+    reference = np.column_stack([np.linspace(0.0, 5.0, 51), np.zeros(51)])
+    m = compute_metrics(ts, reference, TORQUE_LIMIT)
+    assert m["max_lateral"] == pytest.approx(0.066, abs=1e-12)  # the paper's lateral: end-clamped
+    assert m["cross_track_max"] == pytest.approx(0.0, abs=EXACT)
+    assert m["along_track_max"] == pytest.approx(0.066, abs=1e-12)

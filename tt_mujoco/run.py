@@ -81,6 +81,12 @@ def parse_param(text: str) -> tuple[str, float]:
         ) from None
 
 
+def _disturbance_limit(text: str) -> str | float:
+    if text.strip().lower() in ("actuator", "none"):
+        return text.strip().lower()
+    return positive("--disturbance-limit")(text)
+
+
 def _path_option(text: str) -> tuple[str, float | str]:
     name, sep, value = text.partition("=")
     name, value = name.strip(), value.strip()
@@ -188,6 +194,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--disturbance-model",
         default=DISTURBANCE_MODEL,
         help="the disturbance Delta(t): paper, or a hook package.module:Name / file.py:Name",
+    )
+    g.add_argument(
+        "--disturbance-limit",
+        type=_disturbance_limit,
+        default="actuator",
+        help="bound on each wheel's matched disturbance torque: actuator (the torque limit), "
+        "none (the paper's unbounded g^-1 Delta) or a number in N m",
     )
     g.add_argument(
         "--metric",
@@ -373,6 +386,7 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
         reverse=bool(args.reverse),
         path_feedback={} if args.path_feedback else None,
         disturbance_model=args.disturbance_model,
+        disturbance_limit=args.disturbance_limit,
         path_options=dict(path_options),
         metrics=list(args.metric or []),
     )
@@ -557,6 +571,12 @@ def _print_summary(result, out: Path, written, notes) -> None:
     print(summary_table(result.metrics, keys=keys))
     for fault in result.metrics.get("faults", []):
         w = fault["window"]
+        if w is None:
+            print(
+                f"fault {fault['kind']} at t={fault['t']:g} s: not reached, the run stopped at "
+                f"t={result.metrics['sim_time_s']:.3f} s ({result.status})"
+            )
+            continue
         print(
             f"fault {fault['kind']} at t={fault['t']:g} s, until {RECOVERY_S:g} s after its end: "
             f"max|e_v| {w['max_abs_v']:.4g} m/s, max|e_omega| {w['max_abs_omega']:.4g} rad/s, "

@@ -202,7 +202,7 @@ class Polyline:
         self._chunk_radius = np.sqrt(np.max(np.einsum("ijk,ijk->ij", offset, offset), axis=1))
 
     def project(
-        self, points, *, extend_ends: bool = False, segment_count=None
+        self, points, *, extend_ends: bool = False, segment_count=None, segment_first=None
     ) -> PolylineProjection:
         """Nearest point on the polyline for each query point.
 
@@ -220,6 +220,9 @@ class Polyline:
             Only the first ``segment_count[i]`` segments of :attr:`vertices` serve query point
             i (a path known up to some time). 0 means "the first vertex only". The end extension
             then applies only to segment 0 and, if available, the last segment.
+        segment_first : array_like of int, shape (N,), optional
+            Segments before ``segment_first[i]`` do not serve query point i (a window on a path
+            that may pass the same place twice, e.g. laps). Must be below ``segment_count``.
 
         Returns
         -------
@@ -250,6 +253,14 @@ class Polyline:
                 )
             limit = limit.astype(np.int64)
 
+        first = np.zeros(n, dtype=np.int64)
+        if segment_first is not None:
+            first = np.asarray(segment_first)
+            if first.shape != (n,) or not np.issubdtype(first.dtype, np.integer):
+                raise ValueError(f"segment_first must be an integer array of shape ({n},)")
+            if np.any((first < 0) | ((first >= limit) & (limit > 0))):
+                raise ValueError("segment_first must lie in [0, segment_count)")
+            first = first.astype(np.int64)
         best = _Best(n)
         finite = np.all(np.isfinite(pts), axis=1)
 
@@ -270,12 +281,14 @@ class Polyline:
                 # The rays are not covered by the tree's distance bound: always try them.
                 ends = np.broadcast_to(np.array([0, n_seg - 1]), (pending.size, 2))
                 candidates = np.concatenate([candidates, ends], axis=1)
-            self._try(pts[pending], pending, candidates, limit[pending], extend_ends, best)
+            self._try(
+                pts[pending], pending, candidates, limit[pending], extend_ends, best, first[pending]
+            )
             # Every segment outside the candidate groups is at least this far away.
             bound = group_dist[:, -1] - self._group_radius_max
             pending = pending[np.sqrt(best.d2[pending]) > bound]
         if pending.size:
-            self._chunk_search(pts, pending, limit, extend_ends, best)
+            self._chunk_search(pts, pending, limit, extend_ends, best, first)
         return self._assemble(pts, finite, best, single)
 
     def _segment_distance2(
@@ -309,11 +322,12 @@ class Polyline:
         limit: np.ndarray,
         extend_ends: bool,
         best: _Best,
+        first: np.ndarray,
     ) -> None:
         """Project ``pts[i]`` onto segments ``candidates[i]``; keep what beats ``best[rows[i]]``.
 
-        ``rows`` may repeat (several candidate sets for one point); ``limit`` is per row of
-        ``pts``.
+        ``rows`` may repeat (several candidate sets for one point); ``limit`` and ``first`` (the
+        window of usable segments) are per row of ``pts``.
         """
         n_rows, width = candidates.shape
         px = np.ascontiguousarray(pts[:, 0])
@@ -326,7 +340,7 @@ class Polyline:
             part = slice(lo, lo + step)
             cand = candidates[part]
             d2, t = self._segment_distance2(px[part], py[part], cand, extend_ends)
-            d2[cand >= limit[part, None]] = np.inf
+            d2[(cand >= limit[part, None]) | (cand < first[part, None])] = np.inf
             col = np.argmin(d2, axis=1)
             i = np.arange(cand.shape[0])
             d2_min[part], seg_min[part], t_min[part] = d2[i, col], cand[i, col], t[i, col]
@@ -350,6 +364,7 @@ class Polyline:
         limit: np.ndarray,
         extend_ends: bool,
         best: _Best,
+        first: np.ndarray,
     ) -> None:
         """Exact search over every chunk whose bounding circle is not beyond the best so far."""
         offsets = np.arange(_CHUNK)
@@ -366,7 +381,11 @@ class Polyline:
                 - self._chunk_radius
             )
             upper_bound = np.sqrt(best.d2[idx])
-            keep = (lower_bound <= upper_bound[:, None]) & (self._chunk_first < limit[idx, None])
+            keep = (
+                (lower_bound <= upper_bound[:, None])
+                & (self._chunk_first < limit[idx, None])
+                & (self._chunk_first + _CHUNK > first[idx, None])
+            )
             pair_point, pair_chunk = np.nonzero(keep)
             if pair_point.size == 0:
                 continue
@@ -380,6 +399,7 @@ class Polyline:
                 limit[idx][pair_point],
                 extend_ends,
                 best,
+                first[idx][pair_point],
             )
 
     def _assemble(
@@ -480,28 +500,37 @@ def signed_lateral_error(
     return np.where(inside, proj.signed_distance, np.nan), proj.arc_length
 
 
-def trailer_offtrack(tractor_xy, trailer_xy) -> np.ndarray:
-    """Distance from the trailer axle midpoint P0 to the path its tractor has driven so far.
+def trailer_offtrack(tractor_xy, trailer_xy, window: float | None = None) -> np.ndarray:
+    """Distance from the following axle (P0 driving forward) to the path its leading axle (P)
+    has driven: the off-tracking, sample by sample (docs/metrics.md).
 
-    At sample i the tractor's path is the polyline of P over samples 0..i (the causal path: a
-    path the tractor drives later, e.g. on its next lap or on a crossing, does not count). The
-    distance is reported only when the nearest point of that path lies strictly inside it: its
-    arc length is > 0 (P0 has passed the tractor's starting point) and below the length driven
-    so far (P0 is not beyond the tractor's current position). Otherwise the nearest point is an
-    end of the path and the distance is mostly along-track spacing, not off-tracking: those
-    samples are NaN. This covers the start of every forward run; when reversing, the trailer
-    leads and no sample qualifies.
+    Sample i counts once the follower has passed the leader's starting point and is not ahead
+    of the leader:
+
+    - *passed the start*: the follower has travelled at least its initial spacing from the
+      leader's start, measured along the leader's start direction (so a leader that wiggles by
+      1e-6 m at the start, or rolls back a little, cannot make the initial spacing count as
+      off-tracking), and its nearest point on the driven path lies beyond the path's first
+      point;
+    - *recent path only*: the driven path is searched over its last ``window`` metres (default
+      three times the initial spacing), so a path driven earlier (the previous lap, the other
+      loop of a figure-eight) never serves;
+    - *not ahead*: the nearest point lies before the leader's current position.
+
+    Other samples are NaN.
 
     Parameters
     ----------
     tractor_xy, trailer_xy : array_like, shape (N, 2)
-        P and P0 at the same samples; finite.
+        Leader and follower at the same samples; finite. (Reversing, pass the trailer as the
+        leader.)
+    window : float, optional
+        Length (m) of the recent driven path that serves a sample.
 
     Returns
     -------
     ndarray, shape (N,)
-        Off-tracking distance (metres); NaN where the nearest path point is an end of the
-        path driven so far (see above).
+        Off-tracking distance (m); NaN where a sample does not count (see above).
     """
     p = np.asarray(tractor_xy, dtype=float)
     p0 = np.asarray(trailer_xy, dtype=float)
@@ -512,12 +541,28 @@ def trailer_offtrack(tractor_xy, trailer_xy) -> np.ndarray:
     out = np.full(p.shape[0], np.nan)
     if p.shape[0] < 2 or np.all(p == p[0]):
         return out  # the tractor never moved: P0 cannot have passed its start
+    spacing = float(np.hypot(*(p[0] - p0[0])))
+    # The leader's start direction, from its first move of a tenth of the spacing (not from
+    # its first sample, which may wiggle): the follower passes the start after travelling the
+    # spacing's component along it.
+    moved = np.flatnonzero(np.hypot(*(p - p[0]).T) >= 0.1 * spacing)
+    along = spacing
+    if spacing > 0.0 and moved.size:
+        heading = p[moved[0]] - p[0]
+        along = max(0.0, float(np.dot(p[0] - p0[0], heading) / np.hypot(*heading)))
+    if window is None:
+        window = 3.0 * spacing if spacing > 0.0 else np.inf
     path = Polyline(p)
-    # Sample i may use the de-duplicated segments that end at or before P_i.
-    proj = path.project(p0, segment_count=path.vertex_index)
-    # Exact comparisons: a foot clamped to the start has arc length 0.0, one clamped to the end
-    # of segment s has arc_length[s] + 1.0 * length[s], the same sum that built arc_length[s + 1].
-    driven = path.arc_length[path.vertex_index]
-    passed = (proj.arc_length > 0.0) & (proj.arc_length < driven)
-    out[passed] = proj.distance[passed]
+    count = path.vertex_index  # segments driven up to each sample
+    driven = path.arc_length[count]
+    first = np.searchsorted(path.arc_length, driven - window, side="right") - 1
+    first = np.clip(first, 0, np.maximum(count - 1, 0)).astype(np.int64)
+    proj = path.project(p0, segment_count=count, segment_first=first)
+    step = np.hypot(*np.diff(p0, axis=0).T)
+    travelled = np.concatenate([[0.0], np.cumsum(step)])
+    # Exact comparisons: a foot clamped to the window's first vertex has that vertex's arc
+    # length, one clamped to the leader's position the same sum that built driven[i].
+    inside = (proj.arc_length > path.arc_length[first]) & (proj.arc_length < driven)
+    counted = inside & (travelled >= along) & (count > 0)
+    out[counted] = proj.distance[counted]
     return out

@@ -39,11 +39,13 @@ __all__ = [
     "DEFAULT_SUMMARY_KEYS",
     "DIAGNOSTIC_COLUMNS",
     "METRICS",
+    "OPTIONAL_COLUMNS",
     "REQUIRED_COLUMNS",
     "Polyline",
     "PolylineProjection",
     "compute_metrics",
     "distance_to_polyline",
+    "error_signals",
     "follower_offtrack",
     "max_abs",
     "metric_name",
@@ -83,8 +85,11 @@ DIAGNOSTIC_COLUMNS = (
     "eq_violation",
 )
 
-#: Every column :func:`compute_metrics` reads.
+#: Every column :func:`compute_metrics` needs.
 REQUIRED_COLUMNS = CORE_COLUMNS + DIAGNOSTIC_COLUMNS
+#: Columns used when present: the reference heading (along-track error), the yaw-rate target
+#: the controller tracked (path feedback), whether the disturbance was clipped.
+OPTIONAL_COLUMNS = ("theta_ref", "omega_d_tracked", "dist_clipped")
 
 #: Rows of the CLI's printed summary, in order.
 DEFAULT_SUMMARY_KEYS = (
@@ -94,6 +99,8 @@ DEFAULT_SUMMARY_KEYS = (
     "max_abs_omega",
     "rmse_lateral",
     "max_lateral",
+    "cross_track_rms",
+    "along_track_rms",
     "rmse_position",
     "max_position",
     "trailer_rmse_lateral",
@@ -176,9 +183,62 @@ def _check_inputs(ts, torque_limit) -> tuple[dict[str, np.ndarray], int]:
     return columns, n
 
 
+def error_signals(
+    c: Mapping[str, np.ndarray], reference_polyline, reverse: bool = False
+) -> dict[str, np.ndarray]:
+    """The tracking errors of a run, sample by sample (docs/metrics.md defines each).
+
+    Parameters
+    ----------
+    c : mapping of str -> ndarray
+        Columns with finite positions (``t, x, y, x0, y0, x_ref, y_ref, v, v_d, omega,
+        omega_d``; ``theta_ref`` and ``omega_d_tracked`` are used when present).
+    reference_polyline : array_like or Polyline
+    reverse : bool
+        The run drives the path backwards (the trailer leads).
+
+    Returns
+    -------
+    dict of ndarray
+        ``e_v``, ``e_omega`` (against the reference target), ``e_omega_tracked`` (against the
+        yaw-rate target the controller tracked, when path feedback changed it); ``lateral``
+        (P to the path, ends clamped, signed: the paper's lateral deviation); ``cross_track``
+        (P to the path continued by its end tangents, signed, + left of the direction of travel),
+        ``along_track`` (P's lead, + ahead, or lag against the reference point along the path's
+        tangent there; NaN without ``theta_ref``); ``trailer_offtrack`` (the following unit to the
+        path the leading one drove, NaN where it does not count) and ``trailer_lateral`` (P0's
+        cross-track over the same samples driving forward, over all samples reversing).
+    """
+    reference = as_polyline(reference_polyline)
+    n = len(c["t"])
+    out = {"e_v": c["v"] - c["v_d"], "e_omega": c["omega"] - c["omega_d"]}
+    tracked = c.get("omega_d_tracked")
+    if tracked is not None and not np.array_equal(tracked, c["omega_d"], equal_nan=True):
+        out["e_omega_tracked"] = c["omega"] - tracked
+    tractor = np.column_stack([c["x"], c["y"]])
+    trailer = np.column_stack([c["x0"], c["y0"]])
+    out["lateral"] = reference.project(tractor).signed_distance
+    out["cross_track"] = reference.project(tractor, extend_ends=True).signed_distance
+    direction = -1.0 if reverse else 1.0
+    if "theta_ref" in c:
+        th = c["theta_ref"]
+        ahead = (c["x"] - c["x_ref"]) * np.cos(th) + (c["y"] - c["y_ref"]) * np.sin(th)
+        out["along_track"] = direction * ahead
+    else:
+        out["along_track"] = np.full(n, np.nan)
+    leader, follower = (trailer, tractor) if reverse else (tractor, trailer)
+    offtrack = trailer_offtrack(leader, follower) if n else np.zeros(0)
+    out["trailer_offtrack"] = offtrack
+    trailer_cross = reference.project(trailer, extend_ends=True).signed_distance
+    out["trailer_lateral"] = (
+        trailer_cross if reverse else np.where(np.isnan(offtrack), np.nan, trailer_cross)
+    )
+    return out
+
+
 def compute_metrics(
-    ts: Mapping[str, np.ndarray], reference_polyline, torque_limit: float
-) -> dict[str, float | int]:
+    ts: Mapping[str, np.ndarray], reference_polyline, torque_limit: float, reverse: bool = False
+) -> dict[str, float | int | str]:
     """Summarise a run (docs/model.md Section 11, ``metrics.json``).
 
     Parameters
@@ -197,19 +257,23 @@ def compute_metrics(
         sampling); every maximum is over the samples. Errors are ``e_v = v - v_d`` and
         ``e_omega = omega - omega_d`` with the true velocities (the paper's Section 6 errors).
 
-        - ``rmse_v``, ``max_abs_v`` (m/s); ``rmse_omega``, ``max_abs_omega`` (rad/s).
-        - ``rmse_lateral``, ``max_lateral``: P to the reference polyline (m). Beyond the path's
-          ends this is the distance to the end vertex.
+        - ``rmse_v``, ``max_abs_v`` (m/s); ``rmse_omega``, ``max_abs_omega`` (rad/s), against
+          the reference target; with path feedback also ``rmse_omega_tracked``,
+          ``max_abs_omega_tracked`` against the yaw-rate target the controller was given.
+        - ``rmse_lateral``, ``max_lateral``: P to the reference polyline (m), its ends clamped
+          (the paper's lateral deviation; P running past the end counts as distance to the end).
+        - ``cross_track_rms``, ``cross_track_max``: P to the path continued by its end tangents
+          (m): progress past the end is along-track, not cross-track.
+        - ``along_track_rms``, ``along_track_max``: P's lead or lag against the reference point
+          along the path's tangent there (m), in the direction of travel.
         - ``rmse_position``, ``max_position``: P to the reference point (x_ref, y_ref) (m).
-        - ``trailer_rmse_lateral``, ``trailer_max_lateral``: P0 to the reference polyline (m),
-          over the ``trailer_lateral_samples`` samples whose nearest path point lies strictly
-          inside the path (not clamped to an end: at the start the trailer is L + L0 behind the
-          path's first point, and that spacing is not a lateral error); NaN if there are none.
-        - ``trailer_offtrack_rms``, ``trailer_offtrack_max``: P0 to the tractor's own path,
-          over the ``trailer_offtrack_samples`` samples where P0 has passed the tractor's
-          starting point and is not ahead of the tractor (see :func:`trailer_offtrack`); NaN if
-          there are none (e.g. reversing).
-          NaN values are Python floats: ``json.dump`` writes them as ``NaN``.
+        - ``trailer_offtrack_rms``, ``trailer_offtrack_max``: the following unit (the trailer's
+          P0 forward, the tractor's P reversing; ``offtrack_follower`` says which) to the path
+          the leading unit drove, over the ``trailer_offtrack_samples`` samples after the
+          follower passed the leader's start (see :func:`trailer_offtrack`).
+        - ``trailer_rmse_lateral``, ``trailer_max_lateral``: P0's cross-track against the
+          reference path over the same samples (forward; all samples reversing), counted in
+          ``trailer_lateral_samples``. NaN where no sample counts.
         - ``eq_violation_max`` (rad): max ``|beta - eta phi|``.
         - ``slip_lateral_max``: max of ``|slip_lateral|`` and ``|slip_lateral_trailer|``;
           ``slip_longitudinal_max``: max of ``|slip_left|`` and ``|slip_right|`` (m/s).
@@ -234,6 +298,9 @@ def compute_metrics(
     reference = as_polyline(reference_polyline)
     n = _finite_prefix_length(columns, CORE_COLUMNS)
     c = {name: col[:n] for name, col in columns.items()}
+    for name in OPTIONAL_COLUMNS:
+        if name in ts:
+            c[name] = np.asarray(ts[name], dtype=float)[:n]
     t = c["t"]
     if n >= 2 and np.any(np.diff(t) <= 0.0):
         i = int(np.flatnonzero(np.diff(t) <= 0.0)[0]) + 1
@@ -244,35 +311,35 @@ def compute_metrics(
     all_t = columns["t"][np.isfinite(columns["t"])]
     sample_period = float(np.median(np.diff(all_t))) if all_t.size >= 2 else math.nan
 
+    signals = error_signals(c, reference, reverse)
     metrics: dict[str, float | int] = {}
-    e_v = c["v"] - c["v_d"]
-    e_omega = c["omega"] - c["omega_d"]
-    metrics["rmse_v"] = rmse(e_v)
-    metrics["max_abs_v"] = max_abs(e_v)
-    metrics["rmse_omega"] = rmse(e_omega)
-    metrics["max_abs_omega"] = max_abs(e_omega)
-
-    tractor_xy = np.column_stack([c["x"], c["y"]])
-    trailer_xy = np.column_stack([c["x0"], c["y0"]])
-    lateral = reference.project(tractor_xy).distance
-    metrics["rmse_lateral"] = rmse(lateral)
-    metrics["max_lateral"] = max_abs(lateral)
+    metrics["rmse_v"] = rmse(signals["e_v"])
+    metrics["max_abs_v"] = max_abs(signals["e_v"])
+    metrics["rmse_omega"] = rmse(signals["e_omega"])
+    metrics["max_abs_omega"] = max_abs(signals["e_omega"])
+    if "e_omega_tracked" in signals:
+        metrics["rmse_omega_tracked"] = rmse(signals["e_omega_tracked"])
+        metrics["max_abs_omega_tracked"] = max_abs(signals["e_omega_tracked"])
+    metrics["rmse_lateral"] = rmse(signals["lateral"])
+    metrics["max_lateral"] = max_abs(signals["lateral"])
+    metrics["cross_track_rms"] = rmse(signals["cross_track"])
+    metrics["cross_track_max"] = max_abs(signals["cross_track"])
+    metrics["along_track_rms"] = rmse(signals["along_track"])
+    metrics["along_track_max"] = max_abs(signals["along_track"])
     position = np.hypot(c["x"] - c["x_ref"], c["y"] - c["y_ref"])
     metrics["rmse_position"] = rmse(position)
     metrics["max_position"] = max_abs(position)
-    # The trailer starts L + L0 behind the path's start: there its nearest path point is the
-    # start vertex and the distance is along-track spacing, so only samples whose nearest point
-    # lies strictly inside the path count.
-    trailer_signed, _ = signed_lateral_error(trailer_xy, reference, interior_only=True)
-    trailer_lateral = np.abs(trailer_signed[~np.isnan(trailer_signed)])
+    trailer_lateral = signals["trailer_lateral"]
+    trailer_lateral = trailer_lateral[~np.isnan(trailer_lateral)]
     metrics["trailer_rmse_lateral"] = rmse(trailer_lateral)
     metrics["trailer_max_lateral"] = max_abs(trailer_lateral)
     metrics["trailer_lateral_samples"] = int(trailer_lateral.size)
-    offtrack = trailer_offtrack(tractor_xy, trailer_xy)
+    offtrack = signals["trailer_offtrack"]
     offtrack = offtrack[~np.isnan(offtrack)]
     metrics["trailer_offtrack_rms"] = rmse(offtrack)
     metrics["trailer_offtrack_max"] = max_abs(offtrack)
     metrics["trailer_offtrack_samples"] = int(offtrack.size)
+    metrics["offtrack_follower"] = "tractor" if reverse else "trailer"
 
     metrics["phi_max_abs_deg"] = math.degrees(max_abs(c["phi"]))
     metrics["eq_violation_max"] = _nanmax_abs(c["eq_violation"])
@@ -281,6 +348,9 @@ def compute_metrics(
     threshold = torque_limit * (1.0 - SATURATION_MARGIN)
     saturated = (np.abs(c["T_r_cmd"]) > threshold) | (np.abs(c["T_l_cmd"]) > threshold)
     metrics["torque_saturation_fraction"] = float(saturated.mean()) if n else math.nan
+    if "dist_clipped" in ts:
+        clipped = np.asarray(ts["dist_clipped"], dtype=float)[:n]
+        metrics["disturbance_clipped_fraction"] = float(np.mean(clipped > 0)) if n else math.nan
 
     metrics["steps"] = int(n_total)
     metrics["finite_samples"] = int(n)

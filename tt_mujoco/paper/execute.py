@@ -173,7 +173,6 @@ def execute(key: str, scenario: Scenario, keep_series: bool = False) -> dict:
         series_split = split.pop("series")
         n = _finite_length(ts)
         xy = np.column_stack([ts["x"][:n], ts["y"][:n]])
-        cross, _ = signed_lateral_error(xy, polyline, extend_ends=True)
         plant_params = scenario.plant_params()
         record.update(
             status=result.status,
@@ -183,8 +182,8 @@ def execute(key: str, scenario: Scenario, keep_series: bool = False) -> dict:
             curvature_split=split,
             offtrack=_offtrack_summary(ts, path, scenario, plant_params),
             cross_track={
-                "rms": float(np.sqrt(np.mean(cross**2))) if n else math.nan,
-                "max": float(np.max(np.abs(cross))) if n else math.nan,
+                "rms": result.metrics["cross_track_rms"],
+                "max": result.metrics["cross_track_max"],
             },
         )
         if keep_series and n >= 2:

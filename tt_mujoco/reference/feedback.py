@@ -129,6 +129,9 @@ class PathFeedback:
     def reference_point(self, t):
         return self.target.reference_point(t)
 
+    def reference_pose(self, t):
+        return self.target.reference_pose(t)
+
     def reference_speed(self, t):
         return self.target.reference_speed(t)
 
@@ -169,6 +172,7 @@ class PathFeedback:
         c is clipped.
         """
         v_d, w_d, v_d_dot, w_d_dot = self.target.update(t, dt, v_measured)
+        self.reference_omega_d = w_d  # the path's own target, before the correction
         e_y, e_psi = self.errors(x, y, theta)
         v = float(v_measured)
         sign = 1.0 if v >= 0.0 else -1.0

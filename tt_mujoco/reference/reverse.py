@@ -76,10 +76,14 @@ class ReverseTarget:
         s_ref, v_ref = self.profile.distance(t), self.profile.speed(t)
         return self.path.curvature(self.s_end - s_ref) * -v_ref
 
+    def reference_pose(self, t):
+        """Pose of the path where P should be at time t, reversing on schedule: the heading is
+        the path's tangent, which the tractor faces while backing up (float or array t)."""
+        if isinstance(t, float | int):
+            return self.path.pose_at(self.s_end - self._profile_state(float(t))[0])
+        return self.path.pose(self.s_end - self.profile.distance(t))
+
     def reference_point(self, t):
         """``(x, y)`` where P should be at time t (float or array t), reversing on schedule."""
-        if isinstance(t, float | int):
-            x, y, _ = self.path.pose_at(self.s_end - self._profile_state(float(t))[0])
-            return x, y
-        x, y, _ = self.path.pose(self.s_end - self.profile.distance(t))
+        x, y, _ = self.reference_pose(t)
         return x, y

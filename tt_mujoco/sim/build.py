@@ -69,6 +69,8 @@ class Build:
     v_init: float
     noise_std: tuple[float, float]
     disturbance: Any
+    #: Bound on each wheel's matched disturbance torque (N m), None for unbounded.
+    disturbance_limit: float | None
     controller_class: type[Controller]
     controller_setup: ControllerSetup
     extra_metrics: dict
@@ -93,6 +95,13 @@ class Build:
 
     def new_controller(self) -> Controller:
         return self.controller_class.from_setup(self.controller_setup, self.scenario.gains)
+
+
+def _disturbance_limit(scenario: Scenario, nominal: Params) -> float | None:
+    limit = scenario.disturbance_limit
+    if scenario.disturbance != "matched" or limit == "none":
+        return None
+    return nominal.torque_limit if limit == "actuator" else float(limit)
 
 
 def build(scenario: Scenario) -> Build:
@@ -153,6 +162,7 @@ def build(scenario: Scenario) -> Build:
         disturbance=(
             make_disturbance(scenario.disturbance_model) if scenario.disturbance != "none" else None
         ),
+        disturbance_limit=_disturbance_limit(scenario, nominal),
         controller_class=cls,
         controller_setup=setup,
         extra_metrics=resolve_metrics(scenario.metrics),

@@ -247,7 +247,8 @@ def window_errors(ts, polyline, t_start: float, t_end: float) -> dict:
 
 def fault_report(schedule: FaultSchedule, ts, polyline, torque_limit: float) -> list[dict]:
     """Per fault: its spec, the window it acted in and the tracking errors over that window
-    plus :data:`RECOVERY_S` (payload: to the end of the run), for ``metrics.json``.
+    plus :data:`RECOVERY_S` (payload: to the end of the run), for ``metrics.json``; ``window``
+    is None for a fault the run never reached (``reached`` False).
 
     Kind-specific entries: dropout ``held_steps`` (all dropouts together: control steps whose
     measurement was held); actuator ``torque_shortfall_max`` (N m, largest torque asked for
@@ -258,11 +259,17 @@ def fault_report(schedule: FaultSchedule, ts, polyline, torque_limit: float) -> 
     report = []
     for f in schedule.faults:
         t_end = t_last if math.isinf(f.duration) else f.t + f.duration
+        reached = bool(t.size and t_last >= f.t)
         entry = {
             **f.to_dict(),
             "t_end": t_end,
-            "reached": bool(t.size and t_last >= f.t),
-            "window": window_errors(ts, polyline, f.t, min(t_last, t_end + RECOVERY_S)),
+            "reached": reached,
+            # A fault the run never reached (it stopped before) has no window: None, not NaN.
+            "window": (
+                window_errors(ts, polyline, f.t, min(t_last, t_end + RECOVERY_S))
+                if reached
+                else None
+            ),
         }
         if f.kind == "dropout":
             entry["held_steps"] = schedule.held_steps

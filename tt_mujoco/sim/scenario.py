@@ -46,6 +46,10 @@ class Scenario:
     #: Which disturbance Delta(t): a name in :data:`tt_mujoco.sim.disturbances.DISTURBANCES`
     #: ("paper") or a hook ``module:Name`` / ``file.py:Name``.
     disturbance_model: str = "paper"
+    #: Bound on each wheel's matched disturbance torque (N m): "actuator" (default: the
+    #: nominal torque limit, what a motor-sized disturbance can apply), "none" (the paper's
+    #: unbounded idealisation g^-1 Delta), or a number > 0.
+    disturbance_limit: str | float = "actuator"
     noise_snr_db: float | None = None
     param_scale: float = 1.0
     duration: float | None = None
@@ -88,6 +92,17 @@ class Scenario:
 
         if self.target not in TARGETS:
             raise ValueError(f"target={self.target!r} is not allowed: use one of {TARGETS}")
+        limit = self.disturbance_limit
+        if limit not in ("actuator", "none") and not (
+            isinstance(limit, int | float)
+            and not isinstance(limit, bool)
+            and math.isfinite(limit)
+            and limit > 0
+        ):
+            raise ValueError(
+                f"disturbance_limit={limit!r} is not allowed: use 'actuator', 'none' or a number "
+                "> 0 (N m)"
+            )
         if self.disturbance not in DISTURBANCE_MODES:
             raise ValueError(
                 f"disturbance={self.disturbance!r} is not allowed: use one of {DISTURBANCE_MODES}"

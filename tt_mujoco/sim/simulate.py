@@ -103,7 +103,7 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
     ts = stepper.timeseries()
     polyline = built.path.dense()
     limit = built.nominal.torque_limit
-    metrics = compute_metrics(ts, polyline, limit)
+    metrics = compute_metrics(ts, polyline, limit, reverse=scenario.reverse)
     for name, fn in built.extra_metrics.items():
         metrics[name] = fn(ts, built.path) if len(ts["t"]) else float("nan")
     metrics["wall_time_s"] = wall

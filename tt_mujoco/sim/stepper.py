@@ -51,6 +51,7 @@ class Stepper:
         self._mode = s.disturbance
         self._feedback = s.path_feedback is not None
         self._limit = built.nominal.torque_limit
+        self._dist_limit = built.disturbance_limit
         self.plant = None
 
     def reset(self, rng: np.random.Generator, phi0_deg: float | None = None) -> None:
@@ -111,8 +112,10 @@ class Stepper:
         target = self.built.target
         if self._feedback:
             v_d, w_d, v_d_dot, w_d_dot = target.update(t, self.dt, v_m, me.x, me.y, me.theta)
+            self._omega_ref = target.reference_omega_d
         else:
             v_d, w_d, v_d_dot, w_d_dot = target.update(t, self.dt, v_m)
+            self._omega_ref = w_d
         self.measurement = me
         self._seen = (v_m, w_m)
         seen = (
@@ -148,12 +151,20 @@ class Stepper:
             if factor is not None:
                 self.plant.scale_trailer_mass(factor)
         dist_r = dist_l = force = torque = 0.0
+        clipped = 0.0
         dist = self.built.disturbance
         if dist is not None:
             a_v, a_w = dist(t)
             dist_r, dist_l, force, torque = injected(
                 self._mode, a_v, a_w, me.phi, self.built.nominal
             )
+            bound = self._dist_limit
+            if bound is not None and (abs(dist_r) > bound or abs(dist_l) > bound):
+                # What a disturbance of motor size can apply, per wheel: beyond it the paper's
+                # g^-1 Delta (unbounded as g nears singular) would itself drive a jackknife.
+                dist_r = max(-bound, min(bound, dist_r))
+                dist_l = max(-bound, min(bound, dist_l))
+                clipped = 1.0
         # Log the measurement tuple as it is and the loop's own values beside it: columns are
         # assembled once after the episode (per-step attribute access is costly).
         self._measured.append(me)
@@ -163,7 +174,7 @@ class Stepper:
                 t,
                 ref.s,
                 ref.v_d,
-                ref.omega_d,
+                self._omega_ref,
                 ref.v_d_dot,
                 ref.omega_d_dot,
                 v_m,
@@ -175,6 +186,8 @@ class Stepper:
                 dist_r,
                 dist_l,
                 ref.kappa,
+                ref.omega_d,
+                clipped,
             )
         )
         if k == self.steps:
@@ -202,6 +215,6 @@ class Stepper:
         if self.scheduler is not None:
             ts["eq_violation"] = ts["beta"] - self.scheduler.eta_series(n) * ts["phi"]
         if n:
-            ref = self.built.target.reference_point(ts["t"])
-            ts["x_ref"], ts["y_ref"] = (np.asarray(c, dtype=float) for c in ref)
+            ref = self.built.target.reference_pose(ts["t"])
+            ts["x_ref"], ts["y_ref"], ts["theta_ref"] = (np.asarray(c, dtype=float) for c in ref)
         return ts

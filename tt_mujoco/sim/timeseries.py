@@ -46,6 +46,9 @@ COLUMNS = (
     "slip_right",
     "eq_violation",
     "kappa_d",
+    "theta_ref",
+    "omega_d_tracked",
+    "dist_clipped",
 )
 
 _LOOP_COLUMNS = (
@@ -64,12 +67,14 @@ _LOOP_COLUMNS = (
     "dist_T_r",
     "dist_T_l",
     "kappa_d",
+    "omega_d_tracked",
+    "dist_clipped",
 )
 
 
 def assemble_columns(measured: list, logged: list, eta: float) -> dict[str, np.ndarray]:
     """The time series in :data:`COLUMNS` order from the per-step measurement tuples and the
-    loop's own values (``x_ref``/``y_ref`` are left NaN for the caller to fill)."""
+    loop's own values (``x_ref``, ``y_ref``, ``theta_ref`` are left NaN for the caller to fill)."""
     n = len(logged)
     meas = np.array(measured, dtype=float).reshape(n, len(Measurement._fields))
     loop = np.array(logged, dtype=float).reshape(n, len(_LOOP_COLUMNS))
@@ -78,4 +83,5 @@ def assemble_columns(measured: list, logged: list, eta: float) -> dict[str, np.n
     cols["eq_violation"] = cols["beta"] - eta * cols["phi"]
     cols["x_ref"] = np.full(n, np.nan)
     cols["y_ref"] = np.full(n, np.nan)
+    cols["theta_ref"] = np.full(n, np.nan)
     return {name: np.ascontiguousarray(cols[name]) for name in COLUMNS}

@@ -188,6 +188,10 @@ def convert(name: str, value):
         return _text(name, value)
     if name == "eta":
         return _eta(name, value)
+    if name == "disturbance_limit":
+        if isinstance(value, str) and value.strip().lower() in ("actuator", "none"):
+            return value.strip().lower()
+        return as_number(name, value, positive=True)
     if name == "noise_snr_db":
         return _optional_number(name, value)
     if name == "duration":

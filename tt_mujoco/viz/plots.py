@@ -40,41 +40,46 @@ REFERENCE_COLOR = "0.2"
 
 
 # --- error signals -------------------------------------------------------------------------------
-def tracking_errors(ts: Mapping, reference_polyline=None) -> dict[str, np.ndarray]:
-    """Error signals of a run, as :func:`tt_mujoco.analysis.metrics.compute_metrics`.
+def tracking_errors(
+    ts: Mapping, reference_polyline=None, reverse: bool = False
+) -> dict[str, np.ndarray]:
+    """Error signals of a run, those of :func:`tt_mujoco.analysis.metrics.error_signals`.
 
     Returns
     -------
     dict
-        ``e_v``, ``e_omega``; when a reference polyline is given, ``lateral`` (P to the path)
-        and ``trailer_lateral`` (P0 to the path, NaN while its nearest path point is an end
-        of the path), signed, positive left of the path's direction of travel
-        (:func:`tt_mujoco.analysis.metrics.signed_lateral_error`; their magnitudes are the metrics'
-        distances); always ``trailer_offtrack``, P0 to the path the tractor has driven so far,
-        NaN until P0 has passed the tractor's start
-        (:func:`tt_mujoco.analysis.metrics.trailer_offtrack`).
-        Samples after the first non-finite position are NaN.
+        ``e_v``, ``e_omega``; when a reference polyline is given, ``lateral`` (P to the path,
+        signed, positive left of the path's direction of travel), ``trailer_lateral`` (P0's
+        cross-track where it counts) and ``trailer_offtrack``; their RMS values are the
+        metrics'. Samples
+        after the first non-finite position are NaN.
     """
-    c = _columns(ts, ("t", "x", "y", "x0", "y0", "v", "v_d", "omega", "omega_d"))
+    names = ("t", "x", "y", "x0", "y0", "x_ref", "y_ref", "v", "v_d", "omega", "omega_d")
+    c = _columns(ts, tuple(n for n in names if n in ts or n not in ("x_ref", "y_ref")))
+    c.update({n: np.asarray(ts[n], dtype=float) for n in metrics.OPTIONAL_COLUMNS if n in ts})
     out = {"e_v": c["v"] - c["v_d"], "e_omega": c["omega"] - c["omega_d"]}
     # Positions up to the first non-finite one (a run that diverged ends in NaN rows); the
     # distances after it are NaN.
     positions = np.column_stack([c["x"], c["y"], c["x0"], c["y0"]])
     finite = np.all(np.isfinite(positions), axis=1)
     n = len(finite) if finite.all() else int(np.argmin(finite))
-    tractor, trailer = positions[:n, :2], positions[:n, 2:]
 
     def padded(values: np.ndarray) -> np.ndarray:
         return np.concatenate([values, np.full(len(finite) - n, np.nan)])
 
     if reference_polyline is not None:
-        path = metrics.Polyline(reference_polyline)  # one k-d tree for both queries
-        out["lateral"] = padded(metrics.signed_lateral_error(tractor, path)[0])
-        # Only where P0's nearest path point is inside the path (NaN while P0 is still behind
-        # the path's start, L + L0 behind P at t = 0), as in the metrics.
-        trailer_lateral = metrics.signed_lateral_error(trailer, path, interior_only=True)[0]
-        out["trailer_lateral"] = padded(trailer_lateral)
-    out["trailer_offtrack"] = padded(metrics.trailer_offtrack(tractor, trailer))
+        prefix = {k: v[:n] for k, v in c.items()}
+        prefix.setdefault("x_ref", prefix["x"])
+        prefix.setdefault("y_ref", prefix["y"])
+        signals = metrics.error_signals(prefix, reference_polyline, reverse)
+        out["lateral"] = padded(signals["lateral"])
+        out["trailer_lateral"] = padded(signals["trailer_lateral"])
+        out["trailer_offtrack"] = padded(signals["trailer_offtrack"])
+    else:
+        leader, follower = positions[:n, :2], positions[:n, 2:]
+        if reverse:
+            leader, follower = follower, leader
+        out["trailer_offtrack"] = padded(metrics.trailer_offtrack(leader, follower))
     return out
 
 
@@ -184,6 +189,12 @@ def _torques_figure(c: dict, limit: float) -> Figure:
         name = "right" if side == "r" else "left"
         ax.plot(t, c[f"T_{side}"], color=color, lw=1.3, label=f"T_{side} applied")
         ax.plot(t, c[f"T_{side}_cmd"], "--", color="k", lw=1.0, label=f"T_{side} commanded")
+        dist = c.get(f"dist_T_{side}")
+        if dist is not None and np.any(dist != 0.0):
+            # The matched disturbance acts on the wheel beside the motor: with it the net
+            # torque explains why the motors push back (both negative under the paper's push).
+            ax.plot(t, dist, color="tab:purple", lw=1.0, label="disturbance")
+            ax.plot(t, c[f"T_{side}"] + dist, color="0.5", lw=1.0, label="net (applied + dist.)")
         # The saturation lines only when the torques come near them (else they flatten the plot).
         peak = max(np.max(np.abs(c[f"T_{side}"])), np.max(np.abs(c[f"T_{side}_cmd"])))
         if peak >= 0.5 * limit:
@@ -233,7 +244,8 @@ def plot_run(ts: Mapping, reference_polyline, out_dir, params: Params | None = N
       end (square) markers (paper Figs. 2a, 7a, 8a).
     - ``errors.png``: e_v, e_omega, P's lateral error, P0's lateral error and off-tracking
       (paper Figs. 2-3, 7b-c, 8b-c), each labelled with its RMS.
-    - ``torques.png``: applied (solid) and commanded (dashed) T_r, T_l with the saturation.
+    - ``torques.png``: applied (solid) and commanded (dashed) T_r, T_l with the saturation, and
+      the matched disturbance torque and the net torque when there is a disturbance.
     - ``articulation.png``: phi and beta in degrees, eta * phi dashed.
 
     Parameters
@@ -257,6 +269,11 @@ def plot_run(ts: Mapping, reference_polyline, out_dir, params: Params | None = N
     names = ("t", "x", "y", "x0", "y0", "v", "v_d", "omega", "omega_d", "phi", "beta")
     names += ("T_r", "T_l", "T_r_cmd", "T_l_cmd")
     c = _columns(ts, names)
+    c.update(
+        _columns(ts, tuple(n for n in ("dist_T_r", "dist_T_l") if n in ts))
+        if "dist_T_r" in ts
+        else {}
+    )
     err = tracking_errors(ts, ref)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
