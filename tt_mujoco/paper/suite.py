@@ -187,6 +187,13 @@ STEERING_BASE = {"controller": "ismc_sta", "gains": "paper_6_1", "disturbance": 
 #: Extra steering runs: (path, variant, overrides, plants, label).
 STEERING_EXTRA = (
     ("circle", "paper eta = 3, reverse", {"disturbance": "matched"}, PLANTS, "with disturbance"),
+    (
+        "circle",
+        "paper eta = 3, reverse",
+        {"disturbance": "matched", "disturbance_limit": "none"},
+        PLANTS,
+        "with unbounded disturbance",
+    ),
     ("cycloid", "eta = -3", {"friction": 3.0}, ("mujoco",), "friction 3"),
     ("s_curve", "eta = -3", {"friction": 3.0}, ("mujoco",), "friction 3"),
     ("s_curve", "paper eta = 3, reverse", {"friction": 3.0}, ("mujoco",), "friction 3"),
