@@ -73,3 +73,31 @@ def test_validate_refuses_a_used_folder_before_running(tmp_path, capsys):
     assert validate.main(["--out", str(tmp_path)]) == 2
     assert "not an empty folder" in capsys.readouterr().err
     assert (tmp_path / "report.md").read_text() == "mine"
+
+
+def test_two_runs_into_one_folder_never_lose_or_mix_outputs(tmp_path):
+    # Both start at once into the same (new, or existing empty) folder, 8 times: exactly one
+    # writes, the other is refused with exit code 2 and touches nothing; the folder holds one
+    # complete run (its metrics.json names the controller that wrote it).
+    import subprocess
+    import sys
+
+    base = [sys.executable, "-m", "tt_mujoco.run", "--duration", "0.3", "--quiet"]
+    base += ["--no-video", "--no-plots", "--plant", "reduced"]
+    for i in range(8):
+        out = tmp_path / f"shared-{i}"
+        if i % 2:
+            out.mkdir()  # an existing empty folder: the check-then-create race
+        procs = [
+            subprocess.Popen([*base, "--controller", c, "--out", str(out)], stderr=subprocess.PIPE)
+            for c in ("ismc_sta", "pid")
+        ]
+        codes = sorted(p.wait(timeout=120) for p in procs)
+        errors = [p.stderr.read().decode() for p in procs]
+        assert codes == [0, 2], errors
+        assert any("another run" in e or "not an empty folder" in e for e in errors)
+        names = sorted(p.name for p in out.iterdir())
+        assert names == ["config.toml", "metrics.json", "timeseries.csv"], names
+        doc = json.loads((out / "metrics.json").read_text())
+        config = (out / "config.toml").read_text()
+        assert f'controller = "{doc["config"]["controller"]["name"]}"' in config

@@ -11,7 +11,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from tt_mujoco.outputs import OutputError, atomic_write, claim_folder
+from tt_mujoco.outputs import OutputError, atomic_write, claim_folder, release_folder
 from tt_mujoco.run import PARAM_NAMES, parse_param
 from tt_mujoco.vehicle.mjcf import MODELS_DIR, SCENE_FILE, VEHICLE_FILE, scene_xml, vehicle_xml
 from tt_mujoco.vehicle.params import Params
@@ -71,6 +71,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     for path in write_models(params, out):
         print(f"wrote {path}")
+    if args.out is not None:
+        release_folder(out)
     return 0
 
 

@@ -29,6 +29,7 @@ __all__ = [
     "json_safe",
     "publish_new",
     "read_timeseries",
+    "release_folder",
     "remove_if_empty",
     "save_figure",
     "timeseries_csv",
@@ -108,18 +109,40 @@ def free_name(base: Path) -> Path:
     return path
 
 
-def _writable(out: Path, option: str, created: bool) -> None:
+#: The file that claims an output folder for one writer. It is created exclusively (two runs
+#: started into one folder at once: one gets it, the other is refused) and removed when the
+#: outputs are complete, so a folder that still has it holds an interrupted run's outputs.
+CLAIM_FILE = ".in-progress"
+
+
+def _claim(out: Path, option: str, created: bool) -> None:
     try:
-        with _temporary_beside(out / "probe"):
-            pass
+        fd = os.open(out / CLAIM_FILE, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW)
+    except FileExistsError:
+        raise OutputError(
+            f"{option} {str(out)!r} is being written by another run: outputs are never mixed; "
+            "name a new folder"
+        ) from None
     except OSError as err:
         if created:
             remove_if_empty(out)
         raise OutputError(f"{option} {str(out)!r} cannot be written: {err.strerror}") from None
+    with os.fdopen(fd, "w") as handle:
+        handle.write(
+            f"claimed by process {os.getpid()}: while this file is here the outputs in this "
+            "folder are incomplete (a run in progress, or one that was interrupted)\n"
+        )
+
+
+def release_folder(out: Path) -> None:
+    """Mark ``out``'s outputs complete (remove the claim :func:`claim_folder` made)."""
+    with contextlib.suppress(FileNotFoundError):
+        (Path(out) / CLAIM_FILE).unlink()
 
 
 def claim_folder(out: Path | None, default_base: Path, option: str = "--out") -> tuple[Path, bool]:
-    """A new, writable output folder, or an existing empty one named by the user.
+    """A new, writable output folder, or an existing empty one named by the user, claimed for
+    this writer until :func:`release_folder` (see :data:`CLAIM_FILE`).
 
     Parameters
     ----------
@@ -152,7 +175,7 @@ def claim_folder(out: Path | None, default_base: Path, option: str = "--out") ->
                 raise OutputError(
                     f"output folder {str(path)!r} cannot be created: {err.strerror}"
                 ) from None
-            _writable(path, "output folder", created=True)
+            _claim(path, "output folder", created=True)
             return path, True
         raise OutputError(f"no free output folder name for {str(default_base)!r}")
     out = Path(out)
@@ -166,12 +189,14 @@ def claim_folder(out: Path | None, default_base: Path, option: str = "--out") ->
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise OutputError(f"{option} {str(out)!r} cannot be written: {err.strerror}") from None
-    _writable(out, option, created)
+    _claim(out, option, created)
     return out, created
 
 
 def remove_if_empty(out: Path) -> None:
-    """Remove ``out`` if it is an empty folder (what an abandoned run leaves)."""
+    """Release ``out`` and remove it if it is then an empty folder (what an abandoned run
+    leaves)."""
+    release_folder(out)
     with contextlib.suppress(OSError):
         if out.is_dir() and not any(out.iterdir()):
             out.rmdir()

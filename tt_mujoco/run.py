@@ -38,6 +38,7 @@ from tt_mujoco.outputs import (
     atomic_write,
     claim_folder,
     publish_new,
+    release_folder,
     remove_if_empty,
     timeseries_csv,
     write_json,
@@ -535,11 +536,13 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         if live is not None:
             live.close()
+        release_folder(out)  # the missing metrics.json labels the folder incomplete
         return _fail(
             f"interrupted while writing outputs: the files in {out}/ are complete, but "
             "metrics.json was not written, so the run's outputs are incomplete",
             EXIT_INTERRUPTED,
         )
+    release_folder(out)  # complete: metrics.json is written
     _print_summary(result, out, written, notes)
     if live is not None:
         live.wait_closed()

@@ -28,7 +28,13 @@ import mujoco
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from tt_mujoco.outputs import OutputError, atomic_write, claim_folder, write_json
+from tt_mujoco.outputs import (
+    OutputError,
+    atomic_write,
+    claim_folder,
+    release_folder,
+    write_json,
+)
 from tt_mujoco.sim.physics import Vehicle
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
@@ -395,6 +401,7 @@ def main(argv: list[str] | None = None) -> int:
     write_json(out / "report.json", results)
     text = validation_markdown(results)
     atomic_write(out / "report.md", text + "\n")
+    release_folder(out)
     print(text)
     print(f"\nwrote {out / 'report.md'} and {out / 'report.json'}")
     return 0

@@ -7,7 +7,7 @@ import sys
 import time
 
 from tt_mujoco.cliargs import BadInputError, Parser, integer_at_least
-from tt_mujoco.outputs import claim_folder
+from tt_mujoco.outputs import claim_folder, release_folder, remove_if_empty
 from tt_mujoco.paper.execute import run_suite
 from tt_mujoco.paper.report import build_report
 from tt_mujoco.paper.suite import COMMAND, DEFAULT_OUT, suite
@@ -49,7 +49,12 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     specs = suite(quick=args.quick)
     start = time.perf_counter()
-    records = run_suite(specs, workers=args.workers, progress=not args.quiet)
+    try:
+        records = run_suite(specs, workers=args.workers, progress=not args.quiet)
+    except KeyboardInterrupt:
+        remove_if_empty(out)
+        print("interrupted: the suite was abandoned; nothing was written", file=sys.stderr)
+        return 130
     wall = time.perf_counter() - start
     info = {
         "command": COMMAND + (" --quick" if args.quick else ""),
@@ -59,6 +64,7 @@ def main(argv: list[str] | None = None) -> int:
         "wall_time_s": wall,
     }
     report = build_report(records, out, info, figures=not args.no_figures)
+    release_folder(out)
     errors = [k for k, r in records.items() if r.get("status") == "error"]
     print(f"report: {report} ({len(specs)} runs in {wall:.1f} s)")
     if errors:
