@@ -237,3 +237,35 @@ def test_killed_sweep_resumes_to_the_uninterrupted_table(reference, tmp_path):
     ids = [json.loads(line)["run_id"] for line in journal.read_text().splitlines()]
     assert len(ids) == len(set(ids)) == N_RUNS  # nothing redone, nothing lost
     assert _table(out / "runs.csv") == _table(reference / "runs.csv")
+
+
+def test_an_edited_input_file_is_not_reused_and_a_changed_spec_is_refused(tmp_path, monkeypatch):
+    # A resumed sweep reuses a run only if its options *and* the files it reads are the same.
+    monkeypatch.chdir(tmp_path)
+    csv = tmp_path / "p.csv"
+    csv.write_text("x,y\n0,0\n1,0\n2,0.1\n3,0.3\n")
+    spec = sweep.parse_spec(["traj=p.csv", "duration=0.5", "plant=reduced"], None, 0, 1, None)
+    first = sweep.expand(spec)[0]
+    assert first["options"]["traj"] == str(csv.resolve())  # made absolute
+    csv.write_text("x,y\n0,0\n1,0\n2,0.2\n3,0.6\n")
+    assert sweep.expand(spec)[0]["run_id"] != first["run_id"]
+    out = tmp_path / "sw"
+    sweep.run_sweep(spec, out, workers=1, figures=False)
+    other = sweep.parse_spec(["traj=p.csv", "duration=0.5,0.6", "plant=reduced"], None, 0, 1, None)
+    with pytest.raises(sweep.BadSpecError, match="another specification"):
+        sweep.run_sweep(other, out, workers=1, figures=False, resume=True)
+    extended = sweep.run_sweep(other, out, workers=1, figures=False, resume=True, extend=True)
+    assert extended.reused == 1 and len(extended.rows) == 2
+
+
+def test_symlinked_sweep_files_are_refused(tmp_path):
+    spec = sweep.parse_spec(["duration=0.2", "plant=reduced"], None, 0, 1, None)
+    out = tmp_path / "sw"
+    out.mkdir()
+    victim = tmp_path / "victim.txt"
+    victim.write_text("keep me")
+    (out / ".lock").symlink_to(victim)
+    (out / sweep.JOURNAL).symlink_to(tmp_path / "elsewhere.jsonl")
+    with pytest.raises(sweep.BadSpecError, match="symlink"):
+        sweep.run_sweep(spec, out, workers=1, figures=False, resume=True)
+    assert victim.read_text() == "keep me" and not (tmp_path / "elsewhere.jsonl").exists()

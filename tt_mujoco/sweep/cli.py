@@ -92,6 +92,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="with --resume: run again the runs that ended with status 'error'",
     )
     p.add_argument(
+        "--extend",
+        action="store_true",
+        help="with --resume: the sweep's options changed (more values or samples); run the new "
+        "runs and reuse the finished ones (without it a changed sweep is refused)",
+    )
+    p.add_argument(
         "--workers", type=int, default=None, help="worker processes (default: the CPU count)"
     )
     p.add_argument(
@@ -158,6 +164,7 @@ def main(argv: list[str] | None = None) -> int:
             metric=args.metric,
             figures=not args.no_figures,
             retry_errors=args.retry_errors,
+            extend=args.extend,
         )
     except (BadSpecError, BadInputError, ExecutorError) as err:
         print(f"error: {err}", file=sys.stderr)

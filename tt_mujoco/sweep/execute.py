@@ -5,6 +5,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import contextlib
 import json
+import os
 import sys
 import time
 from collections import deque
@@ -77,7 +78,14 @@ def _lock(out: Path):
         import fcntl
     except ImportError:  # Windows: no advisory lock, the user keeps one sweep per folder
         return contextlib.nullcontext()
-    fh = open(out / ".lock", "w")  # held open (and locked) for the sweep's lifetime
+    try:  # never through a symlink: a planted link must not be truncated or followed
+        fd = os.open(out / ".lock", os.O_WRONLY | os.O_CREAT | os.O_NOFOLLOW, 0o644)
+    except OSError as err:
+        raise BadSpecError(
+            f"--out {str(out)!r}: its .lock cannot be opened ({err.strerror}; a symlink is "
+            "refused): remove it"
+        ) from None
+    fh = os.fdopen(fd, "w")  # held open (and locked) for the sweep's lifetime
     try:
         fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
     except OSError:
@@ -87,7 +95,14 @@ def _lock(out: Path):
 
 
 def prepare_out(out: Path, resume: bool) -> None:
-    """Make the output folder; refuse a used one unless resuming."""
+    """Make the output folder; refuse a used one unless resuming, and any sweep file in it that
+    is a symlink (outputs are never written through one)."""
+    for name in (JOURNAL, SPEC_FILE, TABLE, "summary.csv", "summary.json", ".lock"):
+        if (out / name).is_symlink():
+            raise BadSpecError(
+                f"--out {str(out)!r}: {name} is a symlink; outputs are never written through "
+                "one: remove it"
+            )
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         if not resume:
             raise BadSpecError(
@@ -102,6 +117,19 @@ def prepare_out(out: Path, resume: bool) -> None:
         raise BadSpecError(f"--out {str(out)!r} cannot be made: {err.strerror}") from None
 
 
+def _check_same_spec(out: Path, spec: SweepSpec, resume: bool, extend: bool) -> None:
+    """A resumed sweep keeps its specification; another one is refused unless extending."""
+    saved = out / SPEC_FILE
+    if not resume or extend or not saved.exists():
+        return
+    if saved.read_text(encoding="utf-8") != spec.to_toml():
+        raise BadSpecError(
+            f"--out {str(out)!r} holds a sweep with another specification ({SPEC_FILE}): "
+            "--resume continues it as it is; pass --extend to add the new runs to it (its "
+            "finished runs are reused), or name a new folder"
+        )
+
+
 def run_sweep(
     spec: SweepSpec,
     out: str | Path,
@@ -112,6 +140,7 @@ def run_sweep(
     metric: str = "rmse_lateral",
     figures: bool = True,
     retry_errors: bool = False,
+    extend: bool = False,
 ) -> SweepResult:
     """Run a sweep and write its table, summary and figures into ``out``.
 
@@ -126,6 +155,9 @@ def run_sweep(
     scheduler : str, optional
         None: a local process pool. ``"local"``: a Dask ``LocalCluster``. Otherwise the address
         of a running Dask scheduler, e.g. ``tcp://10.0.0.5:8786``.
+    extend : bool
+        With ``resume``: accept a specification other than the saved one (more values or
+        samples); without it a different specification is refused.
     resume : bool
         Continue a sweep in ``out``: runs whose configuration is in its journal are not run.
     quiet : bool
@@ -159,6 +191,7 @@ def run_sweep(
         # Rewrite the journal without a line cut by a kill, so appends start on a fresh line.
         if journal_path.exists():
             atomic_write(journal_path, "".join(json.dumps(r) + "\n" for r in done.values()))
+        _check_same_spec(out, spec, resume, extend)
         atomic_write(out / SPEC_FILE, spec.to_toml())
         todo = deque(r for r in runs if r["run_id"] not in done)
         reused = len(runs) - len(todo)
@@ -195,7 +228,8 @@ def _execute(todo, done, journal_path, workers, scheduler, quiet, total, reused)
     inflight: dict[cf.Future, dict] = {}
     slots, slots_checked = executors.slots(), time.monotonic()
     try:
-        with open(journal_path, "a", encoding="utf-8") as journal:
+        fd = os.open(journal_path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW, 0o644)
+        with os.fdopen(fd, "a", encoding="utf-8") as journal:
             while todo or inflight:
                 if executors.client is not None and time.monotonic() - slots_checked > 10:
                     slots, slots_checked = executors.slots(), time.monotonic()  # adaptive

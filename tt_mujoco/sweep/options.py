@@ -173,6 +173,8 @@ def convert(name: str, value):
     value). Raises :class:`BadSpecError` naming the value and what is allowed."""
     if name == "controller" and not is_hook(value):
         return _choice(name, value, tuple(CONTROLLERS))  # the registry as it is now
+    if name == "traj" and _text(name, value).lower().endswith(".csv"):
+        return str(Path(_text(name, value)).resolve())  # the same file from any folder
     if name in ("controller", "traj", "disturbance_model"):
         # hook files are made absolute: the workers may run in another folder
         return normalise_hook(_text(name, value))

@@ -8,11 +8,13 @@ import json
 import math
 import time
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 
 import numpy as np
 
 from tt_mujoco.controllers import controller_class
 from tt_mujoco.controllers.base import resolve_gains
+from tt_mujoco.registry import is_hook
 from tt_mujoco.sim import Scenario, build, simulate
 from tt_mujoco.sweep.options import (
     DICT_OPTIONS,
@@ -45,10 +47,34 @@ def _draw(axis: Axis, rng: np.random.Generator):
     return axis.values[int(rng.integers(len(axis.values)))]
 
 
+def input_files(options: Mapping) -> list[Path]:
+    """The files a run reads besides the package: a CSV path, the files of hooks."""
+    files = []
+    values = [options.get(k) for k in ("traj", "controller", "disturbance_model")]
+    values += str(options.get("metrics", "")).split(";")
+    for value in values:
+        if not isinstance(value, str):
+            continue
+        text = value.strip()
+        if text.lower().endswith(".csv"):
+            files.append(Path(text))
+        elif is_hook(text) and text.rsplit(":", 1)[0].endswith(".py"):
+            files.append(Path(text.rsplit(":", 1)[0]))
+    return files
+
+
 def run_id(options: Mapping) -> str:
-    """Stable key of a run: SHA-256 of its options as canonical JSON, 16 hex digits."""
+    """Stable key of a run: SHA-256 of its options as canonical JSON and of the content of every
+    file it reads (:func:`input_files`), 16 hex digits. An edited CSV or controller file gives
+    a new key, so a resumed sweep runs it again instead of reusing the old result."""
     text = json.dumps(options, sort_keys=True, separators=(",", ":"), allow_nan=False)
-    return hashlib.sha256(text.encode()).hexdigest()[:16]
+    digest = hashlib.sha256(text.encode())
+    for path in input_files(options):
+        try:
+            digest.update(hashlib.sha256(path.read_bytes()).digest())
+        except OSError:
+            digest.update(b"missing")  # validation refuses the run with the file named
+    return digest.hexdigest()[:16]
 
 
 def expand(spec: SweepSpec) -> list[dict]:

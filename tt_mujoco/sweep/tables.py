@@ -27,9 +27,16 @@ def read_journal(path: Path) -> dict[str, dict]:
         for line in fh:
             try:
                 record = json.loads(line)
-                done[record["run_id"]] = record
-            except (json.JSONDecodeError, KeyError, TypeError):
+            except json.JSONDecodeError:
                 continue
+            # A line that is not a run's record (hand-edited, or from another program) is
+            # dropped like a cut one: that run runs again.
+            if (
+                isinstance(record, dict)
+                and isinstance(record.get("run_id"), str)
+                and isinstance(record.get("metrics"), dict)
+            ):
+                done[record["run_id"]] = record
     return done
 
 
