@@ -23,6 +23,11 @@ def write(path, text):
     return str(path)
 
 
+def write_bytes(path, data):
+    path.write_bytes(data)
+    return str(path)
+
+
 def csv_cases(d):
     """(argv, expected text) for each bad CSV the issue lists."""
     nan = write(d / "nan.csv", "x,y\n0,0\n1,0\nnan,0.5\n3,1\n")
@@ -46,6 +51,39 @@ def csv_cases(d):
             "line 3 and line 4 repeat the point (x=1, y=0)",
         ),
         "csv curvature": (["--traj", tight], "tight.csv: curvature kappa=6.022 1/m"),
+        "csv 10 km long": (
+            ["--traj", write(d / "long.csv", "x,y\n0,0\n3000,0\n6000,0\n10000,0\n")],
+            "12502 s",
+        ),
+        "csv 1e12 m spacing": (
+            ["--traj", write(d / "huge.csv", "x,y\n0,0\n1e12,0\n2e12,0\n3e12,0\n")],
+            "huge.csv",
+        ),
+        "csv speed 1e-320": (
+            [
+                "--traj",
+                write(d / "slow.csv", "x,y,v\n0,0,1e-320\n1,0,1e-320\n2,0,1e-320\n3,0,1e-320\n"),
+            ],
+            "slow.csv",
+        ),
+        "csv speed 30": (
+            ["--traj", write(d / "fast.csv", "x,y,v\n0,0,30\n1,0,30\n2,0,30\n3,0,30\n")],
+            "v=30.0 at line 2",
+        ),
+        "csv latin-1": (
+            [
+                "--traj",
+                write_bytes(d / "l1.csv", "x,y\n0,0\n1,0\n2,0\n3,0 # caf\xe9\n".encode("latin-1")),
+            ],
+            "l1.csv' is not UTF-8",
+        ),
+        "csv too many rows": (
+            [
+                "--traj",
+                write(d / "many.csv", "x,y\n" + "".join(f"{i * 0.01},0\n" for i in range(100_002))),
+            ],
+            "more than 100000 waypoints",
+        ),
     }
 
 
@@ -90,6 +128,21 @@ OPTION_CASES = {
     "fault after the end": (["--duration", "2", "--fault", "payload:t=100"], "t=100.0"),
     "fault bad wheel": (["--fault", "actuator:t=1,wheel=front"], "'front'"),
     "viewer on the reduced plant": (["--plant", "reduced", "--viewer"], "'reduced'"),
+    # Issue 12: each of these once crashed, ran wild or named the wrong value.
+    "timestep names itself": (["--timestep", "0.5"], "timestep=0.5"),
+    "eta too large": (["--eta", "1e308"], "eta=1e+308"),
+    "duration below one control period": (["--duration", "1e-300"], "duration=1e-300"),
+    "duration of a tenth of a step": (["--duration", "0.0001"], "duration=0.0001"),
+    "steps beyond the cap": (["--timestep", "1e-5", "--duration", "600"], "timestep=1e-05"),
+    "a mass MuJoCo refuses": (["--param", "Mw=0.0005"], "Mw=0.0005"),
+    "a radius MuJoCo refuses": (["--param", "r=1e-9"], "r=1e-09"),
+    "repeated fault key": (["--fault", "dropout:t=1,t=2"], "'t' is given twice"),
+    "300-character traj": (["--traj", "a" * 300 + ".csv"], "File name too long"),
+    "300-character config": (["--config", "c" * 300 + ".toml"], "File name too long"),
+    "reduced plant with a wrench": (
+        ["--plant", "reduced", "--disturbance-mode", "wrench"],
+        "'wrench'",
+    ),
 }
 
 
@@ -114,6 +167,16 @@ def config_cases(d):
             "fa.toml': fault dropout: t=-2.0",
         ),
         "config nan snr": (cfg("n.toml", "noise_snr = nan\n"), "nan"),
+        "config nested too deeply": (cfg("deep.toml", "a = " + "[" * 2000 + "]" * 2000), "deep"),
+        "config huge value not echoed": (
+            cfg("big.toml", 'traj = "' + "x" * 100_000 + '"\n'),
+            "characters)",
+        ),
+        "config gains named with the file": (cfg("g.toml", "[gains]\nk9 = 1\n"), "g.toml' [gains]"),
+        "config the same option twice": (
+            cfg("d.toml", "noise-snr = 20\nnoise_snr = 30\n"),
+            "same option",
+        ),
     }
 
 
@@ -146,6 +209,12 @@ CSV_NAMES = (
     "csv inf",
     "csv repeated",
     "csv curvature",
+    "csv 10 km long",
+    "csv 1e12 m spacing",
+    "csv speed 1e-320",
+    "csv speed 30",
+    "csv latin-1",
+    "csv too many rows",
 )
 CONFIG_NAMES = (
     "config missing",
@@ -161,6 +230,10 @@ CONFIG_NAMES = (
     "config param not a number",
     "config bad fault",
     "config nan snr",
+    "config nested too deeply",
+    "config huge value not echoed",
+    "config gains named with the file",
+    "config the same option twice",
 )
 
 

@@ -316,3 +316,38 @@ def test_params_from_config_round_trip_and_unknown_names():
     assert render.params_from_config(p.to_dict()) == p
     with pytest.raises(ValueError, match="wheelbase"):
         render.params_from_config({"wheelbase": 1.0})
+
+
+def _break(run_dir, how):
+    csv = run_dir / "timeseries.csv"
+    lines = csv.read_text().splitlines()
+    if how == "cut":
+        doc = json.loads((run_dir / "metrics.json").read_text())
+        doc["steps"] = len(lines) - 1  # the run it claims
+        (run_dir / "metrics.json").write_text(json.dumps(doc))
+        csv.write_text("\n".join(lines[:20]) + "\n")  # cut at a line boundary
+        return "the file is cut"
+    if how == "nan":
+        cells = lines[7].split(",")
+        cells[1] = "nan"
+        lines[7] = ",".join(cells)
+        csv.write_text("\n".join(lines) + "\n")
+        return "row 8 holds nan"
+    (run_dir / "metrics.json").write_text("[]")
+    return "is not a run's metrics"
+
+
+@pytest.mark.parametrize("how", ["cut", "nan", "not metrics"])
+def test_cli_refuses_a_broken_run_naming_what_is_wrong(run_dir, capsys, how):
+    expected = _break(run_dir, how)
+    code = render_cli.main([str(run_dir), "--no-progress"])
+    err = capsys.readouterr().err
+    assert code == 2 and expected in err and "Traceback" not in err
+    assert not (run_dir / "video.mp4").exists()
+
+
+def test_cli_out_the_file_system_refuses_is_exit_2(run_dir, capsys):
+    code = render_cli.main([str(run_dir), "--out", "/proc/x.mp4", "--no-progress"])
+    if code == 1:
+        pytest.skip("no OpenGL backend here")
+    assert code == 2 and "/proc/x.mp4" in capsys.readouterr().err

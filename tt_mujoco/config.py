@@ -35,7 +35,7 @@ from pathlib import Path
 
 import tomli_w
 
-from tt_mujoco.registry import closest, normalise_hook
+from tt_mujoco.registry import closest, normalise_hook, shown
 from tt_mujoco.sim.faults import parse_fault
 from tt_mujoco.vehicle.params import Params
 
@@ -76,13 +76,22 @@ def load_config(path) -> dict:
         The file is missing, unreadable or not valid TOML (the message has the line).
     """
     file = Path(path)
-    if not file.is_file():
+    try:
+        is_file = file.is_file()
+    except OSError as err:  # e.g. a name too long for the file system
+        raise ValueError(f"config file {str(path)[:80]!r}...: {err.strerror}") from None
+    if not is_file:
         raise ValueError(f"config file {str(path)!r} does not exist (or is not a file)")
     try:
         with file.open("rb") as handle:
             return tomllib.load(handle)
     except tomllib.TOMLDecodeError as err:
         raise ValueError(f"config file {str(path)!r} is not valid TOML: {err}") from None
+    except RecursionError:
+        raise ValueError(
+            f"config file {str(path)!r} is nested too deeply: a scenario file is flat keys and "
+            "a few tables"
+        ) from None
     except (OSError, UnicodeDecodeError) as err:
         raise ValueError(f"config file {str(path)!r} cannot be read: {err}") from None
 
@@ -115,7 +124,7 @@ def _convert(key: str, value, action: argparse.Action, where: str):
         try:
             converted = action.type(text)
         except (argparse.ArgumentTypeError, ValueError, TypeError) as err:
-            raise ValueError(f"{where}: {key}={value!r} is not allowed: {err}") from None
+            raise ValueError(f"{where}: {key}={shown(value)} is not allowed: {err}") from None
     else:
         converted = text
     if action.choices is not None and converted not in action.choices:

@@ -18,6 +18,11 @@ MAX_DURATION = 600.0
 #: A run stops as a jackknife when |beta| or |phi| passes this (deg): just short of the
 #: singularity at 90 deg, where the reduced model is undefined and the controller's g blows up.
 JACKKNIFE_DEG = 85.0
+#: Most physics steps in one run (duration / timestep): 600 s at 0.5 ms. Beyond it a run's
+#: memory and time are not what anyone means to ask for.
+MAX_PHYSICS_STEPS = 1_200_000
+#: Most waypoints in a CSV path (a path, not a recorded trajectory at 1 kHz).
+MAX_CSV_ROWS = 100_000
 #: Speeds beyond this (m/s) are a numerical blow-up, not driving.
 MAX_SPEED = 20.0
 #: Default controller of a run.

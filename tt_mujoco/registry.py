@@ -25,7 +25,24 @@ import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
-__all__ = ["HookError", "Registry", "closest", "is_hook", "load_hook", "normalise_hook"]
+__all__ = [
+    "HookError",
+    "Registry",
+    "closest",
+    "is_hook",
+    "load_hook",
+    "normalise_hook",
+    "shown",
+]
+
+
+def shown(value, limit: int = 80) -> str:
+    """``repr(value)`` for a message, cut to ``limit`` characters (a 10 MB value is not
+    echoed back)."""
+    text = repr(value)
+    if len(text) <= limit:
+        return text
+    return f"{text[: limit - 30]}... ({len(text)} characters)"
 
 
 def closest(word: str, choices) -> str | None:
@@ -194,7 +211,7 @@ class Registry:
             close = closest(_key(spec), self._items)
             hint = f"; did you mean {close!r}?" if close else ""
         return ValueError(
-            f"{self.what} name={spec!r} is not allowed: use one of {allowed}, "
+            f"{self.what} name={shown(spec)} is not allowed: use one of {allowed}, "
             f"{self.also + ', ' if self.also else ''}or a hook "
             f"'package.module:Name' or 'path/to/file.py:Name'{hint}"
         )

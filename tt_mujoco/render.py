@@ -7,6 +7,8 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from tt_mujoco.outputs import read_timeseries
 from tt_mujoco.viz.render import (
     CAMERAS,
@@ -15,6 +17,19 @@ from tt_mujoco.viz.render import (
     reference_polyline_for,
     render_video,
 )
+
+
+def _check_rows(ts, steps) -> str:
+    """Why a time series cannot be rendered as the run it claims to be, or ""."""
+    n = len(ts.get("t", ()))
+    if isinstance(steps, int) and n < steps:
+        return f"has {n} rows but metrics.json says the run took {steps} steps: the file is cut"
+    for name in ("t", "x", "y", "theta", "phi", "beta", "x0", "y0", "theta0"):
+        if name in ts:
+            bad = np.flatnonzero(~np.isfinite(ts[name]))
+            if bad.size:
+                return f"row {int(bad[0]) + 2} holds {float(ts[name][bad[0]])!r} in column {name!r}"
+    return ""
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -51,7 +66,10 @@ def main(argv: list[str] | None = None) -> int:
         if not needed.is_file():
             return fail(f"{needed} not found: RUN_DIR must be a finished run's folder")
     try:
-        config = json.loads(metrics_path.read_text()).get("config", {})
+        doc = json.loads(metrics_path.read_text())
+        if not isinstance(doc, dict) or not isinstance(doc.get("config", {}), dict):
+            return fail(f"{metrics_path} is not a run's metrics (a JSON object with a config)")
+        config = doc.get("config", {})
         # The simulation loop records the plant's parameters as "plant_params" (the vehicle
         # that moved) and the path in its scenario; the plain "params"/"traj" also work.
         raw_params = config.get("plant_params", config.get("params"))
@@ -59,6 +77,9 @@ def main(argv: list[str] | None = None) -> int:
             return fail(f"{metrics_path} has no config.plant_params or config.params")
         params = params_from_config(raw_params)
         ts = read_timeseries(ts_path)
+        problem = _check_rows(ts, doc.get("steps"))
+        if problem:
+            return fail(f"{ts_path}: {problem}")
         polyline, source = reference_polyline_for(config, ts)
         print(f"reference path: {source}", file=sys.stderr)
         render_video(
@@ -74,6 +95,8 @@ def main(argv: list[str] | None = None) -> int:
         )
     except (ValueError, FileExistsError, json.JSONDecodeError) as exc:
         return fail(str(exc))
+    except OSError as exc:  # an --out the file system refuses
+        return fail(f"{out}: {exc.strerror}")
     except RenderUnavailable as exc:
         return fail(f"rendering unavailable: {exc}", code=1)
     print(out)

@@ -32,7 +32,8 @@ from tt_mujoco import sim
 from tt_mujoco.analysis.metrics import DEFAULT_SUMMARY_KEYS, metric_name, summary_table
 from tt_mujoco.cliargs import BadInputError, Parser, finite, integer_at_least, positive
 from tt_mujoco.config import CONFIG_FILE
-from tt_mujoco.controllers import CONTROLLERS
+from tt_mujoco.controllers import CONTROLLERS, controller_class
+from tt_mujoco.controllers.base import resolve_gains
 from tt_mujoco.defaults import CONTROLLER, DISTURBANCE_MODEL
 from tt_mujoco.outputs import (
     atomic_write,
@@ -331,6 +332,8 @@ def _parse(argv) -> tuple[argparse.Namespace, argparse.ArgumentParser, dict, lis
         found = config_mod.options_from_file(table, parser, args.config, PARAM_NAMES)
         parser.set_defaults(**found.defaults)
         args = parser.parse_args(argv)
+        if "gains" in found.defaults and args.gains == found.defaults["gains"]:
+            _check_gains(args.controller, args.gains, f"config file {str(args.config)!r} [gains]")
         params = dict(found.params)
         faults = found.faults or []
     params.update(dict(args.param or []))
@@ -349,6 +352,15 @@ def _parse(argv) -> tuple[argparse.Namespace, argparse.ArgumentParser, dict, lis
     if args.control_dt is None:
         args.control_dt = args.timestep
     return args, parser, params, faults
+
+
+def _check_gains(controller: str, gains, where: str) -> None:
+    """Gains from a file are checked against the controller now, so the message names the file."""
+    try:
+        cls = controller_class(controller)
+        resolve_gains(cls.name, cls.PRESETS, cls.DEFAULT_PRESET, gains)
+    except ValueError as err:
+        raise BadInputError(f"{where}: {err}") from None
 
 
 def _scenario(args, params: dict, faults: list) -> Scenario:
@@ -427,6 +439,10 @@ def write_outputs(
         written.append(out / CONFIG_FILE)
     atomic_write(out / "timeseries.csv", timeseries_csv(result.timeseries, COLUMNS))
     written.append(out / "timeseries.csv")
+    if len(result.timeseries["t"]) < 2 and (plots or video):
+        # A run that stopped at its first step has one sample: nothing to draw.
+        notes.append("figures and video skipped: the run has fewer than 2 samples")
+        plots = video = False
     staging = Path(tempfile.mkdtemp(dir=out, prefix=STAGING))  # this run's own
     try:
         if plots:
@@ -459,7 +475,7 @@ def write_outputs(
         "notes": notes,
         "config": result.config,
     }
-    write_json(out / "metrics.json", doc)
+    write_json(out / "metrics.json", doc, strict=True)
     written.append(out / "metrics.json")
     return written, notes
 
@@ -484,7 +500,13 @@ def _fail(message: str, code: int = EXIT_BAD_INPUT) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:  # before a folder exists (start-up); later ones are handled inside
+        return _fail("interrupted: nothing was written", EXIT_INTERRUPTED)
 
+
+def _main(argv: list[str] | None) -> int:
     try:
         args, parser, params, faults = _parse(argv)
         scenario = _scenario(args, params, faults)
@@ -505,6 +527,10 @@ def main(argv: list[str] | None = None) -> int:
         out, created = _output_dir(args.out, scenario)
     except (BadInputError, ValueError, reduced.SingularityError) as err:  # OutputError too
         return _fail(str(err))
+    except OSError as err:  # a name the file system refuses (too long, not encodable, ...)
+        name = str(err.filename or "")
+        shown = name if len(name) <= 80 else name[:77] + "..."
+        return _fail(f"{shown!r}: {err.strerror}")
     except viewer_mod.ViewerUnavailable as err:
         return _fail(str(err))
 
@@ -532,6 +558,15 @@ def main(argv: list[str] | None = None) -> int:
             fps=args.fps,
             quiet=args.quiet,
             config_toml=config_toml,
+        )
+    except OSError as err:  # a full disk, a quota, a vanished folder
+        if live is not None:
+            live.close()
+        release_folder(out)
+        return _fail(
+            f"the outputs cannot be written to {out}/: {err.strerror}; the files there are "
+            "complete, but metrics.json is missing, so the run's outputs are incomplete",
+            EXIT_BAD_INPUT,
         )
     except KeyboardInterrupt:
         if live is not None:

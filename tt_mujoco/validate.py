@@ -398,7 +398,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {err}", file=sys.stderr)
         return 2
     results = run_all()
-    write_json(out / "report.json", results)
+    write_json(out / "report.json", results, strict=True)
     text = validation_markdown(results)
     atomic_write(out / "report.md", text + "\n")
     release_folder(out)

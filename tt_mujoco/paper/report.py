@@ -231,7 +231,10 @@ def build_report(
         "figures": figs,
         "runs": {k: {kk: vv for kk, vv in r.items() if kk != "series"} for k, r in records.items()},
     }
-    atomic_write(out / "report.json", json.dumps(json_safe(payload), indent=1, sort_keys=False))
+    atomic_write(
+        out / "report.json",
+        json.dumps(json_safe(payload), indent=1, sort_keys=False, allow_nan=False),
+    )
     return report
 
 

@@ -13,6 +13,7 @@ import numpy as np
 from scipy.integrate import cumulative_simpson
 from scipy.interpolate import CubicHermiteSpline, CubicSpline, make_smoothing_spline
 
+from tt_mujoco.defaults import MAX_CSV_ROWS, MAX_SPEED
 from tt_mujoco.reference.path_base import DEFAULT_MAX_CURVATURE, ReferencePath, positive_number
 
 __all__ = [
@@ -220,10 +221,10 @@ def from_waypoints(
         if v.shape != x.shape:
             raise ValueError(f"{name}: v has {v.size} values for {x.size} waypoints")
         for i, value in enumerate(v):
-            if not (math.isfinite(value) and value >= 0.0):
+            if not (math.isfinite(value) and 0.0 <= value <= MAX_SPEED):
                 raise ValueError(
-                    f"{name}: v={float(value)!r} at {labels[i]} is not allowed: "
-                    "speeds must be finite and >= 0 m/s (forward driving only)"
+                    f"{name}: v={float(value)!r} at {labels[i]} is not allowed: speeds must be "
+                    f"finite, >= 0 and at most {MAX_SPEED:g} m/s (forward driving only)"
                 )
         both_zero = np.flatnonzero((v[:-1] == 0.0) & (v[1:] == 0.0))
         if both_zero.size:
@@ -309,14 +310,29 @@ def from_csv(
         ``max_curvature``. The message names the bad value and its line.
     """
     file = Path(path)
-    if not file.is_file():
+    try:
+        is_file = file.is_file()
+    except OSError as err:  # e.g. a name too long for the file system
+        raise ValueError(f"path file {str(path)[:80]!r}...: {err.strerror}") from None
+    if not is_file:
         raise ValueError(f"path file {str(path)!r} does not exist (or is not a file)")
-    with file.open(newline="", encoding="utf-8-sig") as handle:
-        rows = [
-            (number, row)
-            for number, row in enumerate(csv.reader(handle), start=1)
-            if any(cell.strip() for cell in row)
-        ]
+    rows = []
+    try:
+        with file.open(newline="", encoding="utf-8-sig") as handle:
+            for number, row in enumerate(csv.reader(handle), start=1):
+                if any(cell.strip() for cell in row):
+                    rows.append((number, row))
+                if len(rows) > MAX_CSV_ROWS + 1:
+                    raise ValueError(
+                        f"path file {str(path)!r} has more than {MAX_CSV_ROWS} waypoints: "
+                        "thin it out (a few points per metre are plenty for the spline fit)"
+                    )
+    except UnicodeDecodeError as err:
+        raise ValueError(
+            f"path file {str(path)!r} is not UTF-8 text (byte {err.start}): save it as UTF-8"
+        ) from None
+    except csv.Error as err:
+        raise ValueError(f"path file {str(path)!r} is not CSV: {err}") from None
     if not rows:
         raise ValueError(f"path file {str(path)!r} is empty: it needs a header row 'x,y'")
     header_line, header = rows[0]

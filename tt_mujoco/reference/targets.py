@@ -324,7 +324,8 @@ class StationSpeed(SpeedProfile):
             raise ValueError(
                 f"speeds={v!r} are not allowed: finite, >= 0, never 0 at two consecutive stations"
             )
-        dt = 2.0 * ds / (v[:-1] + v[1:])
+        with np.errstate(over="ignore"):  # a crawl of 1e-320 m/s takes inf s: refused later
+            dt = 2.0 * ds / (v[:-1] + v[1:])
         self._t = np.concatenate([[0.0], np.cumsum(dt)])
         self._s = s - s[0]
         self._v = v

@@ -16,6 +16,7 @@ import numpy as np
 
 from tt_mujoco.analysis.metrics import resolve_metrics
 from tt_mujoco.controllers import Controller, ControllerSetup, controller_class, reduced_model
+from tt_mujoco.defaults import MAX_DURATION, MAX_PHYSICS_STEPS
 from tt_mujoco.reference.feedback import PathFeedback
 from tt_mujoco.reference.reverse import ReverseTarget
 from tt_mujoco.reference.targets import make_target
@@ -104,6 +105,24 @@ def _disturbance_limit(scenario: Scenario, nominal: Params) -> float | None:
     return nominal.torque_limit if limit == "actuator" else float(limit)
 
 
+def _check_size(scenario: Scenario, duration: float) -> None:
+    """Refuse runs too long to be meant, before any work: a path whose speed profile takes
+    longer than the duration cap, or more physics steps than :data:`MAX_PHYSICS_STEPS`."""
+    if duration > MAX_DURATION:
+        raise ValueError(
+            f"path {scenario.traj!r} takes {duration:.6g} s at its speed profile, more than the "
+            f"{MAX_DURATION:g} s a run may last: use a shorter path, a higher speed (a v column, "
+            "or --path-option cruise=...), or a --duration"
+        )
+    steps = duration / scenario.timestep
+    if steps > MAX_PHYSICS_STEPS:
+        raise ValueError(
+            f"timestep={scenario.timestep!r} s over {duration:.6g} s is {steps:.4g} physics "
+            f"steps: at most {MAX_PHYSICS_STEPS} are allowed (use a larger timestep or a shorter "
+            "duration)"
+        )
+
+
 def build(scenario: Scenario) -> Build:
     """Validate ``scenario`` and build its run.
 
@@ -124,6 +143,7 @@ def build(scenario: Scenario) -> Build:
         **scenario.path_options,
     )
     duration = float(target.duration)
+    _check_size(scenario, duration)
     if scenario.reverse:
         target = ReverseTarget(target)
         pose = target.initial_pose

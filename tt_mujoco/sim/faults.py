@@ -101,6 +101,8 @@ def _split_text(spec: str) -> dict:
             raise ValueError(
                 f"fault {spec!r}: {item!r} is not key=value; write e.g. 'actuator:t=2,scale=0.3'"
             )
+        if key.strip() in out:
+            raise ValueError(f"fault {spec!r}: {key.strip()!r} is given twice; give it once")
         out[key.strip()] = value.strip()
     return out
 

@@ -36,7 +36,20 @@ def compile_model(p: Params) -> mujoco.MjModel:
     xml = vehicle_xml(p)
     model = _COMPILED.get(xml)
     if model is None:
-        model = mujoco.MjModel.from_xml_string(scene_xml(), assets={VEHICLE_FILE: xml.encode()})
+        try:
+            model = mujoco.MjModel.from_xml_string(scene_xml(), assets={VEHICLE_FILE: xml.encode()})
+        except ValueError as err:
+            default = Params(eta=p.eta, timestep=p.timestep, friction=p.friction)
+            changed = {
+                k: v
+                for k, v in p.to_dict().items()
+                if k != "steering" and default.to_dict().get(k) != v
+            }
+            shown = ", ".join(f"{k}={v!r}" for k, v in changed.items()) or "the defaults"
+            raise ValueError(
+                f"MuJoCo cannot build the vehicle with {shown}: "
+                f"{' '.join(line.strip() for line in str(err).splitlines() if line.strip())}"
+            ) from None
         if len(_COMPILED) >= _COMPILED_MAX:
             _COMPILED.pop(next(iter(_COMPILED)))
         _COMPILED[xml] = model

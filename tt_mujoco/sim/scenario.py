@@ -113,11 +113,28 @@ class Scenario:
             raise ValueError(
                 f"duration={self.duration!r} is not allowed: it must be in (0, {MAX_DURATION:g}] s"
             )
+        if (
+            self.duration is not None
+            and isinstance(self.control_dt, int | float)
+            and self.duration < self.control_dt
+        ):
+            raise ValueError(
+                f"duration={self.duration!r} is not allowed: it is shorter than one control "
+                f"period ({self.control_dt!r} s)"
+            )
         if self.noise_snr_db is not None and not (
             isinstance(self.noise_snr_db, int | float) and math.isfinite(self.noise_snr_db)
         ):
             raise ValueError(
                 f"noise SNR={self.noise_snr_db!r} is not allowed: it must be a finite number (dB)"
+            )
+        if not (
+            isinstance(self.timestep, int | float)
+            and not isinstance(self.timestep, bool)
+            and 1e-5 <= self.timestep <= 0.01
+        ):
+            raise ValueError(
+                f"timestep={self.timestep!r} is not allowed: it must be in [1e-05, 0.01] s"
             )
         if not (isinstance(self.control_dt, int | float) and 0 < self.control_dt <= 0.05):
             raise ValueError(

@@ -103,9 +103,17 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
     ts = stepper.timeseries()
     polyline = built.path.dense()
     limit = built.nominal.torque_limit
-    metrics = compute_metrics(ts, polyline, limit, reverse=scenario.reverse)
+    if len(ts["t"]):
+        metrics = compute_metrics(ts, polyline, limit, reverse=scenario.reverse)
+    else:  # stopped before its first sample was logged
+        metrics = {"steps": 0, "finite_samples": 0, "sim_time_s": 0.0}
     for name, fn in built.extra_metrics.items():
-        metrics[name] = fn(ts, built.path) if len(ts["t"]) else float("nan")
+        # A user metric that fails must not lose the run: its value is None, its error kept.
+        try:
+            metrics[name] = fn(ts, built.path) if len(ts["t"]) else None
+        except Exception as err:
+            metrics[name] = None
+            metrics.setdefault("metric_errors", {})[name] = f"{type(err).__name__}: {err}"
     metrics["wall_time_s"] = wall
     metrics["status"] = status
     if stepper.faults is not None:

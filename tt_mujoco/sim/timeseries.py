@@ -73,7 +73,7 @@ _LOOP_COLUMNS = (
 
 
 def assemble_columns(measured: list, logged: list, eta: float) -> dict[str, np.ndarray]:
-    """The time series in :data:`COLUMNS` order from the per-step measurement tuples and the
+    """The time series in :data:`COLUMNS` order from the per-step measurement rows and the
     loop's own values (``x_ref``, ``y_ref``, ``theta_ref`` are left NaN for the caller to fill)."""
     n = len(logged)
     meas = np.array(measured, dtype=float).reshape(n, len(Measurement._fields))

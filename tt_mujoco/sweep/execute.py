@@ -15,7 +15,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from tt_mujoco.executor import Executors, ignore_sigint
-from tt_mujoco.outputs import atomic_write
+from tt_mujoco.outputs import atomic_write, json_safe, write_json
 from tt_mujoco.sweep.options import JOURNAL, SPEC_FILE, TABLE, BadSpecError
 from tt_mujoco.sweep.runs import expand, run_one
 from tt_mujoco.sweep.spec import SweepSpec
@@ -117,6 +117,11 @@ def prepare_out(out: Path, resume: bool) -> None:
         raise BadSpecError(f"--out {str(out)!r} cannot be made: {err.strerror}") from None
 
 
+def _json_line(record: dict) -> str:
+    """One journal line: strict JSON (NaN as null)."""
+    return json.dumps(json_safe(record), allow_nan=False) + "\n"
+
+
 def _check_same_spec(out: Path, spec: SweepSpec, resume: bool, extend: bool) -> None:
     """A resumed sweep keeps its specification; another one is refused unless extending."""
     saved = out / SPEC_FILE
@@ -190,7 +195,7 @@ def run_sweep(
             done = {k: r for k, r in done.items() if r.get("status") != "error"}
         # Rewrite the journal without a line cut by a kill, so appends start on a fresh line.
         if journal_path.exists():
-            atomic_write(journal_path, "".join(json.dumps(r) + "\n" for r in done.values()))
+            atomic_write(journal_path, "".join(_json_line(r) for r in done.values()))
         _check_same_spec(out, spec, resume, extend)
         atomic_write(out / SPEC_FILE, spec.to_toml())
         todo = deque(r for r in runs if r["run_id"] not in done)
@@ -203,7 +208,7 @@ def run_sweep(
         atomic_write(out / "summary.csv", summary_csv(summary))
         wall = time.perf_counter() - t0
         doc = {**summary, "mode": spec.mode, "seed": spec.seed, "wall_s": wall, "reused": reused}
-        atomic_write(out / "summary.json", json.dumps(doc, indent=2) + "\n")
+        write_json(out / "summary.json", doc, strict=True)
         files = [out / TABLE, out / "summary.csv", out / "summary.json"]
         if figures and rows:
             if metric not in header:
@@ -258,8 +263,9 @@ def _execute(todo, done, journal_path, workers, scheduler, quiet, total, reused)
                             "metrics": {},
                             "run_wall_s": None,
                         }
-                    record = {"run_id": run["run_id"], "index": run["index"], **result}
-                    journal.write(json.dumps(record) + "\n")
+                    # As the journal holds it (NaN as None), so a resumed table is the same.
+                    record = json_safe({"run_id": run["run_id"], "index": run["index"], **result})
+                    journal.write(_json_line(record))
                     journal.flush()
                     done[run["run_id"]] = record
                     failures += result["status"] != "ok"
@@ -299,7 +305,7 @@ def _recover(executors, broken, inflight, todo, crashes, journal, done) -> cf.Ex
                 "metrics": {},
                 "run_wall_s": None,
             }
-            journal.write(json.dumps(record) + "\n")
+            journal.write(_json_line(record))
             journal.flush()
             done[run["run_id"]] = record
         else:

@@ -14,6 +14,7 @@ from tt_mujoco.sweep.options import (
     DISTRIBUTIONS,
     GRID_GENERATORS,
     LIST_OPTIONS,
+    MAX_RUNS,
     BadSpecError,
     as_integer,
     as_number,
@@ -117,6 +118,8 @@ def _generator(name: str, kind: str, args: Sequence) -> Axis:
         if len(args) not in (2, 3):
             raise BadSpecError(f"{name}: range takes range:START:STOP[:STEP], got {list(args)}")
         ints = [_int_arg(name, x) for x in args]
+        if len(range(*ints)) > MAX_RUNS:  # len() of a range allocates nothing
+            raise BadSpecError(f"{name}: range has more than the {MAX_RUNS} runs allowed")
         values = list(range(*ints))
         if not values:
             raise BadSpecError(f"{name}: range:{':'.join(map(str, ints))} is empty")
@@ -127,6 +130,8 @@ def _generator(name: str, kind: str, args: Sequence) -> Axis:
         n = _int_arg(name, args[2])
         if n < 1:
             raise BadSpecError(f"{name}: {kind} COUNT={n} must be >= 1")
+        if n > MAX_RUNS:  # before anything is allocated
+            raise BadSpecError(f"{name}: {kind} COUNT={n} is more than the {MAX_RUNS} runs allowed")
         if kind == "log" and not (a > 0 and b > 0):
             raise BadSpecError(f"{name}: log:{a:g}:{b:g}:{n} needs START and STOP > 0")
         points = np.linspace(a, b, n) if kind == "lin" else np.geomspace(a, b, n)

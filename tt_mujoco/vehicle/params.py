@@ -54,6 +54,11 @@ def spec_same_path_eta(L: float, L0: float) -> float:
     return -(L0 - L) / (2.0 * L0)
 
 
+#: Largest steering gain accepted: beyond it the singularity |eta phi| = 90 deg is within a
+#: few degrees of articulation, and no run can start.
+MAX_ABS_ETA = 20.0
+
+
 def resolve_eta(eta: float | str, L: float, L0: float) -> tuple[float, str]:
     """Turn a steering specification into ``(eta, preset_name)``.
 
@@ -89,6 +94,12 @@ def resolve_eta(eta: float | str, L: float, L0: float) -> tuple[float, str]:
         value = float(eta)
     if not math.isfinite(value):
         raise ValueError(f"eta={eta!r} is not allowed: use 'paper', 'same_path' or a finite number")
+    if abs(value) > MAX_ABS_ETA:
+        raise ValueError(
+            f"eta={eta!r} is not allowed: |eta| must be at most {MAX_ABS_ETA:g} (with |eta| = "
+            f"{MAX_ABS_ETA:g} the trailer axle already stands across its rod at |phi| = "
+            f"{90 / MAX_ABS_ETA:g} deg)"
+        )
     return value, "custom"
 
 
