@@ -101,3 +101,26 @@ def test_two_runs_into_one_folder_never_lose_or_mix_outputs(tmp_path):
         doc = json.loads((out / "metrics.json").read_text())
         config = (out / "config.toml").read_text()
         assert f'controller = "{doc["config"]["controller"]["name"]}"' in config
+
+
+def test_a_full_disk_is_one_message_and_the_written_files_stay_complete(tmp_path, capsys):
+    import errno
+
+    from tt_mujoco import run
+
+    real = outputs.atomic_write
+
+    def full_disk(path, data):
+        if path.name == "metrics.json":
+            raise OSError(errno.ENOSPC, "No space left on device", str(path))
+        return real(path, data)
+
+    out = tmp_path / "run"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(outputs, "atomic_write", full_disk)
+        argv = ["--duration", "0.5", "--plant", "reduced", "--no-video", "--no-plots"]
+        code = run.main([*argv, "--quiet", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and "No space left on device" in err and "Traceback" not in err
+    assert sorted(p.name for p in out.iterdir()) == ["config.toml", "timeseries.csv"]
+    assert len(outputs.read_timeseries(out / "timeseries.csv")["t"]) == 501

@@ -98,3 +98,15 @@ def test_user_csv_path_from_rest_offtracking_agrees_with_trailer_cross_track(tmp
     assert m["trailer_offtrack_max"] < 0.05
     assert abs(m["trailer_offtrack_rms"] - m["trailer_rmse_lateral"]) < 0.002
     assert m["trailer_offtrack_samples"] == m["trailer_lateral_samples"] > 0
+
+
+def test_a_mujoco_warning_stops_the_run_before_the_reset_state_is_logged():
+    # MuJoCo resets the state when a warning fires: the run stops at the first one, and no row
+    # of the reset state (the model's default pose at the origin) is logged. The cycloid starts
+    # at (0.078, 0.293), so a reset row would show. Before: warnings were checked every 64
+    # steps, and up to 63 reset rows were logged and counted.
+    result = simulate(Scenario(traj="cycloid", friction=1e300, duration=1.0))
+    assert result.status == "diverged" and "MuJoCo warning" in result.message
+    ts = result.timeseries
+    assert 1 <= len(ts["t"]) <= 2  # the steps before the failing one
+    assert np.all(np.hypot(ts["x"] - 0.0783, ts["y"] - 0.2929) < 1e-3)

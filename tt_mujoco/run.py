@@ -20,8 +20,10 @@ import argparse
 import dataclasses
 import json
 import shutil
+import signal
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -499,7 +501,13 @@ def _fail(message: str, code: int = EXIT_BAD_INPUT) -> int:
     return code
 
 
+def _sigterm(signum, frame):
+    raise KeyboardInterrupt  # a batch system's stop: the same clean exit as Ctrl-C
+
+
 def main(argv: list[str] | None = None) -> int:
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _sigterm)
     try:
         return _main(argv)
     except KeyboardInterrupt:  # before a folder exists (start-up); later ones are handled inside
