@@ -124,3 +124,31 @@ def test_a_full_disk_is_one_message_and_the_written_files_stay_complete(tmp_path
     assert code == 2 and "No space left on device" in err and "Traceback" not in err
     assert sorted(p.name for p in out.iterdir()) == ["config.toml", "timeseries.csv"]
     assert len(outputs.read_timeseries(out / "timeseries.csv")["t"]) == 501
+
+
+def test_a_killed_run_keeps_the_rows_it_computed(tmp_path):
+    # A long run streams its rows to timeseries.partial.csv block by block; SIGKILL it part
+    # way and the folder keeps those rows, labelled by the claim file as incomplete.
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "long"
+    cmd = [sys.executable, "-m", "tt_mujoco.run", "--plant", "reduced", "--duration", "600"]
+    cmd += ["--traj", "circle", "--no-video", "--no-plots", "--quiet", "--out", str(out)]
+    proc = subprocess.Popen(cmd)
+    partial = out / "timeseries.partial.csv"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        if partial.exists() and partial.read_text().count("\n") > 3 * 8192:
+            break
+        time.sleep(0.2)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert (out / outputs.CLAIM_FILE).exists()  # labelled: not a finished run
+    rows = np.loadtxt(partial, delimiter=",", skiprows=1)
+    header = partial.read_text().splitlines()[0].split(",")
+    t = rows[:, header.index("t")]
+    assert len(t) >= 3 * 8192 and np.all(np.diff(t) > 0)
+    assert not (out / "metrics.json").exists()

@@ -67,6 +67,8 @@ PARAM_NAMES = tuple(
 #: Prefix of the hidden folder, private to one run, where figures and video are made before
 #: they are moved into the output folder.
 STAGING = ".partial-"
+#: The rows of a run in progress (raw logged columns), removed once timeseries.csv is written.
+CHECKPOINT_FILE = "timeseries.partial.csv"
 
 
 def parse_param(text: str) -> tuple[str, float]:
@@ -440,6 +442,7 @@ def write_outputs(
         atomic_write(out / CONFIG_FILE, config_toml)
         written.append(out / CONFIG_FILE)
     atomic_write(out / "timeseries.csv", timeseries_csv(result.timeseries, COLUMNS))
+    (out / CHECKPOINT_FILE).unlink(missing_ok=True)  # the complete file replaces it
     written.append(out / "timeseries.csv")
     if len(result.timeseries["t"]) < 2 and (plots or video):
         # A run that stopped at its first step has one sample: nothing to draw.
@@ -544,7 +547,9 @@ def _main(argv: list[str] | None) -> int:
 
     update, bar = _progress_bar("simulating", args.quiet or args.viewer)
     try:
-        result = sim.simulate(built, progress=update, on_step=live)
+        # Rows reach the disk every 8192 steps while the run goes on: a killed run keeps them.
+        checkpoint = out / CHECKPOINT_FILE
+        result = sim.simulate(built, progress=update, on_step=live, checkpoint=checkpoint)
     except (BadInputError, ValueError, reduced.SingularityError) as err:
         return _abandon(out, created, live, str(err), EXIT_BAD_INPUT)
     except viewer_mod.ViewerUnavailable as err:
@@ -598,6 +603,7 @@ def _abandon(out: Path, created: bool, live, message: str, code: int) -> int:
     """A run that produced no result: close the viewer, remove the folder made for it."""
     if live is not None:
         live.close()
+    (out / CHECKPOINT_FILE).unlink(missing_ok=True)
     if created:
         remove_if_empty(out)
     nothing = "nothing was written" if not out.exists() or not any(out.iterdir()) else ""

@@ -63,7 +63,7 @@ def run_episode(stepper: Stepper, controller, progress=None, on_step=None) -> tu
     return "ok", f"completed {stepper.built.duration:.3f} s"
 
 
-def simulate(scenario: Scenario | Build, progress=None, on_step=None) -> Result:
+def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint=None) -> Result:
     """Run one scenario. Never raises for a diverging run: see ``Result.status``.
 
     Parameters
@@ -77,6 +77,9 @@ def simulate(scenario: Scenario | Build, progress=None, on_step=None) -> Result:
         Called as ``on_step(t, plant)`` after every control step, ``t`` the new time and
         ``plant`` the running :class:`~tt_mujoco.sim.plant.Plant`; the live viewer uses it. An
         exception it raises ends the run and propagates.
+    checkpoint : path, optional
+        A file that receives the logged rows block by block while the run goes on (see
+        :meth:`tt_mujoco.sim.stepper.Stepper.reset`).
 
     Raises
     ------
@@ -85,7 +88,7 @@ def simulate(scenario: Scenario | Build, progress=None, on_step=None) -> Result:
     """
     built = scenario if isinstance(scenario, Build) else build(scenario)
     stepper = Stepper(built)
-    stepper.reset(np.random.default_rng(built.scenario.seed))
+    stepper.reset(np.random.default_rng(built.scenario.seed), checkpoint=checkpoint)
     controller = built.new_controller()
     controller.reset()
     start_wall = time.perf_counter()

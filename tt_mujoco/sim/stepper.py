@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -25,10 +26,13 @@ from tt_mujoco.sim.disturbances import injected
 from tt_mujoco.sim.measure import Measurement
 from tt_mujoco.sim.plant import StopRun
 from tt_mujoco.sim.scenario import jackknife_phi_deg
-from tt_mujoco.sim.timeseries import assemble_columns
+from tt_mujoco.sim.timeseries import LOOP_COLUMNS, assemble_columns
 from tt_mujoco.vehicle.reduced import SingularityError
 
-__all__ = ["Stepper"]
+__all__ = ["CHECKPOINT_COLUMNS", "Stepper"]
+
+#: Columns of a checkpoint file: the measurement and the loop's own values, as logged.
+CHECKPOINT_COLUMNS = (*Measurement._fields, *LOOP_COLUMNS)
 
 #: Rows kept as Python tuples before they are folded into float arrays: a long run's log then
 #: costs 8 bytes a value (about 290 bytes a row) instead of a tuple's ~1.3 kB.
@@ -58,11 +62,21 @@ class Stepper:
         self._dist_limit = built.disturbance_limit
         self.plant = None
 
-    def reset(self, rng: np.random.Generator, phi0_deg: float | None = None) -> None:
+    def reset(
+        self, rng: np.random.Generator, phi0_deg: float | None = None, checkpoint=None
+    ) -> None:
         """Start an episode: a fresh plant in the initial state, the target and faults reset,
         the noise of the whole episode drawn from ``rng`` (v_k, omega_k, ... in step order, the
-        same numbers as drawing them step by step)."""
+        same numbers as drawing them step by step).
+
+        ``checkpoint``, a file path, receives every block of logged rows as it is folded (CSV
+        of the raw logged columns, :data:`CHECKPOINT_COLUMNS`): a run killed after an hour keeps
+        what it computed there.
+        """
         b = self.built
+        self._checkpoint = None if checkpoint is None else Path(checkpoint)
+        if self._checkpoint is not None:
+            self._checkpoint.write_text(",".join(CHECKPOINT_COLUMNS) + "\n")
         self.plant = b.new_plant(phi0_deg)
         self.faults = b.new_faults()
         self.scheduler = b.new_scheduler(self.plant)
@@ -215,7 +229,11 @@ class Stepper:
         n = len(self._logged)
         if n:
             meas = np.array(self._measured, dtype=float).reshape(n, len(Measurement._fields))
-            self._blocks.append((meas, np.array(self._logged, dtype=float).reshape(n, -1)))
+            loop = np.array(self._logged, dtype=float).reshape(n, -1)
+            self._blocks.append((meas, loop))
+            if self._checkpoint is not None:
+                with open(self._checkpoint, "a") as handle:
+                    np.savetxt(handle, np.hstack([meas, loop]), delimiter=",", fmt="%.17g")
             self._measured.clear()
             self._logged.clear()
 

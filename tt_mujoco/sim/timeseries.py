@@ -6,7 +6,7 @@ import numpy as np
 
 from tt_mujoco.sim.measure import Measurement
 
-__all__ = ["COLUMNS", "assemble_columns"]
+__all__ = ["COLUMNS", "LOOP_COLUMNS", "assemble_columns"]
 
 #: Time-series columns, one row per control step (SI units, radians). See
 #: :mod:`tt_mujoco.analysis.metrics`.
@@ -51,7 +51,7 @@ COLUMNS = (
     "dist_clipped",
 )
 
-_LOOP_COLUMNS = (
+LOOP_COLUMNS = (
     "t",
     "s",
     "v_d",
@@ -77,9 +77,9 @@ def assemble_columns(measured: list, logged: list, eta: float) -> dict[str, np.n
     loop's own values (``x_ref``, ``y_ref``, ``theta_ref`` are left NaN for the caller to fill)."""
     n = len(logged)
     meas = np.array(measured, dtype=float).reshape(n, len(Measurement._fields))
-    loop = np.array(logged, dtype=float).reshape(n, len(_LOOP_COLUMNS))
+    loop = np.array(logged, dtype=float).reshape(n, len(LOOP_COLUMNS))
     cols = {name: meas[:, i] for i, name in enumerate(Measurement._fields)}
-    cols.update({name: loop[:, i] for i, name in enumerate(_LOOP_COLUMNS)})
+    cols.update({name: loop[:, i] for i, name in enumerate(LOOP_COLUMNS)})
     cols["eq_violation"] = cols["beta"] - eta * cols["phi"]
     cols["x_ref"] = np.full(n, np.nan)
     cols["y_ref"] = np.full(n, np.nan)
