@@ -269,3 +269,58 @@ def test_symlinked_sweep_files_are_refused(tmp_path):
     with pytest.raises(sweep.BadSpecError, match="symlink"):
         sweep.run_sweep(spec, out, workers=1, figures=False, resume=True)
     assert victim.read_text() == "keep me" and not (tmp_path / "elsewhere.jsonl").exists()
+
+
+def _descendants(pid: int) -> set[int]:
+    """Live descendants of ``pid`` (Linux /proc)."""
+    children: dict[int, list[int]] = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        children.setdefault(int(fields[1]), []).append(int(stat.parent.name))
+    out, todo = set(), [pid]
+    while todo:
+        for child in children.get(todo.pop(), []):
+            out.add(child)
+            todo.append(child)
+    return out
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
+def test_workers_end_with_a_killed_sweep(tmp_path):
+    # Kill only the sweep process (not its group): its pool's workers, the forkserver's
+    # children, must not go on computing runs nobody will collect.
+    cmd = [sys.executable, "-m", "tt_mujoco.sweep", "traj=circle", "duration=120"]
+    cmd += [
+        "seed=1,2,3,4",
+        "--workers",
+        "2",
+        "--quiet",
+        "--no-figures",
+        "--out",
+        str(tmp_path / "s"),
+    ]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 60
+    workers: set[int] = set()
+    while time.monotonic() < deadline and len(workers) < 3:  # forkserver and 2 workers
+        time.sleep(0.2)
+        workers = _descendants(proc.pid)
+    assert len(workers) >= 3
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    deadline = time.monotonic() + 10
+    alive = workers
+    while alive and time.monotonic() < deadline:
+        time.sleep(0.2)
+        alive = {p for p in workers if Path(f"/proc/{p}").exists() and "Z" not in _state(p)}
+    assert not alive
+
+
+def _state(pid: int) -> str:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return "Z"

@@ -5,7 +5,10 @@ from __future__ import annotations
 import concurrent.futures as cf
 import contextlib
 import multiprocessing
+import os
 import signal
+import threading
+import time
 
 __all__ = ["PRELOAD", "ExecutorError", "Executors", "ignore_sigint"]
 
@@ -33,6 +36,29 @@ def ignore_sigint() -> None:
     # Ctrl-C reaches the whole process group; only the parent should handle it (it cancels the
     # rest and stops the workers), or every worker prints a traceback.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _watch_parent(parent_pid: int, period: float = 1.0) -> None:
+    """End this worker once the process that opened the pool is gone (killed, crashed): pool
+    workers are the forkserver's children and would otherwise finish every run they hold."""
+
+    def watch() -> None:
+        while True:
+            time.sleep(period)
+            try:
+                os.kill(parent_pid, 0)
+            except ProcessLookupError:
+                os._exit(1)
+            except PermissionError:  # alive, another user's
+                pass
+
+    threading.Thread(target=watch, name="parent-watch", daemon=True).start()
+
+
+def _worker_start(parent_pid: int, initializer) -> None:
+    _watch_parent(parent_pid)
+    if initializer is not None:
+        initializer()
 
 
 class Executors:
@@ -66,7 +92,10 @@ class Executors:
             else:  # Windows
                 ctx = multiprocessing.get_context("spawn")
             self.pool = cf.ProcessPoolExecutor(
-                max_workers=self.workers, mp_context=ctx, initializer=self.initializer
+                max_workers=self.workers,
+                mp_context=ctx,
+                initializer=_worker_start,
+                initargs=(os.getpid(), self.initializer),
             )
             return self.pool
         try:
