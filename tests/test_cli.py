@@ -1,4 +1,4 @@
-"""CLI smoke tests: outputs exist, and agree with metrics recomputed from timeseries.csv."""
+"""CLI smoke tests: outputs exist, and agree with metrics recomputed from the time series."""
 
 import json
 import subprocess
@@ -39,7 +39,7 @@ def s_curve_run(tmp_path_factory):
 def test_cli_writes_outputs(s_curve_run):
     out, proc = s_curve_run
     assert proc.returncode == 0, proc.stderr
-    for name in ("metrics.json", "timeseries.csv", "path.png", "errors.png"):
+    for name in ("metrics.json", "timeseries.parquet", "path.png", "errors.png"):
         assert (out / name).stat().st_size > 0, name
     assert "rmse_position" in proc.stdout  # the printed summary table
     doc = json.loads((out / "metrics.json").read_text())
@@ -69,7 +69,7 @@ def test_cli_writes_outputs(s_curve_run):
 def test_metrics_agree_with_timeseries(s_curve_run):
     out, _ = s_curve_run
     doc = json.loads((out / "metrics.json").read_text())
-    ts = outputs.read_timeseries(out / "timeseries.csv")
+    ts = outputs.read_timeseries(out / "timeseries.parquet")
     again = metrics.compute_metrics(ts, paths.get_path("s_curve").dense(), 15.0)
     for key, value in again.items():
         if isinstance(value, float) and np.isfinite(value):
@@ -111,7 +111,7 @@ def test_cli_jackknife_exit_code(tmp_path):
     assert "jackknife at t=" in proc.stderr
     assert "Traceback" not in proc.stderr
     # What was computed is kept.
-    assert (tmp_path / "jk" / "timeseries.csv").stat().st_size > 0
+    assert (tmp_path / "jk" / "timeseries.parquet").stat().st_size > 0
     assert json.loads((tmp_path / "jk" / "metrics.json").read_text())["status"] == "jackknife"
 
 
@@ -161,9 +161,9 @@ def test_cli_steering_and_feedback_options_reach_the_scenario(tmp_path):
     assert scenario["path_feedback"] == {}
     assert scenario["reverse"] is False
     # The scheduled gain at kappa = 1 is the exact same-path gain, not the constant -1/7.
-    ts = outputs.read_timeseries(out / "timeseries.csv")
+    ts = outputs.read_timeseries(out / "timeseries.parquet")
     assert ts["beta"][-1] / ts["phi"][-1] == pytest.approx(-0.14714, abs=1e-4)
     # config.toml repeats it.
     again = tmp_path / "again"
     assert run.main(["--config", str(out / "config.toml"), "--out", str(again)]) == 0
-    assert (again / "timeseries.csv").read_bytes() == (out / "timeseries.csv").read_bytes()
+    assert (again / "timeseries.parquet").read_bytes() == (out / "timeseries.parquet").read_bytes()

@@ -57,7 +57,9 @@ def test_run_writes_its_config_and_repeats_exactly_from_it(tmp_path):
     assert "out" not in written and "quiet" not in written and "viewer" not in written
 
     assert run.main(["--config", str(first / "config.toml"), "--out", str(second), "--quiet"]) == 0
-    assert (first / "timeseries.csv").read_bytes() == (second / "timeseries.csv").read_bytes()
+    assert (first / "timeseries.parquet").read_bytes() == (
+        second / "timeseries.parquet"
+    ).read_bytes()
     again = json.loads((second / "metrics.json").read_text())
     assert without_wall_time(again) == without_wall_time(doc)
     assert (second / "config.toml").read_text() == (first / "config.toml").read_text()

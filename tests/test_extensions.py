@@ -116,7 +116,7 @@ def test_user_path_and_metric_land_in_metrics_json(tmp_path):
     assert 0.0 <= metrics["final_position_error"] < 0.05
     assert metrics["rmse_lateral"] < 0.01
     # the headwind brakes the vehicle: its matched wheel torques are negative
-    ts = outputs.read_timeseries(out / "timeseries.csv")
+    ts = outputs.read_timeseries(out / "timeseries.parquet")
     assert ts["dist_T_r"].min() < 0.0 and metrics["config"]["scenario"][
         "disturbance_model"
     ].endswith("user_parts.py:headwind_gusts")

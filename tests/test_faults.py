@@ -46,7 +46,7 @@ def test_same_seed_gives_identical_outputs(tmp_path):
         return doc
 
     def series(name):
-        return (outs[name] / "timeseries.csv").read_bytes()
+        return (outs[name] / "timeseries.parquet").read_bytes()
 
     assert metrics("a") == metrics("b")
     assert series("a") == series("b")
@@ -162,7 +162,7 @@ def test_body_wrench_beyond_traction_stops_reported_and_written(baseline, tmp_pa
     # disturbance (340x), lateral slip 8.5 vs 0.0014 m/s: the tyres cannot carry ~465 N.
     assert doc["slip_longitudinal_max"] > 100 * baseline.metrics["slip_longitudinal_max"]
     assert doc["slip_lateral_max"] > 1000 * baseline.metrics["slip_lateral_max"]
-    ts = outputs.read_timeseries(out / "timeseries.csv")
+    ts = outputs.read_timeseries(out / "timeseries.parquet")
     assert len(ts["t"]) == doc["steps"] > 500  # everything up to the stop is kept
 
 
@@ -179,8 +179,8 @@ def test_interrupted_output_leaves_no_metrics(tmp_path, monkeypatch, capsys):
     assert code == run.EXIT_INTERRUPTED
     assert "metrics.json was not written" in capsys.readouterr().err
     names = sorted(p.name for p in out.iterdir())
-    assert names == ["config.toml", "timeseries.csv"]  # complete files only, no temporaries
-    ts = outputs.read_timeseries(out / "timeseries.csv")
+    assert names == ["config.toml", "timeseries.parquet"]  # complete files only, no temporaries
+    ts = outputs.read_timeseries(out / "timeseries.parquet")
     assert len(ts["t"]) == 1001 and ts["t"][-1] == 1.0
 
 
@@ -195,7 +195,7 @@ def test_exception_inside_write_outputs_after_the_csv(tmp_path, monkeypatch):
     with pytest.raises(RuntimeError, match="disk on fire"):
         run.write_outputs(result, tmp_path, video=False, plots=True, camera="follow", fps=30,
                           quiet=True)  # fmt: skip
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["timeseries.csv"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["timeseries.parquet"]
 
 
 def test_atomic_write_never_leaves_a_partial_file(tmp_path, monkeypatch):

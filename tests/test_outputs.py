@@ -97,7 +97,7 @@ def test_two_runs_into_one_folder_never_lose_or_mix_outputs(tmp_path):
         assert codes == [0, 2], errors
         assert any("another run" in e or "not an empty folder" in e for e in errors)
         names = sorted(p.name for p in out.iterdir())
-        assert names == ["config.toml", "metrics.json", "timeseries.csv"], names
+        assert names == ["config.toml", "metrics.json", "timeseries.parquet"], names
         doc = json.loads((out / "metrics.json").read_text())
         config = (out / "config.toml").read_text()
         assert f'controller = "{doc["config"]["controller"]["name"]}"' in config
@@ -122,8 +122,8 @@ def test_a_full_disk_is_one_message_and_the_written_files_stay_complete(tmp_path
         code = run.main([*argv, "--quiet", "--out", str(out)])
     err = capsys.readouterr().err
     assert code == 2 and "No space left on device" in err and "Traceback" not in err
-    assert sorted(p.name for p in out.iterdir()) == ["config.toml", "timeseries.csv"]
-    assert len(outputs.read_timeseries(out / "timeseries.csv")["t"]) == 501
+    assert sorted(p.name for p in out.iterdir()) == ["config.toml", "timeseries.parquet"]
+    assert len(outputs.read_timeseries(out / "timeseries.parquet")["t"]) == 501
 
 
 def test_a_killed_run_keeps_the_rows_it_computed(tmp_path):
@@ -152,3 +152,48 @@ def test_a_killed_run_keeps_the_rows_it_computed(tmp_path):
     t = rows[:, header.index("t")]
     assert len(t) >= 3 * 8192 and np.all(np.diff(t) > 0)
     assert not (out / "metrics.json").exists()
+
+
+def test_pandas_reads_a_runs_time_series_as_the_simulation_made_it(tmp_path):
+    # The run's timeseries.parquet is read by pandas (and polars where installed) directly,
+    # with the same float64 numbers the simulation produced and the units in its metadata.
+    import pyarrow.parquet as pq
+
+    from tt_mujoco import run
+    from tt_mujoco.sim import COLUMNS, Scenario, simulate
+
+    pd = pytest.importorskip("pandas")
+    argv = ["--plant", "reduced", "--traj", "circle", "--duration", "1", "--seed", "3"]
+    out = tmp_path / "run"
+    assert (
+        run.main(
+            [
+                *argv,
+                "--noise-snr-db",
+                "20",
+                "--no-video",
+                "--no-plots",
+                "--quiet",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
+    ts = simulate(
+        Scenario(plant="reduced", traj="circle", duration=1.0, seed=3, noise_snr_db=20.0)
+    ).timeseries
+    frame = pd.read_parquet(out / "timeseries.parquet")
+    assert list(frame.columns) == list(COLUMNS)
+    for name in COLUMNS:
+        np.testing.assert_array_equal(frame[name].to_numpy(), ts[name])
+    schema = pq.read_schema(out / "timeseries.parquet")
+    assert schema.field("v").metadata[b"unit"] == b"m/s"
+    assert schema.field("T_r").metadata[b"unit"] == b"N m"
+    try:
+        import polars as pl
+    except ImportError:
+        return
+    np.testing.assert_array_equal(
+        pl.read_parquet(out / "timeseries.parquet")["x"].to_numpy(), ts["x"]
+    )

@@ -34,6 +34,7 @@ __all__ = [
     "save_figure",
     "timeseries_csv",
     "write_json",
+    "write_timeseries",
 ]
 
 
@@ -238,9 +239,35 @@ def timeseries_csv(ts: Mapping[str, np.ndarray], columns) -> str:
     return buf.getvalue()
 
 
-def read_timeseries(path) -> dict[str, np.ndarray]:
-    """A ``timeseries.csv`` (header row, then numbers) as column name -> 1-D array."""
+def write_timeseries(path: Path, ts: Mapping[str, np.ndarray], columns, units=None) -> None:
+    """The time series to ``path`` atomically: Parquet (``.parquet``: float64 columns, the
+    units in the schema's metadata, zstd compression) or CSV (``.csv``: full precision)."""
     path = Path(path)
+    if path.suffix == ".csv":
+        atomic_write(path, timeseries_csv(ts, columns))
+        return
+    import pyarrow as pa  # only where Parquet is written or read
+    import pyarrow.parquet as pq
+
+    fields = [
+        pa.field(c, pa.float64(), metadata={"unit": (units or {}).get(c, "")}) for c in columns
+    ]
+    table = pa.table([np.asarray(ts[c], dtype=float) for c in columns], schema=pa.schema(fields))
+    table = table.replace_schema_metadata({"tt_mujoco": json.dumps({"units": units or {}})})
+    with _temporary_beside(path, suffix=".tmp.parquet") as tmp:
+        pq.write_table(table, tmp, compression="zstd")
+        os.replace(tmp, path)
+
+
+def read_timeseries(path) -> dict[str, np.ndarray]:
+    """A time series file (``.parquet``, or ``.csv``: header row, then numbers) as column
+    name -> 1-D array."""
+    path = Path(path)
+    if path.suffix == ".parquet":
+        import pyarrow.parquet as pq
+
+        table = pq.read_table(path)
+        return {name: table.column(name).to_numpy().astype(float) for name in table.column_names}
     with path.open(newline="") as f:
         header = next(csv.reader(f), None)
     if not header:

@@ -40,7 +40,8 @@ def main(argv: list[str] | None = None) -> int:
     """
     parser = argparse.ArgumentParser(
         prog="python -m tt_mujoco.render",
-        description="Re-render a finished run (RUN_DIR/timeseries.csv, RUN_DIR/metrics.json) "
+        description="Re-render a finished run (RUN_DIR/timeseries.parquet or .csv and "
+        "RUN_DIR/metrics.json) "
         "as an H.264 MP4. Never overwrites a file.",
     )
     parser.add_argument("run_dir", type=Path, metavar="RUN_DIR")
@@ -61,7 +62,10 @@ def main(argv: list[str] | None = None) -> int:
     if out.exists():
         hint = "" if args.out is not None else "; name a new file with --out FILE"
         return fail(f"{out} exists and is never overwritten{hint}")
-    ts_path, metrics_path = run_dir / "timeseries.csv", run_dir / "metrics.json"
+    ts_path = run_dir / "timeseries.parquet"
+    if not ts_path.is_file():
+        ts_path = run_dir / "timeseries.csv"
+    metrics_path = run_dir / "metrics.json"
     for needed in (ts_path, metrics_path):
         if not needed.is_file():
             return fail(f"{needed} not found: RUN_DIR must be a finished run's folder")

@@ -43,11 +43,12 @@ from tt_mujoco.outputs import (
     publish_new,
     release_folder,
     remove_if_empty,
-    timeseries_csv,
     write_json,
+    write_timeseries,
 )
 from tt_mujoco.sim import COLUMNS, DISTURBANCE_MODES, PLANTS, TARGETS, Scenario, build
 from tt_mujoco.sim.faults import RECOVERY_S, parse_fault
+from tt_mujoco.sim.timeseries import UNITS
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.viz import plots as plots_mod
@@ -67,7 +68,9 @@ PARAM_NAMES = tuple(
 #: Prefix of the hidden folder, private to one run, where figures and video are made before
 #: they are moved into the output folder.
 STAGING = ".partial-"
-#: The rows of a run in progress (raw logged columns), removed once timeseries.csv is written.
+#: Formats of the time-series file (``timeseries.<format>``).
+TIMESERIES_FORMATS = ("parquet", "csv")
+#: The rows of a run in progress (raw logged columns), removed once the time series is written.
 CHECKPOINT_FILE = "timeseries.partial.csv"
 
 
@@ -111,7 +114,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="python -m tt_mujoco.run",
         description=(
             "Run one closed-loop tracking scenario of the off-axle tractor-trailer on the MuJoCo "
-            "plant or the analytic reduced model, and write metrics.json, timeseries.csv, "
+            "plant or the analytic reduced model, and write metrics.json, timeseries.parquet, "
             "config.toml, plots and a video into a new folder."
         ),
         formatter_class=argparse.ArgumentDefaultsHelpFormatter,
@@ -314,6 +317,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     o.add_argument("--fps", type=positive("--fps"), default=30.0, help="video frame rate")
     o.add_argument(
+        "--timeseries-format",
+        default="parquet",
+        choices=TIMESERIES_FORMATS,
+        help="timeseries.parquet (compact, columnar; pandas and polars read it) or "
+        "timeseries.csv (text, full precision)",
+    )
+    o.add_argument(
         "--quiet", action=argparse.BooleanOptionalAction, default=False, help="no progress bar"
     )
     o.add_argument(
@@ -428,6 +438,7 @@ def write_outputs(
     fps: float,
     quiet,
     config_toml: str | None = None,
+    timeseries_format: str = "parquet",
 ):
     """Write ``config.toml`` (if given), the time series, figures, video and, last,
     ``metrics.json`` into ``out``.
@@ -441,9 +452,10 @@ def write_outputs(
     if config_toml is not None:
         atomic_write(out / CONFIG_FILE, config_toml)
         written.append(out / CONFIG_FILE)
-    atomic_write(out / "timeseries.csv", timeseries_csv(result.timeseries, COLUMNS))
+    ts_file = out / f"timeseries.{timeseries_format}"
+    write_timeseries(ts_file, result.timeseries, COLUMNS, UNITS)
     (out / CHECKPOINT_FILE).unlink(missing_ok=True)  # the complete file replaces it
-    written.append(out / "timeseries.csv")
+    written.append(ts_file)
     if len(result.timeseries["t"]) < 2 and (plots or video):
         # A run that stopped at its first step has one sample: nothing to draw.
         notes.append("figures and video skipped: the run has fewer than 2 samples")
@@ -571,6 +583,7 @@ def _main(argv: list[str] | None) -> int:
             fps=args.fps,
             quiet=args.quiet,
             config_toml=config_toml,
+            timeseries_format=args.timeseries_format,
         )
     except OSError as err:  # a full disk, a quota, a vanished folder
         if live is not None:

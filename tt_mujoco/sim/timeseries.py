@@ -6,7 +6,7 @@ import numpy as np
 
 from tt_mujoco.sim.measure import Measurement
 
-__all__ = ["COLUMNS", "LOOP_COLUMNS", "assemble_columns"]
+__all__ = ["COLUMNS", "LOOP_COLUMNS", "UNITS", "assemble_columns"]
 
 #: Time-series columns, one row per control step (SI units, radians). See
 #: :mod:`tt_mujoco.analysis.metrics`.
@@ -50,6 +50,22 @@ COLUMNS = (
     "omega_d_tracked",
     "dist_clipped",
 )
+
+#: The unit of every column (written into a Parquet file's metadata).
+UNITS = {
+    **dict.fromkeys(("t", "sim_time"), "s"),
+    **dict.fromkeys(("x", "y", "x0", "y0", "s", "x_ref", "y_ref"), "m"),
+    **dict.fromkeys(("theta", "phi", "beta", "theta0", "theta_l", "theta_r"), "rad"),
+    **dict.fromkeys(("theta_ref", "eq_violation"), "rad"),
+    **dict.fromkeys(("v", "v0", "v_d", "v_meas"), "m/s"),
+    **dict.fromkeys(("slip_lateral", "slip_lateral_trailer", "slip_left", "slip_right"), "m/s"),
+    **dict.fromkeys(("omega", "omega_d", "omega_meas", "omega_d_tracked"), "rad/s"),
+    "v_d_dot": "m/s^2",
+    "omega_d_dot": "rad/s^2",
+    **dict.fromkeys(("T_r", "T_l", "T_r_cmd", "T_l_cmd", "dist_T_r", "dist_T_l"), "N m"),
+    "kappa_d": "1/m",
+    "dist_clipped": "1 (0 or 1)",
+}
 
 LOOP_COLUMNS = (
     "t",
