@@ -1,0 +1,51 @@
+"""``python -m tt_mujoco.compare``: the table, the figures, and what it refuses."""
+
+import json
+
+import pytest
+
+from tt_mujoco import compare, run
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    base = tmp_path_factory.mktemp("runs")
+    folders = []
+    for controller, traj in (("ismc_sta", "circle"), ("pid", "circle"), ("fbl", "s_curve")):
+        out = base / f"{controller}-{traj}"
+        argv = ["--plant", "reduced", "--traj", traj, "--duration", "2", "--controller", controller]
+        assert run.main([*argv, "--no-video", "--no-plots", "--quiet", "--out", str(out)]) == 0
+        folders.append(out)
+    return folders
+
+
+def test_compare_writes_the_table_and_figures(runs, tmp_path, capsys):
+    out = tmp_path / "cmp"
+    assert compare.main([str(runs[0]), str(runs[1]), "--out", str(out)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == [
+        "compare.json",
+        "compare.md",
+        "errors.png",
+        "paths.png",
+        "signals.png",
+    ]
+    doc = json.loads((out / "compare.json").read_text())
+    rows = {r["metric"]: r for r in doc["rows"]}
+    first = json.loads((runs[0] / "metrics.json").read_text())
+    second = json.loads((runs[1] / "metrics.json").read_text())
+    assert rows["rmse_v"]["values"] == [first["rmse_v"], second["rmse_v"]]
+    assert rows["rmse_v"]["ratios"][1] == pytest.approx(second["rmse_v"] / first["rmse_v"])
+    assert "| rmse_v |" in (out / "compare.md").read_text()
+
+
+def test_compare_refuses_runs_on_different_paths_unless_asked(runs, tmp_path, capsys):
+    out = tmp_path / "cmp"
+    assert compare.main([str(runs[0]), str(runs[2]), "--out", str(out)]) == 2
+    assert "different paths" in capsys.readouterr().err and not out.exists()
+    args = [str(runs[0]), str(runs[2]), "--allow-different-paths", "--out", str(out)]
+    assert compare.main(args) == 0
+
+
+def test_compare_refuses_a_folder_that_is_not_a_run(runs, tmp_path, capsys):
+    assert compare.main([str(runs[0]), str(tmp_path), "--out", str(tmp_path / "x")]) == 2
+    assert "not a finished run" in capsys.readouterr().err

@@ -1,0 +1,228 @@
+"""``python -m tt_mujoco.compare RUN_DIR RUN_DIR ...``: finished runs side by side.
+
+Reads each run's ``metrics.json`` and time series and writes into a new folder:
+
+- ``compare.md``: every numeric metric of the runs side by side, with each run's ratio to the
+  first run (the reference) - the table the README shows;
+- ``compare.json``: the same numbers (strict JSON);
+- ``paths.png``: the tractor's (solid) and trailer's (dashed) tracks over the reference path;
+- ``errors.png``: e_v, e_omega and the lateral error over time, one colour per run;
+- ``signals.png``: wheel torques and articulation over time.
+
+Runs on different paths are refused (their errors do not compare) unless
+``--allow-different-paths``. Exit codes: 0 written, 2 bad input.
+"""
+
+from __future__ import annotations
+
+import glob
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from tt_mujoco.cliargs import BadInputError, Parser
+from tt_mujoco.outputs import (
+    OutputError,
+    atomic_write,
+    claim_folder,
+    read_timeseries,
+    release_folder,
+    save_figure,
+    write_json,
+)
+from tt_mujoco.viz.plots import DPI, plot_comparison
+from tt_mujoco.viz.render import reference_polyline_for
+
+__all__ = ["Run", "load_run", "main", "metrics_table"]
+
+DEFAULT_OUT = Path("renders") / "compare"
+
+
+class Run:
+    """A finished run: its label, metrics, configuration and time series."""
+
+    def __init__(self, folder: Path, metrics: dict, timeseries: dict):
+        self.folder = folder
+        self.metrics = metrics
+        self.config = metrics.get("config", {})
+        self.timeseries = timeseries
+        scenario = self.config.get("scenario", {})
+        self.path = str(scenario.get("traj", "?"))
+        parts = [scenario.get("controller", "?"), scenario.get("plant", "?")]
+        self.label = f"{folder.name} ({', '.join(str(p) for p in parts)})"
+
+
+def load_run(folder: Path) -> Run:
+    """Read a run folder; BadInputError naming what is missing or broken."""
+    metrics_file = folder / "metrics.json"
+    ts_file = folder / "timeseries.parquet"
+    if not ts_file.is_file():
+        ts_file = folder / "timeseries.csv"
+    if not (metrics_file.is_file() and ts_file.is_file()):
+        raise BadInputError(
+            f"{str(folder)!r} is not a finished run: it needs metrics.json and a time series"
+        )
+    try:
+        metrics = json.loads(metrics_file.read_text())
+    except (OSError, json.JSONDecodeError) as err:
+        raise BadInputError(f"{metrics_file}: {err}") from None
+    if not isinstance(metrics, dict):
+        raise BadInputError(f"{metrics_file} is not a run's metrics (a JSON object)")
+    try:
+        ts = read_timeseries(ts_file)
+    except (OSError, ValueError) as err:
+        raise BadInputError(f"{ts_file}: {err}") from None
+    return Run(folder, metrics, ts)
+
+
+def _numeric(value) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def metrics_table(runs: list[Run]) -> tuple[list[str], list[dict]]:
+    """The metrics every run has as numbers, in the first run's order, and per metric the runs'
+    values and their ratios to the first run (None where the first is 0)."""
+    skip = {"wall_time_s", "sample_period_s"}
+    names = [k for k, v in runs[0].metrics.items() if _numeric(v) and k not in skip]
+    names = [k for k in names if all(_numeric(r.metrics.get(k)) for r in runs)]
+    rows = []
+    for name in names:
+        values = [float(r.metrics[name]) for r in runs]
+        ratios = [v / values[0] if values[0] else None for v in values]
+        rows.append({"metric": name, "values": values, "ratios": ratios})
+    return names, rows
+
+
+def _markdown(runs: list[Run], rows: list[dict]) -> str:
+    head = "| metric | " + " | ".join(r.label for r in runs) + " |"
+    lines = [
+        f"# {len(runs)} runs compared",
+        "",
+        f"Made by `python -m tt_mujoco.compare {' '.join(str(r.folder) for r in runs)}`. "
+        f"Ratios are to the first run, {runs[0].label}.",
+        "",
+        head,
+        "|" + "---|" * (len(runs) + 1),
+    ]
+    for row in rows:
+        cells = []
+        for value, ratio in zip(row["values"], row["ratios"], strict=True):
+            cell = f"{value:.4g}"
+            if ratio is not None and cells:
+                cell += f" (x{ratio:.3g})"
+            cells.append(cell)
+        lines.append(f"| {row['metric']} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _paths_figure(runs: list[Run], reference) -> Figure:
+    fig = Figure(figsize=(7, 6), layout="constrained")
+    ax = fig.add_subplot()
+    if reference is not None:
+        ax.plot(reference[:, 0], reference[:, 1], color="0.6", lw=3, label="reference path")
+    for i, run in enumerate(runs):
+        ts, color = run.timeseries, f"C{i % 10}"
+        ax.plot(ts["x"], ts["y"], color=color, lw=1.3, label=f"{run.label}: tractor P")
+        ax.plot(ts["x0"], ts["y0"], "--", color=color, lw=1.0, label="trailer P0")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize=7, loc="best")
+    fig.suptitle("Tracks")
+    return fig
+
+
+def _signals_figure(runs: list[Run]) -> Figure:
+    fig = Figure(figsize=(8, 7), layout="constrained")
+    axes = fig.subplots(3, 1, sharex=True)
+    for i, run in enumerate(runs):
+        ts, color = run.timeseries, f"C{i % 10}"
+        axes[0].plot(ts["t"], ts["T_r"], color=color, lw=1.0, label=run.label)
+        axes[1].plot(ts["t"], ts["T_l"], color=color, lw=1.0)
+        axes[2].plot(ts["t"], np.degrees(ts["phi"]), color=color, lw=1.0)
+    for ax, ylabel in zip(axes, ("T_r (N m)", "T_l (N m)", "phi (deg)"), strict=True):
+        ax.set_ylabel(ylabel)
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(fontsize=8)
+    axes[-1].set_xlabel("t (s)")
+    fig.suptitle("Wheel torques and articulation")
+    return fig
+
+
+def compare(folders: list[Path], out: Path | None, allow_different_paths: bool) -> Path:
+    """Write the comparison of ``folders`` into a new folder; returns it."""
+    runs = [load_run(f) for f in folders]
+    paths = sorted({r.path for r in runs})
+    if len(paths) > 1 and not allow_different_paths:
+        raise BadInputError(
+            f"the runs follow different paths ({', '.join(paths)}): their errors do not compare; "
+            "pass --allow-different-paths to compare them anyway"
+        )
+    _, rows = metrics_table(runs)
+    try:
+        reference = reference_polyline_for(runs[0].config, runs[0].timeseries)[0]
+    except ValueError:
+        reference = None
+    folder, _ = claim_folder(out, DEFAULT_OUT)
+    atomic_write(folder / "compare.md", _markdown(runs, rows))
+    write_json(
+        folder / "compare.json",
+        {"runs": [str(r.folder) for r in runs], "labels": [r.label for r in runs], "rows": rows},
+        strict=True,
+    )
+    save_figure(_paths_figure(runs, reference), folder / "paths.png", DPI)
+    plot_comparison(
+        {r.label: r.timeseries for r in runs},
+        folder / "errors.png",
+        reference_polyline=reference,
+        title="Tracking errors",
+    )
+    save_figure(_signals_figure(runs), folder / "signals.png", DPI)
+    release_folder(folder)
+    return folder
+
+
+def _expand(patterns: list[str]) -> list[Path]:
+    folders = []
+    for pattern in patterns:
+        matches = sorted(glob.glob(pattern)) if any(c in pattern for c in "*?[") else [pattern]
+        if not matches:
+            raise BadInputError(f"{pattern!r} matches no run folder")
+        folders += [Path(m) for m in matches]
+    return folders
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = Parser(
+        prog="python -m tt_mujoco.compare",
+        description="Compare finished runs: a table of every metric with ratios to the first "
+        "run, and overlay figures of tracks, errors, torques and articulation.",
+    )
+    parser.add_argument("runs", nargs="+", metavar="RUN_DIR", help="run folders (or a glob)")
+    parser.add_argument(
+        "--out", type=Path, default=None, help="a new folder (default: renders/compare[-N])"
+    )
+    parser.add_argument(
+        "--allow-different-paths", action="store_true", help="compare runs on different paths"
+    )
+    try:
+        args = parser.parse_args(argv)
+        folders = _expand(args.runs)
+        if len(folders) < 2:
+            raise BadInputError("give at least two run folders to compare")
+        folder = compare(folders, args.out, args.allow_different_paths)
+    except (BadInputError, OutputError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    print((folder / "compare.md").read_text())
+    print(f"wrote compare.md, compare.json, paths.png, errors.png, signals.png to {folder}/")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
