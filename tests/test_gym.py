@@ -122,3 +122,29 @@ def test_env_is_the_simulate_plant(extra):
     assert np.array_equal(np.array(xs), reference["x"])
     assert np.array_equal(np.array(vs), reference["v_meas"])  # noisy v, bit for bit
     assert math.isfinite(xs[-1])
+
+
+def test_render_works_without_a_display():
+    # As `run` does: EGL (or OSMesa) chosen by the project, whatever MUJOCO_GL or DISPLAY say.
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "from tt_mujoco.gym_env import TractorTrailerEnv\n"
+        "from tt_mujoco.viz.render import RenderUnavailable\n"
+        "env = TractorTrailerEnv(render_mode='rgb_array', duration=0.2)\n"
+        "env.reset(seed=0)\n"
+        "try:\n"
+        "    a = env.render()\n"
+        "except RenderUnavailable:\n"
+        "    print('unavailable'); raise SystemExit(0)\n"
+        "env.step([2.0, 2.0]); b = env.render(); env.close()\n"
+        "print(a.shape, int(a.std() > 5), int((a != b).any()))\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "MUJOCO_GL")}
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert proc.returncode == 0, proc.stderr[-1500:]
+    if proc.stdout.strip() == "unavailable":
+        pytest.skip("no OpenGL backend on this machine")
+    assert proc.stdout.split() == ["(480,", "640,", "3)", "1", "1"]  # an image that changes

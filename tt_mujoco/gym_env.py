@@ -50,7 +50,7 @@ import mujoco
 
 from tt_mujoco import sim
 from tt_mujoco.sim.measure import Measurement
-from tt_mujoco.viz.render import select_gl_backend
+from tt_mujoco.viz.render import Offscreen
 
 __all__ = ["ENV_ID", "OBSERVATION_NAMES", "TractorTrailerEnv"]
 
@@ -121,6 +121,7 @@ class TractorTrailerEnv(gymnasium.Env):
         if phi0_deg != s.phi0_deg:
             dataclasses.replace(s, phi0_deg=phi0_deg).validate()
         self._stepper.reset(self.np_random, phi0_deg=phi0_deg)
+        self.close()  # a new plant: the renderer is made again for its model
         obs = self._sense()
         return obs, self._info("running")
 
@@ -146,12 +147,27 @@ class TractorTrailerEnv(gymnasium.Env):
         return obs, float(reward), False, truncated, self._info("running")
 
     def render(self):
+        """An RGB image (480 x 640) of the MuJoCo plant from the chase camera. Headless like
+        ``run``: the OpenGL backend is chosen by :func:`tt_mujoco.viz.gl.select_gl_backend`
+        (EGL, else OSMesa), not by a display."""
         if self.render_mode != "rgb_array" or self._stepper.plant is None:
             return None
+        model, data = self._stepper.plant.model, self._stepper.plant.data
         if self._renderer is None:
-            select_gl_backend()
-            self._renderer = mujoco.Renderer(self._stepper.plant.model, 480, 640)
-        self._renderer.update_scene(self._stepper.plant.data, camera="chase")
+            self._renderer = Offscreen(model, 640, 480, maxgeom=1000)
+            self._camera = mujoco.MjvCamera()
+            self._camera.type = mujoco.mjtCamera.mjCAMERA_FIXED
+            self._camera.fixedcamid = model.camera("chase").id
+            self._options = mujoco.MjvOption()
+        mujoco.mjv_updateScene(
+            model,
+            data,
+            self._options,
+            None,
+            self._camera,
+            mujoco.mjtCatBit.mjCAT_ALL,
+            self._renderer.scene,
+        )
         return self._renderer.render()
 
     def close(self):

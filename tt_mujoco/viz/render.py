@@ -117,7 +117,7 @@ _ZERO3 = np.zeros(3)
 _EYE9 = np.eye(3).ravel()
 
 
-class _Offscreen:
+class Offscreen:
     """An OpenGL context, MuJoCo's render context (offscreen buffer) and a scene."""
 
     def __init__(self, model: mujoco.MjModel, width: int, height: int, maxgeom: int):
@@ -265,7 +265,7 @@ class RunRenderer:
         self._line_px = max(1.0, round(height / 200))
 
         self._compact = CompactOverlay(height) if height < MUJOCO_OVERLAY_MIN_HEIGHT else None
-        self._off = _Offscreen(self.model, width, height, maxgeom)
+        self._off = Offscreen(self.model, width, height, maxgeom)
         self._geoms = self._off.scene.geoms  # the tuple is rebuilt on each attribute access
         self._base = -1  # geoms mjv_updateScene wrote in the previous frame
         self._committed = 0  # trace points already in the scene after the fixed geoms
