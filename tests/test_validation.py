@@ -96,3 +96,21 @@ def test_same_path_eta_stays_bounded_forward():
     # The 0.5 deg initial articulation does not grow (measured max 0.635 deg).
     assert result["phi_max_abs_deg_mujoco"] < 1.0
     assert result["phi_max_abs_deg_reduced"] < 1.0
+
+
+def test_report_gives_a_verdict_per_bound_and_never_none():
+    # A synthetic result: one bound broken, one jackknife that never happened.
+    results = {
+        "inertia": [{"eta": 3.0, "samples": 100, "max_rel_error": 2e-15}],
+        "energy": [{"eta": 3.0, "forced": True, "rel_error": 1e-3}],
+        "jackknife": [
+            {"eta": 3.0, "t_over_20deg_mujoco_s": 2.4, "t_over_20deg_reduced_s": None},
+            {"eta": -1 / 7, "phi_max_abs_deg_mujoco": 0.6, "phi_max_abs_deg_reduced": 0.6},
+        ],
+    }
+    checks = validate.verdicts(results)
+    failed = {(c["check"], c["quantity"]) for c in checks if not c["pass"]}
+    assert failed == {("energy", "rel_error"), ("jackknife", "t_over_20deg_reduced_s")}
+    text = validate.validation_markdown(results)
+    assert "**Verdict: 4 of 6 bounds hold; FAILED: energy.rel_error" in text
+    assert "None" not in text and "| never |" in text

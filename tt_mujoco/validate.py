@@ -358,31 +358,106 @@ def run_all() -> dict:
     }
 
 
+#: The bounds each check must meet (the same as ``tests/test_validation.py``): per section,
+#: (quantity, bound, kind) with kind "<" (measured below the bound) or ">" (above it). A
+#: jackknife row is judged by its steering: the paper's eta must jackknife (pass 20 deg within
+#: 3 s on both plants), the same-path gain must not (stay below 1 deg).
+BOUNDS = {
+    "inertia": [("max_rel_error", 1e-12, "<")],
+    "coriolis": [("max_rel_error", 1e-7, "<")],
+    "kinematics": [
+        ("distance_m", 6.0, ">"),
+        ("final_P_error_m", 2e-3, "<"),
+        ("final_P0_error_m", 2e-3, "<"),
+        ("phi_dot_rel_rms_error", 0.02, "<"),
+        ("eq_violation_max_rad", 1e-4, "<"),
+    ],
+    "dynamics": [("v_max_abs_diff", 5e-4, "<"), ("omega_max_abs_diff", 5e-3, "<")],
+    "energy": [("rel_error", 1e-6, "<")],
+}
+_JACKKNIFE_PAPER = [("t_over_20deg_mujoco_s", 3.0, "<"), ("t_over_20deg_reduced_s", 3.0, "<")]
+_JACKKNIFE_STABLE = [("phi_max_abs_deg_mujoco", 1.0, "<"), ("phi_max_abs_deg_reduced", 1.0, "<")]
+
+
+def verdicts(results: dict) -> list[dict]:
+    """Every bound of every check: section, row, quantity, bound, measured value, pass."""
+    out = []
+    for section, rows in results.items():
+        for i, row in enumerate(rows):
+            if section == "jackknife":
+                rules = _JACKKNIFE_PAPER if row["eta"] > 1 else _JACKKNIFE_STABLE
+            else:
+                rules = BOUNDS.get(section, [])
+            for quantity, bound, kind in rules:
+                value = row.get(quantity)
+                ok = value is not None and (value < bound if kind == "<" else value > bound)
+                out.append(
+                    {
+                        "check": section,
+                        "row": i,
+                        "eta": row.get("eta"),
+                        "quantity": quantity,
+                        "bound": f"{kind} {bound:g}",
+                        "measured": value,
+                        "pass": bool(ok),
+                    }
+                )
+    return out
+
+
+def _cell(value) -> str:
+    if value is None:
+        return "never"  # e.g. a jackknife time that was never reached
+    return f"{value:.4g}" if isinstance(value, float) else str(value)
+
+
+def _failures(failed: list[dict]) -> str:
+    return (
+        ("; FAILED: " + ", ".join(f"{c['check']}.{c['quantity']}" for c in failed))
+        if failed
+        else "."
+    )
+
+
 def validation_markdown(results: dict) -> str:
+    checks = verdicts(results)
+    failed = [c for c in checks if not c["pass"]]
     lines = [
         "# Model validation: MuJoCo against the reduced model",
         "",
         "Produced by `python -m tt_mujoco.validate`. Parameters: the paper's (Section 6.1),",
         f"timestep {Params().timestep} s. See `tt_mujoco/validate.py` for each check's definition.",
         "",
+        f"**Verdict: {len(checks) - len(failed)} of {len(checks)} bounds hold"
+        + (
+            f"; FAILED: {', '.join(c['check'] + '.' + c['quantity'] for c in failed)}**"
+            if failed
+            else ".**"
+        ),
+        "",
+        "| check | eta | quantity | bound | measured | pass |",
+        "|---|---|---|---|---|---|",
     ]
+    for c in checks:
+        lines.append(
+            f"| {c['check']} | {_cell(c['eta'])} | {c['quantity']} | {c['bound']} | "
+            f"{_cell(c['measured'])} | {'pass' if c['pass'] else 'FAIL'} |"
+        )
+    lines.append("")
     for section, rows in results.items():
         lines += [f"## {section}", ""]
         keys = list(rows[0])
         lines.append("| " + " | ".join(keys) + " |")
         lines.append("|" + "---|" * len(keys))
         for row in rows:
-            cells = []
-            for k in keys:
-                v = row[k]
-                cells.append(f"{v:.4g}" if isinstance(v, float) else str(v))
-            lines.append("| " + " | ".join(cells) + " |")
+            lines.append("| " + " | ".join(_cell(row.get(k)) for k in keys) + " |")
         lines.append("")
     return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Exit 0 written, 2 a used or unwritable ``--out`` (refused before the checks run)."""
+    """Exit 0 written and every bound holds, 1 written but a bound does not hold, 2 a used or
+    unwritable ``--out`` (refused before the checks run)."""
     parser = argparse.ArgumentParser(
         prog="python -m tt_mujoco.validate",
         description="Check the MuJoCo model against the analytic reduced model. Writes "
@@ -398,12 +473,16 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {err}", file=sys.stderr)
         return 2
     results = run_all()
-    write_json(out / "report.json", results, strict=True)
+    write_json(out / "report.json", {**results, "verdicts": verdicts(results)}, strict=True)
     text = validation_markdown(results)
     atomic_write(out / "report.md", text + "\n")
     release_folder(out)
     print(text)
     print(f"\nwrote {out / 'report.md'} and {out / 'report.json'}")
+    failed = [c for c in verdicts(results) if not c["pass"]]
+    if failed:
+        print(f"error: {len(failed)} validation bound(s) do not hold", file=sys.stderr)
+        return 1
     return 0
 
 
