@@ -27,8 +27,6 @@ import threading
 import time
 from pathlib import Path
 
-from tqdm import tqdm
-
 from tt_mujoco import config as config_mod
 from tt_mujoco import sim
 from tt_mujoco.analysis.metrics import DEFAULT_SUMMARY_KEYS, metric_name, summary_table
@@ -46,6 +44,7 @@ from tt_mujoco.outputs import (
     write_json,
     write_timeseries,
 )
+from tt_mujoco.progress import progress_bar
 from tt_mujoco.sim import COLUMNS, DISTURBANCE_MODES, PLANTS, TARGETS, Scenario, build
 from tt_mujoco.sim.faults import RECOVERY_S, parse_fault
 from tt_mujoco.sim.timeseries import UNITS
@@ -501,7 +500,7 @@ def _progress_bar(total_label: str, quiet: bool):
     if quiet:
         return None, None
 
-    bar = tqdm(total=100, desc=total_label, unit="%", leave=False, disable=None)
+    bar = progress_bar(100, total_label, "%")
 
     def update(done: int, total: int) -> None:
         pct = int(100 * done / max(total, 1))

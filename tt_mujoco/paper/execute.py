@@ -11,12 +11,12 @@ from concurrent.futures import as_completed
 
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
-from tqdm import tqdm
 
 from tt_mujoco.analysis.metrics import follower_offtrack, signed_lateral_error
 from tt_mujoco.executor import Executors, ignore_sigint
 from tt_mujoco.outputs import json_safe
 from tt_mujoco.paper.suite import SERIES_POINTS, SETTLE_DISTANCE, V_MIN, RunSpec
+from tt_mujoco.progress import progress_bar
 from tt_mujoco.reference.targets import make_target
 from tt_mujoco.sim import Scenario, simulate
 from tt_mujoco.vehicle.steering import steady_offtrack
@@ -238,7 +238,7 @@ def run_suite(
             alias[spec.key] = spec.key
     todo = sorted(unique.values(), key=_expected_cost, reverse=True)  # long runs first
 
-    bar = tqdm(total=len(todo), desc="paper suite", unit="run", disable=not progress)
+    bar = progress_bar(len(todo), "paper suite", "run", enabled=progress)
     done: dict[str, dict] = {}
     try:
         if workers == 1:

@@ -12,10 +12,9 @@ from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from tqdm import tqdm
-
 from tt_mujoco.executor import Executors, ignore_sigint
 from tt_mujoco.outputs import atomic_write, json_safe, write_json
+from tt_mujoco.progress import progress_bar
 from tt_mujoco.sweep.options import JOURNAL, SPEC_FILE, TABLE, BadSpecError
 from tt_mujoco.sweep.runs import expand, run_one
 from tt_mujoco.sweep.spec import SweepSpec
@@ -61,16 +60,7 @@ class SweepResult:
 def _progress(total: int, initial: int, quiet: bool):
     if quiet:
         return None
-
-    return tqdm(
-        total=total,
-        initial=initial,
-        unit="run",
-        desc="sweep",
-        dynamic_ncols=True,
-        mininterval=0.5 if sys.stderr.isatty() else 30.0,
-        file=sys.stderr,
-    )
+    return progress_bar(total, "sweep", "run", initial=initial)
 
 
 def _lock(out: Path):

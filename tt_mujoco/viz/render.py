@@ -24,9 +24,9 @@ from pathlib import Path
 
 import mujoco
 import numpy as np
-from tqdm import tqdm
 
 from tt_mujoco.outputs import publish_new
+from tt_mujoco.progress import progress_bar
 from tt_mujoco.reference import paths
 from tt_mujoco.sim.physics import Vehicle
 from tt_mujoco.vehicle import reduced
@@ -492,15 +492,11 @@ def render_video(
         tmp = Path(tmp_name)
         try:
             with mediapy.VideoWriter(tmp, shape=(height, width), fps=fps, codec="h264") as writer:
-                frames = tqdm(
-                    range(renderer.n_frames),
-                    desc=f"video {out.name}",
-                    unit="frame",
-                    disable=not progress,
-                    leave=False,
-                )
-                for k in frames:
-                    writer.add_image(renderer.render_frame(k))
+                bar = progress_bar(renderer.n_frames, f"video {out.name}", "frame", progress)
+                with bar:
+                    for k in range(renderer.n_frames):
+                        writer.add_image(renderer.render_frame(k))
+                        bar.update()
             publish_new(tmp, out)
         finally:
             with contextlib.suppress(FileNotFoundError):
