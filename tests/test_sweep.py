@@ -324,3 +324,26 @@ def _state(pid: int) -> str:
         return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
     except OSError:
         return "Z"
+
+
+def test_summaries_are_grouped_by_the_categorical_options_that_vary(tmp_path):
+    # ISMC-STA and PID pooled give a median between their two clusters; grouped, each keeps its
+    # own (the summary's groups, the CSV's group column).
+    spec = sweep.parse_spec(
+        ["controller=ismc_sta,pid", "plant=reduced", "duration=3", "noise_snr_db=20,30"],
+        None,
+        0,
+        2,
+        None,
+    )
+    result = sweep.run_sweep(spec, tmp_path / "g", workers=1, figures=True)
+    groups = result.summary["groups"]
+    assert result.summary["group_by"] == ["controller"]
+    ismc = groups["controller=ismc_sta"]["metrics"]["rmse_v"]
+    pid = groups["controller=pid"]["metrics"]["rmse_v"]
+    assert ismc["n"] == pid["n"] == 4
+    assert ismc["max"] < pid["min"]  # two populations
+    pooled = result.summary["metrics"]["rmse_v"]["p50"]
+    assert ismc["max"] < pooled < pid["min"]  # the pooled median describes neither
+    text = (tmp_path / "g" / "summary.csv").read_text()
+    assert text.startswith("group,metric,") and "controller=pid,rmse_v," in text

@@ -20,6 +20,7 @@ from tt_mujoco.sweep.runs import expand, run_one
 from tt_mujoco.sweep.spec import SweepSpec
 from tt_mujoco.sweep.tables import (
     build_rows,
+    group_options,
     plot_summary,
     read_journal,
     summarize,
@@ -194,7 +195,7 @@ def run_sweep(
             _execute(todo, done, journal_path, workers, scheduler, quiet, len(runs), reused)
         header, rows = build_rows(runs, done)
         atomic_write(out / TABLE, table_csv(header, rows))
-        summary = summarize(header, rows)
+        summary = summarize(header, rows, group_options(spec, rows))
         atomic_write(out / "summary.csv", summary_csv(summary))
         wall = time.perf_counter() - t0
         doc = {**summary, "mode": spec.mode, "seed": spec.seed, "wall_s": wall, "reused": reused}

@@ -95,24 +95,20 @@ def _numeric(rows: Sequence[Mapping], name: str) -> np.ndarray:
     return np.array([float(v) if _is_number(v := r.get(name)) else math.nan for r in rows])
 
 
-def summarize(header: Sequence[str], rows: Sequence[Mapping]) -> dict:
-    """Counts by status and, per metric, statistics over the runs that finished ``ok``.
+def group_options(spec: SweepSpec, rows: Sequence[Mapping]) -> list[str]:
+    """The categorical options that vary (controller, target, plant, path, ...): their values
+    are text, and pooling their groups' metrics would put a median between populations."""
+    names = [a.name for a in spec.axes if a.varies and a.name != "seed"]
+    return [n for n in names if not _is_numeric(rows, n) and len({r.get(n) for r in rows}) > 1]
 
-    Metrics of stopped runs cover only the time before the stop, so they would mix two
-    populations; their number is in ``failed`` and ``by_status`` instead.
 
-    Returns
-    -------
-    dict
-        ``runs``, ``ok``, ``failed``, ``by_status`` (status -> count), ``errors`` (the first 5
-        distinct error texts), ``metrics`` (name -> ``n``, ``mean``, ``std``, ``min``,
-        ``p5``...``p95``, ``max``; NaN values skipped).
-    """
-    by_status: dict[str, int] = {}
-    for row in rows:
-        by_status[row["status"]] = by_status.get(row["status"], 0) + 1
+def group_of(row: Mapping, options: Sequence[str]) -> str:
+    """A row's group label, e.g. ``controller=pid, target=static``."""
+    return ", ".join(f"{name}={row.get(name)}" for name in options)
+
+
+def _statistics(header: Sequence[str], rows: Sequence[Mapping]) -> dict:
     ok_rows = [r for r in rows if r["status"] == "ok"]
-    errors = list(dict.fromkeys(r["error"] for r in rows if r.get("error")))[:5]
     start = header.index("error") + 1
     stats = {}
     for name in header[start:]:
@@ -127,7 +123,40 @@ def summarize(header: Sequence[str], rows: Sequence[Mapping]) -> dict:
                 entry[f"p{p}"] = float(v)
             entry["max"] = float(x.max())
         stats[name] = entry
+    return stats
+
+
+def summarize(header: Sequence[str], rows: Sequence[Mapping], group_by: Sequence[str] = ()) -> dict:
+    """Counts by status and, per metric, statistics over the runs that finished ``ok``.
+
+    Metrics of stopped runs cover only the time before the stop, so they would mix two
+    populations; their number is in ``failed`` and ``by_status`` instead.
+
+    Returns
+    -------
+    dict
+        ``runs``, ``ok``, ``failed``, ``by_status`` (status -> count), ``errors`` (the first 5
+        distinct error texts), ``metrics`` (name -> ``n``, ``mean``, ``std``, ``min``,
+        ``p5``...``p95``, ``max``; NaN values skipped); with ``group_by`` (categorical
+        options, :func:`group_options`) also ``groups``: label -> the same per group.
+    """
+    by_status: dict[str, int] = {}
+    for row in rows:
+        by_status[row["status"]] = by_status.get(row["status"], 0) + 1
+    ok_rows = [r for r in rows if r["status"] == "ok"]
+    errors = list(dict.fromkeys(r["error"] for r in rows if r.get("error")))[:5]
+    stats = _statistics(header, rows)
+    groups = {}
+    for label in dict.fromkeys(group_of(r, group_by) for r in rows) if group_by else ():
+        members = [r for r in rows if group_of(r, group_by) == label]
+        groups[label] = {
+            "runs": len(members),
+            "ok": sum(r["status"] == "ok" for r in members),
+            "metrics": _statistics(header, members),
+        }
     return {
+        "group_by": list(group_by),
+        "groups": groups,
         "runs": len(rows),
         "ok": len(ok_rows),
         "failed": len(rows) - len(ok_rows),
@@ -138,12 +167,16 @@ def summarize(header: Sequence[str], rows: Sequence[Mapping]) -> dict:
 
 
 def summary_csv(summary: Mapping) -> str:
+    """One row per metric over all runs (group ``all``), then per metric and group."""
     keys = ["n", "mean", "std", "min", *(f"p{p}" for p in PERCENTILES), "max"]
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
-    writer.writerow(["metric", *keys])
-    for name, entry in summary["metrics"].items():
-        writer.writerow([name, *(_cell(entry.get(k)) for k in keys)])
+    writer.writerow(["group", "metric", *keys])
+    parts = [("all", summary["metrics"])]
+    parts += [(label, g["metrics"]) for label, g in summary.get("groups", {}).items()]
+    for label, metrics in parts:
+        for name, entry in metrics.items():
+            writer.writerow([label, name, *(_cell(entry.get(k)) for k in keys)])
     return buf.getvalue()
 
 
@@ -166,6 +199,15 @@ def summary_text(summary: Mapping, metric_names: Sequence[str]) -> str:
             f"{name:<{width}}  {e['p5']:>10.4g} {e['p50']:>10.4g} {e['p95']:>10.4g} "
             f"{e['max']:>10.4g}"
         )
+    for label, group in summary.get("groups", {}).items():
+        lines.append(f"{label}: {group['ok']} of {group['runs']} ok")
+        for name in metric_names:
+            e = group["metrics"].get(name, {})
+            if e.get("n"):
+                lines.append(
+                    f"  {name:<{width}}  {e['p5']:>10.4g} {e['p50']:>10.4g} {e['p95']:>10.4g} "
+                    f"{e['max']:>10.4g}"
+                )
     for err in summary["errors"]:
         lines.append(f"error: {err}")
     return "\n".join(lines)
@@ -175,11 +217,16 @@ def plot_summary(
     rows: Sequence[Mapping], spec: SweepSpec, out: Path, metric: str = "rmse_lateral"
 ) -> list[Path]:
     """``histograms.png`` (key metrics over the ok runs) and ``scatter.png`` (``metric``
-    against each numeric option that varies; failed runs drawn as red crosses at the top)."""
+    against each numeric option that varies; failed runs drawn as red crosses at the top). Runs
+    are coloured by group when categorical options vary (:func:`group_options`): a pooled
+    histogram or median would fall between populations."""
     from matplotlib.figure import Figure  # matplotlib only for sweeps that draw figures
 
     ok = [r for r in rows if r["status"] == "ok"]
     failed = len(rows) - len(ok)
+    by = group_options(spec, rows)
+    labels = list(dict.fromkeys(group_of(r, by) for r in rows)) if by else [""]
+    colour = {label: f"C{i % 10}" for i, label in enumerate(labels)}
     names = [m for m in dict.fromkeys([*KEY_METRICS, metric]) if np.isfinite(_numeric(ok, m)).any()]
     names = names[:6]
     fig = Figure(figsize=(12, 6.5), layout="constrained")
@@ -187,9 +234,15 @@ def plot_summary(
     for ax, name in zip(axs, names, strict=False):
         x = _numeric(ok, name)
         x = x[np.isfinite(x)]
-        ax.hist(x, bins=min(40, max(5, int(math.sqrt(x.size)) + 1)), color="tab:blue", alpha=0.8)
-        med = float(np.median(x))
-        ax.axvline(med, color="k", lw=1, ls="--", label=f"median {med:.3g}")
+        bins = np.histogram_bin_edges(x, bins=min(40, max(5, int(math.sqrt(x.size)) + 1)))
+        for label in labels:
+            xg = _numeric([r for r in ok if not by or group_of(r, by) == label], name)
+            xg = xg[np.isfinite(xg)]
+            if xg.size:
+                med = float(np.median(xg))
+                tag = f"{label}: median {med:.3g}" if by else f"median {med:.3g}"
+                ax.hist(xg, bins=bins, color=colour[label], alpha=0.55 if by else 0.8, label=tag)
+                ax.axvline(med, color=colour[label] if by else "k", lw=1, ls="--")
         ax.set_xlabel(name)
         ax.set_ylabel("runs")
         ax.legend(fontsize=8)
@@ -222,13 +275,20 @@ def plot_summary(
                 half = 0.3 * float(np.diff(levels).min())
                 u_jit = u + 0.5 * half * jitter
                 xs = np.exp(u_jit) if log else u_jit
-                for level in levels:  # the median of the ok runs at each grid value
-                    y = y_all[(u == level) & ~bad & np.isfinite(y_all)]
-                    if y.size:
-                        ends = np.array([level - half, level + half])
-                        ends = np.exp(ends) if log else ends
-                        ax.plot(ends, [np.median(y)] * 2, color="k", lw=1.5)
-            ax.scatter(xs[~bad], y_all[~bad], s=12, alpha=0.6, color="tab:blue", label="ok")
+                for level in levels:  # the median of the ok runs at each value, per group
+                    ends = np.array([level - half, level + half])
+                    ends = np.exp(ends) if log else ends
+                    for label in labels:
+                        member = np.array([not by or group_of(r, by) == label for r in rows])
+                        y = y_all[(u == level) & member & ~bad & np.isfinite(y_all)]
+                        if y.size:
+                            line = colour[label] if by else "k"
+                            ax.plot(ends, [np.median(y)] * 2, color=line, lw=1.5)
+            for label in labels:
+                member = np.array([not by or group_of(r, by) == label for r in rows])
+                pick = member & ~bad
+                name = label if by else "ok"
+                ax.scatter(xs[pick], y_all[pick], s=12, alpha=0.6, color=colour[label], label=name)
             if bad.any():
                 top_row = np.full(bad.sum(), top)
                 ax.scatter(xs[bad], top_row, marker="x", color="tab:red", label="failed")
@@ -246,7 +306,8 @@ def plot_summary(
         ax.set_xlabel(other)
         ax.set_ylabel(metric)
     fig.suptitle(
-        f"{metric} per run ({failed} failed runs drawn at the top in red; black: median per value)"
+        f"{metric} per run ({failed} failed runs drawn at the top in red; lines: median per "
+        f"value{' and group' if by else ''})"
         if axes
         else f"{metric} per run ({failed} failed runs not drawn)"
     )
