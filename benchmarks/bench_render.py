@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from tt_mujoco.vehicle.params import Params
-from tt_mujoco.viz import render
+from tt_mujoco.viz import demo, render
 
 
 def time_frames(renderer: render.RunRenderer, frames: int, rounds: int) -> list[float]:
@@ -56,7 +56,7 @@ def main() -> None:
     )
     print(f"load average before: {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs")
 
-    ts, polyline = render.open_loop_timeseries(duration=10.0, dt=0.01)
+    ts, polyline = demo.open_loop_timeseries(duration=10.0, dt=0.01)
     size = f"{args.width}x{args.height}"
     kept = None
     for camera in render.CAMERAS:

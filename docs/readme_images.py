@@ -1,9 +1,11 @@
-"""Make the two small README images in ``renders/reference/``.
+"""Make the README's images in ``renders/reference/``.
 
 Run: ``python docs/readme_images.py``. It runs the main command
-(``python -m tt_mujoco.run --traj s_curve``) into a temporary folder, then saves frame 138 of its
-video and its ``path.png``, both reduced to 480 px wide. Existing images are replaced only
-because they are this script's own outputs.
+(``python -m tt_mujoco.run --traj s_curve``) and the paper's forward-jackknifing gain
+(``--eta paper``) into a temporary folder, then saves, reduced to 480 px wide: frame 5 of the
+main video (the start), frame 200 (in the second turn), the end card of the jackknife video,
+and the main run's ``path.png``. Existing images are replaced only because they are this
+script's own outputs.
 """
 
 import subprocess
@@ -16,7 +18,6 @@ import numpy as np
 from PIL import Image
 
 OUT = Path(__file__).resolve().parent.parent / "renders" / "reference"
-FRAME = 138
 WIDTH = 480
 
 
@@ -24,24 +25,42 @@ def small(img: Image.Image) -> Image.Image:
     return img.resize((WIDTH, round(img.height * WIDTH / img.width)), Image.LANCZOS)
 
 
+def frames(video: Path, wanted: set[int]) -> dict[int, np.ndarray]:
+    """Frames ``wanted`` of a video (-1: the last one)."""
+    reader = imageio_ffmpeg.read_frames(str(video))
+    w, h = next(reader)["size"]
+    out, last = {}, None
+    for i, raw in enumerate(reader):
+        last = np.frombuffer(raw, dtype=np.uint8).reshape(h, w, 3)
+        if i in wanted:
+            out[i] = last
+    if -1 in wanted:
+        out[-1] = last
+    return out
+
+
+def run(folder: Path, *options: str) -> None:
+    cmd = [sys.executable, "-m", "tt_mujoco.run", "--traj", "s_curve", "--quiet", *options]
+    subprocess.run([*cmd, "--out", str(folder)], check=False)  # the jackknife exits with 3
+
+
 def main() -> int:
     OUT.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
-        run_dir = Path(tmp) / "run"
-        cmd = [sys.executable, "-m", "tt_mujoco.run", "--traj", "s_curve", "--quiet"]
-        subprocess.run([*cmd, "--out", str(run_dir)], check=True)
-        reader = imageio_ffmpeg.read_frames(str(run_dir / "video.mp4"))
-        meta = next(reader)
-        w, h = meta["size"]
-        for i, raw in enumerate(reader):
-            if i == FRAME:
-                frame = np.frombuffer(raw, dtype=np.uint8).reshape(h, w, 3)
-                break
-        small(Image.fromarray(frame)).save(OUT / "s_curve_frame.png", optimize=True)
-        small(Image.open(run_dir / "path.png").convert("RGB")).save(
+        main_run, jackknife = Path(tmp) / "run", Path(tmp) / "jackknife"
+        run(main_run)
+        run(jackknife, "--eta", "paper", "--no-plots")
+        got = frames(main_run / "video.mp4", {5, 200})
+        small(Image.fromarray(got[5])).save(OUT / "s_curve_start.png", optimize=True)
+        small(Image.fromarray(got[200])).save(OUT / "s_curve_frame.png", optimize=True)
+        end = frames(jackknife / "video.mp4", {-1})[-1]
+        small(Image.fromarray(end)).save(OUT / "jackknife_end.png", optimize=True)
+        small(Image.open(main_run / "path.png").convert("RGB")).save(
             OUT / "s_curve_path.png", optimize=True
         )
-    print(f"wrote {OUT / 's_curve_frame.png'} and {OUT / 's_curve_path.png'}")
+    print(
+        f"wrote s_curve_start.png, s_curve_frame.png, jackknife_end.png, s_curve_path.png to {OUT}"
+    )
     return 0
 
 

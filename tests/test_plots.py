@@ -13,7 +13,7 @@ from PIL import Image
 from tt_mujoco.analysis import metrics
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.viz import plots
-from tt_mujoco.viz.render import open_loop_timeseries
+from tt_mujoco.viz.demo import open_loop_timeseries
 
 OFFSET = 0.02  # m: the test reference runs this far to the right of the tractor's path
 

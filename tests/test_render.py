@@ -18,7 +18,7 @@ import pytest
 from tt_mujoco import render as render_cli
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
-from tt_mujoco.viz import gl, render
+from tt_mujoco.viz import demo, gl, render
 
 WIDTH, HEIGHT, FPS, DURATION = 160, 120, 30, 2.0
 
@@ -33,7 +33,7 @@ def decode(path) -> tuple[dict, list[np.ndarray]]:
 
 @pytest.fixture(scope="module")
 def series():
-    return render.open_loop_timeseries(duration=DURATION, dt=0.01)
+    return demo.open_loop_timeseries(duration=DURATION, dt=0.01)
 
 
 @pytest.fixture(scope="module")
@@ -272,7 +272,7 @@ def test_unknown_gl_backend_is_reported(monkeypatch):
 def run_dir(tmp_path):
     """A finished run's folder: a 1 s series in timeseries.csv and its config."""
     p = Params()
-    ts, _ = render.open_loop_timeseries(p, duration=1.0, dt=0.02)
+    ts, _ = demo.open_loop_timeseries(p, duration=1.0, dt=0.02)
     names = list(ts)
     table = np.column_stack([ts[n] for n in names])
     np.savetxt(

@@ -16,6 +16,7 @@ from tt_mujoco.viz.render import (
     params_from_config,
     reference_polyline_for,
     render_video,
+    run_labels,
 )
 
 
@@ -86,6 +87,9 @@ def main(argv: list[str] | None = None) -> int:
             return fail(f"{ts_path}: {problem}")
         polyline, source = reference_polyline_for(config, ts)
         print(f"reference path: {source}", file=sys.stderr)
+        info, outcome = run_labels(
+            config.get("scenario", {}), doc.get("status"), str(doc.get("message", ""))
+        )
         render_video(
             ts,
             params,
@@ -96,6 +100,8 @@ def main(argv: list[str] | None = None) -> int:
             fps=args.fps,
             camera=args.camera,
             progress=not args.no_progress,
+            info=info,
+            outcome=outcome,
         )
     except (ValueError, FileExistsError, json.JSONDecodeError) as exc:
         return fail(str(exc))

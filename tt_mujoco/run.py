@@ -471,6 +471,9 @@ def write_outputs(
             written += [publish_new(Path(f), out / Path(f).name) for f in made]
         if video:
             try:
+                info, outcome = render.run_labels(
+                    result.config["scenario"], result.status, result.message
+                )
                 path = render.render_video(
                     result.timeseries,
                     result.scenario.plant_params(),
@@ -479,6 +482,8 @@ def write_outputs(
                     camera=camera,
                     fps=fps,
                     progress=not quiet,
+                    info=info,
+                    outcome=outcome,
                 )
                 written.append(publish_new(Path(path), out / "video.mp4"))
             except render.RenderUnavailable as err:  # no GL must not lose the results

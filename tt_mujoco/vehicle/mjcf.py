@@ -65,7 +65,8 @@ def vehicle_xml(p: Params | None = None) -> str:
             f'  <inertial pos="0 0 0" mass="{_g(mass)}" '
             f'diaginertia="{_g(p.Iwd)} {_g(p.Iw)} {_g(p.Iwd)}"/>\n'
             f'  <geom name="{name}" class="wheel"/>\n'
-            f'  <geom class="hub" fromto="0 {_g(-0.3 * r)} 0 0 {_g(0.3 * r)} 0"/>\n'
+            f'  <geom class="tyre" fromto="0 {_g(-0.35 * r)} 0 0 {_g(0.35 * r)} 0"/>\n'
+            f'  <geom class="hub" fromto="0 {_g(-0.4 * r)} 0 0 {_g(0.4 * r)} 0"/>\n'
             "</body>"
         )
 
@@ -97,6 +98,13 @@ impratio="{_g(p.impratio)}"/>
         <geom type="sphere" size="{_g(r)}" contype="1" conaffinity="1" condim="3" priority="1"
               friction="{_g(p.friction)} 0 0" solref="{_g(tc)} 1" group="3" material="tire"/>
       </default>
+      <!-- What the eye sees of a wheel (the sphere above is what touches the floor). -->
+      <default class="tyre">
+        <geom type="cylinder" size="{_g(r)}" material="tire"/>
+      </default>
+      <default class="hinge_marker">
+        <geom type="sphere" size="{_g(0.8 * r)}" material="hinge"/>
+      </default>
       <default class="hub">
         <geom type="cylinder" size="{_g(0.6 * r)}" material="hub"/>
       </default>
@@ -107,7 +115,7 @@ impratio="{_g(p.impratio)}"/>
         <geom type="box" material="chassis"/>
       </default>
       <default class="rod">
-        <geom type="capsule" size="{_g(0.15 * r)}" material="rod"/>
+        <geom type="capsule" size="{_g(0.4 * r)}" material="rod"/>
       </default>
     </default>
   </default>
@@ -115,7 +123,8 @@ impratio="{_g(p.impratio)}"/>
   <asset>
     <material name="chassis" rgba="0.85 0.45 0.1 1"/>
     <material name="trailer" rgba="0.2 0.45 0.8 1"/>
-    <material name="rod" rgba="0.3 0.3 0.3 1"/>
+    <material name="rod" rgba="0.95 0.8 0.15 1"/>
+    <material name="hinge" rgba="0.9 0.15 0.15 1"/>
     <material name="tire" rgba="0.1 0.1 0.1 1"/>
     <material name="hub" rgba="0.7 0.7 0.7 1"/>
   </asset>
@@ -142,6 +151,7 @@ diaginertia="{_g(tilt * p.Ifd)} {_g(tilt * p.Ifd)} {_g(p.Ifd)}"/>
         <inertial pos="{_g(-L0 / 2)} 0 0" mass="{_g(p.Mc2)}" diaginertia="{rod2}"/>
         <geom name="trailer_rod" class="rod" fromto="0 0 0 {_g(-L0)} 0 0"/>
         <site name="O" pos="0 0 0" size="{_g(r / 2)}" rgba="0 1 0 1" group="4"/>
+        <geom name="hitch_marker" class="hinge_marker"/>
         <body name="trailer_body" pos="{_g(-L0)} 0 0">
           <inertial pos="0 0 0" mass="{_g(p.Mr)}" \
 diaginertia="{_g(tilt * p.Ird)} {_g(tilt * p.Ird)} {_g(p.Ird)}"/>
@@ -156,6 +166,7 @@ pos="{_g(0.1 * L0)} 0 {_g(r + 3 * chassis_h)}"
 diaginertia="{_g(axle_yaw)} {_g(axle_yaw)} {_g(axle_yaw)}"/>
           <geom name="trailer_axle" class="rod" fromto="0 {_g(-d / 2)} 0 0 {_g(d / 2)} 0"/>
           <site name="P0" pos="0 0 0" size="{_g(r / 2)}" rgba="0 0 1 1" group="4"/>
+          <geom name="steer_marker" class="hinge_marker"/>
 {tl}
 {tr}
         </body>

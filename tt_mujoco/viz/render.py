@@ -19,18 +19,20 @@ import dataclasses
 import math
 import os
 import tempfile
+import textwrap
 from collections.abc import Mapping
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
+from tt_mujoco.analysis.geometry import Polyline
 from tt_mujoco.outputs import publish_new
 from tt_mujoco.progress import progress_bar
 from tt_mujoco.reference import paths
 from tt_mujoco.sim.physics import Vehicle
-from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
+from tt_mujoco.viz.annotate import END_CARD_S, Legend, end_card
 from tt_mujoco.viz.gl import GL_BACKENDS, RenderUnavailable, gl_context, select_gl_backend
 from tt_mujoco.viz.scene import (
     CAMERAS,
@@ -40,7 +42,6 @@ from tt_mujoco.viz.scene import (
     MUJOCO_OVERLAY_MIN_HEIGHT,
     VIDEO_COLUMNS,
     CompactOverlay,
-    cumulative_trapezoid,
     decimate,
     font_scale,
     frame_schedule,
@@ -56,20 +57,19 @@ __all__ = [
     "GL_BACKENDS",
     "MAX_TRACE_POINTS",
     "PATH_RGBA",
-    "TIMESERIES_COLUMNS",
     "TRACTOR_TRACE_RGBA",
     "TRAILER_TRACE_RGBA",
     "VIDEO_COLUMNS",
     "RenderUnavailable",
     "RunRenderer",
     "frame_schedule",
-    "open_loop_timeseries",
     "overview_camera",
     "params_from_config",
     "pose_vehicle",
     "project_to_pixel",
     "reference_polyline_for",
     "render_video",
+    "run_labels",
     "select_gl_backend",
     "trailer_wheel_angles",
 ]
@@ -148,11 +148,20 @@ class Offscreen:
         self.rect = mujoco.MjrRect(0, 0, width, height)
         self._pixels = np.empty((height, width, 3), dtype=np.uint8)
 
-    def render(self, labels: str = "", values: str = "") -> np.ndarray:
-        """Render the scene, with MuJoCo's top-left text overlay if ``labels`` is not empty;
-        a new (H, W, 3) uint8 image."""
+    def render(self, labels: str = "", values: str = "", info: str = "") -> np.ndarray:
+        """Render the scene, with MuJoCo's top-left text overlay if ``labels`` is not empty
+        and ``info`` in the top-right corner; a new (H, W, 3) uint8 image."""
         self._gl.make_current()
         mujoco.mjr_render(self.rect, self.scene, self.context)
+        if info:
+            mujoco.mjr_overlay(
+                mujoco.mjtFont.mjFONT_NORMAL,
+                mujoco.mjtGridPos.mjGRID_TOPRIGHT,
+                self.rect,
+                info,
+                "",
+                self.context,
+            )
         if labels:
             mujoco.mjr_overlay(
                 mujoco.mjtFont.mjFONT_NORMAL,
@@ -195,6 +204,8 @@ class RunRenderer:
     fps : float
         Frames per second of the video the frames are for (see :func:`frame_schedule`).
     camera : {"follow", "overview"}
+    info : str
+        Shown in the top-right corner (e.g. "ismc_sta | mujoco plant | dynamic target").
     """
 
     def __init__(
@@ -206,9 +217,10 @@ class RunRenderer:
         height: int = 480,
         fps: float = 30.0,
         camera: str = "follow",
+        info: str = "",
     ):
-
         _check_video_args(width, height, fps, camera)
+        self.info = info
         self.has_reference_point = "x_ref" in ts and "y_ref" in ts
         extra = ("x_ref", "y_ref") if self.has_reference_point else ()
         self.cols = validated_columns(ts, VIDEO_COLUMNS + extra)
@@ -229,6 +241,12 @@ class RunRenderer:
         # Traces: one point a frame, every stride-th point kept, plus a live segment to "now".
         self.trace_stride = max(1, math.ceil(self.n_frames / MAX_TRACE_POINTS))
         self._tractor_xy = np.column_stack([self.cols["x"], self.cols["y"]])[self.index]
+        # P's cross-track error at each frame, against the full path (docs/metrics.md).
+        self._cross = (
+            Polyline(polyline).project(self._tractor_xy, extend_ends=True).signed_distance
+            if len(polyline) > 1
+            else np.full(self.n_frames, np.nan)
+        )
         self._trailer_xy = np.column_stack([self.cols["x0"], self.cols["y0"]])[self.index]
         max_committed = (self.n_frames - 1) // self.trace_stride + 1
         self._n_fixed = max(len(self.path) - 1, 0)
@@ -260,11 +278,21 @@ class RunRenderer:
         self._mjv_camera.azimuth = self.camera["azimuth"]
         self._mjv_camera.elevation = self.camera["elevation"]
         self._option = mujoco.MjvOption()
-        self._option.geomgroup[3] = 1  # the wheels' spheres (collision geoms, group 3)
+        # The wheels' collision spheres (group 3) stay hidden: their visual tyres are drawn.
+        self._option.geomgroup[3] = 0
         self._perturb = mujoco.MjvPerturb()
         self._line_px = max(1.0, round(height / 200))
 
         self._compact = CompactOverlay(height) if height < MUJOCO_OVERLAY_MIN_HEIGHT else None
+        entries = [
+            ("tractor trace (axle P)", TRACTOR_TRACE_RGBA),
+            ("trailer trace (axle P0)", TRAILER_TRACE_RGBA),
+            ("reference path", PATH_RGBA),
+        ]
+        if self.has_reference_point:
+            entries.append(("reference point", REFERENCE_POINT_RGBA))
+        entries.append(("hitch rods, hinges O and P0", np.array([0.95, 0.8, 0.15, 1.0])))
+        self._legend = Legend(entries, height) if self._compact is None else None
         self._off = Offscreen(self.model, width, height, maxgeom)
         self._geoms = self._off.scene.geoms  # the tuple is rebuilt on each attribute access
         self._base = -1  # geoms mjv_updateScene wrote in the previous frame
@@ -346,10 +374,11 @@ class RunRenderer:
         """Labels and values of the text overlay for ``frame``."""
         i = self.index[frame]
         c = self.cols
-        labels = "t\nv\nomega\nphi"
+        labels = "t\nv\nomega\nphi\nbeta\neta\ncross-track"
         values = (
             f"{self.times[frame]:6.2f} s\n{c['v'][i]:+.3f} m/s\n{c['omega'][i]:+.3f} rad/s\n"
-            f"{math.degrees(c['phi'][i]):+.2f} deg"
+            f"{math.degrees(c['phi'][i]):+.2f} deg\n{math.degrees(c['beta'][i]):+.2f} deg\n"
+            f"{self.params.eta:+.4g}\n{1000.0 * self._cross[frame]:+.1f} mm"
         )
         return labels, values
 
@@ -401,7 +430,8 @@ class RunRenderer:
         )
         self._user_geoms(frame, rewrite)
         if self._compact is None:
-            return self._off.render(*self.overlay_text(frame))
+            image = self._off.render(*self.overlay_text(frame), info=self.info)
+            return self._legend.apply(image)
         return self._compact.draw(self._off.render(), self.compact_text(frame))
 
     def camera_at(self, frame: int) -> dict:
@@ -430,6 +460,20 @@ def _check_video_args(width, height, fps, camera) -> None:
         raise ValueError(f"camera={camera!r} is not allowed: use one of {', '.join(CAMERAS)}")
 
 
+_TITLES = {"ok": "COMPLETED", "jackknife": "JACKKNIFE", "diverged": "DIVERGED"}
+
+
+def run_labels(scenario: Mapping, status: str | None, message: str) -> tuple[str, tuple | None]:
+    """The top-right line and the end card of a run's video, from its scenario and outcome."""
+    info = " | ".join(
+        f"{scenario.get(k, '?')}{suffix}"
+        for k, suffix in (("controller", ""), ("plant", " plant"), ("target", " target"))
+    )
+    if status is None:
+        return info, None
+    return info, (_TITLES.get(status, status.upper()), textwrap.wrap(message, 58))
+
+
 def render_video(
     ts: Mapping,
     params: Params,
@@ -440,6 +484,8 @@ def render_video(
     fps: float = 30,
     camera: str = "follow",
     progress: bool = True,
+    info: str = "",
+    outcome: tuple[str, list[str]] | None = None,
 ) -> Path:
     """Render a run to an H.264 MP4 (see :class:`RunRenderer` for what is drawn).
 
@@ -455,6 +501,11 @@ def render_video(
         The ``.mp4`` to write, in an existing folder; never overwritten.
     progress : bool
         Show a tqdm progress bar (on stderr).
+    info : str
+        Shown in the frames' top-right corner (see :class:`RunRenderer`).
+    outcome : (title, lines), optional
+        How the run ended ("COMPLETED", "JACKKNIFE", ...): an end card over the last frame,
+        held for :data:`~tt_mujoco.viz.annotate.END_CARD_S` after the run's frames.
 
     Returns
     -------
@@ -486,7 +537,7 @@ def render_video(
     _check_video_args(width, height, fps, camera)
     mediapy.set_ffmpeg(imageio_ffmpeg.get_ffmpeg_exe())
 
-    with RunRenderer(ts, params, reference_polyline, width, height, fps, camera) as renderer:
+    with RunRenderer(ts, params, reference_polyline, width, height, fps, camera, info) as renderer:
         fd, tmp_name = tempfile.mkstemp(dir=out.parent, prefix=f".{out.stem}.", suffix=".tmp.mp4")
         os.close(fd)
         tmp = Path(tmp_name)
@@ -495,63 +546,18 @@ def render_video(
                 bar = progress_bar(renderer.n_frames, f"video {out.name}", "frame", progress)
                 with bar:
                     for k in range(renderer.n_frames):
-                        writer.add_image(renderer.render_frame(k))
+                        image = renderer.render_frame(k)
+                        writer.add_image(image)
                         bar.update()
+                if outcome is not None:
+                    card = end_card(image, *outcome)
+                    for _ in range(round(END_CARD_S * fps)):
+                        writer.add_image(card)
             publish_new(tmp, out)
         finally:
             with contextlib.suppress(FileNotFoundError):
                 tmp.unlink()
     return out
-
-
-# --- demo data ------------------------------------------------------------------------------------
-#: Every column of a run's ``timeseries.csv`` (the simulation loop's contract).
-TIMESERIES_COLUMNS = (
-    "t x y theta phi beta v omega x0 y0 theta0 v0 theta_l theta_r s x_ref y_ref v_d omega_d "
-    "v_d_dot omega_d_dot v_meas omega_meas T_r T_l T_r_cmd T_l_cmd slip_lateral "
-    "slip_lateral_trailer slip_left slip_right eq_violation kappa_d"
-).split()
-
-
-def open_loop_timeseries(
-    params: Params | None = None,
-    torques=(0.6, 0.4),
-    duration: float = 3.0,
-    dt: float = 0.01,
-) -> tuple[dict[str, np.ndarray], np.ndarray]:
-    """A run-shaped time series of the reduced model under constant wheel torques.
-
-    For tests and benchmarks until (and besides) the simulation loop: the reduced plant
-    (:class:`~tt_mujoco.vehicle.reduced.ReducedPlant`) from rest, ``beta = eta phi``, the reference
-    point and targets equal to the motion itself, columns without a model value zero.
-
-    Returns
-    -------
-    ts : dict of str to ndarray
-        All :data:`TIMESERIES_COLUMNS`.
-    reference_polyline : ndarray, shape (n, 2)
-        The path P drove.
-    """
-    p = Params() if params is None else params
-    n = round(duration / dt) + 1
-    plant = reduced.ReducedPlant(p)
-    states = np.empty((n, 8))
-    states[0] = plant.state
-    for k in range(1, n):
-        states[k] = plant.step(torques, dt)
-    x, y, theta, phi, theta_l, theta_r, v, omega = states.T
-    ts = {name: np.zeros(n) for name in TIMESERIES_COLUMNS}
-    ts.update(t=np.arange(n) * dt, x=x, y=y, theta=theta, phi=phi, beta=p.eta * phi, v=v)
-    ts.update(omega=omega, theta_l=theta_l, theta_r=theta_r, x_ref=x, y_ref=y, v_d=v)
-    ts.update(omega_d=omega, v_meas=v, omega_meas=omega)
-    ts["T_r"][:], ts["T_l"][:] = torques
-    ts["T_r_cmd"][:], ts["T_l_cmd"][:] = torques
-    for k in range(n):
-        _, P0, theta0 = reduced.trailer_pose(x[k], y[k], theta[k], phi[k], p)
-        ts["x0"][k], ts["y0"][k], ts["theta0"][k] = P0[0], P0[1], theta0
-        ts["v0"][k] = reduced.trailer_velocity(phi[k], (v[k], omega[k]), p)[0]
-    ts["s"] = cumulative_trapezoid(v, ts["t"])
-    return ts, np.column_stack([x, y])
 
 
 # --- re-rendering a finished run --------------------------------------------------------------
