@@ -351,3 +351,32 @@ def test_cli_out_the_file_system_refuses_is_exit_2(run_dir, capsys):
     if code == 1:
         pytest.skip("no OpenGL backend here")
     assert code == 2 and "/proc/x.mp4" in capsys.readouterr().err
+
+
+def test_osmesa_fallback_renders_when_egl_fails():
+    # The real fallback, not its message: EGL's probe fails (as on a machine without EGL), so
+    # the selection goes on to OSMesa, which must then render a frame. Needs libosmesa6 (CI
+    # installs it where it can); skipped with the reason otherwise.
+    import ctypes.util
+    import os
+    import subprocess
+    import sys
+
+    if ctypes.util.find_library("OSMesa") is None:
+        pytest.skip("libOSMesa is not installed (Debian package libosmesa6)")
+    code = (
+        "from tt_mujoco.viz import gl\n"
+        "gl._probe = lambda backend: 'EGL made to fail by the test' if backend == 'egl' else None\n"
+        "print(gl.select_gl_backend())\n"
+        "from tt_mujoco.viz.demo import open_loop_timeseries\n"
+        "from tt_mujoco.viz.render import RunRenderer\n"
+        "from tt_mujoco.vehicle.params import Params\n"
+        "ts, poly = open_loop_timeseries(duration=0.5, dt=0.01)\n"
+        "with RunRenderer(ts, Params(), poly, 320, 240) as r:\n"
+        "    img = r.render_frame(10)\n"
+        "print(img.shape, int(img.std() > 5))\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM")}
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert proc.returncode == 0, proc.stderr[-1500:]
+    assert proc.stdout.split() == ["osmesa", "(240,", "320,", "3)", "1"]
