@@ -35,7 +35,7 @@ from pathlib import Path
 
 import tomli_w
 
-from tt_mujoco.registry import closest, normalise_hook, shown
+from tt_mujoco.registry import closest, existing_file, normalise_hook, shown
 from tt_mujoco.sim.faults import parse_fault
 from tt_mujoco.vehicle.params import Params
 
@@ -75,13 +75,7 @@ def load_config(path) -> dict:
     ValueError
         The file is missing, unreadable or not valid TOML (the message has the line).
     """
-    file = Path(path)
-    try:
-        is_file = file.is_file()
-    except OSError as err:  # e.g. a name too long for the file system
-        raise ValueError(f"config file {str(path)[:80]!r}...: {err.strerror}") from None
-    if not is_file:
-        raise ValueError(f"config file {str(path)!r} does not exist (or is not a file)")
+    file = existing_file(path, "config file")
     try:
         with file.open("rb") as handle:
             return tomllib.load(handle)

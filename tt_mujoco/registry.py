@@ -29,11 +29,25 @@ __all__ = [
     "HookError",
     "Registry",
     "closest",
+    "existing_file",
     "is_hook",
     "load_hook",
     "normalise_hook",
     "shown",
 ]
+
+
+def existing_file(path, what: str) -> Path:
+    """``path`` as a Path if it is an existing file; else ValueError naming it and ``what`` it is
+    for ("path file", "config file"), also for a name the file system refuses (too long)."""
+    file = Path(path)
+    try:
+        is_file = file.is_file()
+    except OSError as err:
+        raise ValueError(f"{what} {shown(str(path))}: {err.strerror}") from None
+    if not is_file:
+        raise ValueError(f"{what} {str(path)!r} does not exist (or is not a file)")
+    return file
 
 
 def shown(value, limit: int = 80) -> str:

@@ -7,7 +7,6 @@ from __future__ import annotations
 import bisect
 import csv
 import math
-from pathlib import Path
 
 import numpy as np
 from scipy.integrate import cumulative_simpson
@@ -15,6 +14,7 @@ from scipy.interpolate import CubicHermiteSpline, CubicSpline, make_smoothing_sp
 
 from tt_mujoco.defaults import MAX_CSV_ROWS, MAX_SPEED
 from tt_mujoco.reference.path_base import DEFAULT_MAX_CURVATURE, ReferencePath, positive_number
+from tt_mujoco.registry import existing_file
 
 __all__ = [
     "SplinePath",
@@ -309,13 +309,7 @@ def from_csv(
         infinite values, repeated consecutive points, bad speeds, or curvature beyond
         ``max_curvature``. The message names the bad value and its line.
     """
-    file = Path(path)
-    try:
-        is_file = file.is_file()
-    except OSError as err:  # e.g. a name too long for the file system
-        raise ValueError(f"path file {str(path)[:80]!r}...: {err.strerror}") from None
-    if not is_file:
-        raise ValueError(f"path file {str(path)!r} does not exist (or is not a file)")
+    file = existing_file(path, "path file")
     rows = []
     try:
         with file.open(newline="", encoding="utf-8-sig") as handle:
