@@ -1,0 +1,139 @@
+"""The physics floor itself: MuJoCo solver settings, their cost and their accuracy (no assertions).
+
+    python benchmarks/bench_physics_settings.py
+
+For each setting it reports, on the closed-loop inputs of the main run with 20 dB noise (the
+sweep's episode, where the contact solver works hardest) replayed open-loop:
+
+- the cost of a physics step (us) and its ratio to the project's settings, in this process;
+- the mean constraint-solver and line-search iterations per step;
+
+and the accuracy figures the model is validated on (``python -m tt_mujoco.validate``):
+
+- the final P error of the analytic kinematics after a weaving drive (bound 2 mm),
+- the largest |beta - eta phi| there (bound 1e-4 rad),
+- the largest |dv| and |d omega| of open-loop torques against the reduced ODE (bounds 5e-4 m/s,
+  5e-3 rad/s).
+
+A setting is applied to every model compiled while it is measured (the mass matrix does not
+depend on the solver, so the inertia check is not repeated).
+"""
+
+import copy
+import statistics
+import time
+from contextlib import contextmanager
+
+import mujoco
+import numpy as np
+
+from tt_mujoco import validate
+from tt_mujoco.sim import Scenario, Stepper, build, physics
+from tt_mujoco.sim.simulate import run_episode
+from tt_mujoco.vehicle.params import Params
+
+SETTINGS = {
+    "project (Newton, elliptic, tol 1e-8)": {},
+    "tolerance 1e-6": {"tolerance": 1e-6},
+    "iterations 4": {"iterations": 4},
+    "line-search iterations 10": {"ls_iterations": 10},
+    "CG solver": {"solver": mujoco.mjtSolver.mjSOL_CG},
+    "PGS solver": {"solver": mujoco.mjtSolver.mjSOL_PGS},
+    "pyramidal cones": {"cone": mujoco.mjtCone.mjCONE_PYRAMIDAL},
+    "no warm start": {"disableflags": mujoco.mjtDisableBit.mjDSBL_WARMSTART},
+}
+
+
+def _apply(model, options: dict) -> None:
+    for name, value in options.items():
+        if name == "disableflags":
+            value = model.opt.disableflags | value
+        setattr(model.opt, name, value)
+
+
+@contextmanager
+def model_options(options: dict):
+    """Every model compiled inside gets ``options`` (fields of ``MjModel.opt``)."""
+    original = physics.compile_model
+
+    def compile_with(p):
+        model = original(p)
+        _apply(model, options)
+        return model
+
+    physics.compile_model = compile_with
+    try:
+        yield
+    finally:
+        physics.compile_model = original
+
+
+def recorded_inputs():
+    """The noisy main run's mj_step inputs and initial state (its own settings)."""
+    scenario = Scenario(traj="s_curve", duration=10.0, noise_snr_db=20.0)
+    built = build(scenario)
+    stepper = Stepper(built)
+    stepper.reset(np.random.default_rng(0))
+    plant, d = stepper.plant, stepper.plant.data
+    initial = (d.qpos.copy(), d.qvel.copy())
+    inputs = []
+    advance = plant.advance
+
+    def recording(substeps):
+        inputs.append((d.ctrl.copy(), d.qfrc_applied.copy()))
+        advance(substeps)
+
+    plant.advance = recording
+    ctrl = built.new_controller()
+    ctrl.reset()
+    run_episode(stepper, ctrl)
+    return plant.model, initial, inputs
+
+
+def replay_cost(model, initial, inputs, options: dict) -> tuple[float, float, float]:
+    """(us a step, mean solver iterations, mean line-search iterations) of the replay."""
+    m = copy.copy(model)
+    _apply(m, options)
+    times, niter, nls = [], [], []
+    for _ in range(3):
+        d = mujoco.MjData(m)
+        d.qpos[:], d.qvel[:] = initial
+        mujoco.mj_forward(m, d)
+        iters = lsiters = 0
+        start = time.perf_counter()
+        for u, q in inputs:
+            d.ctrl[:] = u
+            d.qfrc_applied[:] = q
+            mujoco.mj_step(m, d)
+            iters += int(d.solver_niter[0])
+            lsiters += int(d.solver[0].neval)
+        times.append(time.perf_counter() - start)
+        niter.append(iters / len(inputs))
+        nls.append(lsiters / len(inputs))
+    return 1e6 * min(times) / len(inputs), statistics.mean(niter), statistics.mean(nls)
+
+
+def main() -> None:
+    model, initial, inputs = recorded_inputs()
+    base_us = None
+    header = (
+        f"{'setting':38s} {'us/step':>8s} {'ratio':>6s} {'iter':>5s} {'ls':>5s} "
+        f"{'P err mm':>9s} {'|b-ep|':>8s} {'|dv|':>8s} {'|dw|':>8s}"
+    )
+    print(f"{len(inputs)} steps of the 20 dB noise episode replayed per setting")
+    print(header)
+    for name, options in SETTINGS.items():
+        us, iters, ls = replay_cost(model, initial, inputs, options)
+        base_us = base_us or us
+        with model_options(options):
+            kin = validate.check_kinematics(Params(), +1)
+            dyn = validate.check_dynamics(Params())
+        print(
+            f"{name:38s} {us:8.2f} {us / base_us:6.3f} {iters:5.2f} {ls:5.2f} "
+            f"{1e3 * kin['final_P_error_m']:9.3f} {kin['eq_violation_max_rad']:8.1e} "
+            f"{dyn['v_max_abs_diff']:8.1e} {dyn['omega_max_abs_diff']:8.1e}"
+        )
+
+
+if __name__ == "__main__":
+    main()
