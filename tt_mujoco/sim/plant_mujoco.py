@@ -7,6 +7,7 @@ import math
 import mujoco
 import numpy as np
 
+from tt_mujoco.sim.measure import measure
 from tt_mujoco.sim.physics import Vehicle
 from tt_mujoco.sim.plant import Plant, StopRun
 from tt_mujoco.vehicle.params import Params
@@ -51,9 +52,10 @@ class MujocoPlant(Plant):
         self._qfrc = self.data.qfrc_applied
         self._xfrc = self.data.xfrc_applied
         self._warnings = self.data.warning.number
+        self._qpos, self._qvel, self._layout = self.data.qpos, self.data.qvel, lay
 
     def measure(self):
-        return self.vehicle.measure()
+        return measure(self._qpos, self._qvel, self._layout)
 
     def scale_trailer_mass(self, factor: float) -> None:
         """MuJoCo builds the mass matrix from ``body_mass``/``body_inertia`` every step, so this
