@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 from tt_mujoco.reference.paths import Pose
+from tt_mujoco.reference.targets import Target
 
 __all__ = ["ReverseTarget"]
 
 
-class ReverseTarget:
+class ReverseTarget(Target):
     """Drive a target's path backwards: from where the forward run would end, back to its start.
 
     The tractor faces along the path and reverses (v < 0), so the trailer leads. The kinematics
@@ -26,13 +27,9 @@ class ReverseTarget:
     def __init__(self, target):
         self.forward = target
         self.kind = target.kind
-        self.path = target.path
-        self.profile = target.profile
-        self.duration = target.duration
-        self.s_end = min(self.path.length, self.profile.distance(self.duration))
-        self._profile_state = self.profile.state
-        self._curvature_and_rate = self.path.curvature_and_rate
-        self.reset()
+        # Set before Target.__init__, whose reset() starts the run at the path's far end.
+        self.s_end = min(target.path.length, target.profile.distance(target.duration))
+        super().__init__(target.path, target.profile, target.duration)
 
     @property
     def initial_pose(self):
@@ -43,15 +40,6 @@ class ReverseTarget:
         self._s = self.s_end
         self._kappa = self._curvature_and_rate(self.s_end)[0]
         self._v_prev: float | None = None
-
-    @property
-    def arc_length(self) -> float:
-        """The path arc length s_path (m) used at the last update."""
-        return self._s
-
-    @property
-    def curvature(self) -> float:
-        return self._kappa
 
     def update(self, t: float, dt: float, v_measured: float) -> tuple[float, float, float, float]:
         """``(v_d, omega_d, v_d_dot, omega_d_dot)``, all for reversing (v_d <= 0)."""
@@ -82,8 +70,3 @@ class ReverseTarget:
         if isinstance(t, float | int):
             return self.path.pose_at(self.s_end - self._profile_state(float(t))[0])
         return self.path.pose(self.s_end - self.profile.distance(t))
-
-    def reference_point(self, t):
-        """``(x, y)`` where P should be at time t (float or array t), reversing on schedule."""
-        x, y, _ = self.reference_pose(t)
-        return x, y

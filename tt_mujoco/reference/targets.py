@@ -425,7 +425,7 @@ class Target:
         return self.path.pose(self.profile.distance(t))
 
     def reference_point(self, t):
-        """``(x, y)`` where the tractor's P should be at time t: the path at s_ref(t).
+        """``(x, y)`` of :meth:`reference_pose`: where the tractor's P should be at time t.
 
         For either kind of target this is the speed profile's ``s_ref(t)``, not the dynamic
         target's integrated s: it is where a vehicle following the reference timing would be.
