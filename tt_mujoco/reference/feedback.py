@@ -80,7 +80,7 @@ class PathFeedback:
 
     Parameters
     ----------
-    target : tt_mujoco.reference.targets.Target or tt_mujoco.vehicle.steering.ReverseTarget
+    target : tt_mujoco.reference.targets.Target or tt_mujoco.reference.reverse.ReverseTarget
         The target to wrap (dynamic, eq. 34, or static, eq. 32); its v_d, v_d_dot and its
         omega_d are the feed-forward.
     k_y : float

@@ -72,11 +72,12 @@ class Scenario:
     #: dict
     #: of gains, ``{}`` for the defaults (k_y, k_psi, c_max).
     path_feedback: dict | None = None
-    #: Curvature-scheduled steering (:class:`tt_mujoco.vehicle.steering.EtaScheduler`): the plant's
-    #: eta
-    #: follows the exact same-path gain of the target's curvature; the controller keeps ``eta``.
+    #: Curvature-scheduled steering (:class:`tt_mujoco.sim.schedule.EtaScheduler`): the
+    #: plant's eta follows the exact same-path gain of the target's curvature; the controller
+    #: keeps ``eta``.
     eta_schedule: bool = False
-    #: Drive the path backwards, trailer first (:class:`tt_mujoco.vehicle.steering.ReverseTarget`).
+    #: Drive the path backwards, trailer first
+    #: (:class:`tt_mujoco.reference.reverse.ReverseTarget`).
     reverse: bool = False
     #: Shape options of the path (``R``, ``cruise``, ``ramp_time``, ... see
     #: :func:`tt_mujoco.reference.targets.make_target`; for a path hook, its keyword arguments).
