@@ -90,28 +90,31 @@ def steering_markdown(steering) -> list[str]:
     return out
 
 
-def feedback_markdown(feedback) -> list[str]:
+#: The path-feedback table's columns, metric -> header; each cell reads "off -> on".
+FEEDBACK_COLUMNS = {
+    "rmse_lateral": "lateral RMSE off -> on (m)",
+    "max_lateral": "max lateral off -> on (m)",
+    "cross_track_rms": "cross-track RMS off -> on (m)",
+    "cross_track_max": "cross-track max off -> on (m)",
+    "rmse_v": "e_v RMSE off -> on (m/s)",
+    "rmse_omega": "e_omega RMSE off -> on (rad/s)",
+    "rmse_position": "position RMSE off -> on (m)",
+}
+
+
+def feedback_markdown(feedback, metrics=tuple(FEEDBACK_COLUMNS)) -> list[str]:
+    """The path-feedback study, one row a case and plant with both runs done; ``metrics``
+    picks and orders the columns (keys of :data:`FEEDBACK_COLUMNS`)."""
     out = [
-        "| case | plant | lateral RMSE off -> on (m) | max lateral off -> on (m) "
-        "| cross-track RMS off -> on (m) | cross-track max off -> on (m) "
-        "| e_v RMSE off -> on | e_omega RMSE off -> on | position RMSE off -> on (m) |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| case | plant | " + " | ".join(FEEDBACK_COLUMNS[m] for m in metrics) + " |",
+        "|---|---|" + "---|" * len(metrics),
     ]
     for case in FEEDBACK_CASES:
         for plant in PLANTS:
             off, on = row_pair(feedback, case, plant)
-            if not (off and on):
-                continue
-
-            def both(m, off=off, on=on):
-                return f"{fmt(off[m])} -> {fmt(on[m])}"
-
-            out.append(
-                f"| {case} | {PLANT_LABEL[plant]} | {both('rmse_lateral')} | "
-                f"{both('max_lateral')} | {both('cross_track_rms')} | "
-                f"{both('cross_track_max')} | {both('rmse_v')} | "
-                f"{both('rmse_omega')} | {both('rmse_position')} |"
-            )
+            if off and on:
+                cells = " | ".join(f"{fmt(off[m])} -> {fmt(on[m])}" for m in metrics)
+                out.append(f"| {case} | {PLANT_LABEL[plant]} | {cells} |")
     return out
 
 

@@ -23,7 +23,6 @@ from tt_mujoco.paper.studies import (
     curvature_findings,
     curvature_rows,
     feedback_rows,
-    row_pair,
     steering_ratio,
     steering_row,
     steering_rows,
@@ -31,7 +30,6 @@ from tt_mujoco.paper.studies import (
 from tt_mujoco.paper.suite import (
     COMMAND,
     FACTOR,
-    FEEDBACK_CASES,
     PLANT_LABEL,
     PLANTS,
     SETTLE_DISTANCE,
@@ -324,21 +322,7 @@ def _summary_markdown(rows, steering, feedback, checks, info) -> str:
                     )
             md.append(f"| {path} | {PLANT_LABEL[plant]} | " + " | ".join(cells) + " |")
     md += ["", "### Path feedback (paper disturbances, 20 dB noise unless stated)", ""]
-    md += [
-        "| case | plant | lateral RMSE off -> on (m) | cross-track RMS off -> on (m) "
-        "| e_v RMSE off -> on (m/s) |",
-        "|---|---|---|---|---|",
-    ]
-    for case in FEEDBACK_CASES:
-        for plant in PLANTS:
-            off, on = row_pair(feedback, case, plant)
-            if off and on:
-                md.append(
-                    f"| {case} | {PLANT_LABEL[plant]} | {fmt(off['rmse_lateral'])} -> "
-                    f"{fmt(on['rmse_lateral'])} | {fmt(off['cross_track_rms'])} -> "
-                    f"{fmt(on['cross_track_rms'])} | {fmt(off['rmse_v'])} -> "
-                    f"{fmt(on['rmse_v'])} |"
-                )
+    md += feedback_markdown(feedback, ("rmse_lateral", "cross_track_rms", "rmse_v"))
     md += ["", "Checks:", ""]
     md += [f"- [{'x' if c['passed'] else ' '}] {c['check']}: {c['detail']}" for c in checks]
     return "\n".join(md) + "\n"
