@@ -31,6 +31,7 @@ from tt_mujoco.outputs import (
     claim_folder,
     read_timeseries,
     release_folder,
+    run_timeseries_file,
     save_figure,
     write_json,
 )
@@ -59,9 +60,7 @@ class Run:
 def load_run(folder: Path) -> Run:
     """Read a run folder; BadInputError naming what is missing or broken."""
     metrics_file = folder / "metrics.json"
-    ts_file = folder / "timeseries.parquet"
-    if not ts_file.is_file():
-        ts_file = folder / "timeseries.csv"
+    ts_file = run_timeseries_file(folder)
     if not (metrics_file.is_file() and ts_file.is_file()):
         raise BadInputError(
             f"{str(folder)!r} is not a finished run: it needs metrics.json and a time series"

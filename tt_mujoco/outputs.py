@@ -31,7 +31,9 @@ __all__ = [
     "read_timeseries",
     "release_folder",
     "remove_if_empty",
+    "run_timeseries_file",
     "save_figure",
+    "temporary_beside",
     "timeseries_csv",
     "write_json",
     "write_timeseries",
@@ -49,7 +51,7 @@ def _umask() -> int:
 
 
 @contextlib.contextmanager
-def _temporary_beside(path: Path, suffix: str = ".tmp"):
+def temporary_beside(path: Path, suffix: str = ".tmp"):
     """A fresh, uniquely named temporary file in ``path``'s folder, removed unless renamed."""
     fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
     tmp = Path(name)
@@ -66,7 +68,7 @@ def atomic_write(path: Path, data: str | bytes) -> None:
     """Write ``data`` to ``path`` through a temporary file in the same folder, flushed to disk,
     then renamed over ``path``: a reader (or a crash) sees no file or the complete one."""
     path = Path(path)
-    with _temporary_beside(path) as tmp:
+    with temporary_beside(path) as tmp:
         with open(tmp, "wb") as handle:
             handle.write(data.encode() if isinstance(data, str) else data)
             handle.flush()
@@ -95,7 +97,7 @@ def publish_new(made: Path, out: Path) -> Path:
 def save_figure(fig, path: Path, dpi: float) -> Path:
     """Write a matplotlib figure as PNG to ``path`` atomically."""
     path = Path(path)
-    with _temporary_beside(path, suffix=".tmp.png") as tmp:
+    with temporary_beside(path, suffix=".tmp.png") as tmp:
         fig.savefig(tmp, format="png", dpi=dpi)
         os.replace(tmp, path)
     return path
@@ -254,9 +256,16 @@ def write_timeseries(path: Path, ts: Mapping[str, np.ndarray], columns, units=No
     ]
     table = pa.table([np.asarray(ts[c], dtype=float) for c in columns], schema=pa.schema(fields))
     table = table.replace_schema_metadata({"tt_mujoco": json.dumps({"units": units or {}})})
-    with _temporary_beside(path, suffix=".tmp.parquet") as tmp:
+    with temporary_beside(path, suffix=".tmp.parquet") as tmp:
         pq.write_table(table, tmp, compression="zstd")
         os.replace(tmp, path)
+
+
+def run_timeseries_file(run_dir: Path) -> Path:
+    """A run folder's time series: ``timeseries.parquet`` when it is there, else the path of
+    ``timeseries.csv`` (which the caller checks for)."""
+    parquet = Path(run_dir) / "timeseries.parquet"
+    return parquet if parquet.is_file() else parquet.with_suffix(".csv")
 
 
 def read_timeseries(path) -> dict[str, np.ndarray]:

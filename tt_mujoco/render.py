@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tt_mujoco.outputs import read_timeseries
+from tt_mujoco.outputs import read_timeseries, run_timeseries_file
 from tt_mujoco.viz.render import (
     CAMERAS,
     RenderUnavailable,
@@ -63,9 +63,7 @@ def main(argv: list[str] | None = None) -> int:
     if out.exists():
         hint = "" if args.out is not None else "; name a new file with --out FILE"
         return fail(f"{out} exists and is never overwritten{hint}")
-    ts_path = run_dir / "timeseries.parquet"
-    if not ts_path.is_file():
-        ts_path = run_dir / "timeseries.csv"
+    ts_path = run_timeseries_file(run_dir)
     metrics_path = run_dir / "metrics.json"
     for needed in (ts_path, metrics_path):
         if not needed.is_file():

@@ -14,11 +14,8 @@ re-renders a finished run.
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import math
-import os
-import tempfile
 import textwrap
 from collections.abc import Mapping
 from pathlib import Path
@@ -27,7 +24,7 @@ import mujoco
 import numpy as np
 
 from tt_mujoco.analysis.geometry import Polyline
-from tt_mujoco.outputs import publish_new
+from tt_mujoco.outputs import publish_new, temporary_beside
 from tt_mujoco.progress import progress_bar
 from tt_mujoco.reference import paths
 from tt_mujoco.sim.physics import Vehicle
@@ -537,26 +534,22 @@ def render_video(
     _check_video_args(width, height, fps, camera)
     mediapy.set_ffmpeg(imageio_ffmpeg.get_ffmpeg_exe())
 
-    with RunRenderer(ts, params, reference_polyline, width, height, fps, camera, info) as renderer:
-        fd, tmp_name = tempfile.mkstemp(dir=out.parent, prefix=f".{out.stem}.", suffix=".tmp.mp4")
-        os.close(fd)
-        tmp = Path(tmp_name)
-        try:
-            with mediapy.VideoWriter(tmp, shape=(height, width), fps=fps, codec="h264") as writer:
-                bar = progress_bar(renderer.n_frames, f"video {out.name}", "frame", progress)
-                with bar:
-                    for k in range(renderer.n_frames):
-                        image = renderer.render_frame(k)
-                        writer.add_image(image)
-                        bar.update()
-                if outcome is not None:
-                    card = end_card(image, *outcome)
-                    for _ in range(round(END_CARD_S * fps)):
-                        writer.add_image(card)
-            publish_new(tmp, out)
-        finally:
-            with contextlib.suppress(FileNotFoundError):
-                tmp.unlink()
+    with (
+        RunRenderer(ts, params, reference_polyline, width, height, fps, camera, info) as renderer,
+        temporary_beside(out, suffix=".tmp.mp4") as tmp,
+    ):
+        with mediapy.VideoWriter(tmp, shape=(height, width), fps=fps, codec="h264") as writer:
+            bar = progress_bar(renderer.n_frames, f"video {out.name}", "frame", progress)
+            with bar:
+                for k in range(renderer.n_frames):
+                    image = renderer.render_frame(k)
+                    writer.add_image(image)
+                    bar.update()
+            if outcome is not None:
+                card = end_card(image, *outcome)
+                for _ in range(round(END_CARD_S * fps)):
+                    writer.add_image(card)
+        publish_new(tmp, out)
     return out
 
 
