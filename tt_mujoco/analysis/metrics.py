@@ -46,6 +46,7 @@ __all__ = [
     "compute_metrics",
     "distance_to_polyline",
     "error_signals",
+    "finite_prefix_length",
     "follower_offtrack",
     "max_abs",
     "metric_name",
@@ -144,10 +145,12 @@ def _nanmax_abs(*arrays: np.ndarray) -> float:
     return float(values.max()) if values.size else math.nan
 
 
-def _finite_prefix_length(columns: Mapping[str, np.ndarray], names: Sequence[str]) -> int:
+def finite_prefix_length(columns: Mapping[str, np.ndarray], names: Sequence[str]) -> int:
+    """How many leading rows are finite in every column of ``names`` (a run that diverged
+    is cut before its first NaN or infinity)."""
     bad = np.zeros(len(columns[names[0]]), dtype=bool)
     for name in names:
-        bad |= ~np.isfinite(columns[name])
+        bad |= ~np.isfinite(np.asarray(columns[name], dtype=float))
     hits = np.flatnonzero(bad)
     return int(hits[0]) if hits.size else bad.size
 
@@ -296,7 +299,7 @@ def compute_metrics(
     """
     columns, n_total = _check_inputs(ts, torque_limit)
     reference = as_polyline(reference_polyline)
-    n = _finite_prefix_length(columns, CORE_COLUMNS)
+    n = finite_prefix_length(columns, CORE_COLUMNS)
     c = {name: col[:n] for name, col in columns.items()}
     for name in OPTIONAL_COLUMNS:
         if name in ts:

@@ -12,7 +12,11 @@ from concurrent.futures import as_completed
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
-from tt_mujoco.analysis.metrics import follower_offtrack, signed_lateral_error
+from tt_mujoco.analysis.metrics import (
+    finite_prefix_length,
+    follower_offtrack,
+    signed_lateral_error,
+)
 from tt_mujoco.executor import Executors, ignore_sigint
 from tt_mujoco.outputs import json_safe
 from tt_mujoco.paper.suite import SERIES_POINTS, SETTLE_DISTANCE, V_MIN, RunSpec
@@ -20,6 +24,9 @@ from tt_mujoco.progress import progress_bar
 from tt_mujoco.reference.targets import make_target
 from tt_mujoco.sim import Scenario, simulate
 from tt_mujoco.vehicle.steering import steady_offtrack
+
+#: A run's rows are used up to the first that is not finite in any of these.
+_FINITE_COLUMNS = ("t", "x", "y", "v", "omega", "omega_d")
 
 
 # --- per-run analysis (runs in the worker processes) -------------------------------------------
@@ -49,7 +56,7 @@ def curvature_split(ts: Mapping[str, np.ndarray], path, polyline, v_min: float =
     """
 
     t, v, w, wd = (np.asarray(ts[k], dtype=float) for k in ("t", "v", "omega", "omega_d"))
-    n = _finite_length(ts)
+    n = finite_prefix_length(ts, _FINITE_COLUMNS)
     t, v, w, wd = t[:n], v[:n], w[:n], wd[:n]
     out = {"v_min": v_min, "samples": 0}
     nan_keys = ("rms_e_omega_over_v", "rms_mismatch", "rms_total", "mismatch_share")
@@ -84,15 +91,6 @@ def curvature_split(ts: Mapping[str, np.ndarray], path, polyline, v_min: float =
     return out
 
 
-def _finite_length(ts: Mapping[str, np.ndarray]) -> int:
-    cols = ("t", "x", "y", "v", "omega", "omega_d")
-    bad = np.zeros(len(ts["t"]), dtype=bool)
-    for c in cols:
-        bad |= ~np.isfinite(np.asarray(ts[c], dtype=float))
-    hits = np.flatnonzero(bad)
-    return int(hits[0]) if hits.size else len(bad)
-
-
 def steady_mask(path, s_tractor: np.ndarray, reverse: bool, spacing: float) -> np.ndarray:
     """Samples at which the trailer has run on one constant curvature long enough to settle.
 
@@ -125,7 +123,7 @@ def steady_mask(path, s_tractor: np.ndarray, reverse: bool, spacing: float) -> n
 def _offtrack_summary(ts, path, scenario: Scenario, plant_params) -> dict:
     """Follower off-tracking (full run and steady arcs), jackknife time, analytic steady value."""
 
-    n = _finite_length(ts)
+    n = finite_prefix_length(ts, _FINITE_COLUMNS)
     columns = {k: np.asarray(ts[k])[:n] for k in ("x", "y", "x0", "y0")}
     off = follower_offtrack(columns, reverse=scenario.reverse)
     have = ~np.isnan(off)
@@ -171,7 +169,7 @@ def execute(key: str, scenario: Scenario, keep_series: bool = False) -> dict:
         ).path
         split = curvature_split(ts, path, polyline)
         series_split = split.pop("series")
-        n = _finite_length(ts)
+        n = finite_prefix_length(ts, _FINITE_COLUMNS)
         xy = np.column_stack([ts["x"][:n], ts["y"][:n]])
         plant_params = scenario.plant_params()
         record.update(
