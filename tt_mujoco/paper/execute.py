@@ -21,8 +21,7 @@ from tt_mujoco.executor import Executors, ignore_sigint
 from tt_mujoco.outputs import json_safe
 from tt_mujoco.paper.suite import SERIES_POINTS, SETTLE_DISTANCE, V_MIN, RunSpec
 from tt_mujoco.progress import progress_bar
-from tt_mujoco.reference.targets import make_target
-from tt_mujoco.sim import Scenario, simulate
+from tt_mujoco.sim import Scenario, build, simulate
 from tt_mujoco.vehicle.steering import steady_offtrack
 
 #: A run's rows are used up to the first that is not finite in any of these.
@@ -161,17 +160,16 @@ def execute(key: str, scenario: Scenario, keep_series: bool = False) -> dict:
     start = time.perf_counter()
     record = {"key": key, "scenario": json_safe(scenario.to_dict())}
     try:
-        result = simulate(scenario)
+        built = build(scenario)
+        result = simulate(built)
         ts = result.timeseries
         polyline = result.reference_polyline
-        path = make_target(
-            scenario.traj, kind=scenario.target, duration=scenario.duration, start=scenario.start
-        ).path
+        path = built.path
         split = curvature_split(ts, path, polyline)
         series_split = split.pop("series")
         n = finite_prefix_length(ts, _FINITE_COLUMNS)
         xy = np.column_stack([ts["x"][:n], ts["y"][:n]])
-        plant_params = scenario.plant_params()
+        plant_params = built.plant_params
         record.update(
             status=result.status,
             message=result.message,
