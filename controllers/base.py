@@ -85,7 +85,16 @@ def reduced_model(params) -> ModelFn:
         :class:`tt_mujoco.vehicle.reduced.SingularityError` at a jackknife, like ``dynamics``.
     """
     # Imported here so that importing ``controllers`` stays free of tt_mujoco and numpy.
+    from tt_mujoco.vehicle import train
     from tt_mujoco.vehicle.reduced import dynamics_scalar
+
+    if getattr(params, "n_trailers", 1) > 1:
+        # A train's model takes every hitch angle: ``phi`` is then the tuple phi_1..phi_N
+        # (``Measurement.phis``), and the built-in laws pass it whole.
+        def train_model(phi, v: float, omega: float):
+            return train.dynamics_scalar(phi, v, omega, params)
+
+        return train_model
 
     def model(phi: float, v: float, omega: float):
         return dynamics_scalar(phi, v, omega, params)
@@ -345,12 +354,14 @@ class VelocityController(Controller):
         #: The last unsaturated torque request (T_r, T_l), for logging saturation.
         self.command = (0.0, 0.0)
         self.setup = None
+        self._phi_field = "phi"
         self.reset()
 
     @classmethod
     def from_setup(cls, setup: ControllerSetup, gains: str | Mapping | None = None):
         ctrl = cls(setup.model, torque_limit=setup.torque_limit, gains=gains)
         ctrl.setup = setup
+        ctrl._phi_field = "phis" if getattr(setup.params, "n_trailers", 1) > 1 else "phi"
         return ctrl
 
     def compute(self, t: float, measurement, reference: Reference) -> tuple[float, float]:
@@ -359,7 +370,7 @@ class VelocityController(Controller):
         r = reference
         return self.step(
             self.setup.control_dt,
-            measurement.phi,
+            measurement.phi if self._phi_field == "phi" else measurement.phis,
             measurement.v,
             measurement.omega,
             r.v_d,

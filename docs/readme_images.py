@@ -4,7 +4,8 @@ Run: ``python docs/readme_images.py``. It runs the main command
 (``python -m tt_mujoco.run --traj s_curve``) and the paper's forward-jackknifing gain
 (``--eta paper``) into a temporary folder, then saves, reduced to 480 px wide: frame 5 of the
 main video (the start), frame 200 (in the second turn), the end card of the jackknife video,
-and the main run's ``path.png``. Existing images are replaced only because they are this
+the main run's ``path.png``, and frame 250 of a three-trailer train on the S-curve
+(``--trailers 3 --no-disturbance``). Existing images are replaced only because they are this
 script's own outputs.
 """
 
@@ -50,6 +51,10 @@ def main() -> int:
         main_run, jackknife = Path(tmp) / "run", Path(tmp) / "jackknife"
         run(main_run)
         run(jackknife, "--eta", "paper", "--no-plots")
+        train = Path(tmp) / "train"
+        run(train, "--trailers", "3", "--no-disturbance", "--no-plots")
+        got_train = frames(train / "video.mp4", {250})
+        small(Image.fromarray(got_train[250])).save(OUT / "train_frame.png", optimize=True)
         got = frames(main_run / "video.mp4", {5, 200})
         small(Image.fromarray(got[5])).save(OUT / "s_curve_start.png", optimize=True)
         small(Image.fromarray(got[200])).save(OUT / "s_curve_frame.png", optimize=True)
@@ -59,7 +64,8 @@ def main() -> int:
             OUT / "s_curve_path.png", optimize=True
         )
     print(
-        f"wrote s_curve_start.png, s_curve_frame.png, jackknife_end.png, s_curve_path.png to {OUT}"
+        "wrote s_curve_start.png, s_curve_frame.png, jackknife_end.png, s_curve_path.png, "
+        f"train_frame.png to {OUT}"
     )
     return 0
 

@@ -21,8 +21,13 @@ def test_checked_in_models_match_generator():
 def test_scene_steps_with_random_controls_without_warnings():
     # mujoco_menagerie's model test: load the scene file, 1 s of random controls in ctrlrange.
     m = mujoco.MjModel.from_xml_path(str(model.MODELS_DIR / model.SCENE_FILE))
+    _step_random_controls(m, seed=0)
+
+
+def _step_random_controls(m: mujoco.MjModel, seed: int) -> None:
+    """1 s of random controls inside ctrlrange: no warning, a finite state."""
     d = mujoco.MjData(m)
-    rng = np.random.default_rng(0)
+    rng = np.random.default_rng(seed)
     lo, hi = m.actuator_ctrlrange[:, 0], m.actuator_ctrlrange[:, 1]
     for _ in range(int(1.0 / m.opt.timestep)):
         d.ctrl[:] = rng.uniform(lo, hi)
@@ -131,3 +136,50 @@ def test_export_for_other_parameters_and_never_over_files(tmp_path, capsys):
     assert "not an empty folder" in capsys.readouterr().err
     assert model_cli.main(["--out", str(tmp_path / "bad"), "--param", "L0=-1"]) == 2
     assert not (tmp_path / "bad").exists()
+
+
+@pytest.mark.parametrize("n", [2, 3])
+def test_train_scene_steps_with_random_controls_without_warnings(n):
+    p = Params().with_trailers(n)
+    m = mujoco.MjModel.from_xml_string(
+        model.scene_xml(), assets={model.VEHICLE_FILE: model.vehicle_xml(p).encode()}
+    )
+    _step_random_controls(m, seed=n)
+    assert m.neq == n
+    assert m.body_subtreemass[m.body("tractor").id] == pytest.approx(p.total_mass)
+
+
+def test_every_trailers_equality_gives_beta_equal_eta_phi():
+    # Signs pinned per hitch with gains of both signs on the three trailers.
+    p = Params(eta=-3.0).with_trailers(3, [{"eta": 2.0}, {"eta": -1.5}])
+    veh = Vehicle(p)
+    veh.set_state(v=0.3)
+    for _ in range(1500):
+        veh.set_torque(0.6, -0.1)
+        mujoco.mj_step(veh.model, veh.data)
+    me = veh.measure()
+    assert me.beta == pytest.approx(p.eta * me.phi, abs=1e-4)
+    for (*_, phi, beta, _v0), t in zip(me.train, p.train, strict=True):
+        assert abs(phi) > math.radians(1)
+        assert beta == pytest.approx(t.eta * phi, abs=1e-4)
+    # The measured axles are MuJoCo's sites P0_k.
+    for k, row in enumerate(me.train, start=2):
+        mujoco.mj_kinematics(veh.model, veh.data)
+        assert row[:2] == pytest.approx(veh.data.site(f"P0_{k}").xpos[:2], abs=1e-9)
+
+
+def test_single_trailer_model_text_unchanged_by_the_train_code():
+    # N = 1 is today's model, bit for bit: the train adds text only for N >= 2.
+    assert model.vehicle_xml(Params().with_trailers(1)) == model.vehicle_xml(Params())
+    assert "trailer_2" in model.vehicle_xml(Params().with_trailers(2))
+
+
+def test_export_a_train(tmp_path):
+    from tt_mujoco import model as model_cli
+
+    out = tmp_path / "train"
+    assert model_cli.main(["--out", str(out), "--trailers", "3"]) == 0
+    m = mujoco.MjModel.from_xml_path(str(out / "scene.xml"))
+    assert m.eq_data[m.equality("steering_3").id][1] == pytest.approx(13 / 119)
+    assert "trailer_wheel_left_3" in (out / "tractor_trailer.urdf").read_text()
+    assert model_cli.main(["--trailers", "2"]) == 2  # models/ keeps the default vehicle

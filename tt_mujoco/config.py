@@ -235,6 +235,18 @@ def options_from_file(
             if not all(isinstance(m, str) and m.strip() for m in items):
                 raise ValueError(f"{where}: metric={value!r} is not allowed: give hook names")
             defaults["metric"] = [_relative_hook(m, source) for m in items]
+        elif key == "trailers" and isinstance(value, list):
+            if not all(isinstance(t, dict) for t in value):
+                raise ValueError(
+                    f"{where}: trailers must be a number or an array of tables [[trailers]], "
+                    "one per trailer behind the first"
+                )
+            try:
+                Params(**params).with_trailers(len(value) + 1, value)
+            except ValueError as err:
+                raise ValueError(f"{where} [[trailers]]: {err}") from None
+            defaults["trailers"] = len(value) + 1
+            defaults["train"] = [dict(t) for t in value]
         elif key == "gains":
             if not isinstance(value, str | dict):
                 raise ValueError(
@@ -286,6 +298,11 @@ def resolved_options(args: argparse.Namespace, parser, params: dict, faults: lis
         out["path_options"] = {k: _plain(v) for k, v in args.path_option}
     if params:
         out["params"] = {k: _plain(v) for k, v in params.items()}
+    train = getattr(args, "train", None)
+    if train:
+        # The array form: one table per trailer behind the first (empty: a copy of trailer 1).
+        tables = [dict(t) for t in train] + [{}] * (args.trailers - 1 - len(train))
+        out["trailers"] = [{k: _plain(v) for k, v in t.items()} for t in tables]
     if faults:
         out["faults"] = [{k: _plain(v) for k, v in f.items()} for f in faults]
     return out

@@ -2,7 +2,8 @@
 
 Without ``--out`` it regenerates the repository's ``models/`` from the default ``Params`` (a
 test keeps those files equal to the generator's output); with ``--out DIR`` it writes the three
-files for the given ``--param`` and ``--eta`` into a new (or empty) folder, never over files.
+files for the given ``--param``, ``--eta`` and ``--trailers`` into a new (or empty) folder, never
+over files.
 """
 
 from __future__ import annotations
@@ -48,12 +49,21 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--eta", default=None, help="steering gain: paper, same_path or a number (with --out)"
     )
+    parser.add_argument(
+        "--trailers",
+        type=int,
+        default=1,
+        metavar="N",
+        help="number of trailers, each a copy of the first with its own gain of the --eta "
+        "preset (with --out)",
+    )
     args = parser.parse_args(argv)
     try:
         if args.out is None:
-            if args.param or args.eta is not None:
+            if args.param or args.eta is not None or args.trailers != 1:
                 raise OutputError(
-                    "--param and --eta change the model: give --out DIR (models/ holds the "
+                    "--param, --eta and --trailers change the model: give --out DIR (models/ "
+                    "holds the "
                     "default parameters' files, which the tests check)"
                 )
             params, out = Params(), MODELS_DIR
@@ -64,7 +74,7 @@ def main(argv: list[str] | None = None) -> int:
                 eta = float(eta)
             except ValueError:
                 pass
-            params = Params(eta=eta, **dict(args.param or []))
+            params = Params(eta=eta, **dict(args.param or [])).with_trailers(args.trailers)
             out, _ = claim_folder(args.out, args.out)
     except ValueError as err:  # Params' checks and OutputError name the value
         print(f"error: {err}", file=sys.stderr)

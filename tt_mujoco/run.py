@@ -47,7 +47,7 @@ from tt_mujoco.outputs import (
 from tt_mujoco.progress import progress_bar
 from tt_mujoco.sim import COLUMNS, DISTURBANCE_MODES, PLANTS, TARGETS, Scenario, build
 from tt_mujoco.sim.faults import RECOVERY_S, parse_fault
-from tt_mujoco.sim.timeseries import UNITS
+from tt_mujoco.sim.timeseries import UNITS, train_columns, unit_of
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.viz import plots as plots_mod
@@ -263,6 +263,14 @@ def build_parser() -> argparse.ArgumentParser:
         "paper's initial condition, at rest (on the cycloid at its pose (0, 0, pi/4))",
     )
     g.add_argument(
+        "--trailers",
+        type=int,
+        default=1,
+        metavar="N",
+        help="number of trailers, 1 to 8: trailers 2..N copy trailer 1 and steer with their "
+        "own gain of the --eta preset (a config file's [[trailers]] tables override them)",
+    )
+    g.add_argument(
         "--phi0-deg",
         "--phi0",
         type=finite("--phi0-deg"),
@@ -415,6 +423,8 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
         disturbance_limit=args.disturbance_limit,
         path_options=dict(path_options),
         metrics=list(args.metric or []),
+        trailers=args.trailers,
+        train=list(getattr(args, "train", None) or []),
     )
 
 
@@ -452,7 +462,9 @@ def write_outputs(
         atomic_write(out / CONFIG_FILE, config_toml)
         written.append(out / CONFIG_FILE)
     ts_file = out / f"timeseries.{timeseries_format}"
-    write_timeseries(ts_file, result.timeseries, COLUMNS, UNITS)
+    extra = train_columns(result.scenario.plant_params().n_trailers)
+    units = {**UNITS, **{name: unit_of(name) for name in extra}}
+    write_timeseries(ts_file, result.timeseries, (*COLUMNS, *extra), units)
     (out / CHECKPOINT_FILE).unlink(missing_ok=True)  # the complete file replaces it
     written.append(ts_file)
     if len(result.timeseries["t"]) < 2 and (plots or video):
@@ -630,12 +642,18 @@ def _abandon(out: Path, created: bool, live, message: str, code: int) -> int:
 def _print_summary(result, out: Path, written, notes) -> None:
 
     s = result.scenario
+    etas = s.nominal_params().etas
+    gains = ", ".join(f"{e:.4g}" for e in etas)
+    shown = f"eta={etas[0]:g}" if len(etas) == 1 else f"{len(etas)} trailers, eta_k={gains}"
     print(
-        f"{s.traj} | {s.controller} | {s.target} target | {s.plant} plant | "
-        f"eta={result.config['nominal_params']['eta']:g} | disturbance={s.disturbance} | "
-        f"status={result.status}"
+        f"{s.traj} | {s.controller} | {s.target} target | {s.plant} plant | {shown} | "
+        f"disturbance={s.disturbance} | status={result.status}"
     )
-    extra = [metric_name(spec) for spec in s.metrics]
+    # A train adds its worst trailer, and every trailer's off-tracking.
+    train = [k for k in result.metrics if k.startswith("trailer_") and k[8].isdigit()]
+    train = [k for k in train if k.endswith("offtrack_rms")]
+    train += ["train_offtrack_rms_worst", "train_phi_max_abs_deg"]
+    extra = [*train, *(metric_name(spec) for spec in s.metrics)]
     keys = [k for k in (*DEFAULT_SUMMARY_KEYS, *extra, "wall_time_s") if k in result.metrics]
     print(summary_table(result.metrics, keys=keys))
     for fault in result.metrics.get("faults", []):

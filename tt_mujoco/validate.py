@@ -36,8 +36,9 @@ from tt_mujoco.outputs import (
     write_json,
 )
 from tt_mujoco.sim.physics import Vehicle
+from tt_mujoco.validate_train import run_train
 from tt_mujoco.vehicle import reduced
-from tt_mujoco.vehicle.params import Params
+from tt_mujoco.vehicle.params import MAX_TRAILERS, Params
 
 __all__ = [
     "check_coriolis",
@@ -419,13 +420,17 @@ def _failures(failed: list[dict]) -> str:
     )
 
 
-def validation_markdown(results: dict) -> str:
+def validation_markdown(results: dict, trailers: int = 1) -> str:
     checks = verdicts(results)
     failed = [c for c in checks if not c["pass"]]
+    command, train = "`python -m tt_mujoco.validate`", ""
+    if trailers > 1:
+        command = f"`python -m tt_mujoco.validate --trailers {trailers}`"
+        train = f" with {trailers} trailers, each a copy of the first"
     lines = [
-        "# Model validation: MuJoCo against the reduced model",
+        f"# Model validation: MuJoCo against the reduced model{train}",
         "",
-        "Produced by `python -m tt_mujoco.validate`. Parameters: the paper's (Section 6.1),",
+        f"Produced by {command}. Parameters: the paper's (Section 6.1),",
         f"timestep {Params().timestep} s. See `tt_mujoco/validate.py` for each check's definition.",
         "",
         f"**Verdict: {len(checks) - len(failed)} of {len(checks)} bounds hold"
@@ -466,15 +471,29 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--out", type=Path, default=None, help=f"output folder (default: a new {DEFAULT_OUT}[-N])"
     )
+    parser.add_argument(
+        "--trailers",
+        type=int,
+        default=1,
+        metavar="N",
+        help="check a train of N trailers (1: the paper's vehicle, every check; 2 to "
+        f"{MAX_TRAILERS}: the train's checks of tt_mujoco.validate_train)",
+    )
     args = parser.parse_args(argv)
+    if not 1 <= args.trailers <= MAX_TRAILERS:
+        print(
+            f"error: --trailers {args.trailers} is not allowed: use 1 to {MAX_TRAILERS}",
+            file=sys.stderr,
+        )
+        return 2
     try:
         out, _ = claim_folder(args.out, DEFAULT_OUT)
     except OutputError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
-    results = run_all()
+    results = run_all() if args.trailers == 1 else run_train(args.trailers)
     write_json(out / "report.json", {**results, "verdicts": verdicts(results)}, strict=True)
-    text = validation_markdown(results)
+    text = validation_markdown(results, args.trailers)
     atomic_write(out / "report.md", text + "\n")
     release_folder(out)
     print(text)

@@ -355,11 +355,71 @@ def compute_metrics(
         clipped = np.asarray(ts["dist_clipped"], dtype=float)[:n]
         metrics["disturbance_clipped_fraction"] = float(np.mean(clipped > 0)) if n else math.nan
 
+    metrics.update(train_metrics(ts, n, reference, metrics, reverse))
     metrics["steps"] = int(n_total)
     metrics["finite_samples"] = int(n)
     metrics["sample_period_s"] = sample_period
     metrics["sim_time_s"] = float(t[-1] - t[0] + sample_period) if n else 0.0
     return metrics
+
+
+def trailer_count(ts: Mapping[str, np.ndarray]) -> int:
+    """N, the number of trailers whose columns a time series holds (``x0``, ``x0_2``, ...)."""
+    n = 1
+    while f"x0_{n + 1}" in ts:
+        n += 1
+    return n
+
+
+def train_metrics(ts, n: int, reference, first: Mapping, reverse: bool = False) -> dict:
+    """Metrics of trailers 2..N and the worst over the train (docs/metrics.md), over the first
+    ``n`` samples; empty for one trailer.
+
+    Trailer k's ``trailer_k_offtrack_rms``/``_max`` measure P_k against the path the tractor's
+    P drove (reversing: against the path the last trailer drove), like trailer 1's;
+    ``trailer_k_rmse_lateral``/``_max_lateral`` its cross-track over the same samples; and
+    ``trailer_k_phi_max_abs_deg`` its hitch angle. ``train_offtrack_rms_worst``,
+    ``train_offtrack_max_worst`` and ``train_phi_max_abs_deg`` take the worst trailer,
+    trailer 1 included (from ``first``, its own metrics).
+    """
+    count = trailer_count(ts)
+    if count == 1:
+        return {}
+    col = {name: np.asarray(ts[name], dtype=float)[:n] for name in ("x", "y")}
+    for k in range(2, count + 1):
+        for name in ("x0", "y0", "phi"):
+            col[f"{name}_{k}"] = np.asarray(ts[f"{name}_{k}"], dtype=float)[:n]
+    last = np.column_stack([col[f"x0_{count}"], col[f"y0_{count}"]])
+    leader = last if reverse else np.column_stack([col["x"], col["y"]])
+    out: dict = {}
+    worst_rms = [first["trailer_offtrack_rms"]]
+    worst_max = [first["trailer_offtrack_max"]]
+    worst_phi = [first["phi_max_abs_deg"]]
+    for k in range(2, count + 1):
+        follower = np.column_stack([col[f"x0_{k}"], col[f"y0_{k}"]])
+        if (reverse and k == count) or not n:
+            offtrack = np.full(n, np.nan)  # the leading unit follows nothing
+        else:
+            offtrack = trailer_offtrack(leader, follower)
+        cross = reference.project(follower, extend_ends=True).signed_distance
+        counted = ~np.isnan(offtrack) if not reverse else np.ones(n, dtype=bool)
+        out[f"trailer_{k}_offtrack_rms"] = rmse(offtrack[~np.isnan(offtrack)])
+        out[f"trailer_{k}_offtrack_max"] = max_abs(offtrack[~np.isnan(offtrack)])
+        out[f"trailer_{k}_rmse_lateral"] = rmse(cross[counted])
+        out[f"trailer_{k}_max_lateral"] = max_abs(cross[counted])
+        out[f"trailer_{k}_phi_max_abs_deg"] = math.degrees(max_abs(col[f"phi_{k}"]))
+        worst_rms.append(out[f"trailer_{k}_offtrack_rms"])
+        worst_max.append(out[f"trailer_{k}_offtrack_max"])
+        worst_phi.append(out[f"trailer_{k}_phi_max_abs_deg"])
+    out["train_offtrack_rms_worst"] = _worst(worst_rms)
+    out["train_offtrack_max_worst"] = _worst(worst_max)
+    out["train_phi_max_abs_deg"] = _worst(worst_phi)
+    return out
+
+
+def _worst(values) -> float:
+    finite = [v for v in values if math.isfinite(v)]
+    return max(finite) if finite else math.nan
 
 
 def _format_value(value) -> str:

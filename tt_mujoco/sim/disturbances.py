@@ -14,7 +14,7 @@ import math
 from abc import ABC, abstractmethod
 
 from tt_mujoco.registry import Registry
-from tt_mujoco.vehicle import reduced
+from tt_mujoco.vehicle import reduced, train
 
 __all__ = [
     "DISTURBANCES",
@@ -64,15 +64,19 @@ def make_disturbance(spec: str):
     return obj
 
 
-def injected(mode: str, a_v: float, a_w: float, phi: float, nominal) -> tuple[float, ...]:
+def injected(mode: str, a_v: float, a_w: float, phi, nominal) -> tuple[float, ...]:
     """What the plant receives for Delta = (a_v, a_w): ``(dist_r, dist_l, force, torque)``.
 
     "matched": wheel torques ``g(phi)^-1 Delta`` of the nominal model; "wrench": the
     generalised force ``Mbar Delta`` as a force along the heading at P and a yaw moment (the same
     effect on (v, omega), but through the tyres).
     """
+    if isinstance(phi, tuple):  # a train: every hitch angle (Measurement.phis)
+        mass = train.mass_and_bias(phi, 0.0, 0.0, nominal)[0]
+    else:
+        mass = reduced.mass_terms(phi, nominal)
     if mode == "wrench":
-        M = reduced.mass_matrix(phi, nominal)
-        return 0.0, 0.0, M[0, 0] * a_v + M[0, 1] * a_w, M[1, 0] * a_v + M[1, 1] * a_w
-    dist_r, dist_l = reduced.matched_torque(phi, a_v, a_w, nominal)
+        M11, M12, M22 = mass
+        return 0.0, 0.0, M11 * a_v + M12 * a_w, M12 * a_v + M22 * a_w
+    dist_r, dist_l = reduced.torque_for_force(mass, a_v, a_w, nominal)
     return dist_r, dist_l, 0.0, 0.0

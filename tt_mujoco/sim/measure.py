@@ -14,7 +14,10 @@ from typing import NamedTuple
 
 from tt_mujoco.vehicle.reduced import hitch_and_axle
 
-__all__ = ["Layout", "Measurement", "measure"]
+__all__ = ["TRAIN_FIELDS", "Layout", "Measurement", "TrainMeasurement", "measure", "measure_train"]
+
+#: What is measured of each trailer k >= 2, in order (time-series columns ``<name>_k``).
+TRAIN_FIELDS = ("x0", "y0", "theta0", "phi", "beta", "v0")
 
 
 @dataclass(frozen=True)
@@ -43,6 +46,8 @@ class Layout:
     L0: float
     r: float
     d: float
+    #: Trailers 2..N: ``(hitch_q, hitch_v, steer_q, L_k, L0_k)`` each (empty for one trailer).
+    train: tuple = ()
 
 
 class Measurement(NamedTuple):
@@ -157,3 +162,62 @@ def measure(qpos, qvel, lay: Layout) -> Measurement:
             lay.r * thr_dot - (v + half),
         )
     )
+
+
+class TrainMeasurement(Measurement):
+    """:class:`Measurement` of a train: trailer 1 in the usual fields, trailers 2..N in
+    :attr:`train`, one tuple of :data:`TRAIN_FIELDS` each. It is a :class:`Measurement` for
+    every consumer (a tuple of the same 19 values); :attr:`phis` gives every hitch angle."""
+
+    train: tuple = ()
+
+    @property
+    def phis(self) -> tuple:
+        """The hitch angles phi_1..phi_N (phi_1 as measured, faults and noise included)."""
+        return (self.phi, *(row[3] for row in self.train))
+
+    def _replace(self, **changes):
+        out = super()._replace(**changes)
+        out.train = self.train
+        return out
+
+
+def _new_train_measurement(values, train) -> TrainMeasurement:
+    out = TrainMeasurement._make(values)
+    out.train = train
+    return out
+
+
+def measure_train(qpos, qvel, lay: Layout) -> TrainMeasurement:
+    """:func:`measure` plus trailers 2..N, each as rigid bodies moved by MuJoCo (slip included):
+    trailer k's hitch O_k on trailer k-1's body, L_k behind its axle midpoint."""
+    first = measure(qpos, qvel, lay)
+    qpos = qpos.tolist() if hasattr(qpos, "tolist") else list(qpos)
+    qvel = qvel.tolist() if hasattr(qvel, "tolist") else list(qvel)
+    # Trailer 1's body: axle midpoint, its rigid velocity, heading and heading rate.
+    j = lay.root_v
+    theta, omega = first.theta, first.omega
+    vx, vy = qvel[j], qvel[j + 1]
+    s, c = math.sin(theta), math.cos(theta)
+    fth = first.theta0
+    fw = omega + qvel[lay.hitch_v]
+    fx, fy = first.x0, first.y0
+    fvx = vx + omega * lay.L * s + fw * lay.L0 * math.sin(fth)
+    fvy = vy - omega * lay.L * c - fw * lay.L0 * math.cos(fth)
+    rows = []
+    for hitch_q, hitch_v, steer_q, L, L0 in lay.train:
+        sf, cf = math.sin(fth), math.cos(fth)
+        ox, oy = fx - L * cf, fy - L * sf
+        ovx, ovy = fvx + fw * L * sf, fvy - fw * L * cf
+        phi = -qpos[hitch_q]
+        beta = qpos[steer_q]
+        thk = fth - phi
+        wk = fw + qvel[hitch_v]
+        sk, ck = math.sin(thk), math.cos(thk)
+        px, py = ox - L0 * ck, oy - L0 * sk
+        pvx, pvy = ovx + wk * L0 * sk, ovy - wk * L0 * ck
+        alpha = thk + beta
+        v0 = pvx * math.cos(alpha) + pvy * math.sin(alpha)
+        rows.append((px, py, thk, phi, beta, v0))
+        fx, fy, fth, fw, fvx, fvy = px, py, thk, wk, pvx, pvy
+    return _new_train_measurement(first, tuple(rows))

@@ -13,9 +13,9 @@ import math
 import mujoco
 import numpy as np
 
-from tt_mujoco.sim.measure import Layout, Measurement, measure
-from tt_mujoco.vehicle import reduced
-from tt_mujoco.vehicle.mjcf import VEHICLE_FILE, scene_xml, vehicle_xml
+from tt_mujoco.sim.measure import Layout, Measurement, measure, measure_train
+from tt_mujoco.vehicle import reduced, train
+from tt_mujoco.vehicle.mjcf import VEHICLE_FILE, scene_xml, trailer_suffix, vehicle_xml
 from tt_mujoco.vehicle.params import Params
 
 __all__ = ["Vehicle", "compile_model", "layout_of"]
@@ -84,6 +84,10 @@ def layout_of(model: mujoco.MjModel, p: Params) -> Layout:
         L0=p.L0,
         r=p.r,
         d=p.d,
+        train=tuple(
+            (jq(f"hitch_{k}"), jv(f"hitch_{k}"), jq(f"steer_{k}"), t.L, t.L0)
+            for k, t in enumerate(p.train, start=2)
+        ),
     )
 
 
@@ -104,7 +108,7 @@ class Vehicle:
         self._settled_height = None
 
     # --- state ----------------------------------------------------------------------------
-    def full_selection(self, phi: float, theta: float = 0.0) -> np.ndarray:
+    def full_selection(self, phi, theta: float = 0.0) -> np.ndarray:
         """``Sfull`` (nv x 2): MuJoCo's ``qvel`` for reduced velocities V under pure rolling.
 
         Free joint: world linear velocity ``v e(theta)`` and body angular velocity ``omega e_z``;
@@ -112,6 +116,8 @@ class Vehicle:
         trailer wheels ``(v0 -+ (d/2) alpha_dot)/r`` (docs/model.md Section 4).
         """
         p, lay = self.params, self.layout
+        if p.n_trailers > 1:
+            return self.rolling_selection(phi, theta)
         kappa, (s1, s2), a = (np.array(row) for row in reduced.trailer_rows(phi, p))
         S = np.zeros((self.model.nv, 2))
         S[lay.root_v + 0] = [math.cos(theta), 0.0]
@@ -125,22 +131,61 @@ class Vehicle:
         S[lay.trailer_wheel_right_v] = (kappa + 0.5 * p.d * a) / p.r
         return S
 
+    def rolling_selection(self, phis, theta: float = 0.0) -> np.ndarray:
+        """``Sfull`` for hitch angles ``phis`` (phi_1..phi_N, any N), from the train's velocity
+        pass (docs/model.md Section 12) at V = (1, 0) and (0, 1): :meth:`full_selection` for
+        any train, and for one trailer the general code's check against the closed form."""
+        p, lay = self.params, self.layout
+        phis = tuple(phis)
+        S = np.zeros((self.model.nv, 2))
+        S[lay.root_v + 0] = [math.cos(theta), 0.0]
+        S[lay.root_v + 1] = [math.sin(theta), 0.0]
+        S[lay.root_v + 5] = [0.0, 1.0]
+        S[lay.wheel_left_v] = [1 / p.r, -p.d / (2 * p.r)]
+        S[lay.wheel_right_v] = [1 / p.r, p.d / (2 * p.r)]
+        m = self.model
+        for col, V in enumerate(((1.0, 0.0), (0.0, 1.0))):
+            rows = train.trailer_rates(phis, *V, p)
+            pairs = zip(rows, p.trailers, strict=True)
+            for k, ((phi_dot, v_k, theta_k_dot), t) in enumerate(pairs, start=1):
+                sfx = trailer_suffix(k)
+                a_dot = theta_k_dot + t.eta * phi_dot  # the axle's heading rate
+                S[m.jnt_dofadr[m.joint(f"hitch{sfx}").id], col] = -phi_dot
+                S[m.jnt_dofadr[m.joint(f"steer{sfx}").id], col] = t.eta * phi_dot
+                left = m.jnt_dofadr[m.joint(f"trailer_wheel_left{sfx}").id]
+                right = m.jnt_dofadr[m.joint(f"trailer_wheel_right{sfx}").id]
+                S[left, col] = (v_k - 0.5 * p.d * a_dot) / p.r
+                S[right, col] = (v_k + 0.5 * p.d * a_dot) / p.r
+        return S
+
     def set_state(self, x=0.0, y=0.0, theta=0.0, phi=0.0, v=0.0, omega=0.0, z=None) -> None:
         """Place the vehicle at pose ``(x, y, theta, phi)`` with ``beta = eta phi`` and rolling
-        velocities ``(v, omega)``; wheels touch the floor (or at height ``z`` of P)."""
+        velocities ``(v, omega)``; wheels touch the floor (or at height ``z`` of P). For a train
+        ``phi`` may be the hitch angles phi_1..phi_N (a single value: the first, the others 0).
+        """
         p, lay, d = self.params, self.layout, self.data
-        if abs(p.eta * phi) >= math.pi / 2 - reduced.COS_BETA_MIN:
-            raise reduced.SingularityError(phi, p.eta)
+        phis = tuple(phi) if isinstance(phi, list | tuple | np.ndarray) else (phi,)
+        phis = phis + (0.0,) * (p.n_trailers - len(phis))
+        for angle, eta in zip(phis, p.etas, strict=True):
+            if abs(eta * angle) >= math.pi / 2 - reduced.COS_BETA_MIN:
+                raise reduced.SingularityError(angle, eta)
         mujoco.mj_resetData(self.model, d)
         i = lay.root_q
         d.qpos[i : i + 3] = [x, y, p.r if z is None else z]
         d.qpos[i + 3 : i + 7] = [math.cos(theta / 2), 0.0, 0.0, math.sin(theta / 2)]
-        d.qpos[lay.hitch_q] = -phi
-        d.qpos[lay.steer_q] = p.eta * phi
-        d.qvel[:] = self.full_selection(phi, theta) @ np.array([v, omega])
+        d.qpos[lay.hitch_q] = -phis[0]
+        d.qpos[lay.steer_q] = p.eta * phis[0]
+        rest = zip(lay.train, phis[1:], p.etas[1:], strict=True)
+        for (hitch_q, _, steer_q, _, _), angle, eta in rest:
+            d.qpos[hitch_q] = -angle
+            d.qpos[steer_q] = eta * angle
+        selection = self.full_selection(phis if p.n_trailers > 1 else phis[0], theta)
+        d.qvel[:] = selection @ np.array([v, omega])
         mujoco.mj_forward(self.model, d)
 
     def measure(self) -> Measurement:
+        if self.params.n_trailers > 1:
+            return measure_train(self.data.qpos, self.data.qvel, self.layout)
         return measure(self.data.qpos, self.data.qvel, self.layout)
 
     def set_torque(self, T_r: float, T_l: float) -> None:

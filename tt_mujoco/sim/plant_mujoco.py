@@ -7,7 +7,7 @@ import math
 import mujoco
 import numpy as np
 
-from tt_mujoco.sim.measure import measure
+from tt_mujoco.sim.measure import measure, measure_train
 from tt_mujoco.sim.physics import Vehicle
 from tt_mujoco.sim.plant import Plant, StopRun
 from tt_mujoco.vehicle.params import Params
@@ -53,9 +53,14 @@ class MujocoPlant(Plant):
         self._xfrc = self.data.xfrc_applied
         self._warnings = self.data.warning.number
         self._qpos, self._qvel, self._layout = self.data.qpos, self.data.qvel, lay
+        self._measure = measure if params.n_trailers == 1 else measure_train
+        self._steering_rows = [self._steering_row] + [
+            self.model.eq_data[self.model.equality(f"steering_{k}").id]
+            for k in range(2, params.n_trailers + 1)
+        ]
 
     def measure(self):
-        return measure(self._qpos, self._qvel, self._layout)
+        return self._measure(self._qpos, self._qvel, self._layout)
 
     def scale_trailer_mass(self, factor: float) -> None:
         """MuJoCo builds the mass matrix from ``body_mass``/``body_inertia`` every step, so this
@@ -66,6 +71,10 @@ class MujocoPlant(Plant):
 
     def set_eta(self, eta: float) -> None:
         self._steering_row[1] = -eta
+
+    def set_etas(self, etas) -> None:
+        for row, eta in zip(self._steering_rows, etas, strict=True):
+            row[1] = -eta
 
     def apply(self, T_r, T_l, dist_r, dist_l, wrench_force, wrench_torque, theta) -> None:
         ctrl = self._ctrl

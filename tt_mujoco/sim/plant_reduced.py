@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
-from tt_mujoco.sim.measure import Measurement
+import dataclasses
+
+from tt_mujoco.sim.measure import Measurement, TrainMeasurement
 from tt_mujoco.sim.plant import Plant
-from tt_mujoco.vehicle import reduced
+from tt_mujoco.vehicle import reduced, train
 from tt_mujoco.vehicle.params import Params
 
 __all__ = ["ReducedPlant"]
@@ -31,13 +33,18 @@ class ReducedPlant(Plant):
 
     def __init__(self, params: Params, pose, v_init: float, timestep: float, phi0: float = 0.0):
         self.params = params
-        state = [pose[0], pose[1], pose[2], phi0, 0.0, 0.0, v_init, 0.0]
-        self.ode = reduced.ReducedPlant(params, state=state)
+        n = params.n_trailers
+        hitches = [phi0] + [0.0] * (n - 1)
+        state = [pose[0], pose[1], pose[2], *hitches, 0.0, 0.0, v_init, 0.0]
+        ode = reduced.ReducedPlant if n == 1 else train.TrainODE
+        self.ode = ode(params, state=state)
         self.timestep = timestep
         self._tau = (0.0, 0.0)
 
     def measure(self):
         p = self.params
+        if p.n_trailers > 1:
+            return self._measure_train()
         x, y, theta, phi, th_l, th_r, v, omega = (float(c) for c in self.ode.state)
         _, P0, theta0 = reduced.trailer_pose(x, y, theta, phi, p)
         v0, _ = reduced.trailer_velocity(phi, (v, omega), p)
@@ -63,6 +70,31 @@ class ReducedPlant(Plant):
             slip_right=0.0,
         )
 
+    def _measure_train(self) -> TrainMeasurement:
+        """The train's state from the chain (docs/model.md Section 12), exact like the rest."""
+        p = self.params
+        n = p.n_trailers
+        state = [float(c) for c in self.ode.state]
+        x, y, theta = state[:3]
+        phis = state[3 : 3 + n]
+        th_l, th_r, v, omega = state[3 + n :]
+        places = train.poses(x, y, theta, phis, p)
+        speeds = train.trailer_rates(phis, v, omega, p)
+        rows = tuple(
+            (px, py, thk, phi, t.eta * phi, v_k)
+            for (_, _, px, py, thk), phi, t, (_, v_k, _) in zip(
+                places, phis, p.trailers, speeds, strict=True
+            )
+        )
+        values = (
+            x, y, theta, phis[0], p.eta * phis[0], v, omega, *rows[0][:3], rows[0][5],
+            th_l, th_r, (v - 0.5 * p.d * omega) / p.r, (v + 0.5 * p.d * omega) / p.r,
+            0.0, 0.0, 0.0, 0.0,
+        )  # fmt: skip
+        out = TrainMeasurement._make(values)
+        out.train = rows[1:]
+        return out
+
     def apply(self, T_r, T_l, dist_r, dist_l, wrench_force, wrench_torque, theta) -> None:
         self._tau = (T_r + dist_r, T_l + dist_l)
 
@@ -72,6 +104,13 @@ class ReducedPlant(Plant):
 
     def set_eta(self, eta: float) -> None:
         self._set_params(self.params.replace(eta=eta))
+
+    def set_etas(self, etas) -> None:
+        p = self.params
+        rest = zip(p.train, etas[1:], strict=True)
+        self._set_params(
+            p.replace(eta=etas[0], train=tuple(dataclasses.replace(t, eta=e) for t, e in rest))
+        )
 
     def _set_params(self, params: Params) -> None:
         self.params = params

@@ -85,6 +85,11 @@ class Scenario:
     #: Extra metrics: names in :data:`tt_mujoco.analysis.metrics.METRICS` or hooks
     #: ``module:function`` / ``file.py:function``, each added to ``metrics.json``.
     metrics: list = field(default_factory=list)
+    #: Number of trailers N (1: the paper's vehicle). Trailers 2..N copy trailer 1 (lengths,
+    #: masses, and ``eta``: a preset gives each trailer its own value) ...
+    trailers: int = 1
+    #: ... then take these overrides, one table of ``Trailer`` fields per trailer 2, 3, ...
+    train: list = field(default_factory=list)
 
     def validate(self) -> None:
         """Raise ValueError naming the first bad field and what is allowed."""
@@ -163,6 +168,14 @@ class Scenario:
         if self.path_feedback is not None:
             check_config(self.path_feedback)
         parse_faults(self.faults)
+        if not isinstance(self.train, list | tuple):
+            raise ValueError(f"train={self.train!r} is not allowed: give a list of tables")
+        self.nominal_params()  # the trailers' count and tables, checked by Params
+        if self.trailers > 1 and self.eta_schedule:
+            raise ValueError(
+                f"eta_schedule=True is not allowed with trailers={self.trailers}: the schedule "
+                "steers one trailer; give each trailer a constant eta (e.g. same_path)"
+            )
         self._check_phi0()
 
     def _check_phi0(self) -> None:
@@ -180,8 +193,12 @@ class Scenario:
             )
 
     def nominal_params(self) -> Params:
-        """The controller's model: paper values, this steering and timestep, plus overrides."""
-        return Params(eta=self.eta, timestep=self.timestep, friction=self.friction, **self.params)
+        """The controller's model: paper values, this steering and timestep, plus overrides,
+        and the train of :attr:`trailers`."""
+        p = Params(eta=self.eta, timestep=self.timestep, friction=self.friction, **self.params)
+        if self.trailers == 1 and not self.train:
+            return p
+        return p.with_trailers(self.trailers, self.train)
 
     def plant_params(self) -> Params:
         """The plant's parameters: nominal, times ``param_scale`` on every mass and inertia,

@@ -26,7 +26,7 @@ from tt_mujoco.sim.disturbances import injected
 from tt_mujoco.sim.measure import Measurement
 from tt_mujoco.sim.plant import StopRun
 from tt_mujoco.sim.scenario import jackknife_phi_deg
-from tt_mujoco.sim.timeseries import LOOP_COLUMNS, assemble_columns
+from tt_mujoco.sim.timeseries import LOOP_COLUMNS, assemble_columns, train_columns
 from tt_mujoco.vehicle.reduced import SingularityError
 
 __all__ = ["CHECKPOINT_COLUMNS", "Stepper"]
@@ -60,6 +60,11 @@ class Stepper:
         self._feedback = s.path_feedback is not None
         self._limit = built.nominal.torque_limit
         self._dist_limit = built.disturbance_limit
+        # Trailers 2..N: their hitch limits, and their logged columns after the usual ones.
+        etas = built.plant_params.etas
+        self._train_limits = [math.radians(jackknife_phi_deg(e)) for e in etas[1:]]
+        self.train_columns = train_columns(len(etas))
+        self.checkpoint_columns = (*CHECKPOINT_COLUMNS, *self.train_columns)
         self.plant = None
 
     def reset(
@@ -76,7 +81,7 @@ class Stepper:
         b = self.built
         self._checkpoint = None if checkpoint is None else Path(checkpoint)
         if self._checkpoint is not None:
-            self._checkpoint.write_text(",".join(CHECKPOINT_COLUMNS) + "\n")
+            self._checkpoint.write_text(",".join(self.checkpoint_columns) + "\n")
         self.plant = b.new_plant(phi0_deg)
         self.faults = b.new_faults()
         self.scheduler = b.new_scheduler(self.plant)
@@ -89,7 +94,8 @@ class Stepper:
         )
         self._measured: list = []
         self._logged: list = []
-        self._blocks: list[tuple[np.ndarray, np.ndarray]] = []
+        self._train_logged: list = []
+        self._blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self.measurement = None
 
     @property
@@ -118,6 +124,8 @@ class Stepper:
                 f"beta={math.degrees(me.beta):.1f} deg (eta={self.eta:g}; singular at "
                 f"|beta| = 90 deg), x={me.x:.3f} m, y={me.y:.3f} m, v={me.v:.3f} m/s",
             )
+        if self._train_limits:
+            self._check_train(me, t)
         noise = self._noise
         if noise is not None:
             noise_v, noise_w = self.built.noise_std
@@ -148,6 +156,18 @@ class Stepper:
         self._ref = ref
         return seen, ref
 
+    def _check_train(self, me, t: float) -> None:
+        """Stop when any hitch behind the first jackknifes."""
+        for k, (row, limit) in enumerate(zip(me.train, self._train_limits, strict=True), 2):
+            phi, beta = row[3], row[4]
+            if abs(phi) >= limit or abs(beta) >= self._jk:
+                raise StopRun(
+                    "jackknife",
+                    f"jackknife of trailer {k} at t={t:.3f} s: phi_{k}="
+                    f"{math.degrees(phi):.1f} deg, beta_{k}={math.degrees(beta):.1f} deg, "
+                    f"x={me.x:.3f} m, y={me.y:.3f} m, v={me.v:.3f} m/s",
+                )
+
     def actuate(self, T_r: float, T_l: float, command: tuple[float, float] | None = None) -> bool:
         """Apply the torques of the current step and advance; False when the episode is over.
 
@@ -174,9 +194,8 @@ class Stepper:
         dist = self.built.disturbance
         if dist is not None:
             a_v, a_w = dist(t)
-            dist_r, dist_l, force, torque = injected(
-                self._mode, a_v, a_w, me.phi, self.built.nominal
-            )
+            phi = me.phis if self._train_limits else me.phi
+            dist_r, dist_l, force, torque = injected(self._mode, a_v, a_w, phi, self.built.nominal)
             bound = self._dist_limit
             if bound is not None and (abs(dist_r) > bound or abs(dist_l) > bound):
                 # What a disturbance of motor size can apply, per wheel: beyond it the paper's
@@ -187,6 +206,8 @@ class Stepper:
         # Log the measurement tuple as it is and the loop's own values beside it: columns are
         # assembled once after the episode (per-step attribute access is costly).
         self._measured.append(me)
+        if self._train_limits:
+            self._train_logged.append([value for row in me.train for value in row])
         v_m, w_m = self._seen
         self._logged.append(
             (
@@ -230,12 +251,15 @@ class Stepper:
         if n:
             meas = np.array(self._measured, dtype=float).reshape(n, len(Measurement._fields))
             loop = np.array(self._logged, dtype=float).reshape(n, -1)
-            self._blocks.append((meas, loop))
+            trains = np.array(self._train_logged, dtype=float).reshape(n, len(self.train_columns))
+            self._blocks.append((meas, loop, trains))
             if self._checkpoint is not None:
                 with open(self._checkpoint, "a") as handle:
-                    np.savetxt(handle, np.hstack([meas, loop]), delimiter=",", fmt="%.17g")
+                    rows = np.hstack([meas, loop, trains])
+                    np.savetxt(handle, rows, delimiter=",", fmt="%.17g")
             self._measured.clear()
             self._logged.clear()
+            self._train_logged.clear()
 
     @property
     def samples(self) -> int:
@@ -248,9 +272,12 @@ class Stepper:
         if self._blocks:
             measured = np.concatenate([b[0] for b in self._blocks])
             logged = np.concatenate([b[1] for b in self._blocks])
+            trains = np.concatenate([b[2] for b in self._blocks])
         else:
             measured = logged = []
+            trains = np.empty((0, len(self.train_columns)))
         ts = assemble_columns(measured, logged, self.eta)
+        ts.update({name: trains[:, i].copy() for i, name in enumerate(self.train_columns)})
         n = len(logged)
         if self.scheduler is not None:
             ts["eq_violation"] = ts["beta"] - self.scheduler.eta_series(n) * ts["phi"]

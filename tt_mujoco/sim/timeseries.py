@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from tt_mujoco.sim.measure import Measurement
+from tt_mujoco.sim.measure import TRAIN_FIELDS, Measurement
 
-__all__ = ["COLUMNS", "LOOP_COLUMNS", "UNITS", "assemble_columns"]
+__all__ = ["COLUMNS", "LOOP_COLUMNS", "UNITS", "assemble_columns", "train_columns", "unit_of"]
 
 #: Time-series columns, one row per control step (SI units, radians). See
 #: :mod:`tt_mujoco.analysis.metrics`.
@@ -86,6 +86,20 @@ LOOP_COLUMNS = (
     "omega_d_tracked",
     "dist_clipped",
 )
+
+
+def train_columns(n_trailers: int) -> tuple[str, ...]:
+    """The columns of trailers 2..N, after :data:`COLUMNS`: ``x0_k, y0_k, theta0_k, phi_k,
+    beta_k, v0_k`` for each k (trailer 1 keeps ``x0, y0, theta0, phi, beta, v0``)."""
+    return tuple(f"{name}_{k}" for k in range(2, n_trailers + 1) for name in TRAIN_FIELDS)
+
+
+def unit_of(column: str) -> str | None:
+    """The unit of a time-series column, trailer k's included (None if unknown)."""
+    if column in UNITS:
+        return UNITS[column]
+    base, _, k = column.rpartition("_")
+    return UNITS.get(base) if k.isdigit() else None
 
 
 def assemble_columns(measured: list, logged: list, eta: float) -> dict[str, np.ndarray]:

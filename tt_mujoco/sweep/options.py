@@ -10,7 +10,13 @@ from pathlib import Path
 from tt_mujoco.controllers import CONTROLLERS
 from tt_mujoco.registry import closest, is_hook, normalise_hook
 from tt_mujoco.sim import DISTURBANCE_MODES, PLANTS, TARGETS, Scenario
-from tt_mujoco.vehicle.params import INERTIA_FIELDS, MASS_FIELDS, Params
+from tt_mujoco.vehicle.params import (
+    INERTIA_FIELDS,
+    MASS_FIELDS,
+    MAX_TRAILERS,
+    TRAILER_FIELDS,
+    Params,
+)
 
 EXIT_OK, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 2, 130
 
@@ -21,13 +27,29 @@ STARTS = ("on_path", "paper")
 #: Scenario fields that are options, in the table's column order (``params`` is reached through
 #: ``scale.*`` and ``param.*``; ``gains`` here is the preset name, single gains are ``gain.*``).
 SCENARIO_OPTIONS = tuple(
-    f.name for f in dataclasses.fields(Scenario) if f.name not in ("params", "plant_scale")
+    f.name for f in dataclasses.fields(Scenario) if f.name not in ("params", "plant_scale", "train")
 )
+
+
+#: Per-trailer options of a train: ``trailer<k>.<field>`` for trailer k >= 2 (e.g.
+#: ``trailer2.eta=0``, ``trailer3.L0=0.5``), with ``field`` one of these.
+TRAILER_OPTION_FIELDS = (*TRAILER_FIELDS, "eta")
+
+
+def trailer_option(name: str) -> tuple[int, str] | None:
+    """``(k, field)`` of a per-trailer option name ``trailer<k>.<field>``, else None."""
+    prefix, dot, field = name.partition(".")
+    digits = prefix.removeprefix("trailer")
+    if dot and prefix.startswith("trailer") and digits.isdigit() and field:
+        return int(digits), field
+    return None
 
 
 #: Scenario fields that hold a list of specs; a sweep value is one text, specs separated by ";"
 #: ("none" for no spec), e.g. faults="payload:t=2,factor=1.5;dropout:t=5".
-LIST_OPTIONS = tuple(f.name for f in dataclasses.fields(Scenario) if f.default_factory is list)
+LIST_OPTIONS = tuple(
+    f.name for f in dataclasses.fields(Scenario) if f.default_factory is list and f.name != "train"
+)
 
 
 #: Scenario fields that are an optional dict of numbers (e.g. ``path_feedback``): ``NAME=on``
@@ -206,6 +228,11 @@ def convert(name: str, value):
         return as_number(name, value, positive=True)
     if name.startswith("param."):
         return as_number(name, value)
+    if trailer_option(name) is not None:
+        check_option_name(name)
+        if trailer_option(name)[1] == "eta":
+            return _eta(name, value)
+        return as_number(name, value, positive=True)
     if name in LIST_OPTIONS:
         return _text(name, value)
     if name in DICT_OPTIONS:
@@ -237,7 +264,9 @@ def _unknown_option_message(name: str) -> str:
         + (f" (did you mean {close!r}?)" if close else "")
         + f": use one of {', '.join(SCENARIO_OPTIONS)}, "
         f"gain.<name> (a controller gain), scale.<field> (field one of {', '.join(SCALABLE)}: "
-        f"Params default times the factor), param.<field> (field one of {', '.join(SETTABLE)})"
+        f"Params default times the factor), param.<field> (field one of {', '.join(SETTABLE)}), "
+        f"trailer<k>.<field> (k in 2..{MAX_TRAILERS}, field one of "
+        f"{', '.join(TRAILER_OPTION_FIELDS)})"
         + "".join(f" or {option}.<key>" for option in DICT_OPTIONS)
     )
 
@@ -256,4 +285,8 @@ def check_option_name(name: str) -> str:
             return name
         if prefix in DICT_OPTIONS:
             return name  # its keys are checked by Scenario.validate when runs are expanded
+        trailer = trailer_option(name)
+        if trailer is not None and 2 <= trailer[0] <= MAX_TRAILERS:
+            if trailer[1] in TRAILER_OPTION_FIELDS:
+                return name
     raise BadSpecError(_unknown_option_message(name))

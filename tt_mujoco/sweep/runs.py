@@ -23,6 +23,7 @@ from tt_mujoco.sweep.options import (
     SCENARIO_OPTIONS,
     BadSpecError,
     convert,
+    trailer_option,
 )
 from tt_mujoco.sweep.spec import Axis, SweepSpec
 
@@ -170,6 +171,12 @@ def build_scenario(options: Mapping) -> Scenario:
             kwargs[name] = None
     if "timestep" in kwargs and "control_dt" not in kwargs:
         kwargs["control_dt"] = kwargs["timestep"]
+    overrides = [(trailer_option(k), v) for k, v in options.items() if trailer_option(k)]
+    if overrides:
+        train = [{} for _ in range(max(k for (k, _), _ in overrides) - 1)]
+        for (k, field), value in overrides:
+            train[k - 2][field] = value
+        kwargs["train"] = train
     return Scenario(params=params, plant_scale=plant_scale, **kwargs)
 
 
@@ -215,7 +222,7 @@ def config_columns(run: Mapping) -> dict:
     for k, v in gains.items():
         row[f"gain.{k}"] = v
     for k, v in options.items():
-        if k.startswith(("scale.", "param.")):
+        if k.startswith(("scale.", "param.")) or trailer_option(k):
             row[k] = v
     return row
 

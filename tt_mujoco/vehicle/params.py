@@ -14,11 +14,15 @@ import math
 from dataclasses import dataclass, field
 
 __all__ = [
+    "MAX_TRAILERS",
     "STEERING_PRESETS",
+    "TRAILER_FIELDS",
     "Params",
+    "Trailer",
     "resolve_eta",
     "same_path_eta",
     "spec_same_path_eta",
+    "train_same_path_etas",
 ]
 
 #: Named passive-steering designs accepted wherever an ``eta`` is asked for.
@@ -52,6 +56,88 @@ def spec_same_path_eta(L: float, L0: float) -> float:
     """docs/model.md Section 3's ``-(L0 - L) / (2 L0)`` (-0.125), kept to show why it was replaced:
     it is not the small-curvature limit of the same-path gain (see :func:`same_path_eta`)."""
     return -(L0 - L) / (2.0 * L0)
+
+
+def train_same_path_etas(lengths) -> list[float]:
+    """Small-curvature same-path gains of a train, trailer by trailer (docs/model.md Section 12).
+
+    Parameters
+    ----------
+    lengths : sequence of (L_k, L0_k)
+        Hitch offset behind the body in front and drawbar length of trailers 1..N (m).
+
+    Returns
+    -------
+    list of float
+        ``eta_k = b_k / (L_k + L0_k + b_k - b_(k-1))`` with ``b_0 = 0`` and
+        ``b_k = (L_k^2 - L0_k^2) / (2 L0_k) - (L_k / L0_k) b_(k-1)``, where ``b_k = beta_k / kappa``
+        is the steering angle per unit curvature of a trailer whose axle runs on the path.
+        Trailer 1 gets :func:`same_path_eta` itself. Trailers 2.. differ from their own
+        ``(L_k - L0_k) / (L_k + L0_k)`` because the hitch of trailer k is fixed to the body of
+        trailer k-1, whose axle rolls at beta_(k-1) to it: -1/35 for a copy of the paper's
+        trailer behind it.
+    """
+    etas, b_prev = [], 0.0
+    for k, (L, L0) in enumerate(lengths):
+        b = (L * L - L0 * L0) / (2.0 * L0) - (L / L0) * b_prev
+        etas.append(same_path_eta(L, L0) if k == 0 else b / (L + L0 + b - b_prev))
+        b_prev = b
+    return etas
+
+
+#: Most trailers a train may have (a longer train is accepted by the math but untested).
+MAX_TRAILERS = 8
+
+#: The fields of one trailer (trailer k's ``L`` is its hitch offset behind trailer k-1's axle,
+#: and its rod of length ``L`` and mass ``Mc1`` is part of trailer k-1's body).
+TRAILER_FIELDS = ("L", "L0", "Mr", "Mc1", "Mc2", "Ird", "Ic1", "Ic2")
+
+
+@dataclass(frozen=True)
+class Trailer:
+    """Trailer k >= 2 of a train (trailer 1 is described by :class:`Params`' own fields).
+
+    Parameters
+    ----------
+    L : float
+        Offset of the hitch O_k behind trailer k-1's axle midpoint, along trailer k-1's body.
+    L0 : float
+        Drawbar length O_k - P_k.
+    Mr, Mc1, Mc2, Ird, Ic1, Ic2 : float
+        As in :class:`Params`: body, front rod (rigid with trailer k-1) and drawbar. A table
+        given to :class:`Params` may leave any out: it takes trailer 1's.
+    eta : float or str
+        Steering gain or preset (``"same_path"`` is this trailer's own, see
+        :func:`train_same_path_etas`); resolved to a float by :class:`Params`.
+    """
+
+    L: float
+    L0: float
+    Mr: float
+    Mc1: float
+    Mc2: float
+    Ird: float
+    Ic1: float
+    Ic2: float
+    eta: float | str = "same_path"
+    steering: str = field(default="", compare=False)
+
+    def __post_init__(self) -> None:
+        for name in TRAILER_FIELDS:
+            value = getattr(self, name)
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, int | float)
+                or not math.isfinite(value)
+                or value <= 0
+            ):
+                raise ValueError(
+                    f"trailer {name}={value!r} is not allowed: it must be a finite number > 0"
+                )
+            object.__setattr__(self, name, float(value))
+
+    def to_dict(self) -> dict:
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
 
 
 #: Largest steering gain accepted: beyond it the singularity |eta phi| = 90 deg is within a
@@ -151,6 +237,9 @@ class Params:
         Roll and pitch inertia of the tractor and trailer bodies as a multiple of their yaw
         inertia (not in the paper; a flat plate has 0.5, and MuJoCo needs
         the triangle inequality I_roll + I_pitch >= I_yaw, so 0.6).
+    train : tuple of Trailer (or dicts of its fields)
+        Trailers 2..N behind the first (empty: the paper's single trailer). Build copies of
+        trailer 1 with :meth:`with_trailers`.
     """
 
     Mf: float = 9.0
@@ -174,6 +263,7 @@ class Params:
     timestep: float = 0.001
     impratio: float = 10.0
     body_tilt_inertia_ratio: float = 0.6
+    train: tuple = ()
     steering: str = field(default="", init=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -223,6 +313,99 @@ class Params:
         eta, preset = resolve_eta(self.eta, self.L, self.L0)
         object.__setattr__(self, "eta", eta)
         object.__setattr__(self, "steering", preset)
+        object.__setattr__(self, "train", self._resolved_train())
+
+    def _resolved_train(self) -> tuple:
+        train = self.train
+        if not isinstance(train, list | tuple):
+            raise ValueError(f"train={train!r} is not allowed: give a list of trailers")
+        if len(train) + 1 > MAX_TRAILERS:
+            raise ValueError(
+                f"trailers={len(train) + 1} is not allowed: at most {MAX_TRAILERS} trailers"
+            )
+        items = []
+        first = {name: getattr(self, name) for name in TRAILER_FIELDS}
+        for k, item in enumerate(train, start=2):
+            if isinstance(item, dict):
+                item = {key: value for key, value in item.items() if key != "steering"}
+                unknown = sorted(set(item) - {*TRAILER_FIELDS, "eta"})
+                if unknown:
+                    raise ValueError(
+                        f"trailer {k} field {unknown[0]!r} is not allowed: use "
+                        f"{', '.join((*TRAILER_FIELDS, 'eta'))}"
+                    )
+                item = Trailer(**{**first, **item})
+            elif not isinstance(item, Trailer):
+                raise ValueError(f"trailer {k}={item!r} is not allowed: give a table of fields")
+            items.append(item)
+        if not items:
+            return ()
+        lengths = [(self.L, self.L0)] + [(t.L, t.L0) for t in items]
+        limits = train_same_path_etas(lengths)
+        resolved = []
+        for k, item in enumerate(items, start=2):
+            spec = item.eta
+            if isinstance(spec, str) and spec.strip().lower().replace("-", "_") == "same_path":
+                eta, preset = limits[k - 1], "same_path"
+            else:
+                try:
+                    eta, preset = resolve_eta(spec, item.L, item.L0)
+                except ValueError as err:
+                    raise ValueError(f"trailer {k}: {err}") from None
+            if not isinstance(spec, str) and item.steering:
+                preset = item.steering  # already resolved (a copy made by replace or scaled)
+            if self.r >= min(item.L, item.L0):
+                raise ValueError(
+                    f"trailer {k}: r={self.r!r} is not allowed: the wheel radius must be smaller "
+                    f"than both links (L={item.L!r}, L0={item.L0!r})"
+                )
+            resolved.append(dataclasses.replace(item, eta=eta, steering=preset))
+        return tuple(resolved)
+
+    # --- the train ------------------------------------------------------------------------
+    @property
+    def n_trailers(self) -> int:
+        """Number of trailers N (1 is the paper's vehicle)."""
+        return 1 + len(self.train)
+
+    @property
+    def trailers(self) -> tuple[Trailer, ...]:
+        """Trailers 1..N, trailer 1 made from this object's own fields."""
+        first = Trailer(
+            **{name: getattr(self, name) for name in TRAILER_FIELDS},
+            eta=self.eta,
+            steering=self.steering,
+        )
+        return (first, *self.train)
+
+    @property
+    def etas(self) -> tuple[float, ...]:
+        """The steering gains eta_1..eta_N."""
+        return (self.eta, *(t.eta for t in self.train))
+
+    def with_trailers(self, n: int, overrides=()) -> Params:
+        """A train of ``n`` trailers: trailers 2..n copy trailer 1's lengths, masses and
+        steering (a preset gives each trailer its own value), then take ``overrides[k - 2]``
+        (a dict of :data:`TRAILER_FIELDS` and ``eta``) for trailer k."""
+        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= MAX_TRAILERS:
+            raise ValueError(
+                f"trailers={n!r} is not allowed: it must be an integer in [1, {MAX_TRAILERS}]"
+            )
+        overrides = list(overrides or ())
+        if len(overrides) > n - 1:
+            raise ValueError(
+                f"{len(overrides)} trailer tables are not allowed with trailers={n}: give at "
+                f"most {n - 1} (for trailers 2..{n})"
+            )
+        copy = {name: getattr(self, name) for name in TRAILER_FIELDS}
+        copy["eta"] = self.eta if self.steering == "custom" else self.steering
+        train = []
+        for k in range(2, n + 1):
+            extra = overrides[k - 2] if k - 2 < len(overrides) else {}
+            if not isinstance(extra, dict):
+                raise ValueError(f"trailer {k}={extra!r} is not allowed: give a table of fields")
+            train.append({**copy, **extra})
+        return self.replace(train=tuple(train))
 
     # --- derived quantities ---------------------------------------------------------------
     @property
@@ -231,22 +414,45 @@ class Params:
         return math.inf if self.eta == 0 else math.pi / (2 * abs(self.eta))
 
     @property
+    def phi_singulars(self) -> tuple[float, ...]:
+        """:attr:`phi_singular` of every trailer's hitch."""
+        return tuple(math.inf if e == 0 else math.pi / (2 * abs(e)) for e in self.etas)
+
+    @property
     def total_mass(self) -> float:
-        return self.Mf + self.Mr + 4 * self.Mw + self.Mc1 + self.Mc2
+        extra = sum(t.Mr + 2 * self.Mw + t.Mc1 + t.Mc2 for t in self.train)
+        return self.Mf + self.Mr + 4 * self.Mw + self.Mc1 + self.Mc2 + extra
 
     def replace(self, **changes) -> Params:
         """A copy with some fields changed (validated again)."""
         if "eta" not in changes:
             changes["eta"] = self.eta
-        return dataclasses.replace(self, **changes)
+        out = dataclasses.replace(self, **changes)
+        if out.eta == self.eta and self.steering != "custom":
+            object.__setattr__(out, "steering", self.steering)  # the preset's name survives
+        return out
 
     def scaled(self, scale: float) -> Params:
-        """Masses and inertias multiplied by ``scale`` (docs/model.md §8 parameter uncertainty)."""
+        """Masses and inertias multiplied by ``scale`` (docs/model.md §8 parameter uncertainty),
+        every trailer's included."""
         if not (math.isfinite(scale) and scale > 0):
             raise ValueError(f"param scale={scale!r} is not allowed: it must be finite and > 0")
-        return self.replace(**{k: getattr(self, k) * scale for k in MASS_FIELDS + INERTIA_FIELDS})
+        train = tuple(
+            dataclasses.replace(
+                t, **{k: getattr(t, k) * scale for k in TRAILER_FIELDS if k not in ("L", "L0")}
+            )
+            for t in self.train
+        )
+        return self.replace(
+            train=train, **{k: getattr(self, k) * scale for k in MASS_FIELDS + INERTIA_FIELDS}
+        )
 
     def to_dict(self) -> dict:
-        """All fields as plain floats/strings, for reports and ``metrics.json``."""
+        """All fields as plain floats/strings, for reports and ``metrics.json`` (``train``, a
+        list of trailer tables, only for a train)."""
         out = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
+        if self.train:
+            out["train"] = [t.to_dict() for t in self.train]
+        else:
+            del out["train"]
         return out

@@ -42,9 +42,12 @@ __all__ = [
     "kinematics",
     "kinetic_energy",
     "mass_matrix",
+    "mass_terms",
     "matched_torque",
     "phi_rate",
     "rolling_rates",
+    "solve_dynamics",
+    "torque_for_force",
     "trailer_pose",
     "trailer_rows",
     "trailer_velocity",
@@ -317,7 +320,18 @@ def _coriolis(phi: float, v: float, omega: float, p: Params):
 def matched_torque(phi: float, a_v: float, a_omega: float, p: Params) -> tuple[float, float]:
     """Wheel torques ``(T_r, T_l) = g(phi)^-1 (a_v, a_omega) = B^-1 Mbar(phi) a``: the matched
     input that adds the acceleration ``a`` to ``(v_dot, omega_dot)`` (docs/model.md Section 8)."""
-    M11, M12, M22 = _inertia_terms(phi, p)[0]
+    return torque_for_force(_inertia_terms(phi, p)[0], a_v, a_omega, p)
+
+
+def mass_terms(phi: float, p: Params) -> tuple[float, float, float]:
+    """``Mbar(phi)`` as plain floats ``(M11, M12, M22)`` (see :func:`mass_matrix`)."""
+    return _inertia_terms(phi, p)[0]
+
+
+def torque_for_force(mass: tuple, a_v: float, a_omega: float, p: Params) -> tuple[float, float]:
+    """``B^-1 Mbar a`` for ``Mbar`` given as ``(M11, M12, M22)``: the wheel torques that add the
+    acceleration ``a`` (the one trailer's :func:`matched_torque`, or a train's)."""
+    M11, M12, M22 = mass
     force = M11 * a_v + M12 * a_omega  # generalized force on v
     moment = M12 * a_v + M22 * a_omega  # ... and on omega
     # B^-1 with B = [[1/r, 1/r], [d/(2r), -d/(2r)]].
@@ -335,7 +349,15 @@ def coriolis_force(phi: float, V, p: Params) -> np.ndarray:
 def dynamics_scalar(phi: float, v: float, omega: float, p: Params):
     """:func:`dynamics` as six plain floats ``(f1, f2, g11, g12, g21, g22)``: the controllers'
     per-step call, without array allocation."""
-    (M11, M12, M22), (c1, c2) = _coriolis(phi, v, omega, p)
+    return solve_dynamics(*_coriolis(phi, v, omega, p), p)
+
+
+def solve_dynamics(mass: tuple, bias: tuple, p: Params):
+    """``(f1, f2, g11, g12, g21, g22)`` of ``V_dot = f + g tau`` from ``Mbar`` as
+    ``(M11, M12, M22)`` and ``Cbar V`` as ``(c1, c2)``: ``f = -Mbar^-1 Cbar V``,
+    ``g = Mbar^-1 B`` (one trailer's or a train's)."""
+    M11, M12, M22 = mass
+    c1, c2 = bias
     det = M11 * M22 - M12 * M12
     i11, i12, i22 = M22 / det, -M12 / det, M11 / det
     b = 1.0 / p.r

@@ -33,13 +33,15 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from tt_mujoco.vehicle.params import Params, same_path_eta
+from tt_mujoco.vehicle.params import Params, same_path_eta, train_same_path_etas
 
 __all__ = [
     "exact_same_path_eta",
+    "exact_train_same_path_etas",
     "same_path_eta_limit",
     "steady_articulation",
     "steady_offtrack",
+    "steady_train",
 ]
 
 #: Below this |kappa| (1/m) the exact gain is its limit (the error is O(kappa^2), < 1e-12 here).
@@ -161,3 +163,110 @@ def steady_articulation(kappa: float, params: Params | None = None) -> float:
         if values[i] == 0.0 or values[i] * values[i + 1] < 0.0:
             return float(brentq(residual, grid[i], grid[i + 1], xtol=1e-13))
     return math.nan
+
+
+def exact_train_same_path_etas(kappa: float, lengths) -> list[float]:
+    """The constant-curvature gains that put every trailer's axle on the tractor's path.
+
+    Parameters
+    ----------
+    kappa : float
+        Curvature of the tractor's path (1/m); the gains are even in kappa.
+    lengths : sequence of (L_k, L0_k)
+        Trailers 1..N.
+
+    Returns
+    -------
+    list of float
+        ``eta_k = beta_k / phi_k`` of the steady turn in which P_1..P_N all lie on the circle of
+        radius R = 1/|kappa| (docs/model.md Section 12): trailer by trailer, O_k is fixed by the
+        body in front, P_k is where the circle of radius L0_k about O_k meets the path's circle
+        behind O_k, and P_k's rolling direction, the circle's tangent, fixes beta_k. Trailer 1's
+        gain is :func:`exact_same_path_eta`. Below |kappa| = 1e-6 the small-curvature limits
+        (:func:`tt_mujoco.vehicle.params.train_same_path_etas`).
+
+    Raises
+    ------
+    ValueError
+        If the curvature is so tight that some trailer's axle cannot reach the path.
+    """
+    kappa = float(kappa)
+    if not math.isfinite(kappa):
+        raise ValueError(f"kappa={kappa!r} is not allowed: it must be finite")
+    lengths = [(float(L), float(L0)) for L, L0 in lengths]
+    if abs(kappa) < _KAPPA_TINY:
+        return train_same_path_etas(lengths)
+    R = 1.0 / abs(kappa)
+    # Turning left about C = 0: the tractor's P at (R, 0) heading +y.
+    fx, fy, fth = R, 0.0, 0.5 * math.pi
+    etas = []
+    for k, (L, L0) in enumerate(lengths, start=1):
+        ox, oy = fx - L * math.cos(fth), fy - L * math.sin(fth)
+        dist = math.hypot(ox, oy)
+        a = (R * R - L0 * L0 + dist * dist) / (2.0 * dist)
+        if R * R - a * a < 0.0:
+            raise ValueError(
+                f"kappa={kappa!r} is not allowed: trailer {k}'s axle cannot reach a path of "
+                f"radius {R:.4g} m"
+            )
+        h = math.sqrt(R * R - a * a)
+        ux, uy = ox / dist, oy / dist
+        # The meeting point behind O (clockwise from it, as the train turns left).
+        px, py = a * ux + h * uy, a * uy - h * ux
+        thk = math.atan2(oy - py, ox - px)
+        alpha = math.atan2(py, px) + 0.5 * math.pi
+        phi = _wrap(fth - thk)
+        beta = _wrap(alpha - thk)
+        etas.append(beta / phi)
+        fx, fy, fth = px, py, thk
+    return etas
+
+
+def _wrap(angle: float) -> float:
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def steady_train(kappa: float, params: Params) -> tuple[list[float], list[float]]:
+    """Steady articulations and off-tracking of every trailer at constant curvature.
+
+    Solves ``phi_k_dot = 0`` trailer by trailer with ``omega = kappa v`` on the reduced
+    kinematics (docs/model.md Section 12), taking each root nearest to 0, and places the train on
+    the tractor's circle.
+
+    Returns
+    -------
+    phis : list of float
+        phi_1..phi_N (rad); NaN from the first trailer without a steady state.
+    offtracks : list of float
+        |C P_k| - R (m): + outside the tractor's path, - inside.
+    """
+    from tt_mujoco.vehicle import train  # the train's kinematics (imports this module's peers)
+
+    kappa = float(kappa)
+    n = params.n_trailers
+    if kappa == 0.0:
+        return [0.0] * n, [0.0] * n
+    phis = [0.0] * n
+    for k in range(n):
+
+        def rate(phi: float, k: int = k) -> float:
+            trial = phis[:k] + [phi] + [0.0] * (n - k - 1)
+            return train.trailer_rates(trial, 1.0, kappa, params)[k][0]
+
+        reach = min(math.pi / 2, params.phi_singulars[k] * (1.0 - 1e-6))
+        root = math.nan
+        grid = np.linspace(0.0, reach, 2001)
+        for sign in (1.0, -1.0):
+            values = [rate(sign * g) for g in grid]
+            for i in range(len(grid) - 1):
+                if values[i] == 0.0 or values[i] * values[i + 1] < 0.0:
+                    candidate = brentq(rate, sign * grid[i], sign * grid[i + 1], xtol=1e-15)
+                    if math.isnan(root) or abs(candidate) < abs(root):
+                        root = candidate
+                    break
+        if math.isnan(root):
+            return phis[:k] + [math.nan] * (n - k), [math.nan] * n
+        phis[k] = float(root)
+    R = 1.0 / kappa
+    places = train.poses(R, 0.0, 0.5 * math.pi, phis, params)
+    return phis, [math.hypot(px, py) - abs(R) for _, _, px, py, _ in places]

@@ -64,6 +64,125 @@ ALONG_X = f"0 {math.pi / 2!r} 0"
 ALONG_Y = f"{math.pi / 2!r} 0 0"
 
 
+def _trailer_parts(p: Params, k: int, revolute_z, wheel_link, wheel_joint, hitch_limit) -> str:
+    """Trailer k's links and joints. Trailer 1 hangs from the tractor L behind P; trailer k >= 2
+    from trailer k-1's frame (at O_(k-1)), L_k behind its axle midpoint, with its front rod
+    fixed to trailer k-1 (as the MJCF)."""
+    t = p.trailers[k - 1]
+    sfx = "" if k == 1 else f"_{k}"
+    r, d, L, L0 = p.r, p.d, t.L, t.L0
+    tilt = p.body_tilt_inertia_ratio
+    h = CHASSIS_HALF_HEIGHT
+    rod_radius = 0.15 * r
+    axle_mass = AXLE_MASS
+    axle_yaw = axle_mass * d**2 / 4
+    passive = '  <dynamics damping="0" friction="0"/>\n'
+    trailer_wheel_mass = p.Mw - axle_mass / 2
+    parent, origin, front = "tractor", -L, []
+    if k > 1:
+        parent = f"trailer{'' if k == 2 else f'_{k - 1}'}"
+        behind = -p.trailers[k - 2].L0  # trailer k-1's axle midpoint, in its frame
+        origin = behind - L
+        front = [
+            f"\n<!-- Trailer {k}'s front rod, fixed to trailer {k - 1}. -->\n",
+            _link(
+                f"front_rod_{k}",
+                _inertial(t.Mc1, 0.01 * t.Ic1, t.Ic1, t.Ic1)
+                + _shape(
+                    "visual",
+                    f'<cylinder radius="{_g(rod_radius)}" length="{_g(L)}"/>',
+                    rpy=ALONG_X,
+                    material="rod",
+                ),
+            ),
+            _joint(
+                f"front_rod_{k}_joint",
+                "fixed",
+                parent,
+                f"front_rod_{k}",
+                f"{_g(behind - L / 2)} 0 0",
+            ),
+        ]
+    head = (
+        "\n<!-- Trailer: frame at the hitch O; hitch angle q_hitch = -phi. -->\n"
+        if k == 1
+        else f"\n<!-- Trailer {k}: frame at its hitch O_{k}; q_hitch_{k} = -phi_{k}. -->\n"
+    )
+    steer_note = (
+        "\n<!-- Steering axle at P0: q_steer = beta. AXLE_MASS is taken from the two trailer\n"
+        "     wheels, with the yaw inertia that mass had at the wheel centres (as the MJCF). -->\n"
+        if k == 1
+        else f"\n<!-- Trailer {k}'s steering axle at P0_{k}: q_steer_{k} = beta_{k}. -->\n"
+    )
+    parts = [
+        *front,
+        head,
+        _link(
+            f"trailer{sfx}",
+            _inertial(t.Mc2, 0.01 * t.Ic2, t.Ic2, t.Ic2, xyz=f"{_g(-L0 / 2)} 0 0")
+            + _shape(
+                "visual",
+                f'<cylinder radius="{_g(rod_radius)}" length="{_g(L0)}"/>',
+                xyz=f"{_g(-L0 / 2)} 0 0",
+                rpy=ALONG_X,
+                material="rod",
+            ),
+        ),
+        _joint(
+            f"hitch{sfx}",
+            "revolute",
+            parent,
+            f"trailer{sfx}",
+            f"{_g(origin)} 0 0",
+            revolute_z(hitch_limit, 0.0) + passive,
+        ),
+        _link(
+            f"trailer_body{sfx}",
+            _inertial(t.Mr, tilt * t.Ird, tilt * t.Ird, t.Ird)
+            + _shape(
+                "visual",
+                f'<box size="{_g(2 * (0.35 * L0))} {_g(2 * (0.35 * d))} {_g(2 * h)}"/>',
+                xyz=f"{_g(0.1 * L0)} 0 {_g(r + 3 * h)}",
+                material=f"trailer{sfx}",
+            ),
+        ),
+        _joint(
+            f"trailer_body_joint{sfx}",
+            "fixed",
+            f"trailer{sfx}",
+            f"trailer_body{sfx}",
+            f"{_g(-L0)} 0 0",
+        ),
+        steer_note,
+        _link(
+            f"trailer_axle{sfx}",
+            _inertial(axle_mass, axle_yaw, axle_yaw, axle_yaw)
+            + _shape(
+                "visual",
+                f'<cylinder radius="{_g(rod_radius)}" length="{_g(d)}"/>',
+                rpy=ALONG_Y,
+                material="rod",
+            ),
+        ),
+        _joint(
+            f"steer{sfx}",
+            "revolute",
+            f"trailer{sfx}",
+            f"trailer_axle{sfx}",
+            f"{_g(-L0)} 0 0",
+            revolute_z(STEER_LIMIT, 0.0)
+            + passive
+            + "  <!-- Kinematic only: beta = eta * phi, see the top of this file. -->\n"
+            + f'  <mimic joint="hitch{sfx}" multiplier="{_g(-t.eta)}" offset="0"/>\n',
+        ),
+        wheel_link(f"trailer_wheel_left{sfx}", trailer_wheel_mass),
+        wheel_joint(f"trailer_wheel_left{sfx}", f"trailer_axle{sfx}", d / 2, None),
+        wheel_link(f"trailer_wheel_right{sfx}", trailer_wheel_mass),
+        wheel_joint(f"trailer_wheel_right{sfx}", f"trailer_axle{sfx}", -d / 2, None),
+    ]
+    return "".join(parts)
+
+
 def wheel_joint_name(link: str) -> str:
     """URDF name of a wheel's spin joint (the MJCF calls it like the body, ``link``)."""
     return f"{link}_joint"
@@ -141,11 +260,9 @@ def urdf_xml(p: Params | None = None) -> str:
     tilt = p.body_tilt_inertia_ratio
     h = CHASSIS_HALF_HEIGHT
     rod_radius = 0.15 * r  # the MJCF's capsule radius
-    axle_mass = AXLE_MASS
-    axle_yaw = axle_mass * d**2 / 4
     # Hitch range: up to the singularity |eta phi| = pi/2 (docs/model.md Section 2), at most a full
     # fold.
-    hitch_limit = min(p.phi_singular, math.pi)
+    hitch_limits = [min(limit, math.pi) for limit in p.phi_singulars]
     passive = '  <dynamics damping="0" friction="0"/>\n'  # as the MJCF: no frictionloss
 
     def revolute_z(limit: float, effort: float) -> str:
@@ -178,7 +295,6 @@ def urdf_xml(p: Params | None = None) -> str:
         extra = '  <axis xyz="0 1 0"/>\n' + limit + passive
         return _joint(wheel_joint_name(name), "continuous", parent, name, f"0 {_g(y)} 0", extra)
 
-    trailer_wheel_mass = p.Mw - axle_mass / 2
     parts = [
         "<!-- Materials of the MJCF. -->\n",
         *(
@@ -218,69 +334,22 @@ def urdf_xml(p: Params | None = None) -> str:
         wheel_joint("tractor_wheel_left", "tractor", d / 2, p.torque_limit),
         wheel_link("tractor_wheel_right", p.Mw),
         wheel_joint("tractor_wheel_right", "tractor", -d / 2, p.torque_limit),
-        "\n<!-- Trailer: frame at the hitch O; hitch angle q_hitch = -phi. -->\n",
-        _link(
-            "trailer",
-            _inertial(p.Mc2, 0.01 * p.Ic2, p.Ic2, p.Ic2, xyz=f"{_g(-L0 / 2)} 0 0")
-            + _shape(
-                "visual",
-                f'<cylinder radius="{_g(rod_radius)}" length="{_g(L0)}"/>',
-                xyz=f"{_g(-L0 / 2)} 0 0",
-                rpy=ALONG_X,
-                material="rod",
-            ),
+        *(
+            _trailer_parts(p, k, revolute_z, wheel_link, wheel_joint, hitch_limits[k - 1])
+            for k in range(1, p.n_trailers + 1)
         ),
-        _joint(
-            "hitch",
-            "revolute",
-            "tractor",
-            "trailer",
-            f"{_g(-L)} 0 0",
-            revolute_z(hitch_limit, 0.0) + passive,
-        ),
-        _link(
-            "trailer_body",
-            _inertial(p.Mr, tilt * p.Ird, tilt * p.Ird, p.Ird)
-            + _shape(
-                "visual",
-                f'<box size="{_g(2 * (0.35 * L0))} {_g(2 * (0.35 * d))} {_g(2 * h)}"/>',
-                xyz=f"{_g(0.1 * L0)} 0 {_g(r + 3 * h)}",
-                material="trailer",
-            ),
-        ),
-        _joint("trailer_body_joint", "fixed", "trailer", "trailer_body", f"{_g(-L0)} 0 0"),
-        "\n<!-- Steering axle at P0: q_steer = beta. AXLE_MASS is taken from the two trailer\n"
-        "     wheels, with the yaw inertia that mass had at the wheel centres (as the MJCF). -->\n",
-        _link(
-            "trailer_axle",
-            _inertial(axle_mass, axle_yaw, axle_yaw, axle_yaw)
-            + _shape(
-                "visual",
-                f'<cylinder radius="{_g(rod_radius)}" length="{_g(d)}"/>',
-                rpy=ALONG_Y,
-                material="rod",
-            ),
-        ),
-        _joint(
-            "steer",
-            "revolute",
-            "trailer",
-            "trailer_axle",
-            f"{_g(-L0)} 0 0",
-            revolute_z(STEER_LIMIT, 0.0)
-            + passive
-            + "  <!-- Kinematic only: beta = eta * phi, see the top of this file. -->\n"
-            + f'  <mimic joint="hitch" multiplier="{_g(-p.eta)}" offset="0"/>\n',
-        ),
-        wheel_link("trailer_wheel_left", trailer_wheel_mass),
-        wheel_joint("trailer_wheel_left", "trailer_axle", d / 2, None),
-        wheel_link("trailer_wheel_right", trailer_wheel_mass),
-        wheel_joint("trailer_wheel_right", "trailer_axle", -d / 2, None),
         "\n<!-- Gazebo: wheel-floor friction (Params.friction). -->\n",
         *(
             f'<gazebo reference="{name}"><mu1>{_g(p.friction)}</mu1>'
             f"<mu2>{_g(p.friction)}</mu2></gazebo>\n"
-            for name in WHEELS
+            for name in (
+                *WHEELS,
+                *(
+                    f"trailer_wheel_{side}_{k}"
+                    for k in range(2, p.n_trailers + 1)
+                    for side in ("left", "right")
+                ),
+            )
         ),
     ]
     body = textwrap.indent("".join(parts), "  ")

@@ -28,6 +28,7 @@ from tt_mujoco.outputs import publish_new, temporary_beside
 from tt_mujoco.progress import progress_bar
 from tt_mujoco.reference import paths
 from tt_mujoco.sim.physics import Vehicle
+from tt_mujoco.sim.timeseries import train_columns
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.viz.annotate import END_CARD_S, Legend, end_card
 from tt_mujoco.viz.gl import GL_BACKENDS, RenderUnavailable, gl_context, select_gl_backend
@@ -95,6 +96,17 @@ TRACTOR_TRACE_RGBA = np.array([1.0, 0.45, 0.05, 1.0], dtype=np.float32)  # tract
 
 
 TRAILER_TRACE_RGBA = np.array([0.2, 0.6, 1.0, 1.0], dtype=np.float32)  # trailer blue
+
+#: Traces of trailers 2, 3, ... of a train (cycled): violet, teal, pink, yellow-green.
+TRAIN_TRACE_RGBA = tuple(
+    np.array(rgba, dtype=np.float32)
+    for rgba in (
+        (0.65, 0.35, 1.0, 1.0),
+        (0.1, 0.85, 0.7, 1.0),
+        (1.0, 0.4, 0.7, 1.0),
+        (0.7, 0.9, 0.2, 1.0),
+    )
+)
 
 
 REFERENCE_POINT_RGBA = np.array([0.1, 0.9, 0.2, 1.0], dtype=np.float32)
@@ -220,6 +232,7 @@ class RunRenderer:
         self.info = info
         self.has_reference_point = "x_ref" in ts and "y_ref" in ts
         extra = ("x_ref", "y_ref") if self.has_reference_point else ()
+        extra += train_columns(params.n_trailers)
         self.cols = validated_columns(ts, VIDEO_COLUMNS + extra)
         polyline = np.asarray(reference_polyline, dtype=float).reshape(-1, 2)
         if not np.all(np.isfinite(polyline)):
@@ -231,9 +244,19 @@ class RunRenderer:
         self.model = self.vehicle.model
         self.times, self.index = frame_schedule(self.cols["t"], fps)
         self.n_frames = len(self.times)
+        trailers = range(1, params.n_trailers + 1)
         self._wheels = np.column_stack(
-            [self.cols["theta_l"], self.cols["theta_r"], *trailer_wheel_angles(self.cols, params)]
+            [
+                self.cols["theta_l"],
+                self.cols["theta_r"],
+                *(a for k in trailers for a in trailer_wheel_angles(self.cols, params, k)),
+            ]
         )
+        # (phi_k, beta_k) of trailers 2..N at every sample.
+        self._train = np.zeros((len(self.cols["t"]), params.n_trailers - 1, 2))
+        for j, k in enumerate(trailers[1:]):
+            self._train[:, j, 0] = self.cols[f"phi_{k}"]
+            self._train[:, j, 1] = self.cols[f"beta_{k}"]
 
         # Traces: one point a frame, every stride-th point kept, plus a live segment to "now".
         self.trace_stride = max(1, math.ceil(self.n_frames / MAX_TRACE_POINTS))
@@ -244,23 +267,33 @@ class RunRenderer:
             if len(polyline) > 1
             else np.full(self.n_frames, np.nan)
         )
-        self._trailer_xy = np.column_stack([self.cols["x0"], self.cols["y0"]])[self.index]
+        # Every axle's trace: P, P0, then P0_k of trailers k = 2..N.
+        sfx = ["" if k == 1 else f"_{k}" for k in trailers]
+        self._units = [self._tractor_xy] + [
+            np.column_stack([self.cols[f"x0{s}"], self.cols[f"y0{s}"]])[self.index] for s in sfx
+        ]
+        self._unit_rgba = [TRACTOR_TRACE_RGBA, TRAILER_TRACE_RGBA] + [
+            TRAIN_TRACE_RGBA[j % len(TRAIN_TRACE_RGBA)] for j in range(params.n_trailers - 1)
+        ]
+        self._last = f"x0{sfx[-1]}", f"y0{sfx[-1]}"  # the last axle, for the follow camera
         max_committed = (self.n_frames - 1) // self.trace_stride + 1
         self._n_fixed = max(len(self.path) - 1, 0)
-        n_user = self._n_fixed + 1 + 2 * (max_committed + 1)
+        n_user = self._n_fixed + 1 + len(self._units) * (max_committed + 1)
         # Room for the model's geoms twice over (mjv_updateScene may add decor) plus ours.
         maxgeom = 2 * self.model.ngeom + 100 + n_user
 
         fovy = float(self.model.vis.global_.fovy)
-        drawn = np.vstack([self._tractor_xy, self._trailer_xy, self.path])
+        drawn = np.vstack([*self._units, self.path])
         if camera == "overview":
             # The bodies reach past P and P0 (the tractor's chassis 0.75 L ahead of P).
             pad = 0.75 * params.L + 0.5 * params.d
             self.camera = overview_camera(drawn, fovy, width / height, pad)
         else:
+            # A train is longer than the paper's vehicle: back off by the extra length.
+            extra_length = sum(t.L + t.L0 for t in params.train)
             self.camera = {
                 "lookat": np.zeros(3),
-                "distance": FOLLOW_DISTANCE,
+                "distance": FOLLOW_DISTANCE + extra_length,
                 "azimuth": FOLLOW_AZIMUTH,
                 "elevation": FOLLOW_ELEVATION,
             }
@@ -284,6 +317,10 @@ class RunRenderer:
         entries = [
             ("tractor trace (axle P)", TRACTOR_TRACE_RGBA),
             ("trailer trace (axle P0)", TRAILER_TRACE_RGBA),
+            *(
+                (f"trailer {k} trace (axle P0_{k})", rgba)
+                for k, rgba in enumerate(self._unit_rgba[2:], start=2)
+            ),
             ("reference path", PATH_RGBA),
         ]
         if self.has_reference_point:
@@ -349,22 +386,22 @@ class RunRenderer:
             slot += 1
         trace0 = slot
         stride = self.trace_stride
+        units = len(self._units)
         for j in range(self._committed, committed):
-            self._trace_pair(trace0 + 2 * (j - 1), (j - 1) * stride, j * stride)
+            self._trace_group(trace0 + units * (j - 1), (j - 1) * stride, j * stride)
         self._committed = committed
-        slot = trace0 + 2 * (committed - 1)
+        slot = trace0 + units * (committed - 1)
         last = (committed - 1) * stride
         if frame > last:  # a zero-length line would take its direction from stale memory
-            self._trace_pair(slot, last, frame)
-            slot += 2
+            self._trace_group(slot, last, frame)
+            slot += units
         scn.ngeom = slot
 
-    def _trace_pair(self, slot: int, a: int, b: int) -> None:
-        """Trace segments from frame ``a`` to frame ``b``: P at ``slot``, P0 at ``slot + 1``."""
-        self._segment(slot, self._tractor_xy[a], self._tractor_xy[b], TRACE_Z, TRACTOR_TRACE_RGBA)
-        self._segment(
-            slot + 1, self._trailer_xy[a], self._trailer_xy[b], TRACE_Z, TRAILER_TRACE_RGBA
-        )
+    def _trace_group(self, slot: int, a: int, b: int) -> None:
+        """Trace segments from frame ``a`` to frame ``b``: P at ``slot``, P0 at ``slot + 1``,
+        then the axles of trailers 2..N."""
+        for j, (xy, rgba) in enumerate(zip(self._units, self._unit_rgba, strict=True)):
+            self._segment(slot + j, xy[a], xy[b], TRACE_Z, rgba)
 
     # --- frames -----------------------------------------------------------------------------------
     def overlay_text(self, frame: int) -> tuple[str, str]:
@@ -377,6 +414,10 @@ class RunRenderer:
             f"{math.degrees(c['phi'][i]):+.2f} deg\n{math.degrees(c['beta'][i]):+.2f} deg\n"
             f"{self.params.eta:+.4g}\n{1000.0 * self._cross[frame]:+.1f} mm"
         )
+        # A train: every further hitch angle and its gain.
+        for k, t in enumerate(self.params.train, start=2):
+            labels += f"\nphi_{k} (eta_{k})"
+            values += f"\n{math.degrees(c[f'phi_{k}'][i]):+.2f} deg ({t.eta:+.3g})"
         return labels, values
 
     def compact_text(self, frame: int) -> str:
@@ -406,14 +447,10 @@ class RunRenderer:
             c["phi"][i],
             c["beta"][i],
             self._wheels[i],
+            self._train[i],
         )
         if self.camera_mode == "follow":
-            # Look at the middle of the vehicle (between P and P0), so both units stay framed.
-            self._mjv_camera.lookat[:] = [
-                0.5 * (c["x"][i] + c["x0"][i]),
-                0.5 * (c["y"][i] + c["y0"][i]),
-                0.05,
-            ]
+            self._mjv_camera.lookat[:] = self.camera_at(frame)["lookat"]
         else:
             self._mjv_camera.lookat[:] = self.camera["lookat"]
         mujoco.mjv_updateScene(
@@ -435,10 +472,12 @@ class RunRenderer:
         """The free camera (as in :func:`overview_camera`) used for ``frame``."""
         cam = dict(self.camera)
         if self.camera_mode == "follow":
+            # The middle of the vehicle (between P and the last axle), so every unit stays framed.
             i = self.index[frame]
             c = self.cols
+            lx, ly = self._last
             cam["lookat"] = np.array(
-                [0.5 * (c["x"][i] + c["x0"][i]), 0.5 * (c["y"][i] + c["y0"][i]), 0.05]
+                [0.5 * (c["x"][i] + c[lx][i]), 0.5 * (c["y"][i] + c[ly][i]), 0.05]
             )
         return cam
 

@@ -117,42 +117,52 @@ def cumulative_trapezoid(y: np.ndarray, t: np.ndarray) -> np.ndarray:
     return out
 
 
-def trailer_wheel_angles(ts: Mapping, params: Params) -> tuple[np.ndarray, np.ndarray]:
+def trailer_wheel_angles(ts: Mapping, params: Params, k: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """Trailer wheel spin angles (left, right) by integrating their rolling rates.
 
     The wheels at P0 +- (d/2) n(alpha) roll at ``(v0 -+ (d/2) alpha_dot) / r`` with
     ``alpha = theta0 + beta`` (docs/model.md Section 4), so the angles are
-    ``(integral(v0) -+ (d/2) (alpha - alpha(0))) / r``.
+    ``(integral(v0) -+ (d/2) (alpha - alpha(0))) / r``. Trailer ``k`` >= 2 uses its own
+    columns (``v0_k``, ``theta0_k``, ``beta_k``).
     """
-    cols = validated_columns(ts, ("t", "v0", "theta0", "beta"))
-    rolled = cumulative_trapezoid(cols["v0"], cols["t"])
-    alpha = cols["theta0"] + cols["beta"]
+    sfx = "" if k == 1 else f"_{k}"
+    names = ("v0", "theta0", "beta")
+    cols = validated_columns(ts, ("t", *(name + sfx for name in names)))
+    v0, theta0, beta = (cols[name + sfx] for name in names)
+    rolled = cumulative_trapezoid(v0, cols["t"])
+    alpha = theta0 + beta
     turned = 0.5 * params.d * (alpha - alpha[0])
     return (rolled - turned) / params.r, (rolled + turned) / params.r
 
 
-def pose_vehicle(vehicle, x, y, theta, phi, beta, wheels) -> None:
+def pose_vehicle(vehicle, x, y, theta, phi, beta, wheels, train=()) -> None:
     """Put a :class:`~tt_mujoco.sim.physics.Vehicle` in a planar pose and compute its kinematics.
 
     Free joint at (x, y, r) with yaw ``theta``; ``q_hitch = -phi``; ``q_steer = beta`` (the
     recorded angle, so an equality-constraint violation shows); ``wheels`` are the spin angles
-    (tractor left, tractor right, trailer left, trailer right).
+    (tractor left, tractor right, trailer left, trailer right, then trailer k's left and
+    right for k = 2..N); ``train`` holds ``(phi_k, beta_k)`` of trailers 2..N.
     """
     lay, d, p = vehicle.layout, vehicle.data, vehicle.params
     i = lay.root_q
     d.qpos[i : i + 7] = [x, y, p.r, math.cos(theta / 2), 0.0, 0.0, math.sin(theta / 2)]
     d.qpos[lay.hitch_q] = -phi
     d.qpos[lay.steer_q] = beta
+    for (hitch_q, _, steer_q, _, _), (phi_k, beta_k) in zip(lay.train, train, strict=True):
+        d.qpos[hitch_q] = -phi_k
+        d.qpos[steer_q] = beta_k
     for address, angle in zip(_wheel_qpos(vehicle), wheels, strict=True):
         d.qpos[address] = angle
     mujoco.mj_kinematics(vehicle.model, d)
     mujoco.mj_camlight(vehicle.model, d)
 
 
-def _wheel_qpos(vehicle) -> tuple[int, int, int, int]:
+def _wheel_qpos(vehicle) -> tuple[int, ...]:
     m = vehicle.model
-    names = ("tractor_wheel_left", "tractor_wheel_right", "trailer_wheel_left")
-    names += ("trailer_wheel_right",)
+    names = ["tractor_wheel_left", "tractor_wheel_right", "trailer_wheel_left"]
+    names += ["trailer_wheel_right"]
+    for k in range(2, vehicle.params.n_trailers + 1):
+        names += [f"trailer_wheel_left_{k}", f"trailer_wheel_right_{k}"]
     return tuple(int(m.jnt_qposadr[m.joint(name).id]) for name in names)
 
 
