@@ -66,3 +66,10 @@ class Plant(ABC):
     @abstractmethod
     def set_eta(self, eta: float) -> None:
         """Change the passive steering gain beta = eta phi from the next step on."""
+
+    def set_etas(self, etas) -> None:
+        """Change every trailer's gain, eta_1..eta_N (a plant of one trailer needs only
+        :meth:`set_eta`)."""
+        if len(etas) != 1:
+            raise NotImplementedError(f"{type(self).__name__} steers one trailer")
+        self.set_eta(etas[0])

@@ -171,11 +171,6 @@ class Scenario:
         if not isinstance(self.train, list | tuple):
             raise ValueError(f"train={self.train!r} is not allowed: give a list of tables")
         self.nominal_params()  # the trailers' count and tables, checked by Params
-        if self.trailers > 1 and self.eta_schedule:
-            raise ValueError(
-                f"eta_schedule=True is not allowed with trailers={self.trailers}: the schedule "
-                "steers one trailer; give each trailer a constant eta (e.g. same_path)"
-            )
         self._check_phi0()
 
     def _check_phi0(self) -> None:

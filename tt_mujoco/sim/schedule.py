@@ -8,7 +8,11 @@ import numpy as np
 
 from tt_mujoco.sim.plant import Plant
 from tt_mujoco.vehicle.params import Params
-from tt_mujoco.vehicle.steering import SCHEDULE_TOLERANCE, exact_same_path_eta
+from tt_mujoco.vehicle.steering import (
+    SCHEDULE_TOLERANCE,
+    exact_same_path_eta,
+    exact_train_same_path_etas,
+)
 
 __all__ = ["EtaScheduler"]
 
@@ -38,8 +42,10 @@ class EtaScheduler:
         if not (isinstance(tolerance, int | float) and math.isfinite(tolerance) and tolerance >= 0):
             raise ValueError(f"tolerance={tolerance!r} is not allowed: it must be a number >= 0")
         self.L, self.L0 = params.L, params.L0
+        self.lengths = [(t.L, t.L0) for t in params.trailers]
         self.tolerance = float(tolerance)
         self.eta = params.eta
+        self.etas = params.etas
         self.updates = 0
         self._kappa: float | None = None
         # (first sample, eta) for every change: sample j was reached under the eta in force
@@ -59,6 +65,15 @@ class EtaScheduler:
         if kappa == self._kappa:  # arcs: constant curvature, nothing to recompute
             return self.eta
         self._kappa = kappa
+        if len(self.lengths) > 1:  # a train: every trailer's own exact gain
+            etas = exact_train_same_path_etas(kappa, self.lengths)
+            if max(abs(a - b) for a, b in zip(etas, self.etas, strict=True)) > self.tolerance:
+                self._plant.set_etas(etas)
+                self.etas = tuple(etas)
+                self.eta = etas[0]
+                self.updates += 1
+                self._changes.append((step + 1, self.eta))
+            return self.eta
         eta = exact_same_path_eta(kappa, self.L, self.L0)
         if abs(eta - self.eta) > self.tolerance:
             self._apply(eta)

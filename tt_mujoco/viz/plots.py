@@ -21,6 +21,7 @@ from matplotlib.figure import Figure
 
 from tt_mujoco.analysis import metrics
 from tt_mujoco.outputs import save_figure
+from tt_mujoco.sim.timeseries import train_columns
 from tt_mujoco.vehicle.params import Params
 
 __all__ = [
@@ -118,6 +119,19 @@ def _reference(reference_polyline) -> np.ndarray | None:
     return ref
 
 
+#: Colours of trailers 2, 3, ... of a train (cycled).
+TRAIN_COLORS = ("tab:purple", "tab:cyan", "tab:pink", "tab:olive")
+
+
+def _train(c: dict) -> list[tuple[int, str]]:
+    """``(k, colour)`` of the trailers k >= 2 whose columns ``c`` holds."""
+    out, k = [], 2
+    while f"x0_{k}" in c:
+        out.append((k, TRAIN_COLORS[(k - 2) % len(TRAIN_COLORS)]))
+        k += 1
+    return out
+
+
 # --- figures of one run ---------------------------------------------------------------------------
 def _path_figure(c: dict, ref: np.ndarray) -> Figure:
     fig = Figure(figsize=(7, 6), layout="constrained")
@@ -125,6 +139,8 @@ def _path_figure(c: dict, ref: np.ndarray) -> Figure:
     ax.plot(ref[:, 0], ref[:, 1], "--", color=REFERENCE_COLOR, lw=1.2, label="reference path")
     ax.plot(c["x"], c["y"], color=TRACTOR_COLOR, lw=1.6, label="tractor P")
     ax.plot(c["x0"], c["y0"], color=TRAILER_COLOR, lw=1.2, label="trailer P0")
+    for k, color in _train(c):
+        ax.plot(c[f"x0_{k}"], c[f"y0_{k}"], color=color, lw=1.0, label=f"trailer {k} P0_{k}")
     for xs, ys, color in ((c["x"], c["y"], TRACTOR_COLOR), (c["x0"], c["y0"], TRAILER_COLOR)):
         ax.plot(xs[0], ys[0], "o", color=color, ms=7, mfc="white", mew=1.5)
         ax.plot(xs[-1], ys[-1], "s", color=color, ms=6)
@@ -222,6 +238,8 @@ def _articulation_figure(c: dict, params: Params) -> Figure:
         lw=1.0,
         label=f"eta * phi (eta = {params.eta:.4g})",
     )
+    for k, color in _train(c):
+        ax.plot(t, np.degrees(c[f"phi_{k}"]), color=color, lw=1.0, label=f"phi_{k} (trailer {k})")
     # The jackknife singularity |eta phi| = 90 deg (docs/model.md Section 2), once phi gets near it.
     limit = math.degrees(params.phi_singular)
     if math.isfinite(limit) and np.max(np.abs(np.degrees(c["phi"]))) > 0.5 * limit:
@@ -274,6 +292,8 @@ def plot_run(ts: Mapping, reference_polyline, out_dir, params: Params | None = N
         if "dist_T_r" in ts
         else {}
     )
+    n_trailers = 1 + sum(1 for name in ts if name.startswith("x0_"))
+    c.update(_columns(ts, train_columns(n_trailers)) if n_trailers > 1 else {})
     err = tracking_errors(ts, ref)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
