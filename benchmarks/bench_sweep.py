@@ -7,15 +7,17 @@ plots.
 
 It prints:
 
-1. Where one episode's time goes, in this process (median of ``--profile`` episodes): setup
-   (target, MuJoCo model compile, controller), the control loop split into MuJoCo's ``mj_step``
-   (timed by wrapping it) and everything else per step (measurement, controller, target,
-   logging), and the metrics. "Overhead outside the physics step" is the episode minus
-   ``mj_step``.
+1. Where one episode's time goes, in this process (median of ``--profile`` episodes of the sweep
+   itself): setup (target, MuJoCo model, controller), the control loop (compiled, see
+   :mod:`tt_mujoco.sim.compiled`) and the metrics, beside the episode's physics floor: the
+   replay of its own ``mj_step`` inputs (recorded with the Python loop, which gives the same
+   numbers; the replay's final state is checked against the run's).
 2. Scaling: the same ``--scaling-runs`` episodes through :func:`tt_mujoco.sweep.run_sweep` on 1
    and 2 local worker processes: runs/s, and the executor's own overhead per run (wall time x
    workers minus the episodes' own time, over the runs: pool start, transfer, journal, table).
-3. The ``--episodes`` sweep on ``--workers`` workers: wall time, runs/s, failures.
+3. The ``--episodes`` sweep on ``--workers`` workers: wall time, runs/s, failures, and its ratio
+   to the physics floor, the mean replay time of the profiled episodes times the episodes over
+   the workers (issue 13's goal: <= 1.25).
 
 Numbers depend on what else runs on the machine; the load average is printed with them.
 """
@@ -31,50 +33,41 @@ import time
 from pathlib import Path
 
 import mujoco
+import numpy as np
+from bench_closed_loop import closed_loop, python_loop, replay
 
 from tt_mujoco import sweep
 from tt_mujoco.analysis import metrics
 from tt_mujoco.sim import Scenario, simulate
+from tt_mujoco.sweep import runs as sweep_runs
 
 ITEMS = ["traj=s_curve", "duration=10", "noise_snr_db=20"]
 
 
-def episode_breakdown(n: int, control_dt: float = 0.001) -> dict:
-    """Median time per part of one episode, in this process (seconds)."""
-    real_step = mujoco.mj_step
-    spent = [0.0]
-
-    def timed_step(*args, **kwargs):
+def episode_breakdown(spec, n: int) -> dict:
+    """Median time per part of the sweep's first ``n`` episodes, in this process (seconds), and
+    their physics floor: the replay of each episode's own ``mj_step`` inputs."""
+    simulate(Scenario(duration=2.5))  # imports, caches and the compiled loop out of the way
+    parts = {"episode": [], "setup": [], "loop": [], "metrics": [], "replay": []}
+    for run in sweep_runs.expand(spec)[:n]:
+        scenario = sweep_runs.build_scenario(run["options"])
         t = time.perf_counter()
-        real_step(*args, **kwargs)
-        spent[0] += time.perf_counter() - t
-
-    simulate(Scenario(duration=1.0))  # imports and caches out of the measurement
-    parts = {"episode": [], "setup": [], "loop": [], "physics": [], "metrics": []}
-    mujoco.mj_step = timed_step  # sim looks mj_step up on the module at each call
-    try:
-        for seed in range(n):
-            spent[0] = 0.0
-            t = time.perf_counter()
-            result = simulate(
-                Scenario(
-                    traj="s_curve", duration=10.0, noise_snr_db=20, seed=seed, control_dt=control_dt
-                )
-            )
-            episode = time.perf_counter() - t
-            t = time.perf_counter()
-            metrics.compute_metrics(result.timeseries, result.reference_polyline, 15.0)
-            metrics_s = time.perf_counter() - t
-            parts["episode"].append(episode)
-            parts["loop"].append(result.wall_time_s)
-            parts["physics"].append(spent[0])
-            parts["metrics"].append(metrics_s)
-            parts["setup"].append(episode - result.wall_time_s - metrics_s)
-    finally:
-        mujoco.mj_step = real_step
+        result = simulate(scenario)
+        episode = time.perf_counter() - t
+        t = time.perf_counter()
+        metrics.compute_metrics(result.timeseries, result.reference_polyline, 15.0)
+        metrics_s = time.perf_counter() - t
+        with python_loop():  # record the inputs (the compiled loop gives the same numbers)
+            _, _, inputs, initial, final, plant, _ = closed_loop(scenario, record=True)
+        replay_s, replay_final = replay(plant, inputs, initial)
+        assert np.array_equal(replay_final, final)
+        parts["episode"].append(episode)
+        parts["loop"].append(result.wall_time_s)
+        parts["metrics"].append(metrics_s)
+        parts["setup"].append(episode - result.wall_time_s - metrics_s)
+        parts["replay"].append(replay_s)
     out = {k: statistics.median(v) for k, v in parts.items()}
-    out["loop_other"] = out["loop"] - out["physics"]
-    out["outside_physics"] = out["episode"] - out["physics"]
+    out["replay_mean"] = statistics.mean(parts["replay"])
     out["steps"] = int(result.metrics["steps"])
     return out
 
@@ -103,7 +96,9 @@ def sweep_rate(n_runs: int, workers: int, scheduler: str | None = None) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--profile", type=int, default=5, help="episodes for the breakdown")
+    ap.add_argument(
+        "--profile", type=int, default=20, help="episodes for the breakdown and the floor"
+    )
     ap.add_argument("--scaling-runs", type=int, default=24, help="episodes per scaling point")
     ap.add_argument("--episodes", type=int, default=1000, help="the big sweep (0: skip)")
     ap.add_argument("--workers", type=int, default=2, help="workers of the big sweep")
@@ -118,16 +113,16 @@ def main() -> None:
 
     print(f"mujoco {mujoco.__version__}, {os.cpu_count()} CPUs, load {os.getloadavg()[0]:.2f}")
     print(f"control period {1e3 * args.control_dt:g} ms, physics step 1 ms")
-    b = episode_breakdown(args.profile, args.control_dt)
+    spec = sweep.parse_spec(ITEMS, repeats=max(args.episodes, args.profile), seed=0)
+    b = episode_breakdown(spec, args.profile)
     ms = {k: 1e3 * v for k, v in b.items() if k != "steps"}
     print(
         f"one 10 s episode ({b['steps']} control steps), median of {args.profile}, in-process:\n"
         f"  total {ms['episode']:.0f} ms = setup {ms['setup']:.0f} + control loop "
         f"{ms['loop']:.0f} + metrics {ms['metrics']:.0f}\n"
-        f"  control loop = mj_step {ms['physics']:.0f} + other per-step Python "
-        f"{ms['loop_other']:.0f} ({1e3 * ms['loop_other'] / b['steps']:.1f} us/step)\n"
-        f"  overhead outside the physics step: {ms['outside_physics']:.0f} ms per episode "
-        f"({100 * b['outside_physics'] / b['episode']:.0f} % of the episode)"
+        f"  the replay of its own mj_step inputs (the physics floor): {ms['replay']:.0f} ms; "
+        f"control loop / floor {b['loop'] / b['replay']:.2f}, episode / floor "
+        f"{b['episode'] / b['replay']:.2f}"
     )
     results = {"breakdown_s": b, "scaling": [], "load_start": os.getloadavg()[0]}
     points = [(1, None), (2, None)] + ([(2, "local")] if args.dask else [])
@@ -144,10 +139,15 @@ def main() -> None:
     if args.episodes:
         r = sweep_rate(args.episodes, args.workers)
         results["big"] = r
+        floor = b["replay_mean"] * args.episodes / args.workers
+        r["floor_s"], r["ratio_to_floor"] = floor, r["wall_s"] / floor
         print(
             f"{args.episodes} episodes on {args.workers} workers: {r['wall_s']:.1f} s "
             f"({r['wall_s'] / 60:.2f} min), {r['runs_per_s']:.2f} runs/s, {r['failed']} failed, "
-            f"episode median {r['episode_median_s']:.3f} s (loop {r['loop_median_s']:.3f} s)"
+            f"episode median {r['episode_median_s']:.3f} s (loop {r['loop_median_s']:.3f} s)\n"
+            f"physics floor (mean replay of {args.profile} episodes x {args.episodes} / "
+            f"{args.workers} workers): {floor:.1f} s; ratio to the floor "
+            f"{r['ratio_to_floor']:.3f} (goal <= 1.25)"
         )
     results["load_end"] = os.getloadavg()[0]
     print(f"load average now {results['load_end']:.2f}")

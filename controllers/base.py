@@ -99,6 +99,7 @@ def reduced_model(params) -> ModelFn:
     def model(phi: float, v: float, omega: float):
         return dynamics_scalar(phi, v, omega, params)
 
+    model.builtin = True  # the compiled episode may run its closed form instead
     return model
 
 
@@ -298,6 +299,32 @@ def resolve_gains(
     return values, preset
 
 
+#: Outcomes of a law's step from plain numbers (:func:`tt_mujoco.controllers.ismc_sta.
+#: ismc_sta_law`): done, ``g`` singular, torques not finite.
+LAW_OK, LAW_SINGULAR, LAW_NOT_FINITE = 0, 1, 2
+
+
+def inverse_of(g11: float, g12: float, g21: float, g22: float):
+    """``(ok, g^-1 entries)``: ``ok`` False where g is singular or not finite."""
+    det = g11 * g22 - g12 * g21
+    if not abs(det) > _SINGULAR_RTOL * (abs(g11 * g22) + abs(g12 * g21)):
+        return False, 0.0, 0.0, 0.0, 0.0
+    return True, g22 / det, -g12 / det, -g21 / det, g11 / det
+
+
+def saturate_of(u1: float, u2: float, lim: float):
+    """``(T_r, T_l, s1, s2)``: ``(u1, u2)`` clipped at ``lim`` and the saturation signs."""
+    s1 = 1.0 if u1 > lim else (-1.0 if u1 < -lim else 0.0)
+    s2 = 1.0 if u2 > lim else (-1.0 if u2 < -lim else 0.0)
+    return (s1 * lim if s1 else u1), (s2 * lim if s2 else u2), s1, s2
+
+
+def deepens(x: float, gi_1: float, gi_2: float, s1: float, s2: float) -> bool:
+    """Whether an integrator increment ``+x`` in a channel with g^-1 column ``(gi_1, gi_2)``
+    would push a saturated torque further out (module docstring)."""
+    return s1 * gi_1 * x < 0.0 or s2 * gi_2 * x < 0.0
+
+
 class VelocityController(Controller):
     """The built-in laws' base: validation, the 2x2 solve, saturation and the anti-windup test.
 
@@ -432,36 +459,36 @@ class VelocityController(Controller):
         )
 
     # --- helpers for subclasses ------------------------------------------------------------
-    @staticmethod
-    def _inverse(g11: float, g12: float, g21: float, g22: float):
+    def _inverse(self, g11: float, g12: float, g21: float, g22: float):
         """``g^-1`` by hand; FloatingPointError if g is singular or not finite."""
-        det = g11 * g22 - g12 * g21
-        if not abs(det) > _SINGULAR_RTOL * (abs(g11 * g22) + abs(g12 * g21)):
+        ok, a11, a12, a21, a22 = inverse_of(g11, g12, g21, g22)
+        if not ok:
+            self._raise_for(LAW_SINGULAR, (g11, g12, g21, g22), 0.0, 0.0)
+        return a11, a12, a21, a22
+
+    def _saturate(self, u1: float, u2: float):
+        """Clip ``(u1, u2)``; return the torques and the saturation signs (+1, -1 or 0)."""
+        if not (-_INF < u1 < _INF and -_INF < u2 < _INF):
+            self._raise_for(LAW_NOT_FINITE, (), u1, u2)
+        T_r, T_l, s1, s2 = saturate_of(u1, u2, self.torque_limit)
+        self.saturated = s1 != 0.0 or s2 != 0.0
+        self.command = (u1, u2)
+        return T_r, T_l, s1, s2
+
+    def _raise_for(self, status: int, g: tuple, u1: float, u2: float) -> None:
+        """The FloatingPointError of a law's failed ``status`` (none for :data:`LAW_OK`)."""
+        if status == LAW_SINGULAR:
+            g11, g12, g21, g22 = g
+            det = g11 * g22 - g12 * g21
             raise FloatingPointError(
                 f"the nominal input matrix g = [[{g11!r}, {g12!r}], [{g21!r}, {g22!r}]] is "
                 f"singular (det = {det!r}): the torques cannot be computed"
             )
-        return g22 / det, -g12 / det, -g21 / det, g11 / det
-
-    def _saturate(self, u1: float, u2: float):
-        """Clip ``(u1, u2)``; return the torques and the saturation signs (+1, -1 or 0)."""
-        lim = self.torque_limit
-        if not (-_INF < u1 < _INF and -_INF < u2 < _INF):
+        if status == LAW_NOT_FINITE:
             raise FloatingPointError(
                 f"{self.name}: the unsaturated torques ({u1!r}, {u2!r}) are not finite "
                 "(check the measurement and the target for nan/inf)"
             )
-        s1 = 1.0 if u1 > lim else (-1.0 if u1 < -lim else 0.0)
-        s2 = 1.0 if u2 > lim else (-1.0 if u2 < -lim else 0.0)
-        self.saturated = s1 != 0.0 or s2 != 0.0
-        self.command = (u1, u2)
-        return (s1 * lim if s1 else u1), (s2 * lim if s2 else u2), s1, s2
-
-    @staticmethod
-    def _deepens(x: float, gi_1: float, gi_2: float, s1: float, s2: float) -> bool:
-        """Whether an integrator increment ``+x`` in a channel with g^-1 column ``(gi_1, gi_2)``
-        would push a saturated torque further out (module docstring)."""
-        return s1 * gi_1 * x < 0.0 or s2 * gi_2 * x < 0.0
 
     @staticmethod
     def _check_dt(dt: float) -> None:

@@ -39,11 +39,20 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from tt_mujoco.controllers.base import VelocityController
+from tt_mujoco.controllers.base import (
+    LAW_NOT_FINITE,
+    LAW_OK,
+    LAW_SINGULAR,
+    VelocityController,
+    deepens,
+    inverse_of,
+    saturate_of,
+)
 
-__all__ = ["IsmcStaController"]
+__all__ = ["IsmcStaController", "ismc_sta_law"]
 
 _sqrt = math.sqrt
+_INF = math.inf
 
 
 class IsmcStaController(VelocityController):
@@ -76,12 +85,6 @@ class IsmcStaController(VelocityController):
     }
     DEFAULT_PRESET = "paper_6_1"
 
-    def _set_gains(self, gains):
-        self._lam1, self._lam2 = gains["lambda_v"], gains["lambda_omega"]
-        self._k11, self._k12 = gains["k1_v"], gains["k1_omega"]
-        self._k21, self._k22 = gains["k2_v"], gains["k2_omega"]
-        self._eps = gains["eps"]
-
     def reset(self):
         self.int_e_v = self.int_e_omega = 0.0  # int(e), inside S
         self.sta_v = self.sta_omega = 0.0  # int(k2 sig(S)), the super-twisting integral
@@ -100,42 +103,126 @@ class IsmcStaController(VelocityController):
             "S_omega": self.S_omega,
         }
 
+    def _set_gains(self, gains):
+        self._lam1, self._lam2 = gains["lambda_v"], gains["lambda_omega"]
+        self._k11, self._k12 = gains["k1_v"], gains["k1_omega"]
+        self._k21, self._k22 = gains["k2_v"], gains["k2_omega"]
+        self._eps = gains["eps"]
+        self.law_gains = (self._lam1, self._lam2, self._k11, self._k12, self._k21, self._k22)
+        self.law_gains += (self._eps,)
+
+    def law_state(self) -> tuple:
+        """The integrators and held integrands, in :func:`ismc_sta_law`'s order."""
+        return (
+            self.int_e_v,
+            self.int_e_omega,
+            self.sta_v,
+            self.sta_omega,
+            self._rate_e1,
+            self._rate_e2,
+            self._rate_w1,
+            self._rate_w2,
+        )
+
     def step(self, dt, phi, v, omega, v_d, omega_d, v_d_dot, omega_d_dot):
         if not 0.0 < dt < math.inf:
             self._check_dt(dt)
-        # Explicit Euler over the elapsed interval with the integrands of the previous call.
-        I1 = self.int_e_v + dt * self._rate_e1
-        I2 = self.int_e_omega + dt * self._rate_e2
-        W1 = self.sta_v + dt * self._rate_w1
-        W2 = self.sta_omega + dt * self._rate_w2
-        self.int_e_v, self.int_e_omega, self.sta_v, self.sta_omega = I1, I2, W1, W2
-
         f1, f2, g11, g12, g21, g22 = self.model(phi, v, omega)
-        e1 = v - v_d
-        e2 = omega - omega_d
-        lam1, lam2, eps = self._lam1, self._lam2, self._eps
-        S1 = e1 + lam1 * I1
-        S2 = e2 + lam2 * I2
+        out = ismc_sta_law(
+            dt,
+            v,
+            omega,
+            v_d,
+            omega_d,
+            v_d_dot,
+            omega_d_dot,
+            f1,
+            f2,
+            g11,
+            g12,
+            g21,
+            g22,
+            self.law_state(),
+            self.law_gains,
+            self.torque_limit,
+            self.saturated,
+            self.anti_windup,
+        )
+        status, T_r, T_l, u1, u2, saturated, S1, S2, state = out
+        self.int_e_v, self.int_e_omega, self.sta_v, self.sta_omega = state[:4]
         self.S_v, self.S_omega = S1, S2
-        sig1 = S1 / (eps + abs(S1))
-        sig2 = S2 / (eps + abs(S2))
-        r1 = v_d_dot - f1 - lam1 * e1 - self._k11 * _sqrt(abs(S1)) * sig1 - W1
-        r2 = omega_d_dot - f2 - lam2 * e2 - self._k12 * _sqrt(abs(S2)) * sig2 - W2
-
-        a11, a12, a21, a22 = self._inverse(g11, g12, g21, g22)
-        T_r, T_l, s1, s2 = self._saturate(a11 * r1 + a12 * r2, a21 * r1 + a22 * r2)
-
-        w1 = self._k21 * sig1
-        w2 = self._k22 * sig2
-        if self.saturated and self.anti_windup:
-            deepens = self._deepens
-            if deepens(e1, a11, a21, s1, s2):
-                e1 = 0.0
-            if deepens(e2, a12, a22, s1, s2):
-                e2 = 0.0
-            if deepens(w1, a11, a21, s1, s2):
-                w1 = 0.0
-            if deepens(w2, a12, a22, s1, s2):
-                w2 = 0.0
-        self._rate_e1, self._rate_e2, self._rate_w1, self._rate_w2 = e1, e2, w1, w2
+        self._raise_for(status, (g11, g12, g21, g22), u1, u2)
+        self.saturated = saturated
+        self.command = (u1, u2)
+        self._rate_e1, self._rate_e2, self._rate_w1, self._rate_w2 = state[4:]
         return T_r, T_l
+
+
+def ismc_sta_law(
+    dt,
+    v,
+    omega,
+    v_d,
+    omega_d,
+    v_d_dot,
+    omega_d_dot,
+    f1,
+    f2,
+    g11,
+    g12,
+    g21,
+    g22,
+    state,
+    gains,
+    limit,
+    saturated,
+    anti_windup,
+):
+    """One step of the law (module docstring) from plain numbers, given the nominal model's
+    ``f`` and ``g`` at the measurement: the one implementation, which
+    :meth:`IsmcStaController.step` and the compiled episode (:mod:`tt_mujoco.sim.compiled`)
+    both run.
+
+    ``state`` is ``(int_e_v, int_e_omega, sta_v, sta_omega, rate_e1, rate_e2, rate_w1,
+    rate_w2)``, ``gains`` ``(lambda_v, lambda_omega, k1_v, k1_omega, k2_v, k2_omega, eps)``,
+    ``saturated`` whether the previous step saturated. Returns ``(status, T_r, T_l, u1, u2,
+    saturated, S_v, S_omega, state)``; ``status`` is :data:`~tt_mujoco.controllers.base.LAW_OK`,
+    ``LAW_SINGULAR`` (g cannot be inverted) or ``LAW_NOT_FINITE`` (the torques are not finite).
+    """
+    lam1, lam2, k11, k12, k21, k22, eps = gains
+    # Explicit Euler over the elapsed interval with the integrands of the previous call.
+    I1 = state[0] + dt * state[4]
+    I2 = state[1] + dt * state[5]
+    W1 = state[2] + dt * state[6]
+    W2 = state[3] + dt * state[7]
+
+    e1 = v - v_d
+    e2 = omega - omega_d
+    S1 = e1 + lam1 * I1
+    S2 = e2 + lam2 * I2
+    sig1 = S1 / (eps + abs(S1))
+    sig2 = S2 / (eps + abs(S2))
+    r1 = v_d_dot - f1 - lam1 * e1 - k11 * _sqrt(abs(S1)) * sig1 - W1
+    r2 = omega_d_dot - f2 - lam2 * e2 - k12 * _sqrt(abs(S2)) * sig2 - W2
+
+    w1 = k21 * sig1
+    w2 = k22 * sig2
+    ok, a11, a12, a21, a22 = inverse_of(g11, g12, g21, g22)
+    if not ok:
+        return LAW_SINGULAR, 0.0, 0.0, 0.0, 0.0, saturated, S1, S2, (I1, I2, W1, W2, e1, e2, w1, w2)
+    u1 = a11 * r1 + a12 * r2
+    u2 = a21 * r1 + a22 * r2
+    if not (-_INF < u1 < _INF and -_INF < u2 < _INF):
+        return LAW_NOT_FINITE, 0.0, 0.0, u1, u2, saturated, S1, S2, (I1, I2, W1, W2, e1, e2, w1, w2)
+    T_r, T_l, s1, s2 = saturate_of(u1, u2, limit)
+    saturated = s1 != 0.0 or s2 != 0.0
+    if saturated and anti_windup:
+        if deepens(e1, a11, a21, s1, s2):
+            e1 = 0.0
+        if deepens(e2, a12, a22, s1, s2):
+            e2 = 0.0
+        if deepens(w1, a11, a21, s1, s2):
+            w1 = 0.0
+        if deepens(w2, a12, a22, s1, s2):
+            w2 = 0.0
+    return LAW_OK, T_r, T_l, u1, u2, saturated, S1, S2, (I1, I2, W1, W2, e1, e2, w1, w2)

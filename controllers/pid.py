@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from tt_mujoco.controllers.base import VelocityController
+from tt_mujoco.controllers.base import VelocityController, deepens
 
 __all__ = ["PidController"]
 
@@ -85,9 +85,9 @@ class PidController(VelocityController):
         T_r, T_l, s1, s2 = self._saturate(a11 * r1 + a12 * r2, a21 * r1 + a22 * r2)
 
         if self.saturated and self.anti_windup:
-            if self._deepens(e1, a11, a21, s1, s2):
+            if deepens(e1, a11, a21, s1, s2):
                 e1 = 0.0
-            if self._deepens(e2, a12, a22, s1, s2):
+            if deepens(e2, a12, a22, s1, s2):
                 e2 = 0.0
         self._rate1, self._rate2 = e1, e2
         return T_r, T_l

@@ -119,12 +119,18 @@ class CycloidPath(ReferencePath):
         return tau - math.sin(tau), 1.0 - math.cos(tau), math.pi / 2.0 - tau / 2.0
 
     def curvature_and_rate(self, s: float) -> tuple[float, float]:
-        u = _CYCLOID_MID - min(max(s, 0.0), CYCLOID_LENGTH)
-        if s < 0.0 or s > CYCLOID_LENGTH:
-            return -1.0 / math.sqrt(16.0 - u * u), 0.0
-        q = 16.0 - u * u
-        root = math.sqrt(q)
-        return -1.0 / root, u / (q * root)
+        return cycloid_curvature_and_rate(s)
+
+
+def cycloid_curvature_and_rate(s: float) -> tuple[float, float]:
+    """The cycloid's ``(kappa(s), dkappa/ds(s))`` as plain floats, held at the ends (the
+    compiled episode, :mod:`tt_mujoco.sim.compiled`, shares it)."""
+    u = _CYCLOID_MID - min(max(s, 0.0), CYCLOID_LENGTH)
+    if s < 0.0 or s > CYCLOID_LENGTH:
+        return -1.0 / math.sqrt(16.0 - u * u), 0.0
+    q = 16.0 - u * u
+    root = math.sqrt(q)
+    return -1.0 / root, u / (q * root)
 
 
 def cycloid(start: str = "on_path") -> CycloidPath:

@@ -40,10 +40,16 @@ class PaperDisturbance(Disturbance):
     rad/s^2 (bounds 5 and 2)."""
 
     def __call__(self, t: float) -> tuple[float, float]:
-        return (
-            3.5 + math.sin(0.3 * t) + 0.5 * math.cos(2.0 * t),
-            1.5 * math.sin(0.3 * t) + 0.5 * math.cos(5.0 * t),
-        )
+        return paper_disturbance_of(t)
+
+
+def paper_disturbance_of(t: float) -> tuple[float, float]:
+    """The paper's Delta(t) (:class:`PaperDisturbance`) as plain floats (the compiled episode,
+    :mod:`tt_mujoco.sim.compiled`, shares it)."""
+    return (
+        3.5 + math.sin(0.3 * t) + 0.5 * math.cos(2.0 * t),
+        1.5 * math.sin(0.3 * t) + 0.5 * math.cos(5.0 * t),
+    )
 
 
 #: Disturbance name -> class (or callable). ``DISTURBANCES.register`` adds one.

@@ -49,6 +49,13 @@ class Layout:
     #: Trailers 2..N: ``(hitch_q, hitch_v, steer_q, L_k, L0_k)`` each (empty for one trailer).
     train: tuple = ()
 
+    def __post_init__(self) -> None:
+        # What measure_values takes after the state vectors, in its order.
+        addresses = (self.root_q, self.root_v, self.hitch_q, self.hitch_v, self.steer_q)
+        addresses += (self.wheel_left_v, self.wheel_right_v, self.wheel_left_q)
+        object.__setattr__(self, "addresses", (*addresses, self.wheel_right_q))
+        object.__setattr__(self, "lengths", (self.L, self.L0, self.r, self.d))
+
 
 class Measurement(NamedTuple):
     """What the controllers and the metrics see (SI units, radians).
@@ -103,14 +110,24 @@ def measure(qpos, qvel, lay: Layout) -> Measurement:
     # One conversion to Python floats: indexing numpy arrays element by element is slower.
     qpos = qpos.tolist() if hasattr(qpos, "tolist") else list(qpos)
     qvel = qvel.tolist() if hasattr(qvel, "tolist") else list(qvel)
-    i = lay.root_q
+    # Positional construction (field order of Measurement): keywords cost ~1.5 us a call.
+    return _new_measurement(measure_values(qpos, qvel, *lay.addresses, *lay.lengths))
+
+
+def measure_values(
+    qpos, qvel, root_q, root_v, hitch_q, hitch_v, steer_q, wl_v, wr_v, wl_q, wr_q, L, L0, r, d
+) -> tuple:
+    """:func:`measure` from the state vectors and plain addresses and lengths: the
+    :class:`Measurement` fields as a tuple, the form the compiled episode
+    (:mod:`tt_mujoco.sim.compiled`) shares."""
+    i = root_q
     x, y = qpos[i], qpos[i + 1]
     qw, qx, qy, qz = qpos[i + 3], qpos[i + 4], qpos[i + 5], qpos[i + 6]
     theta = yaw_from_quat(qw, qx, qy, qz)
-    phi = -qpos[lay.hitch_q]  # hitch axis +z: q_hitch = theta0 - theta
-    beta = qpos[lay.steer_q]
+    phi = -qpos[hitch_q]  # hitch axis +z: q_hitch = theta0 - theta
+    beta = qpos[steer_q]
 
-    j = lay.root_v
+    j = root_v
     vx, vy = qvel[j], qvel[j + 1]
     # World z component of the body-frame angular velocity: third row of R(quat).
     wx, wy, wz = qvel[j + 3], qvel[j + 4], qvel[j + 5]
@@ -125,42 +142,39 @@ def measure(qpos, qvel, lay: Layout) -> Measurement:
 
     theta0 = theta - phi
     c0, s0 = math.cos(theta0), math.sin(theta0)
-    x0, y0 = hitch_and_axle(x, y, theta, theta0, lay.L, lay.L0)[2:]
+    x0, y0 = hitch_and_axle(x, y, theta, theta0, L, L0)[2:]
     # Rigid-body velocities in the plane, as MuJoCo moved the bodies (slip included).
-    vox, voy = vx + omega * lay.L * s, vy - omega * lay.L * c
-    theta0_dot = omega + qvel[lay.hitch_v]  # phi_dot = -q_hitch_dot
-    v0x, v0y = vox + theta0_dot * lay.L0 * s0, voy - theta0_dot * lay.L0 * c0
+    vox, voy = vx + omega * L * s, vy - omega * L * c
+    theta0_dot = omega + qvel[hitch_v]  # phi_dot = -q_hitch_dot
+    v0x, v0y = vox + theta0_dot * L0 * s0, voy - theta0_dot * L0 * c0
     alpha = theta0 + beta
     ca, sa = math.cos(alpha), math.sin(alpha)
     v0 = v0x * ca + v0y * sa
     slip_lateral_trailer = -v0x * sa + v0y * ca
 
-    thl_dot = qvel[lay.wheel_left_v]
-    thr_dot = qvel[lay.wheel_right_v]
-    half = 0.5 * lay.d * omega
-    # Positional construction (field order of Measurement): keywords cost ~1.5 us a call.
-    return _new_measurement(
-        (
-            x,
-            y,
-            theta,
-            phi,
-            beta,
-            v,
-            omega,
-            x0,
-            y0,
-            theta0,
-            v0,
-            qpos[lay.wheel_left_q],
-            qpos[lay.wheel_right_q],
-            thl_dot,
-            thr_dot,
-            slip_lateral,
-            slip_lateral_trailer,
-            lay.r * thl_dot - (v - half),
-            lay.r * thr_dot - (v + half),
-        )
+    thl_dot = qvel[wl_v]
+    thr_dot = qvel[wr_v]
+    half = 0.5 * d * omega
+    return (
+        x,
+        y,
+        theta,
+        phi,
+        beta,
+        v,
+        omega,
+        x0,
+        y0,
+        theta0,
+        v0,
+        qpos[wl_q],
+        qpos[wr_q],
+        thl_dot,
+        thr_dot,
+        slip_lateral,
+        slip_lateral_trailer,
+        r * thl_dot - (v - half),
+        r * thr_dot - (v + half),
     )
 
 

@@ -45,30 +45,8 @@ class ReducedPlant(Plant):
         p = self.params
         if p.n_trailers > 1:
             return self._measure_train()
-        x, y, theta, phi, th_l, th_r, v, omega = (float(c) for c in self.ode.state)
-        _, P0, theta0 = reduced.trailer_pose(x, y, theta, phi, p)
-        v0, _ = reduced.trailer_velocity(phi, (v, omega), p)
-        return Measurement(
-            x=x,
-            y=y,
-            theta=theta,
-            phi=phi,
-            beta=p.eta * phi,
-            v=v,
-            omega=omega,
-            x0=float(P0[0]),
-            y0=float(P0[1]),
-            theta0=theta0,
-            v0=v0,
-            theta_l=th_l,
-            theta_r=th_r,
-            theta_l_dot=(v - 0.5 * p.d * omega) / p.r,
-            theta_r_dot=(v + 0.5 * p.d * omega) / p.r,
-            slip_lateral=0.0,
-            slip_lateral_trailer=0.0,
-            slip_left=0.0,
-            slip_right=0.0,
-        )
+        state = [float(c) for c in self.ode.state]
+        return Measurement._make(reduced_measure_values(state, p.eta, p.L, p.L0, p.r, p.d))
 
     def _measure_train(self) -> TrainMeasurement:
         """The train's state from the chain (docs/model.md Section 12), exact like the rest."""
@@ -120,3 +98,34 @@ class ReducedPlant(Plant):
         """Raises :class:`tt_mujoco.vehicle.reduced.SingularityError` at |beta| = 90 deg."""
         for _ in range(substeps):
             self.ode.step(self._tau, self.timestep)
+
+
+def reduced_measure_values(state, eta: float, L: float, L0: float, r: float, d: float) -> tuple:
+    """The :class:`~tt_mujoco.sim.measure.Measurement` fields of the reduced plant's state
+    ``(x, y, theta, phi, theta_l, theta_r, v, omega)``: exact, without slip (the compiled
+    episode, :mod:`tt_mujoco.sim.compiled`, shares it)."""
+    x, y, theta, phi = state[0], state[1], state[2], state[3]
+    th_l, th_r, v, omega = state[4], state[5], state[6], state[7]
+    theta0 = theta - phi
+    _, _, x0, y0 = reduced.hitch_and_axle(x, y, theta, theta0, L, L0)
+    return (
+        x,
+        y,
+        theta,
+        phi,
+        eta * phi,
+        v,
+        omega,
+        x0,
+        y0,
+        theta0,
+        reduced.trailer_speed_of(phi, v, omega, eta, L),
+        th_l,
+        th_r,
+        (v - 0.5 * d * omega) / r,
+        (v + 0.5 * d * omega) / r,
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    )

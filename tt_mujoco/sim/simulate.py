@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tt_mujoco.analysis.metrics import compute_metrics
+from tt_mujoco.sim import compiled
 from tt_mujoco.sim import faults as faults_mod
 from tt_mujoco.sim.build import Build, build
 from tt_mujoco.sim.plant import StopRun
@@ -40,6 +41,8 @@ def run_episode(stepper: Stepper, controller, progress=None, on_step=None) -> tu
 
     Returns ``(status, message)``; see :func:`simulate` for ``progress`` and ``on_step``.
     """
+    if compiled.unsupported(stepper.built, controller, on_step) is None:
+        return compiled.run_compiled(stepper, controller, progress)
     n = stepper.steps
     report_every = max(1, n // 100)
     sense, actuate, compute = stepper.sense, stepper.actuate, controller.compute

@@ -39,6 +39,18 @@ CHECKPOINT_COLUMNS = (*Measurement._fields, *LOOP_COLUMNS)
 _LOG_BLOCK = 8192
 
 
+def blew_up_message(t: float, v: float) -> str:
+    return f"state blew up at t={t:.3f} s: v={v!r}"
+
+
+def jackknife_message(t, phi, beta, eta, x, y, v) -> str:
+    return (
+        f"jackknife at t={t:.3f} s: phi={math.degrees(phi):.1f} deg, "
+        f"beta={math.degrees(beta):.1f} deg (eta={eta:g}; singular at "
+        f"|beta| = 90 deg), x={x:.3f} m, y={y:.3f} m, v={v:.3f} m/s"
+    )
+
+
 class Stepper:
     """One episode of a built scenario, step by step.
 
@@ -116,13 +128,10 @@ class Stepper:
             not (math.isfinite(me.x) and math.isfinite(me.v) and math.isfinite(me.omega))
             or abs(me.v) > MAX_SPEED
         ):
-            raise StopRun("diverged", f"state blew up at t={t:.3f} s: v={me.v!r}")
+            raise StopRun("diverged", blew_up_message(t, me.v))
         if abs(me.phi) >= self._jk_phi or abs(me.beta) >= self._jk:
             raise StopRun(
-                "jackknife",
-                f"jackknife at t={t:.3f} s: phi={math.degrees(me.phi):.1f} deg, "
-                f"beta={math.degrees(me.beta):.1f} deg (eta={self.eta:g}; singular at "
-                f"|beta| = 90 deg), x={me.x:.3f} m, y={me.y:.3f} m, v={me.v:.3f} m/s",
+                "jackknife", jackknife_message(t, me.phi, me.beta, self.eta, me.x, me.y, me.v)
             )
         if self._train_limits:
             self._check_train(me, t)
@@ -252,14 +261,19 @@ class Stepper:
             meas = np.array(self._measured, dtype=float).reshape(n, len(Measurement._fields))
             loop = np.array(self._logged, dtype=float).reshape(n, -1)
             trains = np.array(self._train_logged, dtype=float).reshape(n, len(self.train_columns))
-            self._blocks.append((meas, loop, trains))
-            if self._checkpoint is not None:
-                with open(self._checkpoint, "a") as handle:
-                    rows = np.hstack([meas, loop, trains])
-                    np.savetxt(handle, rows, delimiter=",", fmt="%.17g")
+            self.add_block(meas, loop, trains)
             self._measured.clear()
             self._logged.clear()
             self._train_logged.clear()
+
+    def add_block(self, meas: np.ndarray, loop: np.ndarray, trains: np.ndarray) -> None:
+        """Append logged rows as float arrays (measurement, loop values, trailers 2..N), and
+        to the checkpoint file if there is one; the compiled episode logs this way."""
+        self._blocks.append((meas, loop, trains))
+        if self._checkpoint is not None:
+            with open(self._checkpoint, "a") as handle:
+                rows = np.hstack([meas, loop, trains])
+                np.savetxt(handle, rows, delimiter=",", fmt="%.17g")
 
     @property
     def samples(self) -> int:

@@ -82,9 +82,16 @@ def phi_rate(phi: float, p: Params) -> tuple[float, float]:
 
     ``phi_dot = [sin(beta - phi) v + (L0 cos(beta) + L cos(beta - phi)) omega] / (L0 cos(beta))``.
     """
-    cb = _cos_beta(phi, p.eta)
-    psi = (p.eta - 1.0) * phi  # beta - phi
-    return math.sin(psi) / (p.L0 * cb), 1.0 + p.L * math.cos(psi) / (p.L0 * cb)
+    _cos_beta(phi, p.eta)
+    return phi_rate_of(phi, p.eta, p.L, p.L0)
+
+
+def phi_rate_of(phi: float, eta: float, L: float, L0: float) -> tuple[float, float]:
+    """:func:`phi_rate` from plain numbers (no singularity check): the form the compiled
+    episode (:mod:`tt_mujoco.sim.compiled`) shares."""
+    cb = math.cos(eta * phi)
+    psi = (eta - 1.0) * phi  # beta - phi
+    return math.sin(psi) / (L0 * cb), 1.0 + L * math.cos(psi) / (L0 * cb)
 
 
 def kinematics(q, V, p: Params) -> np.ndarray:
@@ -108,15 +115,21 @@ def kinematics(q, V, p: Params) -> np.ndarray:
 def rolling_rates(theta: float, phi: float, v: float, omega: float, p: Params) -> tuple:
     """``q_dot = S(q) V`` as plain floats: ``(x_dot, y_dot, theta_dot, phi_dot, theta_l_dot,
     theta_r_dot)`` (docs/model.md Section 2); :func:`kinematics` and the plant use it."""
-    s1, s2 = phi_rate(phi, p)
-    spin = p.d * omega / (2.0 * p.r)
+    _cos_beta(phi, p.eta)
+    return rolling_rates_of(theta, phi, v, omega, p.eta, p.L, p.L0, p.r, p.d)
+
+
+def rolling_rates_of(theta, phi, v, omega, eta, L, L0, r, d) -> tuple:
+    """:func:`rolling_rates` from plain numbers (no singularity check)."""
+    s1, s2 = phi_rate_of(phi, eta, L, L0)
+    spin = d * omega / (2.0 * r)
     return (
         v * math.cos(theta),
         v * math.sin(theta),
         omega,
         s1 * v + s2 * omega,
-        v / p.r - spin,
-        v / p.r + spin,
+        v / r - spin,
+        v / r + spin,
     )
 
 
@@ -173,10 +186,14 @@ def trailer_velocity(phi: float, V, p: Params) -> tuple[float, float]:
     ``v0 = (v cos(phi) + L omega sin(phi)) / cos(beta)``, ``theta0_dot = omega - phi_dot``.
     """
     v, omega = float(V[0]), float(V[1])
-    cb = _cos_beta(phi, p.eta)
+    _cos_beta(phi, p.eta)
     s1, s2 = phi_rate(phi, p)
-    v0 = (v * math.cos(phi) + p.L * omega * math.sin(phi)) / cb
-    return v0, omega - (s1 * v + s2 * omega)
+    return trailer_speed_of(phi, v, omega, p.eta, p.L), omega - (s1 * v + s2 * omega)
+
+
+def trailer_speed_of(phi: float, v: float, omega: float, eta: float, L: float) -> float:
+    """The trailer axle's speed ``v0`` of :func:`trailer_velocity` from plain numbers."""
+    return (v * math.cos(phi) + L * omega * math.sin(phi)) / math.cos(eta * phi)
 
 
 def trailer_pose(x: float, y: float, theta: float, phi: float, p: Params):
@@ -262,10 +279,16 @@ def _compute_inertia_terms(phi: float, p: Params):
     ``a = (0, 1) + (eta - 1) s``; rod 2's cross term uses ``n = (cos psi, -L sin psi)`` and
     ``dn/dphi = (eta - 1) m``, ``m = (-sin psi, -L cos psi)``.
     """
-    eta, L, L0, m_t, J_t, J_a, J_0, q, mk = _constants(p)
+    constants = _constants(p)
+    if math.cos(constants[0] * phi) < COS_BETA_MIN:
+        raise SingularityError(phi, constants[0])
+    return inertia_terms_of(phi, *constants)
+
+
+def inertia_terms_of(phi, eta, L, L0, m_t, J_t, J_a, J_0, q, mk):
+    """:func:`_compute_inertia_terms` from plain numbers (:func:`_constants`; no singularity
+    check): the form the compiled episode shares."""
     cb = math.cos(eta * phi)
-    if cb < COS_BETA_MIN:
-        raise SingularityError(phi, eta)
     sb = math.sin(eta * phi)
     cphi, sphi = math.cos(phi), math.sin(phi)
     psi = (eta - 1.0) * phi
@@ -309,8 +332,12 @@ def mass_matrix(phi: float, p: Params) -> np.ndarray:
 
 
 def _coriolis(phi: float, v: float, omega: float, p: Params):
-    (M11, M12, M22), (N11, N12, N21, N22), (s1, s2) = _inertia_terms(phi, p)
-    gamma = _lumped(p)[5]
+    return coriolis_of(_inertia_terms(phi, p), _lumped(p)[5], v, omega)
+
+
+def coriolis_of(terms, gamma: float, v: float, omega: float):
+    """``(Mbar, Cbar V)`` from :func:`inertia_terms_of`'s terms and gamma (plain numbers)."""
+    (M11, M12, M22), (N11, N12, N21, N22), (s1, s2) = terms
     phi_dot = s1 * v + s2 * omega
     c1 = -gamma * omega * omega + phi_dot * (N11 * v + N12 * omega)
     c2 = gamma * omega * v + phi_dot * (N21 * v + N22 * omega)
@@ -320,7 +347,7 @@ def _coriolis(phi: float, v: float, omega: float, p: Params):
 def matched_torque(phi: float, a_v: float, a_omega: float, p: Params) -> tuple[float, float]:
     """Wheel torques ``(T_r, T_l) = g(phi)^-1 (a_v, a_omega) = B^-1 Mbar(phi) a``: the matched
     input that adds the acceleration ``a`` to ``(v_dot, omega_dot)`` (docs/model.md Section 8)."""
-    return torque_for_force(_inertia_terms(phi, p)[0], a_v, a_omega, p)
+    return torque_for_force_of(_inertia_terms(phi, p)[0], a_v, a_omega, p.r, p.d)
 
 
 def mass_terms(phi: float, p: Params) -> tuple[float, float, float]:
@@ -331,12 +358,17 @@ def mass_terms(phi: float, p: Params) -> tuple[float, float, float]:
 def torque_for_force(mass: tuple, a_v: float, a_omega: float, p: Params) -> tuple[float, float]:
     """``B^-1 Mbar a`` for ``Mbar`` given as ``(M11, M12, M22)``: the wheel torques that add the
     acceleration ``a`` (the one trailer's :func:`matched_torque`, or a train's)."""
+    return torque_for_force_of(mass, a_v, a_omega, p.r, p.d)
+
+
+def torque_for_force_of(mass: tuple, a_v: float, a_omega: float, r: float, d: float):
+    """:func:`torque_for_force` from plain numbers."""
     M11, M12, M22 = mass
     force = M11 * a_v + M12 * a_omega  # generalized force on v
     moment = M12 * a_v + M22 * a_omega  # ... and on omega
     # B^-1 with B = [[1/r, 1/r], [d/(2r), -d/(2r)]].
-    common = 0.5 * p.r * force
-    diff = p.r * moment / p.d
+    common = 0.5 * r * force
+    diff = r * moment / d
     return common + diff, common - diff
 
 
@@ -349,19 +381,25 @@ def coriolis_force(phi: float, V, p: Params) -> np.ndarray:
 def dynamics_scalar(phi: float, v: float, omega: float, p: Params):
     """:func:`dynamics` as six plain floats ``(f1, f2, g11, g12, g21, g22)``: the controllers'
     per-step call, without array allocation."""
-    return solve_dynamics(*_coriolis(phi, v, omega, p), p)
+    mass, bias = _coriolis(phi, v, omega, p)
+    return solve_dynamics_of(mass, bias, p.r, p.d)
 
 
 def solve_dynamics(mass: tuple, bias: tuple, p: Params):
     """``(f1, f2, g11, g12, g21, g22)`` of ``V_dot = f + g tau`` from ``Mbar`` as
     ``(M11, M12, M22)`` and ``Cbar V`` as ``(c1, c2)``: ``f = -Mbar^-1 Cbar V``,
     ``g = Mbar^-1 B`` (one trailer's or a train's)."""
+    return solve_dynamics_of(mass, bias, p.r, p.d)
+
+
+def solve_dynamics_of(mass: tuple, bias: tuple, r: float, d: float):
+    """:func:`solve_dynamics` from plain numbers."""
     M11, M12, M22 = mass
     c1, c2 = bias
     det = M11 * M22 - M12 * M12
     i11, i12, i22 = M22 / det, -M12 / det, M11 / det
-    b = 1.0 / p.r
-    k = p.d / (2.0 * p.r)
+    b = 1.0 / r
+    k = d / (2.0 * r)
     return (
         -(i11 * c1 + i12 * c2),
         -(i12 * c1 + i22 * c2),
@@ -444,15 +482,25 @@ class ReducedPlant:
         tau = (float(tau[0]), float(tau[1]))
         acc = (float(accel_disturbance[0]), float(accel_disturbance[1]))
         k1 = self.derivative(y, tau, acc)
-        k2 = self.derivative([a + 0.5 * dt * b for a, b in zip(y, k1, strict=True)], tau, acc)
-        k3 = self.derivative([a + 0.5 * dt * b for a, b in zip(y, k2, strict=True)], tau, acc)
-        k4 = self.derivative([a + dt * b for a, b in zip(y, k3, strict=True)], tau, acc)
-        h = dt / 6.0
-        self.state = np.array(
-            [
-                a + h * (b1 + 2.0 * b2 + 2.0 * b3 + b4)
-                for a, b1, b2, b3, b4 in zip(y, k1, k2, k3, k4, strict=True)
-            ]
-        )
+        k2 = self.derivative(rk4_stage(y, k1, 0.5 * dt), tau, acc)
+        k3 = self.derivative(rk4_stage(y, k2, 0.5 * dt), tau, acc)
+        k4 = self.derivative(rk4_stage(y, k3, dt), tau, acc)
+        self.state = np.array(rk4_combine(y, k1, k2, k3, k4, dt / 6.0))
         self.time += dt
         return self.state
+
+
+def rk4_stage(y, k, c: float) -> list:
+    """``y + c k`` element by element: the state at which RK4 takes its next slope."""
+    out = [0.0] * len(y)
+    for i in range(len(y)):
+        out[i] = y[i] + c * k[i]
+    return out
+
+
+def rk4_combine(y, k1, k2, k3, k4, h: float) -> list:
+    """RK4's new state ``y + h (k1 + 2 k2 + 2 k3 + k4)`` with ``h = dt / 6``."""
+    out = [0.0] * len(y)
+    for i in range(len(y)):
+        out[i] = y[i] + h * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+    return out

@@ -1,0 +1,271 @@
+"""The compiled episode: the built-in law's closed loop as one machine-code loop.
+
+:func:`tt_mujoco.sim.simulate.run_episode` hands an episode here when every part of it has a
+compiled form (:func:`unsupported` says why not otherwise): ISMC-STA with the built-in nominal
+model, a static or dynamic target on a closed-form path (the S-curve, the circle, the cycloid),
+the paper's disturbance (matched) or none, measurement noise, one trailer, no faults, path
+feedback, steering schedule, reversing or per-step callback. The loop then runs in numba, chunk
+by chunk, calling ``mj_step`` through MuJoCo's C library or stepping the reduced ODE, and logs
+into float arrays.
+
+Every formula it runs is the Python one: the functions marked "the compiled episode shares it"
+(measurement, reduced model, law, path curvature, disturbance, RK4) are compiled from their own
+source with ``numba.extending.register_jitable``, so the compiled and the Python loop compute
+the same numbers bit for bit (``tests/test_compiled.py``). ``TT_MUJOCO_COMPILED=0`` turns it off.
+
+Compiled code is cached on disk, keyed by the numba and MuJoCo versions and a hash of every
+source file involved (numba's own cache only watches the file of the function it caches), under
+``$TT_MUJOCO_CACHE`` or ``~/.cache/tt_mujoco``. The first episode after an install compiles
+(about 10 s, once); later processes load it (about 0.3 s, once per process).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["run_compiled", "unsupported"]
+
+#: Shortest episode handed to the compiled loop: loading the compiled code costs ~0.3 s once
+#: per process, what the Python loop's overhead costs in about 10,000 steps.
+MIN_STEPS = 2000
+
+# Status codes of the kernel.
+_RUNNING, _FINISHED, _BLEW_UP, _JACKKNIFE, _WARNING, _LAW_FAILED, _SINGULAR = range(7)
+
+_KERNEL = None
+
+
+def _enabled() -> bool:
+    return os.environ.get("TT_MUJOCO_COMPILED", "1") != "0"
+
+
+def unsupported(built, controller, on_step=None) -> str | None:
+    """Why the episode cannot run compiled (None when it can)."""
+    from tt_mujoco.controllers.ismc_sta import IsmcStaController
+    from tt_mujoco.reference.paths import ArcsPath, CycloidPath
+    from tt_mujoco.reference.targets import DynamicTarget, StaticTarget
+    from tt_mujoco.sim.disturbances import PaperDisturbance
+
+    s = built.scenario
+    reasons = [
+        (not _enabled(), "TT_MUJOCO_COMPILED=0"),
+        (built.steps < MIN_STEPS, f"fewer than {MIN_STEPS} steps"),
+        (bool(s.faults) or s.path_feedback is not None or s.eta_schedule, "faults or feedback"),
+        (built.plant_params.n_trailers != 1, "a train"),
+        (s.plant == "mujoco" and s.disturbance == "wrench", "the wrench disturbance"),
+        (on_step is not None, "a per-step callback"),
+        (type(controller) is not IsmcStaController, "a controller other than ismc_sta"),
+        (not getattr(getattr(controller, "model", None), "builtin", False), "a custom model"),
+        (type(built.target) not in (StaticTarget, DynamicTarget), "this target"),
+        (type(built.path) not in (ArcsPath, CycloidPath), "a path without closed form"),
+        (
+            built.disturbance is not None and type(built.disturbance) is not PaperDisturbance,
+            "a custom disturbance",
+        ),
+    ]
+    for failed, reason in reasons:
+        if failed:
+            return reason
+    try:
+        import numba  # noqa: F401
+    except ImportError:
+        return "numba is not installed"
+    return None
+
+
+def _cache_dir() -> Path:
+    """A cache folder per version of every source the kernel compiles."""
+    import mujoco
+    import numba
+
+    from tt_mujoco.controllers import base, ismc_sta
+    from tt_mujoco.reference import paths
+    from tt_mujoco.sim import disturbances, measure, plant_reduced
+    from tt_mujoco.vehicle import reduced
+
+    digest = hashlib.sha256(f"{numba.__version__} {mujoco.__version__}".encode())
+    for module in (base, ismc_sta, paths, disturbances, measure, plant_reduced, reduced):
+        digest.update(Path(module.__file__).read_bytes())
+    digest.update(Path(__file__).read_bytes())
+    root = Path(os.environ.get("TT_MUJOCO_CACHE", Path.home() / ".cache" / "tt_mujoco"))
+    return root / "numba" / digest.hexdigest()[:16]
+
+
+def _kernel():
+    """The compiled chunk loop (built on first use)."""
+    global _KERNEL
+    if _KERNEL is None:
+        import numba
+
+        cache = _cache_dir()
+        try:
+            cache.mkdir(parents=True, exist_ok=True)
+            numba.config.CACHE_DIR = str(cache)
+        except OSError:
+            pass  # no cache: compiled in memory, every process
+        from tt_mujoco.sim import _kernel
+
+        _KERNEL = _kernel
+    return _KERNEL
+
+
+def run_compiled(stepper, controller, progress=None) -> tuple[str, str]:
+    """Run the (reset) ``stepper``'s episode with ``controller`` compiled; ``(status,
+    message)`` as :func:`tt_mujoco.sim.simulate.run_episode`."""
+    from tt_mujoco.sim.plant_mujoco import MujocoPlant
+    from tt_mujoco.vehicle import reduced
+
+    k_mod = _kernel()
+    b = stepper.built
+    plant = stepper.plant
+    steps, dt = stepper.steps, stepper.dt
+    target = b.target
+    times = [k * dt for k in range(steps + 1)]
+    profile = np.array([target._profile_state(t) for t in times], dtype=float).reshape(-1, 3)
+    path = b.path
+    if hasattr(path, "_inner_bounds"):
+        path_kind, bounds, kappas = 0, np.array(path._inner_bounds), np.array(path._kappa_list)
+    else:
+        path_kind, bounds, kappas = 1, np.zeros(0), np.zeros(0)
+    nominal = b.nominal
+    consts = reduced._constants(nominal)
+    gamma = reduced._lumped(nominal)[5]
+    noise = np.zeros(0) if stepper._noise is None else np.array(stepper._noise)
+    mujoco_plant = isinstance(plant, MujocoPlant)
+    if mujoco_plant:
+        lay = plant._layout
+        layout = np.array([*lay.addresses, lay.act_right, lay.act_left], dtype=np.int64)
+        lengths = np.array(lay.lengths)
+        d = plant.data
+        pointers = np.array([plant.model._address, d._address], dtype=np.int64)
+        qpos, qvel, ctrl, qfrc = d.qpos, d.qvel, d.ctrl, d.qfrc_applied
+        warnings, ode_state, plant_consts = d.warning.number, np.zeros(8), np.zeros(0)
+    else:
+        pp = plant.params
+        layout, pointers = np.zeros(11, dtype=np.int64), np.zeros(2, dtype=np.int64)
+        lengths = np.array([pp.L, pp.L0, pp.r, pp.d])
+        qpos = qvel = ctrl = qfrc = np.zeros(1)
+        warnings = np.zeros(1, dtype=np.int32)
+        ode_state = np.array(plant.ode.state, dtype=float)
+        plant_consts = np.array([*reduced._constants(pp), reduced._lumped(pp)[5], plant.timestep])
+    limits = np.array(
+        [
+            stepper._limit,
+            math.inf if stepper._dist_limit is None else stepper._dist_limit,
+            stepper._jk,
+            stepper._jk_phi,
+            *b.noise_std,
+            float(b.disturbance is not None and stepper._mode == "matched"),
+            float(controller.anti_windup),
+        ]
+    )
+    from tt_mujoco.defaults import MAX_SPEED
+
+    law = np.array([*controller.law_state(), float(controller.saturated), 0.0, 0.0])
+    target_state = np.array([0.0, math.nan, target.curvature, 0.0])  # s, v_prev, kappa, -
+    scalars = np.array([dt, float(b.substeps), float(steps), MAX_SPEED, nominal.r, nominal.d])
+    report_every = max(1, steps // 100)
+    chunk = min(8192, report_every * max(1, 8192 // report_every))
+    k, status = 0, _RUNNING
+    info = np.zeros(8)
+    while status == _RUNNING:
+        k_end = min(steps, k + chunk - 1)
+        meas = np.empty((k_end - k + 1, 19))
+        loop = np.empty((k_end - k + 1, 17))
+        status, k_next = k_mod.run_chunk(
+            k,
+            k_end,
+            mujoco_plant,
+            pointers,
+            qpos,
+            qvel,
+            ctrl,
+            qfrc,
+            warnings,
+            layout,
+            lengths,
+            ode_state,
+            plant_consts,
+            consts,
+            gamma,
+            controller.law_gains,
+            law,
+            path_kind,
+            bounds,
+            kappas,
+            target.kind == "dynamic",
+            profile,
+            target_state,
+            noise,
+            limits,
+            scalars,
+            meas,
+            loop,
+            info,
+        )
+        # Rows k..k_next-1 are logged; a stop in the plant's advance or the end logs k_next too.
+        logged = k_next - k + (1 if status in (_FINISHED, _WARNING, _SINGULAR) else 0)
+        stepper.add_block(meas[:logged], loop[:logged], np.empty((logged, 0)))
+        if progress is not None:
+            progress(k_next, steps)
+        k = k_next
+    # Hand the state back: the stepper, the target, the controller and the reduced ODE.
+    stepper.k = k
+    stepper.finished = status == _FINISHED
+    target._s, target._kappa = target_state[0], target_state[2]
+    if target.kind == "dynamic":
+        target._v_prev = None if math.isnan(target_state[1]) else target_state[1]
+    (
+        controller.int_e_v,
+        controller.int_e_omega,
+        controller.sta_v,
+        controller.sta_omega,
+        controller._rate_e1,
+        controller._rate_e2,
+        controller._rate_w1,
+        controller._rate_w2,
+    ) = law[:8].tolist()
+    controller.saturated = bool(law[8])
+    if not mujoco_plant:
+        plant.ode.state = ode_state.copy()
+        plant.ode.time = k * dt
+    return _outcome(status, info, stepper, controller, k)
+
+
+def _outcome(status, info, stepper, controller, k) -> tuple[str, str]:
+    """``(status, message)``, worded as the Python loop words them."""
+    from tt_mujoco.controllers.base import LAW_SINGULAR
+    from tt_mujoco.sim.stepper import blew_up_message, jackknife_message
+    from tt_mujoco.vehicle.reduced import SingularityError
+
+    t = k * stepper.dt
+    if status == _FINISHED:
+        return "ok", f"completed {stepper.built.duration:.3f} s"
+    if status == _BLEW_UP:
+        return "diverged", blew_up_message(t, float(info[0]))
+    if status == _JACKKNIFE:
+        phi, beta, x, y, v = info[:5].tolist()
+        return "jackknife", jackknife_message(t, phi, beta, stepper.eta, x, y, v)
+    if status == _WARNING:
+        import mujoco
+
+        name = mujoco.mjtWarning(int(info[0])).name
+        return "diverged", f"MuJoCo warning {name} by t={stepper.plant.data.time:.3f} s"
+    if status == _SINGULAR:
+        err = SingularityError(float(info[0]), float(info[1]))
+        return "jackknife", f"jackknife at t={t + stepper.dt:.3f} s: {err}"
+    # _LAW_FAILED: the nominal model's singularity (code 0) or the law's own failure
+    values = info[1:5].tolist()
+    try:
+        if info[0] == 0.0:
+            raise SingularityError(values[0], values[1])
+        g = tuple(values) if int(info[0]) == LAW_SINGULAR else ()
+        controller._raise_for(int(info[0]), g, values[0], values[1])
+    except FloatingPointError as err:
+        return "diverged", f"controller failed at t={t:.3f} s: {err}"
+    raise AssertionError(f"unknown status {status}")  # pragma: no cover
