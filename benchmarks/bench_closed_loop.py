@@ -21,6 +21,8 @@ import argparse
 import contextlib
 import os
 import time
+
+os.environ.setdefault("TT_MUJOCO_COMPILE_NOW", "1")  # compile here, not in the background
 from collections import defaultdict
 
 import mujoco

@@ -30,6 +30,8 @@ import os
 import statistics
 import tempfile
 import time
+
+os.environ.setdefault("TT_MUJOCO_COMPILE_NOW", "1")  # compile here, not in the background
 from pathlib import Path
 
 import mujoco

@@ -8,6 +8,13 @@ import pytest
 
 from tt_mujoco.sim import Scenario, build, compiled, simulate
 
+
+@pytest.fixture(autouse=True)
+def compile_now(monkeypatch):
+    """Compile in the test process instead of in the background."""
+    monkeypatch.setenv("TT_MUJOCO_COMPILE_NOW", "1")
+
+
 CASES = [
     dict(traj="s_curve", duration=4.0),
     dict(traj="s_curve", duration=4.0, noise_snr_db=20.0, seed=5),
@@ -72,3 +79,14 @@ def test_switched_off_by_the_environment(monkeypatch):
     monkeypatch.setenv("TT_MUJOCO_COMPILED", "0")
     built = build(Scenario(traj="circle", duration=3.0))
     assert compiled.unsupported(built, built.new_controller()) == "TT_MUJOCO_COMPILED=0"
+
+
+def test_first_use_compiles_in_the_background_and_runs_the_python_loop(monkeypatch, tmp_path):
+    monkeypatch.setenv("TT_MUJOCO_COMPILE_NOW", "0")
+    monkeypatch.setenv("TT_MUJOCO_CACHE", str(tmp_path))
+    monkeypatch.setattr(compiled, "_KERNEL", None)
+    started = []
+    monkeypatch.setattr(compiled, "_compile_in_background", lambda: started.append(1))
+    built = build(Scenario(traj="circle", duration=3.0))
+    reason = compiled.unsupported(built, built.new_controller())
+    assert reason == "being compiled in the background (first use)" and started == [1]
