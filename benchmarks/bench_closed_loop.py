@@ -93,6 +93,38 @@ def replay(plant, inputs, initial) -> tuple[float, np.ndarray]:
     return time.perf_counter() - start, d.qpos.copy()
 
 
+def compiled_replay(plant, inputs, initial) -> float:
+    """Wall seconds to replay ``inputs`` with the ``mj_step`` calls made from compiled code, as
+    the compiled loop makes them: the physics share of a compiled control step."""
+    from numba import njit
+
+    from tt_mujoco.sim import _kernel
+
+    mj_step = _kernel.mj_step
+
+    @njit
+    def run(m, d, ctrl, qfrc, ctrls, qfrcs, substeps):
+        for k in range(ctrls.shape[0]):
+            ctrl[:] = ctrls[k]
+            qfrc[:] = qfrcs[k]
+            for _ in range(substeps):
+                mj_step(m, d)
+
+    m = plant.model
+    ctrls = np.array([u for u, _, _, _ in inputs])
+    qfrcs = np.array([q for _, q, _, _ in inputs])
+    best = np.inf
+    for _ in range(4):  # the first call compiles
+        d = mujoco.MjData(m)
+        d.qpos[:], d.qvel[:], d.act[:] = initial[0], initial[1], initial[2]
+        d.time = initial[3]
+        mujoco.mj_forward(m, d)
+        start = time.perf_counter()
+        run(m._address, d._address, d.ctrl, d.qfrc_applied, ctrls, qfrcs, inputs[0][3])
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
 def parts(scenario: Scenario) -> dict[str, float]:
     """Microseconds per control step spent in each part of a closed-loop run."""
     built = build(scenario)
@@ -164,6 +196,13 @@ def main() -> None:
     print(
         f"compiled / Python loop: MuJoCo {loop_python / loop_compiled:.2f}x faster, reduced "
         f"{reduced_python / reduced:.2f}x"
+    )
+    physics = compiled_replay(plant, inputs, initial)
+    us = 1e6 / steps
+    print(
+        f"per control step (us), compiled loop: {loop_compiled * us:.2f} = mj_step called from "
+        f"compiled code {physics * us:.2f} (its replay) + the rest "
+        f"{(loop_compiled - physics) * us:.2f}"
     )
     print("per control step (us), Python loop, MuJoCo plant:")
     with python_loop():
