@@ -266,3 +266,38 @@ def test_checked_in_urdf_is_current():
     assert (MODELS_DIR / URDF_FILE).read_text() == urdf_xml(Params()), (
         "models/tractor_trailer.urdf is stale: run `python -m tt_mujoco.model`"
     )
+
+
+def test_a_trains_urdf_mirrors_its_mjcf(tmp_path):
+    # Three trailers: the URDF's links are the MJCF's bodies, with the same masses, centres of
+    # mass and inertias, every hitch and steering joint, and the same forward kinematics.
+    p = Params().with_trailers(3, [{"eta": 0.5}])
+    urdf = load(p, tmp_path)
+    assert urdf.validate()
+    vehicle = Vehicle(p)
+    model, data = vehicle.model, vehicle.data
+    assert set(urdf.link_map) == {model.body(i).name for i in range(1, model.nbody)}
+    for name, link in urdf.link_map.items():
+        body = model.body(name)
+        assert link.inertial.mass == pytest.approx(float(body.mass[0]), rel=1e-15)
+        np.testing.assert_allclose(link.inertial.origin[:3, 3], body.ipos, atol=1e-15)
+    assert sum(link.inertial.mass for link in urdf.link_map.values()) == pytest.approx(
+        p.total_mass, rel=1e-14
+    )
+    for k, t in zip((2, 3), p.train, strict=True):
+        mimic = urdf.joint_map[f"steer_{k}"].mimic
+        assert mimic.joint == f"hitch_{k}" and mimic.multiplier == pytest.approx(-t.eta)
+    rng = np.random.default_rng(7)
+    vehicle.set_state(phi=tuple(rng.uniform(-0.3, 0.3, 3)))
+    cfg = {"hitch": -vehicle.measure().phi}
+    for k, row in enumerate(vehicle.measure().train, start=2):
+        cfg[f"hitch_{k}"] = -row[3]
+    urdf.update_cfg(cfg)
+    mujoco.mj_kinematics(model, data)
+    tractor = model.body("tractor").id
+    R = data.xmat[tractor].reshape(3, 3)
+    for k in (2, 3):
+        body = model.body(f"trailer_axle_{k}").id
+        expected = R.T @ (data.xpos[body] - data.xpos[tractor])
+        got = urdf.get_transform(f"trailer_axle_{k}", "tractor")[:3, 3]
+        np.testing.assert_allclose(got, expected, atol=FK_TOL)
