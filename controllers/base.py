@@ -475,6 +475,31 @@ class VelocityController(Controller):
         self.command = (u1, u2)
         return T_r, T_l, s1, s2
 
+    #: The law's gains as its plain-number function takes them (set by ``_set_gains``).
+    law_gains: tuple = ()
+
+    def law_state(self) -> tuple:
+        """The law's memory as its plain-number function takes it (8 floats)."""
+        return (0.0,) * 8
+
+    def set_law_state(self, state, aux1: float = 0.0, aux2: float = 0.0) -> None:
+        """Take back the memory :meth:`law_state` gave, as the law returned it."""
+
+    def run_law(self, law, dt, phi, v, omega, v_d, omega_d, v_d_dot, omega_d_dot):
+        """One step of ``law`` (a plain-number law such as
+        :func:`tt_mujoco.controllers.ismc_sta.ismc_sta_law`) on the nominal model at the
+        measurement: the built-in laws' :meth:`step`."""
+        f1, f2, g11, g12, g21, g22 = self.model(phi, v, omega)
+        status, T_r, T_l, u1, u2, saturated, aux1, aux2, state = law(
+            dt, v, omega, v_d, omega_d, v_d_dot, omega_d_dot, f1, f2, g11, g12, g21, g22,
+            self.law_state(), self.law_gains, self.torque_limit, self.saturated, self.anti_windup,
+        )  # fmt: skip
+        self.set_law_state(state, aux1, aux2)
+        self._raise_for(status, (g11, g12, g21, g22), u1, u2)
+        self.saturated = saturated
+        self.command = (u1, u2)
+        return T_r, T_l
+
     def _raise_for(self, status: int, g: tuple, u1: float, u2: float) -> None:
         """The FloatingPointError of a law's failed ``status`` (none for :data:`LAW_OK`)."""
         if status == LAW_SINGULAR:

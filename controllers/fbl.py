@@ -14,9 +14,18 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from tt_mujoco.controllers.base import VelocityController
+from tt_mujoco.controllers.base import (
+    LAW_NOT_FINITE,
+    LAW_OK,
+    LAW_SINGULAR,
+    VelocityController,
+    inverse_of,
+    saturate_of,
+)
 
-__all__ = ["FblController"]
+__all__ = ["FblController", "fbl_law"]
+
+_INF = math.inf
 
 
 class FblController(VelocityController):
@@ -33,6 +42,7 @@ class FblController(VelocityController):
 
     def _set_gains(self, gains):
         self._k1, self._k2 = gains["k_v"], gains["k_omega"]
+        self.law_gains = (self._k1, self._k2, 0.0, 0.0, 0.0, 0.0, 0.0)
 
     def reset(self):
         self.saturated = False
@@ -43,9 +53,24 @@ class FblController(VelocityController):
     def step(self, dt, phi, v, omega, v_d, omega_d, v_d_dot, omega_d_dot):
         if not 0.0 < dt < math.inf:
             self._check_dt(dt)
-        f1, f2, g11, g12, g21, g22 = self.model(phi, v, omega)
-        r1 = v_d_dot - f1 - self._k1 * (v - v_d)
-        r2 = omega_d_dot - f2 - self._k2 * (omega - omega_d)
-        a11, a12, a21, a22 = self._inverse(g11, g12, g21, g22)
-        T_r, T_l, _, _ = self._saturate(a11 * r1 + a12 * r2, a21 * r1 + a22 * r2)
-        return T_r, T_l
+        return self.run_law(fbl_law, dt, phi, v, omega, v_d, omega_d, v_d_dot, omega_d_dot)
+
+
+def fbl_law(
+    dt, v, omega, v_d, omega_d, v_d_dot, omega_d_dot, f1, f2, g11, g12, g21, g22, state, gains,
+    limit, saturated, anti_windup,
+):  # fmt: skip
+    """One step of the law (module docstring) from plain numbers, in the form of
+    :func:`tt_mujoco.controllers.ismc_sta.ismc_sta_law` (the compiled episode shares it);
+    ``gains`` is ``(k_v, k_omega, 0, 0, 0, 0, 0)`` and ``state`` is passed through."""
+    r1 = v_d_dot - f1 - gains[0] * (v - v_d)
+    r2 = omega_d_dot - f2 - gains[1] * (omega - omega_d)
+    ok, a11, a12, a21, a22 = inverse_of(g11, g12, g21, g22)
+    if not ok:
+        return LAW_SINGULAR, 0.0, 0.0, 0.0, 0.0, saturated, 0.0, 0.0, state
+    u1 = a11 * r1 + a12 * r2
+    u2 = a21 * r1 + a22 * r2
+    if not (-_INF < u1 < _INF and -_INF < u2 < _INF):
+        return LAW_NOT_FINITE, 0.0, 0.0, u1, u2, saturated, 0.0, 0.0, state
+    T_r, T_l, s1, s2 = saturate_of(u1, u2, limit)
+    return LAW_OK, T_r, T_l, u1, u2, s1 != 0.0 or s2 != 0.0, 0.0, 0.0, state

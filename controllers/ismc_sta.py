@@ -127,35 +127,12 @@ class IsmcStaController(VelocityController):
     def step(self, dt, phi, v, omega, v_d, omega_d, v_d_dot, omega_d_dot):
         if not 0.0 < dt < math.inf:
             self._check_dt(dt)
-        f1, f2, g11, g12, g21, g22 = self.model(phi, v, omega)
-        out = ismc_sta_law(
-            dt,
-            v,
-            omega,
-            v_d,
-            omega_d,
-            v_d_dot,
-            omega_d_dot,
-            f1,
-            f2,
-            g11,
-            g12,
-            g21,
-            g22,
-            self.law_state(),
-            self.law_gains,
-            self.torque_limit,
-            self.saturated,
-            self.anti_windup,
-        )
-        status, T_r, T_l, u1, u2, saturated, S1, S2, state = out
+        return self.run_law(ismc_sta_law, dt, phi, v, omega, v_d, omega_d, v_d_dot, omega_d_dot)
+
+    def set_law_state(self, state, S_v: float = 0.0, S_omega: float = 0.0) -> None:
         self.int_e_v, self.int_e_omega, self.sta_v, self.sta_omega = state[:4]
-        self.S_v, self.S_omega = S1, S2
-        self._raise_for(status, (g11, g12, g21, g22), u1, u2)
-        self.saturated = saturated
-        self.command = (u1, u2)
         self._rate_e1, self._rate_e2, self._rate_w1, self._rate_w2 = state[4:]
-        return T_r, T_l
+        self.S_v, self.S_omega = S_v, S_omega
 
 
 def ismc_sta_law(

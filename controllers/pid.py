@@ -23,9 +23,19 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from tt_mujoco.controllers.base import VelocityController, deepens
+from tt_mujoco.controllers.base import (
+    LAW_NOT_FINITE,
+    LAW_OK,
+    LAW_SINGULAR,
+    VelocityController,
+    deepens,
+    inverse_of,
+    saturate_of,
+)
 
-__all__ = ["PidController"]
+__all__ = ["PidController", "pid_law"]
+
+_INF = math.inf
 
 
 class PidController(VelocityController):
@@ -52,6 +62,29 @@ class PidController(VelocityController):
         self._kp1, self._kp2 = gains["kp_v"], gains["kp_omega"]
         self._ki1, self._ki2 = gains["ki_v"], gains["ki_omega"]
         self._kd1, self._kd2 = gains["kd_v"], gains["kd_omega"]
+        self.law_gains = (self._kp1, self._kp2, self._ki1, self._ki2, self._kd1, self._kd2, 0.0)
+
+    def law_state(self) -> tuple:
+        """The integrators, the previous errors and the held integrands, in
+        :func:`pid_law`'s order."""
+        first = self._prev_e1 is None
+        return (
+            self.int_e_v,
+            self.int_e_omega,
+            0.0 if first else self._prev_e1,
+            0.0 if first else self._prev_e2,
+            0.0 if first else 1.0,
+            self._rate1,
+            self._rate2,
+            0.0,
+        )
+
+    def set_law_state(self, state, aux1: float = 0.0, aux2: float = 0.0) -> None:
+        self.int_e_v, self.int_e_omega = state[0], state[1]
+        has_prev = state[4] != 0.0
+        self._prev_e1 = state[2] if has_prev else None
+        self._prev_e2 = state[3] if has_prev else None
+        self._rate1, self._rate2 = state[5], state[6]
 
     def reset(self):
         self.int_e_v = self.int_e_omega = 0.0
@@ -65,29 +98,46 @@ class PidController(VelocityController):
     def step(self, dt, phi, v, omega, v_d, omega_d, v_d_dot, omega_d_dot):
         if not 0.0 < dt < math.inf:
             self._check_dt(dt)
-        I1 = self.int_e_v + dt * self._rate1
-        I2 = self.int_e_omega + dt * self._rate2
-        self.int_e_v, self.int_e_omega = I1, I2
+        return self.run_law(pid_law, dt, phi, v, omega, v_d, omega_d, v_d_dot, omega_d_dot)
 
-        f1, f2, g11, g12, g21, g22 = self.model(phi, v, omega)
-        e1 = v - v_d
-        e2 = omega - omega_d
-        if self._prev_e1 is None:
-            de1 = de2 = 0.0
-        else:
-            de1 = (e1 - self._prev_e1) / dt
-            de2 = (e2 - self._prev_e2) / dt
-        self._prev_e1, self._prev_e2 = e1, e2
-        r1 = v_d_dot - f1 - self._kp1 * e1 - self._ki1 * I1 - self._kd1 * de1
-        r2 = omega_d_dot - f2 - self._kp2 * e2 - self._ki2 * I2 - self._kd2 * de2
 
-        a11, a12, a21, a22 = self._inverse(g11, g12, g21, g22)
-        T_r, T_l, s1, s2 = self._saturate(a11 * r1 + a12 * r2, a21 * r1 + a22 * r2)
+def pid_law(
+    dt, v, omega, v_d, omega_d, v_d_dot, omega_d_dot, f1, f2, g11, g12, g21, g22, state, gains,
+    limit, saturated, anti_windup,
+):  # fmt: skip
+    """One step of the PID law (module docstring) from plain numbers, in the form of
+    :func:`tt_mujoco.controllers.ismc_sta.ismc_sta_law` (the compiled episode shares it).
 
-        if self.saturated and self.anti_windup:
-            if deepens(e1, a11, a21, s1, s2):
-                e1 = 0.0
-            if deepens(e2, a12, a22, s1, s2):
-                e2 = 0.0
-        self._rate1, self._rate2 = e1, e2
-        return T_r, T_l
+    ``state`` is ``(int_e_v, int_e_omega, prev_e_v, prev_e_omega, has_prev, rate_v,
+    rate_omega, 0)``, ``gains`` ``(kp_v, kp_omega, ki_v, ki_omega, kd_v, kd_omega, 0)``.
+    """
+    kp1, kp2, ki1, ki2, kd1, kd2, _ = gains
+    I1 = state[0] + dt * state[5]
+    I2 = state[1] + dt * state[6]
+    e1 = v - v_d
+    e2 = omega - omega_d
+    if state[4] == 0.0:
+        de1 = de2 = 0.0
+    else:
+        de1 = (e1 - state[2]) / dt
+        de2 = (e2 - state[3]) / dt
+    r1 = v_d_dot - f1 - kp1 * e1 - ki1 * I1 - kd1 * de1
+    r2 = omega_d_dot - f2 - kp2 * e2 - ki2 * I2 - kd2 * de2
+    ok, a11, a12, a21, a22 = inverse_of(g11, g12, g21, g22)
+    if not ok:
+        return LAW_SINGULAR, 0.0, 0.0, 0.0, 0.0, saturated, 0.0, 0.0, (I1, I2, e1, e2, 1.0,
+            state[5], state[6], 0.0)  # fmt: skip
+    u1 = a11 * r1 + a12 * r2
+    u2 = a21 * r1 + a22 * r2
+    if not (-_INF < u1 < _INF and -_INF < u2 < _INF):
+        return LAW_NOT_FINITE, 0.0, 0.0, u1, u2, saturated, 0.0, 0.0, (I1, I2, e1, e2, 1.0,
+            state[5], state[6], 0.0)  # fmt: skip
+    T_r, T_l, s1, s2 = saturate_of(u1, u2, limit)
+    saturated = s1 != 0.0 or s2 != 0.0
+    rate1, rate2 = e1, e2
+    if saturated and anti_windup:
+        if deepens(e1, a11, a21, s1, s2):
+            rate1 = 0.0
+        if deepens(e2, a12, a22, s1, s2):
+            rate2 = 0.0
+    return LAW_OK, T_r, T_l, u1, u2, saturated, 0.0, 0.0, (I1, I2, e1, e2, 1.0, rate1, rate2, 0.0)

@@ -25,6 +25,10 @@ CASES = [
     dict(traj="s_curve", gains="paper_6_2", disturbance_limit="none", start="paper", duration=3.0),
     dict(traj="s_curve", eta="paper"),  # jackknifes at 1.142 s
     dict(traj="s_curve", eta="paper", plant="reduced"),  # and here at 1.095 s
+    dict(traj="cycloid", controller="pid", noise_snr_db=20.0),
+    dict(traj="cycloid", controller="fbl", plant="reduced"),
+    dict(traj="s_curve", controller="pid", target="static", duration=3.0),
+    dict(traj="circle", controller="fbl", noise_snr_db=15.0, duration=3.0),
 ]
 
 
@@ -60,7 +64,6 @@ def test_checkpoint_rows_are_the_same(monkeypatch, tmp_path):
 @pytest.mark.parametrize(
     ("changes", "reason"),
     [
-        (dict(controller="pid"), "a controller other than ismc_sta"),
         (dict(faults=["dropout:t=1"]), "faults or feedback"),
         (dict(path_feedback={}), "faults or feedback"),
         (dict(eta_schedule=True), "faults or feedback"),
@@ -90,3 +93,14 @@ def test_first_use_compiles_in_the_background_and_runs_the_python_loop(monkeypat
     built = build(Scenario(traj="circle", duration=3.0))
     reason = compiled.unsupported(built, built.new_controller())
     assert reason == "being compiled in the background (first use)" and started == [1]
+
+
+def test_a_user_controller_runs_the_python_loop():
+    from tt_mujoco.controllers.pid import PidController
+
+    class Mine(PidController):
+        pass
+
+    built = build(Scenario(traj="circle", duration=3.0))
+    controller = Mine.from_setup(built.controller_setup)
+    assert compiled.unsupported(built, controller) == "a controller other than the built-in laws"

@@ -16,7 +16,7 @@ from llvmlite import binding
 from numba import njit, types
 from numba.extending import register_jitable
 
-from tt_mujoco.controllers import base, ismc_sta
+from tt_mujoco.controllers import base, fbl, ismc_sta, pid
 from tt_mujoco.reference import paths
 from tt_mujoco.sim import disturbances, measure, plant_reduced
 from tt_mujoco.vehicle import reduced
@@ -39,6 +39,8 @@ for _fn in (
     base.saturate_of,
     base.deepens,
     ismc_sta.ismc_sta_law,
+    pid.pid_law,
+    fbl.fbl_law,
     paths.cycloid_curvature_and_rate,
     disturbances.paper_disturbance_of,
 ):
@@ -54,6 +56,8 @@ rolling_rates_of = reduced.rolling_rates_of
 rk4_stage = reduced.rk4_stage
 rk4_combine = reduced.rk4_combine
 ismc_sta_law = ismc_sta.ismc_sta_law
+pid_law = pid.pid_law
+fbl_law = fbl.fbl_law
 cycloid_curvature_and_rate = paths.cycloid_curvature_and_rate
 paper_disturbance_of = disturbances.paper_disturbance_of
 COS_BETA_MIN = reduced.COS_BETA_MIN
@@ -137,6 +141,7 @@ def run_chunk(
     plant_consts,
     consts,
     gamma,
+    law_kind,
     gains,
     law,
     path_kind,
@@ -236,10 +241,15 @@ def run_chunk(
         mass, bias = coriolis_of(terms, gamma, v_m, w_m)
         f1, f2, g11, g12, g21, g22 = solve_dynamics_of(mass, bias, r_n, d_n)
         state = (law[0], law[1], law[2], law[3], law[4], law[5], law[6], law[7])
-        status, T_r, T_l, u1, u2, saturated, _, _, state = ismc_sta_law(
-            dt, v_m, w_m, v_d, w_d, v_d_dot, w_d_dot, f1, f2, g11, g12, g21, g22, state, gains,
-            lim, law[8] != 0.0, anti_windup,
-        )  # fmt: skip
+        args = (dt, v_m, w_m, v_d, w_d, v_d_dot, w_d_dot, f1, f2, g11, g12, g21, g22, state, gains)
+        if law_kind == 0:
+            out = ismc_sta_law(*args, lim, law[8] != 0.0, anti_windup)
+        elif law_kind == 1:
+            out = pid_law(*args, lim, law[8] != 0.0, anti_windup)
+        else:
+            out = fbl_law(*args, lim, law[8] != 0.0, anti_windup)
+        status, T_r, T_l, u1, u2, saturated, aux1, aux2, state = out
+        law[9], law[10] = aux1, aux2
         for i in range(8):
             law[i] = state[i]
         if status != LAW_OK:

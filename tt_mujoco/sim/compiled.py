@@ -1,12 +1,12 @@
 """The compiled episode: the built-in law's closed loop as one machine-code loop.
 
 :func:`tt_mujoco.sim.simulate.run_episode` hands an episode here when every part of it has a
-compiled form (:func:`unsupported` says why not otherwise): ISMC-STA with the built-in nominal
-model, a static or dynamic target on a closed-form path (the S-curve, the circle, the cycloid),
-the paper's disturbance (matched) or none, measurement noise, one trailer, no faults, path
-feedback, steering schedule, reversing or per-step callback. The loop then runs in numba, chunk
-by chunk, calling ``mj_step`` through MuJoCo's C library or stepping the reduced ODE, and logs
-into float arrays.
+compiled form (:func:`unsupported` says why not otherwise): a built-in law (ISMC-STA, PID, FBL)
+on the built-in nominal model, a static or dynamic target on a closed-form path (the S-curve,
+the circle, the cycloid), the paper's disturbance (matched) or none, measurement noise, one
+trailer, no faults, path feedback, steering schedule, reversing or per-step callback. The loop
+then runs in numba, chunk by chunk, calling ``mj_step`` through MuJoCo's C library or stepping
+the reduced ODE, and logs into float arrays.
 
 Every formula it runs is the Python one: the functions marked "the compiled episode shares it"
 (measurement, reduced model, law, path curvature, disturbance, RK4) are compiled from their own
@@ -52,7 +52,9 @@ def _enabled() -> bool:
 
 def unsupported(built, controller, on_step=None) -> str | None:
     """Why the episode cannot run compiled (None when it can)."""
+    from tt_mujoco.controllers.fbl import FblController
     from tt_mujoco.controllers.ismc_sta import IsmcStaController
+    from tt_mujoco.controllers.pid import PidController
     from tt_mujoco.reference.paths import ArcsPath, CycloidPath
     from tt_mujoco.reference.targets import DynamicTarget, StaticTarget
     from tt_mujoco.sim.disturbances import PaperDisturbance
@@ -65,7 +67,10 @@ def unsupported(built, controller, on_step=None) -> str | None:
         (built.plant_params.n_trailers != 1, "a train"),
         (s.plant == "mujoco" and s.disturbance == "wrench", "the wrench disturbance"),
         (on_step is not None, "a per-step callback"),
-        (type(controller) is not IsmcStaController, "a controller other than ismc_sta"),
+        (
+            type(controller) not in (IsmcStaController, PidController, FblController),
+            "a controller other than the built-in laws",
+        ),
         (not getattr(getattr(controller, "model", None), "builtin", False), "a custom model"),
         (type(built.target) not in (StaticTarget, DynamicTarget), "this target"),
         (type(built.path) not in (ArcsPath, CycloidPath), "a path without closed form"),
@@ -146,13 +151,13 @@ def _source_digest() -> str:
     import mujoco
     import numba
 
-    from tt_mujoco.controllers import base, ismc_sta
+    from tt_mujoco.controllers import base, fbl, ismc_sta, pid
     from tt_mujoco.reference import paths
     from tt_mujoco.sim import disturbances, measure, plant_reduced
     from tt_mujoco.vehicle import reduced
 
     digest = hashlib.sha256(f"{numba.__version__} {mujoco.__version__}".encode())
-    for module in (base, ismc_sta, paths, disturbances, measure, plant_reduced, reduced):
+    for module in (base, fbl, ismc_sta, pid, paths, disturbances, measure, plant_reduced, reduced):
         digest.update(Path(module.__file__).read_bytes())
     digest.update(Path(__file__).read_bytes())
     digest.update((Path(__file__).parent / "_kernel.py").read_bytes())
@@ -229,6 +234,7 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str]:
     from tt_mujoco.defaults import MAX_SPEED
 
     law = np.array([*controller.law_state(), float(controller.saturated), 0.0, 0.0])
+    law_kind = {"ismc_sta": 0, "pid": 1, "fbl": 2}[controller.name]
     target_state = np.array([0.0, math.nan, target.curvature, 0.0])  # s, v_prev, kappa, -
     scalars = np.array([dt, float(b.substeps), float(steps), MAX_SPEED, nominal.r, nominal.d])
     report_every = max(1, steps // 100)
@@ -255,6 +261,7 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str]:
             plant_consts,
             consts,
             gamma,
+            law_kind,
             controller.law_gains,
             law,
             path_kind,
@@ -282,16 +289,7 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str]:
     target._s, target._kappa = target_state[0], target_state[2]
     if target.kind == "dynamic":
         target._v_prev = None if math.isnan(target_state[1]) else target_state[1]
-    (
-        controller.int_e_v,
-        controller.int_e_omega,
-        controller.sta_v,
-        controller.sta_omega,
-        controller._rate_e1,
-        controller._rate_e2,
-        controller._rate_w1,
-        controller._rate_w2,
-    ) = law[:8].tolist()
+    controller.set_law_state(tuple(law[:8].tolist()), float(law[9]), float(law[10]))
     controller.saturated = bool(law[8])
     if not mujoco_plant:
         plant.ode.state = ode_state.copy()
