@@ -20,6 +20,7 @@ depend on the solver, so the inertia check is not repeated).
 """
 
 import copy
+import os
 import statistics
 import time
 from contextlib import contextmanager
@@ -69,7 +70,10 @@ def model_options(options: dict):
 
 
 def recorded_inputs():
-    """The noisy main run's mj_step inputs and initial state (its own settings)."""
+    """The noisy main run's mj_step inputs and initial state (its own settings), recorded
+    around the plant's ``advance``, which only the Python loop calls (the compiled loop gives
+    the same numbers)."""
+    os.environ["TT_MUJOCO_COMPILED"] = "0"
     scenario = Scenario(traj="s_curve", duration=10.0, noise_snr_db=20.0)
     built = build(scenario)
     stepper = Stepper(built)
@@ -113,8 +117,47 @@ def replay_cost(model, initial, inputs, options: dict) -> tuple[float, float, fl
     return 1e6 * min(times) / len(inputs), statistics.mean(niter), statistics.mean(nls)
 
 
+#: MuJoCo's own stage timers, in the order a step runs them (mjData.timer).
+STAGES = (
+    ("position: kinematics", "mjTIMER_POS_KINEMATICS"),
+    ("position: inertia", "mjTIMER_POS_INERTIA"),
+    ("position: collision", "mjTIMER_POS_COLLISION"),
+    ("position: make constraints", "mjTIMER_POS_MAKE"),
+    ("position: project", "mjTIMER_POS_PROJECT"),
+    ("velocity", "mjTIMER_VELOCITY"),
+    ("actuation", "mjTIMER_ACTUATION"),
+    ("constraint solver", "mjTIMER_CONSTRAINT"),
+    ("advance (integrator)", "mjTIMER_ADVANCE"),
+)
+
+
+def stage_profile(model, initial, inputs) -> dict[str, float]:
+    """Microseconds a step in each stage of ``mj_step`` (MuJoCo's timers), and the whole step."""
+    d = mujoco.MjData(model)
+    d.qpos[:], d.qvel[:] = initial
+    mujoco.mj_forward(model, d)
+    for i in range(len(d.timer)):
+        d.timer[i].duration, d.timer[i].number = 0.0, 0
+    for u, q in inputs:
+        d.ctrl[:] = u
+        d.qfrc_applied[:] = q
+        mujoco.mj_step(model, d)
+
+    def us(name: str) -> float:
+        timer = d.timer[int(getattr(mujoco.mjtTimer, name))]
+        return 1e6 * timer.duration / len(inputs)
+
+    out = {label: us(name) for label, name in STAGES}
+    out["whole step"] = us("mjTIMER_STEP")
+    return out
+
+
 def main() -> None:
     model, initial, inputs = recorded_inputs()
+    print("where a step of the project's settings goes (MuJoCo's timers, us a step):")
+    profile = stage_profile(model, initial, inputs)
+    for label, value in profile.items():
+        print(f"  {label:28s} {value:6.2f}  ({100 * value / profile['whole step']:4.1f} %)")
     base_us = None
     header = (
         f"{'setting':38s} {'us/step':>8s} {'ratio':>6s} {'iter':>5s} {'ls':>5s} "
