@@ -319,6 +319,27 @@ def saturate_of(u1: float, u2: float, lim: float):
     return (s1 * lim if s1 else u1), (s2 * lim if s2 else u2), s1, s2
 
 
+def finite_pair(u1: float, u2: float) -> bool:
+    """Whether both torque requests are finite numbers."""
+    return -_INF < u1 < _INF and -_INF < u2 < _INF
+
+
+def torques_of(g11, g12, g21, g22, r1, r2, limit):
+    """The torques a law asks for to get the accelerations ``(r1, r2)``: ``u = g^-1 r`` clipped
+    at ``limit``. Returns ``(status, T_r, T_l, u1, u2, s1, s2, a11, a12, a21, a22)``, ``s`` the
+    saturation signs and ``a`` the entries of ``g^-1``; ``status`` :data:`LAW_SINGULAR` (all
+    zeros) or :data:`LAW_NOT_FINITE` (``u`` kept for the message) when there are no torques."""
+    ok, a11, a12, a21, a22 = inverse_of(g11, g12, g21, g22)
+    if not ok:
+        return LAW_SINGULAR, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    u1 = a11 * r1 + a12 * r2
+    u2 = a21 * r1 + a22 * r2
+    if not finite_pair(u1, u2):
+        return LAW_NOT_FINITE, 0.0, 0.0, u1, u2, 0.0, 0.0, a11, a12, a21, a22
+    T_r, T_l, s1, s2 = saturate_of(u1, u2, limit)
+    return LAW_OK, T_r, T_l, u1, u2, s1, s2, a11, a12, a21, a22
+
+
 def deepens(x: float, gi_1: float, gi_2: float, s1: float, s2: float) -> bool:
     """Whether an integrator increment ``+x`` in a channel with g^-1 column ``(gi_1, gi_2)``
     would push a saturated torque further out (module docstring)."""
@@ -381,14 +402,14 @@ class VelocityController(Controller):
         #: The last unsaturated torque request (T_r, T_l), for logging saturation.
         self.command = (0.0, 0.0)
         self.setup = None
-        self._phi_field = "phi"
+        self._train = False  # a train's model takes every hitch angle (Measurement.phis)
         self.reset()
 
     @classmethod
     def from_setup(cls, setup: ControllerSetup, gains: str | Mapping | None = None):
         ctrl = cls(setup.model, torque_limit=setup.torque_limit, gains=gains)
         ctrl.setup = setup
-        ctrl._phi_field = "phis" if getattr(setup.params, "n_trailers", 1) > 1 else "phi"
+        ctrl._train = getattr(setup.params, "n_trailers", 1) > 1
         return ctrl
 
     def compute(self, t: float, measurement, reference: Reference) -> tuple[float, float]:
@@ -397,7 +418,7 @@ class VelocityController(Controller):
         r = reference
         return self.step(
             self.setup.control_dt,
-            measurement.phi if self._phi_field == "phi" else measurement.phis,
+            measurement.phis if self._train else measurement.phi,
             measurement.v,
             measurement.omega,
             r.v_d,
@@ -468,7 +489,7 @@ class VelocityController(Controller):
 
     def _saturate(self, u1: float, u2: float):
         """Clip ``(u1, u2)``; return the torques and the saturation signs (+1, -1 or 0)."""
-        if not (-_INF < u1 < _INF and -_INF < u2 < _INF):
+        if not finite_pair(u1, u2):
             self._raise_for(LAW_NOT_FINITE, (), u1, u2)
         T_r, T_l, s1, s2 = saturate_of(u1, u2, self.torque_limit)
         self.saturated = s1 != 0.0 or s2 != 0.0

@@ -14,18 +14,9 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from tt_mujoco.controllers.base import (
-    LAW_NOT_FINITE,
-    LAW_OK,
-    LAW_SINGULAR,
-    VelocityController,
-    inverse_of,
-    saturate_of,
-)
+from tt_mujoco.controllers.base import LAW_OK, VelocityController, torques_of
 
 __all__ = ["FblController", "fbl_law"]
-
-_INF = math.inf
 
 
 class FblController(VelocityController):
@@ -65,12 +56,7 @@ def fbl_law(
     ``gains`` is ``(k_v, k_omega, 0, 0, 0, 0, 0)`` and ``state`` is passed through."""
     r1 = v_d_dot - f1 - gains[0] * (v - v_d)
     r2 = omega_d_dot - f2 - gains[1] * (omega - omega_d)
-    ok, a11, a12, a21, a22 = inverse_of(g11, g12, g21, g22)
-    if not ok:
-        return LAW_SINGULAR, 0.0, 0.0, 0.0, 0.0, saturated, 0.0, 0.0, state
-    u1 = a11 * r1 + a12 * r2
-    u2 = a21 * r1 + a22 * r2
-    if not (-_INF < u1 < _INF and -_INF < u2 < _INF):
-        return LAW_NOT_FINITE, 0.0, 0.0, u1, u2, saturated, 0.0, 0.0, state
-    T_r, T_l, s1, s2 = saturate_of(u1, u2, limit)
+    status, T_r, T_l, u1, u2, s1, s2, _, _, _, _ = torques_of(g11, g12, g21, g22, r1, r2, limit)
+    if status != LAW_OK:
+        return status, T_r, T_l, u1, u2, saturated, 0.0, 0.0, state
     return LAW_OK, T_r, T_l, u1, u2, s1 != 0.0 or s2 != 0.0, 0.0, 0.0, state

@@ -39,20 +39,11 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from tt_mujoco.controllers.base import (
-    LAW_NOT_FINITE,
-    LAW_OK,
-    LAW_SINGULAR,
-    VelocityController,
-    deepens,
-    inverse_of,
-    saturate_of,
-)
+from tt_mujoco.controllers.base import LAW_OK, VelocityController, deepens, torques_of
 
 __all__ = ["IsmcStaController", "ismc_sta_law"]
 
 _sqrt = math.sqrt
-_INF = math.inf
 
 
 class IsmcStaController(VelocityController):
@@ -184,14 +175,11 @@ def ismc_sta_law(
 
     w1 = k21 * sig1
     w2 = k22 * sig2
-    ok, a11, a12, a21, a22 = inverse_of(g11, g12, g21, g22)
-    if not ok:
-        return LAW_SINGULAR, 0.0, 0.0, 0.0, 0.0, saturated, S1, S2, (I1, I2, W1, W2, e1, e2, w1, w2)
-    u1 = a11 * r1 + a12 * r2
-    u2 = a21 * r1 + a22 * r2
-    if not (-_INF < u1 < _INF and -_INF < u2 < _INF):
-        return LAW_NOT_FINITE, 0.0, 0.0, u1, u2, saturated, S1, S2, (I1, I2, W1, W2, e1, e2, w1, w2)
-    T_r, T_l, s1, s2 = saturate_of(u1, u2, limit)
+    status, T_r, T_l, u1, u2, s1, s2, a11, a12, a21, a22 = torques_of(
+        g11, g12, g21, g22, r1, r2, limit
+    )
+    if status != LAW_OK:
+        return status, T_r, T_l, u1, u2, saturated, S1, S2, (I1, I2, W1, W2, e1, e2, w1, w2)
     saturated = s1 != 0.0 or s2 != 0.0
     if saturated and anti_windup:
         if deepens(e1, a11, a21, s1, s2):

@@ -23,19 +23,9 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from tt_mujoco.controllers.base import (
-    LAW_NOT_FINITE,
-    LAW_OK,
-    LAW_SINGULAR,
-    VelocityController,
-    deepens,
-    inverse_of,
-    saturate_of,
-)
+from tt_mujoco.controllers.base import LAW_OK, VelocityController, deepens, torques_of
 
 __all__ = ["PidController", "pid_law"]
-
-_INF = math.inf
 
 
 class PidController(VelocityController):
@@ -123,16 +113,12 @@ def pid_law(
         de2 = (e2 - state[3]) / dt
     r1 = v_d_dot - f1 - kp1 * e1 - ki1 * I1 - kd1 * de1
     r2 = omega_d_dot - f2 - kp2 * e2 - ki2 * I2 - kd2 * de2
-    ok, a11, a12, a21, a22 = inverse_of(g11, g12, g21, g22)
-    if not ok:
-        return LAW_SINGULAR, 0.0, 0.0, 0.0, 0.0, saturated, 0.0, 0.0, (I1, I2, e1, e2, 1.0,
-            state[5], state[6], 0.0)  # fmt: skip
-    u1 = a11 * r1 + a12 * r2
-    u2 = a21 * r1 + a22 * r2
-    if not (-_INF < u1 < _INF and -_INF < u2 < _INF):
-        return LAW_NOT_FINITE, 0.0, 0.0, u1, u2, saturated, 0.0, 0.0, (I1, I2, e1, e2, 1.0,
-            state[5], state[6], 0.0)  # fmt: skip
-    T_r, T_l, s1, s2 = saturate_of(u1, u2, limit)
+    status, T_r, T_l, u1, u2, s1, s2, a11, a12, a21, a22 = torques_of(
+        g11, g12, g21, g22, r1, r2, limit
+    )
+    if status != LAW_OK:
+        held = (I1, I2, e1, e2, 1.0, state[5], state[6], 0.0)
+        return status, T_r, T_l, u1, u2, saturated, 0.0, 0.0, held
     saturated = s1 != 0.0 or s2 != 0.0
     rate1, rate2 = e1, e2
     if saturated and anti_windup:

@@ -38,6 +38,8 @@ for _fn in (
     base.inverse_of,
     base.saturate_of,
     base.deepens,
+    base.finite_pair,
+    base.torques_of,
     ismc_sta.ismc_sta_law,
     pid.pid_law,
     fbl.fbl_law,
@@ -61,7 +63,7 @@ fbl_law = fbl.fbl_law
 cycloid_curvature_and_rate = paths.cycloid_curvature_and_rate
 paper_disturbance_of = disturbances.paper_disturbance_of
 COS_BETA_MIN = reduced.COS_BETA_MIN
-LAW_OK = base.LAW_OK
+LAW_OK, LAW_SINGULAR = base.LAW_OK, base.LAW_SINGULAR
 
 # mj_step by its symbol in MuJoCo's library, which the Python bindings load: no pointer is
 # baked into the compiled code, so it can be cached on disk.
@@ -254,7 +256,7 @@ def run_chunk(
             law[i] = state[i]
         if status != LAW_OK:
             info[0] = status
-            if status == 1:
+            if status == LAW_SINGULAR:
                 info[1], info[2], info[3], info[4] = g11, g12, g21, g22
             else:
                 info[1], info[2] = u1, u2

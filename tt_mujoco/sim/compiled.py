@@ -34,6 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
+from tt_mujoco.defaults import MAX_SPEED
+
 __all__ = ["run_compiled", "unsupported"]
 
 #: Shortest episode handed to the compiled loop: loading the compiled code costs ~0.3 s once
@@ -231,8 +233,6 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str]:
             float(controller.anti_windup),
         ]
     )
-    from tt_mujoco.defaults import MAX_SPEED
-
     law = np.array([*controller.law_state(), float(controller.saturated), 0.0, 0.0])
     law_kind = {"ismc_sta": 0, "pid": 1, "fbl": 2}[controller.name]
     target_state = np.array([0.0, math.nan, target.curvature, 0.0])  # s, v_prev, kappa, -

@@ -56,21 +56,17 @@ class ReducedPlant(Plant):
         x, y, theta = state[:3]
         phis = state[3 : 3 + n]
         th_l, th_r, v, omega = state[3 + n :]
-        places = train.poses(x, y, theta, phis, p)
-        speeds = train.trailer_rates(phis, v, omega, p)
-        rows = tuple(
+        # Trailer 1 as for one trailer; trailers 2..N from the chain.
+        first = [x, y, theta, phis[0], th_l, th_r, v, omega]
+        out = TrainMeasurement._make(reduced_measure_values(first, p.eta, p.L, p.L0, p.r, p.d))
+        places = train.poses(x, y, theta, phis, p)[1:]
+        speeds = train.trailer_rates(phis, v, omega, p)[1:]
+        out.train = tuple(
             (px, py, thk, phi, t.eta * phi, v_k)
             for (_, _, px, py, thk), phi, t, (_, v_k, _) in zip(
-                places, phis, p.trailers, speeds, strict=True
+                places, phis[1:], p.train, speeds, strict=True
             )
         )
-        values = (
-            x, y, theta, phis[0], p.eta * phis[0], v, omega, *rows[0][:3], rows[0][5],
-            th_l, th_r, (v - 0.5 * p.d * omega) / p.r, (v + 0.5 * p.d * omega) / p.r,
-            0.0, 0.0, 0.0, 0.0,
-        )  # fmt: skip
-        out = TrainMeasurement._make(values)
-        out.train = rows[1:]
         return out
 
     def apply(self, T_r, T_l, dist_r, dist_l, wrench_force, wrench_torque, theta) -> None:

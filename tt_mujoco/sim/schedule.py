@@ -66,18 +66,12 @@ class EtaScheduler:
             return self.eta
         self._kappa = kappa
         if len(self.lengths) > 1:  # a train: every trailer's own exact gain
-            etas = exact_train_same_path_etas(kappa, self.lengths)
-            if max(abs(a - b) for a, b in zip(etas, self.etas, strict=True)) > self.tolerance:
-                self._plant.set_etas(etas)
-                self.etas = tuple(etas)
-                self.eta = etas[0]
-                self.updates += 1
-                self._changes.append((step + 1, self.eta))
-            return self.eta
-        eta = exact_same_path_eta(kappa, self.L, self.L0)
-        if abs(eta - self.eta) > self.tolerance:
-            self._apply(eta)
-            self._changes.append((step + 1, eta))
+            etas = tuple(exact_train_same_path_etas(kappa, self.lengths))
+        else:
+            etas = (exact_same_path_eta(kappa, self.L, self.L0),)
+        if max(abs(a - b) for a, b in zip(etas, self.etas, strict=True)) > self.tolerance:
+            self._apply(etas)
+            self._changes.append((step + 1, self.eta))
         return self.eta
 
     def eta_series(self, n: int) -> np.ndarray:
@@ -89,7 +83,7 @@ class EtaScheduler:
             out[start : max(start, min(stop, n))] = eta
         return out
 
-    def _apply(self, eta: float) -> None:
-        self._plant.set_eta(eta)
-        self.eta = eta
+    def _apply(self, etas: tuple) -> None:
+        self._plant.set_etas(etas)
+        self.etas, self.eta = etas, etas[0]
         self.updates += 1
