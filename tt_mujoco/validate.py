@@ -36,7 +36,7 @@ from tt_mujoco.outputs import (
     write_json,
 )
 from tt_mujoco.sim.physics import Vehicle
-from tt_mujoco.validate_train import run_train
+from tt_mujoco.validate_train import damped_program, run_train, torque_program_dynamics
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import MAX_TRAILERS, Params
 
@@ -117,18 +117,6 @@ def check_coriolis(
     return {"eta": p.eta, "samples": samples, "max_rel_error": worst}
 
 
-def _damped_program(base: float, weave: float, yaw_damping: float):
-    """Wheel torques (T_r, T_l): a constant drive ``base`` on both wheels, a slow weave
-    ``+-weave sin(0.8 t)`` and a yaw-rate damping term. The damping (no model in it) keeps the
-    yaw mode, which is open-loop unstable when reversing a loaded trailer, from running away."""
-
-    def program(t: float, omega: float) -> tuple[float, float]:
-        diff = weave * math.sin(0.8 * t) - yaw_damping * omega
-        return base + diff, base - diff
-
-    return program
-
-
 def _mujoco_run(p: Params, duration: float, program, v0: float = 0.0, phi0: float = 0.0):
     """Step MuJoCo with a torque program; returns a dict of per-step arrays (after each step)."""
     veh = Vehicle(p)
@@ -173,7 +161,7 @@ def check_kinematics(p: Params, direction: int, duration: float = 10.0) -> dict:
     Section 2 relative to
     the RMS of phi_dot, the max equality violation |beta - eta phi| and the max side slip.
     """
-    program = _damped_program(base=0.2 * direction, weave=0.1, yaw_damping=2.0)
+    program = damped_program(base=0.2 * direction, weave=0.1, yaw_damping=2.0)
     run = _mujoco_run(p, duration, program)
     dt = p.timestep
     q = np.array([run["x"][0], run["y"][0], run["theta"][0], run["phi"][0], 0.0, 0.0])
@@ -204,13 +192,6 @@ def check_kinematics(p: Params, direction: int, duration: float = 10.0) -> dict:
     }
 
 
-def _torque_program_dynamics(t: float) -> tuple[float, float]:
-    """Open-loop torques for the dynamics comparison: within traction (< 1 N m per wheel)."""
-    common = 0.4 + 0.3 * math.sin(2.0 * t)
-    diff = 0.25 * math.sin(3.0 * t + 0.5)
-    return common + diff, common - diff
-
-
 def check_dynamics(p: Params, duration: float = 2.0, v0: float = 0.3) -> dict:
     """(v, omega) of MuJoCo and of the reduced ODE under the same open-loop torques.
 
@@ -223,7 +204,7 @@ def check_dynamics(p: Params, duration: float = 2.0, v0: float = 0.3) -> dict:
     v0 *= sign
 
     def program(t, _omega=0.0):
-        T_r, T_l = _torque_program_dynamics(t)
+        T_r, T_l = torque_program_dynamics(t)
         return sign * T_r, sign * T_l
 
     run = _mujoco_run(p, duration, program, v0=v0)
@@ -278,7 +259,7 @@ def check_energy(
     def tau_fn(t):
         if not forced:
             return (0.0, 0.0)
-        T_r, T_l = _torque_program_dynamics(t)
+        T_r, T_l = torque_program_dynamics(t)
         return sign * T_r, sign * T_l
 
     sol = solve_ivp(

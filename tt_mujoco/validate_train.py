@@ -32,9 +32,35 @@ __all__ = [
     "check_inertia",
     "check_jackknife",
     "check_kinematics",
+    "damped_program",
     "run_train",
+    "torque_program_dynamics",
     "train_params",
 ]
+
+
+def damped_program(base: float, weave: float, yaw_damping: float):
+    """Wheel torques (T_r, T_l): a constant drive ``base`` on both wheels, a slow weave
+    ``+-weave sin(0.8 t)`` and a yaw-rate damping term. The damping (no model in it) keeps the
+    yaw mode, which is open-loop unstable when reversing a loaded trailer, from running away."""
+
+    def program(t: float, omega: float) -> tuple[float, float]:
+        diff = weave * math.sin(0.8 * t) - yaw_damping * omega
+        return base + diff, base - diff
+
+    return program
+
+
+def torque_program_dynamics(t: float) -> tuple[float, float]:
+    """Open-loop torques for the dynamics comparison: within traction (< 1 N m per wheel)."""
+    common = 0.4 + 0.3 * math.sin(2.0 * t)
+    diff = 0.25 * math.sin(3.0 * t + 0.5)
+    return common + diff, common - diff
+
+
+def _drive_scale(p: Params) -> float:
+    """The train's mass over the single trailer's: drives scaled by it cover the same ground."""
+    return p.total_mass / Params(eta=p.eta).total_mass
 
 
 def train_params(n: int, eta="same_path") -> Params:
@@ -131,13 +157,8 @@ def check_kinematics(p: Params, direction: int = 1, duration: float = 10.0) -> d
     ``|beta_k - eta_k phi_k|`` over all hitches.
     """
     n = p.n_trailers
-    scale = p.total_mass / Params(eta=p.eta).total_mass
-    base, weave, damping = 0.2 * direction * scale, 0.1 * scale, 2.0 * scale
-
-    def program(t: float, omega: float):
-        diff = weave * math.sin(0.8 * t) - damping * omega
-        return base + diff, base - diff
-
+    scale = _drive_scale(p)
+    program = damped_program(0.2 * direction * scale, 0.1 * scale, 2.0 * scale)
     run, hitch_rates = _mujoco_run(p, duration, program)
     dt = p.timestep
     q = np.array([run[0].x, run[0].y, run[0].theta, *_phis(run[0])])
@@ -193,11 +214,7 @@ def check_energy(p: Params, forced: bool, duration: float = 2.0) -> dict:
     B = reduced.input_matrix(p)
 
     def tau_fn(t):
-        if not forced:
-            return np.zeros(2)
-        common = 0.4 + 0.3 * math.sin(2.0 * t)
-        diff = 0.25 * math.sin(3.0 * t + 0.5)
-        return np.array([common + diff, common - diff])
+        return np.array(torque_program_dynamics(t)) if forced else np.zeros(2)
 
     def rhs(t, y):
         phis, V = tuple(y[3 : 3 + n]), y[3 + n : 5 + n]
@@ -231,11 +248,8 @@ def check_jackknife(p: Params, direction: int = 1, duration: float = 4.0) -> dic
     |beta_k| = 90 deg (a jackknife)."""
     n = p.n_trailers
     phi0 = math.radians(1.0) * direction
-    scale = p.total_mass / Params(eta=p.eta).total_mass
-    base, damping = 0.3 * direction * scale, 2.0 * scale
-
-    def program(_t: float, omega: float):
-        return base - damping * omega, base + damping * omega
+    scale = _drive_scale(p)
+    program = damped_program(0.3 * direction * scale, 0.0, 2.0 * scale)
 
     veh = Vehicle(p)
     veh.set_state(v=0.5 * direction, phi=(phi0,) * n)

@@ -85,6 +85,16 @@ def train_same_path_etas(lengths) -> list[float]:
     return etas
 
 
+def _positive(name: str, value, label: str = "") -> float:
+    """``value`` as a float, or ValueError naming ``label + name`` unless it is a finite
+    number > 0."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ValueError(f"{label}{name}={value!r} is not allowed: it must be a number > 0")
+    if not math.isfinite(value) or value <= 0:
+        raise ValueError(f"{label}{name}={value!r} is not allowed: it must be finite and > 0")
+    return float(value)
+
+
 #: Most trailers a train may have (a longer train is accepted by the math but untested).
 MAX_TRAILERS = 8
 
@@ -124,17 +134,7 @@ class Trailer:
 
     def __post_init__(self) -> None:
         for name in TRAILER_FIELDS:
-            value = getattr(self, name)
-            if (
-                isinstance(value, bool)
-                or not isinstance(value, int | float)
-                or not math.isfinite(value)
-                or value <= 0
-            ):
-                raise ValueError(
-                    f"trailer {name}={value!r} is not allowed: it must be a finite number > 0"
-                )
-            object.__setattr__(self, name, float(value))
+            object.__setattr__(self, name, _positive(name, getattr(self, name), "trailer "))
 
     def to_dict(self) -> dict:
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
@@ -145,7 +145,9 @@ class Trailer:
 MAX_ABS_ETA = 20.0
 
 
-def resolve_eta(eta: float | str, L: float, L0: float) -> tuple[float, str]:
+def resolve_eta(
+    eta: float | str, L: float, L0: float, same_path: float | None = None
+) -> tuple[float, str]:
     """Turn a steering specification into ``(eta, preset_name)``.
 
     Parameters
@@ -155,6 +157,9 @@ def resolve_eta(eta: float | str, L: float, L0: float) -> tuple[float, str]:
         :func:`same_path_eta`) or a number, given as a float or a numeric string.
     L, L0 : float
         Link lengths (m).
+    same_path : float, optional
+        What ``"same_path"`` stands for, :func:`same_path_eta` of ``L, L0`` unless given (a
+        trailer behind another has its own, :func:`train_same_path_etas`).
 
     Returns
     -------
@@ -167,7 +172,7 @@ def resolve_eta(eta: float | str, L: float, L0: float) -> tuple[float, str]:
         if key == "paper":
             return PAPER_ETA, "paper"
         if key == "same_path":
-            return same_path_eta(L, L0), "same_path"
+            return (same_path_eta(L, L0) if same_path is None else same_path), "same_path"
         try:
             value = float(eta)  # the original text: "-3" and "1e-3" are numbers
         except ValueError:
@@ -280,12 +285,7 @@ class Params:
             "body_tilt_inertia_ratio",
         )
         for name in positive:
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                raise ValueError(f"{name}={value!r} is not allowed: it must be a number > 0")
-            if not math.isfinite(value) or value <= 0:
-                raise ValueError(f"{name}={value!r} is not allowed: it must be finite and > 0")
-            object.__setattr__(self, name, float(value))
+            object.__setattr__(self, name, _positive(name, getattr(self, name)))
         if not 1e-5 <= self.timestep <= 0.01:
             raise ValueError(
                 f"timestep={self.timestep!r} is not allowed: it must be in [1e-05, 0.01] s"
@@ -324,7 +324,7 @@ class Params:
                 f"trailers={len(train) + 1} is not allowed: at most {MAX_TRAILERS} trailers"
             )
         items = []
-        first = {name: getattr(self, name) for name in TRAILER_FIELDS}
+        first = self._first_trailer_fields()
         for k, item in enumerate(train, start=2):
             if isinstance(item, dict):
                 item = {key: value for key, value in item.items() if key != "steering"}
@@ -345,13 +345,10 @@ class Params:
         resolved = []
         for k, item in enumerate(items, start=2):
             spec = item.eta
-            if isinstance(spec, str) and spec.strip().lower().replace("-", "_") == "same_path":
-                eta, preset = limits[k - 1], "same_path"
-            else:
-                try:
-                    eta, preset = resolve_eta(spec, item.L, item.L0)
-                except ValueError as err:
-                    raise ValueError(f"trailer {k}: {err}") from None
+            try:
+                eta, preset = resolve_eta(spec, item.L, item.L0, same_path=limits[k - 1])
+            except ValueError as err:
+                raise ValueError(f"trailer {k}: {err}") from None
             if not isinstance(spec, str) and item.steering:
                 preset = item.steering  # already resolved (a copy made by replace or scaled)
             if self.r >= min(item.L, item.L0):
@@ -371,12 +368,12 @@ class Params:
     @property
     def trailers(self) -> tuple[Trailer, ...]:
         """Trailers 1..N, trailer 1 made from this object's own fields."""
-        first = Trailer(
-            **{name: getattr(self, name) for name in TRAILER_FIELDS},
-            eta=self.eta,
-            steering=self.steering,
-        )
+        first = Trailer(**self._first_trailer_fields(), eta=self.eta, steering=self.steering)
         return (first, *self.train)
+
+    def _first_trailer_fields(self) -> dict:
+        """Trailer 1's :data:`TRAILER_FIELDS`, from this object's own fields."""
+        return {name: getattr(self, name) for name in TRAILER_FIELDS}
 
     @property
     def etas(self) -> tuple[float, ...]:
@@ -397,7 +394,7 @@ class Params:
                 f"{len(overrides)} trailer tables are not allowed with trailers={n}: give at "
                 f"most {n - 1} (for trailers 2..{n})"
             )
-        copy = {name: getattr(self, name) for name in TRAILER_FIELDS}
+        copy = self._first_trailer_fields()
         copy["eta"] = self.eta if self.steering == "custom" else self.steering
         train = []
         for k in range(2, n + 1):
@@ -411,7 +408,7 @@ class Params:
     @property
     def phi_singular(self) -> float:
         """|phi| at which cos(beta) = 0 (the kinematics are singular), or inf if eta = 0."""
-        return math.inf if self.eta == 0 else math.pi / (2 * abs(self.eta))
+        return self.phi_singulars[0]
 
     @property
     def phi_singulars(self) -> tuple[float, ...]:
