@@ -98,9 +98,9 @@ def compiled_replay(plant, inputs, initial) -> float:
     the compiled loop makes them: the physics share of a compiled control step."""
     from numba import njit
 
-    from tt_mujoco.sim import _kernel
+    from tt_mujoco.sim import compiled
 
-    mj_step = _kernel.mj_step
+    mj_step = compiled.kernel().mj_step
 
     @njit
     def run(m, d, ctrl, qfrc, ctrls, qfrcs, substeps):

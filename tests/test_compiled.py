@@ -51,14 +51,18 @@ def test_compiled_loop_equals_python_loop_bit_for_bit(monkeypatch, case):
 
 
 def test_checkpoint_rows_are_the_same(monkeypatch, tmp_path):
+    from tt_mujoco.sim.checkpoint import read_checkpoint
+
     scenario = Scenario(traj="circle", duration=3.0, noise_snr_db=25.0)
-    texts = []
+    rows = []
     for flag in ("0", "1"):
         monkeypatch.setenv("TT_MUJOCO_COMPILED", flag)
-        path = tmp_path / f"partial{flag}.csv"
+        path = tmp_path / f"partial{flag}.arrows"
         simulate(scenario, checkpoint=path)
-        texts.append(path.read_text())
-    assert texts[0] == texts[1] and len(texts[0].splitlines()) == 3002
+        rows.append(read_checkpoint(path))
+    assert list(rows[0]) == list(rows[1]) and len(rows[0]["t"]) == 3001
+    for name, column in rows[0].items():
+        assert np.array_equal(column, rows[1][name], equal_nan=True), name
 
 
 @pytest.mark.parametrize(
@@ -91,8 +95,9 @@ def test_first_use_compiles_in_the_background_and_runs_the_python_loop(monkeypat
     started = []
     monkeypatch.setattr(compiled, "_compile_in_background", lambda: started.append(1))
     built = build(Scenario(traj="circle", duration=3.0))
-    reason = compiled.unsupported(built, built.new_controller())
-    assert reason == "being compiled in the background (first use)" and started == [1]
+    assert compiled.unsupported(built, built.new_controller()) is None  # a query: no compile
+    assert started == []
+    assert not compiled.ready() and started == [1]
 
 
 def test_a_user_controller_runs_the_python_loop():
@@ -104,3 +109,90 @@ def test_a_user_controller_runs_the_python_loop():
     built = build(Scenario(traj="circle", duration=3.0))
     controller = Mine.from_setup(built.controller_setup)
     assert compiled.unsupported(built, controller) == "a controller other than the built-in laws"
+
+
+def _fake_cache(monkeypatch, tmp_path):
+    """A cache folder laid out as the kernel leaves it, with a manifest."""
+    import hashlib
+
+    monkeypatch.setenv("TT_MUJOCO_CACHE", str(tmp_path))
+    cache = compiled._cache_dir()
+    sub = cache / f"{cache.name}_{hashlib.sha1(str(cache.resolve()).encode()).hexdigest()}"
+    sub.mkdir(parents=True)
+    (cache / "_kernel.py").write_text("# the kernel's copy\n")
+    (sub / "_kernel.run_chunk-1.py311.nbi").write_bytes(b"index" * 100)
+    (sub / "_kernel.run_chunk-1.py311.1.nbc").write_bytes(b"code" * 1000)
+    compiled._write_manifest()
+    return cache, sub
+
+
+def test_a_whole_cache_is_ready_without_compiling(monkeypatch, tmp_path):
+    monkeypatch.setenv("TT_MUJOCO_COMPILE_NOW", "0")
+    monkeypatch.setattr(compiled, "_KERNEL", None)
+    _fake_cache(monkeypatch, tmp_path)
+    started = []
+    monkeypatch.setattr(compiled, "_compile_in_background", lambda: started.append(1))
+    assert compiled.ready() and started == []
+
+
+@pytest.mark.parametrize("damage", ["truncate", "garbage_manifest", "moved"])
+def test_a_damaged_cache_is_set_aside_and_the_run_takes_the_python_loop(
+    monkeypatch, tmp_path, capsys, damage
+):
+    # A truncated file would make numba compile in the foreground (seconds), a garbage
+    # manifest must not crash: either way the folder is moved aside with a one-line note,
+    # a fresh compile starts in the background, and this run takes the Python loop.
+    import shutil
+
+    monkeypatch.setenv("TT_MUJOCO_COMPILE_NOW", "0")
+    monkeypatch.setattr(compiled, "_KERNEL", None)
+    cache, sub = _fake_cache(monkeypatch, tmp_path / "a")
+    if damage == "truncate":
+        code = next(sub.glob("*.nbc"))
+        code.write_bytes(code.read_bytes()[:100])
+    elif damage == "garbage_manifest":
+        (cache / compiled.MANIFEST).write_text("{not json")
+    else:  # the whole cache root copied elsewhere: numba would not find its subfolder
+        shutil.copytree(tmp_path / "a", tmp_path / "b")
+        monkeypatch.setenv("TT_MUJOCO_CACHE", str(tmp_path / "b"))
+        cache = compiled._cache_dir()
+    started = []
+    monkeypatch.setattr(compiled, "_compile_in_background", lambda: started.append(1))
+    assert not compiled.ready() and started == [1]
+    err = capsys.readouterr().err
+    assert "compiled-code cache could not be loaded" in err and "Python loop" in err
+    assert not cache.exists() and list(cache.parent.glob(f"{cache.name}.damaged-*"))
+
+
+def test_a_kernel_that_fails_to_load_leaves_the_episode_to_the_python_loop(
+    monkeypatch, tmp_path, capsys
+):
+    class Broken:
+        @staticmethod
+        def run_chunk(*args):
+            raise EOFError("Ran out of input")
+
+    monkeypatch.setenv("TT_MUJOCO_CACHE", str(tmp_path))
+    scenario = Scenario(traj="circle", duration=3.0, noise_snr_db=25.0)
+    monkeypatch.setenv("TT_MUJOCO_COMPILED", "0")
+    python = simulate(scenario)
+    monkeypatch.setenv("TT_MUJOCO_COMPILED", "1")
+    monkeypatch.setattr(compiled, "_KERNEL", Broken)
+    result = simulate(scenario)
+    assert "EOFError: Ran out of input" in capsys.readouterr().err
+    for name, column in python.timeseries.items():
+        assert np.array_equal(column, result.timeseries[name], equal_nan=True), name
+
+
+def test_the_cache_key_lists_the_sources_the_kernel_compiles():
+    # One list (kernel_sources.SHARED) is what the kernel registers and what the key hashes.
+    import inspect
+
+    from tt_mujoco.sim import kernel_sources
+
+    files = kernel_sources.source_files()
+    for fn in kernel_sources.SHARED:
+        assert inspect.getsourcefile(fn) in files
+    assert len(files) == len(set(files))
+    modules = sorted({fn.__module__ for fn in kernel_sources.SHARED})
+    assert [inspect.getsourcefile(__import__(m, fromlist=["_"])) for m in modules] == files

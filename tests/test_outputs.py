@@ -8,6 +8,8 @@ import numpy as np
 import pytest
 
 from tt_mujoco import outputs, validate
+from tt_mujoco.sim.checkpoint import read_checkpoint
+from tt_mujoco.sim.stepper import CHECKPOINT_COLUMNS
 
 
 def test_output_folders_never_overwrite(tmp_path):
@@ -127,7 +129,7 @@ def test_a_full_disk_is_one_message_and_the_written_files_stay_complete(tmp_path
 
 
 def test_a_killed_run_keeps_the_rows_it_computed(tmp_path):
-    # A long run streams its rows to timeseries.partial.csv block by block; SIGKILL it part
+    # A long run streams its rows to timeseries.partial.arrows block by block; SIGKILL it part
     # way and the folder keeps those rows, labelled by the claim file as incomplete.
     import signal
     import subprocess
@@ -137,21 +139,53 @@ def test_a_killed_run_keeps_the_rows_it_computed(tmp_path):
     out = tmp_path / "long"
     cmd = [sys.executable, "-m", "tt_mujoco.run", "--plant", "reduced", "--duration", "600"]
     cmd += ["--traj", "circle", "--no-video", "--no-plots", "--quiet", "--out", str(out)]
-    proc = subprocess.Popen(cmd)
-    partial = out / "timeseries.partial.csv"
+    # The Python loop (a few seconds a block), so the run is still going when it is killed.
+    proc = subprocess.Popen(cmd, env={**os.environ, "TT_MUJOCO_COMPILED": "0"})
+    partial = out / "timeseries.partial.arrows"
+    block = 8192 * len(CHECKPOINT_COLUMNS) * 8  # bytes of one block's values
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:
-        if partial.exists() and partial.read_text().count("\n") > 3 * 8192:
+        if partial.exists() and partial.stat().st_size > 3 * block:
             break
         time.sleep(0.2)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     assert (out / outputs.CLAIM_FILE).exists()  # labelled: not a finished run
-    rows = np.loadtxt(partial, delimiter=",", skiprows=1)
-    header = partial.read_text().splitlines()[0].split(",")
-    t = rows[:, header.index("t")]
-    assert len(t) >= 3 * 8192 and np.all(np.diff(t) > 0)
+    rows = read_checkpoint(partial)
+    assert list(rows) == list(CHECKPOINT_COLUMNS)
+    t = rows["t"]
+    assert len(t) >= 3 * 8192 and len(t) % 8192 == 0 and np.all(np.diff(t) > 0)
+    np.testing.assert_array_equal(t, np.arange(len(t)) * 0.001)
     assert not (out / "metrics.json").exists()
+
+
+def test_sigterm_keeps_every_row_computed_and_says_where(tmp_path):
+    # A batch system stops a job with SIGTERM: the run ends with exit 130 and keeps every row it
+    # computed (the rows since the last block included), and the message names the file.
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "long"
+    cmd = [sys.executable, "-m", "tt_mujoco.run", "--plant", "reduced", "--duration", "600"]
+    cmd += ["--traj", "circle", "--no-video", "--no-plots", "--quiet", "--out", str(out)]
+    env = {**os.environ, "TT_MUJOCO_COMPILED": "0"}
+    proc = subprocess.Popen(cmd, env=env, stderr=subprocess.PIPE, text=True)
+    partial = out / "timeseries.partial.arrows"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and not (partial.exists() and partial.stat().st_size > 1e6):
+        time.sleep(0.1)
+    time.sleep(0.3)  # part way into the next block
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert str(partial) in err and "Traceback" not in err
+    rows = read_checkpoint(partial)
+    t = rows["t"]
+    assert len(t) > 8192 and len(t) % 8192 != 0  # the unfinished block is kept too
+    assert f"the {len(t)} rows computed" in err and f"t={t[-1]:.3f} s" in err
+    assert (out / outputs.CLAIM_FILE).exists() and not (out / "metrics.json").exists()
 
 
 def test_pandas_reads_a_runs_time_series_as_the_simulation_made_it(tmp_path):

@@ -46,6 +46,7 @@ from tt_mujoco.outputs import (
 )
 from tt_mujoco.progress import progress_bar
 from tt_mujoco.sim import COLUMNS, DISTURBANCE_MODES, PLANTS, TARGETS, Scenario, build
+from tt_mujoco.sim.checkpoint import read_checkpoint
 from tt_mujoco.sim.faults import RECOVERY_S, parse_fault
 from tt_mujoco.sim.timeseries import UNITS, train_columns, unit_of
 from tt_mujoco.vehicle import reduced
@@ -70,7 +71,7 @@ STAGING = ".partial-"
 #: Formats of the time-series file (``timeseries.<format>``).
 TIMESERIES_FORMATS = ("parquet", "csv")
 #: The rows of a run in progress (raw logged columns), removed once the time series is written.
-CHECKPOINT_FILE = "timeseries.partial.csv"
+CHECKPOINT_FILE = "timeseries.partial.arrows"
 
 
 def parse_param(text: str) -> tuple[str, float]:
@@ -585,7 +586,7 @@ def _main(argv: list[str] | None) -> int:
     except viewer_mod.ViewerClosed as err:
         return _abandon(out, created, live, f"{err}: run abandoned", EXIT_INTERRUPTED)
     except KeyboardInterrupt:
-        return _abandon(out, created, live, "interrupted: run abandoned", EXIT_INTERRUPTED)
+        return _interrupted(out, created, live)
     finally:
         if bar is not None:
             bar.close()
@@ -637,6 +638,26 @@ def _abandon(out: Path, created: bool, live, message: str, code: int) -> int:
         remove_if_empty(out)
     nothing = "nothing was written" if not out.exists() or not any(out.iterdir()) else ""
     return _fail(f"{message}{'; ' + nothing if nothing else ''}", code)
+
+
+def _interrupted(out: Path, created: bool, live) -> int:
+    """Ctrl-C or SIGTERM during the simulation: keep the rows computed, say where they are."""
+    partial = out / CHECKPOINT_FILE
+    try:
+        rows = read_checkpoint(partial)
+    except (OSError, ValueError):
+        rows = {}
+    t = rows.get("t", ())
+    if len(t) == 0:
+        return _abandon(out, created, live, "interrupted before the first row", EXIT_INTERRUPTED)
+    if live is not None:
+        live.close()
+    return _fail(
+        f"interrupted at t={t[-1]:.3f} s: the {len(t)} rows computed are kept in {partial} "
+        "(read them with tt_mujoco.sim.checkpoint.read_checkpoint or pyarrow.ipc.open_stream); "
+        "the folder has no metrics.json, so it is labelled incomplete",
+        EXIT_INTERRUPTED,
+    )
 
 
 def _print_summary(result, out: Path, written, notes) -> None:

@@ -1,5 +1,9 @@
 """The numba side of :mod:`tt_mujoco.sim.compiled`: imported only when an episode runs compiled.
 
+It is imported from a copy of this file inside the compiled-code cache
+(:func:`tt_mujoco.sim.compiled.kernel`), so that numba's own cache, which checks the source
+file's path and time stamp, stays valid for every checkout of the same sources.
+
 The shared plain-number functions are registered with numba here, so the chunk loop below
 compiles them from their own source; the loop itself only sequences them as
 :class:`tt_mujoco.sim.stepper.Stepper` does (sense, law, actuate, log, advance).
@@ -19,33 +23,10 @@ from numba.extending import register_jitable
 from tt_mujoco.controllers import base, fbl, ismc_sta, pid
 from tt_mujoco.reference import paths
 from tt_mujoco.sim import disturbances, measure, plant_reduced
+from tt_mujoco.sim.kernel_sources import SHARED
 from tt_mujoco.vehicle import reduced
 
-for _fn in (
-    measure.yaw_from_quat,
-    measure.measure_values,
-    reduced.hitch_and_axle,
-    reduced.phi_rate_of,
-    reduced.rolling_rates_of,
-    reduced.inertia_terms_of,
-    reduced.coriolis_of,
-    reduced.solve_dynamics_of,
-    reduced.torque_for_force_of,
-    reduced.trailer_speed_of,
-    reduced.rk4_stage,
-    reduced.rk4_combine,
-    plant_reduced.reduced_measure_values,
-    base.inverse_of,
-    base.saturate_of,
-    base.deepens,
-    base.finite_pair,
-    base.torques_of,
-    ismc_sta.ismc_sta_law,
-    pid.pid_law,
-    fbl.fbl_law,
-    paths.cycloid_curvature_and_rate,
-    disturbances.paper_disturbance_of,
-):
+for _fn in SHARED:
     register_jitable(_fn)
 
 measure_values = measure.measure_values
@@ -126,7 +107,7 @@ def _rk4(y, T_r, T_l, pc, r, d, info):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def run_chunk(
     k,
     k_end,

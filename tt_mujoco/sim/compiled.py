@@ -13,13 +13,16 @@ Every formula it runs is the Python one: the functions marked "the compiled epis
 source with ``numba.extending.register_jitable``, so the compiled and the Python loop compute
 the same numbers bit for bit (``tests/test_compiled.py``). ``TT_MUJOCO_COMPILED=0`` turns it off.
 
-Compiled code is cached on disk, keyed by the numba and MuJoCo versions and a hash of every
-source file involved (numba's own cache only watches the file of the function it caches), under
-``$TT_MUJOCO_CACHE`` or ``~/.cache/tt_mujoco``. Compiling takes about 5 s, so it never happens
-in the user's run: the first episode that could run compiled finds the cache empty, starts one
-background process that compiles it, and runs the Python loop (same numbers); later episodes
-load it (about 0.3 s, once per process). ``TT_MUJOCO_COMPILE_NOW=1`` compiles in the run
-itself (the tests and benchmarks).
+Compiled code is cached on disk under ``$TT_MUJOCO_CACHE`` or ``~/.cache/tt_mujoco``, in a
+folder keyed by :func:`source_digest` (the interpreter, numba, llvmlite and MuJoCo versions and
+every file the kernel compiles: numba's own cache only watches the file of the function it
+caches). Compiling takes seconds, so it never happens in the user's run: the first episode that
+could run compiled finds no whole cache (:func:`ready`), starts one background process that
+compiles it, and runs the Python loop (same numbers); later episodes load it, once per process.
+The kernel runs from a copy of its source inside that folder, so every checkout of the same
+sources shares one cache, and a manifest of the folder's files lets a damaged cache be set
+aside rather than recompiled in the foreground. ``TT_MUJOCO_COMPILE_NOW=1`` compiles in the
+run itself (the tests and benchmarks).
 """
 
 from __future__ import annotations
@@ -36,10 +39,10 @@ import numpy as np
 
 from tt_mujoco.defaults import MAX_SPEED
 
-__all__ = ["run_compiled", "unsupported"]
+__all__ = ["kernel", "ready", "run_compiled", "source_digest", "unsupported"]
 
-#: Shortest episode handed to the compiled loop: loading the compiled code costs ~0.3 s once
-#: per process, what the Python loop's overhead costs in about 10,000 steps.
+#: Shortest episode handed to the compiled loop (loading the compiled code is paid once per
+#: process: a short episode gains less than that).
 MIN_STEPS = 2000
 
 # Status codes of the kernel.
@@ -53,7 +56,7 @@ def _enabled() -> bool:
 
 
 def unsupported(built, controller, on_step=None) -> str | None:
-    """Why the episode cannot run compiled (None when it can)."""
+    """Why the episode has no compiled form (None when it has one); only a query."""
     from tt_mujoco.controllers.fbl import FblController
     from tt_mujoco.controllers.ismc_sta import IsmcStaController
     from tt_mujoco.controllers.pid import PidController
@@ -88,15 +91,75 @@ def unsupported(built, controller, on_step=None) -> str | None:
         import numba  # noqa: F401
     except ImportError:
         return "numba is not installed"
-    if not _compiled_yet() and os.environ.get("TT_MUJOCO_COMPILE_NOW") != "1":
-        _compile_in_background()
-        return "being compiled in the background (first use)"
     return None
 
 
-def _compiled_yet() -> bool:
-    """Whether the kernel is loaded here or in the cache."""
-    return _KERNEL is not None or any(_cache_dir().glob("*/_kernel.run_chunk-*.nbi"))
+def ready() -> bool:
+    """Whether the compiled kernel can run now without compiling in the foreground: loaded in
+    this process, or in the cache. The first call that finds neither starts one background
+    process that fills the cache (``TT_MUJOCO_COMPILE_NOW=1``: compile here instead)."""
+    if _KERNEL is not None or _cached() or os.environ.get("TT_MUJOCO_COMPILE_NOW") == "1":
+        return True
+    _compile_in_background()
+    return False
+
+
+#: The cache folder's list of its files and their hashes, written once the kernel has run.
+MANIFEST = "manifest.json"
+
+
+def _cache_files(cache: Path) -> dict[str, str]:
+    """Every compiled-code file of a cache folder (and the kernel's copy) -> its sha256.
+
+    Only the subfolder numba reads for the kernel's copy there counts: numba names it after
+    the copy's folder and a sha1 of its path, so a cache moved elsewhere lists nothing."""
+    subfolder = f"{cache.name}_{hashlib.sha1(str(cache.resolve()).encode()).hexdigest()}"
+    files = [cache / "_kernel.py", *sorted((cache / subfolder).glob("*.nb[ic]"))]
+    return {
+        str(f.relative_to(cache)): hashlib.sha256(f.read_bytes()).hexdigest()
+        for f in files
+        if f.is_file()
+    }
+
+
+def _cached() -> bool:
+    """Whether this version's cache folder holds the compiled kernel, whole: every file its
+    manifest lists, with the same hash. A folder whose files differ is set aside (a
+    truncated or edited file would otherwise make numba compile in the foreground)."""
+    import json
+
+    cache = _cache_dir()
+    try:
+        listed = json.loads((cache / MANIFEST).read_text())
+    except FileNotFoundError:
+        return False
+    except (OSError, ValueError) as err:
+        set_aside_cache(err)
+        return False
+    try:
+        found = _cache_files(cache)
+    except OSError as err:
+        set_aside_cache(err)
+        return False
+    if not isinstance(listed, dict) or not listed or found != listed:
+        set_aside_cache(ValueError("its files differ from its manifest"))
+        return False
+    return True
+
+
+def _write_manifest() -> None:
+    """List the cache folder's files once the kernel has run from it (atomically)."""
+    import json
+
+    cache = _cache_dir()
+    if (cache / MANIFEST).exists():
+        return
+    try:
+        tmp = cache / f".manifest-{os.getpid()}.tmp"
+        tmp.write_text(json.dumps(_cache_files(cache), indent=1))
+        os.replace(tmp, cache / MANIFEST)
+    except OSError:
+        pass  # a read-only cache: the next run checks it again
 
 
 def _compile_in_background() -> None:
@@ -145,52 +208,93 @@ def warm_up() -> None:
 def _cache_dir() -> Path:
     """A cache folder per version of every source the kernel compiles."""
     root = os.environ.get("TT_MUJOCO_CACHE", str(Path.home() / ".cache" / "tt_mujoco"))
-    return Path(root) / "numba" / _source_digest()
+    return Path(root) / "numba" / source_digest()
 
 
 @functools.cache
-def _source_digest() -> str:
-    import mujoco
-    import numba
+def source_digest() -> str:
+    """A hash of what the compiled code depends on: the interpreter, the machine, numba's,
+    llvmlite's and MuJoCo's versions, and every file the kernel compiles
+    (:func:`tt_mujoco.sim.kernel_sources.source_files`, this file and the kernel's)."""
+    import platform
+    from importlib import metadata
 
-    from tt_mujoco.controllers import base, fbl, ismc_sta, pid
-    from tt_mujoco.reference import paths
-    from tt_mujoco.sim import disturbances, measure, plant_reduced
-    from tt_mujoco.vehicle import reduced
+    from tt_mujoco.sim.kernel_sources import source_files
 
-    digest = hashlib.sha256(f"{numba.__version__} {mujoco.__version__}".encode())
-    for module in (base, fbl, ismc_sta, pid, paths, disturbances, measure, plant_reduced, reduced):
-        digest.update(Path(module.__file__).read_bytes())
-    digest.update(Path(__file__).read_bytes())
-    digest.update((Path(__file__).parent / "_kernel.py").read_bytes())
+    versions = [metadata.version(name) for name in ("numba", "llvmlite", "mujoco")]
+    digest = hashlib.sha256(" ".join([sys.version, platform.machine(), *versions]).encode())
+    here = Path(__file__).parent
+    for name in (*source_files(), __file__, here / "_kernel.py"):
+        digest.update(Path(name).read_bytes())
     return digest.hexdigest()[:16]
 
 
-def _kernel():
-    """The compiled chunk loop (built on first use)."""
+def kernel():
+    """The compiled chunk loop's module (imported on first use).
+
+    It is imported from a copy of ``_kernel.py`` in this version's cache folder, written once:
+    numba's cache index checks its source file's path and time stamp, which a copy keyed by
+    :func:`source_digest` keeps the same for every checkout and reinstall of these sources.
+    """
     global _KERNEL
     if _KERNEL is None:
+        import importlib.util
+
         import numba
 
+        source = Path(__file__).parent / "_kernel.py"
         cache = _cache_dir()
         try:
             cache.mkdir(parents=True, exist_ok=True)
+            copy = cache / "_kernel.py"
+            if not copy.is_file():
+                tmp = cache / f".kernel-{os.getpid()}.tmp"
+                tmp.write_bytes(source.read_bytes())
+                os.replace(tmp, copy)  # atomic: a concurrent reader sees all of it or none
             numba.config.CACHE_DIR = str(cache)
         except OSError:
-            pass  # no cache: compiled in memory, every process
-        from tt_mujoco.sim import _kernel
-
-        _KERNEL = _kernel
+            copy = source  # no cache: compiled in memory, every process
+        name = "tt_mujoco.sim._kernel"
+        spec = importlib.util.spec_from_file_location(name, copy)
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        spec.loader.exec_module(module)
+        _KERNEL = module
     return _KERNEL
 
 
-def run_compiled(stepper, controller, progress=None) -> tuple[str, str]:
+def set_aside_cache(err: BaseException) -> None:
+    """A cache that fails to load (truncated, garbage, foreign): move it aside, so that a
+    fresh one is compiled in the background, and say so in one line."""
+    global _KERNEL
+    cache = _cache_dir()
+    aside = cache.with_name(f"{cache.name}.damaged-{os.getpid()}")
+    try:
+        os.replace(cache, aside)
+        where = f"moved to {aside}"
+    except OSError:
+        where = f"left at {cache}"
+    _KERNEL = None
+    sys.modules.pop("tt_mujoco.sim._kernel", None)
+    print(
+        f"note: the compiled-code cache could not be loaded ({type(err).__name__}: {err}); "
+        f"it was {where}, and this run uses the Python loop (same numbers)",
+        file=sys.stderr,
+    )
+
+
+def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
     """Run the (reset) ``stepper``'s episode with ``controller`` compiled; ``(status,
-    message)`` as :func:`tt_mujoco.sim.simulate.run_episode`."""
+    message)`` as :func:`tt_mujoco.sim.simulate.run_episode`, or None when the compiled code
+    cannot be loaded (nothing has run then: the caller runs the Python loop)."""
+    try:
+        k_mod = kernel()
+    except Exception as err:  # a damaged cache: its copy of the kernel does not import
+        set_aside_cache(err)
+        return None
     from tt_mujoco.sim.plant_mujoco import MujocoPlant
     from tt_mujoco.vehicle import reduced
 
-    k_mod = _kernel()
     b = stepper.built
     plant = stepper.plant
     steps, dt = stepper.steps, stepper.dt
@@ -245,7 +349,7 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str]:
         k_end = min(steps, k + chunk - 1)
         meas = np.empty((k_end - k + 1, 19))
         loop = np.empty((k_end - k + 1, 17))
-        status, k_next = k_mod.run_chunk(
+        args = (
             k,
             k_end,
             mujoco_plant,
@@ -277,6 +381,15 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str]:
             loop,
             info,
         )
+        if k == 0:
+            try:  # the first call loads the compiled code from the cache
+                status, k_next = k_mod.run_chunk(*args)
+            except Exception as err:  # damaged: nothing has run, the Python loop takes over
+                set_aside_cache(err)
+                return None
+            _write_manifest()
+        else:
+            status, k_next = k_mod.run_chunk(*args)
         # Rows k..k_next-1 are logged; a stop in the plant's advance or the end logs k_next too.
         logged = k_next - k + (1 if status in (_FINISHED, _WARNING, _SINGULAR) else 0)
         stepper.add_block(meas[:logged], loop[:logged], np.empty((logged, 0)))

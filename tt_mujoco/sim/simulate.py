@@ -41,8 +41,10 @@ def run_episode(stepper: Stepper, controller, progress=None, on_step=None) -> tu
 
     Returns ``(status, message)``; see :func:`simulate` for ``progress`` and ``on_step``.
     """
-    if compiled.unsupported(stepper.built, controller, on_step) is None:
-        return compiled.run_compiled(stepper, controller, progress)
+    if compiled.unsupported(stepper.built, controller, on_step) is None and compiled.ready():
+        outcome = compiled.run_compiled(stepper, controller, progress)
+        if outcome is not None:
+            return outcome
     n = stepper.steps
     report_every = max(1, n // 100)
     sense, actuate, compute = stepper.sense, stepper.actuate, controller.compute
@@ -95,7 +97,10 @@ def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint
     controller = built.new_controller()
     controller.reset()
     start_wall = time.perf_counter()
-    status, message = run_episode(stepper, controller, progress, on_step)
+    try:
+        status, message = run_episode(stepper, controller, progress, on_step)
+    finally:
+        stepper.close()  # the checkpoint file, if any, then holds every row computed
     wall = time.perf_counter() - start_wall
     if progress is not None:
         progress(stepper.steps, stepper.steps)

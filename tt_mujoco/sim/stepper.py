@@ -15,13 +15,13 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 
 from tt_mujoco.controllers import Reference
 from tt_mujoco.defaults import JACKKNIFE_DEG, MAX_SPEED
 from tt_mujoco.sim.build import Build
+from tt_mujoco.sim.checkpoint import Checkpoint
 from tt_mujoco.sim.disturbances import injected
 from tt_mujoco.sim.measure import Measurement
 from tt_mujoco.sim.plant import StopRun
@@ -78,6 +78,7 @@ class Stepper:
         self.train_columns = train_columns(len(etas))
         self.checkpoint_columns = (*CHECKPOINT_COLUMNS, *self.train_columns)
         self.plant = None
+        self._checkpoint = None
 
     def reset(
         self, rng: np.random.Generator, phi0_deg: float | None = None, checkpoint=None
@@ -86,14 +87,16 @@ class Stepper:
         the noise of the whole episode drawn from ``rng`` (v_k, omega_k, ... in step order, the
         same numbers as drawing them step by step).
 
-        ``checkpoint``, a file path, receives every block of logged rows as it is folded (CSV
-        of the raw logged columns, :data:`CHECKPOINT_COLUMNS`): a run killed after an hour keeps
-        what it computed there.
+        ``checkpoint``, a file path, receives every block of logged rows as it is folded (an
+        Arrow IPC stream of the raw logged columns, :class:`~tt_mujoco.sim.checkpoint.
+        Checkpoint`): a run killed after an hour keeps what it computed there. :meth:`close`
+        writes the rows not yet folded.
         """
         b = self.built
-        self._checkpoint = None if checkpoint is None else Path(checkpoint)
-        if self._checkpoint is not None:
-            self._checkpoint.write_text(",".join(self.checkpoint_columns) + "\n")
+        self.close()  # a previous episode's checkpoint
+        self._checkpoint = (
+            None if checkpoint is None else Checkpoint(checkpoint, self.checkpoint_columns)
+        )
         self.plant = b.new_plant(phi0_deg)
         self.faults = b.new_faults()
         self.scheduler = b.new_scheduler(self.plant)
@@ -255,12 +258,16 @@ class Stepper:
         return True
 
     def _fold(self) -> None:
-        """Move the rows logged as tuples into one block of float arrays."""
+        """Move the rows logged as tuples into one block of float arrays.
+
+        A row is complete once its loop values are logged (the last of its parts): an
+        interruption between its parts leaves it out."""
         n = len(self._logged)
         if n:
-            meas = np.array(self._measured, dtype=float).reshape(n, len(Measurement._fields))
+            meas = np.array(self._measured[:n], dtype=float).reshape(n, len(Measurement._fields))
             loop = np.array(self._logged, dtype=float).reshape(n, -1)
-            trains = np.array(self._train_logged, dtype=float).reshape(n, len(self.train_columns))
+            trains = np.array(self._train_logged[:n], dtype=float)
+            trains = trains.reshape(n, len(self.train_columns))
             self.add_block(meas, loop, trains)
             self._measured.clear()
             self._logged.clear()
@@ -271,9 +278,16 @@ class Stepper:
         to the checkpoint file if there is one; the compiled episode logs this way."""
         self._blocks.append((meas, loop, trains))
         if self._checkpoint is not None:
-            with open(self._checkpoint, "a") as handle:
-                rows = np.hstack([meas, loop, trains])
-                np.savetxt(handle, rows, delimiter=",", fmt="%.17g")
+            self._checkpoint.append(meas, loop, trains)
+
+    def close(self) -> None:
+        """Write every logged row to the checkpoint file, if there is one, and close it (an
+        interrupted run calls this too, so the file then holds every row computed)."""
+        checkpoint = self._checkpoint
+        if checkpoint is not None:
+            self._fold()
+            self._checkpoint = None
+            checkpoint.close()
 
     @property
     def samples(self) -> int:

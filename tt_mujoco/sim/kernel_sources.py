@@ -1,0 +1,52 @@
+"""The plain-number functions that both loops run: the one list the compiled kernel compiles.
+
+:mod:`tt_mujoco.sim._kernel` registers each of :data:`SHARED` with numba, and
+:func:`tt_mujoco.sim.compiled.source_digest` keys the compiled-code cache by the files they are
+defined in: a function added here is compiled and watched with no second list to keep.
+Importing this module imports no numba.
+"""
+
+from __future__ import annotations
+
+import inspect
+
+from tt_mujoco.controllers import base, fbl, ismc_sta, pid
+from tt_mujoco.reference import paths
+from tt_mujoco.sim import disturbances, measure, plant_reduced
+from tt_mujoco.vehicle import reduced
+
+__all__ = ["SHARED", "source_files"]
+
+SHARED = (
+    measure.yaw_from_quat,
+    measure.measure_values,
+    reduced.hitch_and_axle,
+    reduced.phi_rate_of,
+    reduced.rolling_rates_of,
+    reduced.inertia_terms_of,
+    reduced.coriolis_of,
+    reduced.solve_dynamics_of,
+    reduced.torque_for_force_of,
+    reduced.trailer_speed_of,
+    reduced.rk4_stage,
+    reduced.rk4_combine,
+    plant_reduced.reduced_measure_values,
+    base.inverse_of,
+    base.saturate_of,
+    base.deepens,
+    base.finite_pair,
+    base.torques_of,
+    ismc_sta.ismc_sta_law,
+    pid.pid_law,
+    fbl.fbl_law,
+    paths.cycloid_curvature_and_rate,
+    disturbances.paper_disturbance_of,
+)
+
+
+def source_files() -> list[str]:
+    """The files the shared functions are defined in, each once, in the order of their
+    modules' names (so the same sources in another folder list alike); numba compiles the
+    functions with their module's constants, so the whole file counts."""
+    files = {fn.__module__: inspect.getsourcefile(fn) for fn in SHARED}
+    return [files[module] for module in sorted(files)]
