@@ -147,12 +147,13 @@ def _cached() -> bool:
     return True
 
 
-def _write_manifest() -> None:
-    """List the cache folder's files once the kernel has run from it (atomically)."""
+def _write_manifest(compiled_here: bool = False) -> None:
+    """List the cache folder's files once the kernel has run from it (atomically); again
+    after this process compiled a new signature into it (numba rewrote its index then)."""
     import json
 
     cache = _cache_dir()
-    if (cache / MANIFEST).exists():
+    if (cache / MANIFEST).exists() and not compiled_here:
         return
     try:
         tmp = cache / f".manifest-{os.getpid()}.tmp"
@@ -192,17 +193,19 @@ def _compile_in_background() -> None:
 
 
 def warm_up() -> None:
-    """Compile the kernel (for both plants: one signature) by running a short episode."""
+    """Compile the kernel for every signature a run can call it with: a short episode on
+    each plant (MuJoCo's warning counts are a strided view, the reduced plant's are not)."""
     from tt_mujoco.sim.build import build
     from tt_mujoco.sim.scenario import Scenario
     from tt_mujoco.sim.stepper import Stepper
 
-    built = build(Scenario(traj="circle", duration=MIN_STEPS * 0.001))
-    stepper = Stepper(built)
-    stepper.reset(np.random.default_rng(0))
-    controller = built.new_controller()
-    controller.reset()
-    run_compiled(stepper, controller)
+    for plant in ("mujoco", "reduced"):
+        built = build(Scenario(traj="circle", plant=plant, duration=MIN_STEPS * 0.001))
+        stepper = Stepper(built)
+        stepper.reset(np.random.default_rng(0))
+        controller = built.new_controller()
+        controller.reset()
+        run_compiled(stepper, controller)
 
 
 def _cache_dir() -> Path:
@@ -387,7 +390,7 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
             except Exception as err:  # damaged: nothing has run, the Python loop takes over
                 set_aside_cache(err)
                 return None
-            _write_manifest()
+            _write_manifest(sum(k_mod.run_chunk.stats.cache_misses.values()) > 0)
         else:
             status, k_next = k_mod.run_chunk(*args)
         # Rows k..k_next-1 are logged; a stop in the plant's advance or the end logs k_next too.

@@ -1,0 +1,129 @@
+"""Runs through the CLI against their physics floor: MuJoCo's C rollout of their own inputs.
+
+Run: ``python benchmarks/bench_cli.py [--repeats N] [CASE ...]``. For each case (a command line
+of ``python -m tt_mujoco.run``, with ``--no-video --no-plots``), in this one process:
+
+1. runs it once through :func:`tt_mujoco.run.main` to warm the process (the compiled code is
+   loaded once per process), then ``--repeats`` times more;
+2. takes the episode's inputs from its own ``timeseries.parquet`` (the wheel torques ``T_r,
+   T_l`` and the matched disturbance ``dist_T_r, dist_T_l`` of every control step, held over its
+   physics steps) and replays them from the run's initial state with ``mujoco.rollout`` on one
+   thread: MuJoCo is deterministic, so the rollout ends in the run's final state (checked, bit
+   for bit), and its cost is the physics of that episode and nothing else;
+3. prints the CLI's simulation time (``wall_time_s`` of ``metrics.json``: the loop as the user
+   runs it), the whole ``main()`` call's, the rollout's, and the ratio floor / loop (1.0: the
+   loop costs nothing beyond MuJoCo's own stepping). The reduced-plant case prints its loop's
+   speed against the MuJoCo case's instead (it has no MuJoCo floor).
+
+Ratios are taken in one process, so a busy machine moves both sides alike.
+"""
+
+import argparse
+import contextlib
+import io
+import json
+import os
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("TT_MUJOCO_COMPILE_NOW", "1")  # compile here, not in the background
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+from tt_mujoco import run
+from tt_mujoco.outputs import read_timeseries
+from tt_mujoco.sim import build
+
+ROOT = Path(__file__).resolve().parents[1]
+CASES = {
+    "main": ["--traj", "s_curve"],
+    "train3": ["--traj", "s_curve", "--trailers", "3", "--no-disturbance"],
+    "kanayama": [
+        "--traj",
+        "s_curve",
+        "--controller",
+        f"{ROOT}/examples/kanayama.py:KanayamaTracker",
+    ],
+    "reduced": ["--traj", "s_curve", "--plant", "reduced"],
+}
+QUIET = ["--no-video", "--no-plots", "--quiet"]
+#: What the rollout's control vector holds: the actuators' ctrl, then qfrc_applied.
+CONTROL_SPEC = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_QFRC_APPLIED
+FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS
+
+
+def cli_run(argv: list[str], out: Path) -> tuple[float, float, dict]:
+    """(whole main() seconds, the run's simulation seconds, its time series)."""
+    start = time.perf_counter()
+    with contextlib.redirect_stdout(io.StringIO()):  # the summary table
+        code = run.main([*argv, *QUIET, "--out", str(out)])
+    whole = time.perf_counter() - start
+    if code != 0:
+        raise SystemExit(f"{argv}: exit {code}")
+    metrics = json.loads((out / "metrics.json").read_text())
+    return whole, metrics["wall_time_s"], read_timeseries(out / "timeseries.parquet")
+
+
+def floor(argv: list[str], ts: dict) -> float:
+    """Seconds of ``mujoco.rollout`` (one thread) of the run's inputs; checks that it ends in
+    the run's last logged state."""
+    args, _, params, faults = run._parse([*argv, *QUIET])
+    built = build(run._scenario(args, params, faults))
+    plant = built.new_plant()
+    m, d = plant.model, plant.data
+    state = np.empty(mujoco.mj_stateSize(m, FULL))
+    mujoco.mj_getState(m, d, state, FULL)
+    n = len(ts["t"]) - 1  # control steps advanced: the last row is measured, not applied
+    per_step = np.zeros((n, m.nu + m.nv))
+    per_step[:, plant._act_r] = ts["T_r"][:n]
+    per_step[:, plant._act_l] = ts["T_l"][:n]
+    per_step[:, m.nu + plant._wheel_r] = ts["dist_T_r"][:n]
+    per_step[:, m.nu + plant._wheel_l] = ts["dist_T_l"][:n]
+    control = np.repeat(per_step, built.substeps, axis=0)[None]
+    data = mujoco.MjData(m)
+    warm = d.qacc_warmstart.copy()[None]
+    start = time.perf_counter()
+    states, _ = rollout.rollout(
+        m, data, state[None], control, control_spec=CONTROL_SPEC, initial_warmstart=warm
+    )
+    seconds = time.perf_counter() - start
+    mujoco.mj_setState(m, d, states[0, -1], FULL)
+    last = plant.measure()
+    for name in ("x", "y", "theta", "phi", "v", "omega"):
+        if getattr(last, name) != ts[name][-1]:
+            raise SystemExit(f"{argv}: the rollout does not reproduce the run ({name})")
+    return seconds
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("cases", nargs="*", metavar="CASE", help=f"of {list(CASES)} (default: all)")
+    p.add_argument("--repeats", type=int, default=2)
+    args = p.parse_args()
+    loops = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for case in args.cases or CASES:
+            argv = CASES[case]
+            cli_run(argv, Path(tmp) / f"{case}-warm")
+            for i in range(args.repeats):
+                whole, loop, ts = cli_run(argv, Path(tmp) / f"{case}-{i}")
+                steps = len(ts["t"]) - 1
+                loops.setdefault(case, []).append(steps / loop)
+                line = (
+                    f"{case:9s} run {i + 1}: {steps} steps, loop {loop:.3f} s "
+                    f"({steps / loop:,.0f} steps/s), main() {whole:.3f} s"
+                )
+                if case == "reduced":
+                    if "main" in loops:
+                        line += f"; {steps / loop / loops['main'][i]:.1f}x the MuJoCo loop"
+                else:
+                    c_floor = floor(argv, ts)
+                    line += f"; C rollout {c_floor:.3f} s; loop at {c_floor / loop:.2f} of it"
+                print(line, flush=True)
+
+
+if __name__ == "__main__":
+    main()
