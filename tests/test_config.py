@@ -163,3 +163,17 @@ def test_unknown_fault_key_in_file_names_it(tmp_path):
     path.write_text('[[faults]]\nkind = "payload"\nt = 1.0\nmass = 3.0\n')
     with pytest.raises(ValueError, match="option 'mass' is not allowed"):
         parse(["--config", str(path)])
+
+
+@pytest.mark.parametrize("flag", ["reverse", "path_feedback", "video", "plots", "quiet"])
+@pytest.mark.parametrize("value", [True, False])
+def test_a_flags_negative_key_means_what_it_says(tmp_path, flag, value):
+    # ``no_video = true`` is --no-video: the option off (it once turned it on, or left it on).
+    path = tmp_path / "c.toml"
+    path.write_text(f"no_{flag} = {str(value).lower()}\n")
+    assert getattr(parse(["--config", str(path)])[0], flag) is (not value)
+    path.write_text(f"{flag} = {str(value).lower()}\n")
+    assert getattr(parse(["--config", str(path)])[0], flag) is value
+    path.write_text(f"{flag} = true\nno_{flag} = true\n")
+    with pytest.raises(ValueError, match="name the same option"):
+        parse(["--config", str(path)])

@@ -168,16 +168,26 @@ def options_from_file(
     known = set(actions) | set(TABLES)
     defaults, params, faults = {}, {}, None
     # Every long option name is a key (``noise_snr`` and ``noise_snr_db`` both name the option
-    # whose destination is ``noise_snr_db``); giving one option twice is refused.
+    # whose destination is ``noise_snr_db``); giving one option twice is refused. A flag's
+    # negative form means what it says on the command line: ``no_video = true`` is
+    # ``--no-video``, i.e. ``video = false``.
     aliases = {
         opt[2:].replace("-", "_"): a.dest
         for a in actions.values()
         for opt in a.option_strings
         if opt.startswith("--")
     }
+    negative = {
+        opt[2:].replace("-", "_")
+        for a in actions.values()
+        if isinstance(a, argparse.BooleanOptionalAction)
+        for opt in a.option_strings
+        if opt.startswith("--no-")
+    }
     seen: dict[str, str] = {}
     for raw_key, value in table.items():
         key = raw_key.replace("-", "_")
+        negated = key in negative
         key = aliases.get(key, key)
         if key in seen:
             raise ValueError(
@@ -255,6 +265,8 @@ def options_from_file(
             defaults["gains"] = value
         else:
             converted = _convert(key, value, actions[key], where)
+            if negated:
+                converted = not converted
             if key == "traj" and converted.lower().endswith(".csv"):
                 csv = Path(converted)
                 if not csv.is_absolute():
