@@ -29,3 +29,7 @@ MAX_SPEED = 20.0
 CONTROLLER = "ismc_sta"
 #: Default disturbance Delta(t) (docs/model.md Section 8).
 DISTURBANCE_MODEL = "paper"
+
+#: Exit codes of every command: done; bad input (one message, nothing written); the run
+#: diverged, jackknifed or its user code failed (what was computed is kept); interrupted.
+EXIT_OK, EXIT_BAD_INPUT, EXIT_DIVERGED, EXIT_INTERRUPTED = 0, 2, 3, 130

@@ -29,6 +29,7 @@ __all__ = [
     "HookError",
     "Registry",
     "closest",
+    "describe_failure",
     "existing_file",
     "is_hook",
     "load_hook",
@@ -66,7 +67,35 @@ def closest(word: str, choices) -> str | None:
 
 
 class HookError(ValueError):
-    """A hook that cannot be loaded: the message names the hook and what was wrong."""
+    """A hook that cannot be loaded, or that fails before the run: the message names the hook
+    and what was wrong."""
+
+
+def _inside_package(filename: str) -> bool:
+    roots = [Path(__file__).resolve().parent]
+    controllers = sys.modules.get("tt_mujoco.controllers")
+    if controllers is not None and getattr(controllers, "__file__", None):
+        roots.append(Path(controllers.__file__).resolve().parent)
+    try:
+        path = Path(filename).resolve()
+    except (OSError, RuntimeError):
+        return False
+    return any(path.is_relative_to(root) for root in roots)
+
+
+def describe_failure(err: BaseException) -> str:
+    """What user code did wrong, in one line: ``file.py, line N: TypeError: message``, the
+    place being the innermost frame of the traceback outside this package (the user's
+    code); ``SystemExit`` is named as a call of ``sys.exit``."""
+    import traceback
+
+    frames = traceback.extract_tb(err.__traceback__)
+    mine = [f for f in frames if not _inside_package(f.filename)] or frames
+    place = f"{mine[-1].filename}, line {mine[-1].lineno}: " if mine else ""
+    if isinstance(err, SystemExit):
+        return f"{place}it called sys.exit({err.code!r})"
+    text = str(err)
+    return f"{place}{type(err).__name__}{': ' + text if text else ''}"
 
 
 def is_hook(spec) -> bool:
@@ -117,9 +146,11 @@ def _module_from_file(path: Path, what: str, spec: str):
     sys.modules[module_name] = module  # before exec: dataclasses and pickling look it up
     try:
         loader_spec.loader.exec_module(module)
-    except Exception as err:
+    except (Exception, SystemExit) as err:  # sys.exit at import must not end the run as done
         del sys.modules[module_name]
-        raise HookError(f"{what} {spec!r}: importing {str(path)!r} failed: {err}") from err
+        raise HookError(
+            f"{what} {spec!r}: importing {str(path)!r} failed: {describe_failure(err)}"
+        ) from None
     return module
 
 
@@ -147,6 +178,10 @@ def load_hook(spec: str, what: str = "hook") -> object:
         except ImportError as err:
             raise HookError(
                 f"{what} {spec!r}: module {where!r} cannot be imported: {err}"
+            ) from None
+        except (Exception, SystemExit) as err:
+            raise HookError(
+                f"{what} {spec!r}: importing module {where!r} failed: {describe_failure(err)}"
             ) from None
     try:
         return getattr(module, name)

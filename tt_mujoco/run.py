@@ -34,7 +34,14 @@ from tt_mujoco.cliargs import BadInputError, Parser, finite, integer_at_least, p
 from tt_mujoco.config import CONFIG_FILE
 from tt_mujoco.controllers import CONTROLLERS, controller_class
 from tt_mujoco.controllers.base import resolve_gains
-from tt_mujoco.defaults import CONTROLLER, DISTURBANCE_MODEL
+from tt_mujoco.defaults import (
+    CONTROLLER,
+    DISTURBANCE_MODEL,
+    EXIT_BAD_INPUT,
+    EXIT_DIVERGED,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+)
 from tt_mujoco.outputs import (
     atomic_write,
     claim_folder,
@@ -49,6 +56,7 @@ from tt_mujoco.sim import COLUMNS, DISTURBANCE_MODES, PLANTS, TARGETS, Scenario,
 from tt_mujoco.sim.checkpoint import read_checkpoint
 from tt_mujoco.sim.faults import RECOVERY_S, parse_fault
 from tt_mujoco.sim.timeseries import UNITS, train_columns, unit_of
+from tt_mujoco.sim.usercode import check_user_code
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.viz import plots as plots_mod
@@ -58,7 +66,6 @@ from tt_mujoco.viz import viewer as viewer_mod
 __all__ = ["build_parser", "main", "write_outputs"]
 
 RENDERS = Path("renders")
-EXIT_OK, EXIT_BAD_INPUT, EXIT_DIVERGED, EXIT_INTERRUPTED = 0, 2, 3, 130
 #: Params fields settable with --param / [params] (eta, timestep and friction have options).
 PARAM_NAMES = tuple(
     f.name
@@ -72,6 +79,8 @@ STAGING = ".partial-"
 TIMESERIES_FORMATS = ("parquet", "csv")
 #: The rows of a run in progress (raw logged columns), removed once the time series is written.
 CHECKPOINT_FILE = "timeseries.partial.arrows"
+#: The traceback of the user's code that stopped a run (status "failed").
+ERROR_LOG = "error.log"
 
 
 def parse_param(text: str) -> tuple[str, float]:
@@ -462,6 +471,9 @@ def write_outputs(
     if config_toml is not None:
         atomic_write(out / CONFIG_FILE, config_toml)
         written.append(out / CONFIG_FILE)
+    if result.details is not None:  # the traceback of the user code that stopped the run
+        atomic_write(out / ERROR_LOG, result.details)
+        written.append(out / ERROR_LOG)
     ts_file = out / f"timeseries.{timeseries_format}"
     extra = train_columns(result.scenario.plant_params().n_trailers)
     units = {**UNITS, **{name: unit_of(name) for name in extra}}
@@ -552,6 +564,7 @@ def _main(argv: list[str] | None) -> int:
         scenario = _scenario(args, params, faults)
         # Everything simulate checks, before an output folder exists; simulate reuses it.
         built = build(scenario)
+        check_user_code(built)
         config_toml = config_mod.dump_config(
             config_mod.resolved_options(args, parser, params, faults)
         )

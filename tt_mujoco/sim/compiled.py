@@ -448,8 +448,9 @@ def _outcome(status, info, stepper, controller, k) -> tuple[str, str]:
     if status == _WARNING:
         import mujoco
 
-        name = mujoco.mjtWarning(int(info[0])).name
-        return "diverged", f"MuJoCo warning {name} by t={stepper.plant.data.time:.3f} s"
+        from tt_mujoco.sim.plant_mujoco import warning_message
+
+        return "diverged", warning_message(mujoco.mjtWarning(int(info[0])).name, t)
     if status == _SINGULAR:
         err = SingularityError(float(info[0]), float(info[1]))
         return "jackknife", f"jackknife at t={t + stepper.dt:.3f} s: {err}"

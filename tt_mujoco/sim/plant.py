@@ -15,12 +15,15 @@ __all__ = ["Plant", "StopRun"]
 
 
 class StopRun(Exception):  # noqa: N818 - a control-flow signal, not an error
-    """The run must stop: ``status`` is "jackknife" or "diverged", ``message`` says when and why."""
+    """The run must stop: ``status`` is "jackknife", "diverged" or "failed" (the user's code
+    failed), ``message`` says when and why, ``details`` (optional) is the user code's
+    traceback."""
 
-    def __init__(self, status: str, message: str):
+    def __init__(self, status: str, message: str, details: str | None = None):
         super().__init__(message)
         self.status = status
         self.message = message
+        self.details = details
 
 
 class Plant(ABC):

@@ -15,6 +15,11 @@ from tt_mujoco.vehicle.params import Params
 __all__ = ["MujocoPlant"]
 
 
+def warning_message(name: str, t: float) -> str:
+    """The stop for a MuJoCo warning in the control step that started at ``t``."""
+    return f"MuJoCo warning {name} in the step from t={t:.3f} s"
+
+
 class MujocoPlant(Plant):
     """Contact physics: four wheels in friction contact, the steering coupling an equality.
 
@@ -91,9 +96,9 @@ class MujocoPlant(Plant):
             qfrc[self._wheel_l] = dist_l
 
     def advance(self, substeps: int) -> None:
+        start = self.data.time  # a warning resets MuJoCo's state, its clock included
         mujoco.mj_step(self.model, self.data, nstep=substeps)
         # MuJoCo resets the state when a warning fires: stop at once, before it is measured.
         if self._warnings.any():
             i = int(np.flatnonzero(self._warnings)[0])
-            name = mujoco.mjtWarning(i).name
-            raise StopRun("diverged", f"MuJoCo warning {name} by t={self.data.time:.3f} s")
+            raise StopRun("diverged", warning_message(mujoco.mjtWarning(i).name, start))

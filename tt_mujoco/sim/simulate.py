@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from numbers import Real
 
 import numpy as np
 
 from tt_mujoco.analysis.metrics import compute_metrics
-from tt_mujoco.sim import compiled
+from tt_mujoco.registry import describe_failure as usercode_failure
+from tt_mujoco.registry import shown
+from tt_mujoco.sim import compiled, usercode
 from tt_mujoco.sim import faults as faults_mod
 from tt_mujoco.sim.build import Build, build
 from tt_mujoco.sim.plant import StopRun
@@ -25,11 +28,13 @@ class Result:
     scenario: Scenario
     timeseries: dict[str, np.ndarray]
     metrics: dict
-    status: str  # "ok", "jackknife" or "diverged"
+    status: str  # "ok", "jackknife", "diverged" or "failed" (the user's code)
     message: str
     reference_polyline: np.ndarray
     wall_time_s: float
     config: dict
+    #: The traceback of the user code that stopped a "failed" run (None otherwise).
+    details: str | None = None
 
     @property
     def ok(self) -> bool:
@@ -48,14 +53,18 @@ def run_episode(stepper: Stepper, controller, progress=None, on_step=None) -> tu
     n = stepper.steps
     report_every = max(1, n // 100)
     sense, actuate, compute = stepper.sense, stepper.actuate, controller.compute
+    who = usercode.controller_label(stepper.built)
     try:
         while True:
             me, ref = sense()
             try:
-                T_r, T_l = compute(ref.t, me, ref)
-            except FloatingPointError as err:
+                out = compute(ref.t, me, ref)
+            except FloatingPointError as err:  # a built-in law's own failure
                 msg = f"controller failed at t={ref.t:.3f} s: {err}"
                 raise StopRun("diverged", msg) from None
+            except (Exception, SystemExit) as err:
+                raise usercode.failure(who, ref.t, err) from None
+            T_r, T_l = usercode.checked_torques(out, who, ref.t)
             if not actuate(T_r, T_l, controller.command):
                 break
             if on_step is not None:
@@ -64,6 +73,7 @@ def run_episode(stepper: Stepper, controller, progress=None, on_step=None) -> tu
             if progress is not None and k % report_every == 0:
                 progress(k, n)
     except StopRun as stop:
+        stepper.stop_details = stop.details
         return stop.status, stop.message
     return "ok", f"completed {stepper.built.duration:.3f} s"
 
@@ -75,7 +85,8 @@ def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint
     ----------
     scenario : Scenario or Build
         A scenario, or the :class:`~tt_mujoco.sim.build.Build` of one (a caller that built it
-        to check its input first, as the CLI does, need not build it again).
+        to check its input first, as the CLI does, need not build it again; such a caller
+        also calls :func:`tt_mujoco.sim.usercode.check_user_code` on it first).
     progress : callable, optional
         Called as ``progress(steps_done, steps_total)`` about every 1 % of the run.
     on_step : callable, optional
@@ -89,9 +100,16 @@ def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint
     Raises
     ------
     ValueError
-        For bad configuration values (before anything is simulated).
+        For bad configuration values, and a user's controller or disturbance that fails
+        before the run (:class:`tt_mujoco.registry.HookError`), before anything is simulated.
+        User code that fails during the run stops it instead: status ``"failed"``, the
+        traceback in ``Result.details``.
     """
-    built = scenario if isinstance(scenario, Build) else build(scenario)
+    if isinstance(scenario, Build):
+        built = scenario
+    else:
+        built = build(scenario)
+        usercode.check_user_code(built)
     stepper = Stepper(built)
     stepper.reset(np.random.default_rng(built.scenario.seed), checkpoint=checkpoint)
     controller = built.new_controller()
@@ -107,6 +125,27 @@ def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint
     return finish(built, stepper, controller, status, message, wall)
 
 
+def user_metric(fn, ts: dict, path) -> tuple[float | None, str | None]:
+    """``(value, error)`` of a user's metric on read-only views of the time series: a metric
+    that fails, or returns something other than a number, must not lose the run (its value
+    is then None and its error kept), nor change the series the run saves."""
+    if not len(ts["t"]):
+        return None, None
+    views = {}
+    for key, column in ts.items():
+        views[key] = column.view()
+        views[key].flags.writeable = False
+    try:
+        value = fn(views, path)
+    except (Exception, SystemExit) as err:
+        return None, usercode_failure(err)
+    if value is None or isinstance(value, int | float):
+        return value, None
+    if isinstance(value, Real):  # a NumPy scalar
+        return float(value), None
+    return None, f"it returned {shown(value, 60)}: a metric returns a number or None"
+
+
 def finish(built: Build, stepper: Stepper, controller, status, message, wall) -> Result:
     """The :class:`Result` of an episode: time series, metrics (built-in and the scenario's
     extra ones) and the configuration."""
@@ -119,12 +158,9 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
     else:  # stopped before its first sample was logged
         metrics = {"steps": 0, "finite_samples": 0, "sim_time_s": 0.0}
     for name, fn in built.extra_metrics.items():
-        # A user metric that fails must not lose the run: its value is None, its error kept.
-        try:
-            metrics[name] = fn(ts, built.path) if len(ts["t"]) else None
-        except Exception as err:
-            metrics[name] = None
-            metrics.setdefault("metric_errors", {})[name] = f"{type(err).__name__}: {err}"
+        metrics[name], error = user_metric(fn, ts, built.path)
+        if error is not None:
+            metrics.setdefault("metric_errors", {})[name] = error
     metrics["wall_time_s"] = wall
     metrics["status"] = status
     if stepper.faults is not None:
@@ -147,4 +183,5 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
         reference_polyline=polyline,
         wall_time_s=wall,
         config=config,
+        details=stepper.stop_details,
     )

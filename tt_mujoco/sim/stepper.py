@@ -20,6 +20,7 @@ import numpy as np
 
 from tt_mujoco.controllers import Reference
 from tt_mujoco.defaults import JACKKNIFE_DEG, MAX_SPEED
+from tt_mujoco.sim import usercode
 from tt_mujoco.sim.build import Build
 from tt_mujoco.sim.checkpoint import Checkpoint
 from tt_mujoco.sim.disturbances import injected
@@ -72,6 +73,7 @@ class Stepper:
         self._feedback = s.path_feedback is not None
         self._limit = built.nominal.torque_limit
         self._dist_limit = built.disturbance_limit
+        self._dist_label = usercode.disturbance_label(built)
         # Trailers 2..N: their hitch limits, and their logged columns after the usual ones.
         etas = built.plant_params.etas
         self._train_limits = [math.radians(jackknife_phi_deg(e)) for e in etas[1:]]
@@ -103,6 +105,7 @@ class Stepper:
         b.target.reset()
         self.k = 0
         self.finished = False
+        self.stop_details = None  # the traceback of user code that stopped the episode
         noise_v, noise_w = b.noise_std
         self._noise = (
             rng.standard_normal(2 * (self.steps + 1)).tolist() if noise_v or noise_w else None
@@ -205,7 +208,11 @@ class Stepper:
         clipped = 0.0
         dist = self.built.disturbance
         if dist is not None:
-            a_v, a_w = dist(t)
+            try:
+                out = dist(t)
+            except (Exception, SystemExit) as err:
+                raise usercode.failure(self._dist_label, t, err) from None
+            a_v, a_w = usercode.checked_disturbance(out, self._dist_label, t)
             phi = me.phis if self._train_limits else me.phi
             dist_r, dist_l, force, torque = injected(self._mode, a_v, a_w, phi, self.built.nominal)
             bound = self._dist_limit

@@ -11,14 +11,12 @@ import time
 from pathlib import Path
 
 from tt_mujoco.cliargs import BadInputError, Parser
+from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_OK
 from tt_mujoco.executor import ExecutorError
 from tt_mujoco.outputs import free_name
 from tt_mujoco.sweep.execute import run_sweep
 from tt_mujoco.sweep.options import (
     DICT_OPTIONS,
-    EXIT_BAD_INPUT,
-    EXIT_INTERRUPTED,
-    EXIT_OK,
     JOURNAL,
     KEY_METRICS,
     RENDERS,
@@ -185,4 +183,12 @@ def main(argv: list[str] | None = None) -> int:
         f"{len(result.rows)} runs ({result.reused} reused) in {result.wall_s:.1f} s{rate}; "
         f"wrote {', '.join(p.name for p in result.files)} to {result.out}/"
     )
+    failed = [r for r in result.rows if r.get("status") in ("error", "failed")]
+    if result.rows and len(failed) == len(result.rows):
+        first = failed[0].get("error") or failed[0].get("message") or ""
+        print(
+            f"error: every run failed (the first: {first}); runs.csv has each one's error",
+            file=sys.stderr,
+        )
+        return EXIT_DIVERGED
     return EXIT_OK

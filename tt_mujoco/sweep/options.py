@@ -18,9 +18,6 @@ from tt_mujoco.vehicle.params import (
     Params,
 )
 
-EXIT_OK, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 2, 130
-
-
 STARTS = ("on_path", "paper")
 
 

@@ -16,6 +16,7 @@ from tt_mujoco.controllers import controller_class
 from tt_mujoco.controllers.base import resolve_gains
 from tt_mujoco.registry import is_hook
 from tt_mujoco.sim import Scenario, build, simulate
+from tt_mujoco.sim.usercode import check_user_code
 from tt_mujoco.sweep.options import (
     DICT_OPTIONS,
     LIST_OPTIONS,
@@ -196,7 +197,7 @@ def _validate_runs(runs: Sequence[dict]) -> None:
         if key in checked:
             continue
         try:
-            build(build_scenario(options))
+            check_user_code(build(build_scenario(options)))
         except (ValueError, TypeError, OSError) as err:
             shown = {k: v for k, v in options.items() if k != "seed"}
             raise BadSpecError(f"run {run['index']} {shown}: {err}") from None
@@ -264,7 +265,7 @@ def run_one(options: Mapping) -> dict:
         result = simulate(build_scenario(options))
         metrics = _flatten_metrics({k: v for k, v in result.metrics.items() if k != "status"})
         out = {"status": result.status, "message": result.message, "error": "", "metrics": metrics}
-    except Exception as err:  # a run's crash is a row of the table, not the sweep's end
+    except (Exception, SystemExit) as err:  # a run's crash is a row, not the sweep's end
         out = {
             "status": "error",
             "message": "",

@@ -1,0 +1,209 @@
+"""User code is a boundary (tt_mujoco.sim.usercode): a user's controller, disturbance or metric
+that fails ends in one message naming it, the right exit code, and nothing lost or left."""
+
+from __future__ import annotations
+
+import json
+import textwrap
+
+import numpy as np
+import pytest
+
+from tt_mujoco import outputs, run
+from tt_mujoco.outputs import read_timeseries
+
+ARGV = ["--plant", "reduced", "--traj", "circle", "--duration", "1", "--no-video", "--no-plots"]
+
+CONTROLLER = """
+import sys
+from tt_mujoco.controllers import Controller
+
+class Broken(Controller):
+    name = "broken"
+
+    def compute(self, t, measurement, reference):
+        if t >= START:
+            BODY
+        return 0.5, 0.5
+"""
+
+
+def controller(tmp_path, body: str, start: float = 0.3) -> str:
+    path = tmp_path / "broken.py"
+    text = CONTROLLER.replace("BODY", body).replace("START", repr(start))
+    path.write_text(textwrap.dedent(text))
+    return f"{path}:Broken"
+
+
+def cli(tmp_path, capsys, *extra):
+    out = tmp_path / "out"
+    code = run.main([*ARGV, *extra, "--quiet", "--out", str(out)])
+    return code, out, capsys.readouterr().err
+
+
+def assert_nothing_left(out):
+    assert not out.exists() or not any(out.iterdir())
+
+
+@pytest.mark.parametrize(
+    ("body", "said"),
+    [
+        ("return None", "returned None at t=0.000 s: compute must return two numbers (T_r, T_l)"),
+        ("return 1.0, 2.0, 3.0", "returned (1.0, 2.0, 3.0) at t=0.000 s"),
+        ("return 'ab'", "returned 'ab' at t=0.000 s"),
+        ("return float('inf'), 0.0", "returned T_r=inf, T_l=0.0 at t=0.000 s"),
+        ("raise KeyError('gain')", "broken.py, line 10: KeyError: 'gain'"),
+        ("sys.exit(0)", "broken.py, line 10: it called sys.exit(0)"),
+    ],
+)
+def test_a_controller_that_fails_on_the_initial_state_is_bad_input(tmp_path, capsys, body, said):
+    code, out, err = cli(tmp_path, capsys, "--controller", controller(tmp_path, body, 0.0))
+    assert code == 2 and said in err and "Traceback" not in err, err
+    assert err.count("\n") == 1 and "controller '" in err
+    assert_nothing_left(out)
+
+
+@pytest.mark.parametrize(
+    ("body", "said"),
+    [
+        ("raise ZeroDivisionError('gain')", "failed at t=0.300 s: "),
+        ("return None", "returned None at t=0.300 s"),
+        ("return float('-inf'), 1.0", "returned T_r=-inf, T_l=1.0 at t=0.300 s"),
+        ("sys.exit(0)", "it called sys.exit(0)"),
+    ],
+)
+def test_a_controller_that_fails_during_the_run_keeps_its_rows(tmp_path, capsys, body, said):
+    code, out, err = cli(tmp_path, capsys, "--controller", controller(tmp_path, body))
+    assert code == 3 and said in err and "Traceback" not in err, err
+    ts = read_timeseries(out / "timeseries.parquet")
+    assert len(ts["t"]) == 300 and ts["t"][-1] == pytest.approx(0.299)
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["status"] == "failed" and metrics["sim_time_s"] == pytest.approx(0.3)
+    assert metrics["cross_track_rms"] is not None
+    assert not (out / outputs.CLAIM_FILE).exists()
+    assert not (out / run.CHECKPOINT_FILE).exists()
+    if body.startswith(("raise", "sys")):
+        log = (out / run.ERROR_LOG).read_text()
+        assert "Traceback" in log and "broken.py" in log
+
+
+def test_an_init_that_skips_the_base_class_is_named_before_the_run(tmp_path, capsys):
+    path = tmp_path / "stanley.py"
+    path.write_text(
+        textwrap.dedent(
+            """
+            from tt_mujoco.controllers import Controller
+
+            class Stanley(Controller):
+                name = "stanley"
+
+                def __init__(self, setup, gains=None):
+                    self.k = 1.0
+
+                def compute(self, t, measurement, reference):
+                    return 0.0, 0.0
+            """
+        )
+    )
+    code, out, err = cli(tmp_path, capsys, "--controller", f"{path}:Stanley")
+    assert code == 2 and "super().__init__(setup, gains)" in err and "'preset'" in err, err
+    assert_nothing_left(out)
+
+
+def test_a_reset_that_raises_is_bad_input(tmp_path, capsys):
+    path = tmp_path / "r.py"
+    path.write_text(
+        "from tt_mujoco.controllers import Controller\n"
+        "class R(Controller):\n"
+        "    def reset(self):\n"
+        "        raise RuntimeError('no state')\n"
+        "    def compute(self, t, m, r):\n"
+        "        return 0.0, 0.0\n"
+    )
+    code, out, err = cli(tmp_path, capsys, "--controller", f"{path}:R")
+    assert code == 2 and "r.py, line 4: RuntimeError: no state" in err, err
+    assert_nothing_left(out)
+
+
+@pytest.mark.parametrize("exit_code", [0, 3])
+def test_sys_exit_at_a_hooks_import_is_bad_input(tmp_path, capsys, exit_code):
+    path = tmp_path / "m.py"
+    path.write_text(f"import sys\nsys.exit({exit_code})\ndef m(ts, path):\n    return 1.0\n")
+    code, out, err = cli(tmp_path, capsys, "--metric", f"{path}:m")
+    assert code == 2 and f"it called sys.exit({exit_code})" in err, err
+    assert_nothing_left(out)
+
+
+def test_a_disturbance_that_turns_nan_stops_the_run_where_it_did(tmp_path, capsys):
+    path = tmp_path / "d.py"
+    path.write_text("def gust(t):\n    return (float('nan'), 0.0) if t >= 0.5 else (0.1, 0.0)\n")
+    argv = ["--plant", "mujoco", "--disturbance-model", f"{path}:gust"]
+    code, out, err = cli(tmp_path, capsys, *argv)
+    assert code == 3 and "returned a_v=nan, a_omega=0.0 at t=0.500 s" in err, err
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["status"] == "failed" and metrics["sim_time_s"] == pytest.approx(0.5)
+
+
+def test_a_disturbance_that_fails_at_the_start_is_bad_input(tmp_path, capsys):
+    path = tmp_path / "d.py"
+    path.write_text("def gust(t):\n    return 1.0\n")
+    code, out, err = cli(tmp_path, capsys, "--disturbance-model", f"{path}:gust")
+    assert code == 2 and "returned 1.0 at t=0.000 s: a disturbance must return two" in err
+    assert_nothing_left(out)
+
+
+def test_a_metric_sees_a_read_only_series_and_a_bad_value_is_kept_as_an_error(tmp_path, capsys):
+    path = tmp_path / "m.py"
+    path.write_text(
+        "def zero_x(ts, path):\n"
+        "    ts['x'][:] = 0.0\n"
+        "    return 1.0\n"
+        "def thing(ts, path):\n"
+        "    return object()\n"
+        "def fine(ts, path):\n"
+        "    return float(ts['x'].max())\n"
+    )
+    metrics = [a for name in ("zero_x", "thing", "fine") for a in ("--metric", f"{path}:{name}")]
+    code, out, err = cli(tmp_path, capsys, *metrics)
+    assert code == 0, err
+    ts = read_timeseries(out / "timeseries.parquet")
+    assert np.all(ts["x"] != 0.0)
+    doc = json.loads((out / "metrics.json").read_text())
+    assert doc["zero_x"] is None and "read-only" in doc["metric_errors"]["zero_x"]
+    assert doc["thing"] is None and "a metric returns a number" in doc["metric_errors"]["thing"]
+    assert doc["fine"] == pytest.approx(ts["x"].max())
+
+
+def test_a_sweep_refuses_a_controller_that_fails_on_the_initial_state(tmp_path, capsys):
+    from tt_mujoco import sweep
+
+    spec = controller(tmp_path, "return None", 0.0)
+    out = tmp_path / "s"
+    argv = [f"controller={spec}", "duration=0.5", "plant=reduced", "--out", str(out)]
+    assert sweep.main([*argv, "--quiet", "--no-figures"]) == 2
+    err = capsys.readouterr().err
+    assert "returned None at t=0.000 s" in err and err.count("\n") == 1
+    assert not out.exists()
+
+
+def test_a_sweep_whose_every_run_fails_exits_3_and_keeps_its_table(tmp_path, capsys):
+    from tt_mujoco import sweep
+
+    spec = controller(tmp_path, "raise ZeroDivisionError('late')", 0.2)
+    out = tmp_path / "s"
+    argv = [f"controller={spec}", "duration=0.5,0.6", "plant=reduced", "traj=circle"]
+    assert sweep.main([*argv, "--out", str(out), "--quiet", "--no-figures", "--workers", "1"]) == 3
+    err = capsys.readouterr().err
+    assert "every run failed" in err and "ZeroDivisionError: late" in err
+    assert (out / "runs.csv").exists()
+
+
+def test_a_metric_that_returns_an_object_is_a_column_of_errors_in_a_sweep(tmp_path):
+    from tt_mujoco import sweep
+
+    path = tmp_path / "m.py"
+    path.write_text("def thing(ts, path):\n    return object()\n")
+    result = sweep.run_one({"duration": 0.3, "plant": "reduced", "metrics": f"{path}:thing"})
+    assert result["status"] == "ok", result
+    assert result["metrics"]["thing"] is None
+    assert "a metric returns a number" in result["metrics"]["metric_errors.thing"]
