@@ -231,3 +231,26 @@ def test_pandas_reads_a_runs_time_series_as_the_simulation_made_it(tmp_path):
     np.testing.assert_array_equal(
         pl.read_parquet(out / "timeseries.parquet")["x"].to_numpy(), ts["x"]
     )
+
+
+def test_an_out_name_that_is_not_utf8_is_refused_before_the_run(tmp_path, capsys):
+    from tt_mujoco import run
+
+    out = tmp_path / "bad\udcffname"  # a byte 0xff from the command line
+    argv = ["--plant", "reduced", "--duration", "0.2", "--no-video", "--no-plots", "--quiet"]
+    assert run.main([*argv, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "not UTF-8" in err and "Traceback" not in err and err.count("\n") == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_dangling_symlink_as_out_is_named_as_a_link(tmp_path, capsys):
+    from tt_mujoco import run
+
+    link = tmp_path / "link"
+    link.symlink_to(tmp_path / "missing")
+    argv = ["--plant", "reduced", "--duration", "0.2", "--no-video", "--no-plots", "--quiet"]
+    assert run.main([*argv, "--out", str(link)]) == 2
+    err = capsys.readouterr().err
+    assert "is a symbolic link" in err and "which does not exist" in err
+    assert not (tmp_path / "missing").exists()

@@ -347,3 +347,32 @@ def test_summaries_are_grouped_by_the_categorical_options_that_vary(tmp_path):
     assert ismc["max"] < pooled < pid["min"]  # the pooled median describes neither
     text = (tmp_path / "g" / "summary.csv").read_text()
     assert text.startswith("group,metric,") and "controller=pid,rmse_v," in text
+
+
+def test_workers_are_capped_at_the_runs_and_warned_above_the_cores(capsys):
+    from tt_mujoco.sweep import execute
+
+    assert execute._worker_count(1000, 3, None) == 3
+    assert "more than this machine's" in capsys.readouterr().err
+    assert execute._worker_count(1, 3, None) == 1
+    assert capsys.readouterr().err == ""
+
+
+def test_a_scheduler_that_accepts_and_never_answers_is_given_up_at_the_deadline(monkeypatch):
+    # A peer on loopback that takes the connection and says nothing: the wait is bounded.
+    import socket
+    import time
+
+    from tt_mujoco import executor
+
+    pytest.importorskip("distributed")
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(1)
+    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    monkeypatch.setattr(executor, "CONNECT_TIMEOUT_S", 2.0)
+    start = time.monotonic()
+    with pytest.raises(executor.ExecutorError, match="cannot connect to a Dask scheduler"):
+        executor.Executors(1, address).open()
+    assert time.monotonic() - start < 10
+    server.close()

@@ -61,6 +61,33 @@ def _worker_start(parent_pid: int, initializer) -> None:
         initializer()
 
 
+#: How long a connection to a Dask scheduler may take, handshake included (s).
+CONNECT_TIMEOUT_S = 20.0
+
+
+def _connect(client_class, address: str, timeout: float):
+    """A Dask client of the scheduler at ``address``, within ``timeout`` seconds whatever the
+    peer does: Dask's own timeout does not bound a peer that accepts and never answers, so
+    the connection is made on a daemon thread and abandoned at the deadline."""
+    import threading
+
+    outcome: dict = {}
+
+    def connect() -> None:
+        try:
+            outcome["client"] = client_class(address, timeout=f"{timeout:g}s")
+        except Exception as err:
+            outcome["error"] = err
+
+    thread = threading.Thread(target=connect, daemon=True)
+    thread.start()
+    thread.join(timeout)
+    if "client" in outcome:
+        return outcome["client"]
+    reason = outcome.get("error") or f"no answer within {timeout:g} s"
+    raise ExecutorError(f"--scheduler {address!r}: cannot connect to a Dask scheduler ({reason})")
+
+
 class Executors:
     """Opens the executor: a process pool, or a Dask client's concurrent.futures executor.
 
@@ -113,12 +140,7 @@ class Executors:
             )
             self.client = Client(self.cluster)
         else:
-            try:
-                self.client = Client(self.scheduler, timeout="20s")
-            except (OSError, TimeoutError) as err:
-                raise ExecutorError(
-                    f"--scheduler {self.scheduler!r}: cannot connect to a Dask scheduler ({err})"
-                ) from None
+            self.client = _connect(Client, self.scheduler, CONNECT_TIMEOUT_S)
         # pure=False: a resubmitted run must run again, not return a cached failure
         self.pool = self.client.get_executor(pure=False)
         return self.pool

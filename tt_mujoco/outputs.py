@@ -182,7 +182,21 @@ def claim_folder(out: Path | None, default_base: Path, option: str = "--out") ->
             return path, True
         raise OutputError(f"no free output folder name for {str(default_base)!r}")
     out = Path(out)
-    if out.is_symlink() or (out.exists() and (not out.is_dir() or any(out.iterdir()))):
+    try:
+        str(out).encode("utf-8")
+    except UnicodeEncodeError:
+        raise OutputError(
+            f"{option} {str(out)!r} is not allowed: the name has bytes that are not UTF-8, "
+            "which the time series' file format cannot record; use a UTF-8 name"
+        ) from None
+    if out.is_symlink():
+        target = os.readlink(out)
+        state = "" if out.exists() else ", which does not exist"
+        raise OutputError(
+            f"{option} {str(out)!r} is not allowed: it is a symbolic link (to {target!r}{state}) "
+            "and outputs are never written through a link; name the folder itself, or a new one"
+        )
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise OutputError(
             f"{option} {str(out)!r} already exists and is not an empty folder: outputs are "
             "never overwritten; name a new folder"

@@ -192,6 +192,7 @@ def run_sweep(
         todo = deque(r for r in runs if r["run_id"] not in done)
         reused = len(runs) - len(todo)
         if todo:
+            workers = _worker_count(workers, len(todo), scheduler)
             _execute(todo, done, journal_path, workers, scheduler, quiet, len(runs), reused)
         header, rows = build_rows(runs, done)
         atomic_write(out / TABLE, table_csv(header, rows))
@@ -210,6 +211,21 @@ def run_sweep(
                 metric = "rmse_lateral"
             files += plot_summary(rows, spec, out, metric)
     return SweepResult(out, header, rows, summary, reused, time.perf_counter() - t0, files)
+
+
+def _worker_count(workers: int, runs: int, scheduler: str | None) -> int:
+    """No more local workers than runs; a note when they outnumber the cores (each worker is
+    a process with its own MuJoCo: more than the cores only adds memory and switching)."""
+    if scheduler not in (None, "local"):
+        return workers  # a remote cluster's workers are its own
+    cores = os.cpu_count() or 1
+    if workers > cores:
+        print(
+            f"note: --workers {workers} is more than this machine's {cores} cores; runs then "
+            "share cores and go no faster",
+            file=sys.stderr,
+        )
+    return min(workers, runs)
 
 
 def _execute(todo, done, journal_path, workers, scheduler, quiet, total, reused) -> None:
