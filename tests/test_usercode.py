@@ -207,3 +207,33 @@ def test_a_metric_that_returns_an_object_is_a_column_of_errors_in_a_sweep(tmp_pa
     assert result["status"] == "ok", result
     assert result["metrics"]["thing"] is None
     assert "a metric returns a number" in result["metrics"]["metric_errors.thing"]
+
+
+def test_a_hung_controller_is_stopped_at_the_time_limit_with_its_rows(tmp_path, capsys):
+    import time
+
+    spec = controller(tmp_path, "import time; time.sleep(3600)", 0.2)
+    start = time.monotonic()
+    code, out, err = cli(tmp_path, capsys, "--controller", spec, "--time-limit", "1.5")
+    assert time.monotonic() - start < 30
+    assert code == 3 and "passed its time limit of 1.5 s" in err and "broken.py, line 10" in err
+    ts = read_timeseries(out / "timeseries.parquet")
+    assert len(ts["t"]) == 200
+    assert "TimeLimitExceeded" in (out / run.ERROR_LOG).read_text()
+
+
+def test_a_sweep_run_that_hangs_is_a_failed_row(tmp_path):
+    from tt_mujoco import sweep
+
+    spec = controller(tmp_path, "import time; time.sleep(3600)", 0.1)
+    options = {"controller": spec, "duration": 0.5, "plant": "reduced", "time_limit_s": 1.0}
+    result = sweep.run_one(options)
+    assert result["status"] == "failed" and "time limit of 1 s" in result["message"]
+    assert result["metrics"]["steps"] == 100
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "inf", "nan", "soon"])
+def test_a_bad_time_limit_is_refused(tmp_path, capsys, value):
+    code, out, err = cli(tmp_path, capsys, "--time-limit", value)
+    assert code == 2 and "--time-limit" in err and value in err, err
+    assert_nothing_left(out)

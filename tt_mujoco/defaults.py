@@ -33,3 +33,6 @@ DISTURBANCE_MODEL = "paper"
 #: Exit codes of every command: done; bad input (one message, nothing written); the run
 #: diverged, jackknifed or its user code failed (what was computed is kept); interrupted.
 EXIT_OK, EXIT_BAD_INPUT, EXIT_DIVERGED, EXIT_INTERRUPTED = 0, 2, 3, 130
+#: A run's wall-clock time limit (s): ends a run whose user code hangs (exit code 3). The
+#: longest run the caps allow takes minutes, so the default never stops a working run.
+TIME_LIMIT_S = 3600.0

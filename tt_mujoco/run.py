@@ -41,6 +41,7 @@ from tt_mujoco.defaults import (
     EXIT_DIVERGED,
     EXIT_INTERRUPTED,
     EXIT_OK,
+    TIME_LIMIT_S,
 )
 from tt_mujoco.outputs import (
     atomic_write,
@@ -289,6 +290,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="initial articulation phi (deg), short of the jackknife",
     )
     g.add_argument(
+        "--time-limit",
+        dest="time_limit_s",
+        type=positive("--time-limit"),
+        default=TIME_LIMIT_S,
+        help=f"wall-clock limit of the run (s; default {TIME_LIMIT_S:g}): a run still going "
+        "then stops, its rows kept (exit code 3)",
+    )
+    g.add_argument(
         "--friction",
         type=positive("--friction"),
         default=1.0,
@@ -435,6 +444,7 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
         metrics=list(args.metric or []),
         trailers=args.trailers,
         train=list(getattr(args, "train", None) or []),
+        time_limit_s=args.time_limit_s,
     )
 
 

@@ -11,7 +11,7 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
-from tt_mujoco.defaults import CONTROL_DT, JACKKNIFE_DEG, MAX_DURATION, TIMESTEP
+from tt_mujoco.defaults import CONTROL_DT, JACKKNIFE_DEG, MAX_DURATION, TIME_LIMIT_S, TIMESTEP
 from tt_mujoco.reference.feedback import check_config
 from tt_mujoco.sim.faults import parse_faults
 from tt_mujoco.vehicle.params import INERTIA_FIELDS, MASS_FIELDS, Params
@@ -90,9 +90,22 @@ class Scenario:
     trailers: int = 1
     #: ... then take these overrides, one table of ``Trailer`` fields per trailer 2, 3, ...
     train: list = field(default_factory=list)
+    #: Wall-clock limit of the run (s): a run still going then (a hung controller, say) stops
+    #: with status "failed" and its rows so far kept. Enforced where the run is in a
+    #: process's main thread (the CLI, a sweep's process workers), by SIGALRM.
+    time_limit_s: float = TIME_LIMIT_S
 
     def validate(self) -> None:
         """Raise ValueError naming the first bad field and what is allowed."""
+        limit = self.time_limit_s
+        if (
+            isinstance(limit, bool)
+            or not isinstance(limit, int | float)
+            or not (math.isfinite(limit) and limit > 0)
+        ):
+            raise ValueError(
+                f"time_limit_s={limit!r} is not allowed: it must be a finite number of seconds > 0"
+            )
         if self.plant not in PLANTS:
             raise ValueError(f"plant={self.plant!r} is not allowed: use one of {PLANTS}")
 

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import contextlib
+import signal
+import threading
 import time
 from dataclasses import dataclass
 from numbers import Real
@@ -39,6 +42,43 @@ class Result:
     @property
     def ok(self) -> bool:
         return self.status == "ok"
+
+
+class TimeLimitExceeded(BaseException):
+    """The run's wall-clock limit passed (raised by SIGALRM wherever the run then was;
+    a BaseException, so that the guard around user code does not take it for the user's)."""
+
+
+@contextlib.contextmanager
+def wall_time_limit(seconds: float):
+    """Raise :class:`TimeLimitExceeded` in this thread after ``seconds`` of wall time; a
+    no-op outside a process's main thread, where signals cannot be received."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def expired(signum, frame):
+        raise TimeLimitExceeded(seconds)
+
+    previous = signal.signal(signal.SIGALRM, expired)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0.0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def _time_limit_stop(stepper: Stepper, err: TimeLimitExceeded) -> tuple[str, str]:
+    import traceback
+
+    stepper.stop_details = "".join(traceback.format_exception(err))
+    t = max(stepper.samples - 1, 0) * stepper.dt
+    where = usercode_failure(err).split(": ")[0]
+    return "failed", (
+        f"the run passed its time limit of {err.args[0]:g} s (wall clock; --time-limit) at "
+        f"t={t:.3f} s, in {where}"
+    )
 
 
 def run_episode(stepper: Stepper, controller, progress=None, on_step=None) -> tuple[str, str]:
@@ -116,7 +156,10 @@ def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint
     controller.reset()
     start_wall = time.perf_counter()
     try:
-        status, message = run_episode(stepper, controller, progress, on_step)
+        with wall_time_limit(built.scenario.time_limit_s):
+            status, message = run_episode(stepper, controller, progress, on_step)
+    except TimeLimitExceeded as err:
+        status, message = _time_limit_stop(stepper, err)
     finally:
         stepper.close()  # the checkpoint file, if any, then holds every row computed
     wall = time.perf_counter() - start_wall
