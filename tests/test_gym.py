@@ -148,3 +148,88 @@ def test_render_works_without_a_display():
     if proc.stdout.strip() == "unavailable":
         pytest.skip("no OpenGL backend on this machine")
     assert proc.stdout.split() == ["(480,", "640,", "3)", "1", "1"]  # an image that changes
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")  # advisory: unbounded obs, torque units
+def test_a_train_env_passes_the_checker_and_observes_every_trailer():
+    env = gym_env.TractorTrailerEnv(trailers=3, duration=0.5, traj="circle")
+    check_env(env, skip_render_check=True)
+    names = env.observation_names
+    assert names == gym_env.observation_names(3)
+    for k in (2, 3):
+        for field in ("phi", "beta", "x0", "y0", "theta0", "v0"):
+            assert f"{field}_{k}" in names
+        assert f"cross_track_trailer_{k}" in names and f"heading_error_trailer_{k}" in names
+    obs, _ = env.reset(seed=0)
+    o = dict(zip(names, obs, strict=True))
+    # On the path at the start: the tractor's errors are nil, every trailer's match its own.
+    assert abs(o["cross_track_tractor"]) < 1e-9 and abs(o["heading_error_tractor"]) < 1e-9
+    assert o["cross_track_lead"] == o["cross_track_tractor"]
+
+
+def test_path_frame_errors_follow_a_shifted_start_and_the_lead_when_reversing():
+    env = gym_env.TractorTrailerEnv(traj="circle", duration=0.5, reverse=True, eta="paper")
+    obs, _ = env.reset(seed=0)
+    o = dict(zip(env.observation_names, obs, strict=True))
+    assert o["cross_track_lead"] == o["cross_track_trailer_1"]
+    assert o["heading_error_lead"] == o["heading_error_trailer_1"]
+    assert abs(o["heading_error_tractor"]) < 1e-9  # it faces along the path, backing up
+
+
+@pytest.mark.parametrize("plant", ["mujoco", "reduced"])
+def test_a_train_driven_through_the_env_is_simulate_bit_for_bit(plant):
+    scenario = Scenario(
+        traj="s_curve", duration=0.6, trailers=3, disturbance="none", control_dt=0.01,
+        noise_snr_db=20.0, seed=4, plant=plant,
+    )  # fmt: skip
+    reference = simulate(scenario).timeseries
+    env = gym_env.TractorTrailerEnv(scenario)
+    nominal = scenario.nominal_params()
+    ctrl = make_controller("ismc_sta", reduced_model(nominal), torque_limit=nominal.torque_limit)
+    ctrl.reset()
+    names = env.observation_names
+    obs, info = env.reset(seed=scenario.seed)
+    rows = []
+    while True:
+        o = dict(zip(names, obs, strict=True))
+        rows.append(o)
+        phis = (o["phi"], o["phi_2"], o["phi_3"])
+        torques = ctrl.step(
+            env.dt, phis, o["v"], o["omega"], o["v_d"], o["omega_d"],
+            info["v_d_dot"], info["omega_d_dot"],
+        )  # fmt: skip
+        obs, _, terminated, truncated, info = env.step(np.array(torques))
+        if terminated or truncated:
+            rows.append(dict(zip(names, obs, strict=True)))
+            break
+    assert len(rows) == len(reference["t"])
+    for name in ("x", "y", "phi", "phi_2", "phi_3", "beta_3", "x0_3", "v0_2"):
+        assert np.array_equal([r[name] for r in rows], reference[name]), name
+    assert np.array_equal([r["v"] for r in rows], reference["v_meas"])
+
+
+def test_vectorised_through_make_vec():
+    envs = gymnasium.make_vec(
+        gym_env.ENV_ID, num_envs=2, vectorization_mode="sync", traj="circle",
+        plant="reduced", duration=0.2, trailers=2,
+    )  # fmt: skip
+    obs, _ = envs.reset(seed=[1, 2])
+    assert obs.shape == (2, len(gym_env.observation_names(2)))
+    obs, reward, terminated, _, _ = envs.step(np.ones((2, 2)))
+    assert reward.shape == (2,) and not terminated.any()
+    envs.close()
+
+
+def test_render_explains_itself_before_reset_and_without_a_render_mode():
+    env = gym_env.TractorTrailerEnv(duration=0.2, render_mode="rgb_array")
+    with pytest.raises(gymnasium.error.ResetNeeded, match="call reset"):
+        env.render()
+    plain = gym_env.TractorTrailerEnv(duration=0.2)
+    plain.reset(seed=0)
+    with pytest.warns(UserWarning, match="render_mode='rgb_array'"):
+        assert plain.render() is None
+
+
+def test_an_unknown_field_gets_a_did_you_mean():
+    with pytest.raises(ValueError, match="did you mean 'trailers'"):
+        gym_env.TractorTrailerEnv(trailer=2)

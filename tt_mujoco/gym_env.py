@@ -9,15 +9,24 @@ chooses the wheel torques:
   actuators saturate, so values outside are clipped, as a real motor driver would.
 - **observation**: the measurement layer (:class:`tt_mujoco.sim.measure.Measurement`, its 19
   fields in order, with the scenario's measurement noise on v and omega and any sensor dropout
-  applied) followed by the tracking target ``(v_d, omega_d)``; names in
-  :data:`OBSERVATION_NAMES`.
+  applied), then for a train trailers 2..N (``x0_k, y0_k, theta0_k, phi_k, beta_k, v0_k``, as
+  the time series' columns), then the path-frame errors of every unit against the reference
+  path (``cross_track_tractor``, ``heading_error_tractor`` of the point P, and
+  ``cross_track_trailer_k``, ``heading_error_trailer_k`` of each trailer's axle: the signed
+  distance from the nearest path point, positive to the left of the path's direction, and
+  the heading against the path's tangent: the vehicle faces along it, also when it backs up
+  the path), those of
+  the unit that leads the motion (``cross_track_lead``, ``heading_error_lead``: the tractor
+  forward, the last trailer when reversing), and the tracking target ``(v_d, omega_d)``.
+  :func:`observation_names` gives the names for N trailers, ``env.observation_names`` the
+  environment's; :data:`OBSERVATION_NAMES` are the one-trailer vehicle's.
 - **reward**: the negative squared tracking error ``-(e_v^2 + e_omega^2)`` after the step,
   ``e = z - z_d`` with the true velocities, so that an episode's return is ``-N`` times
   ``rmse_v^2 + rmse_omega^2`` of ``metrics.json``. A jackknife or a blow-up ends the episode
   (``terminated``) with the reward ``-(1 + steps left)``, as if every remaining step had an
   error of 1: ending early never pays.
 - **truncated** when the scenario's duration is reached.
-- **info**: ``t``, ``status`` ("running", "jackknife", "diverged"), the errors ``e_v``,
+- **info**: ``t``, ``status`` ("running", "jackknife", "diverged", "failed"), the errors ``e_v``,
   ``e_omega``, the target's derivatives ``v_d_dot``, ``omega_d_dot`` (what the project's
   controllers also use) and ``slip_longitudinal`` (m/s).
 
@@ -30,7 +39,13 @@ pass any other: every scenario option works (reverse driving, the curvature-sche
 path feedback, faults, path hooks, ...), because the environment drives the same
 :class:`~tt_mujoco.sim.stepper.Stepper` as :func:`~tt_mujoco.sim.simulate`. The noise seed is
 ``reset(seed=...)``; the first reset without a seed uses the scenario's, so the same seed gives
-the same episode on every route. Registered as ``tt_mujoco/TractorTrailer-v0``.
+the same episode on every route. Registered as ``tt_mujoco/TractorTrailer-v0``; vectorised
+with ``gymnasium.make_vec(ENV_ID, num_envs=N, vectorization_mode="sync")`` (or "async").
+
+**Rendering** needs ``render_mode="rgb_array"`` at construction (the MuJoCo plant only):
+``render()`` then returns a 480 x 640 RGB frame of the current state. With
+``render_mode=None`` it warns and returns None, as Gymnasium's environments do; before the
+first ``reset()`` there is no state to draw, and it raises ``gymnasium.error.ResetNeeded``.
 """
 
 from __future__ import annotations
@@ -49,13 +64,26 @@ except ImportError as err:  # pragma: no cover - depends on the optional extra
 import mujoco
 
 from tt_mujoco import sim
+from tt_mujoco.reference.feedback import path_errors
+from tt_mujoco.registry import closest
 from tt_mujoco.sim.measure import Measurement
+from tt_mujoco.sim.timeseries import train_columns
 from tt_mujoco.viz.render import Offscreen
 
-__all__ = ["ENV_ID", "OBSERVATION_NAMES", "TractorTrailerEnv"]
+__all__ = ["ENV_ID", "OBSERVATION_NAMES", "TractorTrailerEnv", "observation_names"]
 
 ENV_ID = "tt_mujoco/TractorTrailer-v0"
-OBSERVATION_NAMES = (*Measurement._fields, "v_d", "omega_d")
+
+
+def observation_names(n_trailers: int = 1) -> tuple[str, ...]:
+    """The observation's names, in order, for a vehicle with ``n_trailers`` trailers."""
+    units = ["tractor", *(f"trailer_{k}" for k in range(1, n_trailers + 1)), "lead"]
+    errors = [f"{name}_{unit}" for unit in units for name in ("cross_track", "heading_error")]
+    return (*Measurement._fields, *train_columns(n_trailers), *errors, "v_d", "omega_d")
+
+
+#: The observation's names for the paper's vehicle (one trailer).
+OBSERVATION_NAMES = observation_names(1)
 #: The environment's default control period (s): 100 Hz is plenty for an agent.
 DEFAULT_CONTROL_DT = 0.01
 
@@ -82,9 +110,15 @@ class TractorTrailerEnv(gymnasium.Env):
         if scenario is None:
             scenario = sim.Scenario(disturbance="none", control_dt=DEFAULT_CONTROL_DT)
         if overrides:
-            unknown = sorted(set(overrides) - {f.name for f in dataclasses.fields(scenario)})
-            if unknown:
-                raise ValueError(f"unknown Scenario field(s) {unknown}")
+            fields = [f.name for f in dataclasses.fields(scenario)]
+            for name in overrides:
+                if name not in fields:
+                    close = closest(name, fields)
+                    hint = f"; did you mean {close!r}?" if close else ""
+                    raise ValueError(
+                        f"{name}={overrides[name]!r} is not allowed: {name!r} is not a Scenario "
+                        f"field{hint} (the fields: {', '.join(fields)})"
+                    )
             scenario = dataclasses.replace(scenario, **overrides)
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise ValueError(f"render_mode={render_mode!r} is not allowed: use None or 'rgb_array'")
@@ -99,10 +133,14 @@ class TractorTrailerEnv(gymnasium.Env):
         self.path, self.target = self._built.path, self._built.target
         self.duration = self._built.duration
         limit = self.nominal.torque_limit
+        self.n_trailers = self.plant_params.n_trailers
+        self.observation_names = observation_names(self.n_trailers)
         self.action_space = spaces.Box(-limit, limit, shape=(2,), dtype=np.float32)
         self.observation_space = spaces.Box(
-            -np.inf, np.inf, shape=(len(OBSERVATION_NAMES),), dtype=np.float64
+            -np.inf, np.inf, shape=(len(self.observation_names),), dtype=np.float64
         )
+        self._reverse = bool(scenario.reverse)
+        self._pose_at, self._curvature = self.path.pose_at, self.path.curvature_and_rate
         self.dt = scenario.control_dt
         self.max_steps = self._built.steps
         self._seeded = False
@@ -121,6 +159,8 @@ class TractorTrailerEnv(gymnasium.Env):
         if phi0_deg != s.phi0_deg:
             dataclasses.replace(s, phi0_deg=phi0_deg).validate()
         self._stepper.reset(self.np_random, phi0_deg=phi0_deg)
+        # Each unit's nearest path point, warm-started from the target's start.
+        self._unit_s = [float(self.target.arc_length)] * (1 + self.n_trailers)
         self.close()  # a new plant: the renderer is made again for its model
         obs = self._sense()
         return obs, self._info("running")
@@ -149,9 +189,23 @@ class TractorTrailerEnv(gymnasium.Env):
     def render(self):
         """An RGB image (480 x 640) of the MuJoCo plant from the chase camera. Headless like
         ``run``: the OpenGL backend is chosen by :func:`tt_mujoco.viz.gl.select_gl_backend`
-        (EGL, else OSMesa), not by a display."""
-        if self.render_mode != "rgb_array" or self._stepper.plant is None:
+        (EGL, else OSMesa), not by a display.
+
+        Raises
+        ------
+        gymnasium.error.ResetNeeded
+            Before the first :meth:`reset`: there is no state to draw yet.
+        """
+        if self.render_mode is None:
+            gymnasium.logger.warn(
+                "render() was called with render_mode=None: make the environment with "
+                "render_mode='rgb_array' to get frames"
+            )
             return None
+        if self._stepper.plant is None:
+            raise gymnasium.error.ResetNeeded(
+                "render() before reset(): call reset() first, then render() draws its state"
+            )
         model, data = self._stepper.plant.model, self._stepper.plant.data
         if self._renderer is None:
             self._renderer = Offscreen(model, 640, 480, maxgeom=1000)
@@ -177,12 +231,31 @@ class TractorTrailerEnv(gymnasium.Env):
 
     # --- helpers -----------------------------------------------------------------------------
     def _sense(self) -> np.ndarray:
-        """Measurement (noisy v, omega; held during a dropout) and the target at this step."""
+        """Measurement (noisy v, omega; held during a dropout), trailers 2..N, every unit's
+        path-frame errors and the target at this step."""
         seen, ref = self._stepper.sense()
-        self._me, self._ref = self._stepper.measurement, ref
-        obs = np.array([*seen, ref.v_d, ref.omega_d], dtype=np.float64)
+        me = self._stepper.measurement
+        self._me, self._ref = me, ref
+        train = [value for row in seen.train for value in row] if self.n_trailers > 1 else []
+        errors = self._path_errors(me)
+        lead = errors[-2:] if self._reverse else errors[:2]
+        obs = np.array([*seen, *train, *errors, *lead, ref.v_d, ref.omega_d], dtype=np.float64)
         self._last_obs = obs
         return obs
+
+    def _path_errors(self, me) -> list[float]:
+        """``[cross_track, heading_error]`` of the tractor's P and of each trailer's axle, in
+        order, against the reference path (true poses: the paper's noise is on v, omega)."""
+        poses = [(me.x, me.y, me.theta), (me.x0, me.y0, me.theta0)]
+        poses += [(row[0], row[1], row[2]) for row in getattr(me, "train", ())]
+        out = []
+        for i, (x, y, theta) in enumerate(poses):
+            s, e_y, e_psi = path_errors(
+                self._pose_at, self._curvature, self._unit_s[i], x, y, theta
+            )
+            self._unit_s[i] = s
+            out += [e_y, e_psi]
+        return out
 
     def _info(self, status: str) -> dict:
         me, ref = self._me, self._ref

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["DEFAULT_GAINS", "PathFeedback", "check_config"]
+__all__ = ["DEFAULT_GAINS", "PathFeedback", "check_config", "path_errors"]
 
 #: Default gains. k_y = 4 1/m^2 and k_psi = 4 1/m: critically damped in arc length
 #: (k_psi = 2 sqrt(k_y)), offset halved every ~0.4 m. At the cycloid's 1.36 m/s peak that is a
@@ -42,6 +42,28 @@ DEFAULT_GAINS = {"k_y": 4.0, "k_psi": 4.0, "c_max": 2.0}
 _NEWTON_STEPS = 2
 # Lower bound of 1 - kappa e_y in the error kinematics (inside a tight turn, far from the path).
 _MIN_METRIC = 0.2
+
+
+def path_errors(pose_at, curvature_and_rate, s: float, x: float, y: float, theta: float):
+    """``(s*, e_y, e_psi)``: the nearest path point to (x, y) by Newton steps warm-started at
+    arc length ``s``, the signed distance from it (positive left of the path's direction) and
+    the heading error ``theta - psi_path(s*)`` in (-pi, pi].
+
+    ``pose_at`` and ``curvature_and_rate`` are the path's (:class:`~tt_mujoco.reference.
+    path_base.ReferencePath`); called every control step from near the last answer.
+    """
+    for _ in range(_NEWTON_STEPS):
+        xr, yr, h = pose_at(s)
+        c, sn = math.cos(h), math.sin(h)
+        dx, dy = x - xr, y - yr
+        along, e_y = dx * c + dy * sn, dy * c - dx * sn
+        # Newton on |P - r(s)|^2 / 2, whose second derivative is 1 - kappa e_y. On the inside
+        # of a turn it is below 1 and vanishes at the centre of curvature: there a plain step
+        # (metric 1) converges linearly instead of overshooting.
+        s += along / max(1.0 - curvature_and_rate(s)[0] * e_y, 1.0)
+    xr, yr, h = pose_at(s)
+    e_y = (y - yr) * math.cos(h) - (x - xr) * math.sin(h)
+    return s, e_y, math.remainder(theta - h, 2.0 * math.pi)
 
 
 def check_config(config: dict | None) -> dict[str, float]:
@@ -141,22 +163,11 @@ class PathFeedback:
     # --- the loop ------------------------------------------------------------------------
     def errors(self, x: float, y: float, theta: float) -> tuple[float, float]:
         """Update s* (Newton, warm-started) and return ``(e_y, e_psi)`` for pose (x, y, theta)."""
-        s = self.path_arc_length
-        pose_at, curvature = self._pose_at, self._curvature
-        for _ in range(_NEWTON_STEPS):
-            xr, yr, h = pose_at(s)
-            c, sn = math.cos(h), math.sin(h)
-            dx, dy = x - xr, y - yr
-            along, e_y = dx * c + dy * sn, dy * c - dx * sn
-            # Newton on |P - r(s)|^2 / 2, whose second derivative is 1 - kappa e_y. On the
-            # inside of a turn it is below 1 and vanishes at the centre of curvature: there a
-            # plain step (metric 1) converges linearly instead of overshooting.
-            s += along / max(1.0 - curvature(s)[0] * e_y, 1.0)
-        xr, yr, h = pose_at(s)
-        e_y = (y - yr) * math.cos(h) - (x - xr) * math.sin(h)
-        e_psi = math.remainder(theta - h, 2.0 * math.pi)
+        s, e_y, e_psi = path_errors(
+            self._pose_at, self._curvature, self.path_arc_length, x, y, theta
+        )
         self.path_arc_length = s
-        self._kappa_near = curvature(s)[0]
+        self._kappa_near = self._curvature(s)[0]
         self.lateral_error, self.heading_error = e_y, e_psi
         return e_y, e_psi
 
