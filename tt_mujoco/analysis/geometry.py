@@ -40,6 +40,10 @@ _CHUNK = 16
 _WORK_BLOCK = 1 << 15
 # The chunk search works on blocks of at most this many point-segment pairs (bounds the memory).
 _SEARCH_BLOCK = 1 << 20
+# Query points handed to the chunk search at once (bounds the pairs and lists it makes).
+_POINT_BLOCK = 1 << 14
+# A window of at most this many chunks is enumerated; a longer one is asked of the chunk tree.
+_WINDOW_CHUNKS = 512
 
 
 class _Best:
@@ -200,6 +204,8 @@ class Polyline:
         offset = chunk_vertices - centre[:, None, :]
         self._chunk_centre = centre
         self._chunk_radius = np.sqrt(np.max(np.einsum("ijk,ijk->ij", offset, offset), axis=1))
+        self._chunk_radius_max = float(self._chunk_radius.max())
+        self._chunk_tree = cKDTree(centre)
 
     def project(
         self, points, *, extend_ends: bool = False, segment_count=None, segment_first=None
@@ -272,6 +278,14 @@ class Polyline:
             best.seg[only_start] = 0
 
         pending = np.flatnonzero(finite & (limit > 0))
+        if segment_first is not None:
+            # A short window is searched directly: the tree holds the whole path, whose other
+            # laps crowd out the window's candidates.
+            spans = (np.minimum(limit - 1, n_seg - 1) // _CHUNK) - first // _CHUNK + 1
+            direct = pending[spans[pending] <= _WINDOW_CHUNKS]
+            if direct.size:
+                self._chunk_search(pts, direct, limit, extend_ends, best, first)
+                pending = np.setdiff1d(pending, direct, assume_unique=True)
         for k in _CANDIDATE_ROUNDS:
             if pending.size == 0 or k >= self._tree.n:
                 break
@@ -366,41 +380,108 @@ class Polyline:
         best: _Best,
         first: np.ndarray,
     ) -> None:
-        """Exact search over every chunk whose bounding circle is not beyond the best so far."""
+        """Exact search over every chunk of a point's usable segments (``first`` to ``limit``)
+        whose bounding circle is not beyond the best so far.
+
+        The chunks are found without looking at all of them, so the cost grows with the points,
+        not with points times path (a path driven in many laps, a long run's driven path): a
+        point asks the chunk tree for the circles within its distance so far (one without,
+        whose window held no tree candidate, takes the nearest of its window's chunk starts).
+        """
         offsets = np.arange(_CHUNK)
-        n_chunks = self._chunk_first.size
-        block = max(1, _SEARCH_BLOCK // (n_chunks * _CHUNK))
-        for lo in range(0, pending.size, block):
-            idx = pending[lo : lo + block]
-            p = pts[idx]
-            lower_bound = (
-                np.hypot(
-                    p[:, 0, None] - self._chunk_centre[:, 0],
-                    p[:, 1, None] - self._chunk_centre[:, 1],
+        budget = max(1, _SEARCH_BLOCK // _CHUNK)
+        for lo in range(0, pending.size, _POINT_BLOCK):
+            idx = pending[lo : lo + _POINT_BLOCK]
+            pair_point, pair_chunk = self._chunk_pairs(
+                pts[idx], limit[idx], first[idx], best.d2[idx]
+            )
+            # Blocks of whole points (a point's pairs are never split: ties resolve as in one
+            # pass), each about _SEARCH_BLOCK segment tests.
+            bounds = np.searchsorted(pair_point, np.arange(idx.size + 1))
+            a = 0
+            while a < idx.size:
+                b = int(np.searchsorted(bounds, bounds[a] + budget, side="right")) - 1
+                b = min(max(b, a + 1), idx.size)
+                part = slice(bounds[a], bounds[b])
+                a = b
+                if part.start == part.stop:
+                    continue
+                point, chunk = pair_point[part], pair_chunk[part]
+                candidates = np.minimum(
+                    self._chunk_first[chunk, None] + offsets, self.n_segments - 1
                 )
-                - self._chunk_radius
+                self._try(
+                    pts[idx[point]],
+                    idx[point],
+                    candidates,
+                    limit[idx[point]],
+                    extend_ends,
+                    best,
+                    first[idx[point]],
+                )
+
+    def _chunk_pairs(self, p, limit, first, d2) -> tuple[np.ndarray, np.ndarray]:
+        """``(point, chunk)`` pairs, point-major with chunks ascending, of the chunks that may
+        hold each point's nearest usable segment: inside its window and its lower bound
+        (centre distance less radius) not beyond its best distance so far.
+
+        A short window (a run's recent driven path) is enumerated chunk by chunk; a long one
+        (the whole path) is asked of the chunk tree, for the circles within the distance so
+        far. A point of a short window without a distance yet (the tree's candidates lay
+        outside it) takes the nearest of its window's chunk starts: a true distance to a
+        usable segment, so the pruning keeps the same nearest point and far fewer chunks.
+        """
+        n_chunks = self._chunk_first.size
+        upper = np.sqrt(d2)
+        lo_chunk = first // _CHUNK
+        hi_chunk = np.minimum((limit - 1) // _CHUNK, n_chunks - 1) + 1
+        spans = np.maximum(hi_chunk - lo_chunk, 0)
+        short = (spans <= _WINDOW_CHUNKS) | ~np.isfinite(upper)
+        points, chunks = [], []
+        windowed = np.flatnonzero(short)
+        if windowed.size:
+            span = spans[windowed]
+            starts = np.cumsum(span) - span
+            owner = np.repeat(np.arange(windowed.size), span)
+            chunk = np.repeat(lo_chunk[windowed], span) + np.arange(int(span.sum()))
+            chunk -= np.repeat(starts, span)
+            unbounded = ~np.isfinite(upper[windowed])
+            if unbounded.any():
+                vertex = np.maximum(self._chunk_first[chunk], first[windowed][owner])
+                gap = p[windowed][owner] - self.vertices[vertex]
+                seed = np.full(windowed.size, np.inf)
+                np.minimum.at(seed, owner, np.hypot(gap[:, 0], gap[:, 1]))
+                upper = upper.copy()
+                upper[windowed[unbounded]] = seed[unbounded]
+            points.append(windowed[owner])
+            chunks.append(chunk)
+        searched = np.flatnonzero(~short)
+        if searched.size:
+            found = self._chunk_tree.query_ball_point(
+                p[searched],
+                (upper[searched] + self._chunk_radius_max) * (1.0 + 1e-9) + 1e-12,
+                return_sorted=True,
             )
-            upper_bound = np.sqrt(best.d2[idx])
-            keep = (
-                (lower_bound <= upper_bound[:, None])
-                & (self._chunk_first < limit[idx, None])
-                & (self._chunk_first + _CHUNK > first[idx, None])
+            counts = np.fromiter((len(f) for f in found), dtype=np.int64, count=searched.size)
+            if counts.sum():
+                points.append(np.repeat(searched, counts))
+                chunks.append(np.concatenate([f for f in found if f]).astype(np.int64))
+        if not points:
+            empty = np.zeros(0, dtype=np.int64)
+            return empty, empty
+        point, chunk = np.concatenate(points), np.concatenate(chunks)
+        if len(points) > 1:  # each group is point-major already, and a point is in one group
+            order = np.argsort(point, kind="stable")
+            point, chunk = point[order], chunk[order]
+        lower = (
+            np.hypot(
+                p[point, 0] - self._chunk_centre[chunk, 0],
+                p[point, 1] - self._chunk_centre[chunk, 1],
             )
-            pair_point, pair_chunk = np.nonzero(keep)
-            if pair_point.size == 0:
-                continue
-            candidates = np.minimum(
-                self._chunk_first[pair_chunk, None] + offsets, self.n_segments - 1
-            )
-            self._try(
-                p[pair_point],
-                idx[pair_point],
-                candidates,
-                limit[idx][pair_point],
-                extend_ends,
-                best,
-                first[idx][pair_point],
-            )
+            - self._chunk_radius[chunk]
+        )
+        keep = (lower <= upper[point]) & (chunk >= lo_chunk[point]) & (chunk < hi_chunk[point])
+        return point[keep], chunk[keep]
 
     def _assemble(
         self,

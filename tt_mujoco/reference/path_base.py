@@ -58,11 +58,16 @@ class ReferencePath:
         Desired speeds (m/s) at arc-length stations (m), from a CSV ``v`` column.
     """
 
-    def __init__(self, name: str, length: float, initial_pose=None, station_speeds=None):
+    def __init__(
+        self, name: str, length: float, initial_pose=None, station_speeds=None, period=None
+    ):
         if not (math.isfinite(length) and length > 0):
             raise ValueError(f"path length={length!r} is not allowed: it must be finite and > 0")
         self.name = name
         self.length = float(length)
+        #: The arc length after which the path repeats itself exactly (a circle's lap), or
+        #: None: distances to the path are then distances to one period of it.
+        self.period = None if period is None else float(period)
         self.station_speeds = station_speeds
         self._initial_pose = None if initial_pose is None else Pose(*map(float, initial_pose))
 
@@ -129,12 +134,14 @@ class ReferencePath:
         rate = np.where((s_arr < 0.0) | (s_arr > self.length), 0.0, rate)
         return _out(np.asarray(rate, dtype=float), s_arr.ndim == 0)
 
-    def dense(self, ds: float = 0.005) -> np.ndarray:
-        """The path as an ``(N, 2)`` polyline with spacing at most ``ds`` (both ends included)."""
+    def dense(self, ds: float = 0.005, length: float | None = None) -> np.ndarray:
+        """The path as an ``(N, 2)`` polyline with spacing at most ``ds`` (both ends included),
+        from s = 0 to ``length`` (default, and at most, the whole path)."""
         if not (math.isfinite(ds) and ds > 0):
             raise ValueError(f"ds={ds!r} is not allowed: it must be finite and > 0")
-        n = max(2, math.ceil(self.length / ds) + 1)
-        x, y, _ = self.pose(np.linspace(0.0, self.length, n))
+        end = self.length if length is None else min(float(length), self.length)
+        n = max(2, math.ceil(end / ds) + 1)
+        x, y, _ = self.pose(np.linspace(0.0, end, n))
         return np.column_stack([x, y])
 
     @property

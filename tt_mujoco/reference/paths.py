@@ -166,14 +166,14 @@ class ArcsPath(ReferencePath):
         curvature applies. The curvature rate is 0 everywhere (jumps carry no rate).
     """
 
-    def __init__(self, name: str, start, segments, initial_pose=None):
+    def __init__(self, name: str, start, segments, initial_pose=None, period=None):
         lengths = np.array([float(seg[0]) for seg in segments])
         kappas = np.array([float(seg[1]) for seg in segments])
         if lengths.size == 0 or np.any(~np.isfinite(lengths)) or np.any(lengths <= 0):
             raise ValueError(f"segments={segments!r}: every segment length must be finite and > 0")
         if np.any(~np.isfinite(kappas)):
             raise ValueError(f"segments={segments!r}: every curvature must be finite")
-        super().__init__(name, float(lengths.sum()), initial_pose=initial_pose)
+        super().__init__(name, float(lengths.sum()), initial_pose=initial_pose, period=period)
         self._bounds = np.concatenate([[0.0], np.cumsum(lengths)])
         self._kappas = kappas
         x0, y0, h0 = (float(v) for v in start)
@@ -251,7 +251,9 @@ def circle(R: float = 1.0, length: float | None = None) -> ArcsPath:
     """
     R = positive_number("R", R)
     length = 2.0 * math.pi * R if length is None else positive_number("length", length)
-    return ArcsPath("circle", (R, 0.0, math.pi / 2.0), [(length, 1.0 / R)])
+    lap = 2.0 * math.pi * R
+    period = lap if length > lap else None  # more than a lap: laps past the first repeat it
+    return ArcsPath("circle", (R, 0.0, math.pi / 2.0), [(length, 1.0 / R)], period=period)
 
 
 # --- dispatch --------------------------------------------------------------------------------

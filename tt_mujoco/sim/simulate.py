@@ -12,6 +12,7 @@ from numbers import Real
 import numpy as np
 
 from tt_mujoco.analysis.metrics import compute_metrics
+from tt_mujoco.defaults import MAX_SPEED
 from tt_mujoco.registry import describe_failure as usercode_failure
 from tt_mujoco.registry import shown
 from tt_mujoco.sim import compiled, usercode
@@ -189,15 +190,31 @@ def user_metric(fn, ts: dict, path) -> tuple[float | None, str | None]:
     return None, f"it returned {shown(value, 60)}: a metric returns a number or None"
 
 
+def reference_polylines(built: Build) -> tuple[np.ndarray, np.ndarray]:
+    """The reference path as the run can reach it (``(N, 2)``, to draw), and as distances are
+    measured to it: one period of a path that repeats itself (a circle's laps coincide, and
+    projecting onto every lap would cost the run's length times its laps).
+
+    Both are sized by the distance the run can cover (``MAX_SPEED`` for its duration), not by
+    the path: a circle of R = 1e4 m on a 1 s run is a 20 m arc here, not 63 km of polyline.
+    """
+    path = built.path
+    reach = min(path.length, MAX_SPEED * built.duration)
+    drawn = path.dense(length=reach)
+    if path.period is None or path.period >= reach:
+        return drawn, drawn
+    return drawn, path.dense(length=path.period)
+
+
 def finish(built: Build, stepper: Stepper, controller, status, message, wall) -> Result:
     """The :class:`Result` of an episode: time series, metrics (built-in and the scenario's
     extra ones) and the configuration."""
     scenario = built.scenario
     ts = stepper.timeseries()
-    polyline = built.path.dense()
+    polyline, measured_against = reference_polylines(built)
     limit = built.nominal.torque_limit
     if len(ts["t"]):
-        metrics = compute_metrics(ts, polyline, limit, reverse=scenario.reverse)
+        metrics = compute_metrics(ts, measured_against, limit, reverse=scenario.reverse)
     else:  # stopped before its first sample was logged
         metrics = {"steps": 0, "finite_samples": 0, "sim_time_s": 0.0}
     for name, fn in built.extra_metrics.items():
@@ -207,7 +224,7 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
     metrics["wall_time_s"] = wall
     metrics["status"] = status
     if stepper.faults is not None:
-        metrics["faults"] = faults_mod.fault_report(stepper.faults, ts, polyline, limit)
+        metrics["faults"] = faults_mod.fault_report(stepper.faults, ts, measured_against, limit)
     config = {
         "scenario": scenario.to_dict(),
         "nominal_params": built.nominal.to_dict(),
