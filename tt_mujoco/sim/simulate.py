@@ -210,7 +210,7 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
     """The :class:`Result` of an episode: time series, metrics (built-in and the scenario's
     extra ones) and the configuration."""
     scenario = built.scenario
-    ts = stepper.timeseries()
+    ts = stepper.timeseries(release=True)
     polyline, measured_against = reference_polylines(built)
     limit = built.nominal.torque_limit
     if len(ts["t"]):

@@ -301,13 +301,21 @@ class Stepper:
         """Rows logged so far."""
         return len(self._logged) + sum(len(b[0]) for b in self._blocks)
 
-    def timeseries(self) -> dict[str, np.ndarray]:
-        """The episode's time series so far, in :data:`tt_mujoco.sim.timeseries.COLUMNS` order."""
+    def timeseries(self, release: bool = False) -> dict[str, np.ndarray]:
+        """The episode's time series so far, in :data:`tt_mujoco.sim.timeseries.COLUMNS` order.
+
+        ``release``: the episode is over and the caller takes the rows; the logged blocks are
+        dropped as they are gathered, so that a long run's rows are held about once, not
+        three times (blocks, their concatenation, the columns)."""
         self._fold()
         if self._blocks:
-            measured = np.concatenate([b[0] for b in self._blocks])
-            logged = np.concatenate([b[1] for b in self._blocks])
-            trains = np.concatenate([b[2] for b in self._blocks])
+            blocks = self._blocks
+            if release:
+                self._blocks = []
+            measured = np.concatenate([b[0] for b in blocks])
+            logged = np.concatenate([b[1] for b in blocks])
+            trains = np.concatenate([b[2] for b in blocks])
+            del blocks
         else:
             measured = logged = []
             trains = np.empty((0, len(self.train_columns)))
