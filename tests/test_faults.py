@@ -179,7 +179,8 @@ def test_interrupted_output_leaves_no_metrics(tmp_path, monkeypatch, capsys):
     assert code == run.EXIT_INTERRUPTED
     assert "metrics.json was not written" in capsys.readouterr().err
     names = sorted(p.name for p in out.iterdir())
-    assert names == ["config.toml", "timeseries.parquet"]  # complete files only, no temporaries
+    # complete files only, no temporaries
+    assert names == ["config.toml", "reference_path.parquet", "timeseries.parquet"]
     ts = outputs.read_timeseries(out / "timeseries.parquet")
     assert len(ts["t"]) == 1001 and ts["t"][-1] == 1.0
 
@@ -195,7 +196,10 @@ def test_exception_inside_write_outputs_after_the_csv(tmp_path, monkeypatch):
     with pytest.raises(RuntimeError, match="disk on fire"):
         run.write_outputs(result, tmp_path, video=False, plots=True, camera="follow", fps=30,
                           quiet=True)  # fmt: skip
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["timeseries.parquet"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "reference_path.parquet",
+        "timeseries.parquet",
+    ]
 
 
 def test_atomic_write_never_leaves_a_partial_file(tmp_path, monkeypatch):

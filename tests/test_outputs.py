@@ -99,7 +99,12 @@ def test_two_runs_into_one_folder_never_lose_or_mix_outputs(tmp_path):
         assert codes == [0, 2], errors
         assert any("another run" in e or "not an empty folder" in e for e in errors)
         names = sorted(p.name for p in out.iterdir())
-        assert names == ["config.toml", "metrics.json", "timeseries.parquet"], names
+        assert names == [
+            "config.toml",
+            "metrics.json",
+            "reference_path.parquet",
+            "timeseries.parquet",
+        ]
         doc = json.loads((out / "metrics.json").read_text())
         config = (out / "config.toml").read_text()
         assert f'controller = "{doc["config"]["controller"]["name"]}"' in config
@@ -124,7 +129,8 @@ def test_a_full_disk_is_one_message_and_the_written_files_stay_complete(tmp_path
         code = run.main([*argv, "--quiet", "--out", str(out)])
     err = capsys.readouterr().err
     assert code == 2 and "No space left on device" in err and "Traceback" not in err
-    assert sorted(p.name for p in out.iterdir()) == ["config.toml", "timeseries.parquet"]
+    kept = ["config.toml", "reference_path.parquet", "timeseries.parquet"]
+    assert sorted(p.name for p in out.iterdir()) == kept
     assert len(outputs.read_timeseries(out / "timeseries.parquet")["t"]) == 501
 
 

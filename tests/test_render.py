@@ -380,3 +380,53 @@ def test_osmesa_fallback_renders_when_egl_fails():
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
     assert proc.returncode == 0, proc.stderr[-1500:]
     assert proc.stdout.split() == ["osmesa", "(240,", "320,", "3)", "1"]
+
+
+def _csv_run(tmp_path):
+    """A finished CLI run on a CSV path (reduced plant, 2 s, no video)."""
+    from tt_mujoco import run
+
+    path = tmp_path / "path.csv"
+    t = np.linspace(0.0, 1.0, 30)
+    path.write_text("x,y\n" + "".join(f"{3 * v},{0.5 * math.sin(2 * v)}\n" for v in t))
+    out = tmp_path / "run"
+    argv = ["--traj", str(path), "--plant", "reduced", "--duration", "2", "--no-video"]
+    assert run.main([*argv, "--no-plots", "--quiet", "--out", str(out)]) == 0
+    return path, out
+
+
+def test_render_draws_the_runs_own_path_after_its_csv_file_changed(tmp_path, capsys):
+    # The run folder keeps the path it was given: editing (or deleting) the CSV file afterwards
+    # changes nothing that render or compare draw.
+    from tt_mujoco.outputs import REFERENCE_FILE, read_timeseries
+
+    path, out = _csv_run(tmp_path)
+    kept = read_timeseries(out / REFERENCE_FILE)
+    path.write_text("x,y\n0,0\n1,1\n2,0\n3,1\n")
+    polyline, source = render.reference_polyline_for({}, {}, out)
+    assert source == f"the run's own {REFERENCE_FILE}"
+    np.testing.assert_array_equal(polyline[:, 0], kept["x"])
+    assert polyline[-1, 0] == pytest.approx(3.0, abs=0.05)  # the old path's end, x = 3 m
+    path.unlink()
+    assert render.reference_polyline_for({}, {}, out)[1] == source
+
+
+def test_render_refuses_plant_params_edited_off_the_recorded_trace(tmp_path, capsys):
+    from tt_mujoco.outputs import read_timeseries
+    from tt_mujoco.sim import Scenario, simulate
+
+    _, out = _csv_run(tmp_path)
+    doc = json.loads((out / "metrics.json").read_text())
+    ts = read_timeseries(out / "timeseries.parquet")
+    as_run = render.params_from_config(doc["config"]["plant_params"])
+    assert render.check_trace(as_run, ts) == ""
+    mujoco_run = simulate(Scenario(duration=1.0, phi0_deg=10.0))  # contact physics: same rule
+    assert render.check_trace(Params(), mujoco_run.timeseries) == ""
+    doc["config"]["plant_params"]["L"] *= 1.5
+    (out / "metrics.json").write_text(json.dumps(doc))
+    code = render_cli.main([str(out), "--no-progress", "--out", str(tmp_path / "v.mp4")])
+    err = capsys.readouterr().err
+    assert code == 2 and "are not the vehicle of its time series" in err, err
+    assert not (tmp_path / "v.mp4").exists()
+    series = demo.open_loop_timeseries(Params(), duration=1.0, dt=0.02)[0]
+    assert render.check_trace(Params(), series) == ""

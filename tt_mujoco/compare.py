@@ -164,7 +164,7 @@ def compare(folders: list[Path], out: Path | None, allow_different_paths: bool) 
         )
     _, rows = metrics_table(runs)
     try:
-        reference = reference_polyline_for(runs[0].config, runs[0].timeseries)[0]
+        reference = reference_polyline_for(runs[0].config, runs[0].timeseries, runs[0].folder)[0]
     except ValueError:
         reference = None
     folder, _ = claim_folder(out, DEFAULT_OUT)

@@ -275,6 +275,11 @@ def write_timeseries(path: Path, ts: Mapping[str, np.ndarray], columns, units=No
         os.replace(tmp, path)
 
 
+#: A run folder's own copy of its reference path (columns x, y in m): what render and compare
+#: draw, never a CSV file that may have changed since the run.
+REFERENCE_FILE = "reference_path.parquet"
+
+
 def run_timeseries_file(run_dir: Path) -> Path:
     """A run folder's time series: ``timeseries.parquet`` when it is there, else the path of
     ``timeseries.csv`` (which the caller checks for)."""

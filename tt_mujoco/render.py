@@ -13,6 +13,7 @@ from tt_mujoco.outputs import read_timeseries, run_timeseries_file
 from tt_mujoco.viz.render import (
     CAMERAS,
     RenderUnavailable,
+    check_trace,
     params_from_config,
     reference_polyline_for,
     render_video,
@@ -83,7 +84,10 @@ def main(argv: list[str] | None = None) -> int:
         problem = _check_rows(ts, doc.get("steps"))
         if problem:
             return fail(f"{ts_path}: {problem}")
-        polyline, source = reference_polyline_for(config, ts)
+        problem = check_trace(params, ts)
+        if problem:
+            return fail(f"{metrics_path}: {problem}")
+        polyline, source = reference_polyline_for(config, ts, run_dir)
         print(f"reference path: {source}", file=sys.stderr)
         info, outcome = run_labels(
             config.get("scenario", {}), doc.get("status"), str(doc.get("message", ""))

@@ -44,6 +44,7 @@ from tt_mujoco.defaults import (
     TIME_LIMIT_S,
 )
 from tt_mujoco.outputs import (
+    REFERENCE_FILE,
     atomic_write,
     claim_folder,
     publish_new,
@@ -484,6 +485,10 @@ def write_outputs(
     if result.details is not None:  # the traceback of the user code that stopped the run
         atomic_write(out / ERROR_LOG, result.details)
         written.append(out / ERROR_LOG)
+    # The run's own reference path: render and compare read it, not a file that may change.
+    line = result.reference_polyline
+    write_timeseries(out / REFERENCE_FILE, {"x": line[:, 0], "y": line[:, 1]}, ("x", "y"), UNITS)
+    written.append(out / REFERENCE_FILE)
     ts_file = out / f"timeseries.{timeseries_format}"
     extra = train_columns(result.scenario.plant_params().n_trailers)
     units = {**UNITS, **{name: unit_of(name) for name in extra}}
