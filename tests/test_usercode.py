@@ -237,3 +237,27 @@ def test_a_bad_time_limit_is_refused(tmp_path, capsys, value):
     code, out, err = cli(tmp_path, capsys, "--time-limit", value)
     assert code == 2 and "--time-limit" in err and value in err, err
     assert_nothing_left(out)
+
+
+def test_a_sweep_whose_controller_file_goes_while_it_runs_still_writes_its_table(tmp_path):
+    # The controller deletes its own file during the first run (as a user's clean-up would):
+    # every run is journalled and the table is built from the journal, not from the file.
+    from tt_mujoco import sweep
+
+    path = tmp_path / "gone.py"
+    path.write_text(
+        "import os\n"
+        "from tt_mujoco.controllers import Controller\n"
+        "class Gone(Controller):\n"
+        "    def compute(self, t, m, r):\n"
+        "        if t >= 0.1 and os.path.exists(__file__):\n"
+        "            os.remove(__file__)\n"
+        "        return 0.5, 0.5\n"
+    )
+    out = tmp_path / "s"
+    argv = [f"controller={path}:Gone", "duration=0.2,0.3", "plant=reduced", "traj=circle"]
+    assert sweep.main([*argv, "--out", str(out), "--quiet", "--no-figures", "--workers", "1"]) == 0
+    assert not path.exists()
+    rows = (out / "runs.csv").read_text().splitlines()
+    assert len(rows) == 3 and ",ok," in rows[1]  # the second run found no file: its error
+    assert ",error," in rows[2] and "not found" in rows[2]

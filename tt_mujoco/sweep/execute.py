@@ -16,7 +16,7 @@ from tt_mujoco.executor import Executors, ignore_sigint
 from tt_mujoco.outputs import atomic_write, json_safe, write_json
 from tt_mujoco.progress import progress_bar
 from tt_mujoco.sweep.options import JOURNAL, SPEC_FILE, TABLE, BadSpecError
-from tt_mujoco.sweep.runs import expand, run_one
+from tt_mujoco.sweep.runs import expand, run_one, validate_runs
 from tt_mujoco.sweep.spec import SweepSpec
 from tt_mujoco.sweep.tables import (
     build_rows,
@@ -177,7 +177,13 @@ def run_sweep(
     out = Path(out)
     if not (isinstance(workers, int) and workers >= 1):
         raise BadSpecError(f"workers={workers!r} is not allowed: it must be an integer >= 1")
-    runs = expand(spec)
+    runs = expand(spec, validate=False)
+    # Every run still to do goes through the setup path before any work; a resumed sweep's
+    # finished runs are not checked again (a file they read may be gone by now).
+    finished = read_journal(out / JOURNAL) if resume and not out.is_symlink() else {}
+    if retry_errors:
+        finished = {k: r for k, r in finished.items() if r.get("status") != "error"}
+    validate_runs([r for r in runs if r["run_id"] not in finished])
     prepare_out(out, resume)
     with _lock(out):
         journal_path = out / JOURNAL

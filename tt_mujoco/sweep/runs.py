@@ -79,7 +79,7 @@ def run_id(options: Mapping) -> str:
     return digest.hexdigest()[:16]
 
 
-def expand(spec: SweepSpec) -> list[dict]:
+def expand(spec: SweepSpec, validate: bool = True) -> list[dict]:
     """The runs of a sweep, in table order.
 
     Returns
@@ -125,7 +125,8 @@ def expand(spec: SweepSpec) -> list[dict]:
             )
         seen[rid] = index
         out.append({"index": index, "replicate": replicate, "run_id": rid, "options": options})
-    _validate_runs(out)
+    if validate:
+        validate_runs(out)
     return out
 
 
@@ -187,7 +188,7 @@ def _resolved_gains(scenario: Scenario) -> tuple[str, dict]:
     return preset, values
 
 
-def _validate_runs(runs: Sequence[dict]) -> None:
+def validate_runs(runs: Sequence[dict]) -> None:
     """Every run through the one setup path (:func:`tt_mujoco.sim.build`), before any work
     (exit 2 on a bad one). Runs that differ only in their seed are checked once."""
     checked: set[str] = set()
@@ -205,11 +206,19 @@ def _validate_runs(runs: Sequence[dict]) -> None:
 
 
 def config_columns(run: Mapping) -> dict:
-    """The configuration part of a run's row: the full Scenario, the resolved eta and gains,
-    and the ``scale.*``/``param.*`` factors given."""
-    options = run["options"]
-    scenario = build_scenario(options)
+    """The configuration part of a run's row: its index, id and replicate, then
+    :func:`scenario_columns`."""
     row = {"index": run["index"], "run_id": run["run_id"], "replicate": run["replicate"]}
+    row.update(scenario_columns(run["options"]))
+    return row
+
+
+def scenario_columns(options: Mapping) -> dict:
+    """The full Scenario of a run's options, the resolved eta and gains, and the
+    ``scale.*``/``param.*`` factors given (the run's journal record keeps them, so a table is
+    built without the files a run read, such as a controller that has gone since)."""
+    scenario = build_scenario(options)
+    row = {}
     for name in SCENARIO_OPTIONS:
         value = getattr(scenario, name)
         if name in LIST_OPTIONS:
@@ -262,9 +271,11 @@ def run_one(options: Mapping) -> dict:
 
     start = time.perf_counter()
     try:
+        config = scenario_columns(options)  # while every file the run reads is there
         result = simulate(build_scenario(options))
         metrics = _flatten_metrics({k: v for k, v in result.metrics.items() if k != "status"})
         out = {"status": result.status, "message": result.message, "error": "", "metrics": metrics}
+        out["config"] = config
     except (Exception, SystemExit) as err:  # a run's crash is a row, not the sweep's end
         out = {
             "status": "error",

@@ -48,6 +48,24 @@ def _cell(value) -> str:
     return str(value)
 
 
+def _config_of(run: Mapping, record: Mapping) -> dict:
+    """A row's configuration: as the run's journal record kept it, else resolved now, else
+    (a file the run read is gone) the options as given."""
+    kept = record.get("config")
+    if isinstance(kept, dict) and kept:
+        return {
+            "index": run["index"],
+            "run_id": run["run_id"],
+            "replicate": run["replicate"],
+            **kept,
+        }
+    try:
+        return config_columns(run)
+    except (ValueError, OSError):
+        ids = {"index": run["index"], "run_id": run["run_id"], "replicate": run["replicate"]}
+        return {**ids, **run["options"]}
+
+
 def build_rows(runs: Sequence[dict], done: Mapping[str, dict]) -> tuple[list[str], list[dict]]:
     """The table: header and one row per run (in run order) from the journal's records."""
     rows = []
@@ -55,7 +73,7 @@ def build_rows(runs: Sequence[dict], done: Mapping[str, dict]) -> tuple[list[str
     metric_names: list[str] = []
     for run in runs:
         record = done[run["run_id"]]
-        row = config_columns(run)
+        row = _config_of(run, record)
         for name in row:
             if name not in config_names:
                 config_names.append(name)
