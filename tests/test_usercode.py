@@ -261,3 +261,22 @@ def test_a_sweep_whose_controller_file_goes_while_it_runs_still_writes_its_table
     rows = (out / "runs.csv").read_text().splitlines()
     assert len(rows) == 3 and ",ok," in rows[1]  # the second run found no file: its error
     assert ",error," in rows[2] and "not found" in rows[2]
+
+
+def test_sys_exit_inside_a_metric_is_that_metrics_error(tmp_path, capsys):
+    path = tmp_path / "m.py"
+    path.write_text("import sys\ndef m(ts, path):\n    sys.exit(0)\n")
+    code, out, err = cli(tmp_path, capsys, "--metric", f"{path}:m")
+    assert code == 0, err
+    doc = json.loads((out / "metrics.json").read_text())
+    assert doc["m"] is None and "it called sys.exit(0)" in doc["metric_errors"]["m"]
+
+
+def test_a_huge_circle_on_a_short_run_costs_what_the_run_covers(tmp_path, capsys):
+    # R = 1e9 m once asked for 9 TiB of polyline: the path is kept as far as the run can go.
+    from tt_mujoco.outputs import REFERENCE_FILE
+
+    code, out, err = cli(tmp_path, capsys, "--path-option", "R=1e9")
+    assert code == 0, err
+    line = read_timeseries(out / REFERENCE_FILE)
+    assert 2 <= len(line["x"]) <= 20.0 / 0.005 + 2  # MAX_SPEED x 1 s at 5 mm
