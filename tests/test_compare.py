@@ -49,3 +49,16 @@ def test_compare_refuses_runs_on_different_paths_unless_asked(runs, tmp_path, ca
 def test_compare_refuses_a_folder_that_is_not_a_run(runs, tmp_path, capsys):
     assert compare.main([str(runs[0]), str(tmp_path), "--out", str(tmp_path / "x")]) == 2
     assert "not a finished run" in capsys.readouterr().err
+
+
+def test_a_broken_copy_of_the_path_is_refused_before_an_output_folder(tmp_path, capsys):
+    from tt_mujoco.outputs import REFERENCE_FILE
+
+    argv = ["--plant", "reduced", "--duration", "0.5", "--no-video", "--no-plots", "--quiet"]
+    for name in ("a", "b"):
+        assert run.main([*argv, "--out", str(tmp_path / name)]) == 0
+    (tmp_path / "a" / REFERENCE_FILE).write_text("garbage")
+    out = tmp_path / "cmp"
+    assert compare.main([str(tmp_path / "a"), str(tmp_path / "b"), "--out", str(out)]) == 2
+    assert REFERENCE_FILE in capsys.readouterr().err
+    assert not out.exists()

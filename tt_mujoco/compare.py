@@ -26,6 +26,7 @@ from matplotlib.figure import Figure
 
 from tt_mujoco.cliargs import BadInputError, Parser
 from tt_mujoco.outputs import (
+    REFERENCE_FILE,
     OutputError,
     atomic_write,
     claim_folder,
@@ -165,8 +166,10 @@ def compare(folders: list[Path], out: Path | None, allow_different_paths: bool) 
     _, rows = metrics_table(runs)
     try:
         reference = reference_polyline_for(runs[0].config, runs[0].timeseries, runs[0].folder)[0]
-    except ValueError:
-        reference = None
+    except ValueError as err:
+        if (runs[0].folder / REFERENCE_FILE).exists():  # the run's own copy, edited or broken
+            raise BadInputError(f"{runs[0].folder / REFERENCE_FILE}: {err}") from None
+        reference = None  # a run from before runs kept their path: drawn without it
     folder, _ = claim_folder(out, DEFAULT_OUT)
     atomic_write(folder / "compare.md", _markdown(runs, rows))
     write_json(
