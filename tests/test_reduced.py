@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from scipy.optimize import brentq
 
 from tt_mujoco.vehicle import reduced
-from tt_mujoco.vehicle.params import Params, spec_same_path_eta
+from tt_mujoco.vehicle.params import Params
 
 PAPER = Params(eta="paper")
 
@@ -154,14 +154,14 @@ def _steady_offtrack(eta: float, R: float) -> float:
     return float(np.hypot(*P0) - R)
 
 
-def test_spec_same_path_formula_is_not_the_small_curvature_limit():
-    # docs/model.md Section 3 calls -(L0 - L)/(2 L0) = -0.125 the small-curvature limit of the
-    # same-path
-    # gain. If it were, the off-tracking would vanish faster than the curvature. It does not:
-    # R x off-tracking tends to a constant (measured -3.889e-3 m^2), i.e. the error is
-    # O(kappa). (L - L0)/(L + L0) = -1/7, the project's same_path, gives O(kappa^3):
-    # R^3 x off-tracking tends to -9.38e-4 m^4.
-    spec = spec_same_path_eta(0.3, 0.4)
+def test_the_half_difference_gain_is_not_the_small_curvature_limit():
+    # The half-difference gain -(L0 - L)/(2 L0) = -0.125 (an earlier derivation's limit of the
+    # same-path gain, docs/model.md Section 3). If it were the limit, the off-tracking would
+    # vanish faster than the curvature. It does not: R x off-tracking tends to a constant
+    # (measured -3.889e-3 m^2), i.e. the error is O(kappa). (L - L0)/(L + L0) = -1/7, the
+    # project's same_path, gives O(kappa^3): R^3 x off-tracking tends to -9.38e-4 m^4.
+    L, L0 = 0.3, 0.4
+    spec = -(L0 - L) / (2.0 * L0)
     assert spec == pytest.approx(-0.125)
     for R in (10.0, 30.0, 100.0):
         assert R * _steady_offtrack(spec, R) == pytest.approx(-3.889e-3, rel=0.01)

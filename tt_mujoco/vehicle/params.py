@@ -21,7 +21,6 @@ __all__ = [
     "Trailer",
     "resolve_eta",
     "same_path_eta",
-    "spec_same_path_eta",
     "train_same_path_etas",
 ]
 
@@ -42,20 +41,10 @@ def same_path_eta(L: float, L0: float) -> float:
     The small-curvature limit of the exact same-path gain (:func:`tt_mujoco.vehicle.steering.
     exact_same_path_eta`): ``eta* = (L - L0) / (L + L0)``, -1/7 = -0.1429 for the paper's
     L = 0.3 m, L0 = 0.4 m. With it the steady off-tracking vanishes like kappa^3 (-0.27 mm at
-    R = 1.5 m).
-
-    docs/model.md Section 3 gives ``-(L0 - L) / (2 L0)`` (-0.125) as this limit; that is wrong: it
-    leaves
-    an off-tracking proportional to kappa (-2.87 mm at R = 1.5 m, -0.39 mm at R = 10 m), see
-    :func:`spec_same_path_eta` and ``tests/test_reduced.py``.
+    R = 1.5 m; docs/model.md Section 3, where the half-difference gain ``-(L0 - L) / (2 L0)``
+    is shown to leave an off-tracking proportional to kappa, ``tests/test_reduced.py``).
     """
     return (L - L0) / (L + L0)
-
-
-def spec_same_path_eta(L: float, L0: float) -> float:
-    """docs/model.md Section 3's ``-(L0 - L) / (2 L0)`` (-0.125), kept to show why it was replaced:
-    it is not the small-curvature limit of the same-path gain (see :func:`same_path_eta`)."""
-    return -(L0 - L) / (2.0 * L0)
 
 
 def train_same_path_etas(lengths) -> list[float]:

@@ -10,8 +10,9 @@ The trailer axle is steered by ``beta = eta * phi`` (paper eq. 2). Three facts d
   and the rolling direction of P0 (perpendicular to C P0) fixes beta. ``eta = beta / phi`` is then
   the gain that holds P0 on the path at curvature 1/R: :func:`exact_same_path_eta`.
 - **Its small-curvature limit is (L - L0) / (L + L0)** = -1/7 = -0.1429 for the paper's L = 0.3 m,
-  L0 = 0.4 m, not the ``-(L0 - L) / (2 L0)`` = -0.125 of docs/model.md Section 3
-  (``params.spec_same_path_eta``); the project's ``same_path`` preset uses this limit.
+  L0 = 0.4 m, not the half-difference gain ``-(L0 - L) / (2 L0)`` = -0.125, which leaves an
+  off-tracking proportional to kappa (docs/model.md Section 3, ``tests/test_reduced.py``); the
+  project's ``same_path`` preset uses this limit.
   Linearising gives ``phi = kappa (L + L0) / (1 - eta)`` from the kinematics (paper eq. 13 at
   phi_dot = 0) and ``phi = kappa (L + L0)^2 / (2 L0)`` from the geometry; equating them gives
   ``1 - eta = 2 L0 / (L + L0)``. With eta = -0.125 the steady off-tracking at R = 1.5 m is
