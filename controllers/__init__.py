@@ -30,6 +30,7 @@ from tt_mujoco.controllers.fbl import FblController
 from tt_mujoco.controllers.ismc_sta import IsmcStaController
 from tt_mujoco.controllers.pid import PidController
 
+from tt_mujoco.defaults import TORQUE_LIMIT
 from tt_mujoco.registry import Registry
 
 __all__ = [
@@ -84,7 +85,7 @@ def build_controller(
 def make_controller(
     name: str,
     model: ModelFn,
-    torque_limit: float = 15.0,
+    torque_limit: float = TORQUE_LIMIT,
     gains: str | Mapping | None = None,
     anti_windup: bool = True,
 ) -> VelocityController:

@@ -49,6 +49,8 @@ from dataclasses import dataclass
 from numbers import Real
 from typing import Any, ClassVar
 
+from tt_mujoco.defaults import TORQUE_LIMIT
+
 __all__ = [
     "Controller",
     "ControllerSetup",
@@ -123,7 +125,7 @@ class ControllerSetup:
 
     params: Any
     model: ModelFn
-    torque_limit: float = 15.0
+    torque_limit: float = TORQUE_LIMIT
     control_dt: float = 0.001
     path: Any = None
 
@@ -371,7 +373,7 @@ class VelocityController(Controller):
     def __init__(
         self,
         model: ModelFn,
-        torque_limit: float = 15.0,
+        torque_limit: float = TORQUE_LIMIT,
         gains: str | Mapping | None = None,
         anti_windup: bool = True,
     ):

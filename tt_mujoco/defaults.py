@@ -25,6 +25,9 @@ MAX_PHYSICS_STEPS = 1_200_000
 MAX_CSV_ROWS = 100_000
 #: Speeds beyond this (m/s) are a numerical blow-up, not driving.
 MAX_SPEED = 20.0
+#: Wheel torque saturation (N m, the paper's Section 6.2): ``Params.torque_limit`` and the
+#: controllers' default.
+TORQUE_LIMIT = 15.0
 #: Default controller of a run.
 CONTROLLER = "ismc_sta"
 #: Default disturbance Delta(t) (docs/model.md Section 8).

@@ -13,6 +13,8 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
+from tt_mujoco.defaults import TORQUE_LIMIT
+
 __all__ = [
     "MAX_TRAILERS",
     "STEERING_PRESETS",
@@ -252,7 +254,7 @@ class Params:
     r: float = 0.02
     d: float = 0.2
     eta: float | str = "same_path"
-    torque_limit: float = 15.0
+    torque_limit: float = TORQUE_LIMIT
     friction: float = 1.0
     timestep: float = 0.001
     impratio: float = 10.0
