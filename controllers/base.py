@@ -9,7 +9,7 @@ target (:class:`Reference`: the reference point, its arc length and curvature, t
 targets and their derivatives, and the path itself for nearest-point queries). The loop clips
 the torques at the torque limit. A user controller subclasses :class:`Controller`, implements
 :meth:`Controller.compute` and is named ``--controller package.module:Class`` or
-``--controller path/to/file.py:Class``; see ``examples/pure_pursuit.py``.
+``--controller path/to/file.py:Class``; see ``examples/kanayama.py`` and ``docs/controllers.md``.
 
 **The built-in laws** (:class:`VelocityController`: ISMC-STA, PID, FBL) track ``z = (v, omega)``
 of the reduced model.
@@ -212,6 +212,23 @@ class Controller(ABC):
 
     def reset(self) -> None:  # noqa: B027 - optional hook: stateless controllers need none
         """Forget everything from a previous run (called before the first step)."""
+
+    def log(self, name: str, value: float) -> None:
+        """Record a signal of this step (an error, an integrator, a prediction): it lands in
+        the run's time series as the column ``ctrl_<name>``, NaN at the steps it was not
+        logged. Call it from :meth:`compute`; the last value given in a step counts.
+
+        Parameters
+        ----------
+        name : str
+            Letters, digits and ``_``, starting with a letter.
+        value : float
+        """
+        self.__dict__.setdefault("_signals", {})[name] = value
+
+    def take_signals(self) -> dict:
+        """The signals logged since the last call, and forget them (the loop calls this)."""
+        return self.__dict__.pop("_signals", None) or {}
 
     @abstractmethod
     def compute(self, t: float, measurement, reference: Reference) -> tuple[float, float]:

@@ -1,9 +1,11 @@
-"""Every quick command block of the README runs as printed (python-control runs its examples).
+"""Every quick command block of the README and the docs runs as printed (python-control runs
+its examples).
 
 A block is run unless an HTML comment right above it says ``readme-test: skip: REASON``;
 ``readme-test: last command`` runs only the last ``&&`` part (the install is CI's own step). A
-TOML block whose first line is ``# path/file.toml`` is written to that path first. Everything
-runs in a fresh folder with the repository's ``examples/``, so nothing lands in the checkout.
+TOML or Python block whose first line is ``# path/file.toml`` (``.py``) is written to that path
+first instead of being run. Everything runs in a fresh folder per document with the
+repository's ``examples/``, so nothing lands in the checkout.
 """
 
 import os
@@ -16,48 +18,69 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 BLOCK = re.compile(r"(?:<!-- readme-test: ([^>]*?) -->\n)?```(bash|python|toml)\n(.*?)```", re.S)
+#: The documents whose blocks run, and how many blocks each must run at least.
+DOCUMENTS = {"README.md": 4, "docs/controllers.md": 3}
+
+
+def _file_name(kind: str, body: str) -> str | None:
+    """The path a block is written to (``# path/file.toml`` or ``.py`` first line), or None."""
+    first = body.splitlines()[0] if body.strip() else ""
+    suffix = {"toml": ".toml", "python": ".py"}.get(kind)
+    if suffix and first.startswith("# ") and first.endswith(suffix) and " " not in first[2:]:
+        return first[2:].strip()
+    return None
 
 
 def _blocks():
-    text = (ROOT / "README.md").read_text()
     out = []
-    for m in BLOCK.finditer(text):
-        line = text[: m.start(2)].count("\n") + 1
-        out.append((line, m.group(1) or "", m.group(2), m.group(3)))
+    for doc in DOCUMENTS:
+        text = (ROOT / doc).read_text()
+        for m in BLOCK.finditer(text):
+            line = text[: m.start(2)].count("\n") + 1
+            out.append((doc, line, m.group(1) or "", m.group(2), m.group(3)))
     return out
 
 
 BLOCKS = _blocks()
+RUN = [
+    b
+    for b in BLOCKS
+    if b[3] != "toml" and not b[2].startswith("skip") and not _file_name(b[3], b[4])
+]
 
 
 def test_every_block_is_run_or_says_why_not():
-    for line, marker, kind, _ in BLOCKS:
-        if kind == "toml":
+    for doc, line, marker, kind, body in BLOCKS:
+        if kind == "toml" or _file_name(kind, body):
             continue
-        assert marker in ("", "last command") or re.match(r"skip: \S", marker), (line, marker)
-    # the main job, the extension examples, the TOML scenario, the Gym snippet
-    assert len([b for b in BLOCKS if not b[1].startswith("skip") and b[2] != "toml"]) >= 4
+        assert marker in ("", "last command") or re.match(r"skip: \S", marker), (doc, line)
+    # the README: the main job, the extension examples, the TOML scenario, the Gym snippet
+    for doc, least in DOCUMENTS.items():
+        assert len([b for b in RUN if b[0] == doc]) >= least, doc
 
 
 @pytest.fixture(scope="module")
-def workdir(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("readme")
-    (folder / "examples").symlink_to(ROOT / "examples")
-    for _, _, kind, body in BLOCKS:
-        first = body.splitlines()[0]
-        if kind == "toml" and first.startswith("# ") and first.endswith(".toml"):
-            path = folder / first[2:].strip()
-            path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(body)
-    return folder
+def workdirs(tmp_path_factory):
+    folders = {}
+    for doc in DOCUMENTS:
+        folder = tmp_path_factory.mktemp(Path(doc).stem)
+        (folder / "examples").symlink_to(ROOT / "examples")
+        for block_doc, _, _, kind, body in BLOCKS:
+            name = _file_name(kind, body)
+            if block_doc == doc and name:
+                path = folder / name
+                path.parent.mkdir(parents=True, exist_ok=True)
+                path.write_text(body)
+        folders[doc] = folder
+    return folders
 
 
 @pytest.mark.parametrize(
-    ("line", "marker", "kind", "body"),
-    [b for b in BLOCKS if b[2] != "toml" and not b[1].startswith("skip")],
-    ids=lambda v: str(v) if isinstance(v, int) else "",
+    ("doc", "line", "marker", "kind", "body"),
+    RUN,
+    ids=lambda v: str(v) if isinstance(v, int) else (v if v in DOCUMENTS else ""),
 )
-def test_readme_block_runs(workdir, line, marker, kind, body):
+def test_block_runs(workdirs, doc, line, marker, kind, body):
     env = {**os.environ, "PATH": f"{Path(sys.executable).parent}{os.pathsep}{os.environ['PATH']}"}
     env["MPLBACKEND"] = "Agg"
     if kind == "python":
@@ -65,5 +88,7 @@ def test_readme_block_runs(workdir, line, marker, kind, body):
     else:
         script = body.split("&&")[-1].strip() if marker == "last command" else body
         cmd = ["bash", "-e", "-c", script]
-    proc = subprocess.run(cmd, cwd=workdir, env=env, capture_output=True, text=True, timeout=300)
-    assert proc.returncode == 0, f"README line {line}: {proc.stderr[-2000:]}"
+    proc = subprocess.run(
+        cmd, cwd=workdirs[doc], env=env, capture_output=True, text=True, timeout=300
+    )
+    assert proc.returncode == 0, f"{doc} line {line}: {proc.stderr[-2000:]}"

@@ -280,3 +280,40 @@ def test_a_huge_circle_on_a_short_run_costs_what_the_run_covers(tmp_path, capsys
     assert code == 0, err
     line = read_timeseries(out / REFERENCE_FILE)
     assert 2 <= len(line["x"]) <= 20.0 / 0.005 + 2  # MAX_SPEED x 1 s at 5 mm
+
+
+def test_logged_signals_are_columns_nan_where_a_step_logged_none(tmp_path, capsys):
+    path = tmp_path / "logs.py"
+    path.write_text(
+        "from tt_mujoco.controllers import Controller\n"
+        "class Logs(Controller):\n"
+        "    def compute(self, t, m, r):\n"
+        "        if t < 0.5:\n"
+        "            self.log('early', t)\n"
+        "        self.log('v_seen', m.v)\n"
+        "        return 0.5, 0.5\n"
+    )
+    code, out, err = cli(tmp_path, capsys, "--controller", f"{path}:Logs")
+    assert code == 0, err
+    ts = read_timeseries(out / "timeseries.parquet")
+    np.testing.assert_array_equal(ts["ctrl_v_seen"], ts["v_meas"])
+    early = ts["ctrl_early"]
+    np.testing.assert_array_equal(early[ts["t"] < 0.5], ts["t"][ts["t"] < 0.5])
+    assert np.all(np.isnan(early[ts["t"] >= 0.5]))
+
+
+@pytest.mark.parametrize(
+    ("call", "said"),
+    [
+        ("self.log('bad name', 1.0)", "logged a signal named 'bad name'"),
+        ("self.log('x', 'text')", "logged x='text'"),
+    ],
+)
+def test_a_bad_logged_signal_is_named(tmp_path, capsys, call, said):
+    code, out, err = cli(tmp_path, capsys, "--controller", controller(tmp_path, call, 0.0))
+    assert code == 2 and said in err, err
+    assert_nothing_left(out)
+    later = tmp_path / "later"  # another file: a hook's module is imported once per path
+    later.mkdir()
+    code, out, err = cli(later, capsys, "--controller", controller(later, call, 0.2))
+    assert code == 3 and said in err and "t=0.200 s" in err, err

@@ -491,7 +491,8 @@ def write_outputs(
     written.append(out / REFERENCE_FILE)
     ts_file = out / f"timeseries.{timeseries_format}"
     extra = train_columns(result.scenario.plant_params().n_trailers)
-    units = {**UNITS, **{name: unit_of(name) for name in extra}}
+    extra += tuple(name for name in result.timeseries if name.startswith("ctrl_"))
+    units = {**UNITS, **{name: unit_of(name) or "" for name in extra}}
     write_timeseries(ts_file, result.timeseries, (*COLUMNS, *extra), units)
     (out / CHECKPOINT_FILE).unlink(missing_ok=True)  # the complete file replaces it
     written.append(ts_file)

@@ -106,6 +106,9 @@ def run_episode(stepper: Stepper, controller, progress=None, on_step=None) -> tu
             except (Exception, SystemExit) as err:
                 raise usercode.failure(who, ref.t, err) from None
             T_r, T_l = usercode.checked_torques(out, who, ref.t)
+            signals = controller.take_signals()
+            if signals:
+                stepper.record_signals(usercode.checked_signals(signals, who, ref.t))
             if not actuate(T_r, T_l, controller.command):
                 break
             if on_step is not None:

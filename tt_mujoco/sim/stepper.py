@@ -106,6 +106,7 @@ class Stepper:
         self.k = 0
         self.finished = False
         self.stop_details = None  # the traceback of user code that stopped the episode
+        self._signals: dict[str, np.ndarray] = {}  # what the controller logged, by name
         noise_v, noise_w = b.noise_std
         self._noise = (
             rng.standard_normal(2 * (self.steps + 1)).tolist() if noise_v or noise_w else None
@@ -264,6 +265,16 @@ class Stepper:
         self.k = k + 1
         return True
 
+    def record_signals(self, signals: dict[str, float]) -> None:
+        """The controller's logged signals at the current step (columns ``ctrl_<name>`` of
+        the time series, NaN where a step logged none)."""
+        k = self.k
+        for name, value in signals.items():
+            column = self._signals.get(name)
+            if column is None:
+                column = self._signals[name] = np.full(self.steps + 1, np.nan)
+            column[k] = value
+
     def _fold(self) -> None:
         """Move the rows logged as tuples into one block of float arrays.
 
@@ -321,6 +332,10 @@ class Stepper:
             trains = np.empty((0, len(self.train_columns)))
         ts = assemble_columns(measured, logged, self.eta)
         ts.update({name: trains[:, i].copy() for i, name in enumerate(self.train_columns)})
+        n_rows = len(ts["t"])
+        ts.update(
+            {f"ctrl_{name}": column[:n_rows].copy() for name, column in self._signals.items()}
+        )
         n = len(logged)
         if self.scheduler is not None:
             ts["eq_violation"] = ts["beta"] - self.scheduler.eta_series(n) * ts["phi"]

@@ -20,7 +20,13 @@ import numpy as np
 from tt_mujoco.registry import HookError, describe_failure, is_hook, shown
 from tt_mujoco.sim.plant import StopRun
 
-__all__ = ["check_user_code", "checked_disturbance", "checked_torques", "failure"]
+__all__ = [
+    "check_user_code",
+    "checked_disturbance",
+    "checked_signals",
+    "checked_torques",
+    "failure",
+]
 
 
 def failure(who: str, t: float, err: BaseException) -> StopRun:
@@ -57,6 +63,26 @@ def checked_torques(out, who: str, t: float) -> tuple[float, float]:
 def checked_disturbance(out, who: str, t: float) -> tuple[float, float]:
     """``(a_v, a_omega)`` from what a disturbance returned, or a "failed" stop."""
     return _two_numbers(out, who, "a disturbance", t, ("a_v", "a_omega"))
+
+
+def checked_signals(signals: dict, who: str, t: float) -> dict[str, float]:
+    """What a controller logged this step (:meth:`~tt_mujoco.controllers.Controller.log`), as
+    floats, or a "failed" stop naming the bad name or value."""
+    out = {}
+    for name, value in signals.items():
+        if not (isinstance(name, str) and name.isidentifier() and name[:1].isalpha()):
+            raise StopRun(
+                "failed",
+                f"{who} logged a signal named {shown(name)} at t={t:.3f} s: a name is letters, "
+                "digits and _, starting with a letter",
+            )
+        if not isinstance(value, Real):
+            raise StopRun(
+                "failed",
+                f"{who} logged {name}={shown(value)} at t={t:.3f} s: a logged signal is a number",
+            )
+        out[name] = float(value)
+    return out
 
 
 def controller_label(built) -> str:
@@ -102,6 +128,7 @@ def check_user_code(built) -> None:
         else:
             try:
                 checked_torques(out, who, 0.0)
+                checked_signals(controller.take_signals(), who, 0.0)
             except StopRun as stop:
                 raise HookError(stop.message) from None
     if built.disturbance is not None and is_hook(s.disturbance_model):
