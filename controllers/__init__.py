@@ -29,6 +29,7 @@ from tt_mujoco.controllers.base import (
 from tt_mujoco.controllers.fbl import FblController
 from tt_mujoco.controllers.ismc_sta import IsmcStaController
 from tt_mujoco.controllers.pid import PidController
+from tt_mujoco.controllers.stanley import StanleyController
 
 from tt_mujoco.defaults import TORQUE_LIMIT
 from tt_mujoco.registry import Registry
@@ -42,6 +43,7 @@ __all__ = [
     "ModelFn",
     "PidController",
     "Reference",
+    "StanleyController",
     "VelocityController",
     "build_controller",
     "controller_class",
@@ -55,6 +57,7 @@ CONTROLLERS = Registry("controller")
 CONTROLLERS.register("ismc_sta", IsmcStaController)
 CONTROLLERS.register("pid", PidController)
 CONTROLLERS.register("fbl", FblController)
+CONTROLLERS.register("stanley", StanleyController)
 
 
 def controller_class(spec: str) -> type[Controller]:

@@ -184,6 +184,9 @@ class Controller(ABC):
     """
 
     name: ClassVar[str] = "controller"
+    #: Whether the controller drives the path backwards too (``--reverse``); a run that
+    #: reverses with one that does not is refused before it starts.
+    REVERSE: ClassVar[bool] = True
     PRESETS: ClassVar[dict[str, dict[str, float]]] = {"default": {}}
     DEFAULT_PRESET: ClassVar[str] = "default"
     #: The last unsaturated torque request (T_r, T_l), for logging; None: what compute returned.

@@ -166,6 +166,11 @@ def build(scenario: Scenario) -> Build:
         path=path,
     )
     cls = controller_class(scenario.controller)
+    if scenario.reverse and not getattr(cls, "REVERSE", True):
+        raise ValueError(
+            f"controller={scenario.controller!r} with reverse=True is not allowed: it tracks the "
+            "path driving forward only (use ismc_sta, pid or fbl to back up)"
+        )
     result = Build(
         scenario=scenario,
         nominal=nominal,
