@@ -57,8 +57,8 @@ from tt_mujoco.progress import progress_bar
 from tt_mujoco.sim import COLUMNS, DISTURBANCE_MODES, PLANTS, TARGETS, Scenario, build
 from tt_mujoco.sim.checkpoint import read_checkpoint
 from tt_mujoco.sim.faults import RECOVERY_S, parse_fault
+from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sim.timeseries import UNITS, train_columns, unit_of
-from tt_mujoco.sim.usercode import check_user_code
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.viz import plots as plots_mod

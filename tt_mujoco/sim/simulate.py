@@ -19,6 +19,7 @@ from tt_mujoco.sim import compiled, usercode
 from tt_mujoco.sim import faults as faults_mod
 from tt_mujoco.sim.build import Build, build
 from tt_mujoco.sim.plant import StopRun
+from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sim.scenario import Scenario
 from tt_mujoco.sim.stepper import Stepper
 
@@ -130,7 +131,7 @@ def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint
     scenario : Scenario or Build
         A scenario, or the :class:`~tt_mujoco.sim.build.Build` of one (a caller that built it
         to check its input first, as the CLI does, need not build it again; such a caller
-        also calls :func:`tt_mujoco.sim.usercode.check_user_code` on it first).
+        also calls :func:`tt_mujoco.sim.probe.check_user_code` on it first).
     progress : callable, optional
         Called as ``progress(steps_done, steps_total)`` about every 1 % of the run.
     on_step : callable, optional
@@ -153,7 +154,7 @@ def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint
         built = scenario
     else:
         built = build(scenario)
-        usercode.check_user_code(built)
+        check_user_code(built)
     stepper = Stepper(built)
     stepper.reset(np.random.default_rng(built.scenario.seed), checkpoint=checkpoint)
     controller = built.new_controller()

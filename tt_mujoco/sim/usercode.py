@@ -1,12 +1,12 @@
-"""User code is a boundary: a user's controller or disturbance is called through here.
+"""User code is a boundary: what a user's controller or disturbance does is checked here.
 
-Before the run, :func:`check_user_code` builds a hooked controller, resets it and asks it once
-for torques on the initial state, and calls a hooked disturbance at ``t = 0``: what fails there
-is bad input (:class:`tt_mujoco.registry.HookError`, exit code 2), before any output exists.
 During the run, :func:`failure` turns what the user's code raised (``SystemExit`` included) into
-a :class:`~tt_mujoco.sim.plant.StopRun` with status ``"failed"``, and :func:`checked_torques` /
-:func:`checked_disturbance` refuse what it returned if it is not two finite numbers: the run
-then stops there, its rows so far kept (exit code 3), the traceback in its ``details``.
+a :class:`~tt_mujoco.sim.plant.StopRun` with status ``"failed"``, and :func:`checked_torques`,
+:func:`checked_disturbance` and :func:`checked_signals` refuse what it returned or logged if it
+is not numbers (two finite ones for torques): the run then stops there, its rows so far kept
+(exit code 3), the traceback in its ``details``. Before the run,
+:func:`tt_mujoco.sim.probe.check_user_code` makes the same checks on the initial state, where a
+failure is bad input (exit code 2).
 """
 
 from __future__ import annotations
@@ -15,13 +15,10 @@ import math
 import traceback
 from numbers import Real
 
-import numpy as np
-
-from tt_mujoco.registry import HookError, describe_failure, is_hook, shown
+from tt_mujoco.registry import describe_failure, shown
 from tt_mujoco.sim.plant import StopRun
 
 __all__ = [
-    "check_user_code",
     "checked_disturbance",
     "checked_signals",
     "checked_torques",
@@ -91,51 +88,3 @@ def controller_label(built) -> str:
 
 def disturbance_label(built) -> str:
     return f"disturbance {built.scenario.disturbance_model!r}"
-
-
-def check_user_code(built) -> None:
-    """Build, reset and call once the scenario's hooked controller, and call its hooked
-    disturbance at t = 0, on throwaway copies of the run's state.
-
-    Raises
-    ------
-    HookError
-        What failed, with the hook, the file and line, and what was wrong.
-    """
-    from tt_mujoco.sim.stepper import Stepper
-
-    s = built.scenario
-    if is_hook(s.controller):
-        who = controller_label(built)
-        try:
-            controller = built.new_controller()
-            controller.reset()
-            _ = controller.gains, controller.name  # what the run's record reads at its end
-        except (Exception, SystemExit) as err:
-            hint = ""
-            if isinstance(err, AttributeError):
-                hint = " (does its __init__ call super().__init__(setup, gains)?)"
-            raise HookError(f"{who} cannot be built: {describe_failure(err)}{hint}") from None
-        probe = Stepper(built)
-        probe.reset(np.random.default_rng(0))
-        try:
-            me, ref = probe.sense()
-            out = controller.compute(ref.t, me, ref)
-        except StopRun:
-            pass  # the initial state itself stops the run: the run will say so
-        except (Exception, SystemExit) as err:
-            raise HookError(f"{who} fails on the initial state: {describe_failure(err)}") from None
-        else:
-            try:
-                checked_torques(out, who, 0.0)
-                checked_signals(controller.take_signals(), who, 0.0)
-            except StopRun as stop:
-                raise HookError(stop.message) from None
-    if built.disturbance is not None and is_hook(s.disturbance_model):
-        who = disturbance_label(built)
-        try:
-            checked_disturbance(built.disturbance(0.0), who, 0.0)
-        except StopRun as stop:
-            raise HookError(stop.message) from None
-        except (Exception, SystemExit) as err:
-            raise HookError(f"{who} fails at t=0: {describe_failure(err)}") from None

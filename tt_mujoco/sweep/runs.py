@@ -16,7 +16,7 @@ from tt_mujoco.controllers import controller_class
 from tt_mujoco.controllers.base import resolve_gains
 from tt_mujoco.registry import is_hook
 from tt_mujoco.sim import Scenario, build, simulate
-from tt_mujoco.sim.usercode import check_user_code
+from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sweep.options import (
     DICT_OPTIONS,
     LIST_OPTIONS,
