@@ -4,8 +4,9 @@ its examples).
 A block is run unless an HTML comment right above it says ``readme-test: skip: REASON``;
 ``readme-test: last command`` runs only the last ``&&`` part (the install is CI's own step). A
 TOML or Python block whose first line is ``# path/file.toml`` (``.py``) is written to that path
-first instead of being run. Everything runs in a fresh folder per document with the
-repository's ``examples/``, so nothing lands in the checkout.
+first instead of being run (or, for a file the repository ships, must equal it). Everything runs
+in a fresh folder per document with the repository's ``examples/``, so nothing lands in the
+checkout.
 """
 
 import os
@@ -49,6 +50,17 @@ RUN = [
 ]
 
 
+def test_a_file_block_of_a_shipped_file_is_that_file():
+    # A block headed by a file the repository ships (examples/icy_circle.toml) is shown as it
+    # is, so the commands beside it work as printed from a checkout.
+    shipped = [(doc, line, _file_name(kind, body), body) for doc, line, _, kind, body in BLOCKS]
+    shipped = [(doc, line, name, body) for doc, line, name, body in shipped if name]
+    shipped = [b for b in shipped if (ROOT / b[2]).exists()]
+    assert shipped, "the README shows examples/icy_circle.toml"
+    for doc, line, name, body in shipped:
+        assert (ROOT / name).read_text() == body, f"{doc} line {line}: {name} differs"
+
+
 def test_every_block_is_run_or_says_why_not():
     for doc, line, marker, kind, body in BLOCKS:
         if kind == "toml" or _file_name(kind, body):
@@ -67,7 +79,7 @@ def workdirs(tmp_path_factory):
         (folder / "examples").symlink_to(ROOT / "examples")
         for block_doc, _, _, kind, body in BLOCKS:
             name = _file_name(kind, body)
-            if block_doc == doc and name:
+            if block_doc == doc and name and not (ROOT / name).exists():
                 path = folder / name
                 path.parent.mkdir(parents=True, exist_ok=True)
                 path.write_text(body)
