@@ -78,6 +78,31 @@ def test_jackknife_terminates_with_a_penalty_worse_than_any_tracking():
     assert reward <= -1.0
 
 
+def _drive_with_ismc_sta(scenario) -> list[dict]:
+    """The observations of an episode of ``scenario`` driven through the env by the ISMC-STA
+    law on the nominal model (a train's model takes every hitch angle), as dicts by name."""
+    env = gym_env.TractorTrailerEnv(scenario)
+    nominal = scenario.nominal_params()
+    ctrl = make_controller("ismc_sta", reduced_model(nominal), torque_limit=nominal.torque_limit)
+    ctrl.reset()
+    names = env.observation_names
+    hitches = ["phi", *(f"phi_{k}" for k in range(2, env.n_trailers + 1))]
+    obs, info = env.reset(seed=scenario.seed)  # same noise stream as simulate's default_rng
+    rows = []
+    while True:
+        o = dict(zip(names, obs, strict=True))
+        rows.append(o)
+        phi = o["phi"] if env.n_trailers == 1 else tuple(o[h] for h in hitches)
+        torques = ctrl.step(
+            env.dt, phi, o["v"], o["omega"], o["v_d"], o["omega_d"],
+            info["v_d_dot"], info["omega_d_dot"],
+        )  # fmt: skip
+        obs, _, terminated, truncated, info = env.step(np.array(torques))
+        if terminated or truncated:
+            rows.append(dict(zip(names, obs, strict=True)))
+            return rows
+
+
 @pytest.mark.parametrize(
     "extra",
     [
@@ -97,27 +122,8 @@ def test_env_is_the_simulate_plant(extra):
     )
     scenario = dataclasses.replace(scenario, **extra)
     reference = simulate(scenario).timeseries
-    env = gym_env.TractorTrailerEnv(scenario)
-    nominal = scenario.nominal_params()
-    ctrl = make_controller("ismc_sta", reduced_model(nominal), torque_limit=nominal.torque_limit)
-    ctrl.reset()
-    names = gym_env.OBSERVATION_NAMES
-    obs, info = env.reset(seed=scenario.seed)  # same noise stream as simulate's default_rng
-    xs, vs = [], []
-    while True:
-        o = dict(zip(names, obs, strict=True))
-        xs.append(o["x"])
-        vs.append(o["v"])
-        torques = ctrl.step(
-            env.dt, o["phi"], o["v"], o["omega"], o["v_d"], o["omega_d"],
-            info["v_d_dot"], info["omega_d_dot"],
-        )  # fmt: skip
-        obs, _, terminated, truncated, info = env.step(np.array(torques))
-        if terminated or truncated:
-            o = dict(zip(names, obs, strict=True))
-            xs.append(o["x"])
-            vs.append(o["v"])
-            break
+    rows = _drive_with_ismc_sta(scenario)
+    xs, vs = [r["x"] for r in rows], [r["v"] for r in rows]
     assert len(xs) == len(reference["t"])
     assert np.array_equal(np.array(xs), reference["x"])
     assert np.array_equal(np.array(vs), reference["v_meas"])  # noisy v, bit for bit
@@ -183,25 +189,7 @@ def test_a_train_driven_through_the_env_is_simulate_bit_for_bit(plant):
         noise_snr_db=20.0, seed=4, plant=plant,
     )  # fmt: skip
     reference = simulate(scenario).timeseries
-    env = gym_env.TractorTrailerEnv(scenario)
-    nominal = scenario.nominal_params()
-    ctrl = make_controller("ismc_sta", reduced_model(nominal), torque_limit=nominal.torque_limit)
-    ctrl.reset()
-    names = env.observation_names
-    obs, info = env.reset(seed=scenario.seed)
-    rows = []
-    while True:
-        o = dict(zip(names, obs, strict=True))
-        rows.append(o)
-        phis = (o["phi"], o["phi_2"], o["phi_3"])
-        torques = ctrl.step(
-            env.dt, phis, o["v"], o["omega"], o["v_d"], o["omega_d"],
-            info["v_d_dot"], info["omega_d_dot"],
-        )  # fmt: skip
-        obs, _, terminated, truncated, info = env.step(np.array(torques))
-        if terminated or truncated:
-            rows.append(dict(zip(names, obs, strict=True)))
-            break
+    rows = _drive_with_ismc_sta(scenario)
     assert len(rows) == len(reference["t"])
     for name in ("x", "y", "phi", "phi_2", "phi_3", "beta_3", "x0_3", "v0_2"):
         assert np.array_equal([r[name] for r in rows], reference[name]), name
