@@ -403,12 +403,12 @@ def test_render_draws_the_runs_own_path_after_its_csv_file_changed(tmp_path, cap
     path, out = _csv_run(tmp_path)
     kept = read_timeseries(out / REFERENCE_FILE)
     path.write_text("x,y\n0,0\n1,1\n2,0\n3,1\n")
-    polyline, source = render.reference_polyline_for({}, {}, out)
+    polyline, source = render.reference_polyline_for({}, out)
     assert source == f"the run's own {REFERENCE_FILE}"
     np.testing.assert_array_equal(polyline[:, 0], kept["x"])
     assert polyline[-1, 0] == pytest.approx(3.0, abs=0.05)  # the old path's end, x = 3 m
     path.unlink()
-    assert render.reference_polyline_for({}, {}, out)[1] == source
+    assert render.reference_polyline_for({}, out)[1] == source
 
 
 def test_render_refuses_plant_params_edited_off_the_recorded_trace(tmp_path, capsys):

@@ -165,7 +165,7 @@ def compare(folders: list[Path], out: Path | None, allow_different_paths: bool) 
         )
     _, rows = metrics_table(runs)
     try:
-        reference = reference_polyline_for(runs[0].config, runs[0].timeseries, runs[0].folder)[0]
+        reference = reference_polyline_for(runs[0].timeseries, runs[0].folder)[0]
     except ValueError as err:
         if (runs[0].folder / REFERENCE_FILE).exists():  # the run's own copy, edited or broken
             raise BadInputError(f"{runs[0].folder / REFERENCE_FILE}: {err}") from None

@@ -87,7 +87,7 @@ def main(argv: list[str] | None = None) -> int:
         problem = check_trace(params, ts)
         if problem:
             return fail(f"{metrics_path}: {problem}")
-        polyline, source = reference_polyline_for(config, ts, run_dir)
+        polyline, source = reference_polyline_for(ts, run_dir)
         print(f"reference path: {source}", file=sys.stderr)
         info, outcome = run_labels(
             config.get("scenario", {}), doc.get("status"), str(doc.get("message", ""))

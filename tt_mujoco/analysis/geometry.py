@@ -281,8 +281,8 @@ class Polyline:
         if segment_first is not None:
             # A short window is searched directly: the tree holds the whole path, whose other
             # laps crowd out the window's candidates.
-            spans = (np.minimum(limit - 1, n_seg - 1) // _CHUNK) - first // _CHUNK + 1
-            direct = pending[spans[pending] <= _WINDOW_CHUNKS]
+            lo_chunk, hi_chunk = self._window_chunks(limit, first)
+            direct = pending[hi_chunk[pending] - lo_chunk[pending] <= _WINDOW_CHUNKS]
             if direct.size:
                 self._chunk_search(pts, direct, limit, extend_ends, best, first)
                 pending = np.setdiff1d(pending, direct, assume_unique=True)
@@ -420,6 +420,10 @@ class Polyline:
                     first[idx[point]],
                 )
 
+    def _window_chunks(self, limit, first) -> tuple[np.ndarray, np.ndarray]:
+        """The chunks ``[lo, hi)`` that hold segments ``first`` to ``limit - 1``."""
+        return first // _CHUNK, np.minimum((limit - 1) // _CHUNK, self._chunk_first.size - 1) + 1
+
     def _chunk_pairs(self, p, limit, first, d2) -> tuple[np.ndarray, np.ndarray]:
         """``(point, chunk)`` pairs, point-major with chunks ascending, of the chunks that may
         hold each point's nearest usable segment: inside its window and its lower bound
@@ -431,10 +435,8 @@ class Polyline:
         outside it) takes the nearest of its window's chunk starts: a true distance to a
         usable segment, so the pruning keeps the same nearest point and far fewer chunks.
         """
-        n_chunks = self._chunk_first.size
         upper = np.sqrt(d2)
-        lo_chunk = first // _CHUNK
-        hi_chunk = np.minimum((limit - 1) // _CHUNK, n_chunks - 1) + 1
+        lo_chunk, hi_chunk = self._window_chunks(limit, first)
         spans = np.maximum(hi_chunk - lo_chunk, 0)
         short = (spans <= _WINDOW_CHUNKS) | ~np.isfinite(upper)
         points, chunks = [], []

@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from tt_mujoco.defaults import MAX_SPEED
+from tt_mujoco.outputs import atomic_write
 
 __all__ = ["kernel", "ready", "run_compiled", "source_digest", "unsupported"]
 
@@ -156,9 +157,7 @@ def _write_manifest(compiled_here: bool = False) -> None:
     if (cache / MANIFEST).exists() and not compiled_here:
         return
     try:
-        tmp = cache / f".manifest-{os.getpid()}.tmp"
-        tmp.write_text(json.dumps(_cache_files(cache), indent=1))
-        os.replace(tmp, cache / MANIFEST)
+        atomic_write(cache / MANIFEST, json.dumps(_cache_files(cache), indent=1))
     except OSError:
         pass  # a read-only cache: the next run checks it again
 
@@ -250,10 +249,8 @@ def kernel():
         try:
             cache.mkdir(parents=True, exist_ok=True)
             copy = cache / "_kernel.py"
-            if not copy.is_file():
-                tmp = cache / f".kernel-{os.getpid()}.tmp"
-                tmp.write_bytes(source.read_bytes())
-                os.replace(tmp, copy)  # atomic: a concurrent reader sees all of it or none
+            if not copy.is_file():  # atomic: a concurrent reader sees all of it or none
+                atomic_write(copy, source.read_bytes())
             numba.config.CACHE_DIR = str(cache)
         except OSError:
             copy = source  # no cache: compiled in memory, every process

@@ -180,16 +180,12 @@ def run_sweep(
     runs = expand(spec, validate=False)
     # Every run still to do goes through the setup path before any work; a resumed sweep's
     # finished runs are not checked again (a file they read may be gone by now).
-    finished = read_journal(out / JOURNAL) if resume and not out.is_symlink() else {}
-    if retry_errors:
-        finished = {k: r for k, r in finished.items() if r.get("status") != "error"}
+    finished = _finished(out / JOURNAL, retry_errors) if resume and not out.is_symlink() else {}
     validate_runs([r for r in runs if r["run_id"] not in finished])
     prepare_out(out, resume)
     with _lock(out):
         journal_path = out / JOURNAL
-        done = read_journal(journal_path)
-        if retry_errors:
-            done = {k: r for k, r in done.items() if r.get("status") != "error"}
+        done = _finished(journal_path, retry_errors)
         # Rewrite the journal without a line cut by a kill, so appends start on a fresh line.
         if journal_path.exists():
             atomic_write(journal_path, "".join(_json_line(r) for r in done.values()))
@@ -217,6 +213,14 @@ def run_sweep(
                 metric = "rmse_lateral"
             files += plot_summary(rows, spec, out, metric)
     return SweepResult(out, header, rows, summary, reused, time.perf_counter() - t0, files)
+
+
+def _finished(journal_path: Path, retry_errors: bool) -> dict[str, dict]:
+    """The journal's finished runs by id, less those that raised when they run again."""
+    done = read_journal(journal_path)
+    if retry_errors:
+        done = {k: r for k, r in done.items() if r.get("status") != "error"}
+    return done
 
 
 def _worker_count(workers: int, runs: int, scheduler: str | None) -> int:

@@ -272,7 +272,9 @@ def run_one(options: Mapping) -> dict:
     start = time.perf_counter()
     try:
         config = scenario_columns(options)  # while every file the run reads is there
-        result = simulate(build_scenario(options))
+        # A Build: its user code was tried on the initial state by validate_runs, once per
+        # configuration, before the sweep started; simulate(Scenario) would try it again.
+        result = simulate(build(build_scenario(options)))
         metrics = _flatten_metrics({k: v for k, v in result.metrics.items() if k != "status"})
         out = {"status": result.status, "message": result.message, "error": "", "metrics": metrics}
         out["config"] = config

@@ -52,18 +52,12 @@ def _config_of(run: Mapping, record: Mapping) -> dict:
     """A row's configuration: as the run's journal record kept it, else resolved now, else
     (a file the run read is gone) the options as given."""
     kept = record.get("config")
-    if isinstance(kept, dict) and kept:
-        return {
-            "index": run["index"],
-            "run_id": run["run_id"],
-            "replicate": run["replicate"],
-            **kept,
-        }
-    try:
-        return config_columns(run)
-    except (ValueError, OSError):
-        ids = {"index": run["index"], "run_id": run["run_id"], "replicate": run["replicate"]}
-        return {**ids, **run["options"]}
+    if not (isinstance(kept, dict) and kept):
+        try:
+            return config_columns(run)
+        except (ValueError, OSError):
+            kept = run["options"]
+    return {"index": run["index"], "run_id": run["run_id"], "replicate": run["replicate"], **kept}
 
 
 def build_rows(runs: Sequence[dict], done: Mapping[str, dict]) -> tuple[list[str], list[dict]]:

@@ -606,7 +606,7 @@ def params_from_config(params: Mapping) -> Params:
     return Params(**{k: v for k, v in params.items() if k in init})
 
 
-def reference_polyline_for(config: Mapping, ts: Mapping, run_dir=None) -> tuple[np.ndarray, str]:
+def reference_polyline_for(ts: Mapping, run_dir=None) -> tuple[np.ndarray, str]:
     """A finished run's reference path, from what the run kept: its ``reference_path.parquet``
     (written by every run), else the recorded reference point ``(x_ref, y_ref)``. A path file
     the run was given (a CSV path) is never read again: it may have changed since.
