@@ -157,7 +157,7 @@ def test_cli_steering_and_feedback_options_reach_the_scenario(tmp_path):
     assert code == 0
     doc = json.loads((out / "metrics.json").read_text())
     scenario = doc["config"]["scenario"]
-    assert scenario["eta_schedule"] is True
+    assert scenario["eta_schedule"] == "curvature"
     assert scenario["path_feedback"] == {}
     assert scenario["reverse"] is False
     # The scheduled gain at kappa = 1 is the exact same-path gain, not the constant -1/7.

@@ -66,7 +66,7 @@ def test_a_jackknife_of_a_trailer_behind_the_first_stops_the_run():
     )
     result = simulate(scenario)
     assert result.status == "jackknife"
-    assert "jackknife of trailer 2" in result.message
+    assert "jackknife at t=" in result.message and "hitch 2:" in result.message
     assert len(result.timeseries["phi_2"]) == result.metrics["steps"]
 
 

@@ -79,6 +79,8 @@ PARAM_NAMES = tuple(
 STAGING = ".partial-"
 #: Formats of the time-series file (``timeseries.<format>``).
 TIMESERIES_FORMATS = ("parquet", "csv")
+#: ``--eta`` words that schedule the plant's gain (Scenario.eta_schedule) on the same_path model.
+ETA_OPTION_SCHEDULES = {"scheduled": "curvature", "path": "path"}
 #: The rows of a run in progress (raw logged columns), removed once the time series is written.
 CHECKPOINT_FILE = "timeseries.partial.arrows"
 #: The traceback of the user's code that stopped a run (status "failed").
@@ -179,7 +181,8 @@ def build_parser() -> argparse.ArgumentParser:
         default="same_path",
         help="passive steering gain: paper (3, jackknifes forward), same_path "
         "((L-L0)/(L+L0) = -1/7), scheduled (the exact same-path gain for the local "
-        "curvature, updated every step), or a number",
+        "curvature, updated every step), path (each trailer's gain eta_k(s) from the path's "
+        "geometry, at its own arc length; |eta| <= 3), or a number",
     )
     g.add_argument(
         "--reverse",
@@ -410,9 +413,11 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
     if traj.lower().endswith(".csv"):
         traj = str(Path(traj))
     eta = args.eta
-    eta_schedule = isinstance(eta, str) and eta.strip().lower() == "scheduled"
+    eta_schedule = ETA_OPTION_SCHEDULES.get(eta.strip().lower()) if isinstance(eta, str) else None
     if eta_schedule:
-        eta = "same_path"  # the nominal model's gain; the plant's follows the curvature
+        eta = "same_path"  # the nominal model's gain; the plant's follows the schedule
+    else:
+        eta_schedule = False
     try:
         eta = float(eta)
     except ValueError:

@@ -25,8 +25,9 @@ from tt_mujoco.sim.faults import FaultSchedule, parse_faults
 from tt_mujoco.sim.plant import Plant
 from tt_mujoco.sim.plant_reduced import ReducedPlant
 from tt_mujoco.sim.scenario import Scenario
-from tt_mujoco.sim.schedule import EtaScheduler
+from tt_mujoco.sim.schedule import EtaScheduler, PathEtaScheduler
 from tt_mujoco.vehicle.params import Params
+from tt_mujoco.vehicle.path_schedule import PathSchedule, path_schedule
 
 __all__ = ["Build", "build", "noise_std"]
 
@@ -75,6 +76,10 @@ class Build:
     controller_class: type[Controller]
     controller_setup: ControllerSetup
     extra_metrics: dict
+    #: The tabulated path schedule (``eta_schedule="path"``), else None.
+    path_schedule: PathSchedule | None = None
+    #: The path's arc length where the tractor starts (its end when reversing).
+    start_s: float = 0.0
 
     def new_plant(self, phi0_deg: float | None = None) -> Plant:
         """A fresh plant in the initial state (``phi0_deg`` overrides the scenario's)."""
@@ -92,7 +97,11 @@ class Build:
         return FaultSchedule(specs, self.control_dt, self.duration) if specs else None
 
     def new_scheduler(self, plant: Plant) -> EtaScheduler | None:
-        return EtaScheduler(plant, self.plant_params) if self.scenario.eta_schedule else None
+        """The scheduler of the scenario's ``eta_schedule`` on ``plant``, or None."""
+        kind = self.scenario.eta_schedule_kind
+        if kind == "path":
+            return PathEtaScheduler(plant, self.plant_params, self.path_schedule, self.start_s)
+        return EtaScheduler(plant, self.plant_params) if kind == "curvature" else None
 
     def new_controller(self) -> Controller:
         return self.controller_class.from_setup(self.controller_setup, self.scenario.gains)
@@ -144,9 +153,11 @@ def build(scenario: Scenario) -> Build:
     )
     duration = float(target.duration)
     _check_size(scenario, duration)
+    start_s = 0.0
     if scenario.reverse:
         target = ReverseTarget(target)
         pose = target.initial_pose
+        start_s = target.s_end
     if scenario.path_feedback is not None:
         target = PathFeedback.from_config(target, scenario.path_feedback)
     dt = scenario.control_dt
@@ -191,6 +202,12 @@ def build(scenario: Scenario) -> Build:
         controller_class=cls,
         controller_setup=setup,
         extra_metrics=resolve_metrics(scenario.metrics),
+        path_schedule=(
+            path_schedule(path, [(t.L, t.L0) for t in plant_p.trailers])
+            if scenario.eta_schedule_kind == "path"
+            else None
+        ),
+        start_s=start_s,
     )
     result.new_faults()  # a fault after the end of the run is refused now
     result.new_controller()  # bad gains fail before any work

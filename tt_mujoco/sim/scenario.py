@@ -16,11 +16,20 @@ from tt_mujoco.reference.feedback import check_config
 from tt_mujoco.sim.faults import parse_faults
 from tt_mujoco.vehicle.params import INERTIA_FIELDS, MASS_FIELDS, Params
 
-__all__ = ["DISTURBANCE_MODES", "PLANTS", "TARGETS", "Scenario", "jackknife_phi_deg"]
+__all__ = [
+    "DISTURBANCE_MODES",
+    "ETA_SCHEDULES",
+    "PLANTS",
+    "TARGETS",
+    "Scenario",
+    "jackknife_phi_deg",
+]
 
 PLANTS = ("mujoco", "reduced")
 TARGETS = ("dynamic", "static")
 DISTURBANCE_MODES = ("matched", "wrench", "none")
+#: What ``Scenario.eta_schedule`` may name besides False / True.
+ETA_SCHEDULES = ("curvature", "path")
 
 
 def jackknife_phi_deg(eta: float) -> float:
@@ -72,10 +81,11 @@ class Scenario:
     #: dict
     #: of gains, ``{}`` for the defaults (k_y, k_psi, c_max).
     path_feedback: dict | None = None
-    #: Curvature-scheduled steering (:class:`tt_mujoco.sim.schedule.EtaScheduler`): the
-    #: plant's eta follows the exact same-path gain of the target's curvature; the controller
-    #: keeps ``eta``.
-    eta_schedule: bool = False
+    #: Scheduled passive steering (:mod:`tt_mujoco.sim.schedule`): False (the constant ``eta``),
+    #: ``"curvature"`` (or True: the exact same-path gain of the target's curvature) or
+    #: ``"path"`` (each trailer's gain eta_k(s) from the path's geometry at its own arc length,
+    #: :mod:`tt_mujoco.vehicle.path_schedule`). The controller keeps ``eta``.
+    eta_schedule: bool | str = False
     #: Drive the path backwards, trailer first
     #: (:class:`tt_mujoco.reference.reverse.ReverseTarget`).
     reverse: bool = False
@@ -94,6 +104,13 @@ class Scenario:
     #: with status "failed" and its rows so far kept. Enforced where the run is in a
     #: process's main thread (the CLI, a sweep's process workers), by SIGALRM.
     time_limit_s: float = TIME_LIMIT_S
+
+    @property
+    def eta_schedule_kind(self) -> str | None:
+        """None (constant eta), ``"curvature"`` or ``"path"``."""
+        if self.eta_schedule is True:
+            return "curvature"
+        return self.eta_schedule or None
 
     def validate(self) -> None:
         """Raise ValueError naming the first bad field and what is allowed."""
@@ -167,10 +184,13 @@ class Scenario:
             )
         if not isinstance(self.seed, int) or isinstance(self.seed, bool) or self.seed < 0:
             raise ValueError(f"seed={self.seed!r} is not allowed: it must be an integer >= 0")
-        for name in ("eta_schedule", "reverse"):
-            value = getattr(self, name)
-            if not isinstance(value, bool):
-                raise ValueError(f"{name}={value!r} is not allowed: use True or False")
+        if not isinstance(self.reverse, bool):
+            raise ValueError(f"reverse={self.reverse!r} is not allowed: use True or False")
+        if not isinstance(self.eta_schedule, bool) and self.eta_schedule not in ETA_SCHEDULES:
+            raise ValueError(
+                f"eta_schedule={self.eta_schedule!r} is not allowed: use False, True "
+                f"(curvature) or one of {ETA_SCHEDULES}"
+            )
         for name in ("params", "plant_scale", "path_options"):
             if not isinstance(getattr(self, name), dict):
                 raise ValueError(f"{name}={getattr(self, name)!r} is not allowed: give a table")

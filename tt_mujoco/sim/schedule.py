@@ -1,4 +1,5 @@
-"""Curvature-scheduled passive steering on a running plant."""
+"""Scheduled passive steering on a running plant: by the target's curvature
+(:class:`EtaScheduler`) or by each trailer's place on the path (:class:`PathEtaScheduler`)."""
 
 from __future__ import annotations
 
@@ -8,13 +9,14 @@ import numpy as np
 
 from tt_mujoco.sim.plant import Plant
 from tt_mujoco.vehicle.params import Params
+from tt_mujoco.vehicle.path_schedule import PathSchedule
 from tt_mujoco.vehicle.steering import (
     SCHEDULE_TOLERANCE,
     exact_same_path_eta,
     exact_train_same_path_etas,
 )
 
-__all__ = ["EtaScheduler"]
+__all__ = ["EtaScheduler", "PathEtaScheduler"]
 
 
 class EtaScheduler:
@@ -57,10 +59,11 @@ class EtaScheduler:
             )
         self._plant = plant
 
-    def update(self, kappa: float, step: int = 0) -> float:
+    def update(self, kappa: float, step: int = 0, measurement=None) -> float:
         """Schedule eta for curvature ``kappa`` (1/m) before the step after sample ``step``.
 
         Returns the eta now in force (it governs the plant from sample ``step + 1`` on).
+        ``measurement`` is not used (:class:`PathEtaScheduler` takes the same arguments).
         """
         if kappa == self._kappa:  # arcs: constant curvature, nothing to recompute
             return self.eta
@@ -69,10 +72,14 @@ class EtaScheduler:
             etas = tuple(exact_train_same_path_etas(kappa, self.lengths))
         else:
             etas = (exact_same_path_eta(kappa, self.L, self.L0),)
+        self._offer(etas, step)
+        return self.eta
+
+    def _offer(self, etas: tuple, step: int) -> None:
+        """Apply ``etas`` if any moved by more than the tolerance."""
         if max(abs(a - b) for a, b in zip(etas, self.etas, strict=True)) > self.tolerance:
             self._apply(etas)
             self._changes.append((step + 1, self.eta))
-        return self.eta
 
     def eta_series(self, n: int) -> np.ndarray:
         """The eta in force at each of ``n`` logged samples (for ``beta - eta phi``)."""
@@ -87,3 +94,69 @@ class EtaScheduler:
         self._plant.set_etas(etas)
         self.etas, self.eta = etas, etas[0]
         self.updates += 1
+
+
+class PathEtaScheduler(EtaScheduler):
+    """Path-scheduled passive steering: trailer k's gain is the path schedule's eta_k at its
+    own axle's arc length (:mod:`tt_mujoco.vehicle.path_schedule`, docs/model.md Section 13).
+
+    Parameters
+    ----------
+    plant : tt_mujoco.sim.plant.Plant
+        The running plant.
+    params : Params
+        The plant's parameters.
+    schedule : PathSchedule
+        The tabulated schedule of the scenario's path and train.
+    start_s : float
+        The tractor's arc length at the start (the path's end when reversing): each axle's
+        projection starts from the schedule's place for it there.
+    tolerance : float
+        As :class:`EtaScheduler`.
+
+    Notes
+    -----
+    Each step projects every axle onto the path (Newton steps from its previous arc length)
+    and looks its gain up there, so a trailer that is off its schedule gets the gain of where
+    it is, not of where the tractor is. The plant starts on the gains of where its axles
+    stand (before the first step).
+    """
+
+    def __init__(
+        self,
+        plant,
+        params: Params,
+        schedule: PathSchedule,
+        start_s: float = 0.0,
+        tolerance: float = SCHEDULE_TOLERANCE,
+    ):
+        super().__init__(plant, params, tolerance)
+        if schedule.n_trailers != len(self.lengths):
+            raise ValueError(
+                f"schedule for {schedule.n_trailers} trailers is not allowed: the plant has "
+                f"{len(self.lengths)}"
+            )
+        self.schedule = schedule
+        self.arc_lengths = schedule.arc_lengths_at(start_s)
+        for k, (x, y) in enumerate(_axle_positions(plant.measure())):
+            self.arc_lengths[k] = schedule.project(self.arc_lengths[k], x, y)
+        start = tuple(schedule.eta(k, s) for k, s in enumerate(self.arc_lengths))
+        self._apply(start)
+        self._changes = [(0, self.eta)]
+
+    def update(self, kappa: float, step: int = 0, measurement=None) -> float:
+        """Schedule every trailer's gain from where its axle is in ``measurement``
+        (:class:`~tt_mujoco.sim.measure.Measurement`); ``kappa`` is not used."""
+        schedule = self.schedule
+        arcs = self.arc_lengths
+        etas = []
+        for k, (x, y) in enumerate(_axle_positions(measurement)):
+            arcs[k] = schedule.project(arcs[k], x, y)
+            etas.append(schedule.eta(k, arcs[k]))
+        self._offer(tuple(etas), step)
+        return self.eta
+
+
+def _axle_positions(me) -> list[tuple[float, float]]:
+    """Every trailer's axle midpoint (x, y) in a measurement, trailer 1 first."""
+    return [(me.x0, me.y0), *((row[0], row[1]) for row in getattr(me, "train", ()))]

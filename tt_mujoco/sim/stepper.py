@@ -44,11 +44,27 @@ def blew_up_message(t: float, v: float) -> str:
     return f"state blew up at t={t:.3f} s: v={v!r}"
 
 
-def jackknife_message(t, phi, beta, eta, x, y, v) -> str:
+def jackknife_message(t, phi, beta, eta, x, y, v, hitch: int = 1) -> str:
+    """Which limit the hitch reached, and why it is one."""
+    phi_deg, beta_deg = math.degrees(phi), math.degrees(beta)
+    if abs(beta_deg) >= JACKKNIFE_DEG:
+        why = (
+            f"|beta| = {abs(beta_deg):.1f} deg reached {JACKKNIFE_DEG:g} deg: the steered axle "
+            f"nears 90 deg, where it would roll across the trailer (phi={phi_deg:.1f} deg)"
+        )
+    else:
+        limit = jackknife_phi_deg(eta)
+        reason = (
+            "the trailer stands across the tractor"
+            if limit >= 90.0
+            else f"with eta={eta:g} the axle's beta = eta phi would reach {JACKKNIFE_DEG:g} deg"
+        )
+        why = (
+            f"|phi| = {abs(phi_deg):.1f} deg reached {limit:.4g} deg: {reason} "
+            f"(beta={beta_deg:.1f} deg)"
+        )
     return (
-        f"jackknife at t={t:.3f} s: phi={math.degrees(phi):.1f} deg, "
-        f"beta={math.degrees(beta):.1f} deg (eta={eta:g}; singular at "
-        f"|beta| = 90 deg), x={x:.3f} m, y={y:.3f} m, v={v:.3f} m/s"
+        f"jackknife at t={t:.3f} s, hitch {hitch}: {why}; x={x:.3f} m, y={y:.3f} m, v={v:.3f} m/s"
     )
 
 
@@ -177,11 +193,9 @@ class Stepper:
         for k, (row, limit) in enumerate(zip(me.train, self._train_limits, strict=True), 2):
             phi, beta = row[3], row[4]
             if abs(phi) >= limit or abs(beta) >= self._jk:
+                eta = self.built.nominal.etas[k - 1]
                 raise StopRun(
-                    "jackknife",
-                    f"jackknife of trailer {k} at t={t:.3f} s: phi_{k}="
-                    f"{math.degrees(phi):.1f} deg, beta_{k}={math.degrees(beta):.1f} deg, "
-                    f"x={me.x:.3f} m, y={me.y:.3f} m, v={me.v:.3f} m/s",
+                    "jackknife", jackknife_message(t, phi, beta, eta, me.x, me.y, me.v, hitch=k)
                 )
 
     def actuate(self, T_r: float, T_l: float, command: tuple[float, float] | None = None) -> bool:
@@ -256,7 +270,7 @@ class Stepper:
             self.finished = True
             return False
         if self.scheduler is not None:
-            self.scheduler.update(ref.kappa, k)
+            self.scheduler.update(ref.kappa, k, me)
         self.plant.apply(T_r, T_l, dist_r, dist_l, force, torque, me.theta)
         try:
             self.plant.advance(self.built.substeps)

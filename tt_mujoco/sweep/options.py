@@ -10,6 +10,7 @@ from pathlib import Path
 from tt_mujoco.controllers import CONTROLLERS
 from tt_mujoco.registry import closest, is_hook, normalise_hook
 from tt_mujoco.sim import DISTURBANCE_MODES, PLANTS, TARGETS, Scenario
+from tt_mujoco.sim.scenario import ETA_SCHEDULES
 from tt_mujoco.vehicle.params import (
     INERTIA_FIELDS,
     MASS_FIELDS,
@@ -236,6 +237,10 @@ def convert(name: str, value):
         return "on" if _boolean(name, value, extra="'on' (defaults) or 'off'") else "off"
     if name.partition(".")[0] in DICT_OPTIONS:
         return as_number(name, value)
+    if name == "eta_schedule":
+        if isinstance(value, str) and value.strip().lower() in ETA_SCHEDULES:
+            return value.strip().lower()
+        return _boolean(name, value, extra=f"true, false or one of {', '.join(ETA_SCHEDULES)}")
     if name in SCENARIO_OPTIONS:  # a newer Scenario field: checked by the type of its default
         default = next(f.default for f in dataclasses.fields(Scenario) if f.name == name)
         if isinstance(default, bool):

@@ -1,0 +1,66 @@
+"""Off-tracking of every trailer, forward, under four steerings: docs/model.md Section 13.
+
+    python docs/path_schedule_study.py [--plants mujoco reduced] [--trailers 1 2 3]
+        [--disturbance none matched]
+
+For each path (circle, cycloid, S-curve), plant, train size and disturbance, one closed-loop run
+(ISMC-STA, dynamic target, from rest) with plain trailers (eta = 0), the same-path limit gains,
+the curvature schedule (``--eta scheduled``) and the path schedule (``--eta path``). Prints each
+trailer's maximum and rms off-tracking (its axle to the path the unit ahead drove, mm), the
+tractor's cross-track rms (mm), the share of steps at the torque limit, and how the run ended.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from tt_mujoco.sim import Scenario, simulate
+
+PATHS = ("circle", "cycloid", "s_curve")
+STEERINGS = {
+    "plain": {"eta": 0.0},
+    "same_path": {"eta": "same_path"},
+    "curvature": {"eta": "same_path", "eta_schedule": "curvature"},
+    "path": {"eta": "same_path", "eta_schedule": "path"},
+}
+
+
+def row(path: str, plant: str, n: int, disturbance: str, steering: str) -> list[str]:
+    """One table row: the run's figures, formatted."""
+    scenario = Scenario(
+        traj=path, plant=plant, trailers=n, disturbance=disturbance, **STEERINGS[steering]
+    )
+    m = simulate(scenario).metrics
+    keys = ["trailer_offtrack"] + [f"trailer_{k}_offtrack" for k in range(2, n + 1)]
+    worst = " / ".join(f"{1e3 * m[f'{key}_max']:.1f}" for key in keys)
+    rms = " / ".join(f"{1e3 * m[f'{key}_rms']:.1f}" for key in keys)
+    ended = m["status"] if m["status"] == "ok" else f"{m['status']} at {m['sim_time_s']:.2f} s"
+    cross = f"{1e3 * m['cross_track_rms']:.1f}"
+    saturated = f"{100 * m['torque_saturation_fraction']:.0f} %"
+    return [path, plant, str(n), disturbance, steering, worst, rms, cross, saturated, ended]
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--plants", nargs="+", default=["mujoco", "reduced"])
+    parser.add_argument("--trailers", nargs="+", type=int, default=[1, 2, 3])
+    parser.add_argument("--disturbance", nargs="+", default=["none"])
+    parser.add_argument("--paths", nargs="+", default=list(PATHS))
+    args = parser.parse_args(argv)
+    head = ["path", "plant", "N", "disturbance", "steering", "max (mm)", "rms (mm)"]
+    head += ["tractor cross-track rms (mm)", "torque at limit", "run"]
+    print("| " + " | ".join(head) + " |")
+    print("|" + "---|" * len(head))
+    for path in args.paths:
+        for plant in args.plants:
+            for disturbance in args.disturbance:
+                for n in args.trailers:
+                    for steering in STEERINGS:
+                        print("| " + " | ".join(row(path, plant, n, disturbance, steering)) + " |")
+                        sys.stdout.flush()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,289 @@
+"""The path schedule eta_k(s): its geometry, its kinematic ideal, and runs with ``--eta path``."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.special import fresnel
+
+from tt_mujoco import outputs, run
+from tt_mujoco.reference.path_base import ReferencePath
+from tt_mujoco.reference.targets import make_target
+from tt_mujoco.sim import Scenario, build, simulate
+from tt_mujoco.sweep import BadSpecError
+from tt_mujoco.sweep.options import convert
+from tt_mujoco.vehicle.params import train_same_path_etas
+from tt_mujoco.vehicle.path_schedule import (
+    PathSchedule,
+    axle_chain,
+    nearest_arc_length,
+    path_schedule,
+)
+from tt_mujoco.vehicle.rolling import constant_steering, drive_along_path, schedule_steering
+from tt_mujoco.vehicle.steering import exact_train_same_path_etas
+
+LINKS = (0.3, 0.4)
+
+
+class Clothoid(ReferencePath):
+    """kappa(s) = rate * s from s = 0, in closed form (Fresnel integrals)."""
+
+    def __init__(self, rate: float = 0.5, length: float = 2.5):
+        super().__init__("clothoid", length)
+        self.rate = rate
+        self.scale = math.sqrt(math.pi / rate)
+
+    def _pose(self, s):
+        sine, cosine = fresnel(np.asarray(s) / self.scale)
+        return self.scale * cosine, self.scale * sine, 0.5 * self.rate * np.asarray(s) ** 2
+
+    def _pose_at(self, s):
+        x, y, heading = self._pose(s)
+        return float(x), float(y), float(heading)
+
+    def _curvature(self, s):
+        return self.rate * np.asarray(s)
+
+    def _curvature_rate(self, s):
+        return np.full_like(np.asarray(s, dtype=float), self.rate)
+
+    def curvature_and_rate(self, s):
+        return self.rate * s, self.rate
+
+
+def _paths():
+    return {
+        "circle": make_target("circle").path,
+        "cycloid": make_target("cycloid").path,
+        "clothoid": Clothoid(),
+    }
+
+
+def _worst(result, n):
+    return [float(np.nanmax(np.abs(result[f"offset_{k}"]))) for k in range(1, n + 1)]
+
+
+def _rms(result, n):
+    return [float(np.sqrt(np.nanmean(result[f"offset_{k}"] ** 2))) for k in range(1, n + 1)]
+
+
+def _shortfall(schedule, k):
+    """An upper bound on the off-tracking the bounded gain can cause: the steering it could not
+    give, integrated along the axle's path (|d offset / ds| <= |delta beta|)."""
+    axle = schedule.axles[k]
+    missing = np.abs(axle["beta"] - axle["eta"] * axle["phi"])
+    return float(np.sum(0.5 * (missing[1:] + missing[:-1]) * np.diff(axle["s"])))
+
+
+@pytest.mark.parametrize("n", [1, 2, 3])
+@pytest.mark.parametrize("name", ["circle", "cycloid", "clothoid"])
+def test_kinematic_ideal_puts_every_axle_on_the_path(name, n):
+    # A tractor driven exactly along the path from rest, trailers straight behind it: the
+    # schedule keeps every axle on the path, the lead-in and the curvature changes included.
+    # Measured 2.5e-7 m at worst (circle), the RK4 step (2 mm) and the table's cubic
+    # interpolation; the bound is 1e-6 m. On the clothoid, trailers 2 and 3 meet one point on
+    # their lead-in where phi_k passes through zero while beta_k is -0.08 / -0.28 deg: no gain
+    # gives that, and the bound there is the steering the gain could not give (12 um for
+    # trailer 3, within its bound of 30 um).
+    path = _paths()[name]
+    lengths = [LINKS] * n
+    schedule = path_schedule(path, lengths)
+    result = drive_along_path(path, lengths, schedule_steering(schedule))
+    for k, worst in enumerate(_worst(result, n)):
+        assert worst < 1e-6 + _shortfall(schedule, k)
+    feasible = [k for k in range(n) if schedule.axles[k]["exact"].all()]
+    assert feasible == (list(range(n)) if name != "clothoid" else [0])
+    # and the same-path limit gains, for scale, leave millimetres to decimetres
+    plain = drive_along_path(path, lengths, constant_steering(train_same_path_etas(lengths)))
+    assert min(_worst(plain, n)) > 1e-3
+
+
+@pytest.mark.parametrize("n", [1, 2, 3])
+def test_s_curve_exact_up_to_the_junction_and_four_times_better_than_same_path(n):
+    # At the junction of the S (s = 3 pi / 2 m) the tractor's curvature steps from +2/3 to
+    # -2/3 1/m; the axles then need |beta / phi| > 3 for a stretch around the inflection
+    # (phi passes through zero while beta does not) and the bounded gain leaves them off the
+    # path (9.8 / 20.8 / 30.2 mm at worst), after which they converge back on the second arc.
+    path = make_target("s_curve").path
+    lengths = [LINKS] * n
+    schedule = path_schedule(path, lengths)
+    result = drive_along_path(path, lengths, schedule_steering(schedule))
+    junction = 1.5 * math.pi
+    before = result["s"] < junction
+    for k in range(1, n + 1):
+        offset = result[f"offset_{k}"]
+        assert np.nanmax(np.abs(offset[before])) < 1e-6
+        # converging back on the second arc: at the path's end 7e-6 (trailer 1) to 1.6e-3
+        # (trailer 3) of the worst
+        assert abs(offset[-1]) < 0.01 * np.nanmax(np.abs(offset))
+    clipped = ~schedule.axles[0]["exact"]
+    assert clipped.any() and np.all(schedule.s_tractor[clipped] > junction)
+    # docs/model.md Section 13 quotes these
+    expected_worst = [9.82e-3, 20.84e-3, 30.16e-3][:n]
+    assert _worst(result, n) == pytest.approx(expected_worst, abs=5e-5)
+    plain = drive_along_path(path, lengths, constant_steering(train_same_path_etas(lengths)))
+    assert _worst(plain, n) == pytest.approx([52.78e-3, 102.44e-3, 134.91e-3][:n], abs=5e-5)
+    for scheduled, limit in (
+        (_worst(result, n), _worst(plain, n)),
+        (_rms(result, n), _rms(plain, n)),
+    ):
+        assert all(4.0 * a < b for a, b in zip(scheduled, limit, strict=True)), (scheduled, limit)
+
+
+@pytest.mark.parametrize("n", [1, 2, 3])
+def test_steady_arc_gains_equal_the_exact_same_path_gains(n):
+    # An independent construction (vehicle/steering.py: circles about the turn centre) gives the
+    # same gains once every axle is on the circle.
+    path = make_target("circle").path
+    lengths = [LINKS] * n
+    schedule = path_schedule(path, lengths)
+    steady = schedule.s_tractor > 3.0
+    expected = exact_train_same_path_etas(1.0, lengths)
+    for axle, eta in zip(schedule.axles, expected, strict=True):
+        assert np.max(np.abs(axle["eta"][steady] - eta)) < 1e-9
+        assert axle["exact"].all()
+        assert axle["eta"].max() == pytest.approx(0.428, abs=1e-3)  # the lead-in (docs)
+
+
+def test_axles_lie_on_the_path_at_their_link_lengths():
+    path = make_target("cycloid").path
+    lengths = [LINKS, (0.5, 0.3)]
+    s = np.linspace(0.0, path.length, 200)
+    fx, fy, fth = path.pose(s)
+    for axle, (L, L0) in zip(axle_chain(path, s, lengths), lengths, strict=True):
+        x, y, tangent = path.pose(axle["s"])
+        np.testing.assert_allclose(x, axle["x"], atol=1e-12)
+        np.testing.assert_allclose(y, axle["y"], atol=1e-12)
+        ox, oy = fx - L * np.cos(fth), fy - L * np.sin(fth)
+        np.testing.assert_allclose(np.hypot(ox - x, oy - y), L0, atol=1e-12)
+        np.testing.assert_allclose(np.arctan2(oy - y, ox - x), axle["theta"], atol=1e-12)
+        np.testing.assert_allclose(axle["beta"], tangent - axle["theta"], atol=1e-12)
+        assert np.all(axle["s"] < s)  # behind the unit ahead
+        s, fx, fy, fth = axle["s"], x, y, axle["theta"]
+
+
+def test_lookup_interpolates_the_table_and_holds_its_ends():
+    path = make_target("cycloid").path
+    schedule = path_schedule(path, [LINKS])
+    axle = schedule.axles[0]
+    for i in (0, 17, axle["s"].size // 2, axle["s"].size - 1):
+        assert schedule.eta(0, float(axle["s"][i])) == pytest.approx(axle["eta"][i], abs=1e-12)
+    assert schedule.eta(0, -50.0) == axle["eta"][0]
+    assert schedule.eta(0, 1e3) == axle["eta"][-1]
+    x, y, _ = path.pose(2.0)
+    assert nearest_arc_length(path, 1.9, x + 0.01 * math.cos(0.3), y) == pytest.approx(
+        2.0, abs=0.02
+    )
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"eta_max": 0.0}, "eta_max=0.0"),
+        ({"eta_max": math.inf}, "eta_max=inf"),
+        ({"spacing": -1.0}, "spacing=-1.0"),
+    ],
+)
+def test_bad_schedule_options_are_refused(kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        path_schedule(make_target("circle").path, [LINKS], **kwargs)
+
+
+def test_a_path_too_tight_for_the_axle_is_refused_before_the_run():
+    with pytest.raises(ValueError, match="trailer 1's axle"):
+        build(Scenario(traj="circle", path_options={"R": 0.05}, eta_schedule="path"))
+
+
+def test_scenario_names_the_allowed_schedules():
+    with pytest.raises(ValueError, match=r"eta_schedule='kappa' is not allowed.*'path'"):
+        Scenario(eta_schedule="kappa").validate()
+    assert Scenario(eta_schedule=True).eta_schedule_kind == "curvature"
+    assert Scenario(eta_schedule="path").eta_schedule_kind == "path"
+    assert Scenario().eta_schedule_kind is None
+    assert isinstance(
+        build(Scenario(traj="circle", eta_schedule="path")).path_schedule, PathSchedule
+    )
+
+
+def _offtracks(metrics, n):
+    keys = ["trailer_offtrack_max"] + [f"trailer_{k}_offtrack_max" for k in range(2, n + 1)]
+    return [metrics[key] for key in keys]
+
+
+@pytest.mark.parametrize("plant", ["mujoco", "reduced"])
+@pytest.mark.parametrize(
+    ("traj", "n"), [("circle", 1), ("circle", 2), ("cycloid", 1), ("cycloid", 2)]
+)
+def test_runs_keep_every_trailer_within_five_millimetres(plant, traj, n):
+    # Issue "same path", must-show 1, from rest, no disturbance: measured at worst 3.25 mm
+    # (MuJoCo, cycloid, trailer 2); the same-path limit gains leave 13-33 mm here.
+    result = simulate(
+        Scenario(plant=plant, traj=traj, trailers=n, disturbance="none", eta_schedule="path")
+    )
+    assert result.status == "ok"
+    assert max(_offtracks(result.metrics, n)) < 5e-3
+
+
+@pytest.mark.parametrize("plant", ["mujoco", "reduced"])
+def test_the_paper_disturbance_keeps_the_bound_for_one_trailer(plant):
+    result = simulate(Scenario(plant=plant, traj="cycloid", eta_schedule="path"))
+    assert result.status == "ok"
+    assert result.metrics["trailer_offtrack_max"] < 5e-3  # measured 1.94 mm (MuJoCo)
+
+
+def test_cli_eta_path_reaches_the_scenario_and_replays(tmp_path):
+    out = tmp_path / "run"
+    argv = ["--traj", "circle", "--plant", "reduced", "--duration", "4", "--eta", "path"]
+    assert run.main([*argv, "--no-video", "--no-plots", "--quiet", "--out", str(out)]) == 0
+    doc = json.loads((out / "metrics.json").read_text())
+    assert doc["config"]["scenario"]["eta_schedule"] == "path"
+    assert doc["config"]["scenario"]["eta"] == "same_path"  # the controller's model
+    assert doc["trailer_offtrack_max"] < 5e-3
+    ts = outputs.read_timeseries(out / "timeseries.parquet")
+    # the plant's gain on the steady arc is the exact same-path gain of kappa = 1, not -1/7
+    assert ts["beta"][-1] / ts["phi"][-1] == pytest.approx(
+        exact_train_same_path_etas(1.0, [LINKS])[0], abs=1e-4
+    )
+    again = tmp_path / "again"
+    assert run.main(["--config", str(out / "config.toml"), "--out", str(again)]) == 0
+    assert (again / "timeseries.parquet").read_bytes() == (out / "timeseries.parquet").read_bytes()
+
+
+def test_sweeps_take_the_schedule_by_name():
+    assert convert("eta_schedule", "path") == "path"
+    assert convert("eta_schedule", "Curvature") == "curvature"
+    assert convert("eta_schedule", "true") is True
+    with pytest.raises(BadSpecError, match=r"eta_schedule='kappa'.*curvature, path"):
+        convert("eta_schedule", "kappa")
+
+
+def test_s_curve_in_contact_physics_jackknifes_after_the_inflection():
+    # What docs/model.md Section 13 reports as open: the gain's swing at the inflection kicks
+    # the MuJoCo vehicle (t = 7.2 s); the reduced plant, without tyres, completes.
+    common = dict(traj="s_curve", disturbance="none", eta_schedule="path")
+    contact = simulate(Scenario(plant="mujoco", **common))
+    assert contact.status == "jackknife"
+    assert 7.0 < contact.metrics["sim_time_s"] < 7.5
+    assert simulate(Scenario(plant="reduced", **common)).status == "ok"
+
+
+@pytest.mark.parametrize(
+    ("path", "plant", "n", "steering"),
+    [
+        ("cycloid", "reduced", 2, "path"),
+        ("circle", "mujoco", 1, "path"),
+        ("circle", "reduced", 1, "same_path"),
+    ],
+)
+def test_the_study_table_is_what_its_command_prints(path, plant, n, steering):
+    docs = Path(__file__).parents[1] / "docs"
+    spec = importlib.util.spec_from_file_location("study", docs / "path_schedule_study.py")
+    study = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(study)
+    line = "| " + " | ".join(study.row(path, plant, n, "none", steering)) + " |"
+    assert line in (docs / "path_schedule_study.md").read_text()

@@ -1,0 +1,266 @@
+"""Path-scheduled passive steering: the gains eta_k(s) that keep every axle on the tractor's path
+(docs/model.md Section 13).
+
+For a tractor whose axle midpoint P runs exactly along a reference path with its heading on the
+path's tangent, the geometry alone fixes where each trailer must be for its axle to lie on the
+same path: the hitch O_k is a distance L_k behind the unit ahead (along that unit's heading),
+and the axle P_k is the point of the path a distance L0_k from O_k, behind it. The trailer's
+heading theta_k points from P_k to O_k, so the hitch angle is ``phi_k = theta_{k-1} - theta_k``;
+P_k rolls along the path's tangent there, so its steering angle is
+``beta_k = heading(s_k) - theta_k``. Their ratio is the gain ``eta_k = beta_k / phi_k`` that
+makes the passive law ``beta_k = eta_k phi_k`` (paper eq. 2) roll P_k along the path: the set of
+poses with every axle on the path is then invariant under the pure-rolling kinematics, in either
+direction of travel, transients included.
+
+Before the path's start the path continues along its first tangent (as
+:meth:`~tt_mujoco.reference.path_base.ReferencePath.pose` does), so a train standing straight
+behind a tractor at s = 0 starts on the schedule.
+
+Where the ratio is not a usable gain the schedule is bounded:
+
+- where |beta_k / phi_k| exceeds ``eta_max`` (near an inflection phi_k passes through zero while
+  beta_k does not: no gain can give that steering), the gain is clipped to the bound, the
+  bounded gain nearest the steering asked for; where phi_k is zero to rounding (a straight
+  stretch), the ratio is interpolated from its neighbours;
+- everything is tabulated once per path on the tractor's arc length (:func:`path_schedule`), and
+  looked up at run time by each trailer's own arc length (:meth:`PathSchedule.eta`), the
+  projection of its axle onto the path, so that a trailer off its schedule still gets the gain
+  of where it is.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "DEFAULT_ETA_MAX",
+    "PathSchedule",
+    "axle_chain",
+    "nearest_arc_length",
+    "path_schedule",
+]
+
+#: Bound on |eta_k| of the path schedule (the bound the issue's study used; the paper's eta = 3).
+DEFAULT_ETA_MAX = 3.0
+#: Tractor arc-length spacing (m) of the tabulated schedule: cubic interpolation on it is exact
+#: to ~1e-10 in eta on the paper's paths (tests/test_path_schedule.py).
+TABLE_SPACING = 0.002
+#: |phi_k| (rad) below which beta_k / phi_k is rounding noise, not a gain.
+_PHI_TINY = 1e-7
+#: Bisection steps for the axle's arc length: brackets of ~1 m shrink below 1e-15 m.
+_BISECTIONS = 56
+
+
+def _wrap(angle):
+    return (angle + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def axle_chain(path, s, lengths):
+    """Where every axle lies on the path when the tractor's P is at arc length ``s``.
+
+    Parameters
+    ----------
+    path : tt_mujoco.reference.path_base.ReferencePath
+        The tractor's path (continued along its end tangents beyond its ends).
+    s : array_like
+        Tractor arc lengths (m).
+    lengths : sequence of (L_k, L0_k)
+        Trailers 1..N: hitch behind the unit ahead, axle behind the hitch (m).
+
+    Returns
+    -------
+    list of dict
+        Per trailer, arrays over ``s``: ``s`` (the axle's arc length), ``x``, ``y`` (the axle),
+        ``theta`` (the trailer's heading), ``phi``, ``beta`` (rad).
+
+    Raises
+    ------
+    ValueError
+        Where the path curves so tightly that an axle's circle about its hitch does not meet it
+        behind the hitch.
+    """
+    s_ahead = np.asarray(s, dtype=float)
+    fx, fy, fth = path.pose(s_ahead)
+    chain = []
+    for k, (L, L0) in enumerate(lengths, start=1):
+        ox, oy = fx - L * np.cos(fth), fy - L * np.sin(fth)
+
+        def excess(sk, ox=ox, oy=oy, L0=L0):
+            x, y, _ = path.pose(sk)
+            return (x - ox) ** 2 + (y - oy) ** 2 - L0 * L0
+
+        # Bracket: O lies about L behind the unit ahead, the axle about L0 behind O.
+        hi = s_ahead - min(L, 0.999 * L0) if L >= L0 else s_ahead.copy()
+        lo = s_ahead - 2.0 * (L + L0) - 0.1
+        if np.any(excess(hi) >= 0.0) or np.any(excess(lo) <= 0.0):
+            bad = float(s_ahead.flat[np.flatnonzero((excess(hi) >= 0.0) | (excess(lo) <= 0.0))[0]])
+            raise ValueError(
+                f"path {path.name!r} at s={bad:.4g} m is not allowed for the path schedule: "
+                f"trailer {k}'s axle (L={L:g} m, L0={L0:g} m) cannot be placed on it"
+            )
+        for _ in range(_BISECTIONS):
+            mid = 0.5 * (lo + hi)
+            inside = excess(mid) < 0.0
+            hi = np.where(inside, mid, hi)
+            lo = np.where(inside, lo, mid)
+        sk = 0.5 * (lo + hi)
+        px, py, tangent = path.pose(sk)
+        thk = np.arctan2(oy - py, ox - px)
+        chain.append(
+            {
+                "s": sk,
+                "x": px,
+                "y": py,
+                "theta": thk,
+                "phi": _wrap(fth - thk),
+                "beta": _wrap(tangent - thk),
+            }
+        )
+        s_ahead, fx, fy, fth = sk, px, py, thk
+    return chain
+
+
+def _bounded_gain(phi: np.ndarray, beta: np.ndarray, eta_max: float):
+    """``(eta, exact)``: beta / phi clipped to [-eta_max, eta_max] (interpolated where phi is
+    zero to rounding), and where that is the exact ratio.
+
+    Clipping is the bounded gain nearest the steering the geometry asks for at each point:
+    ``|beta - eta phi|`` is smallest over |eta| <= eta_max there. (Interpolating across the
+    clipped stretch instead, or across |phi| < 1 deg, left 25-40 % more off-tracking on the
+    S-curve in the kinematic ideal.)
+    """
+    defined = np.abs(phi) > _PHI_TINY
+    ratio = np.divide(beta, phi, out=np.zeros_like(phi), where=defined)
+    if not defined.any():
+        return np.zeros_like(phi), defined
+    index = np.arange(phi.size)
+    ratio = np.interp(index, index[defined], ratio[defined])
+    exact = np.abs(ratio) <= eta_max
+    return np.clip(ratio, -eta_max, eta_max), exact
+
+
+@dataclass(frozen=True)
+class PathSchedule:
+    """The tabulated path schedule of one path and train (from :func:`path_schedule`).
+
+    Attributes
+    ----------
+    path : ReferencePath
+        The path it was built for.
+    s_tractor : ndarray
+        The tractor arc lengths of the table (m).
+    axles : tuple of dict
+        Per trailer, :func:`axle_chain`'s arrays plus ``eta`` (the bounded gain) and ``exact``
+        (True where it is the exact ratio beta / phi, False where the bound clipped it).
+    eta_max : float
+        The bound on |eta_k|.
+    """
+
+    path: object
+    s_tractor: np.ndarray
+    axles: tuple
+    eta_max: float
+
+    def __post_init__(self) -> None:
+        # Plain lists and slopes for the per-step lookup (bisect on a list beats numpy on
+        # scalars); derived from the arrays above, so the object stays a value.
+        tables = tuple(
+            (axle["s"].tolist(), axle["eta"].tolist(), np.gradient(axle["eta"], axle["s"]).tolist())
+            for axle in self.axles
+        )
+        object.__setattr__(self, "_tables", tables)
+
+    @property
+    def n_trailers(self) -> int:
+        return len(self.axles)
+
+    def eta(self, k: int, s_axle: float) -> float:
+        """Trailer ``k``'s gain (k = 0 for trailer 1) where its axle is at arc length ``s_axle``.
+
+        Cubic Hermite interpolation of the table; held at the table's end values beyond it.
+        """
+        return _hermite(self._tables[k], s_axle)
+
+    def arc_lengths_at(self, s_tractor: float) -> list[float]:
+        """Each axle's arc length on the schedule when the tractor is at ``s_tractor`` (the
+        nearest table entry): where a run's projections start."""
+        i = min(int(np.searchsorted(self.s_tractor, s_tractor)), self.s_tractor.size - 1)
+        return [float(axle["s"][i]) for axle in self.axles]
+
+    def project(self, s_guess: float, x: float, y: float) -> float:
+        """Arc length of the path point nearest (x, y) (:func:`nearest_arc_length`)."""
+        return nearest_arc_length(self.path, s_guess, x, y)
+
+
+def nearest_arc_length(path, s_guess: float, x: float, y: float) -> float:
+    """Arc length of the path point nearest (x, y), by Newton steps from ``s_guess``.
+
+    Converges in two or three steps from the previous control step's value (an axle moves
+    millimetres a step); the path continues along its end tangents beyond its ends.
+    """
+    s = s_guess
+    for _ in range(4):
+        px, py, heading = path.pose_at(s)
+        ds = (x - px) * math.cos(heading) + (y - py) * math.sin(heading)
+        s += ds
+        if abs(ds) < 1e-12:
+            break
+    return s
+
+
+def _hermite(table, x: float) -> float:
+    """Cubic Hermite interpolation of ``(xs, ys, slopes)`` at ``x``, held beyond the ends."""
+    xs, ys, slopes = table
+    i = bisect.bisect_right(xs, x)
+    if i <= 0:
+        return ys[0]
+    if i >= len(xs):
+        return ys[-1]
+    x0, x1 = xs[i - 1], xs[i]
+    h = x1 - x0
+    u = (x - x0) / h
+    h00 = (1.0 + 2.0 * u) * (1.0 - u) ** 2
+    h10 = u * (1.0 - u) ** 2
+    h01 = u * u * (3.0 - 2.0 * u)
+    h11 = u * u * (u - 1.0)
+    return h00 * ys[i - 1] + h10 * h * slopes[i - 1] + h01 * ys[i] + h11 * h * slopes[i]
+
+
+def path_schedule(path, lengths, eta_max: float = DEFAULT_ETA_MAX, spacing: float = TABLE_SPACING):
+    """Tabulate the path schedule of a path and a train once.
+
+    Parameters
+    ----------
+    path : ReferencePath
+        The tractor's reference path.
+    lengths : sequence of (L_k, L0_k)
+        Trailers 1..N.
+    eta_max : float
+        Bound on |eta_k| (> 0).
+    spacing : float
+        Tractor arc-length spacing of the table (m, > 0).
+
+    Returns
+    -------
+    PathSchedule
+
+    Raises
+    ------
+    ValueError
+        For a bad bound or spacing, or a path too tight for an axle (:func:`axle_chain`).
+    """
+    for name, value in (("eta_max", eta_max), ("spacing", spacing)):
+        if isinstance(value, bool) or not isinstance(value, int | float) or not value > 0:
+            raise ValueError(f"{name}={value!r} is not allowed: it must be a number > 0")
+        if not math.isfinite(value):
+            raise ValueError(f"{name}={value!r} is not allowed: it must be finite")
+    n = max(3, math.ceil(path.length / spacing) + 1)
+    s = np.linspace(0.0, path.length, n)
+    chain = axle_chain(path, s, lengths)
+    for axle in chain:
+        axle["eta"], axle["exact"] = _bounded_gain(axle["phi"], axle["beta"], float(eta_max))
+    return PathSchedule(path=path, s_tractor=s, axles=tuple(chain), eta_max=float(eta_max))
