@@ -191,6 +191,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="drive the path backwards, trailer first (where eta > 1 is stable)",
     )
     g.add_argument(
+        "--hitch-feedback",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="reversing without --path-feedback: the leading trailer's axle tracks the path "
+        "and a cascade on the hitch angles sets the tractor's yaw rate "
+        "(tt_mujoco.controllers.backing); --no-hitch-feedback leaves the hitches to themselves",
+    )
+    g.add_argument(
         "--path-feedback",
         action=argparse.BooleanOptionalAction,
         default=False,
@@ -444,6 +452,7 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
         eta_schedule=eta_schedule,
         reverse=bool(args.reverse),
         path_feedback={} if args.path_feedback else None,
+        hitch_feedback={} if args.hitch_feedback else None,
         disturbance_model=args.disturbance_model,
         disturbance_limit=args.disturbance_limit,
         path_options=dict(path_options),

@@ -270,6 +270,9 @@ def compute_metrics(
         - ``along_track_rms``, ``along_track_max``: P's lead or lag against the reference point
           along the path's tangent there (m), in the direction of travel.
         - ``rmse_position``, ``max_position``: P to the reference point (x_ref, y_ref) (m).
+        - ``leading_cross_track_rms``, ``leading_cross_track_max``: the cross-track of the unit
+          that leads the motion: the tractor's (``cross_track_*``) driving forward, the last
+          trailer's axle reversing;
         - ``trailer_offtrack_rms``, ``trailer_offtrack_max``: the following unit (the trailer's
           P0 forward, the tractor's P reversing; ``offtrack_follower`` says which) to the path
           the leading unit drove, over the ``trailer_offtrack_samples`` samples after the
@@ -356,6 +359,16 @@ def compute_metrics(
         metrics["disturbance_clipped_fraction"] = float(np.mean(clipped > 0)) if n else math.nan
 
     metrics.update(train_metrics(ts, n, reference, metrics, reverse))
+    # The unit that leads the motion: the tractor forward, the last trailer reversing.
+    last = trailer_count(ts)
+    if not reverse:
+        lead = ("cross_track_rms", "cross_track_max")
+    elif last == 1:
+        lead = ("trailer_rmse_lateral", "trailer_max_lateral")
+    else:
+        lead = (f"trailer_{last}_rmse_lateral", f"trailer_{last}_max_lateral")
+    metrics["leading_cross_track_rms"] = metrics[lead[0]]
+    metrics["leading_cross_track_max"] = metrics[lead[1]]
     metrics["steps"] = int(n_total)
     metrics["finite_samples"] = int(n)
     metrics["sample_period_s"] = sample_period

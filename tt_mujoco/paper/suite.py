@@ -173,7 +173,8 @@ STUDY_PATHS = ("cycloid", "s_curve", "circle")
 STEERING_VARIANTS: dict[str, dict] = {
     "plain (eta = 0)": {"eta": 0.0},
     "paper eta = 3, forward": {"eta": "paper"},
-    "paper eta = 3, reverse": {"eta": "paper", "reverse": True},
+    # passive: the hitch left to itself, which eta = 3 holds reversing (no cascade)
+    "paper eta = 3, reverse": {"eta": "paper", "reverse": True, "hitch_feedback": None},
     "eta = -3": {"eta": -3.0},
     "half-difference gain (-0.125)": {"eta": -0.125},
     "same_path (-1/7)": {"eta": "same_path"},

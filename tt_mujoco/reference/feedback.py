@@ -29,7 +29,14 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["DEFAULT_GAINS", "PathFeedback", "check_config", "path_errors"]
+__all__ = [
+    "DEFAULT_GAINS",
+    "PathFeedback",
+    "TargetWrapper",
+    "check_config",
+    "check_gain_table",
+    "path_errors",
+]
 
 #: Default gains. k_y = 4 1/m^2 and k_psi = 4 1/m: critically damped in arc length
 #: (k_psi = 2 sqrt(k_y)), offset halved every ~0.4 m. At the cycloid's 1.36 m/s peak that is a
@@ -66,38 +73,65 @@ def path_errors(pose_at, curvature_and_rate, s: float, x: float, y: float, theta
     return s, e_y, math.remainder(theta - h, 2.0 * math.pi)
 
 
-def check_config(config: dict | None) -> dict[str, float]:
-    """The gains of a ``Scenario.path_feedback`` dict merged over :data:`DEFAULT_GAINS`.
+def check_gain_table(option: str, config: dict | None, defaults: dict) -> dict[str, float]:
+    """A dict of gains merged over ``defaults``, each checked finite and > 0.
 
     Raises
     ------
     ValueError
-        For anything but a dict with keys among k_y, k_psi, c_max and values finite and > 0.
+        Naming ``option`` (a Scenario field) and the first bad key or value.
     """
     config = {} if config is None else config
+    label = option.replace("_", " ")
     if not isinstance(config, dict):
         raise ValueError(
-            f"path_feedback={config!r} is not allowed: use None or a dict with keys "
-            f"{', '.join(DEFAULT_GAINS)}"
+            f"{option}={config!r} is not allowed: use None or a dict with keys "
+            f"{', '.join(defaults)}"
         )
-    unknown = sorted(set(config) - set(DEFAULT_GAINS))
+    unknown = sorted(set(config) - set(defaults))
     if unknown:
         raise ValueError(
-            f"path_feedback key(s) {', '.join(map(repr, unknown))} not allowed: use "
-            f"{', '.join(DEFAULT_GAINS)}"
+            f"{option} key(s) {', '.join(map(repr, unknown))} not allowed: use "
+            f"{', '.join(defaults)}"
         )
-    gains = {**DEFAULT_GAINS, **config}
+    gains = {**defaults, **config}
     for name, value in gains.items():
         if isinstance(value, bool) or not isinstance(value, int | float):
-            raise ValueError(f"path feedback {name}={value!r} is not allowed: use a number > 0")
+            raise ValueError(f"{label} {name}={value!r} is not allowed: use a number > 0")
         if not (math.isfinite(value) and value > 0):
-            raise ValueError(
-                f"path feedback {name}={value!r} is not allowed: it must be finite and > 0"
-            )
+            raise ValueError(f"{label} {name}={value!r} is not allowed: it must be finite and > 0")
     return {k: float(v) for k, v in gains.items()}
 
 
-class PathFeedback:
+def check_config(config: dict | None) -> dict[str, float]:
+    """The gains of a ``Scenario.path_feedback`` dict merged over :data:`DEFAULT_GAINS`
+    (keys k_y, k_psi, c_max; values finite and > 0), or ValueError."""
+    return check_gain_table("path_feedback", config, DEFAULT_GAINS)
+
+
+class TargetWrapper:
+    """A target around another (``self.target``): the Target interface the simulation loop and
+    the metrics use, passed through; subclasses replace :meth:`update`."""
+
+    kind = property(lambda self: self.target.kind)
+    duration = property(lambda self: self.target.duration)
+    arc_length = property(lambda self: self.target.arc_length)
+    curvature = property(lambda self: self.target.curvature)
+
+    def reference_point(self, t):
+        return self.target.reference_point(t)
+
+    def reference_pose(self, t):
+        return self.target.reference_pose(t)
+
+    def reference_speed(self, t):
+        return self.target.reference_speed(t)
+
+    def reference_yaw_rate(self, t):
+        return self.target.reference_yaw_rate(t)
+
+
+class PathFeedback(TargetWrapper):
     """A tracking target with lateral and heading error feedback on omega_d.
 
     Parameters
@@ -135,30 +169,12 @@ class PathFeedback:
         """Build from a ``Scenario.path_feedback`` dict (keys k_y, k_psi, c_max; {} = defaults)."""
         return cls(target, **check_config(config))
 
-    # --- the Target interface the simulation loop uses ------------------------------------
-    kind = property(lambda self: self.target.kind)
-    duration = property(lambda self: self.target.duration)
-    arc_length = property(lambda self: self.target.arc_length)
-    curvature = property(lambda self: self.target.curvature)
-
     def reset(self) -> None:
         self.target.reset()
         self.path_arc_length = float(self.target.arc_length)
         self.lateral_error = 0.0
         self.heading_error = 0.0
         self._kappa_near = self._curvature(self.path_arc_length)[0]
-
-    def reference_point(self, t):
-        return self.target.reference_point(t)
-
-    def reference_pose(self, t):
-        return self.target.reference_pose(t)
-
-    def reference_speed(self, t):
-        return self.target.reference_speed(t)
-
-    def reference_yaw_rate(self, t):
-        return self.target.reference_yaw_rate(t)
 
     # --- the loop ------------------------------------------------------------------------
     def errors(self, x: float, y: float, theta: float) -> tuple[float, float]:

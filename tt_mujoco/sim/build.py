@@ -16,6 +16,7 @@ import numpy as np
 
 from tt_mujoco.analysis.metrics import resolve_metrics
 from tt_mujoco.controllers import Controller, ControllerSetup, controller_class, reduced_model
+from tt_mujoco.controllers.backing import HitchCascade
 from tt_mujoco.defaults import MAX_DURATION, MAX_PHYSICS_STEPS
 from tt_mujoco.reference.feedback import PathFeedback
 from tt_mujoco.reference.reverse import ReverseTarget
@@ -24,10 +25,10 @@ from tt_mujoco.sim.disturbances import make_disturbance
 from tt_mujoco.sim.faults import FaultSchedule, parse_faults
 from tt_mujoco.sim.plant import Plant
 from tt_mujoco.sim.plant_reduced import ReducedPlant
-from tt_mujoco.sim.scenario import Scenario
+from tt_mujoco.sim.scenario import Scenario, jackknife_phi_deg
 from tt_mujoco.sim.schedule import EtaScheduler, PathEtaScheduler
 from tt_mujoco.vehicle.params import Params
-from tt_mujoco.vehicle.path_schedule import PathSchedule, path_schedule
+from tt_mujoco.vehicle.path_schedule import PathSchedule, axle_chain, path_schedule
 
 __all__ = ["Build", "build", "noise_std"]
 
@@ -80,11 +81,19 @@ class Build:
     path_schedule: PathSchedule | None = None
     #: The path's arc length where the tractor starts (its end when reversing).
     start_s: float = 0.0
+    #: Hitch angles phi_1..phi_N (rad) at the start: zeros, or, backing up with the hitch
+    #: cascade, those that put every axle on the path (phi0_deg, when set, replaces phi_1).
+    initial_hitches: tuple = ()
 
     def new_plant(self, phi0_deg: float | None = None) -> Plant:
         """A fresh plant in the initial state (``phi0_deg`` overrides the scenario's)."""
         s = self.scenario
         phi0 = math.radians(s.phi0_deg if phi0_deg is None else phi0_deg)
+        if any(self.initial_hitches):  # backing up: the trailers start on the path ...
+            if phi0_deg is None and s.phi0_deg == 0.0:
+                phi0 = self.initial_hitches
+            else:  # ... but for hitch 1 when its angle is given
+                phi0 = (phi0, *self.initial_hitches[1:])
         if s.plant == "mujoco":
             wrench = s.disturbance == "wrench"
             return _plant_class("mujoco")(
@@ -105,6 +114,23 @@ class Build:
 
     def new_controller(self) -> Controller:
         return self.controller_class.from_setup(self.controller_setup, self.scenario.gains)
+
+
+def _initial_hitches(scenario: Scenario, path, start_s: float, plant_p: Params) -> tuple:
+    """Backing up with the cascade from the path's end ("on_path" start): the hitch angles
+    that put every axle on the path there (the trailers lead, so they start where they must
+    go); otherwise straight (zeros)."""
+    n = plant_p.n_trailers
+    if not (scenario.backs_with_cascade and scenario.start == "on_path"):
+        return (0.0,) * n
+    chain = axle_chain(path, np.array([start_s]), [(t.L, t.L0) for t in plant_p.trailers])
+    phis = tuple(float(axle["phi"][0]) for axle in chain)
+    # Only where the plant's own gains can hold that pose well short of a jackknife (with the
+    # paper's eta = 3 the axle would stand at beta = 3 phi, beyond 90 deg on an R = 1 m circle).
+    for phi, eta in zip(phis, plant_p.etas, strict=True):
+        if abs(math.degrees(phi)) > 0.5 * jackknife_phi_deg(eta):
+            return (0.0,) * n
+    return phis
 
 
 def _disturbance_limit(scenario: Scenario, nominal: Params) -> float | None:
@@ -160,6 +186,8 @@ def build(scenario: Scenario) -> Build:
         start_s = target.s_end
     if scenario.path_feedback is not None:
         target = PathFeedback.from_config(target, scenario.path_feedback)
+    elif scenario.backs_with_cascade:
+        target = HitchCascade.from_config(target, nominal, scenario.hitch_feedback)
     dt = scenario.control_dt
     # "on_path": the vehicle starts in the reference's initial state, pose *and* speed (paper
     # Section 6.3). The paper's static cycloid target starts at 0.765 m/s while its vehicle is
@@ -208,6 +236,7 @@ def build(scenario: Scenario) -> Build:
             else None
         ),
         start_s=start_s,
+        initial_hitches=_initial_hitches(scenario, path, start_s, plant_p),
     )
     result.new_faults()  # a fault after the end of the run is refused now
     result.new_controller()  # bad gains fail before any work

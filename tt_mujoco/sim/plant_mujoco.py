@@ -33,8 +33,8 @@ class MujocoPlant(Plant):
         Initial forward speed (m/s), rolling.
     wrench : bool
         Disturbances arrive as a chassis wrench instead of wheel torques.
-    phi0 : float
-        Initial articulation (rad), with beta = eta phi.
+    phi0 : float or tuple of float
+        Initial articulation (rad), with beta = eta phi: phi_1, or phi_1..phi_N of a train.
     """
 
     name = "mujoco"

@@ -25,8 +25,8 @@ class ReducedPlant(Plant):
         Initial forward speed (m/s).
     timestep : float
         Integration step (s).
-    phi0 : float
-        Initial articulation (rad).
+    phi0 : float or tuple of float
+        Initial articulation (rad): phi_1, or phi_1..phi_N of a train.
     """
 
     name = "reduced"
@@ -34,7 +34,8 @@ class ReducedPlant(Plant):
     def __init__(self, params: Params, pose, v_init: float, timestep: float, phi0: float = 0.0):
         self.params = params
         n = params.n_trailers
-        hitches = [phi0] + [0.0] * (n - 1)
+        hitches = list(phi0) if isinstance(phi0, tuple | list) else [phi0]
+        hitches += [0.0] * (n - len(hitches))
         state = [pose[0], pose[1], pose[2], *hitches, 0.0, 0.0, v_init, 0.0]
         ode = reduced.ReducedPlant if n == 1 else train.TrainODE
         self.ode = ode(params, state=state)

@@ -11,10 +11,10 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
-from tt_mujoco.defaults import CONTROL_DT, JACKKNIFE_DEG, MAX_DURATION, TIME_LIMIT_S, TIMESTEP
+from tt_mujoco.defaults import CONTROL_DT, MAX_DURATION, TIME_LIMIT_S, TIMESTEP
 from tt_mujoco.reference.feedback import check_config
 from tt_mujoco.sim.faults import parse_faults
-from tt_mujoco.vehicle.params import INERTIA_FIELDS, MASS_FIELDS, Params
+from tt_mujoco.vehicle.params import INERTIA_FIELDS, MASS_FIELDS, Params, jackknife_phi_deg
 
 __all__ = [
     "DISTURBANCE_MODES",
@@ -30,13 +30,6 @@ TARGETS = ("dynamic", "static")
 DISTURBANCE_MODES = ("matched", "wrench", "none")
 #: What ``Scenario.eta_schedule`` may name besides False / True.
 ETA_SCHEDULES = ("curvature", "path")
-
-
-def jackknife_phi_deg(eta: float) -> float:
-    """|phi| (deg) at which a run stops as a jackknife: |beta| = |eta phi| reaches
-    :data:`~tt_mujoco.defaults.JACKKNIFE_DEG`, or |phi| reaches 90 deg (the trailer across
-    the tractor)."""
-    return min(JACKKNIFE_DEG / abs(eta), 90.0) if eta else 90.0
 
 
 @dataclass
@@ -81,6 +74,10 @@ class Scenario:
     #: dict
     #: of gains, ``{}`` for the defaults (k_y, k_psi, c_max).
     path_feedback: dict | None = None
+    #: Reversing without path feedback: the hitch-angle cascade that backs the train along the
+    #: path (:class:`tt_mujoco.controllers.backing.HitchCascade`): a dict of its gains, ``{}``
+    #: for the defaults, or None (the hitches left to themselves). Ignored driving forward.
+    hitch_feedback: dict | None = field(default_factory=dict)
     #: Scheduled passive steering (:mod:`tt_mujoco.sim.schedule`): False (the constant ``eta``),
     #: ``"curvature"`` (or True: the exact same-path gain of the target's curvature) or
     #: ``"path"`` (each trailer's gain eta_k(s) from the path's geometry at its own arc length,
@@ -104,6 +101,15 @@ class Scenario:
     #: with status "failed" and its rows so far kept. Enforced where the run is in a
     #: process's main thread (the CLI, a sweep's process workers), by SIGALRM.
     time_limit_s: float = TIME_LIMIT_S
+
+    @property
+    def backs_with_cascade(self) -> bool:
+        """Reversing with the hitch cascade: reverse, hitch_feedback on, no path feedback, and
+        some hitch unstable backwards (eta_k < 1; with every eta_k > 1, such as the paper's 3,
+        the hitches are stable reversing by themselves, docs/model.md Section 3)."""
+        if not (self.reverse and self.hitch_feedback is not None and self.path_feedback is None):
+            return False
+        return min(self.nominal_params().etas) < 1.0
 
     @property
     def eta_schedule_kind(self) -> str | None:
@@ -200,6 +206,10 @@ class Scenario:
             raise ValueError(f"metrics={self.metrics!r} is not allowed: give a list of names")
         if self.path_feedback is not None:
             check_config(self.path_feedback)
+        if self.hitch_feedback is not None:
+            from tt_mujoco.controllers.backing import check_config as check_hitch
+
+            check_hitch(self.hitch_feedback)
         parse_faults(self.faults)
         if not isinstance(self.train, list | tuple):
             raise ValueError(f"train={self.train!r} is not allowed: give a list of tables")

@@ -87,6 +87,7 @@ class Stepper:
         self._jk_phi = math.radians(jackknife_phi_deg(self.eta))
         self._mode = s.disturbance
         self._feedback = s.path_feedback is not None
+        self._measured_target = getattr(built.target, "uses_measurement", False)
         self._limit = built.nominal.torque_limit
         self._dist_limit = built.disturbance_limit
         self._dist_label = usercode.disturbance_label(built)
@@ -169,7 +170,10 @@ class Stepper:
         if self.faults is not None:
             phi_m, v_m, w_m = self.faults.sensor(k, phi_m, v_m, w_m)
         target = self.built.target
-        if self._feedback:
+        if self._measured_target:
+            v_d, w_d, v_d_dot, w_d_dot = target.update(t, self.dt, v_m, me)
+            self._omega_ref = target.reference_omega_d
+        elif self._feedback:
             v_d, w_d, v_d_dot, w_d_dot = target.update(t, self.dt, v_m, me.x, me.y, me.theta)
             self._omega_ref = target.reference_omega_d
         else:

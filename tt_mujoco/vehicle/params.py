@@ -13,7 +13,7 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
-from tt_mujoco.defaults import TORQUE_LIMIT
+from tt_mujoco.defaults import JACKKNIFE_DEG, TORQUE_LIMIT
 
 __all__ = [
     "MAX_TRAILERS",
@@ -21,6 +21,7 @@ __all__ = [
     "TRAILER_FIELDS",
     "Params",
     "Trailer",
+    "jackknife_phi_deg",
     "resolve_eta",
     "same_path_eta",
     "train_same_path_etas",
@@ -444,3 +445,10 @@ class Params:
         else:
             del out["train"]
         return out
+
+
+def jackknife_phi_deg(eta: float) -> float:
+    """|phi| (deg) at which a run stops as a jackknife: |beta| = |eta phi| reaches
+    :data:`~tt_mujoco.defaults.JACKKNIFE_DEG`, or |phi| reaches 90 deg (the trailer across
+    the tractor)."""
+    return min(JACKKNIFE_DEG / abs(eta), 90.0) if eta else 90.0

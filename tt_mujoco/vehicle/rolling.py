@@ -22,7 +22,7 @@ import numpy as np
 
 from tt_mujoco.vehicle.path_schedule import nearest_arc_length
 
-__all__ = ["constant_steering", "drive_along_path", "schedule_steering"]
+__all__ = ["constant_steering", "drive_along_path", "hitch_rates", "schedule_steering"]
 
 
 def _rates(path, s, thetas, lengths, steering, arcs, v):
@@ -123,3 +123,38 @@ def schedule_steering(schedule) -> Callable:
     """The path schedule's law beta_k = eta_k(s_k) phi_k at the axle's own arc length, as the
     running plant applies it (:class:`tt_mujoco.vehicle.path_schedule.PathSchedule`)."""
     return lambda k, s_axle, phi: schedule.eta(k, s_axle) * phi
+
+
+def hitch_rates(phis, v: float, omega: float, lengths, etas) -> list[tuple[float, float, float]]:
+    """``(phi_k_dot, v_k, theta_k_dot)`` of every trailer from the tractor's ``(v, omega)``:
+    velocities only, in the tractor's frame (the same values as
+    :func:`tt_mujoco.vehicle.train.trailer_rates`, without its accelerations; a tenth of its
+    cost, for per-step use in controllers).
+
+    Parameters
+    ----------
+    phis : sequence of float
+        Hitch angles phi_1..phi_N (rad).
+    v, omega : float
+        The tractor's speed (m/s, negative reversing) and yaw rate (rad/s).
+    lengths : sequence of (L_k, L0_k)
+    etas : sequence of float
+        The steering gains (beta_k = eta_k phi_k).
+    """
+    out = []
+    heading, vx, vy, rate = 0.0, v, 0.0, omega
+    for (L, L0), phi, eta in zip(lengths, phis, etas, strict=True):
+        c, s = math.cos(heading), math.sin(heading)
+        ox, oy = vx + L * rate * s, vy - L * rate * c  # the hitch, L behind along the heading
+        theta = heading - phi
+        beta = eta * phi
+        cos_beta = math.cos(beta)
+        alpha = theta + beta
+        v_k = (ox * math.cos(theta) + oy * math.sin(theta)) / cos_beta
+        theta_dot = (-ox * math.sin(alpha) + oy * math.cos(alpha)) / (L0 * cos_beta)
+        out.append((rate - theta_dot, v_k, theta_dot))
+        # the axle: the hitch's velocity minus the drawbar's rotation
+        vx = ox + L0 * theta_dot * math.sin(theta)
+        vy = oy - L0 * theta_dot * math.cos(theta)
+        heading, rate = theta, theta_dot
+    return out
