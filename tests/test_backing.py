@@ -126,14 +126,17 @@ def test_one_trailer_backs_along_every_path(plant, traj):
         assert rms < 0.020 and worst < 0.050, (disturbance, rms, worst)
 
 
-@pytest.mark.parametrize("traj", ["s_curve", "circle", "cycloid"])
-def test_two_trailers_back_without_jackknifing(traj):
-    # N = 2: no jackknife on either plant; the leading axle's max measured 21-36 mm, its rms
-    # 12-24 mm (above the 20 mm on the S-curve and circle: docs/model.md Section 14).
-    for plant in ("mujoco", "reduced"):
-        result = simulate(Scenario(traj=traj, plant=plant, reverse=True, trailers=2))
-        assert result.status == "ok", result.message
-        assert _lead(result.metrics, 2)[1] < 0.050
+@pytest.mark.parametrize(
+    ("traj", "plant"),
+    [("s_curve", "mujoco"), ("circle", "mujoco"), ("cycloid", "mujoco"), ("cycloid", "reduced")],
+)
+def test_two_trailers_back_without_jackknifing(traj, plant):
+    # N = 2: no jackknife; the leading axle's max measured 21-36 mm, its rms 12-24 mm (above
+    # the 20 mm on the S-curve and circle: docs/model.md Section 14). The reduced
+    # plant's train runs in Python (slow); docs/backing_study.md has its every case.
+    result = simulate(Scenario(traj=traj, plant=plant, reverse=True, trailers=2))
+    assert result.status == "ok", result.message
+    assert _lead(result.metrics, 2)[1] < 0.050
 
 
 def test_no_hitch_feedback_jackknifes_as_before(tmp_path):
