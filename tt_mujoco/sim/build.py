@@ -25,9 +25,9 @@ from tt_mujoco.sim.disturbances import make_disturbance
 from tt_mujoco.sim.faults import FaultSchedule, parse_faults
 from tt_mujoco.sim.plant import Plant
 from tt_mujoco.sim.plant_reduced import ReducedPlant
-from tt_mujoco.sim.scenario import Scenario, jackknife_phi_deg
+from tt_mujoco.sim.scenario import Scenario
 from tt_mujoco.sim.schedule import EtaScheduler, PathEtaScheduler
-from tt_mujoco.vehicle.params import Params
+from tt_mujoco.vehicle.params import Params, jackknife_phi_deg
 from tt_mujoco.vehicle.path_schedule import PathSchedule, axle_chain, path_schedule
 
 __all__ = ["Build", "build", "noise_std"]

@@ -22,6 +22,8 @@ import math
 
 import numpy as np
 
+from tt_mujoco.vehicle.rolling import hitch_rates
+
 __all__ = ["error_rates", "hitch_rates_with_jacobian", "jacobians"]
 
 
@@ -88,7 +90,7 @@ def error_rates(z, u, kappa: float, lengths, etas) -> np.ndarray:
     e_y, e_psi, *phis = (float(x) for x in z)
     v, omega = (float(x) for x in u)
     metric = 1.0 - kappa * e_y
-    rates, _ = hitch_rates_with_jacobian(phis, v, omega, lengths, etas)
+    rates = [row[0] for row in hitch_rates(phis, v, omega, lengths, etas)]
     return np.concatenate(
         [[v * math.sin(e_psi), omega - kappa * v * math.cos(e_psi) / metric], rates]
     )

@@ -36,6 +36,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tt_mujoco.vehicle.steering import wrap_angle
+
 __all__ = [
     "DEFAULT_ETA_MAX",
     "PathSchedule",
@@ -53,10 +55,6 @@ TABLE_SPACING = 0.002
 _PHI_TINY = 1e-7
 #: Bisection steps for the axle's arc length: brackets of ~1 m shrink below 1e-15 m.
 _BISECTIONS = 56
-
-
-def _wrap(angle):
-    return (angle + np.pi) % (2.0 * np.pi) - np.pi
 
 
 def axle_chain(path, s, lengths):
@@ -96,8 +94,9 @@ def axle_chain(path, s, lengths):
         # Bracket: O lies about L behind the unit ahead, the axle about L0 behind O.
         hi = s_ahead - min(L, 0.999 * L0) if L >= L0 else s_ahead.copy()
         lo = s_ahead - 2.0 * (L + L0) - 0.1
-        if np.any(excess(hi) >= 0.0) or np.any(excess(lo) <= 0.0):
-            bad = float(s_ahead.flat[np.flatnonzero((excess(hi) >= 0.0) | (excess(lo) <= 0.0))[0]])
+        unbracketed = (excess(hi) >= 0.0) | (excess(lo) <= 0.0)
+        if np.any(unbracketed):
+            bad = float(s_ahead.flat[np.flatnonzero(unbracketed)[0]])
             raise ValueError(
                 f"path {path.name!r} at s={bad:.4g} m is not allowed for the path schedule: "
                 f"trailer {k}'s axle (L={L:g} m, L0={L0:g} m) cannot be placed on it"
@@ -116,8 +115,8 @@ def axle_chain(path, s, lengths):
                 "x": px,
                 "y": py,
                 "theta": thk,
-                "phi": _wrap(fth - thk),
-                "beta": _wrap(tangent - thk),
+                "phi": wrap_angle(fth - thk),
+                "beta": wrap_angle(tangent - thk),
             }
         )
         s_ahead, fx, fy, fth = sk, px, py, thk

@@ -43,6 +43,7 @@ __all__ = [
     "steady_articulation",
     "steady_offtrack",
     "steady_train",
+    "wrap_angle",
 ]
 
 #: Below this |kappa| (1/m) the exact gain is its limit (the error is O(kappa^2), < 1e-12 here).
@@ -216,14 +217,15 @@ def exact_train_same_path_etas(kappa: float, lengths) -> list[float]:
         px, py = a * ux + h * uy, a * uy - h * ux
         thk = math.atan2(oy - py, ox - px)
         alpha = math.atan2(py, px) + 0.5 * math.pi
-        phi = _wrap(fth - thk)
-        beta = _wrap(alpha - thk)
+        phi = wrap_angle(fth - thk)
+        beta = wrap_angle(alpha - thk)
         etas.append(beta / phi)
         fx, fy, fth = px, py, thk
     return etas
 
 
-def _wrap(angle: float) -> float:
+def wrap_angle(angle):
+    """``angle`` (rad, a float or an array) wrapped into [-pi, pi)."""
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
