@@ -128,8 +128,8 @@ def schedule_steering(schedule) -> Callable:
 def hitch_rates(phis, v: float, omega: float, lengths, etas) -> list[tuple[float, float, float]]:
     """``(phi_k_dot, v_k, theta_k_dot)`` of every trailer from the tractor's ``(v, omega)``:
     velocities only, in the tractor's frame (the same values as
-    :func:`tt_mujoco.vehicle.train.trailer_rates`, without its accelerations; a tenth of its
-    cost, for per-step use in controllers).
+    :func:`tt_mujoco.vehicle.train.trailer_rates`, without its accelerations, for per-step use
+    in controllers).
 
     Parameters
     ----------
