@@ -27,6 +27,7 @@ from tt_mujoco.controllers.base import (
     reduced_model,
 )
 from tt_mujoco.controllers.fbl import FblController
+from tt_mujoco.controllers.nmpc import NmpcController
 from tt_mujoco.controllers.ismc_sta import IsmcStaController
 from tt_mujoco.controllers.pid import PidController
 from tt_mujoco.controllers.stanley import StanleyController
@@ -41,6 +42,7 @@ __all__ = [
     "FblController",
     "IsmcStaController",
     "ModelFn",
+    "NmpcController",
     "PidController",
     "Reference",
     "StanleyController",
@@ -58,6 +60,7 @@ CONTROLLERS.register("ismc_sta", IsmcStaController)
 CONTROLLERS.register("pid", PidController)
 CONTROLLERS.register("fbl", FblController)
 CONTROLLERS.register("stanley", StanleyController)
+CONTROLLERS.register("nmpc", NmpcController)
 
 
 def controller_class(spec: str) -> type[Controller]:

@@ -121,6 +121,8 @@ class ControllerSetup:
         The control period (s): ``compute`` is called every ``control_dt``.
     path : tt_mujoco.reference.paths.ReferencePath or None
         The reference path (``pose_at(s)``, ``curvature(s)``, ``dense()``, ``length``).
+    reverse : bool
+        Whether the run drives the path backwards (``--reverse``: v_d <= 0, the trailer leads).
     """
 
     params: Any
@@ -128,6 +130,7 @@ class ControllerSetup:
     torque_limit: float = TORQUE_LIMIT
     control_dt: float = 0.001
     path: Any = None
+    reverse: bool = False
 
 
 class Reference:
@@ -215,6 +218,11 @@ class Controller(ABC):
 
     def reset(self) -> None:  # noqa: B027 - optional hook: stateless controllers need none
         """Forget everything from a previous run (called before the first step)."""
+
+    def report(self) -> dict:
+        """Figures of the whole run for ``metrics.json`` (under ``controller``): numbers or
+        None, keyed by name; empty (the default) adds nothing. Called once after the run."""
+        return {}
 
     def log(self, name: str, value: float) -> None:
         """Record a signal of this step (an error, an integrator, a prediction): it lands in

@@ -203,6 +203,7 @@ def build(scenario: Scenario) -> Build:
         torque_limit=nominal.torque_limit,
         control_dt=dt,
         path=path,
+        reverse=bool(scenario.reverse),
     )
     cls = controller_class(scenario.controller)
     if scenario.reverse and not getattr(cls, "REVERSE", True):

@@ -225,6 +225,9 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
         metrics[name], error = user_metric(fn, ts, built.path)
         if error is not None:
             metrics.setdefault("metric_errors", {})[name] = error
+    report = controller.report()
+    if report:
+        metrics["controller"] = report
     metrics["wall_time_s"] = wall
     metrics["status"] = status
     if stepper.faults is not None:
