@@ -27,8 +27,8 @@ from tt_mujoco.controllers.base import (
     reduced_model,
 )
 from tt_mujoco.controllers.fbl import FblController
-from tt_mujoco.controllers.nmpc import NmpcController
 from tt_mujoco.controllers.ismc_sta import IsmcStaController
+from tt_mujoco.controllers.nmpc import NmpcController
 from tt_mujoco.controllers.pid import PidController
 from tt_mujoco.controllers.stanley import StanleyController
 

@@ -21,10 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["MissingSolver", "QpSolution", "TrackingQP"]
+__all__ = ["MissingSolverError", "QpSolution", "TrackingQP"]
 
 
-class MissingSolver(ImportError, ValueError):
+class MissingSolverError(ImportError, ValueError):
     """The optional QP solver is not installed (a ValueError too: the run is refused as bad
     input, exit 2)."""
 
@@ -33,7 +33,7 @@ def _osqp():
     try:
         import osqp
     except ImportError:
-        raise MissingSolver(
+        raise MissingSolverError(
             "controller 'nmpc' needs the optional package osqp, which is not installed: "
             "pip install 'tt-mujoco[mpc]'"
         ) from None

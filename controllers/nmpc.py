@@ -37,7 +37,6 @@ import time
 from typing import ClassVar
 
 import numpy as np
-
 from tt_mujoco.controllers.backing import _SteadyInverse
 from tt_mujoco.controllers.base import Controller
 from tt_mujoco.controllers.mpc_qp import TrackingQP
@@ -59,8 +58,9 @@ class NmpcController(Controller):
     REVERSE = True
     PRESETS: ClassVar[dict[str, dict[str, float]]] = {
         "default": {
-            "horizon": 25.0, "horizon_reverse": 50.0, "sample_dt": 0.04, "q_s": 5000.0, "q_y": 2.0e4, "q_psi": 2.0e3,
-            "q_phi": 50.0, "q_v": 200.0, "q_omega": 20.0, "r_du": 0.02, "r_u": 1.0e-4,
+            "horizon": 25.0, "horizon_reverse": 50.0, "sample_dt": 0.04,
+            "q_s": 5000.0, "q_y": 2.0e4, "q_psi": 2.0e3, "q_phi": 50.0, "q_v": 200.0,
+            "q_omega": 20.0, "r_du": 0.02, "r_u": 1.0e-4,
             "phi_max_deg": 45.0, "k_dist": 0.3,
         },
     }  # fmt: skip
@@ -183,7 +183,7 @@ class NmpcController(Controller):
         return np.array([s, e_y, e_psi, *self._phis(m), m.v, m.omega])
 
     def _references(self, r) -> np.ndarray:
-        path, n = self.setup.path, self.n
+        n = self.n
         refs = np.zeros((self.horizon, self.nx))
         for k in range(1, self.horizon + 1):
             tau = k * self.dt

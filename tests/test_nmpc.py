@@ -98,7 +98,8 @@ def test_a_missing_solver_is_refused_as_bad_input(tmp_path):
     code = (
         "import sys; sys.modules['osqp'] = None\n"
         "from tt_mujoco.run import main\n"
-        f"sys.exit(main(['--controller', 'nmpc', '--no-video', '--no-plots', '--out', {str(out)!r}]))"
+        "sys.exit(main(['--controller', 'nmpc', '--no-video', '--no-plots', "
+        f"'--out', {str(out)!r}]))"
     )
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 2, done.stderr
