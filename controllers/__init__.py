@@ -28,6 +28,7 @@ from tt_mujoco.controllers.base import (
 )
 from tt_mujoco.controllers.fbl import FblController
 from tt_mujoco.controllers.ismc_sta import IsmcStaController
+from tt_mujoco.controllers.lqr import LqrController
 from tt_mujoco.controllers.nmpc import NmpcController
 from tt_mujoco.controllers.pid import PidController
 from tt_mujoco.controllers.stanley import StanleyController
@@ -41,6 +42,7 @@ __all__ = [
     "ControllerSetup",
     "FblController",
     "IsmcStaController",
+    "LqrController",
     "ModelFn",
     "NmpcController",
     "PidController",
@@ -60,6 +62,7 @@ CONTROLLERS.register("ismc_sta", IsmcStaController)
 CONTROLLERS.register("pid", PidController)
 CONTROLLERS.register("fbl", FblController)
 CONTROLLERS.register("stanley", StanleyController)
+CONTROLLERS.register("lqr", LqrController)
 CONTROLLERS.register("nmpc", NmpcController)
 
 

@@ -105,6 +105,18 @@ def reduced_model(params) -> ModelFn:
     return model
 
 
+def track_velocities(model: ModelFn, m, v_c, v_c_dot, omega_c, k_v, k_omega):
+    """Wheel torques that make ``(v, omega)`` track ``(v_c, omega_c)`` through the nominal model
+    ``V_dot = f + g tau``: ``tau = g^-1 (a - f)`` with ``a = (v_c_dot + k_v e_v, k_omega e_omega)``
+    (the inner loop of the path trackers; ``m`` the measurement)."""
+    phi = m.phis if getattr(m, "train", ()) else m.phi  # a train's model takes every hitch
+    f1, f2, g11, g12, g21, g22 = model(phi, m.v, m.omega)
+    a_v = v_c_dot + k_v * (v_c - m.v) - f1
+    a_w = k_omega * (omega_c - m.omega) - f2
+    det = g11 * g22 - g12 * g21
+    return (g22 * a_v - g12 * a_w) / det, (g11 * a_w - g21 * a_v) / det
+
+
 @dataclass(frozen=True)
 class ControllerSetup:
     """What a controller is built with, once per run.

@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from tt_mujoco.controllers.base import Controller
+from tt_mujoco.controllers.base import Controller, track_velocities
 
 from tt_mujoco.reference.feedback import path_errors
 
@@ -58,12 +58,9 @@ class StanleyController(Controller):
         kappa = path.curvature_and_rate(s)[0]
         v_s = max(abs(m.v), k["v_min"])
         omega_c = kappa * m.v - k["k_heading"] * v_s * (e_psi + math.atan(k["k_cross"] * e_y / v_s))
-        phi = m.phis if getattr(m, "train", ()) else m.phi  # a train's model takes every hitch
-        f1, f2, g11, g12, g21, g22 = self.setup.model(phi, m.v, m.omega)
-        a_v = r.v_d_dot + k["k_v"] * (r.v_d - m.v) - f1
-        a_w = k["k_omega"] * (omega_c - m.omega) - f2
-        det = g11 * g22 - g12 * g21
         self.log("cross_track", e_y)
         self.log("heading_error", e_psi)
         self.log("omega_c", omega_c)
-        return (g22 * a_v - g12 * a_w) / det, (g11 * a_w - g21 * a_v) / det
+        return track_velocities(
+            self.setup.model, m, r.v_d, r.v_d_dot, omega_c, k["k_v"], k["k_omega"]
+        )
