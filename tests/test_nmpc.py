@@ -118,3 +118,35 @@ def test_metrics_json_carries_the_solve_times(tmp_path):
                            "sample_dt_s"}  # fmt: skip
     assert report["solves"] in (25, 26)  # samples at t = 0, 0.04, ..., 1 s
     assert report["solve_failures"] == 0
+
+
+class _Reporting:
+    def __init__(self, report):
+        self._report = report
+
+    def report(self):
+        if isinstance(self._report, Exception):
+            raise self._report
+        return self._report
+
+
+@pytest.mark.parametrize(
+    ("given", "kept", "error"),
+    [
+        (
+            {"n": np.int64(3), "x": np.float64(1.5), "gone": float("nan")},
+            {"n": 3, "x": 1.5, "gone": None},
+            None,
+        ),
+        ({"bad": "text"}, {}, "is not a number"),
+        ([1, 2], {}, "not a dict"),
+        (RuntimeError("boom"), {}, "RuntimeError: boom"),
+    ],
+)
+def test_a_controller_report_is_kept_as_strict_json_numbers_or_as_an_error(given, kept, error):
+    from tt_mujoco.sim.simulate import controller_report
+
+    report, message = controller_report(_Reporting(given))
+    assert report == kept
+    json.dumps(report, allow_nan=False)
+    assert (message is None) if error is None else (error in message)

@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import contextlib
+import math
 import signal
 import threading
 import time
 from dataclasses import dataclass
-from numbers import Real
+from numbers import Integral, Real
 
 import numpy as np
 
@@ -173,6 +174,26 @@ def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint
     return finish(built, stepper, controller, status, message, wall)
 
 
+def controller_report(controller) -> tuple[dict, str | None]:
+    """``(report, error)``: the controller's :meth:`~tt_mujoco.controllers.Controller.report`,
+    each value a finite number or None (strict JSON); a user's report that fails, or is not a
+    dict of numbers, must not lose the run."""
+    try:
+        report = controller.report()
+        if not isinstance(report, dict):
+            raise TypeError(f"report() returned {shown(report)}, not a dict")
+        clean = {}
+        for key, value in report.items():
+            if value is not None and not (isinstance(value, Real) and not isinstance(value, bool)):
+                raise TypeError(f"report() value {key}={shown(value)} is not a number or None")
+            finite = value is not None and math.isfinite(value)
+            number = int(value) if isinstance(value, Integral) else float(value)
+            clean[str(key)] = number if finite else None
+        return clean, None
+    except Exception as err:  # the user's code: kept as an error, never raised
+        return {}, f"{type(err).__name__}: {err}"
+
+
 def user_metric(fn, ts: dict, path) -> tuple[float | None, str | None]:
     """``(value, error)`` of a user's metric on read-only views of the time series: a metric
     that fails, or returns something other than a number, must not lose the run (its value
@@ -225,9 +246,11 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
         metrics[name], error = user_metric(fn, ts, built.path)
         if error is not None:
             metrics.setdefault("metric_errors", {})[name] = error
-    report = controller.report()
+    report, error = controller_report(controller)
     if report:
         metrics["controller"] = report
+    if error is not None:
+        metrics.setdefault("metric_errors", {})["controller.report"] = error
     metrics["wall_time_s"] = wall
     metrics["status"] = status
     if stepper.faults is not None:
