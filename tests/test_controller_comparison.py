@@ -1,0 +1,71 @@
+"""docs/controller_comparison.md is what its command prints (sample rows re-run here)."""
+
+import importlib.util
+import re
+from pathlib import Path
+
+import pytest
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+
+
+def _study():
+    spec = importlib.util.spec_from_file_location("comparison", DOCS / "controller_comparison.py")
+    study = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(study)
+    return study
+
+
+def _section(case: str) -> str:
+    text = (DOCS / "controller_comparison.md").read_text()
+    return text.split(f"## {case}\n", 1)[1].split("\n## ", 1)[0]
+
+
+@pytest.mark.parametrize(
+    ("case", "controller"),
+    [
+        ("S-curve, no disturbance", "NMPC"),
+        ("circle, no disturbance", "LQR"),
+        ("cycloid, paper disturbance (Table 3)", "ISMC-STA"),
+        ("S-curve backing up, no disturbance", "ISMC-STA"),
+    ],
+)
+def test_a_row_is_what_the_study_prints(case, controller):
+    study = _study()
+    cells = study.row(case, controller, "reduced")
+    # every figure but the three timings, which are this machine's
+    line = "| " + " | ".join(cells[:-3]) + " | "
+    assert line in _section(case)
+
+
+def test_every_case_lists_every_controller_that_drives_it():
+    study = _study()
+    for case in study.CASES:
+        rows = re.findall(r"^\| (\S+) \| (mujoco|reduced) \|", _section(case), re.M)
+        expected = {(name, plant) for name in study.CONTROLLERS for plant in ("mujoco", "reduced")}
+        if "backing up" in case:
+            expected = {(n, p) for n, p in expected if n not in ("Stanley", "LQR")}
+        assert set(rows) == expected
+
+
+def _rows(case: str) -> dict:
+    out = {}
+    for line in _section(case).splitlines():
+        cells = [c.strip() for c in line.strip("|").split("|")]
+        if len(cells) > 2 and cells[1] in ("mujoco", "reduced"):
+            out[(cells[0], cells[1])] = cells
+    return out
+
+
+def test_the_readme_quotes_the_page():
+    readme = (DOCS.parent / "README.md").read_text()
+    quoted = re.search(
+        r"NMPC holds the tractor's cross-track error to ([\d.]+) mm rms\s+\(ISMC-STA ([\d.]+) mm, "
+        r"LQR ([\d.]+) mm\) and solves its QP in a median ([\d.]+) ms of its 40 ms sample\s+"
+        r"period: the run goes ([\d.]+) times faster",
+        readme,
+    )
+    assert quoted, "the README's baseline sentence changed: update this test with it"
+    rows = _rows("S-curve, no disturbance")
+    nmpc, ismc, lqr = (rows[(name, "mujoco")] for name in ("NMPC", "ISMC-STA", "LQR"))
+    assert quoted.groups() == (nmpc[6], ismc[6], lqr[6], nmpc[10], nmpc[11])
