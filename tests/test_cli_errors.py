@@ -89,7 +89,7 @@ def csv_cases(d):
 
 OPTION_CASES = {
     "unknown path": (["--traj", "figure9"], "'figure9'"),
-    "unknown controller": (["--controller", "lqr"], "'lqr'"),
+    "unknown controller": (["--controller", "lqg"], "'lqg'"),
     "unknown target": (["--target", "dynamc"], "'dynamc'"),
     "unknown plant": (["--plant", "bullet"], "'bullet'"),
     "unknown eta": (["--eta", "banana"], "'banana'"),
@@ -157,7 +157,7 @@ def config_cases(d):
         "config unknown param": (cfg("p.toml", "[params]\nMtruck = 3.0\n"), "'Mtruck'"),
         "config out not allowed": (cfg("o.toml", 'out = "x"\n'), "'out' is not allowed"),
         "config bad param": (cfg("bp.toml", "[params]\nMf = -2.0\n"), "bp.toml' [params]: Mf=-2.0"),
-        "config bad value": (cfg("c.toml", 'controller = "lqr"\n'), "'lqr'"),
+        "config bad value": (cfg("c.toml", 'controller = "lqg"\n'), "'lqg'"),
         "config wrong type": (cfg("t.toml", 'duration = "long"\n'), "'long'"),
         "config flag not bool": (cfg("f.toml", 'video = "no"\n'), "'no'"),
         "config not toml": (cfg("bad.toml", "traj = \n"), "bad.toml"),

@@ -80,7 +80,7 @@ def test_values_lists_generators_and_toml_agree():
     [
         (["foo=1"], {}, "option 'foo' is not allowed"),
         (["scale.L=1.1"], {}, "option 'scale.L' is not allowed"),
-        (["controller=lqr"], {}, "controller='lqr' is not allowed"),
+        (["controller=lqg"], {}, "controller='lqg' is not allowed"),
         (["duration=-1"], {}, "duration=-1.0 is not allowed"),
         (["gain.k1_v=5,x"], {}, "gain.k1_v='x' is not allowed"),
         (["gain.kp_v=2"], {}, "'kp_v' (value 2.0) is not a gain of ismc_sta"),

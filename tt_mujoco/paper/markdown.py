@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 from tt_mujoco.outputs import json_safe
-from tt_mujoco.paper.causes import fmt
+from tt_mujoco.paper.causes import fmt, metric_of
 from tt_mujoco.paper.studies import row_pair
 from tt_mujoco.paper.suite import (
     FEEDBACK_CASES,
@@ -13,6 +13,7 @@ from tt_mujoco.paper.suite import (
     PLANTS,
     STEERING_VARIANTS,
     STUDY_PATHS,
+    TABLE_3_CONTROLLERS,
     TABLE_TITLES,
 )
 from tt_mujoco.sim import Scenario
@@ -187,3 +188,29 @@ def suite_setup_lines(seed: int) -> list[str]:
         "to the reference point (`rmse_position`).",
         f"- Seed {seed} for every run; the same command gives the same numbers.",
     ]
+
+
+#: The quantities of Table 3, in its order.
+TABLE_3_METRICS = ("rmse_v", "rmse_omega", "max_abs_v", "max_abs_omega")
+
+
+def baselines_markdown(records) -> list[str]:
+    """Table 3 with the six controllers: the paper's three and the baselines, on both plants
+    (ours only: the paper has no baseline columns)."""
+    out = [
+        "### Table 3 with the baselines (cycloid, paper disturbance; ours)",
+        "",
+        "Each cell is reduced / MuJoCo; Stanley, LQR and NMPC with their default gains "
+        "(docs/controllers.md), the others as in Table 3.",
+        "",
+        "| controller | e_v RMSE (m/s) | e_omega RMSE (rad/s) | max abs e_v (m/s) "
+        "| max abs e_omega (rad/s) | cross-track RMSE (m) |",
+        "|---|---|---|---|---|---|",
+    ]
+    for name, run in TABLE_3_CONTROLLERS.items():
+        cells = []
+        for metric in (*TABLE_3_METRICS, "cross_track_rms"):
+            pair = (fmt(metric_of(records, f"{run}@{plant}", metric)) for plant in PLANTS)
+            cells.append(" / ".join(pair))
+        out.append(f"| {name} | " + " | ".join(cells) + " |")
+    return [*out, ""]

@@ -12,6 +12,7 @@ from tt_mujoco.outputs import atomic_write, json_safe
 from tt_mujoco.paper.causes import CAUSES, explain_cells, fmt, metric_of, unique_cells
 from tt_mujoco.paper.figures import draw_figures
 from tt_mujoco.paper.markdown import (
+    baselines_markdown,
     config_markdown,
     feedback_markdown,
     steering_markdown,
@@ -93,6 +94,7 @@ def build_report(
         "",
     ]
     md += tables_markdown(rows)
+    md += baselines_markdown(records)
     if "fig_ratios.png" in figs:
         md += ["![ours / paper for every cell](fig_ratios.png)", ""]
 
@@ -200,7 +202,7 @@ def build_report(
     report = out / "report.md"
     atomic_write(report, "\n".join(md) + "\n")
 
-    summary = _summary_markdown(rows, steering, feedback, checks, info)
+    summary = _summary_markdown(rows, records, steering, feedback, checks, info)
     atomic_write(out / "summary.md", summary)
     payload = {
         "command": info.get("command", COMMAND),
@@ -275,7 +277,7 @@ FEEDBACK_NOTES = [
 ]
 
 
-def _summary_markdown(rows, steering, feedback, checks, info) -> str:
+def _summary_markdown(rows, records, steering, feedback, checks, info) -> str:
     """The README section: the tables, the steering ratios and the path-feedback gains."""
     md = [
         "## The paper's results in contact physics",
@@ -292,6 +294,7 @@ def _summary_markdown(rows, steering, feedback, checks, info) -> str:
         "",
     ]
     md += tables_markdown(rows)
+    md += baselines_markdown(records)
     md += ["### Passive steering: trailer off-tracking (m, rms over the run / on steady arcs)", ""]
     md += [
         "| path | plant | plain eta = 0 | half-difference -0.125 | same_path -1/7 | scheduled "

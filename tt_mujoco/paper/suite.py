@@ -66,6 +66,23 @@ TABLE_RUNS: dict[str, dict] = {
 }
 
 
+#: Table 3 with the baselines (docs/controllers.md), in Table 3's own case (cycloid, the paper's
+#: disturbance, dynamic target): column name -> run (a key of TABLE_RUNS or BASELINE_RUNS).
+BASELINE_RUNS: dict[str, dict] = {
+    "cycloid_stanley": {"traj": "cycloid", "controller": "stanley"},
+    "cycloid_lqr": {"traj": "cycloid", "controller": "lqr"},
+    "cycloid_nmpc": {"traj": "cycloid", "controller": "nmpc"},
+}
+TABLE_3_CONTROLLERS = {
+    "ISMC-STA": "cycloid_ismc_6_2",
+    "PID": "cycloid_pid",
+    "FBL": "cycloid_fbl",
+    "Stanley": "cycloid_stanley",
+    "LQR": "cycloid_lqr",
+    "NMPC": "cycloid_nmpc",
+}
+
+
 TABLE_TITLES = {
     1: "Table 1. Tracking performance (RMSE) under parameter uncertainties (cycloid)",
     2: "Table 2. Tracking performance (RMSE) under measurement noise (cycloid)",
@@ -263,6 +280,9 @@ def suite(quick: bool = False) -> list[RunSpec]:
     for base, kw in TABLE_RUNS.items():
         for plant in PLANTS:
             specs.append(RunSpec(f"{base}@{plant}", "table", _scenario(plant, **kw), True))
+    for base, kw in BASELINE_RUNS.items():
+        for plant in PLANTS:
+            specs.append(RunSpec(f"{base}@{plant}", "baselines", _scenario(plant, **kw)))
     for base, variant, plants in _ISOLATION:
         for plant in plants:
             kw = {**TABLE_RUNS[base], **VARIANTS[variant]}
