@@ -406,6 +406,19 @@ def _parse(argv) -> tuple[argparse.Namespace, argparse.ArgumentParser, dict, lis
     return args, parser, params, faults
 
 
+def scenario_from_argv(argv) -> Scenario:
+    """The :class:`~tt_mujoco.sim.Scenario` a command line (``--config FILE`` included) stands
+    for, as ``python -m tt_mujoco.run`` builds it.
+
+    Raises
+    ------
+    tt_mujoco.cliargs.BadInputError
+        A bad option or config file (the message names it).
+    """
+    args, _, params, faults = _parse(list(argv))
+    return _scenario(args, params, faults)
+
+
 def _check_gains(controller: str, gains, where: str) -> None:
     """Gains from a file are checked against the controller now, so the message names the file."""
     try:

@@ -1,0 +1,60 @@
+"""The Python API (tt_mujoco.api): the same numbers as the other routes, and its helpers."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import tt_mujoco
+from tt_mujoco.sim import Scenario
+from tt_mujoco.sim import simulate as sim_simulate
+
+
+def test_the_api_gives_the_numbers_of_the_simulation_loop():
+    scenario = tt_mujoco.Scenario(traj="circle", plant="reduced", duration=1.0, seed=3)
+    run = tt_mujoco.simulate(scenario)
+    direct = sim_simulate(scenario)
+    assert run.status == "ok"
+    for name, column in direct.timeseries.items():
+        np.testing.assert_array_equal(run.timeseries[name], column)
+    assert run.metrics["rmse_v"] == direct.metrics["rmse_v"]
+
+
+def test_to_pandas_carries_every_column_and_its_unit():
+    pd = pytest.importorskip("pandas")
+    run = tt_mujoco.simulate(Scenario(traj="circle", plant="reduced", duration=0.5))
+    frame = run.to_pandas()
+    assert isinstance(frame, pd.DataFrame)
+    assert set(frame.columns) == set(run.timeseries)
+    assert len(frame) == len(run.timeseries["t"])
+    assert frame.attrs["units"]["t"] == "s" and frame.attrs["units"]["phi"] == "rad"
+    np.testing.assert_array_equal(frame["x"].to_numpy(), run.timeseries["x"])
+
+
+def test_plot_writes_the_four_figures(tmp_path):
+    run = tt_mujoco.simulate(Scenario(traj="circle", plant="reduced", duration=0.5))
+    made = run.plot(tmp_path)
+    assert len(made) == 4 and all(p.exists() and p.stat().st_size > 0 for p in made)
+    with pytest.raises(ValueError, match="must be a folder"):
+        run.plot(tmp_path / "missing")
+
+
+def test_load_scenario_reads_a_toml_file_as_the_command_line_does(tmp_path):
+    file = tmp_path / "s.toml"
+    file.write_text('traj = "circle"\nplant = "reduced"\nduration = 1.5\n')
+    scenario = tt_mujoco.load_scenario(file, "--seed", "7")
+    assert (scenario.traj, scenario.plant, scenario.duration, scenario.seed) == (
+        "circle",
+        "reduced",
+        1.5,
+        7,
+    )
+    with pytest.raises(ValueError, match="dynamc"):
+        tt_mujoco.load_scenario(file, "--target", "dynamc")
+
+
+def test_importing_the_package_loads_no_simulation():
+    code = "import sys, tt_mujoco; print('mujoco' in sys.modules)"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.stdout.strip() == "False"
