@@ -1,4 +1,4 @@
-"""The README's comparison: ISMC-STA, PID and FBL on the S-curve, then ``compare``.
+"""The comparison of docs/compare.md: ISMC-STA, PID and FBL on the S-curve, then ``compare``.
 
     python docs/compare_example.py
 

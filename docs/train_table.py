@@ -1,4 +1,4 @@
-"""The README's train table: steady-arc off-tracking of a 3-trailer train, same-path gains
+"""The train table of docs/trains.md: steady-arc off-tracking of a 3-trailer train, same-path gains
 against plain trailers, in MuJoCo under ISMC-STA.
 
     python docs/train_table.py [--trailers 3] [--plant mujoco]

@@ -57,15 +57,32 @@ def _rows(case: str) -> dict:
     return out
 
 
-def test_the_readme_quotes_the_page():
-    readme = (DOCS.parent / "README.md").read_text()
+def test_the_results_page_quotes_the_comparison():
+    readme = (DOCS / "results.md").read_text()
     quoted = re.search(
         r"NMPC holds the tractor's cross-track error to ([\d.]+) mm rms\s+\(ISMC-STA ([\d.]+) mm, "
         r"LQR ([\d.]+) mm\) and solves its QP in a median ([\d.]+) ms of its 40 ms sample\s+"
         r"period: the run goes ([\d.]+) times faster",
         readme,
     )
-    assert quoted, "the README's baseline sentence changed: update this test with it"
+    assert quoted, "the results page's baseline sentence changed: update this test with it"
     rows = _rows("S-curve, no disturbance")
     nmpc, ismc, lqr = (rows[(name, "mujoco")] for name in ("NMPC", "ISMC-STA", "LQR"))
     assert quoted.groups() == (nmpc[6], ismc[6], lqr[6], nmpc[10], nmpc[11])
+
+
+def test_the_readme_headline_table_is_the_pages():
+    readme = (DOCS.parent / "README.md").read_text()
+    table = readme.split("## Headline results", 1)[1].split("\n## ", 1)[0]
+    cases = ("cycloid, paper disturbance (Table 3)", "S-curve, no disturbance")
+    cases += ("S-curve backing up, no disturbance",)
+    pages = [_rows(case) for case in cases]
+    lines = [line for line in table.splitlines() if line.startswith("| ") and "---" not in line]
+    assert len(lines) == 7  # the header and six controllers
+    for line in lines[1:]:
+        name, *cells = (c.strip() for c in line.strip("|").split("|"))
+        name = name.replace(" (the paper's)", "")
+        expected = [
+            rows[(name, "mujoco")][6] if (name, "mujoco") in rows else "—" for rows in pages
+        ]
+        assert cells == expected, name

@@ -1,17 +1,19 @@
 """The Python API: one run from a notebook or a script.
 
->>> import tt_mujoco
->>> run = tt_mujoco.simulate(tt_mujoco.Scenario(traj="circle", plant="reduced", duration=1.0))
->>> run.status
-'ok'
->>> frame = run.to_pandas()  # the time series, one column per signal, units in frame.attrs
->>> frame.attrs["units"]["v"]
-'m/s'
-
 :func:`simulate` is :func:`tt_mujoco.sim.simulate` (the same numbers as the command line for
 the same scenario and seed) with the result wrapped in a :class:`Run`, whose helpers draw the
 figures and the video the command line writes. :func:`load_scenario` reads a TOML scenario file
 as ``python -m tt_mujoco.run --config FILE`` does.
+
+Examples
+--------
+>>> import tt_mujoco
+>>> run = tt_mujoco.simulate(tt_mujoco.Scenario(traj="circle", plant="reduced", duration=1.0))
+>>> run.status
+'ok'
+>>> frame = run.to_pandas()  # the time series, one column per signal
+>>> frame.attrs["units"]["v"]
+'m/s'
 """
 
 from __future__ import annotations

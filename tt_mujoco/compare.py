@@ -3,7 +3,7 @@
 Reads each run's ``metrics.json`` and time series and writes into a new folder:
 
 - ``compare.md``: every numeric metric of the runs side by side, with each run's ratio to the
-  first run (the reference) - the table the README shows;
+  first run (the reference) - the table docs/compare.md shows;
 - ``compare.json``: the same numbers (strict JSON);
 - ``paths.png``: the tractor's (solid) and trailer's (dashed) tracks over the reference path;
 - ``errors.png``: e_v, e_omega and the lateral error over time, one colour per run;

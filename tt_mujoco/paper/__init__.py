@@ -19,7 +19,7 @@ on all
 
 The runs go to the project's process pool (:mod:`tt_mujoco.executor`, ``--workers``, default
 2) with a progress bar; identical scenarios run once. The report (``report.md``, ``report.json``,
-``summary.md`` for the README, figures) goes to ``renders/paper``, or to the first free
+``summary.md`` for docs/paper.md, figures) goes to ``renders/paper``, or to the first free
 ``renders/paper-N`` if that exists (never overwritten), or to ``--out DIR`` (new or empty).
 
 All runs use seed :data:`SUITE_SEED` and the same-path steering preset (the paper's eta = 3

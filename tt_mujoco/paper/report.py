@@ -278,7 +278,8 @@ FEEDBACK_NOTES = [
 
 
 def _summary_markdown(rows, records, steering, feedback, checks, info) -> str:
-    """The README section: the tables, the steering ratios and the path-feedback gains."""
+    """The section docs/paper.md carries (one heading level down there): the tables, the
+    steering ratios and the path-feedback gains."""
     md = [
         "## The paper's results in contact physics",
         "",
