@@ -25,7 +25,7 @@ DOCUMENTS = {
     "docs/controllers.md": 3,
     "docs/getting-started.md": 0,
     "docs/extending.md": 1,
-    "docs/scenarios.md": 2,
+    "docs/scenarios.md": 3,
     "docs/sweeps.md": 0,
     "docs/trains.md": 1,
 }

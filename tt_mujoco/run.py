@@ -58,6 +58,7 @@ from tt_mujoco.sim import COLUMNS, DISTURBANCE_MODES, PLANTS, TARGETS, Scenario,
 from tt_mujoco.sim.checkpoint import read_checkpoint
 from tt_mujoco.sim.faults import RECOVERY_S, parse_fault
 from tt_mujoco.sim.probe import check_user_code
+from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.sim.timeseries import UNITS, train_columns, unit_of
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
@@ -107,6 +108,13 @@ def _disturbance_limit(text: str) -> str | float:
     if text.strip().lower() in ("actuator", "none"):
         return text.strip().lower()
     return positive("--disturbance-limit")(text)
+
+
+def _terrain(text: str) -> str:
+    try:
+        return parse_terrain(text).spec()
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
 
 
 def _path_option(text: str) -> tuple[str, float | str]:
@@ -316,6 +324,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="tyre friction coefficient",
     )
     g.add_argument(
+        "--terrain",
+        type=_terrain,
+        default="flat",
+        metavar="flat|slope:GRADE_DEG[:HEADING_DEG]",
+        help="the ground: flat, or a constant grade rising along HEADING_DEG (default 0, +x); "
+        "MuJoCo plant only",
+    )
+    g.add_argument(
         "--timestep",
         type=positive("--timestep"),
         default=0.001,
@@ -473,6 +489,7 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
         trailers=args.trailers,
         train=list(getattr(args, "train", None) or []),
         time_limit_s=args.time_limit_s,
+        terrain=args.terrain,
     )
 
 
@@ -724,7 +741,9 @@ def _print_summary(result, out: Path, written, notes) -> None:
     shown = f"eta={etas[0]:g}" if len(etas) == 1 else f"{len(etas)} trailers, eta_k={gains}"
     print(
         f"{s.traj} | {s.controller} | {s.target} target | {s.plant} plant | {shown} | "
-        f"disturbance={s.disturbance} | status={result.status}"
+        f"disturbance={s.disturbance}"
+        + ("" if s.terrain == "flat" else f" | terrain={s.terrain}")
+        + f" | status={result.status}"
     )
     # A train adds its worst trailer, and every trailer's off-tracking.
     train = [k for k in result.metrics if k.startswith("trailer_") and k[8].isdigit()]

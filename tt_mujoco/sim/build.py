@@ -27,6 +27,7 @@ from tt_mujoco.sim.plant import Plant
 from tt_mujoco.sim.plant_reduced import ReducedPlant
 from tt_mujoco.sim.scenario import Scenario
 from tt_mujoco.sim.schedule import EtaScheduler, PathEtaScheduler
+from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.vehicle.params import Params, jackknife_phi_deg
 from tt_mujoco.vehicle.path_schedule import PathSchedule, axle_chain, path_schedule
 
@@ -96,8 +97,10 @@ class Build:
                 phi0 = (phi0, *self.initial_hitches[1:])
         if s.plant == "mujoco":
             wrench = s.disturbance == "wrench"
+            terrain = parse_terrain(s.terrain)
+            gravity = None if terrain.flat else terrain.gravity
             return _plant_class("mujoco")(
-                self.plant_params, self.initial_pose, self.v_init, wrench, phi0
+                self.plant_params, self.initial_pose, self.v_init, wrench, phi0, gravity
             )
         return ReducedPlant(self.plant_params, self.initial_pose, self.v_init, s.timestep, phi0)
 

@@ -35,13 +35,20 @@ class MujocoPlant(Plant):
         Disturbances arrive as a chassis wrench instead of wheel torques.
     phi0 : float or tuple of float
         Initial articulation (rad), with beta = eta phi: phi_1, or phi_1..phi_N of a train.
+    gravity : (gx, gy, gz) or None
+        Gravity in the ground's frame (m/s^2): a grade (:mod:`tt_mujoco.sim.terrain`); None
+        keeps the model's flat-ground gravity.
     """
 
     name = "mujoco"
     DISTURBANCE_MODES = ("matched", "wrench", "none")
 
-    def __init__(self, params: Params, pose, v_init: float, wrench: bool, phi0: float = 0.0):
+    def __init__(
+        self, params: Params, pose, v_init: float, wrench: bool, phi0: float = 0.0, gravity=None
+    ):
         self.vehicle = Vehicle(params)
+        if gravity is not None:  # the model is the vehicle's own copy (physics.compile_model)
+            self.vehicle.model.opt.gravity[:] = gravity
         self.vehicle.set_state(x=pose[0], y=pose[1], theta=pose[2], phi=phi0, v=v_init)
         self.model, self.data = self.vehicle.model, self.vehicle.data
         lay = self.vehicle.layout

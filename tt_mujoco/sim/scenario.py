@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from tt_mujoco.defaults import CONTROL_DT, MAX_DURATION, TIME_LIMIT_S, TIMESTEP
 from tt_mujoco.reference.feedback import check_config
 from tt_mujoco.sim.faults import parse_faults
+from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.vehicle.params import INERTIA_FIELDS, MASS_FIELDS, Params, jackknife_phi_deg
 
 __all__ = [
@@ -101,6 +102,9 @@ class Scenario:
     #: with status "failed" and its rows so far kept. Enforced where the run is in a
     #: process's main thread (the CLI, a sweep's process workers), by SIGALRM.
     time_limit_s: float = TIME_LIMIT_S
+    #: The ground (:mod:`tt_mujoco.sim.terrain`): ``"flat"`` or ``"slope:GRADE_DEG[:HEADING_DEG]"``,
+    #: a constant grade rising along the heading (MuJoCo plant only).
+    terrain: str = "flat"
 
     @property
     def backs_with_cascade(self) -> bool:
@@ -211,6 +215,11 @@ class Scenario:
 
             check_hitch(self.hitch_feedback)
         parse_faults(self.faults)
+        if not parse_terrain(self.terrain).flat and self.plant != "mujoco":
+            raise ValueError(
+                f"terrain={self.terrain!r} with plant={self.plant!r} is not allowed: the reduced "
+                "plant has flat ground only; use plant='mujoco'"
+            )
         if not isinstance(self.train, list | tuple):
             raise ValueError(f"train={self.train!r} is not allowed: give a list of tables")
         self.nominal_params()  # the trailers' count and tables, checked by Params

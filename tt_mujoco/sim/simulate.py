@@ -23,6 +23,7 @@ from tt_mujoco.sim.plant import StopRun
 from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sim.scenario import Scenario
 from tt_mujoco.sim.stepper import Stepper
+from tt_mujoco.sim.terrain import parse_terrain
 
 __all__ = ["Result", "simulate"]
 
@@ -246,6 +247,15 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
         metrics[name], error = user_metric(fn, ts, built.path)
         if error is not None:
             metrics.setdefault("metric_errors", {})[name] = error
+    terrain = parse_terrain(scenario.terrain)
+    if not terrain.flat and len(ts["t"]):
+        metrics["terrain"] = {
+            "grade_deg": terrain.grade_deg,
+            "heading_deg": terrain.heading_deg,
+            # the paper's Delta_1 bias a free body on this grade would see
+            "equivalent_delta1": terrain.equivalent_delta1,
+            "torque_sum_mean": float(np.mean(ts["T_r"] + ts["T_l"])),
+        }
     report, error = controller_report(controller)
     if report:
         metrics["controller"] = report

@@ -11,6 +11,7 @@ from tt_mujoco.controllers import CONTROLLERS
 from tt_mujoco.registry import closest, is_hook, normalise_hook
 from tt_mujoco.sim import DISTURBANCE_MODES, PLANTS, TARGETS, Scenario
 from tt_mujoco.sim.scenario import ETA_SCHEDULES
+from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.vehicle.params import (
     INERTIA_FIELDS,
     MASS_FIELDS,
@@ -241,6 +242,11 @@ def convert(name: str, value):
         if isinstance(value, str) and value.strip().lower() in ETA_SCHEDULES:
             return value.strip().lower()
         return _boolean(name, value, extra=f"true, false or one of {', '.join(ETA_SCHEDULES)}")
+    if name == "terrain":
+        try:
+            return parse_terrain(_text(name, value)).spec()
+        except ValueError as err:
+            raise BadSpecError(str(err)) from None
     if name in SCENARIO_OPTIONS:  # a newer Scenario field: checked by the type of its default
         default = next(f.default for f in dataclasses.fields(Scenario) if f.name == name)
         if isinstance(default, bool):

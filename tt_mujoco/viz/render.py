@@ -505,6 +505,10 @@ def run_labels(scenario: Mapping, status: str | None, message: str) -> tuple[str
         f"{scenario.get(k, '?')}{suffix}"
         for k, suffix in (("controller", ""), ("plant", " plant"), ("target", " target"))
     )
+    terrain = scenario.get("terrain", "flat")
+    if terrain != "flat":  # the ground is drawn flat: the plane's own frame
+        grade, _, heading = terrain.removeprefix("slope:").partition(":")
+        info += f" | grade {grade}@{heading or 0} deg"
     if status is None:
         return info, None
     return info, (_TITLES.get(status, status.upper()), textwrap.wrap(message, 58))
