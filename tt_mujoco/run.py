@@ -57,6 +57,7 @@ from tt_mujoco.progress import progress_bar
 from tt_mujoco.sim import COLUMNS, DISTURBANCE_MODES, PLANTS, TARGETS, Scenario, build
 from tt_mujoco.sim.checkpoint import read_checkpoint
 from tt_mujoco.sim.faults import RECOVERY_S, parse_fault
+from tt_mujoco.sim.motors import ACTUATORS
 from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.sim.timeseries import UNITS, train_columns, unit_of
@@ -324,6 +325,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="tyre friction coefficient",
     )
     g.add_argument(
+        "--actuator",
+        choices=ACTUATORS,
+        default="ideal",
+        help="ideal: the wheels get the commanded torque; dc_motor: a DC motor per wheel with "
+        "its lag and current and voltage limits (Params motor_*, set with --param)",
+    )
+    g.add_argument(
         "--terrain",
         type=_terrain,
         default="flat",
@@ -490,6 +498,7 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
         train=list(getattr(args, "train", None) or []),
         time_limit_s=args.time_limit_s,
         terrain=args.terrain,
+        actuator=args.actuator,
     )
 
 

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from tt_mujoco.defaults import CONTROL_DT, MAX_DURATION, TIME_LIMIT_S, TIMESTEP
 from tt_mujoco.reference.feedback import check_config
 from tt_mujoco.sim.faults import parse_faults
+from tt_mujoco.sim.motors import ACTUATORS
 from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.vehicle.params import INERTIA_FIELDS, MASS_FIELDS, Params, jackknife_phi_deg
 
@@ -105,6 +106,10 @@ class Scenario:
     #: The ground (:mod:`tt_mujoco.sim.terrain`): ``"flat"`` or ``"slope:GRADE_DEG[:HEADING_DEG]"``,
     #: a constant grade rising along the heading (MuJoCo plant only).
     terrain: str = "flat"
+    #: What turns the torque command into wheel torque (:mod:`tt_mujoco.sim.motors`):
+    #: ``"ideal"`` (at once, the paper's) or ``"dc_motor"`` (a DC motor per wheel with its
+    #: lag and its current and voltage limits, the ``motor_*`` fields of ``Params``).
+    actuator: str = "ideal"
 
     @property
     def backs_with_cascade(self) -> bool:
@@ -215,6 +220,8 @@ class Scenario:
 
             check_hitch(self.hitch_feedback)
         parse_faults(self.faults)
+        if self.actuator not in ACTUATORS:
+            raise ValueError(f"actuator={self.actuator!r} is not allowed: use one of {ACTUATORS}")
         if not parse_terrain(self.terrain).flat and self.plant != "mujoco":
             raise ValueError(
                 f"terrain={self.terrain!r} with plant={self.plant!r} is not allowed: the reduced "

@@ -25,6 +25,7 @@ from tt_mujoco.sim.build import Build
 from tt_mujoco.sim.checkpoint import Checkpoint
 from tt_mujoco.sim.disturbances import injected
 from tt_mujoco.sim.measure import Measurement
+from tt_mujoco.sim.motors import DcMotors
 from tt_mujoco.sim.plant import StopRun
 from tt_mujoco.sim.scenario import jackknife_phi_deg
 from tt_mujoco.sim.timeseries import LOOP_COLUMNS, assemble_columns, train_columns
@@ -118,6 +119,9 @@ class Stepper:
         )
         self.plant = b.new_plant(phi0_deg)
         self.faults = b.new_faults()
+        self.motors = (
+            DcMotors(b.plant_params, b.control_dt) if b.scenario.actuator == "dc_motor" else None
+        )
         self.scheduler = b.new_scheduler(self.plant)
         b.target.reset()
         self.k = 0
@@ -223,6 +227,8 @@ class Stepper:
             factor = faults.payload_factor(k)
             if factor is not None:
                 self.plant.scale_trailer_mass(factor)
+        if self.motors is not None:  # what the motors deliver of the command, over this step
+            T_r, T_l = self.motors.deliver(T_r, T_l, me.theta_r_dot, me.theta_l_dot)
         dist_r = dist_l = force = torque = 0.0
         clipped = 0.0
         dist = self.built.disturbance

@@ -10,6 +10,7 @@ from pathlib import Path
 from tt_mujoco.controllers import CONTROLLERS
 from tt_mujoco.registry import closest, is_hook, normalise_hook
 from tt_mujoco.sim import DISTURBANCE_MODES, PLANTS, TARGETS, Scenario
+from tt_mujoco.sim.motors import ACTUATORS
 from tt_mujoco.sim.scenario import ETA_SCHEDULES
 from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.vehicle.params import (
@@ -242,6 +243,8 @@ def convert(name: str, value):
         if isinstance(value, str) and value.strip().lower() in ETA_SCHEDULES:
             return value.strip().lower()
         return _boolean(name, value, extra=f"true, false or one of {', '.join(ETA_SCHEDULES)}")
+    if name == "actuator":
+        return _choice(name, value, ACTUATORS)
     if name == "terrain":
         try:
             return parse_terrain(_text(name, value)).spec()

@@ -132,6 +132,17 @@ class Trailer:
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
 
 
+#: The drive motors' constants (:mod:`tt_mujoco.sim.motors`).
+MOTOR_FIELDS = (
+    "motor_kt",
+    "motor_resistance",
+    "motor_voltage",
+    "motor_current_limit",
+    "motor_gear",
+    "motor_lag",
+)
+
+
 #: Largest steering gain accepted: beyond it the singularity |eta phi| = 90 deg is within a
 #: few degrees of articulation, and no run can start.
 MAX_ABS_ETA = 20.0
@@ -234,6 +245,20 @@ class Params:
         Roll and pitch inertia of the tractor and trailer bodies as a multiple of their yaw
         inertia (not in the paper; a flat plate has 0.5, and MuJoCo needs
         the triangle inequality I_roll + I_pitch >= I_yaw, so 0.6).
+    motor_kt : float
+        Torque constant of each drive motor (N m/A; its back-EMF constant in V s/rad), used
+        with ``actuator="dc_motor"`` (:mod:`tt_mujoco.sim.motors`, not in the paper).
+    motor_resistance : float
+        Winding resistance (ohm).
+    motor_voltage : float
+        Supply voltage (V).
+    motor_current_limit : float
+        The driver's current limit (A): with the defaults, 15 N m at the wheel, the paper's
+        torque limit.
+    motor_gear : float
+        Gear ratio, motor to wheel.
+    motor_lag : float
+        Time constant (s) of the driver's current, and so the torque, following its command.
     train : tuple of Trailer (or dicts of its fields)
         Trailers 2..N behind the first (empty: the paper's single trailer). Build copies of
         trailer 1 with :meth:`with_trailers`.
@@ -260,6 +285,12 @@ class Params:
     timestep: float = 0.001
     impratio: float = 10.0
     body_tilt_inertia_ratio: float = 0.6
+    motor_kt: float = 0.1
+    motor_resistance: float = 0.2
+    motor_voltage: float = 48.0
+    motor_current_limit: float = 30.0
+    motor_gear: float = 5.0
+    motor_lag: float = 0.005
     train: tuple = ()
     steering: str = field(default="", init=False, compare=False)
 
@@ -275,6 +306,7 @@ class Params:
             "friction",
             "impratio",
             "body_tilt_inertia_ratio",
+            *MOTOR_FIELDS,
         )
         for name in positive:
             object.__setattr__(self, name, _positive(name, getattr(self, name)))
