@@ -332,6 +332,13 @@ def build_parser() -> argparse.ArgumentParser:
         "its lag and current and voltage limits (Params motor_*, set with --param)",
     )
     g.add_argument(
+        "--sensor-delay",
+        type=finite("--sensor-delay"),
+        default=0.0,
+        metavar="S",
+        help="the sensors' delay (s, a multiple of the control period, shorter than the run)",
+    )
+    g.add_argument(
         "--terrain",
         type=_terrain,
         default="flat",
@@ -499,6 +506,7 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
         time_limit_s=args.time_limit_s,
         terrain=args.terrain,
         actuator=args.actuator,
+        sensor_delay=args.sensor_delay,
     )
 
 

@@ -85,6 +85,8 @@ class Build:
     #: Hitch angles phi_1..phi_N (rad) at the start: zeros, or, backing up with the hitch
     #: cascade, those that put every axle on the path (phi0_deg, when set, replaces phi_1).
     initial_hitches: tuple = ()
+    #: The sensor delay in control steps (``Scenario.sensor_delay / control_dt``).
+    delay_steps: int = 0
 
     def new_plant(self, phi0_deg: float | None = None) -> Plant:
         """A fresh plant in the initial state (``phi0_deg`` overrides the scenario's)."""
@@ -117,6 +119,23 @@ class Build:
 
     def new_controller(self) -> Controller:
         return self.controller_class.from_setup(self.controller_setup, self.scenario.gains)
+
+
+def _delay_steps(scenario: Scenario, dt: float, duration: float) -> int:
+    """``sensor_delay`` in whole control periods, shorter than the run."""
+    delay = scenario.sensor_delay
+    steps = round(delay / dt)
+    if abs(delay - steps * dt) > 1e-9 * max(1.0, delay):
+        raise ValueError(
+            f"sensor_delay={delay!r} s is not allowed: it must be a whole multiple of the "
+            f"control period {dt!r} s"
+        )
+    if delay >= duration:
+        raise ValueError(
+            f"sensor_delay={delay!r} s is not allowed: it must be shorter than the run "
+            f"({duration:g} s)"
+        )
+    return steps
 
 
 def _initial_hitches(scenario: Scenario, path, start_s: float, plant_p: Params) -> tuple:
@@ -241,6 +260,7 @@ def build(scenario: Scenario) -> Build:
         ),
         start_s=start_s,
         initial_hitches=_initial_hitches(scenario, path, start_s, plant_p),
+        delay_steps=_delay_steps(scenario, dt, duration),
     )
     result.new_faults()  # a fault after the end of the run is refused now
     result.new_controller()  # bad gains fail before any work

@@ -72,6 +72,7 @@ def unsupported(built, controller, on_step=None) -> str | None:
         (bool(s.faults) or s.path_feedback is not None or s.eta_schedule, "faults or feedback"),
         (built.plant_params.n_trailers != 1, "a train"),
         (s.actuator != "ideal", "a motor model"),
+        (s.sensor_delay != 0.0, "a sensor delay"),
         (s.plant == "mujoco" and s.disturbance == "wrench", "the wrench disturbance"),
         (on_step is not None, "a per-step callback"),
         (

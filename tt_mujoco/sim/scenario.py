@@ -110,6 +110,9 @@ class Scenario:
     #: ``"ideal"`` (at once, the paper's) or ``"dc_motor"`` (a DC motor per wheel with its
     #: lag and its current and voltage limits, the ``motor_*`` fields of ``Params``).
     actuator: str = "ideal"
+    #: The sensors' delay (s, a whole multiple of ``control_dt``): the controller and the outer
+    #: loops see the readings of that long ago (the first reading until then).
+    sensor_delay: float = 0.0
 
     @property
     def backs_with_cascade(self) -> bool:
@@ -220,6 +223,15 @@ class Scenario:
 
             check_hitch(self.hitch_feedback)
         parse_faults(self.faults)
+        delay = self.sensor_delay
+        if (
+            isinstance(delay, bool)
+            or not isinstance(delay, int | float)
+            or not (math.isfinite(delay) and delay >= 0)
+        ):
+            raise ValueError(
+                f"sensor_delay={delay!r} is not allowed: it must be a finite number of seconds >= 0"
+            )
         if self.actuator not in ACTUATORS:
             raise ValueError(f"actuator={self.actuator!r} is not allowed: use one of {ACTUATORS}")
         if not parse_terrain(self.terrain).flat and self.plant != "mujoco":

@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import collections
 import math
 
 import numpy as np
@@ -122,6 +123,9 @@ class Stepper:
         self.motors = (
             DcMotors(b.plant_params, b.control_dt) if b.scenario.actuator == "dc_motor" else None
         )
+        steps = b.delay_steps
+        # until `steps` readings exist, the first one is what the sensors have given
+        self._delayed = None if not steps else collections.deque(maxlen=steps + 1)
         self.scheduler = b.new_scheduler(self.plant)
         b.target.reset()
         self.k = 0
@@ -173,23 +177,30 @@ class Stepper:
         phi_m = me.phi
         if self.faults is not None:
             phi_m, v_m, w_m = self.faults.sensor(k, phi_m, v_m, w_m)
+        seen = (
+            me
+            if (phi_m, v_m, w_m) == (me.phi, me.v, me.omega)
+            else me._replace(phi=phi_m, v=v_m, omega=w_m)
+        )
+        sensed = me  # what the outer loops (path feedback, the hitch cascade) read
+        delayed = self._delayed
+        if delayed is not None:  # the loops see the readings of `delay` steps ago
+            delayed.append((me, seen))
+            sensed, seen = delayed[0]
+            v_m, w_m = seen.v, seen.omega
         target = self.built.target
         if self._measured_target:
-            v_d, w_d, v_d_dot, w_d_dot = target.update(t, self.dt, v_m, me)
+            v_d, w_d, v_d_dot, w_d_dot = target.update(t, self.dt, v_m, sensed)
             self._omega_ref = target.reference_omega_d
         elif self._feedback:
-            v_d, w_d, v_d_dot, w_d_dot = target.update(t, self.dt, v_m, me.x, me.y, me.theta)
+            x, y, theta = sensed.x, sensed.y, sensed.theta
+            v_d, w_d, v_d_dot, w_d_dot = target.update(t, self.dt, v_m, x, y, theta)
             self._omega_ref = target.reference_omega_d
         else:
             v_d, w_d, v_d_dot, w_d_dot = target.update(t, self.dt, v_m)
             self._omega_ref = w_d
         self.measurement = me
         self._seen = (v_m, w_m)
-        seen = (
-            me
-            if (phi_m, v_m, w_m) == (me.phi, me.v, me.omega)
-            else me._replace(phi=phi_m, v=v_m, omega=w_m)
-        )
         ref = Reference(
             t, target.arc_length, target.curvature, v_d, w_d, v_d_dot, w_d_dot, self.built.path
         )
