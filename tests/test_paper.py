@@ -239,7 +239,7 @@ def test_steady_mask_windows_on_the_s_curve():
     assert np.array_equal(reverse[clear], expected_rev[clear])
 
 
-def test_table_3_gains_the_baselines_and_the_readme_quotes_the_suite():
+def test_table_3_gains_the_baselines_and_the_docs_quote_the_suite():
     from tt_mujoco.paper.markdown import baselines_markdown
     from tt_mujoco.paper.suite import PLANTS, TABLE_3_CONTROLLERS
     from tt_mujoco.sim import simulate
@@ -249,11 +249,11 @@ def test_table_3_gains_the_baselines_and_the_readme_quotes_the_suite():
     for run in TABLE_3_CONTROLLERS.values():
         for plant in PLANTS:
             assert f"{run}@{plant}" in specs
-    # Re-run the LQR's reduced-plant run: its halves of the README's row are the suite's.
+    # Re-run the LQR's reduced-plant run: its halves of docs/paper.md's row are the suite's.
     key = "cycloid_lqr@reduced"
     records = {key: {"status": "ok", "metrics": simulate(specs[key].scenario).metrics}}
     ours = next(line for line in baselines_markdown(records) if line.startswith("| LQR |"))
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    quoted = next(line for line in readme.splitlines() if line.startswith("| LQR | 0."))
+    page = (Path(__file__).resolve().parents[1] / "docs" / "paper.md").read_text()
+    quoted = next(line for line in page.splitlines() if line.startswith("| LQR | 0."))
     halves = [cell.split(" / ")[0] for cell in quoted.strip("|").split("|")[1:]]
     assert [cell.split(" / ")[0] for cell in ours.strip("|").split("|")[1:]] == halves
