@@ -10,10 +10,13 @@ same-path trailer, the cycloid and the S-curve (dynamic target) under:
 - no disturbance, and the paper's Delta(t) (matched wheel torques, the default);
 - the grade whose pull on a free body is Delta_1's constant 3.5 m/s^2 (20.9 deg), rising along
   the path's start tangent (docs/model.md Section 16), without Delta(t);
+- a gusty wind across the path's start, 10 m/s with gusts of 3 m/s (Section 18), without
+  Delta(t);
 - a DC motor per wheel with a 20 ms lag and a 20 A current limit (10 N m at the wheel;
   Section 17);
 - a 20 ms measurement delay;
-- the trailer's mass and yaw inertia times 1.5 from t = 5 s (the fault ``payload``).
+- the trailer's mass and yaw inertia times 1.5 from the middle of the run on (the fault
+  ``payload``: t = 2 s on the 4.7 s cycloid, 5 s on the 13.8 s S-curve).
 
 Printed per run: the tractor's cross-track rms (mm), rmse of e_v (m/s) and e_omega (rad/s), the
 share of steps at the torque limit, and how the run ended.
@@ -25,14 +28,15 @@ import argparse
 import math
 import sys
 
+from tt_mujoco.reference.paths import get_path
 from tt_mujoco.sim import Scenario, simulate
 from tt_mujoco.sim.terrain import GRAVITY
 
 #: The grade equivalent to Delta_1's bias: g sin(a) = 3.5 m/s^2.
 GRADE_DEG = math.degrees(math.asin(3.5 / GRAVITY))
 PATHS = ("cycloid", "s_curve")
-#: The cycloid starts heading 45 deg (its paper pose), the S-curve along +x.
-START_HEADING_DEG = {"cycloid": 45.0, "s_curve": 0.0}
+#: When the payload comes on: about the middle of each run.
+PAYLOAD_T = {"cycloid": 2.0, "s_curve": 5.0}
 CONTROLLERS = {
     "ISMC-STA": {"controller": "ismc_sta"},
     "PID": {"controller": "pid"},
@@ -45,15 +49,20 @@ CONTROLLERS = {
 
 def cases(path: str) -> dict[str, dict]:
     """Case name -> Scenario fields, for ``path``."""
-    grade = f"slope:{GRADE_DEG:.1f}:{START_HEADING_DEG[path]:g}"
+    start_heading = math.degrees(get_path(path).pose_at(0.0)[2])  # 67.5 deg, 0 deg
+    grade = f"slope:{GRADE_DEG:.1f}:{start_heading:g}"
     motor = {"motor_lag": 0.02, "motor_current_limit": 20.0}
     return {
         "no disturbance": {"disturbance": "none"},
         "paper Delta(t)": {},
         f"grade {GRADE_DEG:.1f} deg": {"disturbance": "none", "terrain": grade},
+        "gusty wind 10 m/s": {"disturbance": "none", "wind": f"10:{start_heading + 90:g}:3"},
         "DC motor, 20 ms, 20 A": {"disturbance": "none", "actuator": "dc_motor", "params": motor},
         "20 ms sensor delay": {"disturbance": "none", "sensor_delay": 0.02},
-        "payload x1.5 at 5 s": {"disturbance": "none", "faults": ["payload:t=5,factor=1.5"]},
+        f"payload x1.5 at {PAYLOAD_T[path]:g} s": {
+            "disturbance": "none",
+            "faults": [f"payload:t={PAYLOAD_T[path]:g},factor=1.5"],
+        },
     }
 
 

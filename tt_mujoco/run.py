@@ -61,6 +61,7 @@ from tt_mujoco.sim.motors import ACTUATORS
 from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.sim.timeseries import UNITS, train_columns, unit_of
+from tt_mujoco.sim.wind import parse_wind
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.viz import plots as plots_mod
@@ -109,6 +110,13 @@ def _disturbance_limit(text: str) -> str | float:
     if text.strip().lower() in ("actuator", "none"):
         return text.strip().lower()
     return positive("--disturbance-limit")(text)
+
+
+def _wind(text: str) -> str:
+    try:
+        return parse_wind(text).spec()
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
 
 
 def _terrain(text: str) -> str:
@@ -339,6 +347,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="the sensors' delay (s, a multiple of the control period, shorter than the run)",
     )
     g.add_argument(
+        "--wind",
+        type=_wind,
+        default="none",
+        metavar="SPEED[:DIRECTION_DEG[:GUST_STD]]",
+        help="wind blowing toward DIRECTION_DEG (m/s, deg from +x, gusts' std in m/s); "
+        "MuJoCo plant only",
+    )
+    g.add_argument(
         "--terrain",
         type=_terrain,
         default="flat",
@@ -507,6 +523,7 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
         terrain=args.terrain,
         actuator=args.actuator,
         sensor_delay=args.sensor_delay,
+        wind=args.wind,
     )
 
 

@@ -73,6 +73,7 @@ def unsupported(built, controller, on_step=None) -> str | None:
         (built.plant_params.n_trailers != 1, "a train"),
         (s.actuator != "ideal", "a motor model"),
         (s.sensor_delay != 0.0, "a sensor delay"),
+        (s.wind != "none", "wind"),
         (s.plant == "mujoco" and s.disturbance == "wrench", "the wrench disturbance"),
         (on_step is not None, "a per-step callback"),
         (

@@ -102,6 +102,17 @@ class MujocoPlant(Plant):
             qfrc[self._wheel_r] = dist_r
             qfrc[self._wheel_l] = dist_l
 
+    def blow(self, tractor, trailer) -> None:
+        """Horizontal forces (N) on the tractor's and the trailer's bodies for this step, the
+        wind's (on top of the chassis wrench of the "wrench" disturbance, if any)."""
+        for body, (fx, fy) in ((self._tractor, tractor), (self._trailer, trailer)):
+            xfrc = self._xfrc[body]
+            if self._wrench and body == self._tractor:
+                xfrc[0] += fx
+                xfrc[1] += fy
+            else:
+                xfrc[0], xfrc[1] = fx, fy
+
     def advance(self, substeps: int) -> None:
         start = self.data.time  # a warning resets MuJoCo's state, its clock included
         mujoco.mj_step(self.model, self.data, nstep=substeps)

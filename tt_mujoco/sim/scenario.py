@@ -16,6 +16,7 @@ from tt_mujoco.reference.feedback import check_config
 from tt_mujoco.sim.faults import parse_faults
 from tt_mujoco.sim.motors import ACTUATORS
 from tt_mujoco.sim.terrain import parse_terrain
+from tt_mujoco.sim.wind import parse_wind
 from tt_mujoco.vehicle.params import INERTIA_FIELDS, MASS_FIELDS, Params, jackknife_phi_deg
 
 __all__ = [
@@ -113,6 +114,9 @@ class Scenario:
     #: The sensors' delay (s, a whole multiple of ``control_dt``): the controller and the outer
     #: loops see the readings of that long ago (the first reading until then).
     sensor_delay: float = 0.0
+    #: Wind on the bodies (:mod:`tt_mujoco.sim.wind`): ``"none"`` or
+    #: ``"SPEED[:DIRECTION_DEG[:GUST_STD]]"`` (m/s, deg, m/s). MuJoCo plant only.
+    wind: str = "none"
 
     @property
     def backs_with_cascade(self) -> bool:
@@ -234,6 +238,11 @@ class Scenario:
             )
         if self.actuator not in ACTUATORS:
             raise ValueError(f"actuator={self.actuator!r} is not allowed: use one of {ACTUATORS}")
+        if not parse_wind(self.wind).calm and self.plant != "mujoco":
+            raise ValueError(
+                f"wind={self.wind!r} with plant={self.plant!r} is not allowed: the reduced plant "
+                "has no aerodynamics; use plant='mujoco'"
+            )
         if not parse_terrain(self.terrain).flat and self.plant != "mujoco":
             raise ValueError(
                 f"terrain={self.terrain!r} with plant={self.plant!r} is not allowed: the reduced "

@@ -30,6 +30,7 @@ from tt_mujoco.sim.motors import DcMotors
 from tt_mujoco.sim.plant import StopRun
 from tt_mujoco.sim.scenario import jackknife_phi_deg
 from tt_mujoco.sim.timeseries import LOOP_COLUMNS, assemble_columns, train_columns
+from tt_mujoco.sim.wind import drag_force, parse_wind
 from tt_mujoco.vehicle.reduced import SingularityError
 
 __all__ = ["CHECKPOINT_COLUMNS", "Stepper"]
@@ -136,6 +137,11 @@ class Stepper:
         self._noise = (
             rng.standard_normal(2 * (self.steps + 1)).tolist() if noise_v or noise_w else None
         )
+        wind = parse_wind(b.scenario.wind)
+        # the gusts are drawn after the noise, so that a wind leaves the noise as it was
+        self._wind = None if wind.calm else wind.speeds(rng, self.steps, self.dt).tolist()
+        direction = math.radians(wind.direction_deg)
+        self._wind_direction = (math.cos(direction), math.sin(direction))
         self._measured: list = []
         self._logged: list = []
         self._train_logged: list = []
@@ -206,6 +212,20 @@ class Stepper:
         )
         self._ref = ref
         return seen, ref
+
+    def _blow(self, k: int, me) -> None:
+        """The wind's drag on the tractor and the trailer over step ``k`` (sim/wind.py)."""
+        speed = self._wind[k]
+        wx, wy = speed * self._wind_direction[0], speed * self._wind_direction[1]
+        p = self.built.plant_params
+        tractor = drag_force(
+            wx, wy, me.v * math.cos(me.theta), me.v * math.sin(me.theta), p.drag_area_tractor
+        )
+        alpha = me.theta0 + me.beta  # the trailer axle's rolling direction
+        trailer = drag_force(
+            wx, wy, me.v0 * math.cos(alpha), me.v0 * math.sin(alpha), p.drag_area_trailer
+        )
+        self.plant.blow(tractor, trailer)
 
     def _check_train(self, me, t: float) -> None:
         """Stop when any hitch behind the first jackknifes."""
@@ -293,6 +313,8 @@ class Stepper:
         if self.scheduler is not None:
             self.scheduler.update(ref.kappa, k, me)
         self.plant.apply(T_r, T_l, dist_r, dist_l, force, torque, me.theta)
+        if self._wind is not None:
+            self._blow(k, me)
         try:
             self.plant.advance(self.built.substeps)
         except SingularityError as err:

@@ -13,6 +13,7 @@ from tt_mujoco.sim import DISTURBANCE_MODES, PLANTS, TARGETS, Scenario
 from tt_mujoco.sim.motors import ACTUATORS
 from tt_mujoco.sim.scenario import ETA_SCHEDULES
 from tt_mujoco.sim.terrain import parse_terrain
+from tt_mujoco.sim.wind import parse_wind
 from tt_mujoco.vehicle.params import (
     INERTIA_FIELDS,
     MASS_FIELDS,
@@ -245,6 +246,11 @@ def convert(name: str, value):
         return _boolean(name, value, extra=f"true, false or one of {', '.join(ETA_SCHEDULES)}")
     if name == "actuator":
         return _choice(name, value, ACTUATORS)
+    if name == "wind":
+        try:
+            return parse_wind(_text(name, value)).spec()
+        except ValueError as err:
+            raise BadSpecError(str(err)) from None
     if name == "terrain":
         try:
             return parse_terrain(_text(name, value)).spec()

@@ -259,6 +259,9 @@ class Params:
         Gear ratio, motor to wheel.
     motor_lag : float
         Time constant (s) of the driver's current, and so the torque, following its command.
+    drag_area_tractor, drag_area_trailer : float
+        Drag coefficient times reference area (m^2) of the tractor's and the trailer's bodies,
+        for ``Scenario.wind`` (:mod:`tt_mujoco.sim.wind`, not in the paper).
     train : tuple of Trailer (or dicts of its fields)
         Trailers 2..N behind the first (empty: the paper's single trailer). Build copies of
         trailer 1 with :meth:`with_trailers`.
@@ -291,6 +294,8 @@ class Params:
     motor_current_limit: float = 30.0
     motor_gear: float = 5.0
     motor_lag: float = 0.005
+    drag_area_tractor: float = 0.03
+    drag_area_trailer: float = 0.04
     train: tuple = ()
     steering: str = field(default="", init=False, compare=False)
 
@@ -307,6 +312,8 @@ class Params:
             "impratio",
             "body_tilt_inertia_ratio",
             *MOTOR_FIELDS,
+            "drag_area_tractor",
+            "drag_area_trailer",
         )
         for name in positive:
             object.__setattr__(self, name, _positive(name, getattr(self, name)))

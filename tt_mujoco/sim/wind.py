@@ -1,0 +1,110 @@
+"""Wind on the tractor and the trailer bodies (docs/model.md Section 18).
+
+``Scenario.wind = "SPEED[:DIRECTION_DEG[:GUST_STD]]"``: a wind of mean speed SPEED (m/s) blowing
+toward DIRECTION_DEG (from +x, default 0), plus gusts along it, a first-order (Ornstein-Uhlenbeck)
+process of standard deviation GUST_STD (m/s, default 0) and time constant :data:`GUST_TIME`,
+drawn from the run's seed. Each body feels the quadratic drag of the air relative to it,
+
+    F = 1/2 rho C_d A |w - u| (w - u),
+
+at its centre of mass, with ``u`` the velocity of its axle point (P for the tractor, P0 for
+the trailer) and ``C_d A`` the body's drag area (``Params.drag_area_tractor``,
+``drag_area_trailer``, the same from every side). MuJoCo plant only.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["AIR_DENSITY", "GUST_TIME", "Wind", "drag_force", "parse_wind"]
+
+#: Air density at sea level, 15 deg C (kg/m^3).
+AIR_DENSITY = 1.225
+#: Time constant of the gusts (s).
+GUST_TIME = 2.0
+#: Fastest mean wind accepted (m/s): a hurricane's.
+MAX_WIND = 60.0
+
+
+@dataclass(frozen=True)
+class Wind:
+    """A wind of ``speed`` m/s toward ``direction_deg`` with gusts of ``gust_std`` m/s."""
+
+    speed: float = 0.0
+    direction_deg: float = 0.0
+    gust_std: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("speed", "direction_deg", "gust_std"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise ValueError(f"wind {name}={value!r} is not allowed: it must be a number")
+            if not math.isfinite(value):
+                raise ValueError(f"wind {name}={value!r} is not allowed: it must be finite")
+        if not 0.0 <= self.speed <= MAX_WIND:
+            raise ValueError(
+                f"wind speed {self.speed!r} m/s is not allowed: use 0 to {MAX_WIND:g} m/s"
+            )
+        if not 0.0 <= self.gust_std <= MAX_WIND:
+            raise ValueError(
+                f"wind gust_std {self.gust_std!r} m/s is not allowed: use 0 to {MAX_WIND:g} m/s"
+            )
+
+    @property
+    def calm(self) -> bool:
+        return self.speed == 0.0 and self.gust_std == 0.0
+
+    def spec(self) -> str:
+        """The text :func:`parse_wind` reads back."""
+        if self.calm:
+            return "none"
+        return f"{self.speed:g}:{self.direction_deg:g}:{self.gust_std:g}"
+
+    def speeds(self, rng: np.random.Generator, steps: int, dt: float) -> np.ndarray:
+        """The wind speed along its direction at each of ``steps + 1`` control steps (m/s)."""
+        out = np.full(steps + 1, float(self.speed))
+        if self.gust_std > 0.0:
+            keep = math.exp(-dt / GUST_TIME)
+            kick = self.gust_std * math.sqrt(1.0 - keep * keep)
+            draws = rng.standard_normal(steps + 1)
+            gust = self.gust_std * draws[0]  # started in its stationary distribution
+            for k in range(steps + 1):
+                out[k] += gust
+                gust = keep * gust + kick * draws[k]
+        return out
+
+
+def parse_wind(text) -> Wind:
+    """``"none"`` or ``"SPEED[:DIRECTION_DEG[:GUST_STD]]"``.
+
+    Raises
+    ------
+    ValueError
+        Naming the text and what is allowed.
+    """
+    allowed = "use 'none' or 'SPEED[:DIRECTION_DEG[:GUST_STD]]' (m/s, deg, m/s), e.g. '8:90:2'"
+    if isinstance(text, Wind):
+        return text
+    if not isinstance(text, str):
+        raise ValueError(f"wind={text!r} is not allowed: {allowed}")
+    if text.strip().lower() == "none":
+        return Wind()
+    parts = [p.strip() for p in text.split(":")]
+    if not 1 <= len(parts) <= 3:
+        raise ValueError(f"wind={text!r} is not allowed: {allowed}")
+    try:
+        numbers = [float(p) for p in parts]
+    except ValueError:
+        raise ValueError(f"wind={text!r} is not allowed: {allowed}") from None
+    return Wind(*numbers)
+
+
+def drag_force(wind_x: float, wind_y: float, u_x: float, u_y: float, drag_area: float):
+    """``(F_x, F_y)`` (N): the drag of the air moving at ``(wind_x, wind_y)`` on a body moving
+    at ``(u_x, u_y)`` (m/s) with drag area ``drag_area`` (m^2)."""
+    rel_x, rel_y = wind_x - u_x, wind_y - u_y
+    scale = 0.5 * AIR_DENSITY * drag_area * math.hypot(rel_x, rel_y)
+    return scale * rel_x, scale * rel_y
