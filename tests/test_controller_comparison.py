@@ -86,3 +86,15 @@ def test_the_readme_headline_table_is_the_pages():
             rows[(name, "mujoco")][6] if (name, "mujoco") in rows else "—" for rows in pages
         ]
         assert cells == expected, name
+
+
+def test_the_readme_quotes_the_nmpc_timing_of_the_page():
+    readme = (DOCS.parent / "README.md").read_text()
+    quoted = re.search(
+        r"The NMPC solves its QP in a median ([\d.]+) ms of its 40 ms sample period, and its "
+        r"S-curve run goes\s+([\d.]+) times faster than real time",
+        readme,
+    )
+    assert quoted, "the README's NMPC timing sentence changed: update this test with it"
+    nmpc = _rows("S-curve, no disturbance")[("NMPC", "mujoco")]
+    assert quoted.groups() == (nmpc[10], nmpc[11])
