@@ -155,7 +155,7 @@ def test_resolved_options_round_trip_through_toml(tmp_path):
     assert again.gains == {"k1_v": 12.5} and again.control_dt == 0.002
     assert again.eta == "-0.2" and again.phi0_deg == -3.25
     assert params2 == params == {"Mw": 3.5}
-    assert faults2 == faults == [{"kind": "payload", "t": 1.0, "factor": 1.25}]
+    assert faults2 == faults == [{"kind": "payload", "t": 1.0, "factor": 1.25, "trailer": 1}]
 
 
 def test_unknown_fault_key_in_file_names_it(tmp_path):

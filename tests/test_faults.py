@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from tt_mujoco import outputs, run
-from tt_mujoco.sim import Scenario, faults, simulate
+from tt_mujoco.sim import Scenario, build, faults, simulate
 
 # S-curve, 4 s: the ramp (0-2 s) and 2 s of cruising on the first arc, paper disturbance on.
 S_CURVE = {"traj": "s_curve", "duration": 4.0}
@@ -105,6 +105,28 @@ def test_payload_step_on_the_reduced_plant():
     before = same_window(loaded, base, report)
     # Measured: max|e_v| over [1, 2] s 1.66e-4 vs 3.5e-6 m/s (48x).
     assert report["window"]["max_abs_v"] > 10 * before["max_abs_v"]
+
+
+@pytest.mark.parametrize("plant", ["mujoco", "reduced"])
+def test_a_payload_on_trailer_2_of_a_train_loads_that_trailer(plant):
+    kw = {"traj": "circle", "disturbance": "none", "plant": plant, "duration": 1.0, "trailers": 2}
+    base = simulate(Scenario(**kw))
+    loaded = simulate(Scenario(**kw, faults=["payload:t=0.5,factor=2,trailer=2"]))
+    (report,) = loaded.metrics["faults"]
+    assert report["trailer"] == 2 and report["factor"] == 2.0
+    after = loaded.timeseries["t"] >= 0.5
+    assert not np.array_equal(base.timeseries["v"][after], loaded.timeseries["v"][after])
+    first = ~after
+    assert np.array_equal(base.timeseries["v"][first], loaded.timeseries["v"][first])
+
+
+def test_unloading_trailer_2_is_the_payload_below_one_and_a_missing_trailer_is_refused():
+    kw = {"traj": "circle", "disturbance": "none", "plant": "reduced", "duration": 0.5}
+    assert simulate(Scenario(**kw, trailers=2, faults=["payload:t=0.2,factor=0.5,trailer=2"])).ok
+    with pytest.raises(ValueError, match="trailer=2 is not allowed: the train has 1 trailer"):
+        build(Scenario(**kw, faults=["payload:t=0.2,trailer=2"]))
+    with pytest.raises(ValueError, match=r"trailer='1\.5' is not allowed"):
+        build(Scenario(**kw, faults=["payload:t=0.2,trailer=1.5"]))
 
 
 # --- sensor dropout ------------------------------------------------------------------------------

@@ -108,7 +108,10 @@ class Build:
 
     def new_faults(self) -> FaultSchedule | None:
         specs = parse_faults(self.scenario.faults)
-        return FaultSchedule(specs, self.control_dt, self.duration) if specs else None
+        if not specs:
+            return None
+        n = self.plant_params.n_trailers
+        return FaultSchedule(specs, self.control_dt, self.duration, n_trailers=n)
 
     def new_scheduler(self, plant: Plant) -> EtaScheduler | None:
         """The scheduler of the scenario's ``eta_schedule`` on ``plant``, or None."""

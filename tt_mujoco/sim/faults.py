@@ -3,9 +3,10 @@
 A fault is a small spec, given as a dict (a TOML ``[[faults]]`` table) or as the text of
 ``--fault KIND:key=value,...``:
 
-- ``payload``: at time ``t`` the trailer body's mass and yaw inertia (``Mr``, ``Ird``; the
-  payload bed at P0) are multiplied by ``factor`` (default 1.5, "+50 %") for the rest of the
-  run. The controller keeps its nominal model, so it does not know.
+- ``payload``: at time ``t`` the body of trailer ``trailer`` (default 1) has its mass and yaw
+  inertia (``Mr``, ``Ird``; the payload bed at P0) multiplied by ``factor`` (default 1.5,
+  "+50 %"; below 1 it unloads) for the rest of the run. The controller keeps its nominal model,
+  so it does not know.
 - ``dropout``: from ``t`` for ``duration`` s (default 0.1) the controller's measurements
   (phi, v, omega, after any noise) hold the last value received before the dropout; the
   dynamic target integrates the held speed too, as it would on a vehicle.
@@ -29,6 +30,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from tt_mujoco.analysis.metrics import distance_to_polyline
+from tt_mujoco.vehicle.params import MAX_TRAILERS
 
 __all__ = [
     "FAULT_KINDS",
@@ -43,7 +45,7 @@ __all__ = [
 
 #: Each kind's options and their defaults (``t`` is required for all).
 FAULT_KINDS: dict[str, dict[str, float | str]] = {
-    "payload": {"factor": 1.5},
+    "payload": {"factor": 1.5, "trailer": 1},
     "dropout": {"duration": 0.1},
     "actuator": {"duration": 1.0, "scale": 0.3, "wheel": "both"},
 }
@@ -62,6 +64,7 @@ class Fault:
     factor: float = 1.0
     scale: float = 1.0
     wheel: str = "both"
+    trailer: int = 1
 
     def to_dict(self) -> dict:
         """The spec as it would be written in TOML: only the kind's own options."""
@@ -136,7 +139,13 @@ def parse_fault(spec) -> Fault:
     t = _number(kind, "t", options["t"], 0.0, 600.0)
     if kind == "payload":
         factor = _number(kind, "factor", options["factor"], 0.0, 100.0, low_open=True)
-        return Fault(kind, t, factor=factor)
+        trailer = _number(kind, "trailer", options["trailer"], 1.0, MAX_TRAILERS)
+        if trailer != int(trailer):
+            raise ValueError(
+                f"fault payload: trailer={options['trailer']!r} is not allowed: it must be a "
+                f"whole number from 1 to {MAX_TRAILERS}"
+            )
+        return Fault(kind, t, factor=factor, trailer=int(trailer))
     duration = _number(kind, "duration", options["duration"], 0.0, 600.0, low_open=True)
     if kind == "dropout":
         return Fault(kind, t, duration=duration)
@@ -168,12 +177,17 @@ class FaultSchedule:
         Run length (s); a fault starting after it is refused.
     """
 
-    def __init__(self, faults, control_dt: float, duration: float):
+    def __init__(self, faults, control_dt: float, duration: float, n_trailers: int = 1):
         self.faults = tuple(faults)
         for f in self.faults:
             if f.t > duration:
                 raise ValueError(
                     f"fault {f.label}: t={f.t!r} s is after the end of the run ({duration:.6g} s)"
+                )
+            if f.kind == "payload" and f.trailer > n_trailers:
+                raise ValueError(
+                    f"fault {f.label}: trailer={f.trailer} is not allowed: the train has "
+                    f"{n_trailers} trailer(s)"
                 )
         # First step at or after t (the 1e-9 forgives t = k dt written in decimal).
         self._windows = []
@@ -183,10 +197,10 @@ class FaultSchedule:
             self._windows.append((f, k0, k1))
         self._dropouts = [(k0, k1) for f, k0, k1 in self._windows if f.kind == "dropout"]
         self._actuators = [(f, k0, k1) for f, k0, k1 in self._windows if f.kind == "actuator"]
-        self._payloads = {}
+        self._payloads: dict[int, list[tuple[int, float]]] = {}
         for f, k0, _ in self._windows:
             if f.kind == "payload":
-                self._payloads[k0] = self._payloads.get(k0, 1.0) * f.factor
+                self._payloads.setdefault(k0, []).append((f.trailer, f.factor))
         self._held = None
         self.held_steps = 0
 
@@ -210,9 +224,9 @@ class FaultSchedule:
                     T_l *= f.scale
         return T_r, T_l
 
-    def payload_factor(self, k: int) -> float | None:
-        """The trailer-mass factor taking effect at step k, or None."""
-        return self._payloads.get(k)
+    def payloads(self, k: int) -> list[tuple[int, float]]:
+        """``(trailer, factor)`` of each payload change taking effect at step k."""
+        return self._payloads.get(k, [])
 
 
 def window_errors(ts, polyline, t_start: float, t_end: float) -> dict:

@@ -69,8 +69,8 @@ class Plant(ABC):
         """Advance ``substeps`` physics steps; raise :class:`StopRun` on a numerical failure."""
 
     @abstractmethod
-    def scale_trailer_mass(self, factor: float) -> None:
-        """Payload step: the trailer body's mass and yaw inertia times ``factor``."""
+    def scale_trailer_mass(self, factor: float, trailer: int = 1) -> None:
+        """Payload step: trailer ``trailer``'s body mass and yaw inertia times ``factor``."""
 
     @abstractmethod
     def set_eta(self, eta: float) -> None:

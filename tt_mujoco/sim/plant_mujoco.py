@@ -74,12 +74,13 @@ class MujocoPlant(Plant):
     def measure(self):
         return self._measure(self._qpos, self._qvel, self._layout)
 
-    def scale_trailer_mass(self, factor: float) -> None:
+    def scale_trailer_mass(self, factor: float, trailer: int = 1) -> None:
         """MuJoCo builds the mass matrix from ``body_mass``/``body_inertia`` every step, so this
         acts at once (only the solver's compile-time ``body_invweight0``, which scales contact
         softness, keeps its old value)."""
-        self.model.body_mass[self._trailer] *= factor
-        self.model.body_inertia[self._trailer] *= factor
+        body = self._trailer if trailer == 1 else self.model.body(f"trailer_body_{trailer}").id
+        self.model.body_mass[body] *= factor
+        self.model.body_inertia[body] *= factor
 
     def set_eta(self, eta: float) -> None:
         self._steering_row[1] = -eta

@@ -73,9 +73,15 @@ class ReducedPlant(Plant):
     def apply(self, T_r, T_l, dist_r, dist_l, wrench_force, wrench_torque, theta) -> None:
         self._tau = (T_r + dist_r, T_l + dist_l)
 
-    def scale_trailer_mass(self, factor: float) -> None:
+    def scale_trailer_mass(self, factor: float, trailer: int = 1) -> None:
         p = self.params
-        self._set_params(p.replace(Mr=p.Mr * factor, Ird=p.Ird * factor))
+        if trailer == 1:
+            self._set_params(p.replace(Mr=p.Mr * factor, Ird=p.Ird * factor))
+            return
+        train = list(p.train)
+        t = train[trailer - 2]
+        train[trailer - 2] = dataclasses.replace(t, Mr=t.Mr * factor, Ird=t.Ird * factor)
+        self._set_params(p.replace(train=tuple(train)))
 
     def set_eta(self, eta: float) -> None:
         self._set_params(self.params.replace(eta=eta))

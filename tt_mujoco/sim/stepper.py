@@ -255,9 +255,8 @@ class Stepper:
         faults = self.faults
         if faults is not None:
             T_r, T_l = faults.torque(k, T_r, T_l)
-            factor = faults.payload_factor(k)
-            if factor is not None:
-                self.plant.scale_trailer_mass(factor)
+            for trailer, factor in faults.payloads(k):
+                self.plant.scale_trailer_mass(factor, trailer)
         if self.motors is not None:  # what the motors deliver of the command, over this step
             T_r, T_l = self.motors.deliver(T_r, T_l, me.theta_r_dot, me.theta_l_dot)
         dist_r = dist_l = force = torque = 0.0
