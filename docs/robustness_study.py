@@ -12,6 +12,7 @@ same-path trailer, the cycloid and the S-curve (dynamic target) under:
   the path's start tangent (docs/model.md Section 16), without Delta(t);
 - a gusty wind across the path's start, 10 m/s with gusts of 3 m/s (Section 18), without
   Delta(t);
+- an ice band (friction 0.1) over the second metre of the path;
 - a DC motor per wheel with a 20 ms lag and a 20 A current limit (10 N m at the wheel;
   Section 17);
 - a 20 ms measurement delay;
@@ -57,6 +58,7 @@ def cases(path: str) -> dict[str, dict]:
         "paper Delta(t)": {},
         f"grade {GRADE_DEG:.1f} deg": {"disturbance": "none", "terrain": grade},
         "gusty wind 10 m/s": {"disturbance": "none", "wind": f"10:{start_heading + 90:g}:3"},
+        "ice band (mu 0.1) at 1-2 m": {"disturbance": "none", "ground": ["band:1:2:0.1"]},
         "DC motor, 20 ms, 20 A": {"disturbance": "none", "actuator": "dc_motor", "params": motor},
         "20 ms sensor delay": {"disturbance": "none", "sensor_delay": 0.02},
         f"payload x1.5 at {PAYLOAD_T[path]:g} s": {

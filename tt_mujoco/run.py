@@ -347,6 +347,14 @@ def build_parser() -> argparse.ArgumentParser:
         help="the sensors' delay (s, a multiple of the control period, shorter than the run)",
     )
     g.add_argument(
+        "--ground",
+        action="append",
+        default=None,
+        metavar="band:S0:S1:MU|rect:X0:Y0:X1:Y1:MU",
+        help="a patch of other friction (repeatable): a stretch of the path or a rectangle of "
+        "the floor; MuJoCo plant only",
+    )
+    g.add_argument(
         "--wind",
         type=_wind,
         default="none",
@@ -524,6 +532,7 @@ def _scenario(args, params: dict, faults: list) -> Scenario:
         actuator=args.actuator,
         sensor_delay=args.sensor_delay,
         wind=args.wind,
+        ground=list(args.ground or []),
     )
 
 

@@ -23,6 +23,7 @@ from tt_mujoco.reference.reverse import ReverseTarget
 from tt_mujoco.reference.targets import make_target
 from tt_mujoco.sim.disturbances import make_disturbance
 from tt_mujoco.sim.faults import FaultSchedule, parse_faults
+from tt_mujoco.sim.ground import GroundPatches, parse_patches
 from tt_mujoco.sim.plant import Plant
 from tt_mujoco.sim.plant_reduced import ReducedPlant
 from tt_mujoco.sim.scenario import Scenario
@@ -101,9 +102,13 @@ class Build:
             wrench = s.disturbance == "wrench"
             terrain = parse_terrain(s.terrain)
             gravity = None if terrain.flat else terrain.gravity
-            return _plant_class("mujoco")(
+            plant = _plant_class("mujoco")(
                 self.plant_params, self.initial_pose, self.v_init, wrench, phi0, gravity
             )
+            patches = parse_patches(s.ground)
+            if patches:
+                plant.set_ground(GroundPatches(patches, self.path, self.plant_params.friction))
+            return plant
         return ReducedPlant(self.plant_params, self.initial_pose, self.v_init, s.timestep, phi0)
 
     def new_faults(self) -> FaultSchedule | None:

@@ -74,6 +74,7 @@ def unsupported(built, controller, on_step=None) -> str | None:
         (s.actuator != "ideal", "a motor model"),
         (s.sensor_delay != 0.0, "a sensor delay"),
         (s.wind != "none", "wind"),
+        (bool(s.ground), "friction patches"),
         (s.plant == "mujoco" and s.disturbance == "wrench", "the wrench disturbance"),
         (on_step is not None, "a per-step callback"),
         (

@@ -59,6 +59,7 @@ class MujocoPlant(Plant):
         # eq_data row of the joint equality q_steer = polycoef(q_hitch): polycoef[1] = -eta.
         self._steering_row = self.model.eq_data[self.model.equality("steering").id]
         self._wrench = wrench
+        self._ground = None  # friction patches, see set_ground
         # Views into MjData, made once: building them costs more than the writes.
         self._ctrl = self.data.ctrl
         self._qfrc = self.data.qfrc_applied
@@ -103,6 +104,16 @@ class MujocoPlant(Plant):
             qfrc[self._wheel_r] = dist_r
             qfrc[self._wheel_l] = dist_l
 
+    def set_ground(self, ground) -> None:
+        """Friction patches (:class:`tt_mujoco.sim.ground.GroundPatches`): from now on each
+        step sets every wheel's contact friction from where it touches the floor."""
+        m = self.model
+        self._ground = ground
+        self._contact_geoms = [
+            g for g in range(m.ngeom) if m.geom_contype[g] and m.geom_priority[g] == 1
+        ]
+        self.ground_mask = 0
+
     def blow(self, tractor, trailer) -> None:
         """Horizontal forces (N) on the tractor's and the trailer's bodies for this step, the
         wind's (on top of the chassis wrench of the "wrench" disturbance, if any)."""
@@ -115,6 +126,10 @@ class MujocoPlant(Plant):
                 xfrc[0], xfrc[1] = fx, fy
 
     def advance(self, substeps: int) -> None:
+        if self._ground is not None:
+            ids = self._contact_geoms
+            mus, self.ground_mask = self._ground.frictions(self.data.geom_xpos[ids, :2])
+            self.model.geom_friction[ids, 0] = mus
         start = self.data.time  # a warning resets MuJoCo's state, its clock included
         mujoco.mj_step(self.model, self.data, nstep=substeps)
         # MuJoCo resets the state when a warning fires: stop at once, before it is measured.

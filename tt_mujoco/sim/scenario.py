@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from tt_mujoco.defaults import CONTROL_DT, MAX_DURATION, TIME_LIMIT_S, TIMESTEP
 from tt_mujoco.reference.feedback import check_config
 from tt_mujoco.sim.faults import parse_faults
+from tt_mujoco.sim.ground import parse_patches
 from tt_mujoco.sim.motors import ACTUATORS
 from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.sim.wind import parse_wind
@@ -117,6 +118,9 @@ class Scenario:
     #: Wind on the bodies (:mod:`tt_mujoco.sim.wind`): ``"none"`` or
     #: ``"SPEED[:DIRECTION_DEG[:GUST_STD]]"`` (m/s, deg, m/s). MuJoCo plant only.
     wind: str = "none"
+    #: Patches of other friction (:mod:`tt_mujoco.sim.ground`): ``"band:S0:S1:MU"`` along the
+    #: path, ``"rect:X0:Y0:X1:Y1:MU"`` on the floor. MuJoCo plant only.
+    ground: list = field(default_factory=list)
 
     @property
     def backs_with_cascade(self) -> bool:
@@ -238,6 +242,11 @@ class Scenario:
             )
         if self.actuator not in ACTUATORS:
             raise ValueError(f"actuator={self.actuator!r} is not allowed: use one of {ACTUATORS}")
+        if parse_patches(self.ground) and self.plant != "mujoco":
+            raise ValueError(
+                f"ground={self.ground!r} with plant={self.plant!r} is not allowed: the reduced "
+                "plant rolls without slip on any ground; use plant='mujoco'"
+            )
         if not parse_wind(self.wind).calm and self.plant != "mujoco":
             raise ValueError(
                 f"wind={self.wind!r} with plant={self.plant!r} is not allowed: the reduced plant "

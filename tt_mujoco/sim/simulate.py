@@ -19,6 +19,7 @@ from tt_mujoco.registry import shown
 from tt_mujoco.sim import compiled, usercode
 from tt_mujoco.sim import faults as faults_mod
 from tt_mujoco.sim.build import Build, build
+from tt_mujoco.sim.ground import ground_report, parse_patches
 from tt_mujoco.sim.plant import StopRun
 from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sim.scenario import Scenario
@@ -256,6 +257,8 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
             "equivalent_delta1": terrain.equivalent_delta1,
             "torque_sum_mean": float(np.mean(ts["T_r"] + ts["T_l"])),
         }
+    if scenario.ground and len(ts["t"]):
+        metrics["ground"] = ground_report(parse_patches(scenario.ground), stepper.ground_masks, ts)
     report, error = controller_report(controller)
     if report:
         metrics["controller"] = report

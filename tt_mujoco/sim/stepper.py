@@ -124,6 +124,7 @@ class Stepper:
         self.motors = (
             DcMotors(b.plant_params, b.control_dt) if b.scenario.actuator == "dc_motor" else None
         )
+        self._ground_masks = [] if b.scenario.ground else None  # the patches under the wheels
         steps = b.delay_steps
         # until `steps` readings exist, the first one is what the sensors have given
         self._delayed = None if not steps else collections.deque(maxlen=steps + 1)
@@ -212,6 +213,11 @@ class Stepper:
         )
         self._ref = ref
         return seen, ref
+
+    @property
+    def ground_masks(self) -> list[int]:
+        """Per step, the bit mask of the friction patches some wheel stood on."""
+        return self._ground_masks or []
 
     def _blow(self, k: int, me) -> None:
         """The wind's drag on the tractor and the trailer over step ``k`` (sim/wind.py)."""
@@ -316,6 +322,8 @@ class Stepper:
             self._blow(k, me)
         try:
             self.plant.advance(self.built.substeps)
+            if self._ground_masks is not None:
+                self._ground_masks.append(self.plant.ground_mask)
         except SingularityError as err:
             raise StopRun("jackknife", f"jackknife at t={t + self.dt:.3f} s: {err}") from None
         self.k = k + 1

@@ -1,0 +1,162 @@
+"""Patches of the ground with another friction coefficient: ice, gravel (MuJoCo plant).
+
+``Scenario.ground`` lists patches, each a text spec:
+
+- ``band:S0:S1:MU``: the stretch of the path from arc length S0 to S1 (m), across its whole
+  width: a wheel is on it while its nearest path point lies in [S0, S1];
+- ``rect:X0:Y0:X1:Y1:MU``: the rectangle of the floor between the corners (X0, Y0), (X1, Y1).
+
+A wheel on a patch rolls with the patch's friction coefficient MU, elsewhere with the
+scenario's ``friction``; where patches overlap the first listed counts. The MuJoCo plant sets
+each wheel's contact friction every control step from where the wheel touches the floor (its
+contact geoms have the higher priority, so theirs is the contact's coefficient); ``metrics.json``
+reports for each patch the time a wheel spent on it and the wheels' largest slips there.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from tt_mujoco.reference.feedback import path_errors
+
+__all__ = ["GroundPatches", "Patch", "ground_report", "parse_patch", "parse_patches"]
+
+_ALLOWED = (
+    "use 'band:S0:S1:MU' (m along the path) or 'rect:X0:Y0:X1:Y1:MU' (m), e.g. 'band:2:3:0.1'"
+)
+#: Bounds of a patch's friction coefficient.
+MU_RANGE = (0.01, 10.0)
+
+
+@dataclass(frozen=True)
+class Patch:
+    """One patch: ``kind`` "band" (``bounds = (s0, s1)``) or "rect" (``(x0, y0, x1, y1)``)."""
+
+    kind: str
+    bounds: tuple
+    mu: float
+
+    def spec(self) -> str:
+        return ":".join([self.kind, *(f"{b:g}" for b in self.bounds), f"{self.mu:g}"])
+
+    def contains(self, x: float, y: float, s: float) -> bool:
+        if self.kind == "band":
+            return self.bounds[0] <= s <= self.bounds[1]
+        x0, y0, x1, y1 = self.bounds
+        return min(x0, x1) <= x <= max(x0, x1) and min(y0, y1) <= y <= max(y0, y1)
+
+
+def parse_patch(text) -> Patch:
+    """A :class:`Patch` from its text (module docstring).
+
+    Raises
+    ------
+    ValueError
+        Naming the text and what is allowed.
+    """
+    if isinstance(text, Patch):
+        return text
+    if not isinstance(text, str):
+        raise ValueError(f"ground patch {text!r} is not allowed: {_ALLOWED}")
+    kind, *parts = (p.strip() for p in text.split(":"))
+    need = {"band": 3, "rect": 5}.get(kind.lower())
+    if need is None or len(parts) != need:
+        raise ValueError(f"ground patch {text!r} is not allowed: {_ALLOWED}")
+    try:
+        numbers = [float(p) for p in parts]
+    except ValueError:
+        raise ValueError(f"ground patch {text!r} is not allowed: {_ALLOWED}") from None
+    if not all(math.isfinite(n) for n in numbers):
+        raise ValueError(f"ground patch {text!r} is not allowed: its numbers must be finite")
+    *bounds, mu = numbers
+    low, high = MU_RANGE
+    if not low <= mu <= high:
+        raise ValueError(
+            f"ground patch {text!r}: friction {mu!r} is not allowed: use {low:g} to {high:g}"
+        )
+    if kind.lower() == "band" and not 0.0 <= bounds[0] < bounds[1]:
+        raise ValueError(
+            f"ground patch {text!r}: the band {bounds[0]!r} to {bounds[1]!r} m is not allowed: "
+            "use 0 <= S0 < S1"
+        )
+    return Patch(kind.lower(), tuple(bounds), mu)
+
+
+def parse_patches(specs) -> tuple[Patch, ...]:
+    """Validate a list of patch specs (see :func:`parse_patch`)."""
+    if isinstance(specs, str) or not isinstance(specs, list | tuple):
+        raise ValueError(f"ground={specs!r} is not allowed: give a list of patch specs")
+    return tuple(parse_patch(s) for s in specs)
+
+
+class GroundPatches:
+    """Which patch each wheel stands on, step by step (the plant asks).
+
+    Parameters
+    ----------
+    patches : sequence of Patch
+    path : tt_mujoco.reference.path_base.ReferencePath
+        The path the bands are measured along.
+    base_mu : float
+        The friction coefficient off the patches.
+    """
+
+    def __init__(self, patches, path, base_mu: float):
+        self.patches = tuple(patches)
+        self.path = path
+        self.base_mu = float(base_mu)
+        self._bands = any(p.kind == "band" for p in self.patches)
+        self._s: list[float] | None = None  # each wheel's arc length, warm start of the next
+
+    def frictions(self, points) -> tuple[list[float], int]:
+        """``(mu of each wheel, bit mask of the patches some wheel is on)`` for the wheels'
+        contact points ``points`` (an (n, 2) array of x, y)."""
+        points = np.asarray(points, dtype=float)
+        if self._s is None and self._bands:  # a first guess from a coarse table of the path
+            grid = np.linspace(0.0, self.path.length, 2001)
+            table = np.array([self.path.pose_at(s)[:2] for s in grid])
+            self._s = [float(grid[np.argmin(np.hypot(*(table - point).T))]) for point in points]
+        mus, mask = [], 0
+        pose_at, curvature = self.path.pose_at, self.path.curvature_and_rate
+        for i, (x, y) in enumerate(points):
+            s = math.nan
+            if self._bands:
+                s = path_errors(pose_at, curvature, self._s[i], x, y, 0.0)[0]
+                self._s[i] = s
+            mu = self.base_mu
+            for j, patch in enumerate(self.patches):
+                if patch.contains(x, y, s):
+                    mu = patch.mu
+                    mask |= 1 << j
+                    break
+            mus.append(mu)
+        return mus, mask
+
+
+def ground_report(patches, masks, ts) -> list[dict]:
+    """Per patch: its spec, the time some wheel spent on it (s) and the largest tractor-wheel
+    and lateral slips (m/s) over those steps, for ``metrics.json``."""
+    t = np.asarray(ts["t"])
+    masks = list(masks)
+    if masks and len(masks) < len(t):  # the row after the last step: where the wheels were
+        masks += [masks[-1]] * (len(t) - len(masks))
+    masks = np.asarray(masks, dtype=np.int64)
+    n = min(len(masks), len(t))
+    dt = float(t[1] - t[0]) if len(t) > 1 else 0.0
+    report = []
+    for j, patch in enumerate(patches):
+        on = np.zeros(len(t), dtype=bool)
+        on[:n] = (masks[:n] >> j) & 1 == 1
+        entry = {"patch": patch.spec(), "mu": patch.mu, "time_s": float(on.sum() * dt)}
+        for key, columns in (
+            ("slip_longitudinal_max", ("slip_left", "slip_right")),
+            ("slip_lateral_max", ("slip_lateral", "slip_lateral_trailer")),
+        ):
+            values = [np.abs(np.asarray(ts[c])[on]) for c in columns if c in ts]
+            values = [v[np.isfinite(v)] for v in values]
+            entry[key] = float(max(v.max() for v in values)) if on.any() and values else None
+        report.append(entry)
+    return report
