@@ -26,46 +26,12 @@ share of steps at the torque limit, and how the run ended.
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 
-from tt_mujoco.reference.paths import get_path
+from tt_mujoco.paper.robustness import CONTROLLERS, GRADE_DEG, PATHS, cases
 from tt_mujoco.sim import Scenario, simulate
-from tt_mujoco.sim.terrain import GRAVITY
 
-#: The grade equivalent to Delta_1's bias: g sin(a) = 3.5 m/s^2.
-GRADE_DEG = math.degrees(math.asin(3.5 / GRAVITY))
-PATHS = ("cycloid", "s_curve")
-#: When the payload comes on: about the middle of each run.
-PAYLOAD_T = {"cycloid": 2.0, "s_curve": 5.0}
-CONTROLLERS = {
-    "ISMC-STA": {"controller": "ismc_sta"},
-    "PID": {"controller": "pid"},
-    "FBL": {"controller": "fbl"},
-    "Stanley": {"controller": "stanley"},
-    "LQR": {"controller": "lqr"},
-    "NMPC": {"controller": "nmpc"},
-}
-
-
-def cases(path: str) -> dict[str, dict]:
-    """Case name -> Scenario fields, for ``path``."""
-    start_heading = math.degrees(get_path(path).pose_at(0.0)[2])  # 67.5 deg, 0 deg
-    grade = f"slope:{GRADE_DEG:.1f}:{start_heading:g}"
-    motor = {"motor_lag": 0.02, "motor_current_limit": 20.0}
-    return {
-        "no disturbance": {"disturbance": "none"},
-        "paper Delta(t)": {},
-        f"grade {GRADE_DEG:.1f} deg": {"disturbance": "none", "terrain": grade},
-        "gusty wind 10 m/s": {"disturbance": "none", "wind": f"10:{start_heading + 90:g}:3"},
-        "ice band (mu 0.1) at 1-2 m": {"disturbance": "none", "ground": ["band:1:2:0.1"]},
-        "DC motor, 20 ms, 20 A": {"disturbance": "none", "actuator": "dc_motor", "params": motor},
-        "20 ms sensor delay": {"disturbance": "none", "sensor_delay": 0.02},
-        f"payload x1.5 at {PAYLOAD_T[path]:g} s": {
-            "disturbance": "none",
-            "faults": [f"payload:t={PAYLOAD_T[path]:g},factor=1.5"],
-        },
-    }
+__all__ = ["CONTROLLERS", "GRADE_DEG", "PATHS", "cases", "main", "row"]
 
 
 def row(path: str, case: str, controller: str) -> list[str]:

@@ -257,3 +257,23 @@ def test_table_3_gains_the_baselines_and_the_docs_quote_the_suite():
     quoted = next(line for line in page.splitlines() if line.startswith("| LQR | 0."))
     halves = [cell.split(" / ")[0] for cell in quoted.strip("|").split("|")[1:]]
     assert [cell.split(" / ")[0] for cell in ours.strip("|").split("|")[1:]] == halves
+
+
+def test_the_robustness_study_runs_in_the_suite_and_its_table_reads_the_records():
+    from tt_mujoco.paper import robustness
+
+    specs = {s.key: s for s in paper.suite()}
+    keys = [k for k in specs if specs[k].group == "robustness"]
+    n_cases = len(robustness.cases("cycloid"))
+    assert len(keys) == len(robustness.PATHS) * n_cases * len(robustness.CONTROLLERS) == 96
+    grade = next(c for c in robustness.cases("s_curve") if c.startswith("grade"))
+    spec = specs[robustness.run_key("s_curve", grade, "ISMC-STA")]
+    assert spec.scenario.terrain == "slope:20.9:0" and spec.scenario.plant == "mujoco"
+    key = robustness.run_key("cycloid", "no disturbance", "PID")
+    failed = robustness.run_key("cycloid", "no disturbance", "FBL")
+    records = {
+        key: {"status": "ok", "metrics": {"cross_track_rms": 0.0123}},
+        failed: {"status": "jackknife", "metrics": {"sim_time_s": 1.51}},
+    }
+    table = "\n".join(robustness.robustness_markdown(records))
+    assert "| no disturbance | not run | 12.3 | jackknife at 1.51 s | not run |" in table

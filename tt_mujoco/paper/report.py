@@ -19,6 +19,7 @@ from tt_mujoco.paper.markdown import (
     suite_setup_lines,
     tables_markdown,
 )
+from tt_mujoco.paper.robustness import robustness_markdown
 from tt_mujoco.paper.studies import (
     check_rows,
     curvature_findings,
@@ -95,6 +96,7 @@ def build_report(
     ]
     md += tables_markdown(rows)
     md += baselines_markdown(records)
+    md += robustness_markdown(records)
     if "fig_ratios.png" in figs:
         md += ["![ours / paper for every cell](fig_ratios.png)", ""]
 
@@ -296,6 +298,7 @@ def _summary_markdown(rows, records, steering, feedback, checks, info) -> str:
     ]
     md += tables_markdown(rows)
     md += baselines_markdown(records)
+    md += robustness_markdown(records)
     md += ["### Passive steering: trailer off-tracking (m, rms over the run / on steady arcs)", ""]
     md += [
         "| path | plant | plain eta = 0 | half-difference -0.125 | same_path -1/7 | scheduled "

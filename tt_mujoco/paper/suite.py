@@ -283,6 +283,15 @@ def suite(quick: bool = False) -> list[RunSpec]:
     for base, kw in BASELINE_RUNS.items():
         for plant in PLANTS:
             specs.append(RunSpec(f"{base}@{plant}", "baselines", _scenario(plant, **kw)))
+    from tt_mujoco.paper import robustness  # imports causes, which imports this module
+
+    for path in robustness.PATHS:
+        for case, fields in robustness.cases(path).items():
+            for name, controller in robustness.CONTROLLERS.items():
+                sc = _scenario("mujoco", traj=path, **fields, **controller)
+                info = {"path": path, "case": case, "controller": name}
+                key = robustness.run_key(path, case, name)
+                specs.append(RunSpec(key, "robustness", sc, info=info))
     for base, variant, plants in _ISOLATION:
         for plant in plants:
             kw = {**TABLE_RUNS[base], **VARIANTS[variant]}
