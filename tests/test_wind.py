@@ -102,3 +102,10 @@ def test_bad_wind_is_refused_before_the_run(tmp_path, capsys):
     done = subprocess.run([sys.executable, "-m", "tt_mujoco.sweep", *args], capture_output=True)
     assert done.returncode == 0, done.stderr
     assert "4:90:1" in (sweep / "runs.csv").read_text()
+
+
+def test_a_negative_drag_area_is_refused_naming_it(tmp_path, capsys):
+    out = tmp_path / "r"
+    argv = ["--wind", "5", "--param", "drag_area_trailer=-0.1", "--no-video", "--no-plots"]
+    assert run.main([*argv, "--out", str(out)]) == 2
+    assert "drag_area_trailer=-0.1" in capsys.readouterr().err and not out.exists()
