@@ -277,3 +277,21 @@ def test_the_robustness_study_runs_in_the_suite_and_its_table_reads_the_records(
     }
     table = "\n".join(robustness.robustness_markdown(records))
     assert "| no disturbance | not run | 12.3 | jackknife at 1.51 s | not run |" in table
+
+
+def test_docs_paper_quotes_the_suites_robustness_table():
+    from tt_mujoco.paper import robustness
+    from tt_mujoco.sim import simulate
+
+    key = robustness.run_key("cycloid", "no disturbance", "LQR")
+    spec = {s.key: s for s in paper.suite()}[key]
+    records = {key: {"status": "ok", "metrics": simulate(spec.scenario).metrics}}
+    ours = next(
+        line for line in robustness.robustness_markdown(records) if line.startswith("| no dist")
+    )
+    lqr = list(robustness.CONTROLLERS).index("LQR")
+    cell = ours.strip("|").split("|")[1 + lqr].strip()
+    page = (Path(__file__).resolve().parents[1] / "docs" / "paper.md").read_text()
+    cycloid = page.split("cycloid:\n", 1)[1].split("s_curve:\n", 1)[0]
+    quoted = next(line for line in cycloid.splitlines() if line.startswith("| no dist"))
+    assert quoted.strip("|").split("|")[1 + lqr].strip() == cell
