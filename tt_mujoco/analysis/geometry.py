@@ -27,9 +27,9 @@ __all__ = [
 # Tree entries asked for per point in successive queries; points the distance bound does not
 # settle go on to the next query, then to the chunk search. With 4 pieces per entry, 8 entries
 # settle points up to ~15 segment lengths from a smooth path, 32 up to ~250. Chosen by timing
-# 20,000 points against a 2,000-segment cycloid at lateral scatter 1 cm / 5 cm / 20 cm / far:
-# (8, 32) with 4 pieces took 30 / 42 / ~100 / ~200 ms (CPU), against 28 / 84 / 138 / 439 ms with
-# single pieces; larger first queries cost more on near points (query time grows with k).
+# 20,000 points against a 2,000-segment cycloid at lateral scatter from 1 cm to far: (8, 32)
+# with 4 pieces was the fastest at every scatter but the nearest, where single pieces tie;
+# larger first queries cost more on near points (query time grows with k).
 _CANDIDATE_ROUNDS = (8, 32)
 # Consecutive pieces per tree entry: a coarser tree certifies farther points with the same k.
 _GROUP_PIECES = 4

@@ -110,7 +110,7 @@ def measure(qpos, qvel, lay: Layout) -> Measurement:
     # One conversion to Python floats: indexing numpy arrays element by element is slower.
     qpos = qpos.tolist() if hasattr(qpos, "tolist") else list(qpos)
     qvel = qvel.tolist() if hasattr(qvel, "tolist") else list(qvel)
-    # Positional construction (field order of Measurement): keywords cost ~1.5 us a call.
+    # Positional construction (field order of Measurement): keywords are slower, every step.
     return _new_measurement(measure_values(qpos, qvel, *lay.addresses, *lay.lengths))
 
 

@@ -21,8 +21,8 @@ from tt_mujoco.vehicle.params import Params
 __all__ = ["Vehicle", "compile_model", "layout_of"]
 
 
-#: Compiled models by their vehicle XML: compiling takes ~27 ms, copying ~4 ms, and sweeps
-#: build thousands of vehicles with a handful of distinct parameter sets.
+#: Compiled models by their vehicle XML: compiling costs several copies, and sweeps build
+#: thousands of vehicles with a handful of distinct parameter sets.
 _COMPILED: dict[str, mujoco.MjModel] = {}
 _COMPILED_MAX = 16
 

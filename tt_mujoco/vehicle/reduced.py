@@ -258,7 +258,7 @@ def _inertia_terms(phi: float, p: Params):
     :func:`_compute_inertia_terms`).
 
     Within a control step the controller's model and the matched disturbance ask for the same
-    angle, so the last ``(phi, terms)`` is kept on ``p`` itself (a hit saves ~2 us). It is one
+    angle, so the last ``(phi, terms)`` is kept on ``p`` itself (a hit skips the terms). It is one
     tuple written in one assignment: runs in threads that share ``p`` read either the old pair
     or the new one, never a mix, and runs with other parameters never see it.
     """

@@ -50,7 +50,7 @@ __all__ = [
 _KAPPA_TINY = 1e-6
 #: The scheduler re-applies eta only when it moved by more than this. The constraint then lags the
 #: schedule by at most 1e-5 * |phi| < 1e-5 rad, below MuJoCo's own equality violation (~3e-5 rad,
-#: docs/model.md Section 5), and the reduced plant rebuilds its Params (23 us) only when needed.
+#: docs/model.md Section 5), and the reduced plant rebuilds its Params only when needed.
 SCHEDULE_TOLERANCE = 1e-5
 
 

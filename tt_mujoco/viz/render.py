@@ -116,7 +116,7 @@ REFERENCE_POINT_RADIUS = 0.015  # m
 
 
 # Multisample anti-aliasing of the offscreen buffer. On Mesa's llvmpipe, 4 samples make
-# mjr_readPixels resolve the buffer in software: 14 ms instead of 3 ms a 640x480 frame.
+# mjr_readPixels resolve the buffer in software, several times the cost of the frame itself.
 OFFSCREEN_SAMPLES = 0
 
 
@@ -150,7 +150,7 @@ class Offscreen:
         mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self.context)
         self.scene = mujoco.MjvScene(model, maxgeom=maxgeom)
         # Shadows and reflections off: together they cost more than the rest of a frame. The
-        # skybox too: both cameras look down steeply enough never to see the sky (~1 ms).
+        # skybox too: both cameras look down steeply enough never to see the sky.
         self.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
         self.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
         self.scene.flags[mujoco.mjtRndFlag.mjRND_SKYBOX] = False
