@@ -17,7 +17,6 @@ existing non-empty one; ``metrics.json`` is written last, so its presence marks 
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import shutil
 import signal
@@ -63,7 +62,7 @@ from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.sim.timeseries import UNITS, train_columns, unit_of
 from tt_mujoco.sim.wind import parse_wind
 from tt_mujoco.vehicle import reduced
-from tt_mujoco.vehicle.params import Params
+from tt_mujoco.vehicle.params import SETTABLE_FIELDS
 from tt_mujoco.viz import plots as plots_mod
 from tt_mujoco.viz import render
 from tt_mujoco.viz import viewer as viewer_mod
@@ -72,11 +71,7 @@ __all__ = ["build_parser", "main", "write_outputs"]
 
 RENDERS = Path("renders")
 #: Params fields settable with --param / [params] (eta, timestep and friction have options).
-PARAM_NAMES = tuple(
-    f.name
-    for f in dataclasses.fields(Params)
-    if f.init and f.name not in ("eta", "timestep", "friction")
-)
+PARAM_NAMES = SETTABLE_FIELDS
 #: Prefix of the hidden folder, private to one run, where figures and video are made before
 #: they are moved into the output folder.
 STAGING = ".partial-"

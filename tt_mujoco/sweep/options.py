@@ -18,8 +18,8 @@ from tt_mujoco.vehicle.params import (
     INERTIA_FIELDS,
     MASS_FIELDS,
     MAX_TRAILERS,
+    SETTABLE_FIELDS,
     TRAILER_FIELDS,
-    Params,
 )
 
 STARTS = ("on_path", "paper")
@@ -69,11 +69,7 @@ SCALABLE = MASS_FIELDS + INERTIA_FIELDS
 
 #: Fields of :class:`Params` that ``param.<field>`` may set (eta, friction and timestep are
 #: Scenario options of their own).
-SETTABLE = tuple(
-    f.name
-    for f in dataclasses.fields(Params)
-    if f.init and f.name not in ("eta", "friction", "timestep")
-)
+SETTABLE = SETTABLE_FIELDS
 
 
 #: Grid generators (expand to a list) and random distributions (random mode only).

@@ -17,6 +17,8 @@ from tt_mujoco.defaults import JACKKNIFE_DEG, TORQUE_LIMIT
 
 __all__ = [
     "MAX_TRAILERS",
+    "MOTOR_FIELDS",
+    "SETTABLE_FIELDS",
     "STEERING_PRESETS",
     "TRAILER_FIELDS",
     "Params",
@@ -491,3 +493,13 @@ def jackknife_phi_deg(eta: float) -> float:
     :data:`~tt_mujoco.defaults.JACKKNIFE_DEG`, or |phi| reaches 90 deg (the trailer across
     the tractor)."""
     return min(JACKKNIFE_DEG / abs(eta), 90.0) if eta else 90.0
+
+
+#: Fields a scenario sets as ``params`` (``--param``, TOML ``[params]``, a sweep's
+#: ``param.<field>``): every field but eta, friction and timestep, which are scenario options
+#: of their own.
+SETTABLE_FIELDS = tuple(
+    f.name
+    for f in dataclasses.fields(Params)
+    if f.init and f.name not in ("eta", "friction", "timestep")
+)
