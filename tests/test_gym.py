@@ -221,3 +221,23 @@ def test_render_explains_itself_before_reset_and_without_a_render_mode():
 def test_an_unknown_field_gets_a_did_you_mean():
     with pytest.raises(ValueError, match="did you mean 'trailers'"):
         gym_env.TractorTrailerEnv(trailer=2)
+
+
+def test_the_physical_options_reach_the_env():
+    # A grade, motors, a delay, wind and an ice patch: the env's episode is the stepper's.
+    options = {
+        "traj": "circle", "duration": 0.2, "terrain": "slope:5:90", "actuator": "dc_motor",
+        "sensor_delay": 0.01, "wind": "8:0:2", "ground": ["band:0:1:0.1"],
+    }  # fmt: skip
+    env = gym_env.TractorTrailerEnv(**options)
+    env.reset(seed=1)
+    env.step(np.full(2, 1.0, dtype=np.float32))
+    stepper = env._stepper
+    lag = stepper.built.plant_params.motor_lag  # one 10 ms step of the motors' 5 ms lag
+    assert stepper.motors.torques[0] == pytest.approx(1.0 - math.exp(-0.01 / lag))
+    for _ in range(19):
+        obs, _, terminated, _, _ = env.step(np.full(2, 1.0, dtype=np.float32))
+    assert not terminated and np.all(np.isfinite(obs))
+    assert stepper.plant.model.opt.gravity[1] < 0  # the grade rises along +y
+    with pytest.raises(ValueError, match="did you mean 'terrain'"):
+        gym_env.TractorTrailerEnv(terain="slope:5")

@@ -150,3 +150,14 @@ def test_a_controller_report_is_kept_as_strict_json_numbers_or_as_an_error(given
     assert report == kept
     json.dumps(report, allow_nan=False)
     assert (message is None) if error is None else (error in message)
+
+
+def test_a_sweep_runs_the_nmpc_and_keeps_its_solve_columns(tmp_path):
+    out = tmp_path / "sweep"
+    args = ["controller=nmpc", "plant=reduced", "duration=0.5", "--repeats", "1"]
+    done = subprocess.run(
+        [sys.executable, "-m", "tt_mujoco.sweep", *args, "--out", str(out)], capture_output=True
+    )
+    assert done.returncode == 0, done.stderr
+    header = (out / "runs.csv").read_text().splitlines()[0].split(",")
+    assert "controller.solve_ms_median" in header and "controller.solve_failures" in header
