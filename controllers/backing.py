@@ -30,11 +30,22 @@ import math
 
 import numpy as np
 
-from tt_mujoco.reference.feedback import TargetWrapper, check_gain_table, path_errors
+from tt_mujoco.reference.feedback import (
+    TargetWrapper,
+    check_gain_table,
+    curvature_and_rate_at,
+    path_errors,
+)
 from tt_mujoco.vehicle.params import Params, jackknife_phi_deg
 from tt_mujoco.vehicle.rolling import hitch_rates
 
-__all__ = ["DEFAULT_GAINS", "HitchCascade", "check_config", "steady_hitch_angle"]
+__all__ = [
+    "DEFAULT_GAINS",
+    "HitchCascade",
+    "SteadyInverse",
+    "check_config",
+    "steady_hitch_angle",
+]
 
 #: k_y (1/m^2), k_psi (1/m): the leading axle's path loop, critically damped in arc length
 #: (k_psi = 2 sqrt(k_y)), its offset halved over ~1.2 m; k_phi (1/m): the last hitch's loop,
@@ -67,7 +78,7 @@ def steady_curvature(phi, L: float, L0: float, eta: float):
     return -np.sin((eta - 1.0) * phi) / (L0 * np.cos(eta * phi) + L * np.cos((eta - 1.0) * phi))
 
 
-class _SteadyInverse:
+class SteadyInverse:
     """``phi(kappa)``: the inverse of :func:`steady_curvature` on its monotone branch through 0."""
 
     def __init__(self, L: float, L0: float, eta: float, phi_max: float):
@@ -94,7 +105,7 @@ class _SteadyInverse:
 
 def steady_hitch_angle(kappa: float, L: float, L0: float, eta: float, phi_max: float) -> float:
     """The hitch angle (rad, within +-phi_max) held steady at curvature ``kappa``."""
-    return _SteadyInverse(L, L0, eta, phi_max)(kappa)
+    return SteadyInverse(L, L0, eta, phi_max)(kappa)
 
 
 class HitchCascade(TargetWrapper):
@@ -132,9 +143,7 @@ class HitchCascade(TargetWrapper):
         # A wanted hitch angle stays within 80 % of where a run stops as a jackknife (|beta| =
         # |eta phi| = 85 deg: 22.7 deg for the paper's eta = 3).
         self._inverse = [
-            _SteadyInverse(
-                L, L0, eta, min(self.phi_max, 0.8 * math.radians(jackknife_phi_deg(eta)))
-            )
+            SteadyInverse(L, L0, eta, min(self.phi_max, 0.8 * math.radians(jackknife_phi_deg(eta))))
             for (L, L0), eta in zip(self.lengths, self.etas, strict=True)
         ]
         self._pose_at = self.path.pose_at
@@ -173,8 +182,7 @@ class HitchCascade(TargetWrapper):
         self.lateral_error, self.heading_error = e_y, e_psi
         v_lead = rates[-1][1]
         c = -self.k_y * e_y - self.k_psi * math.copysign(1.0, v_lead) * e_psi
-        # beyond its ends the path continues straight (as its pose does)
-        feed = self._curvature(s)[0] if 0.0 <= s <= self.path.length else 0.0
+        feed = curvature_and_rate_at(self.path, s)[0]
         kappa = feed + max(-self.c_max, min(self.c_max, c))
         for k in range(n - 1, 0, -1):  # hitches N..2 (index k is trailer k + 1)
             wanted = self._inverse[k](kappa)

@@ -27,10 +27,10 @@ from typing import ClassVar
 
 import numpy as np
 from scipy.linalg import solve_continuous_are
-from tt_mujoco.controllers.backing import _SteadyInverse
+from tt_mujoco.controllers.backing import SteadyInverse
 from tt_mujoco.controllers.base import Controller, track_velocities
 
-from tt_mujoco.reference.feedback import path_errors
+from tt_mujoco.reference.feedback import curvature_and_rate_at, path_errors
 from tt_mujoco.vehicle.linearize import jacobians
 from tt_mujoco.vehicle.params import jackknife_phi_deg
 
@@ -62,7 +62,7 @@ class LqrController(Controller):
         self.etas = list(params.etas)
         self._behind = np.cumsum([L + L0 for L, L0 in self.lengths])
         self._steady = [
-            _SteadyInverse(L, L0, eta, 0.8 * math.radians(min(80.0, jackknife_phi_deg(eta))))
+            SteadyInverse(L, L0, eta, 0.8 * math.radians(min(80.0, jackknife_phi_deg(eta))))
             for (L, L0), eta in zip(self.lengths, self.etas, strict=True)
         ]
         k = self._gains
@@ -73,10 +73,6 @@ class LqrController(Controller):
     def reset(self) -> None:
         self._s = None
         self._gain_table: dict[tuple[int, int], np.ndarray] = {}
-
-    def _curvature(self, s: float) -> float:
-        path = self.setup.path
-        return path.curvature_and_rate(s)[0] if 0.0 <= s <= path.length else 0.0
 
     def gain(self, kappa: float, v: float) -> np.ndarray:
         """``K`` (shape (N + 2,)) for the steady arc of curvature ``kappa`` at speed ``v``."""
@@ -101,10 +97,10 @@ class LqrController(Controller):
         s = r.s if self._s is None else self._s
         s, e_y, e_psi = path_errors(path.pose_at, path.curvature_and_rate, s, m.x, m.y, m.theta)
         self._s = s
-        kappa = self._curvature(s)
+        kappa = curvature_and_rate_at(path, s)[0]
         phis = [m.phi, *(row[3] for row in getattr(m, "train", ()))]
         phis_ref = [
-            steady(self._curvature(s - behind))
+            steady(curvature_and_rate_at(path, s - behind)[0])
             for steady, behind in zip(self._steady, self._behind, strict=True)
         ]
         K = self.gain(kappa, r.v_d)

@@ -37,11 +37,11 @@ import time
 from typing import ClassVar
 
 import numpy as np
-from tt_mujoco.controllers.backing import _SteadyInverse
+from tt_mujoco.controllers.backing import SteadyInverse
 from tt_mujoco.controllers.base import Controller
 from tt_mujoco.controllers.mpc_qp import TrackingQP
 
-from tt_mujoco.reference.feedback import path_errors
+from tt_mujoco.reference.feedback import curvature_and_rate_at, path_errors
 from tt_mujoco.vehicle.linearize import error_rates, jacobians
 from tt_mujoco.vehicle.params import jackknife_phi_deg
 from tt_mujoco.vehicle.reduced import SingularityError
@@ -83,7 +83,7 @@ class NmpcController(Controller):
             for eta in self.etas
         ]
         self._steady = [
-            _SteadyInverse(L, L0, eta, bound)
+            SteadyInverse(L, L0, eta, bound)
             for (L, L0), eta, bound in zip(self.lengths, self.etas, self.phi_bound, strict=True)
         ]
         weights = [k["q_s"], k["q_y"], k["q_psi"], *[k["q_phi"]] * n, k["q_v"], k["q_omega"]]
@@ -127,7 +127,7 @@ class NmpcController(Controller):
         s, e_y, e_psi = x[0], x[1], x[2]
         phis = [max(-g, min(g, p)) for p, g in zip(x[3 : 3 + n], self._phi_guard, strict=True)]
         v, omega = x[3 + n], x[4 + n]
-        kappa, dkappa = path.curvature_and_rate(s) if 0.0 <= s <= path.length else (0.0, 0.0)
+        kappa, dkappa = curvature_and_rate_at(path, s)
         z = (e_y, e_psi, *phis)
         kin = error_rates(z, (v, omega), kappa, self.lengths, self.etas)
         A_kin, B_kin = jacobians(z, (v, omega), kappa, self.lengths, self.etas)
@@ -183,26 +183,22 @@ class NmpcController(Controller):
         return np.array([s, e_y, e_psi, *self._phis(m), m.v, m.omega])
 
     def _references(self, r) -> np.ndarray:
-        n = self.n
+        n, path = self.n, self.setup.path
         refs = np.zeros((self.horizon, self.nx))
         for k in range(1, self.horizon + 1):
             tau = k * self.dt
             s = r.s + r.v_d * tau + 0.5 * r.v_d_dot * tau * tau
             v = r.v_d + r.v_d_dot * tau
-            kappa = self._curvature(s)
+            kappa = curvature_and_rate_at(path, s)[0]
             refs[k - 1, 0] = s
             # each hitch at the steady angle of the curvature under its own trailer's axle
             refs[k - 1, 3 : 3 + n] = [
-                steady(self._curvature(s - behind))
+                steady(curvature_and_rate_at(path, s - behind)[0])
                 for steady, behind in zip(self._steady, self._behind, strict=True)
             ]
             refs[k - 1, 3 + n] = v
             refs[k - 1, 4 + n] = kappa * v
         return refs
-
-    def _curvature(self, s: float) -> float:
-        path = self.setup.path
-        return path.curvature_and_rate(s)[0] if 0.0 <= s <= path.length else 0.0
 
     def _solve(self, m, r) -> None:
         x0 = self._measured_state(m, r)

@@ -107,18 +107,17 @@ def _disturbance_limit(text: str) -> str | float:
     return positive("--disturbance-limit")(text)
 
 
-def _wind(text: str) -> str:
-    try:
-        return parse_wind(text).spec()
-    except ValueError as err:
-        raise argparse.ArgumentTypeError(str(err)) from None
+def _spec(parse):
+    """An argparse type for an option written as a spec text (``--wind``, ``--terrain``): the
+    parsed value's own spelling of it, or the parser's message."""
 
+    def convert(text: str) -> str:
+        try:
+            return parse(text).spec()
+        except ValueError as err:
+            raise argparse.ArgumentTypeError(str(err)) from None
 
-def _terrain(text: str) -> str:
-    try:
-        return parse_terrain(text).spec()
-    except ValueError as err:
-        raise argparse.ArgumentTypeError(str(err)) from None
+    return convert
 
 
 def _path_option(text: str) -> tuple[str, float | str]:
@@ -351,7 +350,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     g.add_argument(
         "--wind",
-        type=_wind,
+        type=_spec(parse_wind),
         default="none",
         metavar="SPEED[:DIRECTION_DEG[:GUST_STD]]",
         help="wind blowing toward DIRECTION_DEG (m/s, deg from +x, gusts' std in m/s); "
@@ -359,7 +358,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     g.add_argument(
         "--terrain",
-        type=_terrain,
+        type=_spec(parse_terrain),
         default="flat",
         metavar="flat|slope:GRADE_DEG[:HEADING_DEG]",
         help="the ground: flat, or a constant grade rising along HEADING_DEG (default 0, +x); "

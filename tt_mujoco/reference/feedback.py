@@ -35,6 +35,7 @@ __all__ = [
     "TargetWrapper",
     "check_config",
     "check_gain_table",
+    "curvature_and_rate_at",
     "path_errors",
 ]
 
@@ -49,6 +50,12 @@ DEFAULT_GAINS = {"k_y": 4.0, "k_psi": 4.0, "c_max": 2.0}
 _NEWTON_STEPS = 2
 # Lower bound of 1 - kappa e_y in the error kinematics (inside a tight turn, far from the path).
 _MIN_METRIC = 0.2
+
+
+def curvature_and_rate_at(path, s: float) -> tuple[float, float]:
+    """``(kappa, dkappa/ds)`` of ``path`` at arc length ``s``, zero beyond its ends: there the
+    path continues straight along its end tangents (as its pose does)."""
+    return path.curvature_and_rate(s) if 0.0 <= s <= path.length else (0.0, 0.0)
 
 
 def path_errors(pose_at, curvature_and_rate, s: float, x: float, y: float, theta: float):

@@ -72,6 +72,10 @@ SCALABLE = MASS_FIELDS + INERTIA_FIELDS
 SETTABLE = SETTABLE_FIELDS
 
 
+#: Options written as a spec text, each with its parser (the run keeps the parsed spelling).
+SPEC_OPTIONS = {"terrain": parse_terrain, "wind": parse_wind}
+
+
 #: Grid generators (expand to a list) and random distributions (random mode only).
 GRID_GENERATORS = ("lin", "log", "range")
 
@@ -242,14 +246,9 @@ def convert(name: str, value):
         return _boolean(name, value, extra=f"true, false or one of {', '.join(ETA_SCHEDULES)}")
     if name == "actuator":
         return _choice(name, value, ACTUATORS)
-    if name == "wind":
+    if name in SPEC_OPTIONS:
         try:
-            return parse_wind(_text(name, value)).spec()
-        except ValueError as err:
-            raise BadSpecError(str(err)) from None
-    if name == "terrain":
-        try:
-            return parse_terrain(_text(name, value)).spec()
+            return SPEC_OPTIONS[name](_text(name, value)).spec()
         except ValueError as err:
             raise BadSpecError(str(err)) from None
     if name in SCENARIO_OPTIONS:  # a newer Scenario field: checked by the type of its default
