@@ -47,6 +47,12 @@ CASES = {
         "--controller",
         f"{ROOT}/examples/kanayama.py:KanayamaTracker",
     ],
+    "kanayama_law": [
+        "--traj",
+        "s_curve",
+        "--controller",
+        f"{ROOT}/examples/kanayama.py:kanayama_law",
+    ],
     "reduced": ["--traj", "s_curve", "--plant", "reduced"],
 }
 QUIET = ["--no-video", "--no-plots", "--quiet"]

@@ -31,6 +31,7 @@ from tt_mujoco.controllers.ismc_sta import IsmcStaController
 from tt_mujoco.controllers.lqr import LqrController
 from tt_mujoco.controllers.nmpc import NmpcController
 from tt_mujoco.controllers.pid import PidController
+from tt_mujoco.controllers.plain import PlainLawController, plain_law
 from tt_mujoco.controllers.stanley import StanleyController
 
 from tt_mujoco.defaults import TORQUE_LIMIT
@@ -46,12 +47,14 @@ __all__ = [
     "ModelFn",
     "NmpcController",
     "PidController",
+    "PlainLawController",
     "Reference",
     "StanleyController",
     "VelocityController",
     "build_controller",
     "controller_class",
     "make_controller",
+    "plain_law",
     "reduced_model",
 ]
 

@@ -1,6 +1,7 @@
 """A pose-feedback path tracker written outside the package (Kanayama et al., 1990).
 
-Run it with ``python -m tt_mujoco.run --controller examples/kanayama.py:KanayamaTracker``.
+Run it with ``python -m tt_mujoco.run --controller examples/kanayama.py:KanayamaTracker``, or
+its plain-number form ``kanayama_law`` (below), which the loop compiles.
 
 The outer law turns the tractor's pose error against the reference point into velocity
 targets; an inner loop turns those into wheel torques through the nominal model
@@ -18,7 +19,12 @@ The integral term holds the speed against a constant disturbance (the paper's pu
 
 import math
 
-from tt_mujoco.controllers import Controller
+from tt_mujoco.controllers import Controller, plain_law
+
+
+def wrap(angle):
+    """The angle in (-pi, pi]."""
+    return math.atan2(math.sin(angle), math.cos(angle))
 
 
 class KanayamaTracker(Controller):
@@ -36,9 +42,9 @@ class KanayamaTracker(Controller):
         dx, dy = x_ref - m.x, y_ref - m.y
         c, s = math.cos(m.theta), math.sin(m.theta)
         e_x, e_y = c * dx + s * dy, -s * dx + c * dy
-        e_th = math.remainder(th_ref - m.theta, 2.0 * math.pi)
+        e_th = wrap(th_ref - m.theta)
         if r.v_d < 0:  # reversing: the heading error is against the backward tangent
-            e_th = math.remainder(e_th + math.pi, 2.0 * math.pi)
+            e_th = wrap(e_th + math.pi)
         v_c = r.v_d * math.cos(e_th) + k["k_x"] * e_x
         omega_c = r.omega_d + r.v_d * (k["k_y"] * e_y + k["k_th"] * math.sin(e_th))
         e_v, e_w = v_c - m.v, omega_c - m.omega
@@ -52,3 +58,29 @@ class KanayamaTracker(Controller):
         T_r, T_l = (g22 * a_v - g12 * a_w) / det, (g11 * a_w - g21 * a_v) / det
         self._saturated = max(abs(T_r), abs(T_l)) > self.setup.torque_limit
         return T_r, T_l
+
+
+# The same tracker as a plain-number law: the loop compiles it (tt_mujoco.controllers.plain),
+# so it runs at the cost of the physics. Run it with
+# ``python -m tt_mujoco.run --controller examples/kanayama.py:kanayama_law``.
+@plain_law(gains=KanayamaTracker.PRESETS["default"], state=("int_v", "int_w", "saturated"))
+def kanayama_law(m, r, model, k, s, dt, torque_limit):
+    dx, dy = r.x_ref - m.x, r.y_ref - m.y
+    c, sn = math.cos(m.theta), math.sin(m.theta)
+    e_x, e_y = c * dx + sn * dy, -sn * dx + c * dy
+    e_th = wrap(r.theta_ref - m.theta)
+    if r.v_d < 0:  # reversing: the heading error is against the backward tangent
+        e_th = wrap(e_th + math.pi)
+    v_c = r.v_d * math.cos(e_th) + k.k_x * e_x
+    omega_c = r.omega_d + r.v_d * (k.k_y * e_y + k.k_th * math.sin(e_th))
+    e_v, e_w = v_c - m.v, omega_c - m.omega
+    if s.saturated == 0.0:
+        s.int_v += e_v * dt
+        s.int_w += e_w * dt
+    a_v = r.v_d_dot + k.k_v * e_v + k.k_i * s.int_v - model.f1
+    a_w = r.omega_d_dot + k.k_v * e_w + k.k_i * s.int_w - model.f2
+    det = model.g11 * model.g22 - model.g12 * model.g21
+    T_r = (model.g22 * a_v - model.g12 * a_w) / det
+    T_l = (model.g11 * a_w - model.g21 * a_v) / det
+    s.saturated = 1.0 if max(abs(T_r), abs(T_l)) > torque_limit else 0.0
+    return T_r, T_l

@@ -108,7 +108,7 @@ def test_a_user_controller_runs_the_python_loop():
 
     built = build(Scenario(traj="circle", duration=3.0))
     controller = Mine.from_setup(built.controller_setup)
-    assert compiled.unsupported(built, controller) == "a controller other than the built-in laws"
+    assert compiled.unsupported(built, controller) == "a Python controller class"
 
 
 def _fake_cache(monkeypatch, tmp_path):
@@ -168,6 +168,8 @@ def test_a_kernel_that_fails_to_load_leaves_the_episode_to_the_python_loop(
     monkeypatch, tmp_path, capsys
 ):
     class Broken:
+        no_user_law = None
+
         @staticmethod
         def run_chunk(*args):
             raise EOFError("Ran out of input")
@@ -191,8 +193,9 @@ def test_the_cache_key_lists_the_sources_the_kernel_compiles():
     from tt_mujoco.sim import kernel_sources
 
     files = kernel_sources.source_files()
-    for fn in kernel_sources.SHARED:
+    shared = (*kernel_sources.SHARED, *kernel_sources.RECORDS)
+    for fn in shared:
         assert inspect.getsourcefile(fn) in files
     assert len(files) == len(set(files))
-    modules = sorted({fn.__module__ for fn in kernel_sources.SHARED})
+    modules = sorted({fn.__module__ for fn in shared})
     assert [inspect.getsourcefile(__import__(m, fromlist=["_"])) for m in modules] == files

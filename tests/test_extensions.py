@@ -126,7 +126,7 @@ def test_user_path_and_metric_land_in_metrics_json(tmp_path):
     ("args", "message"),
     [
         (["--controller", "examples/nope.py:X"], "not found"),
-        (["--controller", "examples/kanayama.py:Kanayama"], "did you mean 'KanayamaTracker'"),
+        (["--controller", "examples/kanayama.py:KanayamaTrackr"], "did you mean 'KanayamaTracker'"),
         (["--controller", "math:pi"], "not a subclass"),
         (["--controller", "ismc-sat"], "did you mean 'ismc_sta'"),
         (["--traj", "examples/user_parts.py:lane_change", "--path-option", "depth=1"], "depth"),

@@ -92,10 +92,7 @@ class ReferencePath:
         """
         clipped = min(max(s, 0.0), self.length)
         x, y, heading = self._pose_at(clipped)
-        if s != clipped:
-            x += (s - clipped) * math.cos(heading)
-            y += (s - clipped) * math.sin(heading)
-        return x, y, heading
+        return continued_pose(s, clipped, x, y, heading)
 
     def curvature_and_rate(self, s: float) -> tuple[float, float]:
         """``(kappa(s), dkappa/ds(s))`` for one float ``s``, in plain float arithmetic.
@@ -167,6 +164,16 @@ class ReferencePath:
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(name={self.name!r}, length={self.length:.4f})"
+
+
+def continued_pose(s: float, clipped: float, x: float, y: float, heading: float):
+    """The pose at ``s`` from the pose ``(x, y, heading)`` at ``clipped``, s held within the
+    path: beyond its ends the path continues along its end tangent (plain floats; the
+    compiled episode shares it)."""
+    if s != clipped:
+        x += (s - clipped) * math.cos(heading)
+        y += (s - clipped) * math.sin(heading)
+    return x, y, heading
 
 
 def positive_number(name: str, value) -> float:

@@ -25,7 +25,6 @@ arithmetic (about 1 microsecond), because the targets call them at every control
 
 from __future__ import annotations
 
-import bisect
 import math
 
 import numpy as np
@@ -115,11 +114,17 @@ class CycloidPath(ReferencePath):
         return u * (16.0 - u * u) ** -1.5
 
     def _pose_at(self, s):
-        tau = 2.0 * math.acos(min(max((_CYCLOID_MID - s) / 4.0, -1.0), 1.0))
-        return tau - math.sin(tau), 1.0 - math.cos(tau), math.pi / 2.0 - tau / 2.0
+        return cycloid_pose_of(s)
 
     def curvature_and_rate(self, s: float) -> tuple[float, float]:
         return cycloid_curvature_and_rate(s)
+
+
+def cycloid_pose_of(s: float) -> tuple[float, float, float]:
+    """The cycloid's ``(x, y, heading)`` at ``s`` in ``[0, CYCLOID_LENGTH]`` as plain floats
+    (the compiled episode shares it)."""
+    tau = 2.0 * math.acos(min(max((_CYCLOID_MID - s) / 4.0, -1.0), 1.0))
+    return tau - math.sin(tau), 1.0 - math.cos(tau), math.pi / 2.0 - tau / 2.0
 
 
 def cycloid_curvature_and_rate(s: float) -> tuple[float, float]:
@@ -184,7 +189,6 @@ class ArcsPath(ReferencePath):
             starts.append((x + dx, y + dy, h + dh))
         self._starts = np.array(starts)
         # Python lists for the scalar fast path.
-        self._inner_bounds = [float(b) for b in self._bounds[1:-1]]
         self._kappa_list = [float(k) for k in kappas]
         self._bound_list = [float(b) for b in self._bounds]
         self._start_list = [tuple(map(float, row)) for row in self._starts]
@@ -207,17 +211,50 @@ class ArcsPath(ReferencePath):
         return np.zeros_like(s)
 
     def _pose_at(self, s):
-        i = bisect.bisect_right(self._inner_bounds, s)
-        x0, y0, h0 = self._start_list[i]
-        kappa = self._kappa_list[i]
-        local = s - self._bound_list[i]
-        turn = kappa * local
-        chord = local if abs(turn) < 1e-12 else 2.0 * math.sin(turn / 2.0) / kappa
-        mid = h0 + turn / 2.0
-        return x0 + chord * math.cos(mid), y0 + chord * math.sin(mid), h0 + turn
+        return arcs_pose_of(s, self._bound_list, self._kappa_list, self._start_list)
 
     def curvature_and_rate(self, s: float) -> tuple[float, float]:
-        return self._kappa_list[bisect.bisect_right(self._inner_bounds, s)], 0.0
+        return arcs_curvature_of(s, self._bound_list, self._kappa_list)
+
+    @property
+    def closed_form(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The arcs as the compiled episode takes them: the segments' bounds (s_0 = 0 ..
+        length), their curvatures and their start poses (x, y, heading) per row."""
+        return np.array(self._bound_list), np.array(self._kappa_list), np.array(self._starts)
+
+
+def arc_segment(s: float, bounds) -> int:
+    """The segment of arcs with ``bounds`` (s_0 = 0, ..., s_n = length) that holds ``s``: the
+    last whose start is <= s (``bisect.bisect_right`` over the inner bounds), 0 before the
+    path and n - 1 beyond it."""
+    lo, hi = 0, len(bounds) - 2
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if s < bounds[mid + 1]:
+            hi = mid
+        else:
+            lo = mid + 1
+    return lo
+
+
+def arcs_curvature_of(s: float, bounds, kappas) -> tuple[float, float]:
+    """``(kappa(s), 0)`` of arcs with ``bounds`` and curvatures ``kappas`` (plain floats; the
+    compiled episode shares it): piecewise constant, so its rate is zero."""
+    return kappas[arc_segment(s, bounds)], 0.0
+
+
+def arcs_pose_of(s: float, bounds, kappas, starts) -> tuple[float, float, float]:
+    """``(x, y, heading)`` at ``s`` of arcs whose segment i starts at the pose ``starts[i]``
+    (plain floats; the compiled episode shares it)."""
+    i = arc_segment(s, bounds)
+    start = starts[i]
+    x0, y0, h0 = start[0], start[1], start[2]
+    kappa = kappas[i]
+    local = s - bounds[i]
+    turn = kappa * local
+    chord = local if abs(turn) < 1e-12 else 2.0 * math.sin(turn / 2.0) / kappa
+    mid = h0 + turn / 2.0
+    return x0 + chord * math.cos(mid), y0 + chord * math.sin(mid), h0 + turn
 
 
 def _arc_step(length, kappa, heading):

@@ -386,6 +386,11 @@ class Target:
         self._s = 0.0
         self._kappa = self._curvature_and_rate(0.0)[0]
 
+    def set_state(self, s: float, v_prev: float, kappa: float) -> None:
+        """Take the state an update left (arc length, previous measured speed or NaN, and
+        curvature): the compiled episode hands it back this way after its steps."""
+        self._s, self._kappa = s, kappa
+
     @property
     def arc_length(self) -> float:
         """The arc length s (m) used at the last update."""
@@ -456,7 +461,8 @@ class StaticTarget(Target):
         kappa, rate = self._curvature_and_rate(s_ref)
         self._s = s_ref
         self._kappa = kappa
-        return v_ref, kappa * v_ref, a_ref, rate * v_ref * v_ref + kappa * a_ref
+        omega_d, omega_d_dot = yaw_rate_targets(kappa, rate, v_ref, a_ref)
+        return v_ref, omega_d, a_ref, omega_d_dot
 
 
 class DynamicTarget(Target):
@@ -477,6 +483,10 @@ class DynamicTarget(Target):
         super().reset()
         self._v_prev: float | None = None
 
+    def set_state(self, s: float, v_prev: float, kappa: float) -> None:
+        super().set_state(s, v_prev, kappa)
+        self._v_prev = None if math.isnan(v_prev) else v_prev
+
     def update(self, t: float, dt: float, v_measured: float) -> tuple[float, float, float, float]:
         """Advance s and return ``(v_d, omega_d, v_d_dot, omega_d_dot)``.
 
@@ -492,12 +502,26 @@ class DynamicTarget(Target):
         """
         v = float(v_measured)
         if self._v_prev is not None:
-            self._s += 0.5 * (self._v_prev + v) * dt
+            self._s = travelled(self._s, self._v_prev, v, dt)
         self._v_prev = v
         _, v_ref, a_ref = self._profile_state(t)
         kappa, rate = self._curvature_and_rate(self._s)
         self._kappa = kappa
-        return v_ref, kappa * v, a_ref, rate * v * v + kappa * a_ref
+        omega_d, omega_d_dot = yaw_rate_targets(kappa, rate, v, a_ref)
+        return v_ref, omega_d, a_ref, omega_d_dot
+
+
+def yaw_rate_targets(kappa: float, rate: float, speed: float, accel: float):
+    """``(omega_d, omega_d_dot) = (kappa u, kappa' u^2 + kappa a)`` for the path's curvature
+    ``kappa`` and its rate ``kappa'`` at the reference point, met at speed ``u`` with
+    acceleration ``a`` (paper eqs. 32-34; plain floats, the compiled episode shares it)."""
+    return kappa * speed, rate * speed * speed + kappa * accel
+
+
+def travelled(s: float, v_prev: float, v: float, dt: float) -> float:
+    """The dynamic target's arc length after one step: the trapezoidal rule on the measured
+    speed (paper eq. 34; the compiled episode shares it)."""
+    return s + 0.5 * (v_prev + v) * dt
 
 
 # --- factory --------------------------------------------------------------------------------

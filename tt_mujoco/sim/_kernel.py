@@ -4,9 +4,10 @@ It is imported from a copy of this file inside the compiled-code cache
 (:func:`tt_mujoco.sim.compiled.kernel`), so that numba's own cache, which checks the source
 file's path and time stamp, stays valid for every checkout of the same sources.
 
-The shared plain-number functions are registered with numba here, so the chunk loop below
-compiles them from their own source; the loop itself only sequences them as
-:class:`tt_mujoco.sim.stepper.Stepper` does (sense, law, actuate, log, advance).
+The step's plain-number functions (:data:`tt_mujoco.sim.kernel_sources.SHARED`) are registered
+with numba here, so the chunk loop below compiles them from their own source; the loop only
+sequences them as :class:`tt_mujoco.sim.stepper.Stepper` does (sense, noise, target, law,
+saturation, disturbance, log, advance), over the named records of :mod:`tt_mujoco.sim.records`.
 """
 
 from __future__ import annotations
@@ -17,34 +18,25 @@ import os
 import mujoco
 import numpy as np
 from llvmlite import binding
-from numba import njit, types
-from numba.extending import register_jitable
+from numba import cfunc, njit, types
+from numba.extending import intrinsic, register_jitable
 
 from tt_mujoco.controllers import base, fbl, ismc_sta, pid
-from tt_mujoco.reference import paths
-from tt_mujoco.sim import disturbances, measure, plant_reduced
+from tt_mujoco.reference import path_base, paths, targets
+from tt_mujoco.sim import disturbances, measure, plant_reduced, step
 from tt_mujoco.sim.kernel_sources import SHARED
 from tt_mujoco.vehicle import reduced
 
 for _fn in SHARED:
     register_jitable(_fn)
 
-measure_values = measure.measure_values
-reduced_measure_values = plant_reduced.reduced_measure_values
-inertia_terms_of = reduced.inertia_terms_of
-coriolis_of = reduced.coriolis_of
-solve_dynamics_of = reduced.solve_dynamics_of
-torque_for_force_of = reduced.torque_for_force_of
-rolling_rates_of = reduced.rolling_rates_of
-rk4_stage = reduced.rk4_stage
-rk4_combine = reduced.rk4_combine
-ismc_sta_law = ismc_sta.ismc_sta_law
-pid_law = pid.pid_law
-fbl_law = fbl.fbl_law
-cycloid_curvature_and_rate = paths.cycloid_curvature_and_rate
-paper_disturbance_of = disturbances.paper_disturbance_of
-COS_BETA_MIN = reduced.COS_BETA_MIN
+RUNNING, FINISHED, BLEW_UP, JACKKNIFE = step.RUNNING, step.FINISHED, step.BLEW_UP, step.JACKKNIFE
+WARNING, LAW_FAILED, SINGULAR = step.WARNING, step.LAW_FAILED, step.SINGULAR
 LAW_OK, LAW_SINGULAR = base.LAW_OK, base.LAW_SINGULAR
+COS_BETA_MIN = reduced.COS_BETA_MIN
+ISMC_STA, PID, FBL, USER = 0, 1, 2, 3
+#: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
+NOMINAL_SINGULAR = -1.0
 
 # mj_step by its symbol in MuJoCo's library, which the Python bindings load: no pointer is
 # baked into the compiled code, so it can be cached on disk.
@@ -52,233 +44,218 @@ _LIB = [f for f in os.listdir(os.path.dirname(mujoco.__file__)) if f.startswith(
 binding.load_library_permanently(os.path.join(os.path.dirname(mujoco.__file__), _LIB[0]))
 mj_step = types.ExternalFunction("mj_step", types.void(types.voidptr, types.voidptr))
 
-_RUNNING, _FINISHED, _BLEW_UP, _JACKKNIFE, _WARNING, _LAW_FAILED, _SINGULAR = range(7)
+_P = types.CPointer(types.float64)
+#: A compiled plain-number law (:mod:`tt_mujoco.controllers.plain`): pointers to the
+#: measurement, the reference, the nominal model, the gains, the state and the two torques
+#: out, then dt and the torque limit.
+USER_LAW = types.void(_P, _P, _P, _P, _P, _P, types.float64, types.float64)
+
+
+@cfunc(USER_LAW, cache=True)
+def no_user_law(m, r, model, gains, state, out, dt, limit):  # the built-in laws' placeholder
+    pass
+
+
+@intrinsic
+def _pointer(typingctx, array):
+    """The address of a contiguous array's data (of float fields), as a C float pointer."""
+
+    def codegen(context, builder, signature, args):
+        data = context.make_array(signature.args[0])(context, builder, args[0]).data
+        return builder.bitcast(data, context.get_value_type(_P))
+
+    return _P(array), codegen
 
 
 @njit(cache=True)
-def _curvature(s, path_kind, bounds, kappas):
-    if path_kind == 0:
-        # bisect.bisect_right, as ArcsPath.curvature_and_rate
-        return kappas[np.searchsorted(bounds, s, side="right")], 0.0
-    return cycloid_curvature_and_rate(s)
+def _path_at(target, s):
+    """``(kappa, dkappa/ds)`` of the target's closed-form path at ``s``."""
+    if target.path_kind == 0:
+        return paths.arcs_curvature_of(s, target.bounds, target.kappas)
+    return paths.cycloid_curvature_and_rate(s)
 
 
 @njit(cache=True)
-def _derivative(y, T_r, T_l, pc, r, d, out):
-    """ReducedPlant.derivative (no disturbance): False at the singularity."""
-    theta, phi, v, omega = y[2], y[3], y[6], y[7]
-    eta = pc[0]
-    if math.cos(eta * phi) < COS_BETA_MIN:
-        return False
-    terms = inertia_terms_of(phi, pc[0], pc[1], pc[2], pc[3], pc[4], pc[5], pc[6], pc[7], pc[8])
-    mass, bias = coriolis_of(terms, pc[9], v, omega)
-    f1, f2, g11, g12, g21, g22 = solve_dynamics_of(mass, bias, r, d)
-    rates = rolling_rates_of(theta, phi, v, omega, eta, pc[1], pc[2], r, d)
-    for i in range(6):
-        out[i] = rates[i]
-    out[6] = f1 + g11 * T_r + g12 * T_l + 0.0
-    out[7] = f2 + g21 * T_r + g22 * T_l + 0.0
-    return True
+def _pose_at(target, s):
+    """The path's pose at ``s`` (ReferencePath.pose_at)."""
+    bounds = target.bounds
+    clipped = min(max(s, 0.0), target.length)
+    if target.path_kind == 0:
+        x, y, heading = paths.arcs_pose_of(clipped, bounds, target.kappas, target.starts)
+    else:
+        x, y, heading = paths.cycloid_pose_of(clipped)
+    return path_base.continued_pose(s, clipped, x, y, heading)
 
 
 @njit(cache=True)
-def _rk4(y, T_r, T_l, pc, r, d, info):
-    """ReducedPlant.step: y advanced in place by pc[10]; False (info: phi, eta) if singular."""
-    dt = pc[10]
-    k1, k2, k3, k4 = np.empty(8), np.empty(8), np.empty(8), np.empty(8)
-    if not _derivative(y, T_r, T_l, pc, r, d, k1):
-        info[0], info[1] = y[3], pc[0]
-        return False
-    stage = rk4_stage(y, k1, 0.5 * dt)
-    if not _derivative(stage, T_r, T_l, pc, r, d, k2):
-        info[0], info[1] = stage[3], pc[0]
-        return False
-    stage = rk4_stage(y, k2, 0.5 * dt)
-    if not _derivative(stage, T_r, T_l, pc, r, d, k3):
-        info[0], info[1] = stage[3], pc[0]
-        return False
-    stage = rk4_stage(y, k3, dt)
-    if not _derivative(stage, T_r, T_l, pc, r, d, k4):
-        info[0], info[1] = stage[3], pc[0]
-        return False
-    new = rk4_combine(y, k1, k2, k3, k4, dt / 6.0)
+def _sense(plant):
+    """The Measurement fields of the plant's state."""
+    if plant.mujoco:
+        mj = plant.mj
+        return measure.measure_values(mj.qpos, mj.qvel, mj.addresses, mj.lengths)
+    return plant_reduced.reduced_measure_values(plant.ode_state, plant.ode)
+
+
+@njit(cache=True)
+def _update_target(target, k, v_m, dt):
+    """The target's update at step ``k`` (StaticTarget / DynamicTarget.update): ``(v_d,
+    omega_d, v_d_dot, omega_d_dot)``, its state (s, v_prev, kappa) updated in place."""
+    state = target.state[0]
+    s_ref, v_ref, a_ref = target.profile[k, 0], target.profile[k, 1], target.profile[k, 2]
+    if target.dynamic:
+        if not math.isnan(state.v_prev):
+            state.s = targets.travelled(state.s, state.v_prev, v_m, dt)
+        state.v_prev = v_m
+        kappa, rate = _path_at(target, state.s)
+        omega_d, omega_d_dot = targets.yaw_rate_targets(kappa, rate, v_m, a_ref)
+    else:
+        kappa, rate = _path_at(target, s_ref)
+        state.s = s_ref
+        omega_d, omega_d_dot = targets.yaw_rate_targets(kappa, rate, v_ref, a_ref)
+    state.kappa = kappa
+    return v_ref, omega_d, a_ref, omega_d_dot
+
+
+@njit(cache=True)
+def _law(law, v_m, w_m, dt, limit):
+    """The law's ``(status, T_r, T_l, u1, u2)`` at the reference and the nominal model in
+    ``law``; its state updated in place."""
+    r, nm, flags = law.reference[0], law.model[0], law.flags[0]
+    if law.kind == USER:
+        out = np.empty(2)
+        law.user(
+            _pointer(law.measurement_values), _pointer(law.reference), _pointer(law.model),
+            _pointer(law.user_gains), _pointer(law.user_state), _pointer(out), dt, limit,
+        )  # fmt: skip
+        T_r, T_l = out[0], out[1]
+        if not (math.isfinite(T_r) and math.isfinite(T_l)):
+            return base.LAW_NOT_FINITE, T_r, T_l, T_r, T_l
+        return LAW_OK, T_r, T_l, T_r, T_l
+    s = law.state
+    state = (s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7])
+    args = (
+        *(dt, v_m, w_m, r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot),
+        *(nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22, state),
+    )
+    saturated = flags.saturated != 0.0
+    if law.kind == ISMC_STA:
+        out = ismc_sta.ismc_sta_law(*args, law.gains, limit, saturated, law.anti_windup)
+    elif law.kind == PID:
+        out = pid.pid_law(*args, law.gains, limit, saturated, law.anti_windup)
+    else:
+        out = fbl.fbl_law(*args, law.gains, limit, saturated, law.anti_windup)
+    status, T_r, T_l, u1, u2, saturated, aux1, aux2, state = out
+    flags.aux1, flags.aux2 = aux1, aux2
     for i in range(8):
-        y[i] = new[i]
-    return True
+        s[i] = state[i]
+    if status == LAW_OK:
+        flags.saturated = 1.0 if saturated else 0.0
+    return status, T_r, T_l, u1, u2
+
+
+@njit(cache=True)
+def _advance(plant, T_r, T_l, dist_r, dist_l, stop):
+    """Apply the torques and advance the plant one control period; the stop code."""
+    if plant.mujoco:
+        mj = plant.mj
+        a = mj.addresses
+        mj.ctrl[a.act_right] = T_r
+        mj.ctrl[a.act_left] = T_l
+        mj.qfrc_applied[a.wheel_right_v] = dist_r
+        mj.qfrc_applied[a.wheel_left_v] = dist_l
+        for _ in range(plant.substeps):
+            mj_step(mj.pointers[0], mj.pointers[1])
+        for i in range(mj.warnings.size):
+            if mj.warnings[i] != 0:
+                stop.warning = i
+                return WARNING
+        return RUNNING
+    y = plant.ode_state
+    for _ in range(plant.substeps):
+        ok, phi, new = reduced.rk4_step_of(
+            y, T_r + dist_r, T_l + dist_l, 0.0, 0.0, plant.ode, plant.timestep
+        )
+        if not ok:
+            stop.phi, stop.eta = phi, plant.ode.eta
+            return SINGULAR
+        for i in range(8):
+            y[i] = new[i]
+    return RUNNING
 
 
 @njit(cache=True, nogil=True)
-def run_chunk(
-    k,
-    k_end,
-    mujoco_plant,
-    pointers,
-    qpos,
-    qvel,
-    ctrl,
-    qfrc,
-    warnings,
-    layout,
-    lengths,
-    ode_state,
-    plant_consts,
-    consts,
-    gamma,
-    law_kind,
-    gains,
-    law,
-    path_kind,
-    bounds,
-    kappas,
-    dynamic,
-    profile,
-    target_state,
-    noise,
-    limits,
-    scalars,
-    meas,
-    loop,
-    info,
-):
-    """Control steps ``k..k_end`` (Stepper.sense, the law, Stepper.actuate); returns
-    ``(status, k)``: the step it stopped at, or ``k_end + 1`` to go on."""
-    dt, substeps, steps, max_speed, r_n, d_n = (
-        scalars[0],
-        int(scalars[1]),
-        int(scalars[2]),
-        scalars[3],
-        scalars[4],
-        scalars[5],
-    )
-    lim, bound, jk, jk_phi, noise_v, noise_w = (
-        limits[0],
-        limits[1],
-        limits[2],
-        limits[3],
-        limits[4],
-        limits[5],
-    )
-    disturbed, anti_windup = limits[6] != 0.0, limits[7] != 0.0
-    L, L0, r, d = lengths[0], lengths[1], lengths[2], lengths[3]
-    eta_n = consts[0]
+def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
+    """Control steps ``k..k_end``; returns ``(status, k)``: the step it stopped at, or
+    ``k_end + 1`` to go on. Rows go to ``log.measurement`` and ``log.loop`` (from row 0)."""
+    lim, dt, noise = loop.limits, loop.dt, loop.noise
+    stop, r, nm = stop_record[0], law.reference[0], law.model[0]
     row = 0
     while k <= k_end:
         t = k * dt
-        if mujoco_plant:
-            me = measure_values(
-                qpos,
-                qvel,
-                layout[0],
-                layout[1],
-                layout[2],
-                layout[3],
-                layout[4],
-                layout[5],
-                layout[6],
-                layout[7],
-                layout[8],
-                L,
-                L0,
-                r,
-                d,
-            )
-        else:
-            me = reduced_measure_values(ode_state, plant_consts[0], L, L0, r, d)
+        me = _sense(plant)
         x, y, phi, beta, v, omega = me[0], me[1], me[3], me[4], me[5], me[6]
-        if not (math.isfinite(x) and math.isfinite(v) and math.isfinite(omega)) or (
-            abs(v) > max_speed
-        ):
-            info[0] = v
-            return _BLEW_UP, k
-        if abs(phi) >= jk_phi or abs(beta) >= jk:
-            info[0], info[1], info[2], info[3], info[4] = phi, beta, x, y, v
-            return _JACKKNIFE, k
+        code = step.stop_code(x, v, omega, phi, beta, lim)
+        if code != RUNNING:
+            stop.v, stop.phi, stop.beta, stop.x, stop.y = v, phi, beta, x, y
+            return code, k
         if noise.size:
-            v_m = v + noise_v * noise[2 * k]
-            w_m = omega + noise_w * noise[2 * k + 1]
+            v_m = step.noisy(v, lim.noise_v, noise, 2 * k)
+            w_m = step.noisy(omega, lim.noise_w, noise, 2 * k + 1)
         else:
             v_m, w_m = v, omega
-        # The target (StaticTarget.update / DynamicTarget.update).
-        if dynamic:
-            if not math.isnan(target_state[1]):
-                target_state[0] += 0.5 * (target_state[1] + v_m) * dt
-            target_state[1] = v_m
-            v_ref, a_ref = profile[k, 1], profile[k, 2]
-            kappa, rate = _curvature(target_state[0], path_kind, bounds, kappas)
-            v_d, w_d, v_d_dot, w_d_dot = v_ref, kappa * v_m, a_ref, rate * v_m * v_m + kappa * a_ref
-        else:
-            s_ref, v_ref, a_ref = profile[k, 0], profile[k, 1], profile[k, 2]
-            kappa, rate = _curvature(s_ref, path_kind, bounds, kappas)
-            target_state[0] = s_ref
-            v_d, w_d = v_ref, kappa * v_ref
-            v_d_dot, w_d_dot = a_ref, rate * v_ref * v_ref + kappa * a_ref
-        target_state[2] = kappa
-        # The law on the nominal model.
-        if math.cos(eta_n * phi) < COS_BETA_MIN:
-            info[0], info[1], info[2] = 0.0, phi, eta_n
-            return _LAW_FAILED, k
-        terms = inertia_terms_of(
-            phi, consts[0], consts[1], consts[2], consts[3], consts[4], consts[5], consts[6],
-            consts[7], consts[8],
-        )  # fmt: skip
-        mass, bias = coriolis_of(terms, gamma, v_m, w_m)
-        f1, f2, g11, g12, g21, g22 = solve_dynamics_of(mass, bias, r_n, d_n)
-        state = (law[0], law[1], law[2], law[3], law[4], law[5], law[6], law[7])
-        args = (dt, v_m, w_m, v_d, w_d, v_d_dot, w_d_dot, f1, f2, g11, g12, g21, g22, state, gains)
-        if law_kind == 0:
-            out = ismc_sta_law(*args, lim, law[8] != 0.0, anti_windup)
-        elif law_kind == 1:
-            out = pid_law(*args, lim, law[8] != 0.0, anti_windup)
-        else:
-            out = fbl_law(*args, lim, law[8] != 0.0, anti_windup)
-        status, T_r, T_l, u1, u2, saturated, aux1, aux2, state = out
-        law[9], law[10] = aux1, aux2
-        for i in range(8):
-            law[i] = state[i]
+        r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot = _update_target(target, k, v_m, dt)
+        state = target.state[0]
+        r.t, r.s, r.kappa = t, state.s, state.kappa
+        # The nominal model at the measurement, for the law and the matched disturbance.
+        c = law.nominal
+        if math.cos(c.eta * phi) < COS_BETA_MIN:
+            stop.law_status, stop.phi, stop.eta = NOMINAL_SINGULAR, phi, c.eta
+            return LAW_FAILED, k
+        terms = reduced.inertia_terms_of(phi, c)
+        mass, bias = reduced.coriolis_of(terms, c.gamma, v_m, w_m)
+        nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22 = reduced.solve_dynamics_of(
+            mass, bias, c.r, c.d
+        )
+        measured = log.measurement[row]
+        for i in range(measured.size):  # the Measurement tuple, in its field order
+            measured[i] = me[i]
+        if law.kind == USER:  # the user's law sees the measurement with its noise
+            for i in range(measured.size):
+                law.measurement_values[i] = me[i]
+            seen = law.measurement[0]
+            seen.v, seen.omega = v_m, w_m
+            r.x_ref, r.y_ref, r.theta_ref = _pose_at(target, state.s)
+        status, T_r, T_l, u1, u2 = _law(law, v_m, w_m, dt, lim.torque_limit)
         if status != LAW_OK:
-            info[0] = status
-            if status == LAW_SINGULAR:
-                info[1], info[2], info[3], info[4] = g11, g12, g21, g22
-            else:
-                info[1], info[2] = u1, u2
-            return _LAW_FAILED, k
-        law[8] = 1.0 if saturated else 0.0
+            stop.law_status = status
+            stop.g11, stop.g12, stop.g21, stop.g22 = nm.g11, nm.g12, nm.g21, nm.g22
+            stop.u1, stop.u2 = u1, u2
+            return LAW_FAILED, k
         # Stepper.actuate
-        T_r = -lim if T_r < -lim else (lim if T_r > lim else T_r)
-        T_l = -lim if T_l < -lim else (lim if T_l > lim else T_l)
-        dist_r = dist_l = 0.0
-        clipped = 0.0
-        if disturbed:
-            a_v, a_w = paper_disturbance_of(t)
-            dist_r, dist_l = torque_for_force_of(terms[0], a_v, a_w, r_n, d_n)
-            if abs(dist_r) > bound or abs(dist_l) > bound:
-                dist_r = max(-bound, min(bound, dist_r))
-                dist_l = max(-bound, min(bound, dist_l))
-                clipped = 1.0
-        for i in range(19):
-            meas[row, i] = me[i]
-        out = (t, target_state[0], v_d, w_d, v_d_dot, w_d_dot, v_m, w_m, T_r, T_l, u1, u2)
-        for i in range(12):
-            loop[row, i] = out[i]
-        loop[row, 12], loop[row, 13], loop[row, 14] = dist_r, dist_l, kappa
-        loop[row, 15], loop[row, 16] = w_d, clipped
+        T_r_cmd, T_l_cmd = u1, u2
+        T_r = step.clip(T_r, lim.torque_limit)
+        T_l = step.clip(T_l, lim.torque_limit)
+        dist_r = dist_l = clipped = 0.0
+        if loop.disturbed:
+            a_v, a_w = disturbances.paper_disturbance_of(t)
+            dist_r, dist_l = reduced.torque_for_force_of(terms[0], a_v, a_w, c.r, c.d)
+            dist_r, dist_l, clipped = step.clip_pair(dist_r, dist_l, lim.disturbance_bound)
+        out = log.loop[row]
+        out.t, out.s, out.v_d, out.omega_d = t, state.s, r.v_d, r.omega_d
+        out.v_d_dot, out.omega_d_dot, out.v_meas, out.omega_meas = (
+            r.v_d_dot,
+            r.omega_d_dot,
+            v_m,
+            w_m,
+        )
+        out.T_r, out.T_l, out.T_r_cmd, out.T_l_cmd = T_r, T_l, T_r_cmd, T_l_cmd
+        out.dist_T_r, out.dist_T_l, out.kappa_d = dist_r, dist_l, state.kappa
+        out.omega_d_tracked, out.dist_clipped = r.omega_d, clipped
         row += 1
-        if k == steps:
-            return _FINISHED, k
-        if mujoco_plant:
-            ctrl[layout[9]] = T_r
-            ctrl[layout[10]] = T_l
-            qfrc[layout[6]] = dist_r
-            qfrc[layout[5]] = dist_l
-            for _ in range(substeps):
-                mj_step(pointers[0], pointers[1])
-            for i in range(warnings.size):
-                if warnings[i] != 0:
-                    info[0] = i
-                    return _WARNING, k
-        else:
-            for _ in range(substeps):
-                if not _rk4(ode_state, T_r + dist_r, T_l + dist_l, plant_consts, r, d, info):
-                    return _SINGULAR, k
+        if k == loop.steps:
+            return FINISHED, k
+        code = _advance(plant, T_r, T_l, dist_r, dist_l, stop)
+        if code != RUNNING:
+            return code, k
         k += 1
-    return _RUNNING, k
+    return RUNNING, k

@@ -1,17 +1,21 @@
-"""The compiled episode: the built-in law's closed loop as one machine-code loop.
+"""The compiled episode: the closed loop of a built-in or plain-number law as machine code.
 
 :func:`tt_mujoco.sim.simulate.run_episode` hands an episode here when every part of it has a
 compiled form (:func:`unsupported` says why not otherwise): a built-in law (ISMC-STA, PID, FBL)
-on the built-in nominal model, a static or dynamic target on a closed-form path (the S-curve,
-the circle, the cycloid), the paper's disturbance (matched) or none, measurement noise, one
-trailer, no faults, path feedback, steering schedule, reversing or per-step callback. The loop
-then runs in numba, chunk by chunk, calling ``mj_step`` through MuJoCo's C library or stepping
-the reduced ODE, and logs into float arrays.
+or a user's plain-number law (:mod:`tt_mujoco.controllers.plain`, compiled once per process by
+:func:`compile_law`) on the built-in nominal model, a static or dynamic target on a
+closed-form path (the S-curve, the circle, the cycloid), the paper's disturbance (matched) or
+none, measurement noise, one trailer, no faults, path feedback, steering schedule, reversing
+or per-step callback. The loop then runs in numba, chunk by chunk, calling ``mj_step`` through
+MuJoCo's C library or stepping the reduced ODE, over the named records of
+:mod:`tt_mujoco.sim.records`.
 
-Every formula it runs is the Python one: the functions marked "the compiled episode shares it"
-(measurement, reduced model, law, path curvature, disturbance, RK4) are compiled from their own
-source with ``numba.extending.register_jitable``, so the compiled and the Python loop compute
-the same numbers bit for bit (``tests/test_compiled.py``). ``TT_MUJOCO_COMPILED=0`` turns it off.
+Every rule and formula it runs is the Python one: the step's checks and clips
+(:mod:`tt_mujoco.sim.step`) and the functions marked "the compiled episode shares it"
+(measurement, reduced model and its RK4, law, path curvature and pose, target, disturbance)
+are compiled from their own source with ``numba.extending.register_jitable``, so the compiled
+and the Python loop compute the same numbers bit for bit (``tests/test_compiled.py``,
+``tests/test_plain.py``). ``TT_MUJOCO_COMPILED=0`` turns it off.
 
 Compiled code is cached on disk under ``$TT_MUJOCO_CACHE`` or ``~/.cache/tt_mujoco``, in a
 folder keyed by :func:`source_digest` (the interpreter, numba, llvmlite and MuJoCo versions and
@@ -37,8 +41,8 @@ from pathlib import Path
 
 import numpy as np
 
-from tt_mujoco.defaults import MAX_SPEED
 from tt_mujoco.outputs import atomic_write
+from tt_mujoco.sim import step
 
 __all__ = ["kernel", "ready", "run_compiled", "source_digest", "unsupported"]
 
@@ -46,8 +50,6 @@ __all__ = ["kernel", "ready", "run_compiled", "source_digest", "unsupported"]
 #: process: a short episode gains less than that).
 MIN_STEPS = 2000
 
-# Status codes of the kernel.
-_RUNNING, _FINISHED, _BLEW_UP, _JACKKNIFE, _WARNING, _LAW_FAILED, _SINGULAR = range(7)
 
 _KERNEL = None
 
@@ -61,6 +63,7 @@ def unsupported(built, controller, on_step=None) -> str | None:
     from tt_mujoco.controllers.fbl import FblController
     from tt_mujoco.controllers.ismc_sta import IsmcStaController
     from tt_mujoco.controllers.pid import PidController
+    from tt_mujoco.controllers.plain import PlainLawController
     from tt_mujoco.reference.paths import ArcsPath, CycloidPath
     from tt_mujoco.reference.targets import DynamicTarget, StaticTarget
     from tt_mujoco.sim.disturbances import PaperDisturbance
@@ -78,10 +81,11 @@ def unsupported(built, controller, on_step=None) -> str | None:
         (s.plant == "mujoco" and s.disturbance == "wrench", "the wrench disturbance"),
         (on_step is not None, "a per-step callback"),
         (
-            type(controller) not in (IsmcStaController, PidController, FblController),
-            "a controller other than the built-in laws",
+            type(controller) not in (IsmcStaController, PidController, FblController)
+            and not isinstance(controller, PlainLawController),
+            "a Python controller class",
         ),
-        (not getattr(getattr(controller, "model", None), "builtin", False), "a custom model"),
+        (not getattr(_model_of(controller), "builtin", False), "a custom model"),
         (type(built.target) not in (StaticTarget, DynamicTarget), "this target"),
         (type(built.path) not in (ArcsPath, CycloidPath), "a path without closed form"),
         (
@@ -97,6 +101,14 @@ def unsupported(built, controller, on_step=None) -> str | None:
     except ImportError:
         return "numba is not installed"
     return None
+
+
+def _model_of(controller):
+    """The nominal model a controller runs (a built-in law's own, or its setup's)."""
+    model = getattr(controller, "model", None)
+    if model is None:
+        model = getattr(getattr(controller, "setup", None), "model", None)
+    return model
 
 
 def ready() -> bool:
@@ -296,95 +308,45 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
     except Exception as err:  # a damaged cache: its copy of the kernel does not import
         set_aside_cache(err)
         return None
-    from tt_mujoco.sim.plant_mujoco import MujocoPlant
-    from tt_mujoco.vehicle import reduced
+    try:
+        user = _user_law(k_mod, controller)
+    except Exception as err:  # numba cannot compile the user's law: the Python loop can run it
+        import re
 
-    b = stepper.built
-    plant = stepper.plant
-    steps, dt = stepper.steps, stepper.dt
-    target = b.target
-    profile = _profile_table(target, dt, steps)
-    path = b.path
-    if hasattr(path, "_inner_bounds"):
-        path_kind, bounds, kappas = 0, np.array(path._inner_bounds), np.array(path._kappa_list)
-    else:
-        path_kind, bounds, kappas = 1, np.zeros(0), np.zeros(0)
-    nominal = b.nominal
-    consts = reduced._constants(nominal)
-    gamma = reduced._lumped(nominal)[5]
-    noise = np.zeros(0) if stepper._noise is None else np.array(stepper._noise)
-    mujoco_plant = isinstance(plant, MujocoPlant)
-    if mujoco_plant:
-        lay = plant._layout
-        layout = np.array([*lay.addresses, lay.act_right, lay.act_left], dtype=np.int64)
-        lengths = np.array(lay.lengths)
-        d = plant.data
-        pointers = np.array([plant.model._address, d._address], dtype=np.int64)
-        qpos, qvel, ctrl, qfrc = d.qpos, d.qvel, d.ctrl, d.qfrc_applied
-        warnings, ode_state, plant_consts = d.warning.number, np.zeros(8), np.zeros(0)
-    else:
-        pp = plant.params
-        layout, pointers = np.zeros(11, dtype=np.int64), np.zeros(2, dtype=np.int64)
-        lengths = np.array([pp.L, pp.L0, pp.r, pp.d])
-        qpos = qvel = ctrl = qfrc = np.zeros(1)
-        warnings = np.zeros(1, dtype=np.int32)
-        ode_state = np.array(plant.ode.state, dtype=float)
-        plant_consts = np.array([*reduced._constants(pp), reduced._lumped(pp)[5], plant.timestep])
-    limits = np.array(
-        [
-            stepper._limit,
-            math.inf if stepper._dist_limit is None else stepper._dist_limit,
-            stepper._jk,
-            stepper._jk_phi,
-            *b.noise_std,
-            float(b.disturbance is not None and stepper._mode == "matched"),
-            float(controller.anti_windup),
-        ]
+        lines = [re.sub(r"\x1b\[[0-9;]*m", "", line).strip() for line in str(err).splitlines()]
+        why = next((line for line in lines if line and not line.startswith("Failed in")), "")
+        why = why or type(err).__name__
+        print(
+            f"note: the law {controller.name!r} has no compiled form ({why}); "
+            "it runs in the Python loop (same numbers, slower)",
+            file=sys.stderr,
+        )
+        return None
+    from tt_mujoco.sim import records
+
+    steps = stepper.steps
+    loop = records.LoopRecord(
+        limits=stepper.limits,
+        dt=stepper.dt,
+        steps=steps,
+        noise=np.zeros(0) if stepper._noise is None else np.array(stepper._noise),
+        disturbed=stepper.built.disturbance is not None and stepper._mode == "matched",
     )
-    law = np.array([*controller.law_state(), float(controller.saturated), 0.0, 0.0])
-    law_kind = {"ismc_sta": 0, "pid": 1, "fbl": 2}[controller.name]
-    target_state = np.array([0.0, math.nan, target.curvature, 0.0])  # s, v_prev, kappa, -
-    scalars = np.array([dt, float(b.substeps), float(steps), MAX_SPEED, nominal.r, nominal.d])
+    plant = _plant_record(stepper.plant, stepper.built.substeps, stepper.built.nominal)
+    law = _law_record(controller, stepper.built.nominal, user)
+    target = _target_record(stepper.built, steps)
+    stop = records.new_record(records.STOP_FIELDS)
     report_every = max(1, steps // 100)
     chunk = min(8192, report_every * max(1, 8192 // report_every))
-    k, status = 0, _RUNNING
-    info = np.zeros(8)
-    while status == _RUNNING:
+    k, status = 0, step.RUNNING
+    while status == step.RUNNING:
         k_end = min(steps, k + chunk - 1)
-        meas = np.empty((k_end - k + 1, 19))
-        loop = np.empty((k_end - k + 1, 17))
-        args = (
-            k,
-            k_end,
-            mujoco_plant,
-            pointers,
-            qpos,
-            qvel,
-            ctrl,
-            qfrc,
-            warnings,
-            layout,
-            lengths,
-            ode_state,
-            plant_consts,
-            consts,
-            gamma,
-            law_kind,
-            controller.law_gains,
-            law,
-            path_kind,
-            bounds,
-            kappas,
-            target.kind == "dynamic",
-            profile,
-            target_state,
-            noise,
-            limits,
-            scalars,
-            meas,
-            loop,
-            info,
+        n = k_end - k + 1
+        log = records.LogRecord(
+            measurement=np.empty((n, len(records.MEASUREMENT_DTYPE))),
+            loop=np.empty(n, dtype=records.LOG_DTYPE),
         )
+        args = (k, k_end, loop, plant, law, target, log, stop)
         if k == 0:
             try:  # the first call loads the compiled code from the cache
                 status, k_next = k_mod.run_chunk(*args)
@@ -395,23 +357,134 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
         else:
             status, k_next = k_mod.run_chunk(*args)
         # Rows k..k_next-1 are logged; a stop in the plant's advance or the end logs k_next too.
-        logged = k_next - k + (1 if status in (_FINISHED, _WARNING, _SINGULAR) else 0)
-        stepper.add_block(meas[:logged], loop[:logged], np.empty((logged, 0)))
+        logged = k_next - k + (1 if status in (step.FINISHED, step.WARNING, step.SINGULAR) else 0)
+        columns = log.loop.view(np.float64).reshape(n, -1)
+        stepper.add_block(log.measurement[:logged], columns[:logged], np.empty((logged, 0)))
         if progress is not None:
             progress(k_next, steps)
         k = k_next
-    # Hand the state back: the stepper, the target, the controller and the reduced ODE.
+    _hand_back(stepper, controller, status, k, plant, law, target)
+    return _outcome(status, stop[0], stepper, controller, k)
+
+
+def _user_law(k_mod, controller):
+    """The compiled form of a plain-number law (the kernel's placeholder for a built-in)."""
+    from tt_mujoco.controllers.plain import PlainLawController
+
+    if isinstance(controller, PlainLawController):
+        return compile_law(type(controller))
+    return k_mod.no_user_law
+
+
+def _plant_record(plant, substeps: int, nominal):
+    from tt_mujoco.sim import records
+    from tt_mujoco.sim.measure import Addresses, Lengths
+    from tt_mujoco.sim.plant_mujoco import MujocoPlant
+    from tt_mujoco.vehicle import reduced
+
+    if isinstance(plant, MujocoPlant):
+        d, lay = plant.data, plant._layout
+        mj = records.MujocoRecord(
+            pointers=np.array([plant.model._address, d._address], dtype=np.int64),
+            qpos=d.qpos,
+            qvel=d.qvel,
+            ctrl=d.ctrl,
+            qfrc_applied=d.qfrc_applied,
+            warnings=d.warning.number,
+            addresses=lay.addresses,
+            lengths=lay.lengths,
+        )
+        ode_state, ode, timestep = np.zeros(8), reduced.model_constants(nominal), 0.0
+    else:
+        one, none = np.zeros(1), np.zeros(0, dtype=np.int64)
+        mj = records.MujocoRecord(
+            none, one, one, one, one, np.zeros(1, dtype=np.int32),
+            Addresses(*[0] * len(Addresses._fields)), Lengths(0.0, 0.0, 0.0, 0.0),
+        )  # fmt: skip
+        ode_state = np.array(plant.ode.state, dtype=float)
+        ode, timestep = reduced.model_constants(plant.params), plant.timestep
+    return records.PlantRecord(
+        isinstance(plant, MujocoPlant), substeps, mj, ode_state, ode, timestep
+    )
+
+
+def _law_record(controller, nominal, user):
+    from tt_mujoco.controllers.plain import PlainLawController
+    from tt_mujoco.sim import records
+    from tt_mujoco.vehicle import reduced
+
+    if isinstance(controller, PlainLawController):
+        kind, gains, state, flags = 3, np.zeros(0), np.zeros(8), (0.0, 0.0, 0.0)
+        user_gains = np.array(list(controller.gain_record), dtype=float)
+        user_state = np.array([getattr(controller.law_state, f) for f in controller.STATE])
+        anti_windup = False
+    else:
+        kind = {"ismc_sta": 0, "pid": 1, "fbl": 2}[controller.name]
+        gains = np.array(controller.law_gains, dtype=float)
+        state = np.array(controller.law_state(), dtype=float)
+        flags = (float(controller.saturated), 0.0, 0.0)
+        user_gains, user_state = np.zeros(0), np.zeros(0)
+        anti_windup = bool(controller.anti_windup)
+    measurement = records.new_record(records.MEASUREMENT_DTYPE.names)
+    return records.LawRecord(
+        kind=kind,
+        gains=gains,
+        state=state,
+        flags=records.new_record(
+            records.LAW_FLAGS, **dict(zip(records.LAW_FLAGS, flags, strict=True))
+        ),
+        nominal=reduced.model_constants(nominal),
+        anti_windup=anti_windup,
+        user=user,
+        user_gains=user_gains if user_gains.size else np.zeros(1),
+        user_state=user_state if user_state.size else np.zeros(1),
+        reference=records.new_record(records.REFERENCE_FIELDS),
+        model=records.new_record(records.NOMINAL_FIELDS),
+        measurement=measurement,
+        measurement_values=measurement.view(np.float64),
+    )
+
+
+def _target_record(built, steps: int):
+    from tt_mujoco.reference.paths import ArcsPath
+    from tt_mujoco.sim import records
+
+    target, path = built.target, built.path
+    if isinstance(path, ArcsPath):
+        kind, (bounds, kappas, starts) = 0, path.closed_form
+    else:
+        kind, bounds, kappas, starts = 1, np.zeros(0), np.zeros(0), np.zeros((0, 3))
+    return records.TargetRecord(
+        dynamic=target.kind == "dynamic",
+        profile=_profile_table(target, built.control_dt, steps),
+        path_kind=kind,
+        length=float(path.length),
+        bounds=bounds,
+        kappas=kappas,
+        starts=starts,
+        state=records.new_record(records.TARGET_FIELDS, v_prev=math.nan, kappa=target.curvature),
+    )
+
+
+def _hand_back(stepper, controller, status, k, plant, law, target) -> None:
+    """Give the state back: the stepper, the target, the controller and the reduced ODE."""
+    from tt_mujoco.controllers.plain import PlainLawController
+
     stepper.k = k
-    stepper.finished = status == _FINISHED
-    target._s, target._kappa = target_state[0], target_state[2]
-    if target.kind == "dynamic":
-        target._v_prev = None if math.isnan(target_state[1]) else target_state[1]
-    controller.set_law_state(tuple(law[:8].tolist()), float(law[9]), float(law[10]))
-    controller.saturated = bool(law[8])
-    if not mujoco_plant:
-        plant.ode.state = ode_state.copy()
-        plant.ode.time = k * dt
-    return _outcome(status, info, stepper, controller, k)
+    stepper.finished = status == step.FINISHED
+    state = target.state[0]
+    stepper.built.target.set_state(float(state["s"]), float(state["v_prev"]), float(state["kappa"]))
+    if isinstance(controller, PlainLawController):
+        for name, value in zip(controller.STATE, law.user_state.tolist(), strict=False):
+            setattr(controller.law_state, name, value)
+    else:
+        flags = law.flags[0]
+        aux1, aux2 = float(flags["aux1"]), float(flags["aux2"])
+        controller.set_law_state(tuple(law.state.tolist()), aux1, aux2)
+        controller.saturated = bool(flags["saturated"])
+    if not plant.mujoco:
+        stepper.plant.ode.state = plant.ode_state.copy()
+        stepper.plant.ode.time = k * stepper.dt
 
 
 #: Speed-profile tables by (pickled profile, dt, steps): a sweep's episodes share their profile.
@@ -432,36 +505,119 @@ def _profile_table(target, dt: float, steps: int) -> np.ndarray:
     return table
 
 
-def _outcome(status, info, stepper, controller, k) -> tuple[str, str]:
-    """``(status, message)``, worded as the Python loop words them."""
-    from tt_mujoco.controllers.base import LAW_SINGULAR
+def _outcome(status, stop, stepper, controller, k) -> tuple[str, str]:
+    """``(status, message)`` from the ``stop`` record, worded as the Python loop words them."""
+    from tt_mujoco.controllers.base import LAW_NOT_FINITE, LAW_SINGULAR
+    from tt_mujoco.controllers.plain import PlainLawController
+    from tt_mujoco.sim import usercode
+    from tt_mujoco.sim.plant import StopRun
     from tt_mujoco.sim.stepper import blew_up_message, jackknife_message
     from tt_mujoco.vehicle.reduced import SingularityError
 
     t = k * stepper.dt
-    if status == _FINISHED:
+    value = {name: float(stop[name]) for name in stop.dtype.names}
+    if status == step.FINISHED:
         return "ok", f"completed {stepper.built.duration:.3f} s"
-    if status == _BLEW_UP:
-        return "diverged", blew_up_message(t, float(info[0]))
-    if status == _JACKKNIFE:
-        phi, beta, x, y, v = info[:5].tolist()
+    if status == step.BLEW_UP:
+        return "diverged", blew_up_message(t, value["v"])
+    if status == step.JACKKNIFE:
+        phi, beta, x, y, v = (value[name] for name in ("phi", "beta", "x", "y", "v"))
         return "jackknife", jackknife_message(t, phi, beta, stepper.eta, x, y, v)
-    if status == _WARNING:
+    if status == step.WARNING:
         import mujoco
 
         from tt_mujoco.sim.plant_mujoco import warning_message
 
-        return "diverged", warning_message(mujoco.mjtWarning(int(info[0])).name, t)
-    if status == _SINGULAR:
-        err = SingularityError(float(info[0]), float(info[1]))
+        return "diverged", warning_message(mujoco.mjtWarning(int(value["warning"])).name, t)
+    if status == step.SINGULAR:
+        err = SingularityError(value["phi"], value["eta"])
         return "jackknife", f"jackknife at t={t + stepper.dt:.3f} s: {err}"
-    # _LAW_FAILED: the nominal model's singularity (code 0) or the law's own failure
-    values = info[1:5].tolist()
+    # LAW_FAILED: the nominal model's singularity, or the law's own failure
+    law_status = int(value["law_status"])
+    u1, u2 = value["u1"], value["u2"]
+    if isinstance(controller, PlainLawController):  # the user's law returned no torques
+        try:
+            usercode.checked_torques((u1, u2), usercode.controller_label(stepper.built), t)
+        except StopRun as stop_run:
+            if law_status == LAW_NOT_FINITE:
+                return stop_run.status, stop_run.message
     try:
-        if info[0] == 0.0:
-            raise SingularityError(values[0], values[1])
-        g = tuple(values) if int(info[0]) == LAW_SINGULAR else ()
-        controller._raise_for(int(info[0]), g, values[0], values[1])
+        if law_status == NOMINAL_SINGULAR:
+            raise SingularityError(value["phi"], value["eta"])
+        g = tuple(value[name] for name in ("g11", "g12", "g21", "g22"))
+        controller._raise_for(law_status, g if law_status == LAW_SINGULAR else (), u1, u2)
     except FloatingPointError as err:
         return "diverged", f"controller failed at t={t:.3f} s: {err}"
     raise AssertionError(f"unknown status {status}")  # pragma: no cover
+
+
+#: ``stop.law_status`` of the nominal model's own singularity (the kernel's NOMINAL_SINGULAR)
+NOMINAL_SINGULAR = -1
+
+
+def compile_law(cls):
+    """The plain-number law of ``cls`` (a :class:`~tt_mujoco.controllers.plain.
+    PlainLawController` subclass) compiled with the kernel's law signature, once per process
+    and class."""
+    key = (cls.__module__, cls.__qualname__, cls.LAW)
+    compiled_law = _LAWS.get(key)
+    if compiled_law is None:
+        compiled_law = _LAWS[key] = _compile_law(cls)
+    return compiled_law
+
+
+_LAWS: dict = {}
+
+
+def _register_helpers(fn, seen=None) -> None:
+    """Let numba compile the plain functions a law calls from its own module (and theirs)."""
+    import types
+
+    from numba.extending import register_jitable
+
+    seen = set() if seen is None else seen
+    for name in fn.__code__.co_names:
+        helper = fn.__globals__.get(name)
+        if (
+            isinstance(helper, types.FunctionType)
+            and helper.__module__ == fn.__module__
+            and helper not in seen
+        ):
+            seen.add(helper)
+            register_jitable(helper)
+            _register_helpers(helper, seen)
+
+
+def _compile_law(cls):
+    from numba import carray, cfunc, njit
+
+    from tt_mujoco.sim import records
+
+    k_mod = kernel()
+    _register_helpers(cls.LAW)
+    law = njit(error_model="numpy", cache=True)(cls.LAW)
+    gain_names = tuple(cls.PRESETS[cls.DEFAULT_PRESET]) or ("unused",)
+    gains_dtype = records.record_dtype(gain_names)
+    state_dtype = records.record_dtype(cls.STATE or ("unused",))
+    meas_dtype, ref_dtype = (
+        records.MEASUREMENT_DTYPE,
+        records.record_dtype(records.REFERENCE_FIELDS),
+    )
+    model_dtype = records.record_dtype(records.NOMINAL_FIELDS)
+    n_meas, n_gains, n_state = len(meas_dtype), len(gains_dtype), len(state_dtype)
+    n_ref, n_model = len(ref_dtype), len(model_dtype)
+
+    def wrapper(m, r, model, gains, state, out, dt, limit):
+        torques = carray(out, 2)
+        T_r, T_l = law(
+            carray(m, n_meas).view(meas_dtype)[0],
+            carray(r, n_ref).view(ref_dtype)[0],
+            carray(model, n_model).view(model_dtype)[0],
+            carray(gains, n_gains).view(gains_dtype)[0],
+            carray(state, n_state).view(state_dtype)[0],
+            dt,
+            limit,
+        )
+        torques[0], torques[1] = T_r, T_l
+
+    return cfunc(k_mod.USER_LAW, error_model="numpy")(wrapper)

@@ -11,13 +11,17 @@ from __future__ import annotations
 import inspect
 
 from tt_mujoco.controllers import base, fbl, ismc_sta, pid
-from tt_mujoco.reference import paths
-from tt_mujoco.sim import disturbances, measure, plant_reduced
+from tt_mujoco.reference import path_base, paths, targets
+from tt_mujoco.sim import disturbances, measure, plant_reduced, records, step
 from tt_mujoco.vehicle import reduced
 
-__all__ = ["SHARED", "source_files"]
+__all__ = ["RECORDS", "SHARED", "source_files"]
 
 SHARED = (
+    step.stop_code,
+    step.noisy,
+    step.clip,
+    step.clip_pair,
     measure.yaw_from_quat,
     measure.measure_values,
     reduced.hitch_and_axle,
@@ -26,11 +30,21 @@ SHARED = (
     reduced.inertia_terms_of,
     reduced.coriolis_of,
     reduced.solve_dynamics_of,
+    reduced.nominal_of,
+    reduced.derivative_of,
+    reduced.rk4_step_of,
     reduced.torque_for_force_of,
     reduced.trailer_speed_of,
     reduced.rk4_stage,
     reduced.rk4_combine,
     plant_reduced.reduced_measure_values,
+    targets.yaw_rate_targets,
+    targets.travelled,
+    paths.arc_segment,
+    paths.arcs_curvature_of,
+    paths.arcs_pose_of,
+    paths.cycloid_pose_of,
+    path_base.continued_pose,
     base.inverse_of,
     base.saturate_of,
     base.deepens,
@@ -44,9 +58,24 @@ SHARED = (
 )
 
 
+#: The record types the kernel takes: their fields are part of its compiled signature.
+RECORDS = (
+    records.Limits,
+    records.LoopRecord,
+    records.PlantRecord,
+    records.MujocoRecord,
+    records.LawRecord,
+    records.TargetRecord,
+    records.LogRecord,
+    measure.Addresses,
+    measure.Lengths,
+    reduced.ModelConstants,
+)
+
+
 def source_files() -> list[str]:
-    """The files the shared functions are defined in, each once, in the order of their
-    modules' names (so the same sources in another folder list alike); numba compiles the
-    functions with their module's constants, so the whole file counts."""
-    files = {fn.__module__: inspect.getsourcefile(fn) for fn in SHARED}
+    """The files the shared functions and the record types are defined in, each once, in the
+    order of their modules' names (so the same sources in another folder list alike); numba
+    compiles the functions with their module's constants, so the whole file counts."""
+    files = {obj.__module__: inspect.getsourcefile(obj) for obj in (*SHARED, *RECORDS)}
     return [files[module] for module in sorted(files)]

@@ -14,10 +14,45 @@ from typing import NamedTuple
 
 from tt_mujoco.vehicle.reduced import hitch_and_axle
 
-__all__ = ["TRAIN_FIELDS", "Layout", "Measurement", "TrainMeasurement", "measure", "measure_train"]
+__all__ = [
+    "TRAIN_FIELDS",
+    "Addresses",
+    "Layout",
+    "Lengths",
+    "Measurement",
+    "TrainMeasurement",
+    "measure",
+    "measure_train",
+]
 
 #: What is measured of each trailer k >= 2, in order (time-series columns ``<name>_k``).
 TRAIN_FIELDS = ("x0", "y0", "theta0", "phi", "beta", "v0")
+
+
+class Addresses(NamedTuple):
+    """Where :func:`measure_values` reads the state and the step writes the torques: the
+    integer part of :class:`Layout`, as the plain record the compiled episode takes."""
+
+    root_q: int
+    root_v: int
+    hitch_q: int
+    hitch_v: int
+    steer_q: int
+    wheel_left_v: int
+    wheel_right_v: int
+    wheel_left_q: int
+    wheel_right_q: int
+    act_right: int
+    act_left: int
+
+
+class Lengths(NamedTuple):
+    """The geometry :func:`measure_values` needs (m)."""
+
+    L: float
+    L0: float
+    r: float
+    d: float
 
 
 @dataclass(frozen=True)
@@ -50,11 +85,10 @@ class Layout:
     train: tuple = ()
 
     def __post_init__(self) -> None:
-        # What measure_values takes after the state vectors, in its order.
-        addresses = (self.root_q, self.root_v, self.hitch_q, self.hitch_v, self.steer_q)
-        addresses += (self.wheel_left_v, self.wheel_right_v, self.wheel_left_q)
-        object.__setattr__(self, "addresses", (*addresses, self.wheel_right_q))
-        object.__setattr__(self, "lengths", (self.L, self.L0, self.r, self.d))
+        # What measure_values takes after the state vectors.
+        addresses = Addresses(*(getattr(self, name) for name in Addresses._fields))
+        object.__setattr__(self, "addresses", addresses)
+        object.__setattr__(self, "lengths", Lengths(self.L, self.L0, self.r, self.d))
 
 
 class Measurement(NamedTuple):
@@ -111,23 +145,23 @@ def measure(qpos, qvel, lay: Layout) -> Measurement:
     qpos = qpos.tolist() if hasattr(qpos, "tolist") else list(qpos)
     qvel = qvel.tolist() if hasattr(qvel, "tolist") else list(qvel)
     # Positional construction (field order of Measurement): keywords are slower, every step.
-    return _new_measurement(measure_values(qpos, qvel, *lay.addresses, *lay.lengths))
+    return _new_measurement(measure_values(qpos, qvel, lay.addresses, lay.lengths))
 
 
-def measure_values(
-    qpos, qvel, root_q, root_v, hitch_q, hitch_v, steer_q, wl_v, wr_v, wl_q, wr_q, L, L0, r, d
-) -> tuple:
-    """:func:`measure` from the state vectors and plain addresses and lengths: the
+def measure_values(qpos, qvel, a: Addresses, n: Lengths) -> tuple:
+    """:func:`measure` from the state vectors, the addresses and the lengths: the
     :class:`Measurement` fields as a tuple, the form the compiled episode
     (:mod:`tt_mujoco.sim.compiled`) shares."""
-    i = root_q
+    L, L0, r, d = n.L, n.L0, n.r, n.d
+    hitch_q, hitch_v, steer_q = a.hitch_q, a.hitch_v, a.steer_q
+    i = a.root_q
     x, y = qpos[i], qpos[i + 1]
     qw, qx, qy, qz = qpos[i + 3], qpos[i + 4], qpos[i + 5], qpos[i + 6]
     theta = yaw_from_quat(qw, qx, qy, qz)
     phi = -qpos[hitch_q]  # hitch axis +z: q_hitch = theta0 - theta
     beta = qpos[steer_q]
 
-    j = root_v
+    j = a.root_v
     vx, vy = qvel[j], qvel[j + 1]
     # World z component of the body-frame angular velocity: third row of R(quat).
     wx, wy, wz = qvel[j + 3], qvel[j + 4], qvel[j + 5]
@@ -152,8 +186,8 @@ def measure_values(
     v0 = v0x * ca + v0y * sa
     slip_lateral_trailer = -v0x * sa + v0y * ca
 
-    thl_dot = qvel[wl_v]
-    thr_dot = qvel[wr_v]
+    thl_dot = qvel[a.wheel_left_v]
+    thr_dot = qvel[a.wheel_right_v]
     half = 0.5 * d * omega
     return (
         x,
@@ -167,8 +201,8 @@ def measure_values(
         y0,
         theta0,
         v0,
-        qpos[wl_q],
-        qpos[wr_q],
+        qpos[a.wheel_left_q],
+        qpos[a.wheel_right_q],
         thl_dot,
         thr_dot,
         slip_lateral,

@@ -47,7 +47,7 @@ class ReducedPlant(Plant):
         if p.n_trailers > 1:
             return self._measure_train()
         state = [float(c) for c in self.ode.state]
-        return Measurement._make(reduced_measure_values(state, p.eta, p.L, p.L0, p.r, p.d))
+        return Measurement._make(reduced_measure_values(state, reduced.model_constants(p)))
 
     def _measure_train(self) -> TrainMeasurement:
         """The train's state from the chain (docs/model.md Section 12), exact like the rest."""
@@ -59,7 +59,7 @@ class ReducedPlant(Plant):
         th_l, th_r, v, omega = state[3 + n :]
         # Trailer 1 as for one trailer; trailers 2..N from the chain.
         first = [x, y, theta, phis[0], th_l, th_r, v, omega]
-        out = TrainMeasurement._make(reduced_measure_values(first, p.eta, p.L, p.L0, p.r, p.d))
+        out = TrainMeasurement._make(reduced_measure_values(first, reduced.model_constants(p)))
         places = train.poses(x, y, theta, phis, p)[1:]
         speeds = train.trailer_rates(phis, v, omega, p)[1:]
         out.train = tuple(
@@ -103,10 +103,11 @@ class ReducedPlant(Plant):
             self.ode.step(self._tau, self.timestep)
 
 
-def reduced_measure_values(state, eta: float, L: float, L0: float, r: float, d: float) -> tuple:
+def reduced_measure_values(state, c: reduced.ModelConstants) -> tuple:
     """The :class:`~tt_mujoco.sim.measure.Measurement` fields of the reduced plant's state
-    ``(x, y, theta, phi, theta_l, theta_r, v, omega)``: exact, without slip (the compiled
-    episode, :mod:`tt_mujoco.sim.compiled`, shares it)."""
+    ``(x, y, theta, phi, theta_l, theta_r, v, omega)`` with the plant's constants ``c``: exact,
+    without slip (the compiled episode, :mod:`tt_mujoco.sim.compiled`, shares it)."""
+    eta, L, L0, r, d = c.eta, c.L, c.L0, c.r, c.d
     x, y, theta, phi = state[0], state[1], state[2], state[3]
     th_l, th_r, v, omega = state[4], state[5], state[6], state[7]
     theta0 = theta - phi

@@ -28,7 +28,9 @@ from tt_mujoco.sim.disturbances import injected
 from tt_mujoco.sim.measure import Measurement
 from tt_mujoco.sim.motors import DcMotors
 from tt_mujoco.sim.plant import StopRun
+from tt_mujoco.sim.records import Limits
 from tt_mujoco.sim.scenario import jackknife_phi_deg
+from tt_mujoco.sim.step import BLEW_UP, JACKKNIFE, clip, clip_pair, noisy, stop_code
 from tt_mujoco.sim.timeseries import LOOP_COLUMNS, assemble_columns, train_columns
 from tt_mujoco.sim.wind import drag_force, parse_wind
 from tt_mujoco.vehicle.reduced import SingularityError
@@ -87,12 +89,19 @@ class Stepper:
         self.steps = built.steps
         self.eta = built.nominal.eta
         self._jk = math.radians(JACKKNIFE_DEG)
-        self._jk_phi = math.radians(jackknife_phi_deg(self.eta))
+        bound = built.disturbance_limit
+        self.limits = Limits(
+            torque_limit=built.nominal.torque_limit,
+            disturbance_bound=math.inf if bound is None else bound,
+            jackknife_phi=math.radians(jackknife_phi_deg(self.eta)),
+            jackknife_beta=self._jk,
+            max_speed=MAX_SPEED,
+            noise_v=built.noise_std[0],
+            noise_w=built.noise_std[1],
+        )
         self._mode = s.disturbance
         self._feedback = s.path_feedback is not None
         self._measured_target = getattr(built.target, "uses_measurement", False)
-        self._limit = built.nominal.torque_limit
-        self._dist_limit = built.disturbance_limit
         self._dist_label = usercode.disturbance_label(built)
         # Trailers 2..N: their hitch limits, and their logged columns after the usual ones.
         etas = built.plant_params.etas
@@ -163,12 +172,10 @@ class Stepper:
         """
         k, t = self.k, self.k * self.dt
         me = self.plant.measure()
-        if (
-            not (math.isfinite(me.x) and math.isfinite(me.v) and math.isfinite(me.omega))
-            or abs(me.v) > MAX_SPEED
-        ):
+        stop = stop_code(me.x, me.v, me.omega, me.phi, me.beta, self.limits)
+        if stop == BLEW_UP:
             raise StopRun("diverged", blew_up_message(t, me.v))
-        if abs(me.phi) >= self._jk_phi or abs(me.beta) >= self._jk:
+        if stop == JACKKNIFE:
             raise StopRun(
                 "jackknife", jackknife_message(t, me.phi, me.beta, self.eta, me.x, me.y, me.v)
             )
@@ -176,9 +183,9 @@ class Stepper:
             self._check_train(me, t)
         noise = self._noise
         if noise is not None:
-            noise_v, noise_w = self.built.noise_std
-            v_m = me.v + noise_v * noise[2 * k]
-            w_m = me.omega + noise_w * noise[2 * k + 1]
+            lim = self.limits
+            v_m = noisy(me.v, lim.noise_v, noise, 2 * k)
+            w_m = noisy(me.omega, lim.noise_w, noise, 2 * k + 1)
         else:
             v_m, w_m = me.v, me.omega
         phi_m = me.phi
@@ -255,9 +262,9 @@ class Stepper:
         """
         k, t, me, ref = self.k, self.k * self.dt, self.measurement, self._ref
         T_r_cmd, T_l_cmd = (T_r, T_l) if command is None else command
-        lim = self._limit
-        T_r = -lim if T_r < -lim else (lim if T_r > lim else T_r)
-        T_l = -lim if T_l < -lim else (lim if T_l > lim else T_l)
+        limits = self.limits
+        T_r = clip(T_r, limits.torque_limit)
+        T_l = clip(T_l, limits.torque_limit)
         faults = self.faults
         if faults is not None:
             T_r, T_l = faults.torque(k, T_r, T_l)
@@ -276,15 +283,11 @@ class Stepper:
             a_v, a_w = usercode.checked_disturbance(out, self._dist_label, t)
             phi = me.phis if self._train_limits else me.phi
             dist_r, dist_l, force, torque = injected(self._mode, a_v, a_w, phi, self.built.nominal)
-            bound = self._dist_limit
-            if bound is not None and (abs(dist_r) > bound or abs(dist_l) > bound):
-                # What a disturbance of motor size can apply, per wheel: beyond it the paper's
-                # g^-1 Delta (unbounded as g nears singular) would itself drive a jackknife.
-                dist_r = max(-bound, min(bound, dist_r))
-                dist_l = max(-bound, min(bound, dist_l))
-                clipped = 1.0
-        # Log the measurement tuple as it is and the loop's own values beside it: columns are
-        # assembled once after the episode (per-step attribute access is costly).
+            # What a disturbance of motor size can apply, per wheel: beyond it the paper's
+            # g^-1 Delta (unbounded as g nears singular) would itself drive a jackknife.
+            dist_r, dist_l, clipped = clip_pair(dist_r, dist_l, limits.disturbance_bound)
+        # Log the measurement tuple as it is and the loop's own values beside it, in the order
+        # of LOOP_COLUMNS (records.LOG_DTYPE): columns are assembled once after the episode.
         self._measured.append(me)
         if self._train_limits:
             self._train_logged.append([value for row in me.train for value in row])

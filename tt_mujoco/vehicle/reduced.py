@@ -26,12 +26,14 @@ Everything here is plain float arithmetic on scalars, because the controllers ca
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
 from tt_mujoco.vehicle.params import Params
 
 __all__ = [
+    "ModelConstants",
     "ReducedPlant",
     "SingularityError",
     "coriolis_force",
@@ -241,16 +243,38 @@ def _lumped(p: Params) -> tuple[float, float, float, float, float, float]:
     return lumped
 
 
-def _constants(p: Params) -> tuple:
-    """(eta, L, L0, m_t, J_t, J_a, J_0, Mc2/4, m_0 + Mc2/4), cached on ``p`` like
-    :func:`_lumped`; ``kappa kappa^T`` collects the trailer's translation and rod 2's."""
+class ModelConstants(NamedTuple):
+    """The reduced model's constants as plain numbers (docs/model.md Section 4): what the
+    plain-number functions below, and the compiled episode, read by name."""
+
+    eta: float
+    L: float
+    L0: float
+    m_t: float
+    J_t: float
+    J_a: float
+    J_0: float
+    #: Mc2 / 4: rod 2's share, whose cross term with the trailer's translation is kept apart
+    q: float
+    #: m_0 + Mc2 / 4: ``kappa kappa^T`` collects the trailer's translation and rod 2's
+    mk: float
+    gamma: float
+    r: float
+    d: float
+
+
+def _constants(p: Params) -> ModelConstants:
+    """The :class:`ModelConstants` of ``p``, cached on ``p`` like :func:`_lumped`."""
     cached = p.__dict__.get("_constants_cache")
     if cached is None:
-        m_t, J_t, m_0, J_a, J_0, _ = _lumped(p)
+        m_t, J_t, m_0, J_a, J_0, gamma = _lumped(p)
         q = p.Mc2 / 4.0
-        cached = (p.eta, p.L, p.L0, m_t, J_t, J_a, J_0, q, m_0 + q)
+        cached = ModelConstants(p.eta, p.L, p.L0, m_t, J_t, J_a, J_0, q, m_0 + q, gamma, p.r, p.d)
         object.__setattr__(p, "_constants_cache", cached)
     return cached
+
+
+model_constants = _constants
 
 
 def _inertia_terms(phi: float, p: Params):
@@ -280,14 +304,15 @@ def _compute_inertia_terms(phi: float, p: Params):
     ``dn/dphi = (eta - 1) m``, ``m = (-sin psi, -L cos psi)``.
     """
     constants = _constants(p)
-    if math.cos(constants[0] * phi) < COS_BETA_MIN:
-        raise SingularityError(phi, constants[0])
-    return inertia_terms_of(phi, *constants)
+    if math.cos(constants.eta * phi) < COS_BETA_MIN:
+        raise SingularityError(phi, constants.eta)
+    return inertia_terms_of(phi, constants)
 
 
-def inertia_terms_of(phi, eta, L, L0, m_t, J_t, J_a, J_0, q, mk):
-    """:func:`_compute_inertia_terms` from plain numbers (:func:`_constants`; no singularity
-    check): the form the compiled episode shares."""
+def inertia_terms_of(phi: float, c: ModelConstants):
+    """:func:`_compute_inertia_terms` from plain numbers (no singularity check): the form the
+    compiled episode shares."""
+    eta, L, L0, m_t, J_t, J_a, J_0, q, mk = c.eta, c.L, c.L0, c.m_t, c.J_t, c.J_a, c.J_0, c.q, c.mk
     cb = math.cos(eta * phi)
     sb = math.sin(eta * phi)
     cphi, sphi = math.cos(phi), math.sin(phi)
@@ -461,33 +486,72 @@ class ReducedPlant:
 
     def derivative(self, state, tau, accel_disturbance=(0.0, 0.0)) -> list[float]:
         """Time derivative of the state for wheel torques ``tau`` and an additive
-        disturbance ``accel_disturbance`` in ``(v_dot, omega_dot)`` (docs/model.md Section 8).
-
-        Plain float arithmetic (this is the plant's inner loop): kinematics of eq. 16-17,
-        dynamics ``f + g tau`` of docs/model.md Section 4.
-        """
-        p = self.params
-        theta, phi, v, omega = state[2], state[3], state[6], state[7]
-        f1, f2, g11, g12, g21, g22 = dynamics_scalar(phi, v, omega, p)
-        T_r, T_l = tau
-        return [
-            *rolling_rates(theta, phi, v, omega, p),
-            f1 + g11 * T_r + g12 * T_l + accel_disturbance[0],
-            f2 + g21 * T_r + g22 * T_l + accel_disturbance[1],
-        ]
+        disturbance ``accel_disturbance`` in ``(v_dot, omega_dot)`` (docs/model.md Section 8):
+        :func:`derivative_of`, raising :class:`SingularityError` at the singularity."""
+        c = _constants(self.params)
+        a_v, a_w = accel_disturbance
+        ok, rates = derivative_of(state, float(tau[0]), float(tau[1]), a_v, a_w, c)
+        if not ok:
+            raise SingularityError(state[3], c.eta)
+        return list(rates)
 
     def step(self, tau, dt: float, accel_disturbance=(0.0, 0.0)) -> np.ndarray:
-        """Advance by ``dt`` with RK4; raises :class:`SingularityError` at a jackknife."""
+        """Advance by ``dt`` with RK4 (:func:`rk4_step_of`); raises :class:`SingularityError`
+        at a jackknife."""
         y = [float(c) for c in self.state]
-        tau = (float(tau[0]), float(tau[1]))
-        acc = (float(accel_disturbance[0]), float(accel_disturbance[1]))
-        k1 = self.derivative(y, tau, acc)
-        k2 = self.derivative(rk4_stage(y, k1, 0.5 * dt), tau, acc)
-        k3 = self.derivative(rk4_stage(y, k2, 0.5 * dt), tau, acc)
-        k4 = self.derivative(rk4_stage(y, k3, dt), tau, acc)
-        self.state = np.array(rk4_combine(y, k1, k2, k3, k4, dt / 6.0))
+        c = _constants(self.params)
+        a_v, a_w = float(accel_disturbance[0]), float(accel_disturbance[1])
+        ok, phi, new = rk4_step_of(y, float(tau[0]), float(tau[1]), a_v, a_w, c, dt)
+        if not ok:
+            raise SingularityError(phi, c.eta)
+        self.state = np.array(new)
         self.time += dt
         return self.state
+
+
+def nominal_of(phi: float, v: float, omega: float, c: ModelConstants) -> tuple:
+    """``(f1, f2, g11, g12, g21, g22)`` of ``V_dot = f + g tau`` at ``(phi, v, omega)`` from
+    plain numbers, without the singularity check (the compiled episode shares it)."""
+    mass, bias = coriolis_of(inertia_terms_of(phi, c), c.gamma, v, omega)
+    return solve_dynamics_of(mass, bias, c.r, c.d)
+
+
+def derivative_of(y, T_r: float, T_l: float, a_v: float, a_w: float, c: ModelConstants):
+    """``(ok, dy/dt)`` of the state ``y = (x, y, theta, phi, theta_l, theta_r, v, omega)``:
+    kinematics of eqs. 16-17, dynamics ``f + g tau`` plus the acceleration ``(a_v, a_w)``;
+    ``ok`` is False (rates zero) at the singularity ``cos(eta phi) < COS_BETA_MIN``."""
+    theta, phi, v, omega = y[2], y[3], y[6], y[7]
+    if math.cos(c.eta * phi) < COS_BETA_MIN:
+        return False, (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    f1, f2, g11, g12, g21, g22 = nominal_of(phi, v, omega, c)
+    x_dot, y_dot, theta_dot, phi_dot, thl_dot, thr_dot = rolling_rates_of(
+        theta, phi, v, omega, c.eta, c.L, c.L0, c.r, c.d
+    )
+    v_dot = f1 + g11 * T_r + g12 * T_l + a_v
+    w_dot = f2 + g21 * T_r + g22 * T_l + a_w
+    return True, (x_dot, y_dot, theta_dot, phi_dot, thl_dot, thr_dot, v_dot, w_dot)
+
+
+def rk4_step_of(y, T_r: float, T_l: float, a_v: float, a_w: float, c: ModelConstants, dt):
+    """One classical RK4 step of :func:`derivative_of`, inputs held over it: ``(ok, phi,
+    new state)``; ``ok`` False with the stage's phi where a stage meets the singularity."""
+    ok, k1 = derivative_of(y, T_r, T_l, a_v, a_w, c)
+    if not ok:
+        return False, y[3], k1
+    stage = rk4_stage(y, k1, 0.5 * dt)
+    ok, k2 = derivative_of(stage, T_r, T_l, a_v, a_w, c)
+    if not ok:
+        return False, stage[3], k2
+    stage = rk4_stage(y, k2, 0.5 * dt)
+    ok, k3 = derivative_of(stage, T_r, T_l, a_v, a_w, c)
+    if not ok:
+        return False, stage[3], k3
+    stage = rk4_stage(y, k3, dt)
+    ok, k4 = derivative_of(stage, T_r, T_l, a_v, a_w, c)
+    if not ok:
+        return False, stage[3], k4
+    new = rk4_combine(y, k1, k2, k3, k4, dt / 6.0)
+    return True, y[3], (new[0], new[1], new[2], new[3], new[4], new[5], new[6], new[7])
 
 
 def rk4_stage(y, k, c: float) -> list:

@@ -31,11 +31,15 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.reduced import (
     COS_BETA_MIN,
     ReducedPlant,
     SingularityError,
+    rk4_combine,
+    rk4_stage,
     solve_dynamics,
     torque_for_force,
 )
@@ -231,6 +235,20 @@ class TrainODE(ReducedPlant):
     """The train's reduced model as an ODE: :class:`tt_mujoco.vehicle.reduced.ReducedPlant`'s
     RK4 step (zero-order hold of the torques) on the state
     ``(x, y, theta, phi_1..phi_N, theta_l, theta_r, v, omega)``."""
+
+    def step(self, tau, dt: float, accel_disturbance=(0.0, 0.0)) -> np.ndarray:
+        """Advance by ``dt`` with RK4 on :meth:`derivative` (any N; one trailer's plain-number
+        step is :func:`tt_mujoco.vehicle.reduced.rk4_step_of`)."""
+        y = [float(c) for c in self.state]
+        tau = (float(tau[0]), float(tau[1]))
+        acc = (float(accel_disturbance[0]), float(accel_disturbance[1]))
+        k1 = self.derivative(y, tau, acc)
+        k2 = self.derivative(rk4_stage(y, k1, 0.5 * dt), tau, acc)
+        k3 = self.derivative(rk4_stage(y, k2, 0.5 * dt), tau, acc)
+        k4 = self.derivative(rk4_stage(y, k3, dt), tau, acc)
+        self.state = np.array(rk4_combine(y, k1, k2, k3, k4, dt / 6.0))
+        self.time += dt
+        return self.state
 
     def derivative(self, y, tau, accel_disturbance=(0.0, 0.0)) -> list[float]:
         p = self.params

@@ -1,0 +1,175 @@
+"""The second controller form: a plain-number law that the closed loop compiles.
+
+A :class:`~tt_mujoco.controllers.Controller` subclass runs in the Python loop. A law written
+as one plain function of numbers and named records runs compiled, at the cost of the physics
+itself, wherever the episode has a compiled form (:mod:`tt_mujoco.sim.compiled`), and in the
+Python loop, with the same numbers, everywhere else::
+
+    from tt_mujoco.controllers import plain_law
+
+    @plain_law(gains={"k_v": 20.0, "k_omega": 20.0}, state=("int_v",))
+    def my_law(m, r, model, k, s, dt, torque_limit):
+        e_v, e_w = r.v_d - m.v, r.omega_d - m.omega
+        s.int_v += e_v * dt
+        a_v = r.v_d_dot + k.k_v * e_v + s.int_v - model.f1
+        a_w = r.omega_d_dot + k.k_omega * e_w - model.f2
+        det = model.g11 * model.g22 - model.g12 * model.g21
+        return (model.g22 * a_v - model.g12 * a_w) / det, (model.g11 * a_w - model.g21 * a_v) / det
+
+The law's arguments, each read by field name:
+
+- ``m``: the measurement as the controller sees it (the fields of
+  :class:`tt_mujoco.sim.measure.Measurement`, noise included);
+- ``r``: the reference (:data:`tt_mujoco.sim.records.REFERENCE_FIELDS`: ``t, s, kappa, v_d,
+  omega_d, v_d_dot, omega_d_dot`` and the path's pose ``x_ref, y_ref, theta_ref`` at ``s``);
+- ``model``: the nominal model ``V_dot = f + g tau`` at the measurement (``f1, f2, g11, g12,
+  g21, g22``);
+- ``k``: the gains (the names of ``gains=``; ``--gains``, TOML and sweeps override them);
+- ``s``: the law's own state (the names of ``state=``), zero at the start of a run, float
+  fields it reads and writes;
+- ``dt``: the control period (s); ``torque_limit``: the wheel torque limit (N m).
+
+It returns the two wheel torques ``(T_r, T_l)`` (N m); the loop clips them at the limit. The
+body may use arithmetic, ``math`` functions, ``if`` and ``for``: what numba compiles in
+nopython mode. A train's measurement carries trailer 1 only in ``m``; the model is the train's.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+from collections.abc import Callable, Mapping, Sequence
+from typing import ClassVar
+
+from tt_mujoco.controllers.base import Controller
+
+__all__ = ["NOMINAL_FIELDS", "REFERENCE_FIELDS", "PlainLawController", "plain_law"]
+
+#: What a law sees of the target (the same names as :mod:`tt_mujoco.sim.records`).
+REFERENCE_FIELDS = (
+    *("t", "s", "kappa", "v_d", "omega_d", "v_d_dot", "omega_d_dot"),
+    *("x_ref", "y_ref", "theta_ref"),
+)
+#: The nominal model's values at the measurement.
+NOMINAL_FIELDS = ("f1", "f2", "g11", "g12", "g21", "g22")
+
+LawReference = namedtuple("LawReference", REFERENCE_FIELDS)
+Nominal = namedtuple("Nominal", NOMINAL_FIELDS)
+
+
+class LawState:
+    """A law's state in the Python loop: float fields, as the compiled loop's record holds
+    them (a value written is stored as a float)."""
+
+    __slots__ = ("__dict__",)
+
+    def __init__(self, fields: Sequence[str]):
+        for name in fields:
+            object.__setattr__(self, name, 0.0)
+
+    def __setattr__(self, name: str, value) -> None:
+        if name not in self.__dict__:
+            fields = ", ".join(self.__dict__) or "none"
+            raise AttributeError(f"the law's state has no field {name!r} (its fields: {fields})")
+        object.__setattr__(self, name, float(value))
+
+
+class PlainLawController(Controller):
+    """A plain-number law as a :class:`Controller`: the Python loop's form of it.
+
+    Made by :func:`plain_law`; :attr:`LAW` is the function, :attr:`STATE` its state's field
+    names. :mod:`tt_mujoco.sim.compiled` compiles the same function for the compiled loop.
+    """
+
+    LAW: ClassVar[Callable]
+    STATE: ClassVar[tuple[str, ...]] = ()
+
+    def __init__(self, setup, gains=None):
+        super().__init__(setup, gains)
+        self.gain_record = namedtuple("Gains", tuple(self._gains))(**self._gains)
+        self._train = getattr(setup.params, "n_trailers", 1) > 1
+        self.reset()
+
+    def reset(self) -> None:
+        self.law_state = LawState(self.STATE)
+
+    def compute(self, t, measurement, reference):
+        m, setup = measurement, self.setup
+        model = Nominal(*setup.model(m.phis if self._train else m.phi, m.v, m.omega))
+        r = reference
+        ref = LawReference(t, r.s, r.kappa, r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot, *r.pose)
+        law = type(self).LAW
+        return law(m, ref, model, self.gain_record, self.law_state, setup.control_dt,
+                   setup.torque_limit)  # fmt: skip
+
+
+def plain_law(
+    *,
+    gains: Mapping[str, float] | None = None,
+    state: Sequence[str] = (),
+    presets: Mapping[str, Mapping[str, float]] | None = None,
+    name: str | None = None,
+    reverse: bool = True,
+) -> Callable[[Callable], type[PlainLawController]]:
+    """Declare a plain-number law (module docstring): its gains, its state, its name.
+
+    Parameters
+    ----------
+    gains : dict, optional
+        The default gains, name -> value (the preset ``"default"``).
+    state : sequence of str
+        The names of the law's state fields (floats, zero at the start of a run).
+    presets : dict, optional
+        Named gain sets beside (or instead of) ``gains``; the first is the default when
+        ``gains`` is not given.
+    name : str, optional
+        The controller's name (default: the function's).
+    reverse : bool
+        Whether the law drives the path backwards too.
+
+    Returns
+    -------
+    callable
+        A decorator that turns the function into a :class:`PlainLawController` subclass,
+        usable as ``--controller FILE.py:NAME`` like any controller class.
+
+    Raises
+    ------
+    ValueError
+        A gain that is not a finite number, or a name that is not an identifier.
+    """
+    table = {str(k): dict(v) for k, v in (presets or {}).items()}
+    if gains is not None:
+        table = {"default": dict(gains), **table}
+    if not table:
+        table = {"default": {}}
+    state = tuple(state)
+    for field in (*state, *(key for gains in table.values() for key in gains)):
+        if not (isinstance(field, str) and field.isidentifier()):
+            raise ValueError(f"field {field!r} is not allowed: use a Python identifier")
+    for preset, values in table.items():
+        for key, value in values.items():
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise ValueError(f"gain {preset}.{key}={value!r} is not allowed: use a number")
+            if not math.isfinite(value):
+                raise ValueError(
+                    f"gain {preset}.{key}={value!r} is not allowed: use a finite number"
+                )
+
+    def decorate(fn: Callable) -> type[PlainLawController]:
+        if not callable(fn):
+            raise ValueError(f"plain_law decorates a function, not {fn!r}")
+        attrs = {
+            "LAW": staticmethod(fn),
+            "STATE": state,
+            "PRESETS": table,
+            "DEFAULT_PRESET": next(iter(table)),
+            "REVERSE": bool(reverse),
+            "name": name or fn.__name__,
+            "__doc__": fn.__doc__,
+            "__module__": fn.__module__,
+            "__qualname__": fn.__qualname__,
+        }
+        return type(fn.__name__, (PlainLawController,), attrs)
+
+    return decorate

@@ -1,0 +1,125 @@
+"""Plain-number laws (tt_mujoco.controllers.plain): one function, run compiled or in the Python
+loop with the same numbers, declared and refused like any controller."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from tt_mujoco.controllers import controller_class, plain_law
+
+from tt_mujoco.sim import Scenario, build, compiled, simulate
+
+LAW = "examples/kanayama.py:kanayama_law"
+CLASS = "examples/kanayama.py:KanayamaTracker"
+
+
+@pytest.fixture(autouse=True)
+def compile_now(monkeypatch):
+    monkeypatch.setenv("TT_MUJOCO_COMPILE_NOW", "1")
+
+
+def _run(monkeypatch, flag: str, **kw):
+    monkeypatch.setenv("TT_MUJOCO_COMPILED", flag)
+    return simulate(Scenario(**kw))
+
+
+def _same(a, b) -> None:
+    assert set(a.timeseries) == set(b.timeseries)
+    for name, column in a.timeseries.items():
+        assert np.array_equal(column, b.timeseries[name], equal_nan=True), name
+    assert (a.status, a.message) == (b.status, b.message)
+
+
+@pytest.mark.parametrize(
+    "case",
+    [
+        dict(traj="s_curve", duration=4.0, noise_snr_db=25.0, seed=3),
+        dict(traj="cycloid", plant="reduced"),
+        dict(traj="circle", target="static", duration=3.0),
+    ],
+    ids=["s_curve-noise", "cycloid-reduced", "circle-static"],
+)
+def test_the_compiled_law_equals_the_python_class_bit_for_bit(monkeypatch, case):
+    # The law and the class are the same tracker written in the two forms: the compiled law,
+    # the law in the Python loop and the class give the same numbers.
+    scenario = Scenario(controller=LAW, **case)
+    built = build(scenario)
+    assert compiled.unsupported(built, built.new_controller()) is None
+    fast = _run(monkeypatch, "1", controller=LAW, **case)
+    _same(_run(monkeypatch, "0", controller=LAW, **case), fast)
+    _same(_run(monkeypatch, "0", controller=CLASS, **case), fast)
+    assert fast.status == "ok"
+
+
+def test_gains_reach_the_compiled_law(monkeypatch):
+    default = _run(monkeypatch, "1", controller=LAW, traj="circle", duration=3.0)
+    soft = _run(monkeypatch, "1", controller=LAW, traj="circle", duration=3.0, gains={"k_y": 2.0})
+    python = _run(monkeypatch, "0", controller=LAW, traj="circle", duration=3.0, gains={"k_y": 2.0})
+    _same(python, soft)
+    assert not np.array_equal(default.timeseries["y"], soft.timeseries["y"])
+
+
+def test_a_law_returning_nan_fails_alike_on_both_routes(monkeypatch, tmp_path):
+    # Torques that are not finite stop the run as a user-code failure (exit code 3) with the
+    # same message and rows whichever loop ran it.
+    law = tmp_path / "bad_law.py"
+    law.write_text(
+        "from tt_mujoco.controllers import plain_law\n\n"
+        "@plain_law(state=('n',))\n"
+        "def bad_law(m, r, model, k, s, dt, torque_limit):\n"
+        "    s.n += 1.0\n"
+        "    return (0.0 if s.n < 2500.0 else float('nan')), 0.0\n"
+    )
+    spec = f"{law}:bad_law"
+    kw = dict(controller=spec, traj="circle", duration=3.0, disturbance="none")
+    fast = _run(monkeypatch, "1", **kw)
+    _same(_run(monkeypatch, "0", **kw), fast)
+    assert (
+        fast.status == "failed" and "T_r=nan" in fast.message and len(fast.timeseries["t"]) == 2499
+    )
+
+
+def test_a_law_numba_cannot_compile_runs_in_the_python_loop(monkeypatch, tmp_path, capsys):
+    law = tmp_path / "dict_law.py"
+    law.write_text(
+        "from tt_mujoco.controllers import plain_law\n\n"
+        "@plain_law(gains={'k': 5.0})\n"
+        "def dict_law(m, r, model, k, s, dt, torque_limit):\n"
+        "    table = {'a': object()}\n"
+        "    return k.k * (r.v_d - m.v), 0.0 * len(table)\n"
+    )
+    spec = f"{law}:dict_law"
+    fast = _run(monkeypatch, "1", controller=spec, traj="circle", duration=2.5)
+    assert "has no compiled form" in capsys.readouterr().err
+    _same(_run(monkeypatch, "0", controller=spec, traj="circle", duration=2.5), fast)
+
+
+def test_the_state_takes_floats_and_only_its_own_fields():
+    from tt_mujoco.controllers.plain import LawState
+
+    state = LawState(("int_v",))
+    state.int_v = True
+    assert state.int_v == 1.0 and isinstance(state.int_v, float)
+    with pytest.raises(AttributeError, match=r"no field 'int_w'.*int_v"):
+        state.int_w = 1.0
+
+
+@pytest.mark.parametrize(
+    ("kw", "match"),
+    [
+        (dict(gains={"k": math.nan}), "gain default.k=nan"),
+        (dict(gains={"k": "fast"}), "gain default.k='fast'"),
+        (dict(state=("not a name",)), "field 'not a name'"),
+    ],
+)
+def test_a_bad_declaration_is_refused(kw, match):
+    with pytest.raises(ValueError, match=match):
+        plain_law(**kw)
+
+
+def test_the_law_is_a_controller_class_with_its_gains():
+    cls = controller_class(LAW)
+    assert cls.name == "kanayama_law" and cls.STATE == ("int_v", "int_w", "saturated")
+    assert cls.PRESETS["default"] == controller_class(CLASS).PRESETS["default"]

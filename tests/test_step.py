@@ -1,0 +1,63 @@
+"""The step's shared checks and clips (tt_mujoco.sim.step) and the records they read
+(tt_mujoco.sim.records), which the Python and the compiled loop both run."""
+
+from __future__ import annotations
+
+import bisect
+import math
+
+import numpy as np
+import pytest
+
+from tt_mujoco.reference.paths import arc_segment
+from tt_mujoco.sim import records, step
+
+LIMITS = records.Limits(
+    torque_limit=15.0,
+    disturbance_bound=math.inf,
+    jackknife_phi=math.radians(60.0),
+    jackknife_beta=math.radians(80.0),
+    max_speed=50.0,
+    noise_v=0.0,
+    noise_w=0.0,
+)
+
+
+@pytest.mark.parametrize(
+    ("state", "code"),
+    [
+        ((0.0, 1.0, 0.0, 0.0, 0.0), step.RUNNING),
+        ((math.nan, 1.0, 0.0, 0.0, 0.0), step.BLEW_UP),
+        ((0.0, 1.0, math.inf, 0.0, 0.0), step.BLEW_UP),
+        ((0.0, 50.1, 0.0, 0.0, 0.0), step.BLEW_UP),
+        ((0.0, 1.0, 0.0, math.radians(60.0), 0.0), step.JACKKNIFE),
+        ((0.0, 1.0, 0.0, 0.0, -math.radians(80.0)), step.JACKKNIFE),
+        ((0.0, -50.0, 0.0, math.radians(59.9), math.radians(79.9)), step.RUNNING),
+    ],
+)
+def test_stop_code(state, code):
+    assert step.stop_code(*state, LIMITS) == code
+
+
+def test_clips():
+    assert step.clip(20.0, 15.0) == 15.0 and step.clip(-20.0, 15.0) == -15.0
+    assert step.clip(3.0, 15.0) == 3.0
+    assert step.clip_pair(1.0, -2.0, math.inf) == (1.0, -2.0, 0.0)
+    assert step.clip_pair(1.0, -20.0, 15.0) == (1.0, -15.0, 1.0)
+    assert step.noisy(1.0, 0.5, [0.0, 2.0], 1) == 2.0
+
+
+def test_arc_segment_is_bisect_over_the_inner_bounds():
+    rng = np.random.default_rng(0)
+    for n in (1, 2, 3, 7):
+        bounds = [0.0, *np.cumsum(rng.uniform(0.1, 2.0, n)).tolist()]
+        for s in [-1.0, 0.0, *bounds, *rng.uniform(-1.0, bounds[-1] + 1.0, 50).tolist()]:
+            assert arc_segment(s, bounds) == bisect.bisect_right(bounds[1:-1], s)
+
+
+def test_a_record_is_read_and_written_by_name():
+    record = records.new_record(records.TARGET_FIELDS, v_prev=math.nan, kappa=0.5)
+    assert record.dtype.names == records.TARGET_FIELDS
+    assert math.isnan(record[0]["v_prev"]) and record[0]["kappa"] == 0.5 and record[0]["s"] == 0.0
+    log = np.zeros(3, dtype=records.LOG_DTYPE)
+    assert log.view(np.float64).reshape(3, -1).shape == (3, len(records.LOG_DTYPE))

@@ -1,0 +1,196 @@
+"""The named records the closed-loop step reads and writes: one schema for both loops.
+
+Every bundle the compiled chunk loop (:mod:`tt_mujoco.sim._kernel`) takes is a
+:class:`~typing.NamedTuple` or a NumPy structured array defined here, so a field is read by
+its name, never by a bare index: the limits, the plant's arrays, the law's state, the target's
+state, the log row and why a run stopped. The Python loop
+(:class:`tt_mujoco.sim.stepper.Stepper`) holds the same :class:`Limits`.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from tt_mujoco.sim.measure import Addresses, Lengths, Measurement
+from tt_mujoco.sim.timeseries import LOOP_COLUMNS
+from tt_mujoco.vehicle.reduced import ModelConstants
+
+__all__ = [
+    "LAW_FLAGS",
+    "LOG_DTYPE",
+    "MEASUREMENT_DTYPE",
+    "NOMINAL_FIELDS",
+    "REFERENCE_FIELDS",
+    "STOP_FIELDS",
+    "TARGET_FIELDS",
+    "LawRecord",
+    "Limits",
+    "LogRecord",
+    "LoopRecord",
+    "MujocoRecord",
+    "PlantRecord",
+    "TargetRecord",
+    "new_record",
+    "record_dtype",
+]
+
+
+def record_dtype(fields) -> np.dtype:
+    """The structured dtype of float ``fields``, in their order."""
+    return np.dtype([(name, np.float64) for name in fields])
+
+
+_dtype = record_dtype
+
+
+#: The measurement, field by field.
+MEASUREMENT_DTYPE = _dtype(Measurement._fields)
+
+#: One logged row of the loop's own values (:data:`tt_mujoco.sim.timeseries.LOOP_COLUMNS`).
+LOG_DTYPE = _dtype(LOOP_COLUMNS)
+
+#: What a law sees of the target at a step: the :class:`~tt_mujoco.controllers.Reference`
+#: fields and the path's pose at the reference point.
+REFERENCE_FIELDS = (
+    *("t", "s", "kappa", "v_d", "omega_d", "v_d_dot", "omega_d_dot"),
+    *("x_ref", "y_ref", "theta_ref"),
+)
+
+#: The nominal model ``V_dot = f + g tau`` at the measurement.
+NOMINAL_FIELDS = ("f1", "f2", "g11", "g12", "g21", "g22")
+
+#: The target's state between steps: arc length, the previous measured speed (NaN before the
+#: first update) and the curvature at the last update.
+TARGET_FIELDS = ("s", "v_prev", "kappa")
+
+#: A built-in law's values beside its state vector: whether the last torques saturated and the
+#: two auxiliary outputs (the sliding variables of ISMC-STA).
+LAW_FLAGS = ("saturated", "aux1", "aux2")
+
+#: Why a stretch of steps stopped, with what the message names.
+STOP_FIELDS = (
+    *("v", "phi", "beta", "x", "y", "eta", "warning", "law_status"),
+    *("g11", "g12", "g21", "g22", "u1", "u2"),
+)
+
+
+def new_record(fields, **values) -> np.ndarray:
+    """A one-element structured array of float ``fields`` (zeros, or the ``values`` given);
+    its element ``[0]`` is the record a compiled function reads and writes by name."""
+    record = np.zeros(1, dtype=_dtype(fields))
+    for name, value in values.items():
+        record[0][name] = value
+    return record
+
+
+class Limits(NamedTuple):
+    """The step's fixed bounds and noise levels."""
+
+    #: wheel torque limit (N m)
+    torque_limit: float
+    #: per-wheel bound on the disturbance's torques (N m; inf: none)
+    disturbance_bound: float
+    #: hitch angle at which the run stops as a jackknife (rad)
+    jackknife_phi: float
+    #: steering angle at which the run stops as a jackknife (rad)
+    jackknife_beta: float
+    #: speed above which the state has blown up (m/s)
+    max_speed: float
+    #: standard deviations of the speed and yaw-rate noise (m/s, rad/s)
+    noise_v: float
+    noise_w: float
+
+
+class MujocoRecord(NamedTuple):
+    """The MuJoCo plant's arrays, seen from the compiled loop (dummies on the reduced plant)."""
+
+    #: addresses of ``MjModel`` and ``MjData`` for ``mj_step``
+    pointers: np.ndarray
+    qpos: np.ndarray
+    qvel: np.ndarray
+    ctrl: np.ndarray
+    qfrc_applied: np.ndarray
+    #: ``MjData.warning.number``: a step that raises any of them stops the run
+    warnings: np.ndarray
+    addresses: Addresses
+    lengths: Lengths
+
+
+class PlantRecord(NamedTuple):
+    """The plant the compiled loop advances: MuJoCo (``mj_step``) or the reduced ODE (RK4)."""
+
+    mujoco: bool
+    #: plant steps per control step
+    substeps: int
+    mj: MujocoRecord
+    #: the reduced plant's state (x, y, theta, phi, theta_l, theta_r, v, omega), advanced in place
+    ode_state: np.ndarray
+    #: the reduced plant's (true) constants
+    ode: ModelConstants
+    #: the reduced plant's RK4 step (s)
+    timestep: float
+
+
+class LawRecord(NamedTuple):
+    """The law the compiled loop runs on the controller's nominal model."""
+
+    #: 0 ISMC-STA, 1 PID, 2 FBL, 3 a user's plain-number law (:mod:`tt_mujoco.controllers.plain`)
+    kind: int
+    gains: np.ndarray
+    #: a built-in law's state vector
+    state: np.ndarray
+    #: :data:`LAW_FLAGS`
+    flags: np.ndarray
+    nominal: ModelConstants
+    anti_windup: bool
+    #: the user's law, compiled (a placeholder for the built-in ones)
+    user: Any
+    #: the user law's gains and state records
+    user_gains: np.ndarray
+    user_state: np.ndarray
+    #: what the law sees: the :data:`REFERENCE_FIELDS` record, the nominal model
+    #: (:data:`NOMINAL_FIELDS`) at the measurement, and the measurement as seen (noise
+    #: included; ``measurement_values`` is the same memory as plain floats)
+    reference: np.ndarray
+    model: np.ndarray
+    measurement: np.ndarray
+    measurement_values: np.ndarray
+
+
+class TargetRecord(NamedTuple):
+    """The tracking target: its speed profile tabulated per step and a closed-form path."""
+
+    dynamic: bool
+    #: per control step, the speed profile's (s_ref, v_ref, a_ref)
+    profile: np.ndarray
+    #: 0 arcs of constant curvature (``bounds``, ``kappas``, ``starts``), 1 the cycloid
+    path_kind: int
+    length: float
+    bounds: np.ndarray
+    kappas: np.ndarray
+    starts: np.ndarray
+    #: :data:`TARGET_FIELDS`
+    state: np.ndarray
+
+
+class LoopRecord(NamedTuple):
+    """The episode's constants and its noise."""
+
+    limits: Limits
+    dt: float
+    #: the last control step
+    steps: int
+    #: the episode's standard normal draws (empty without noise)
+    noise: np.ndarray
+    #: whether the paper's disturbance enters as matched torques
+    disturbed: bool
+
+
+class LogRecord(NamedTuple):
+    """Where a chunk logs its rows: the Measurement fields and the loop's own values."""
+
+    measurement: np.ndarray
+    #: :data:`LOG_DTYPE`
+    loop: np.ndarray

@@ -1,0 +1,59 @@
+"""The closed-loop step's own arithmetic, written once for both loops.
+
+:class:`tt_mujoco.sim.stepper.Stepper` (the Python loop, with its hooks) and the compiled
+chunk loop (:mod:`tt_mujoco.sim._kernel`) sequence the same step, sense, noise, target, law,
+saturation, disturbance, log, advance, and call these plain-number functions for every check
+and clip in it, so that no rule of the step stands twice. They take and return plain floats
+(numba compiles them from this source, :mod:`tt_mujoco.sim.kernel_sources`).
+"""
+
+from __future__ import annotations
+
+import math
+
+__all__ = [
+    "BLEW_UP",
+    "FINISHED",
+    "JACKKNIFE",
+    "LAW_FAILED",
+    "RUNNING",
+    "SINGULAR",
+    "WARNING",
+    "clip",
+    "clip_pair",
+    "noisy",
+    "stop_code",
+]
+
+#: How a stretch of steps ended: still running, the episode's end, or why it stopped.
+RUNNING, FINISHED, BLEW_UP, JACKKNIFE, WARNING, LAW_FAILED, SINGULAR = range(7)
+
+
+def stop_code(x: float, v: float, omega: float, phi: float, beta: float, limits) -> int:
+    """:data:`BLEW_UP` when the state is not finite or faster than ``limits.max_speed``,
+    :data:`JACKKNIFE` when a hitch reached ``limits.jackknife_phi`` or its axle
+    ``limits.jackknife_beta`` (rad), else :data:`RUNNING`."""
+    if not (math.isfinite(x) and math.isfinite(v) and math.isfinite(omega)):
+        return BLEW_UP
+    if abs(v) > limits.max_speed:
+        return BLEW_UP
+    if abs(phi) >= limits.jackknife_phi or abs(beta) >= limits.jackknife_beta:
+        return JACKKNIFE
+    return RUNNING
+
+
+def noisy(value: float, std: float, noise, index: int) -> float:
+    """``value`` plus ``std`` times the episode's ``index``-th standard normal draw."""
+    return value + std * noise[index]
+
+
+def clip(value: float, limit: float) -> float:
+    """``value`` held within ``[-limit, limit]``."""
+    return -limit if value < -limit else (limit if value > limit else value)
+
+
+def clip_pair(first: float, second: float, bound: float) -> tuple[float, float, float]:
+    """Both values held within ``[-bound, bound]``, and 1.0 if either was clipped (else 0.0)."""
+    if abs(first) > bound or abs(second) > bound:
+        return max(-bound, min(bound, first)), max(-bound, min(bound, second)), 1.0
+    return first, second, 0.0
