@@ -25,7 +25,7 @@ from tt_mujoco.controllers import base, fbl, ismc_sta, pid
 from tt_mujoco.reference import path_base, paths, targets
 from tt_mujoco.sim import disturbances, measure, plant_reduced, step
 from tt_mujoco.sim.kernel_sources import SHARED
-from tt_mujoco.vehicle import reduced
+from tt_mujoco.vehicle import reduced, train
 
 for _fn in SHARED:
     register_jitable(_fn)
@@ -88,12 +88,32 @@ def _pose_at(target, s):
 
 
 @njit(cache=True)
-def _sense(plant):
-    """The Measurement fields of the plant's state."""
+def _sense(plant, n, rows):
+    """The Measurement fields of the plant's state; trailers 2..N of ``n`` into ``rows``."""
     if plant.mujoco:
         mj = plant.mj
-        return measure.measure_values(mj.qpos, mj.qvel, mj.addresses, mj.lengths)
-    return plant_reduced.reduced_measure_values(plant.ode_state, plant.ode)
+        me = measure.measure_values(mj.qpos, mj.qvel, mj.addresses, mj.lengths)
+        if n > 1:
+            measure.train_rows_of(
+                mj.qpos, mj.qvel, mj.addresses, mj.lengths, me, plant.train_joints, rows
+            )
+        return me
+    y = plant.ode_state
+    if n == 1:
+        return plant_reduced.reduced_measure_values(y, plant.ode)
+    first = (y[0], y[1], y[2], y[3], y[3 + n], y[4 + n], y[5 + n], y[6 + n])
+    plant_reduced.reduced_train_rows_of(y, plant.train, plant.places, plant.speeds, rows)
+    return plant_reduced.reduced_measure_values(first, plant.ode)
+
+
+@njit(cache=True)
+def _first_singular(phis, c, stop):
+    """The first trailer at cos(eta_k phi_k) < COS_BETA_MIN into ``stop`` (phi, eta)."""
+    for k in range(len(c.trailers)):
+        eta = c.trailers[k][2]
+        if math.cos(eta * phis[k]) < COS_BETA_MIN:
+            stop.phi, stop.eta = phis[k], eta
+            return
 
 
 @njit(cache=True)
@@ -171,6 +191,16 @@ def _advance(plant, T_r, T_l, dist_r, dist_l, stop):
                 return WARNING
         return RUNNING
     y = plant.ode_state
+    n = len(plant.train.trailers)
+    if n > 1:
+        inputs = (T_r + dist_r, T_l + dist_l, 0.0, 0.0)
+        for _ in range(plant.substeps):
+            if not train.train_rk4_step_of(
+                y, inputs, plant.train, plant.timestep, plant.speeds, plant.slopes
+            ):
+                _first_singular(plant.slopes[4][3 : 3 + n], plant.train, stop)
+                return SINGULAR
+        return RUNNING
     for _ in range(plant.substeps):
         ok, phi, new = reduced.rk4_step_of(
             y, T_r + dist_r, T_l + dist_l, 0.0, 0.0, plant.ode, plant.timestep
@@ -189,15 +219,23 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
     ``k_end + 1`` to go on. Rows go to ``log.measurement`` and ``log.loop`` (from row 0)."""
     lim, dt, noise = loop.limits, loop.dt, loop.noise
     stop, r, nm = stop_record[0], law.reference[0], law.model[0]
+    n, phis = loop.n_trailers, law.phis
     row = 0
     while k <= k_end:
         t = k * dt
-        me = _sense(plant)
+        rows = log.train[row]
+        me = _sense(plant, n, rows)
         x, y, phi, beta, v, omega = me[0], me[1], me[3], me[4], me[5], me[6]
         code = step.stop_code(x, v, omega, phi, beta, lim)
         if code != RUNNING:
-            stop.v, stop.phi, stop.beta, stop.x, stop.y = v, phi, beta, x, y
+            stop.v, stop.phi, stop.beta, stop.x, stop.y, stop.hitch = v, phi, beta, x, y, 1.0
             return code, k
+        if n > 1:
+            i = step.hitch_stop(rows, loop.hitch_limits, lim.jackknife_beta)
+            if i >= 0:
+                stop.v, stop.phi, stop.beta, stop.x, stop.y = v, rows[i][3], rows[i][4], x, y
+                stop.hitch, stop.eta = i + 2.0, law.nominal_train.trailers[i + 1][2]
+                return JACKKNIFE, k
         if noise.size:
             v_m = step.noisy(v, lim.noise_v, noise, 2 * k)
             w_m = step.noisy(omega, lim.noise_w, noise, 2 * k + 1)
@@ -208,11 +246,21 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         r.t, r.s, r.kappa = t, state.s, state.kappa
         # The nominal model at the measurement, for the law and the matched disturbance.
         c = law.nominal
-        if math.cos(c.eta * phi) < COS_BETA_MIN:
-            stop.law_status, stop.phi, stop.eta = NOMINAL_SINGULAR, phi, c.eta
-            return LAW_FAILED, k
-        terms = reduced.inertia_terms_of(phi, c)
-        mass, bias = reduced.coriolis_of(terms, c.gamma, v_m, w_m)
+        if n == 1:
+            if math.cos(c.eta * phi) < COS_BETA_MIN:
+                stop.law_status, stop.phi, stop.eta = NOMINAL_SINGULAR, phi, c.eta
+                return LAW_FAILED, k
+            terms = reduced.inertia_terms_of(phi, c)
+            mass, bias = reduced.coriolis_of(terms, c.gamma, v_m, w_m)
+        else:
+            phis[0] = phi
+            for i in range(n - 1):
+                phis[i + 1] = rows[i][3]
+            ok, mass, bias = train.mass_and_bias_of(phis, v_m, w_m, law.nominal_train, law.rates)
+            if not ok:
+                stop.law_status = NOMINAL_SINGULAR
+                _first_singular(phis, law.nominal_train, stop)
+                return LAW_FAILED, k
         nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22 = reduced.solve_dynamics_of(
             mass, bias, c.r, c.d
         )
@@ -238,7 +286,7 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         dist_r = dist_l = clipped = 0.0
         if loop.disturbed:
             a_v, a_w = disturbances.paper_disturbance_of(t)
-            dist_r, dist_l = reduced.torque_for_force_of(terms[0], a_v, a_w, c.r, c.d)
+            dist_r, dist_l = reduced.torque_for_force_of(mass, a_v, a_w, c.r, c.d)
             dist_r, dist_l, clipped = step.clip_pair(dist_r, dist_l, lim.disturbance_bound)
         out = log.loop[row]
         out.t, out.s, out.v_d, out.omega_d = t, state.s, r.v_d, r.omega_d

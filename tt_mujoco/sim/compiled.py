@@ -73,7 +73,6 @@ def unsupported(built, controller, on_step=None) -> str | None:
         (not _enabled(), "TT_MUJOCO_COMPILED=0"),
         (built.steps < MIN_STEPS, f"fewer than {MIN_STEPS} steps"),
         (bool(s.faults) or s.path_feedback is not None or s.eta_schedule, "faults or feedback"),
-        (built.plant_params.n_trailers != 1, "a train"),
         (s.actuator != "ideal", "a motor model"),
         (s.sensor_delay != 0.0, "a sensor delay"),
         (s.wind != "none", "wind"),
@@ -323,6 +322,7 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
         )
         return None
     from tt_mujoco.sim import records
+    from tt_mujoco.sim.measure import TRAIN_FIELDS
 
     steps = stepper.steps
     loop = records.LoopRecord(
@@ -331,6 +331,8 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
         steps=steps,
         noise=np.zeros(0) if stepper._noise is None else np.array(stepper._noise),
         disturbed=stepper.built.disturbance is not None and stepper._mode == "matched",
+        n_trailers=stepper.built.plant_params.n_trailers,
+        hitch_limits=np.array(stepper._train_limits, dtype=float),
     )
     plant = _plant_record(stepper.plant, stepper.built.substeps, stepper.built.nominal)
     law = _law_record(controller, stepper.built.nominal, user)
@@ -345,6 +347,7 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
         log = records.LogRecord(
             measurement=np.empty((n, len(records.MEASUREMENT_DTYPE))),
             loop=np.empty(n, dtype=records.LOG_DTYPE),
+            train=np.empty((n, loop.n_trailers - 1, len(TRAIN_FIELDS))),
         )
         args = (k, k_end, loop, plant, law, target, log, stop)
         if k == 0:
@@ -359,7 +362,8 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
         # Rows k..k_next-1 are logged; a stop in the plant's advance or the end logs k_next too.
         logged = k_next - k + (1 if status in (step.FINISHED, step.WARNING, step.SINGULAR) else 0)
         columns = log.loop.view(np.float64).reshape(n, -1)
-        stepper.add_block(log.measurement[:logged], columns[:logged], np.empty((logged, 0)))
+        trains = log.train.reshape(n, -1)
+        stepper.add_block(log.measurement[:logged], columns[:logged], trains[:logged])
         if progress is not None:
             progress(k_next, steps)
         k = k_next
@@ -395,6 +399,7 @@ def _plant_record(plant, substeps: int, nominal):
             lengths=lay.lengths,
         )
         ode_state, ode, timestep = np.zeros(8), reduced.model_constants(nominal), 0.0
+        params, joints = nominal, np.array(lay.train, dtype=float).reshape(-1, 5)
     else:
         one, none = np.zeros(1), np.zeros(0, dtype=np.int64)
         mj = records.MujocoRecord(
@@ -403,9 +408,30 @@ def _plant_record(plant, substeps: int, nominal):
         )  # fmt: skip
         ode_state = np.array(plant.ode.state, dtype=float)
         ode, timestep = reduced.model_constants(plant.params), plant.timestep
+        params, joints = plant.params, np.zeros((0, 5))
+    n = params.n_trailers
     return records.PlantRecord(
-        isinstance(plant, MujocoPlant), substeps, mj, ode_state, ode, timestep
+        mujoco=isinstance(plant, MujocoPlant),
+        substeps=substeps,
+        mj=mj,
+        ode_state=ode_state,
+        ode=ode,
+        timestep=timestep,
+        train=_train_constants(params),
+        train_joints=joints,
+        places=np.zeros((n, 5)),
+        speeds=np.zeros((n, 3)),
+        slopes=np.zeros((5, len(ode_state))),
     )
+
+
+def _train_constants(params):
+    """A train's constants with the trailers as a float array (no rows for one trailer)."""
+    from tt_mujoco.vehicle.train import TRAILER_ROW, train_constants
+
+    c = train_constants(params)
+    rows = np.array(c.trailers, dtype=float) if params.n_trailers > 1 else np.zeros(0)
+    return c._replace(trailers=rows.reshape(-1, len(TRAILER_ROW)))
 
 
 def _law_record(controller, nominal, user):
@@ -434,6 +460,9 @@ def _law_record(controller, nominal, user):
             records.LAW_FLAGS, **dict(zip(records.LAW_FLAGS, flags, strict=True))
         ),
         nominal=reduced.model_constants(nominal),
+        nominal_train=_train_constants(nominal),
+        phis=np.zeros(nominal.n_trailers),
+        rates=np.zeros((nominal.n_trailers, 3)),
         anti_windup=anti_windup,
         user=user,
         user_gains=user_gains if user_gains.size else np.zeros(1),
@@ -522,7 +551,9 @@ def _outcome(status, stop, stepper, controller, k) -> tuple[str, str]:
         return "diverged", blew_up_message(t, value["v"])
     if status == step.JACKKNIFE:
         phi, beta, x, y, v = (value[name] for name in ("phi", "beta", "x", "y", "v"))
-        return "jackknife", jackknife_message(t, phi, beta, stepper.eta, x, y, v)
+        hitch = int(value["hitch"])
+        eta = stepper.eta if hitch == 1 else value["eta"]
+        return "jackknife", jackknife_message(t, phi, beta, eta, x, y, v, hitch=hitch)
     if status == step.WARNING:
         import mujoco
 

@@ -13,7 +13,7 @@ import inspect
 from tt_mujoco.controllers import base, fbl, ismc_sta, pid
 from tt_mujoco.reference import path_base, paths, targets
 from tt_mujoco.sim import disturbances, measure, plant_reduced, records, step
-from tt_mujoco.vehicle import reduced
+from tt_mujoco.vehicle import reduced, train
 
 __all__ = ["RECORDS", "SHARED", "source_files"]
 
@@ -22,6 +22,20 @@ SHARED = (
     step.noisy,
     step.clip,
     step.clip_pair,
+    step.hitch_stop,
+    measure.train_rows_of,
+    plant_reduced.reduced_train_rows_of,
+    train.tractor_pass,
+    train._behind,
+    train._beside,
+    train.trailer_pass,
+    train._masses,
+    train._add,
+    train.mass_and_bias_of,
+    train.trailer_rates_of,
+    train.poses_of,
+    train.train_derivative_of,
+    train.train_rk4_step_of,
     measure.yaw_from_quat,
     measure.measure_values,
     reduced.hitch_and_axle,
@@ -70,6 +84,7 @@ RECORDS = (
     measure.Addresses,
     measure.Lengths,
     reduced.ModelConstants,
+    train.TrainConstants,
 )
 
 

@@ -242,18 +242,30 @@ def measure_train(qpos, qvel, lay: Layout) -> TrainMeasurement:
     first = measure(qpos, qvel, lay)
     qpos = qpos.tolist() if hasattr(qpos, "tolist") else list(qpos)
     qvel = qvel.tolist() if hasattr(qvel, "tolist") else list(qvel)
+    rows = [[0.0] * len(TRAIN_FIELDS) for _ in lay.train]
+    train_rows_of(qpos, qvel, lay.addresses, lay.lengths, first, lay.train, rows)
+    return _new_train_measurement(first, tuple(tuple(row) for row in rows))
+
+
+def train_rows_of(qpos, qvel, a: Addresses, n: Lengths, first, train, out) -> None:
+    """Trailers 2..N of :func:`measure_train` into ``out[k - 2]`` (:data:`TRAIN_FIELDS`), from
+    trailer 1's measurement ``first`` (the :class:`Measurement` fields) and ``train``, one row
+    ``(hitch_q, hitch_v, steer_q, L_k, L0_k)`` per trailer. Plain numbers (the compiled episode
+    shares it)."""
     # Trailer 1's body: axle midpoint, its rigid velocity, heading and heading rate.
-    j = lay.root_v
-    theta, omega = first.theta, first.omega
+    j = a.root_v
+    theta, omega = first[2], first[6]
     vx, vy = qvel[j], qvel[j + 1]
     s, c = math.sin(theta), math.cos(theta)
-    fth = first.theta0
-    fw = omega + qvel[lay.hitch_v]
-    fx, fy = first.x0, first.y0
-    fvx = vx + omega * lay.L * s + fw * lay.L0 * math.sin(fth)
-    fvy = vy - omega * lay.L * c - fw * lay.L0 * math.cos(fth)
-    rows = []
-    for hitch_q, hitch_v, steer_q, L, L0 in lay.train:
+    fth = first[9]
+    fw = omega + qvel[a.hitch_v]
+    fx, fy = first[7], first[8]
+    fvx = vx + omega * n.L * s + fw * n.L0 * math.sin(fth)
+    fvy = vy - omega * n.L * c - fw * n.L0 * math.cos(fth)
+    for k in range(len(train)):
+        joint = train[k]
+        hitch_q, hitch_v, steer_q = int(joint[0]), int(joint[1]), int(joint[2])
+        L, L0 = joint[3], joint[4]
         sf, cf = math.sin(fth), math.cos(fth)
         ox, oy = fx - L * cf, fy - L * sf
         ovx, ovy = fvx + fw * L * sf, fvy - fw * L * cf
@@ -266,6 +278,6 @@ def measure_train(qpos, qvel, lay: Layout) -> TrainMeasurement:
         pvx, pvy = ovx + wk * L0 * sk, ovy - wk * L0 * ck
         alpha = thk + beta
         v0 = pvx * math.cos(alpha) + pvy * math.sin(alpha)
-        rows.append((px, py, thk, phi, beta, v0))
+        row = out[k]
+        row[0], row[1], row[2], row[3], row[4], row[5] = px, py, thk, phi, beta, v0
         fx, fy, fth, fw, fvx, fvy = px, py, thk, wk, pvx, pvy
-    return _new_train_measurement(first, tuple(rows))

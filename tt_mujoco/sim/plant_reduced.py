@@ -54,20 +54,13 @@ class ReducedPlant(Plant):
         p = self.params
         n = p.n_trailers
         state = [float(c) for c in self.ode.state]
-        x, y, theta = state[:3]
-        phis = state[3 : 3 + n]
-        th_l, th_r, v, omega = state[3 + n :]
         # Trailer 1 as for one trailer; trailers 2..N from the chain.
-        first = [x, y, theta, phis[0], th_l, th_r, v, omega]
+        first = [*state[:4], *state[3 + n :]]
         out = TrainMeasurement._make(reduced_measure_values(first, reduced.model_constants(p)))
-        places = train.poses(x, y, theta, phis, p)[1:]
-        speeds = train.trailer_rates(phis, v, omega, p)[1:]
-        out.train = tuple(
-            (px, py, thk, phi, t.eta * phi, v_k)
-            for (_, _, px, py, thk), phi, t, (_, v_k, _) in zip(
-                places, phis[1:], p.train, speeds, strict=True
-            )
-        )
+        places, speeds = [[0.0] * 5 for _ in range(n)], [[0.0] * 3 for _ in range(n)]
+        rows = [[0.0] * 6 for _ in range(n - 1)]
+        reduced_train_rows_of(state, train.train_constants(p), places, speeds, rows)
+        out.train = tuple(tuple(row) for row in rows)
         return out
 
     def apply(self, T_r, T_l, dist_r, dist_l, wrench_force, wrench_torque, theta) -> None:
@@ -101,6 +94,21 @@ class ReducedPlant(Plant):
         """Raises :class:`tt_mujoco.vehicle.reduced.SingularityError` at |beta| = 90 deg."""
         for _ in range(substeps):
             self.ode.step(self._tau, self.timestep)
+
+
+def reduced_train_rows_of(state, c, places, speeds, out) -> None:
+    """Trailers 2..N of the reduced train's state ``(x, y, theta, phi_1..phi_N, theta_l,
+    theta_r, v, omega)`` into ``out[k - 2]`` (:data:`~tt_mujoco.sim.measure.TRAIN_FIELDS`),
+    with the train's constants ``c`` and scratch rows ``places`` (N x 5) and ``speeds``
+    (N x 3): exact, without slip (the compiled episode shares it)."""
+    n = len(c.trailers)
+    phis = state[3 : 3 + n]
+    train.poses_of(state[0], state[1], state[2], phis, c, places)
+    train.trailer_rates_of(phis, state[5 + n], state[6 + n], c, speeds)
+    for k in range(1, n):
+        row, place = out[k - 1], places[k]
+        row[0], row[1], row[2] = place[2], place[3], place[4]
+        row[3], row[4], row[5] = phis[k], c.trailers[k][2] * phis[k], speeds[k][1]
 
 
 def reduced_measure_values(state, c: reduced.ModelConstants) -> tuple:

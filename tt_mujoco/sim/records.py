@@ -16,6 +16,7 @@ import numpy as np
 from tt_mujoco.sim.measure import Addresses, Lengths, Measurement
 from tt_mujoco.sim.timeseries import LOOP_COLUMNS
 from tt_mujoco.vehicle.reduced import ModelConstants
+from tt_mujoco.vehicle.train import TrainConstants
 
 __all__ = [
     "LAW_FLAGS",
@@ -71,7 +72,7 @@ LAW_FLAGS = ("saturated", "aux1", "aux2")
 
 #: Why a stretch of steps stopped, with what the message names.
 STOP_FIELDS = (
-    *("v", "phi", "beta", "x", "y", "eta", "warning", "law_status"),
+    *("v", "phi", "beta", "x", "y", "eta", "hitch", "warning", "law_status"),
     *("g11", "g12", "g21", "g22", "u1", "u2"),
 )
 
@@ -131,6 +132,14 @@ class PlantRecord(NamedTuple):
     ode: ModelConstants
     #: the reduced plant's RK4 step (s)
     timestep: float
+    #: a train's (true) constants, trailers as an N x 9 float array (0 rows for one trailer)
+    train: TrainConstants
+    #: MuJoCo: trailers 2..N as rows (hitch_q, hitch_v, steer_q, L_k, L0_k)
+    train_joints: np.ndarray
+    #: the reduced train's scratch rows: poses (N x 5), rates (N x 3), RK4 slopes (5 x len(y))
+    places: np.ndarray
+    speeds: np.ndarray
+    slopes: np.ndarray
 
 
 class LawRecord(NamedTuple):
@@ -144,6 +153,11 @@ class LawRecord(NamedTuple):
     #: :data:`LAW_FLAGS`
     flags: np.ndarray
     nominal: ModelConstants
+    #: a train's nominal constants (0 trailer rows for one trailer), its hitch angles and the
+    #: trailers' rates (scratch)
+    nominal_train: TrainConstants
+    phis: np.ndarray
+    rates: np.ndarray
     anti_windup: bool
     #: the user's law, compiled (a placeholder for the built-in ones)
     user: Any
@@ -186,6 +200,9 @@ class LoopRecord(NamedTuple):
     noise: np.ndarray
     #: whether the paper's disturbance enters as matched torques
     disturbed: bool
+    n_trailers: int
+    #: the hitch limits of trailers 2..N (rad)
+    hitch_limits: np.ndarray
 
 
 class LogRecord(NamedTuple):
@@ -194,3 +211,5 @@ class LogRecord(NamedTuple):
     measurement: np.ndarray
     #: :data:`LOG_DTYPE`
     loop: np.ndarray
+    #: trailers 2..N per row: (N - 1) x :data:`~tt_mujoco.sim.measure.TRAIN_FIELDS`
+    train: np.ndarray

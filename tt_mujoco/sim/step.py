@@ -21,6 +21,7 @@ __all__ = [
     "WARNING",
     "clip",
     "clip_pair",
+    "hitch_stop",
     "noisy",
     "stop_code",
 ]
@@ -40,6 +41,17 @@ def stop_code(x: float, v: float, omega: float, phi: float, beta: float, limits)
     if abs(phi) >= limits.jackknife_phi or abs(beta) >= limits.jackknife_beta:
         return JACKKNIFE
     return RUNNING
+
+
+def hitch_stop(rows, hitch_limits, jackknife_beta: float) -> int:
+    """The index of the first trailer k >= 2 (row ``k - 2`` of ``rows``, with ``phi_k`` and
+    ``beta_k`` in columns 3 and 4) whose hitch reached its limit ``hitch_limits[k - 2]`` or
+    whose axle reached ``jackknife_beta`` (rad), or -1."""
+    for i in range(len(rows)):
+        row = rows[i]
+        if abs(row[3]) >= hitch_limits[i] or abs(row[4]) >= jackknife_beta:
+            return i
+    return -1
 
 
 def noisy(value: float, std: float, noise, index: int) -> float:

@@ -30,7 +30,15 @@ from tt_mujoco.sim.motors import DcMotors
 from tt_mujoco.sim.plant import StopRun
 from tt_mujoco.sim.records import Limits
 from tt_mujoco.sim.scenario import jackknife_phi_deg
-from tt_mujoco.sim.step import BLEW_UP, JACKKNIFE, clip, clip_pair, noisy, stop_code
+from tt_mujoco.sim.step import (
+    BLEW_UP,
+    JACKKNIFE,
+    clip,
+    clip_pair,
+    hitch_stop,
+    noisy,
+    stop_code,
+)
 from tt_mujoco.sim.timeseries import LOOP_COLUMNS, assemble_columns, train_columns
 from tt_mujoco.sim.wind import drag_force, parse_wind
 from tt_mujoco.vehicle.reduced import SingularityError
@@ -242,13 +250,13 @@ class Stepper:
 
     def _check_train(self, me, t: float) -> None:
         """Stop when any hitch behind the first jackknifes."""
-        for k, (row, limit) in enumerate(zip(me.train, self._train_limits, strict=True), 2):
-            phi, beta = row[3], row[4]
-            if abs(phi) >= limit or abs(beta) >= self._jk:
-                eta = self.built.nominal.etas[k - 1]
-                raise StopRun(
-                    "jackknife", jackknife_message(t, phi, beta, eta, me.x, me.y, me.v, hitch=k)
-                )
+        i = hitch_stop(me.train, self._train_limits, self._jk)
+        if i >= 0:
+            phi, beta = me.train[i][3], me.train[i][4]
+            eta = self.built.nominal.etas[i + 1]
+            raise StopRun(
+                "jackknife", jackknife_message(t, phi, beta, eta, me.x, me.y, me.v, hitch=i + 2)
+            )
 
     def actuate(self, T_r: float, T_l: float, command: tuple[float, float] | None = None) -> bool:
         """Apply the torques of the current step and advance; False when the episode is over.
