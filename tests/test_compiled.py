@@ -29,6 +29,8 @@ CASES = [
     dict(traj="cycloid", controller="fbl", plant="reduced"),
     dict(traj="s_curve", controller="pid", target="static", duration=3.0),
     dict(traj="circle", controller="fbl", noise_snr_db=15.0, duration=3.0),
+    dict(traj="s_curve", disturbance="wrench", duration=3.0),
+    dict(traj="s_curve", disturbance="wrench", trailers=2, noise_snr_db=20.0, duration=3.0),
     # trains of any N, on both plants; trailer 2 with eta = 2.5 jackknifes at hitch 2
     dict(traj="s_curve", trailers=3, disturbance="none", duration=3.0),
     dict(traj="s_curve", trailers=2, noise_snr_db=20.0, seed=2, duration=3.0),
@@ -78,7 +80,6 @@ def test_checkpoint_rows_are_the_same(monkeypatch, tmp_path):
         (dict(path_feedback={}), "faults or feedback"),
         (dict(eta_schedule=True), "faults or feedback"),
         (dict(duration=1.0), "fewer than 2000 steps"),
-        (dict(disturbance="wrench"), "the wrench disturbance"),
         (dict(reverse=True), "this target"),
     ],
 )

@@ -23,7 +23,7 @@ from numba.extending import intrinsic, register_jitable
 
 from tt_mujoco.controllers import base, fbl, ismc_sta, pid
 from tt_mujoco.reference import path_base, paths, targets
-from tt_mujoco.sim import disturbances, measure, plant_reduced, step
+from tt_mujoco.sim import disturbances, measure, plant_mujoco, plant_reduced, step
 from tt_mujoco.sim.kernel_sources import SHARED
 from tt_mujoco.vehicle import reduced, train
 
@@ -174,15 +174,21 @@ def _law(law, v_m, w_m, dt, limit):
 
 
 @njit(cache=True)
-def _advance(plant, T_r, T_l, dist_r, dist_l, stop):
-    """Apply the torques and advance the plant one control period; the stop code."""
+def _advance(plant, T_r, T_l, push, stop):
+    """Apply the torques and the disturbance ``push = (dist_r, dist_l, wrench?, fx, fy, mz)``
+    and advance the plant one control period; the stop code."""
+    dist_r, dist_l = push[0], push[1]
     if plant.mujoco:
         mj = plant.mj
         a = mj.addresses
         mj.ctrl[a.act_right] = T_r
         mj.ctrl[a.act_left] = T_l
-        mj.qfrc_applied[a.wheel_right_v] = dist_r
-        mj.qfrc_applied[a.wheel_left_v] = dist_l
+        if push[2] != 0.0:
+            xfrc = mj.xfrc_applied[mj.tractor_body]
+            xfrc[0], xfrc[1], xfrc[5] = push[3], push[4], push[5]
+        else:
+            mj.qfrc_applied[a.wheel_right_v] = dist_r
+            mj.qfrc_applied[a.wheel_left_v] = dist_l
         for _ in range(plant.substeps):
             mj_step(mj.pointers[0], mj.pointers[1])
         for i in range(mj.warnings.size):
@@ -283,11 +289,15 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         T_r_cmd, T_l_cmd = u1, u2
         T_r = step.clip(T_r, lim.torque_limit)
         T_l = step.clip(T_l, lim.torque_limit)
-        dist_r = dist_l = clipped = 0.0
+        dist_r = dist_l = clipped = fx = fy = mz = 0.0
         if loop.disturbed:
             a_v, a_w = disturbances.paper_disturbance_of(t)
             dist_r, dist_l = reduced.torque_for_force_of(mass, a_v, a_w, c.r, c.d)
             dist_r, dist_l, clipped = step.clip_pair(dist_r, dist_l, lim.disturbance_bound)
+        elif loop.wrench:
+            a_v, a_w = disturbances.paper_disturbance_of(t)
+            force, torque = disturbances.wrench_of(mass, a_v, a_w)
+            fx, fy, mz = plant_mujoco.chassis_wrench_of(force, torque, me[2])
         out = log.loop[row]
         out.t, out.s, out.v_d, out.omega_d = t, state.s, r.v_d, r.omega_d
         out.v_d_dot, out.omega_d_dot, out.v_meas, out.omega_meas = (
@@ -302,7 +312,8 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         row += 1
         if k == loop.steps:
             return FINISHED, k
-        code = _advance(plant, T_r, T_l, dist_r, dist_l, stop)
+        push = (dist_r, dist_l, 1.0 if loop.wrench else 0.0, fx, fy, mz)
+        code = _advance(plant, T_r, T_l, push, stop)
         if code != RUNNING:
             return code, k
         k += 1

@@ -77,7 +77,6 @@ def unsupported(built, controller, on_step=None) -> str | None:
         (s.sensor_delay != 0.0, "a sensor delay"),
         (s.wind != "none", "wind"),
         (bool(s.ground), "friction patches"),
-        (s.plant == "mujoco" and s.disturbance == "wrench", "the wrench disturbance"),
         (on_step is not None, "a per-step callback"),
         (
             type(controller) not in (IsmcStaController, PidController, FblController)
@@ -331,6 +330,7 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
         steps=steps,
         noise=np.zeros(0) if stepper._noise is None else np.array(stepper._noise),
         disturbed=stepper.built.disturbance is not None and stepper._mode == "matched",
+        wrench=stepper.built.disturbance is not None and stepper._mode == "wrench",
         n_trailers=stepper.built.plant_params.n_trailers,
         hitch_limits=np.array(stepper._train_limits, dtype=float),
     )
@@ -395,6 +395,8 @@ def _plant_record(plant, substeps: int, nominal):
             ctrl=d.ctrl,
             qfrc_applied=d.qfrc_applied,
             warnings=d.warning.number,
+            xfrc_applied=d.xfrc_applied,
+            tractor_body=plant.tractor_body,
             addresses=lay.addresses,
             lengths=lay.lengths,
         )
@@ -403,7 +405,7 @@ def _plant_record(plant, substeps: int, nominal):
     else:
         one, none = np.zeros(1), np.zeros(0, dtype=np.int64)
         mj = records.MujocoRecord(
-            none, one, one, one, one, np.zeros(1, dtype=np.int32),
+            none, one, one, one, one, np.zeros(1, dtype=np.int32), np.zeros((1, 6)), 0,
             Addresses(*[0] * len(Addresses._fields)), Lengths(0.0, 0.0, 0.0, 0.0),
         )  # fmt: skip
         ode_state = np.array(plant.ode.state, dtype=float)

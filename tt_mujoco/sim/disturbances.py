@@ -70,6 +70,14 @@ def make_disturbance(spec: str):
     return obj
 
 
+def wrench_of(mass, a_v: float, a_w: float) -> tuple[float, float]:
+    """The generalised force ``Mbar Delta`` for ``Mbar = (M11, M12, M22)``: the force along the
+    heading and the yaw moment with the effect of Delta on (v, omega) (the compiled episode
+    shares it)."""
+    M11, M12, M22 = mass
+    return M11 * a_v + M12 * a_w, M12 * a_v + M22 * a_w
+
+
 def injected(mode: str, a_v: float, a_w: float, phi, nominal) -> tuple[float, ...]:
     """What the plant receives for Delta = (a_v, a_w): ``(dist_r, dist_l, force, torque)``.
 
@@ -82,7 +90,6 @@ def injected(mode: str, a_v: float, a_w: float, phi, nominal) -> tuple[float, ..
     else:
         mass = reduced.mass_terms(phi, nominal)
     if mode == "wrench":
-        M11, M12, M22 = mass
-        return 0.0, 0.0, M11 * a_v + M12 * a_w, M12 * a_v + M22 * a_w
+        return (0.0, 0.0, *wrench_of(mass, a_v, a_w))
     dist_r, dist_l = reduced.torque_for_force(mass, a_v, a_w, nominal)
     return dist_r, dist_l, 0.0, 0.0

@@ -12,7 +12,7 @@ import inspect
 
 from tt_mujoco.controllers import base, fbl, ismc_sta, pid
 from tt_mujoco.reference import path_base, paths, targets
-from tt_mujoco.sim import disturbances, measure, plant_reduced, records, step
+from tt_mujoco.sim import disturbances, measure, plant_mujoco, plant_reduced, records, step
 from tt_mujoco.vehicle import reduced, train
 
 __all__ = ["RECORDS", "SHARED", "source_files"]
@@ -69,6 +69,8 @@ SHARED = (
     fbl.fbl_law,
     paths.cycloid_curvature_and_rate,
     disturbances.paper_disturbance_of,
+    disturbances.wrench_of,
+    plant_mujoco.chassis_wrench_of,
 )
 
 

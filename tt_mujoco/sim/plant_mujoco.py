@@ -15,6 +15,12 @@ from tt_mujoco.vehicle.params import Params
 __all__ = ["MujocoPlant"]
 
 
+def chassis_wrench_of(force: float, torque: float, theta: float) -> tuple[float, float, float]:
+    """The chassis' ``xfrc_applied`` (fx, fy, mz) of a force along the heading ``theta`` and a
+    yaw moment (the compiled episode shares it)."""
+    return force * math.cos(theta), force * math.sin(theta), torque
+
+
 def warning_message(name: str, t: float) -> str:
     """The stop for a MuJoCo warning in the control step that started at ``t``."""
     return f"MuJoCo warning {name} in the step from t={t:.3f} s"
@@ -72,6 +78,11 @@ class MujocoPlant(Plant):
             for k in range(2, params.n_trailers + 1)
         ]
 
+    @property
+    def tractor_body(self) -> int:
+        """The tractor's body id (where the wrench disturbance and the wind act)."""
+        return self._tractor
+
     def measure(self):
         return self._measure(self._qpos, self._qvel, self._layout)
 
@@ -96,9 +107,7 @@ class MujocoPlant(Plant):
         ctrl[self._act_l] = T_l
         if self._wrench:
             xfrc = self._xfrc[self._tractor]
-            xfrc[0] = wrench_force * math.cos(theta)
-            xfrc[1] = wrench_force * math.sin(theta)
-            xfrc[5] = wrench_torque
+            xfrc[0], xfrc[1], xfrc[5] = chassis_wrench_of(wrench_force, wrench_torque, theta)
         else:
             qfrc = self._qfrc
             qfrc[self._wheel_r] = dist_r

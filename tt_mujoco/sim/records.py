@@ -115,6 +115,9 @@ class MujocoRecord(NamedTuple):
     qfrc_applied: np.ndarray
     #: ``MjData.warning.number``: a step that raises any of them stops the run
     warnings: np.ndarray
+    #: ``MjData.xfrc_applied`` and the tractor's body, where the wrench disturbance acts
+    xfrc_applied: np.ndarray
+    tractor_body: int
     addresses: Addresses
     lengths: Lengths
 
@@ -198,8 +201,9 @@ class LoopRecord(NamedTuple):
     steps: int
     #: the episode's standard normal draws (empty without noise)
     noise: np.ndarray
-    #: whether the paper's disturbance enters as matched torques
+    #: whether the paper's disturbance enters as matched torques, or as a chassis wrench
     disturbed: bool
+    wrench: bool
     n_trailers: int
     #: the hitch limits of trailers 2..N (rad)
     hitch_limits: np.ndarray
