@@ -631,3 +631,22 @@ def test_overshoot_past_the_end_is_along_track_not_cross_track():
     assert m["max_lateral"] == pytest.approx(0.066, abs=1e-12)  # the paper's lateral: end-clamped
     assert m["cross_track_max"] == pytest.approx(0.0, abs=EXACT)
     assert m["along_track_max"] == pytest.approx(0.066, abs=1e-12)
+
+
+def test_projection_with_a_window_matches_brute_force():
+    # A path driven in laps (a circle three times): each point sees only segments first..count,
+    # the recent path, as the off-tracking asks; the other laps pass within millimetres.
+    rng = np.random.default_rng(5)
+    angle = np.linspace(0.0, 6.0 * np.pi, 6000)
+    radius = 1.0 + 0.002 * np.sin(7.0 * angle)
+    vertices = np.column_stack([radius * np.cos(angle), radius * np.sin(angle)])
+    line = Polyline(vertices)
+    n = 600
+    count = rng.integers(1, line.n_segments + 1, n)
+    first = np.maximum(count - rng.integers(1, 2500, n), 0)
+    points = vertices[np.maximum(count - rng.integers(0, 3000, n), 0)]
+    points = points + rng.normal(0.0, 0.02, (n, 2))
+    proj = line.project(points, segment_count=count, segment_first=first)
+    for i in range(0, n, 5):
+        expected = brute_force_distance(points[i : i + 1], vertices[first[i] : count[i] + 1])[0]
+        assert proj.distance[i] == pytest.approx(expected, rel=1e-12, abs=1e-14)

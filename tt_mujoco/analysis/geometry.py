@@ -284,6 +284,15 @@ class Polyline:
             lo_chunk, hi_chunk = self._window_chunks(limit, first)
             direct = pending[hi_chunk[pending] - lo_chunk[pending] <= _WINDOW_CHUNKS]
             if direct.size:
+                # The tree's nearest groups inside a point's window give it a distance to beat:
+                # the chunk tree then finds the few chunks nearer than it, where enumerating
+                # every chunk of the window would cost the window's length for every point.
+                k = min(_CANDIDATE_ROUNDS[0], self._tree.n)
+                _, group_idx = self._tree.query(pts[direct], k=k)
+                candidates = self._group_segments[group_idx].reshape(direct.size, -1)
+                self._try(
+                    pts[direct], direct, candidates, limit[direct], extend_ends, best, first[direct]
+                )
                 self._chunk_search(pts, direct, limit, extend_ends, best, first)
                 pending = np.setdiff1d(pending, direct, assume_unique=True)
         for k in _CANDIDATE_ROUNDS:
@@ -429,16 +438,16 @@ class Polyline:
         hold each point's nearest usable segment: inside its window and its lower bound
         (centre distance less radius) not beyond its best distance so far.
 
-        A short window (a run's recent driven path) is enumerated chunk by chunk; a long one
-        (the whole path) is asked of the chunk tree, for the circles within the distance so
-        far. A point of a short window without a distance yet (the tree's candidates lay
-        outside it) takes the nearest of its window's chunk starts: a true distance to a
-        usable segment, so the pruning keeps the same nearest point and far fewer chunks.
+        A point with a distance so far asks the chunk tree for the circles within it (then keeps
+        those inside its window). A point without one (the tree's candidates lay outside its
+        window) enumerates its window chunk by chunk and takes the nearest of their starts: a
+        true distance to a usable segment, so the pruning keeps the same nearest point and far
+        fewer chunks.
         """
         upper = np.sqrt(d2)
         lo_chunk, hi_chunk = self._window_chunks(limit, first)
         spans = np.maximum(hi_chunk - lo_chunk, 0)
-        short = (spans <= _WINDOW_CHUNKS) | ~np.isfinite(upper)
+        short = ~np.isfinite(upper)
         points, chunks = [], []
         windowed = np.flatnonzero(short)
         if windowed.size:
