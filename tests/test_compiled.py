@@ -58,6 +58,24 @@ def test_compiled_loop_equals_python_loop_bit_for_bit(monkeypatch, case):
     assert (python.status, python.message) == (fast.status, fast.message)
 
 
+@pytest.mark.parametrize("plant", ["mujoco", "reduced"])
+def test_a_csv_spline_path_runs_compiled_bit_for_bit(monkeypatch, tmp_path, plant):
+    # An ellipse of waypoints: a spline path, compiled like the closed-form ones (its curvature
+    # for the target, its pose for a plain-number law).
+    a = np.linspace(0.0, 1.5 * np.pi, 40)
+    rows = "\n".join(f"{2.0 * np.cos(t):.6f},{1.2 * np.sin(t):.6f}" for t in a)
+    path = tmp_path / "ellipse.csv"
+    path.write_text("x,y\n" + rows + "\n")
+    for controller in ("ismc_sta", "examples/kanayama.py:kanayama_law"):
+        scenario = Scenario(traj=str(path), plant=plant, controller=controller, duration=3.0)
+        built = build(scenario)
+        assert compiled.unsupported(built, built.new_controller()) is None
+        python, fast = _both(monkeypatch, scenario)
+        for name, column in python.timeseries.items():
+            assert np.array_equal(column, fast.timeseries[name], equal_nan=True), name
+        assert (python.status, python.message) == (fast.status, fast.message) and fast.status == "ok"
+
+
 def test_checkpoint_rows_are_the_same(monkeypatch, tmp_path):
     from tt_mujoco.sim.checkpoint import read_checkpoint
 

@@ -166,6 +166,20 @@ class ReferencePath:
         return f"{type(self).__name__}(name={self.name!r}, length={self.length:.4f})"
 
 
+def arc_segment(s: float, bounds) -> int:
+    """The segment of arcs with ``bounds`` (s_0 = 0, ..., s_n = length) that holds ``s``: the
+    last whose start is <= s (``bisect.bisect_right`` over the inner bounds), 0 before the
+    path and n - 1 beyond it."""
+    lo, hi = 0, len(bounds) - 2
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if s < bounds[mid + 1]:
+            hi = mid
+        else:
+            lo = mid + 1
+    return lo
+
+
 def continued_pose(s: float, clipped: float, x: float, y: float, heading: float):
     """The pose at ``s`` from the pose ``(x, y, heading)`` at ``clipped``, s held within the
     path: beyond its ends the path continues along its end tangent (plain floats; the

@@ -33,6 +33,7 @@ from tt_mujoco.reference.path_base import (
     DEFAULT_MAX_CURVATURE,
     Pose,
     ReferencePath,
+    arc_segment,
     positive_number,
 )
 from tt_mujoco.reference.spline import SplinePath, from_csv, from_waypoints
@@ -221,20 +222,6 @@ class ArcsPath(ReferencePath):
         """The arcs as the compiled episode takes them: the segments' bounds (s_0 = 0 ..
         length), their curvatures and their start poses (x, y, heading) per row."""
         return np.array(self._bound_list), np.array(self._kappa_list), np.array(self._starts)
-
-
-def arc_segment(s: float, bounds) -> int:
-    """The segment of arcs with ``bounds`` (s_0 = 0, ..., s_n = length) that holds ``s``: the
-    last whose start is <= s (``bisect.bisect_right`` over the inner bounds), 0 before the
-    path and n - 1 beyond it."""
-    lo, hi = 0, len(bounds) - 2
-    while lo < hi:
-        mid = (lo + hi) // 2
-        if s < bounds[mid + 1]:
-            hi = mid
-        else:
-            lo = mid + 1
-    return lo
 
 
 def arcs_curvature_of(s: float, bounds, kappas) -> tuple[float, float]:

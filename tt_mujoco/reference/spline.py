@@ -4,7 +4,6 @@ true arc length and checked against the curvature the vehicle can follow (docs/m
 
 from __future__ import annotations
 
-import bisect
 import csv
 import math
 
@@ -13,7 +12,12 @@ from scipy.integrate import cumulative_simpson
 from scipy.interpolate import CubicHermiteSpline, CubicSpline, make_smoothing_spline
 
 from tt_mujoco.defaults import MAX_CSV_ROWS, MAX_SPEED
-from tt_mujoco.reference.path_base import DEFAULT_MAX_CURVATURE, ReferencePath, positive_number
+from tt_mujoco.reference.path_base import (
+    DEFAULT_MAX_CURVATURE,
+    ReferencePath,
+    arc_segment,
+    positive_number,
+)
 from tt_mujoco.registry import existing_file
 
 __all__ = [
@@ -57,7 +61,7 @@ class SplinePath(ReferencePath):
         secant = np.diff(kappa) / h
         c2 = (3.0 * secant - 2.0 * rate_left - rate_right) / h
         c3 = (rate_left + rate_right - 2.0 * secant) / h**2
-        self._cell_starts = [float(q) for q in s_fine[1:-1]]
+        self._bounds = [float(q) for q in s_fine]
         self._cells = [
             tuple(map(float, row))
             for row in zip(s_fine[:-1], kappa[:-1], rate_left, c2, c3, strict=True)
@@ -106,32 +110,55 @@ class SplinePath(ReferencePath):
         return _spline_curvature_rate(d1, d2, d3)
 
     def _pose_at(self, s):
-        cell = self._pose_cells[
-            min(bisect.bisect_right(self._cell_starts, s), len(self._cells) - 1)
-        ]
-        s0, h, x0, y0, a0, k0, x1, y1, a1, k1 = cell
-        w = (s - s0) / h
-        w2, w3 = w * w, w * w * w
-        b00, b10, b01, b11 = (
-            2 * w3 - 3 * w2 + 1.0,
-            (w3 - 2 * w2 + w) * h,
-            3 * w2 - 2 * w3,
-            (w3 - w2) * h,
-        )
-        return (
-            b00 * x0 + b10 * math.cos(a0) + b01 * x1 + b11 * math.cos(a1),
-            b00 * y0 + b10 * math.sin(a0) + b01 * y1 + b11 * math.sin(a1),
-            b00 * a0 + b10 * k0 + b01 * a1 + b11 * k1,
-        )
+        return spline_pose_of(s, self._bounds, self._pose_cells)
 
     def curvature_and_rate(self, s: float) -> tuple[float, float]:
-        if s < 0.0:
-            return self._kappa_ends[0], 0.0
-        if s > self.length:
-            return self._kappa_ends[1], 0.0
-        s0, c0, c1, c2, c3 = self._cells[bisect.bisect_right(self._cell_starts, s)]
-        w = s - s0
-        return c0 + w * (c1 + w * (c2 + w * c3)), c1 + w * (2.0 * c2 + 3.0 * w * c3)
+        return spline_curvature_of(s, self.length, self._kappa_ends, self._bounds, self._cells)
+
+    @property
+    def closed_form(self) -> tuple:
+        """The tables the compiled episode takes: the fine cells' bounds, their curvature
+        cubics (s0, c0..c3), their pose cells (:func:`spline_pose_of`) and the end curvatures."""
+        return (
+            np.array(self._bounds),
+            np.array(self._cells),
+            np.array(self._pose_cells),
+            np.array(self._kappa_ends),
+        )
+
+
+def spline_curvature_of(s: float, length: float, kappa_ends, bounds, cells):
+    """``(kappa(s), dkappa/ds)`` of a spline path from its fine cells' cubics (plain floats;
+    the compiled episode shares it): held at the end values beyond the path."""
+    if s < 0.0:
+        return kappa_ends[0], 0.0
+    if s > length:
+        return kappa_ends[1], 0.0
+    cell = cells[arc_segment(s, bounds)]
+    s0, c0, c1, c2, c3 = cell[0], cell[1], cell[2], cell[3], cell[4]
+    w = s - s0
+    return c0 + w * (c1 + w * (c2 + w * c3)), c1 + w * (2.0 * c2 + 3.0 * w * c3)
+
+
+def spline_pose_of(s: float, bounds, pose_cells) -> tuple[float, float, float]:
+    """``(x, y, heading)`` at ``s`` in ``[0, length]``: cubic Hermite in s of x, y and the
+    heading on the fine cell that holds s (plain floats; the compiled episode shares it)."""
+    cell = pose_cells[arc_segment(s, bounds)]
+    s0, h, x0, y0, a0 = cell[0], cell[1], cell[2], cell[3], cell[4]
+    k0, x1, y1, a1, k1 = cell[5], cell[6], cell[7], cell[8], cell[9]
+    w = (s - s0) / h
+    w2, w3 = w * w, w * w * w
+    b00, b10, b01, b11 = (
+        2 * w3 - 3 * w2 + 1.0,
+        (w3 - 2 * w2 + w) * h,
+        3 * w2 - 2 * w3,
+        (w3 - w2) * h,
+    )
+    return (
+        b00 * x0 + b10 * math.cos(a0) + b01 * x1 + b11 * math.cos(a1),
+        b00 * y0 + b10 * math.sin(a0) + b01 * y1 + b11 * math.sin(a1),
+        b00 * a0 + b10 * k0 + b01 * a1 + b11 * k1,
+    )
 
 
 def _spline_curvature(d1, d2):

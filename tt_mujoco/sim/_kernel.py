@@ -22,7 +22,7 @@ from numba import cfunc, njit, types
 from numba.extending import intrinsic, register_jitable
 
 from tt_mujoco.controllers import base, fbl, ismc_sta, pid
-from tt_mujoco.reference import path_base, paths, targets
+from tt_mujoco.reference import path_base, paths, spline, targets
 from tt_mujoco.sim import disturbances, measure, plant_mujoco, plant_reduced, step
 from tt_mujoco.sim.kernel_sources import SHARED
 from tt_mujoco.vehicle import reduced, train
@@ -72,6 +72,9 @@ def _path_at(target, s):
     """``(kappa, dkappa/ds)`` of the target's closed-form path at ``s``."""
     if target.path_kind == 0:
         return paths.arcs_curvature_of(s, target.bounds, target.kappas)
+    if target.path_kind == 2:
+        bounds, cells = target.bounds, target.cells
+        return spline.spline_curvature_of(s, target.length, target.kappa_ends, bounds, cells)
     return paths.cycloid_curvature_and_rate(s)
 
 
@@ -82,6 +85,8 @@ def _pose_at(target, s):
     clipped = min(max(s, 0.0), target.length)
     if target.path_kind == 0:
         x, y, heading = paths.arcs_pose_of(clipped, bounds, target.kappas, target.starts)
+    elif target.path_kind == 2:
+        x, y, heading = spline.spline_pose_of(clipped, bounds, target.pose_cells)
     else:
         x, y, heading = paths.cycloid_pose_of(clipped)
     return path_base.continued_pose(s, clipped, x, y, heading)

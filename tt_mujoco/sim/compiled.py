@@ -65,6 +65,7 @@ def unsupported(built, controller, on_step=None) -> str | None:
     from tt_mujoco.controllers.pid import PidController
     from tt_mujoco.controllers.plain import PlainLawController
     from tt_mujoco.reference.paths import ArcsPath, CycloidPath
+    from tt_mujoco.reference.spline import SplinePath
     from tt_mujoco.reference.targets import DynamicTarget, StaticTarget
     from tt_mujoco.sim.disturbances import PaperDisturbance
 
@@ -85,7 +86,7 @@ def unsupported(built, controller, on_step=None) -> str | None:
         ),
         (not getattr(_model_of(controller), "builtin", False), "a custom model"),
         (type(built.target) not in (StaticTarget, DynamicTarget), "this target"),
-        (type(built.path) not in (ArcsPath, CycloidPath), "a path without closed form"),
+        (type(built.path) not in (ArcsPath, CycloidPath, SplinePath), "a path without closed form"),
         (
             built.disturbance is not None and type(built.disturbance) is not PaperDisturbance,
             "a custom disturbance",
@@ -478,13 +479,18 @@ def _law_record(controller, nominal, user):
 
 def _target_record(built, steps: int):
     from tt_mujoco.reference.paths import ArcsPath
+    from tt_mujoco.reference.spline import SplinePath
     from tt_mujoco.sim import records
 
     target, path = built.target, built.path
+    kappas, starts = np.zeros(0), np.zeros((0, 3))
+    cells, pose_cells, kappa_ends = np.zeros((0, 5)), np.zeros((0, 10)), np.zeros(2)
     if isinstance(path, ArcsPath):
         kind, (bounds, kappas, starts) = 0, path.closed_form
+    elif isinstance(path, SplinePath):
+        kind, (bounds, cells, pose_cells, kappa_ends) = 2, path.closed_form
     else:
-        kind, bounds, kappas, starts = 1, np.zeros(0), np.zeros(0), np.zeros((0, 3))
+        kind, bounds = 1, np.zeros(0)
     return records.TargetRecord(
         dynamic=target.kind == "dynamic",
         profile=_profile_table(target, built.control_dt, steps),
@@ -493,6 +499,9 @@ def _target_record(built, steps: int):
         bounds=bounds,
         kappas=kappas,
         starts=starts,
+        cells=cells,
+        pose_cells=pose_cells,
+        kappa_ends=kappa_ends,
         state=records.new_record(records.TARGET_FIELDS, v_prev=math.nan, kappa=target.curvature),
     )
 

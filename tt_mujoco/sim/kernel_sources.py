@@ -11,7 +11,7 @@ from __future__ import annotations
 import inspect
 
 from tt_mujoco.controllers import base, fbl, ismc_sta, pid
-from tt_mujoco.reference import path_base, paths, targets
+from tt_mujoco.reference import path_base, paths, spline, targets
 from tt_mujoco.sim import disturbances, measure, plant_mujoco, plant_reduced, records, step
 from tt_mujoco.vehicle import reduced, train
 
@@ -54,7 +54,9 @@ SHARED = (
     plant_reduced.reduced_measure_values,
     targets.yaw_rate_targets,
     targets.travelled,
-    paths.arc_segment,
+    path_base.arc_segment,
+    spline.spline_curvature_of,
+    spline.spline_pose_of,
     paths.arcs_curvature_of,
     paths.arcs_pose_of,
     paths.cycloid_pose_of,

@@ -182,12 +182,16 @@ class TargetRecord(NamedTuple):
     dynamic: bool
     #: per control step, the speed profile's (s_ref, v_ref, a_ref)
     profile: np.ndarray
-    #: 0 arcs of constant curvature (``bounds``, ``kappas``, ``starts``), 1 the cycloid
+    #: 0 arcs of constant curvature (``bounds``, ``kappas``, ``starts``), 1 the cycloid, 2 a
+    #: spline (``bounds`` of its fine cells, their ``cells``, ``pose_cells`` and ``kappa_ends``)
     path_kind: int
     length: float
     bounds: np.ndarray
     kappas: np.ndarray
     starts: np.ndarray
+    cells: np.ndarray
+    pose_cells: np.ndarray
+    kappa_ends: np.ndarray
     #: :data:`TARGET_FIELDS`
     state: np.ndarray
 
