@@ -73,7 +73,10 @@ def test_a_csv_spline_path_runs_compiled_bit_for_bit(monkeypatch, tmp_path, plan
         python, fast = _both(monkeypatch, scenario)
         for name, column in python.timeseries.items():
             assert np.array_equal(column, fast.timeseries[name], equal_nan=True), name
-        assert (python.status, python.message) == (fast.status, fast.message) and fast.status == "ok"
+        assert (python.status, python.message) == (
+            fast.status,
+            fast.message,
+        ) and fast.status == "ok"
 
 
 def test_checkpoint_rows_are_the_same(monkeypatch, tmp_path):
