@@ -15,7 +15,8 @@ It prints:
 2. Scaling: the same ``--scaling-runs`` episodes through :func:`tt_mujoco.sweep.run_sweep` on 1
    and 2 local worker processes: runs/s, and the executor's own overhead per run (wall time x
    workers minus the episodes' own time, over the runs: pool start, transfer, journal, table).
-3. The ``--episodes`` sweep on ``--workers`` workers: wall time, runs/s, failures, and its ratio
+3. The ``--episodes`` sweep on ``--workers`` workers (``--trailers 3``: of a three-trailer
+   train): wall time, runs/s, failures, and its ratio
    to the physics floor, the mean replay time of the profiled episodes times the episodes over
    the workers (issue 13's goal: <= 1.25).
 
@@ -109,12 +110,16 @@ def main() -> None:
     ap.add_argument(
         "--control-dt", type=float, default=0.001, help="control period of every episode (s)"
     )
+    ap.add_argument("--trailers", type=int, default=1, help="trailers of every episode's train")
     args = ap.parse_args()
     if args.control_dt != 0.001:
         ITEMS.append(f"control_dt={args.control_dt}")
+    if args.trailers != 1:
+        ITEMS.append(f"trailers={args.trailers}")
 
     print(f"mujoco {mujoco.__version__}, {os.cpu_count()} CPUs, load {os.getloadavg()[0]:.2f}")
-    print(f"control period {1e3 * args.control_dt:g} ms, physics step 1 ms")
+    trailers = f"{args.trailers} trailer" + ("s" if args.trailers > 1 else "")
+    print(f"control period {1e3 * args.control_dt:g} ms, physics step 1 ms, {trailers}")
     spec = sweep.parse_spec(ITEMS, repeats=max(args.episodes, args.profile), seed=0)
     b = episode_breakdown(spec, args.profile)
     ms = {k: 1e3 * v for k, v in b.items() if k != "steps"}
