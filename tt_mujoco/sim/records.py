@@ -13,6 +13,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+# What a law sees of the target and of the nominal model: the plain-number law's records.
+from tt_mujoco.controllers.plain import NOMINAL_FIELDS, REFERENCE_FIELDS
 from tt_mujoco.sim.measure import Addresses, Lengths, Measurement
 from tt_mujoco.sim.timeseries import LOOP_COLUMNS
 from tt_mujoco.vehicle.reduced import ModelConstants
@@ -43,24 +45,11 @@ def record_dtype(fields) -> np.dtype:
     return np.dtype([(name, np.float64) for name in fields])
 
 
-_dtype = record_dtype
-
-
 #: The measurement, field by field.
-MEASUREMENT_DTYPE = _dtype(Measurement._fields)
+MEASUREMENT_DTYPE = record_dtype(Measurement._fields)
 
 #: One logged row of the loop's own values (:data:`tt_mujoco.sim.timeseries.LOOP_COLUMNS`).
-LOG_DTYPE = _dtype(LOOP_COLUMNS)
-
-#: What a law sees of the target at a step: the :class:`~tt_mujoco.controllers.Reference`
-#: fields and the path's pose at the reference point.
-REFERENCE_FIELDS = (
-    *("t", "s", "kappa", "v_d", "omega_d", "v_d_dot", "omega_d_dot"),
-    *("x_ref", "y_ref", "theta_ref"),
-)
-
-#: The nominal model ``V_dot = f + g tau`` at the measurement.
-NOMINAL_FIELDS = ("f1", "f2", "g11", "g12", "g21", "g22")
+LOG_DTYPE = record_dtype(LOOP_COLUMNS)
 
 #: The target's state between steps: arc length, the previous measured speed (NaN before the
 #: first update) and the curvature at the last update.
@@ -80,7 +69,7 @@ STOP_FIELDS = (
 def new_record(fields, **values) -> np.ndarray:
     """A one-element structured array of float ``fields`` (zeros, or the ``values`` given);
     its element ``[0]`` is the record a compiled function reads and writes by name."""
-    record = np.zeros(1, dtype=_dtype(fields))
+    record = np.zeros(1, dtype=record_dtype(fields))
     for name, value in values.items():
         record[0][name] = value
     return record
