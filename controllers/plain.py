@@ -61,8 +61,6 @@ class LawState:
     """A law's state in the Python loop: float fields, as the compiled loop's record holds
     them (a value written is stored as a float)."""
 
-    __slots__ = ("__dict__",)
-
     def __init__(self, fields: Sequence[str]):
         for name in fields:
             object.__setattr__(self, name, 0.0)

@@ -21,6 +21,7 @@ import difflib
 import hashlib
 import importlib
 import importlib.util
+import math
 import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -28,6 +29,7 @@ from pathlib import Path
 __all__ = [
     "HookError",
     "Registry",
+    "check_finite_fields",
     "closest",
     "describe_failure",
     "existing_file",
@@ -49,6 +51,17 @@ def existing_file(path, what: str) -> Path:
     if not is_file:
         raise ValueError(f"{what} {str(path)!r} does not exist (or is not a file)")
     return file
+
+
+def check_finite_fields(obj, what: str, names) -> None:
+    """Refuse a field of ``obj`` among ``names`` that is not a finite number (a bool is not one),
+    naming it as ``what name=value`` (the physical options' records check their fields so)."""
+    for name in names:
+        value = getattr(obj, name)
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise ValueError(f"{what} {name}={value!r} is not allowed: it must be a number")
+        if not math.isfinite(value):
+            raise ValueError(f"{what} {name}={value!r} is not allowed: it must be finite")
 
 
 def shown(value, limit: int = 80) -> str:

@@ -16,7 +16,6 @@ import math
 import os
 
 import mujoco
-import numpy as np
 from llvmlite import binding
 from numba import cfunc, njit, types
 from numba.extending import intrinsic, register_jitable
@@ -147,7 +146,7 @@ def _law(law, v_m, w_m, dt, limit):
     ``law``; its state updated in place."""
     r, nm, flags = law.reference[0], law.model[0], law.flags[0]
     if law.kind == USER:
-        out = np.empty(2)
+        out = law.torques
         law.user(
             _pointer(law.measurement_values), _pointer(law.reference), _pointer(law.model),
             _pointer(law.user_gains), _pointer(law.user_state), _pointer(out), dt, limit,

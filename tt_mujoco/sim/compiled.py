@@ -474,6 +474,7 @@ def _law_record(controller, nominal, user):
         model=records.new_record(records.NOMINAL_FIELDS),
         measurement=measurement,
         measurement_values=measurement.view(np.float64),
+        torques=np.zeros(2),
     )
 
 

@@ -163,6 +163,8 @@ class LawRecord(NamedTuple):
     model: np.ndarray
     measurement: np.ndarray
     measurement_values: np.ndarray
+    #: where the user's law writes its two torques
+    torques: np.ndarray
 
 
 class TargetRecord(NamedTuple):

@@ -96,13 +96,12 @@ class Stepper:
         self.dt = built.control_dt
         self.steps = built.steps
         self.eta = built.nominal.eta
-        self._jk = math.radians(JACKKNIFE_DEG)
         bound = built.disturbance_limit
         self.limits = Limits(
             torque_limit=built.nominal.torque_limit,
             disturbance_bound=math.inf if bound is None else bound,
             jackknife_phi=math.radians(jackknife_phi_deg(self.eta)),
-            jackknife_beta=self._jk,
+            jackknife_beta=math.radians(JACKKNIFE_DEG),
             max_speed=MAX_SPEED,
             noise_v=built.noise_std[0],
             noise_w=built.noise_std[1],
@@ -250,7 +249,7 @@ class Stepper:
 
     def _check_train(self, me, t: float) -> None:
         """Stop when any hitch behind the first jackknifes."""
-        i = hitch_stop(me.train, self._train_limits, self._jk)
+        i = hitch_stop(me.train, self._train_limits, self.limits.jackknife_beta)
         if i >= 0:
             phi, beta = me.train[i][3], me.train[i][4]
             eta = self.built.nominal.etas[i + 1]

@@ -16,6 +16,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from tt_mujoco.registry import check_finite_fields
+
 __all__ = ["GRAVITY", "MAX_GRADE_DEG", "Terrain", "parse_terrain"]
 
 #: Standard gravity (m/s^2), MuJoCo's default ``opt.gravity`` magnitude.
@@ -32,11 +34,7 @@ class Terrain:
     heading_deg: float = 0.0
 
     def __post_init__(self) -> None:
-        for name, value in (("grade_deg", self.grade_deg), ("heading_deg", self.heading_deg)):
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                raise ValueError(f"terrain {name}={value!r} is not allowed: it must be a number")
-            if not math.isfinite(value):
-                raise ValueError(f"terrain {name}={value!r} is not allowed: it must be finite")
+        check_finite_fields(self, "terrain", ("grade_deg", "heading_deg"))
         if not 0.0 <= self.grade_deg < MAX_GRADE_DEG:
             raise ValueError(
                 f"terrain grade {self.grade_deg!r} deg is not allowed: use 0 <= grade < "

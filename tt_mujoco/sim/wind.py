@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tt_mujoco.registry import check_finite_fields
+
 __all__ = ["AIR_DENSITY", "GUST_TIME", "Wind", "drag_force", "parse_wind"]
 
 #: Air density at sea level, 15 deg C (kg/m^3).
@@ -38,12 +40,7 @@ class Wind:
     gust_std: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("speed", "direction_deg", "gust_std"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                raise ValueError(f"wind {name}={value!r} is not allowed: it must be a number")
-            if not math.isfinite(value):
-                raise ValueError(f"wind {name}={value!r} is not allowed: it must be finite")
+        check_finite_fields(self, "wind", ("speed", "direction_deg", "gust_std"))
         if not 0.0 <= self.speed <= MAX_WIND:
             raise ValueError(
                 f"wind speed {self.speed!r} m/s is not allowed: use 0 to {MAX_WIND:g} m/s"
