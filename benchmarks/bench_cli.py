@@ -76,8 +76,7 @@ def cli_run(argv: list[str], out: Path) -> tuple[float, float, dict]:
 def floor(argv: list[str], ts: dict) -> float:
     """Seconds of ``mujoco.rollout`` (one thread) of the run's inputs; checks that it ends in
     the run's last logged state."""
-    args, _, params, faults = run._parse([*argv, *QUIET])
-    built = build(run._scenario(args, params, faults))
+    built = build(run.scenario_from_argv([*argv, *QUIET]))
     plant = built.new_plant()
     m, d = plant.model, plant.data
     state = np.empty(mujoco.mj_stateSize(m, FULL))

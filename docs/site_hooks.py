@@ -1,11 +1,22 @@
-"""MkDocs hook: the README's images (``renders/reference/``) are published with the site, so
-the pages show them from where the repository keeps them (no second copy in ``docs/``)."""
+"""MkDocs hooks: the README's images (``renders/reference/``) are published with the site, so
+the pages show them from where the repository keeps them (no second copy in ``docs/``); and the
+options page's table is made from the option schema at every build, never pasted."""
 
 from pathlib import Path
 
 from mkdocs.structure.files import File
 
 ROOT = Path(__file__).resolve().parents[1]
+#: Where the options page takes the schema's table.
+OPTIONS_MARKER = "<!-- options-table -->"
+
+
+def on_page_markdown(markdown, page, config, files):
+    if OPTIONS_MARKER not in markdown:
+        return markdown
+    from tt_mujoco.sim import SCHEMA
+
+    return markdown.replace(OPTIONS_MARKER, SCHEMA.markdown_table())
 
 
 def on_files(files, config):

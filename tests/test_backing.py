@@ -101,6 +101,11 @@ def test_reversing_starts_with_the_trailers_on_the_path():
 def test_bad_cascade_gains_are_refused(config, match):
     with pytest.raises(ValueError, match=match):
         check_config(config)
+    if config == "on":  # a scenario takes the word, as a sweep does: the defaults
+        scenario = Scenario(reverse=True, hitch_feedback=config)
+        scenario.validate()
+        assert scenario.hitch_feedback == {}
+        return
     with pytest.raises(ValueError, match=match):
         Scenario(reverse=True, hitch_feedback=config).validate()
 

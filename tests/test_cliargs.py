@@ -8,10 +8,10 @@ import pytest
 CASES = [
     (["tt_mujoco.run", "--controler", "pid"], "did you mean --controller?"),
     (["tt_mujoco.run", "--target", "dynamc"], "did you mean 'dynamic'?"),
-    (["tt_mujoco.sweep", "noise_snr=20", "--dry-run"], "did you mean 'noise_snr_db'?"),
+    (["tt_mujoco.sweep", "noise_snrr=20", "--dry-run"], "did you mean 'noise_snr"),
     (["tt_mujoco.sweep", "--wokers", "2", "duration=1"], "did you mean --workers?"),
     (["tt_mujoco.paper", "--wokers", "2"], "did you mean --workers?"),
-    (["tt_mujoco.run", "--seed", "-1"], "--seed '-1' is not an integer >= 0"),
+    (["tt_mujoco.run", "--seed", "-1"], "--seed: '-1' is not allowed: it must be an integer >= 0"),
 ]
 
 

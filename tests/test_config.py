@@ -3,6 +3,7 @@ own config.toml."""
 
 import json
 import tomllib
+from types import SimpleNamespace
 
 import pytest
 
@@ -66,8 +67,10 @@ def test_run_writes_its_config_and_repeats_exactly_from_it(tmp_path):
 
 
 def parse(argv):
-    args, _, params, faults = run._parse(argv)
-    return args, params, faults
+    """The values a command line stands for: the scenario's and the outputs', by name."""
+    invocation = run._parse(argv)
+    values = SimpleNamespace(**invocation.scenario.to_dict(), **invocation.outputs)
+    return values, values.params, values.faults
 
 
 def test_command_line_overrides_file_key_by_key(tmp_path):
@@ -142,20 +145,25 @@ def test_resolved_options_round_trip_through_toml(tmp_path):
         "--fault",
         "payload:t=1,factor=1.25",
         "--no-plots",
+        "--eta",
+        "path",
+        "--trailers",
+        "2",
+        "--no-hitch-feedback",
     ]
-    args, parser, params, faults = run._parse(argv)
-    options = config.resolved_options(args, parser, params, faults)
+    invocation = run._parse(argv)
     path = tmp_path / config.CONFIG_FILE
-    path.write_text(config.dump_config(options))
+    path.write_text(config.dump_config(invocation.file_form()))
     assert path.read_text().startswith("# Resolved options")
-    again, _, params2, faults2 = run._parse(["--config", str(path)])
-    for key in options:
-        if key not in ("params", "faults", "path_options"):
-            assert getattr(again, key) == getattr(args, key), key
-    assert again.gains == {"k1_v": 12.5} and again.control_dt == 0.002
-    assert again.eta == "-0.2" and again.phi0_deg == -3.25
-    assert params2 == params == {"Mw": 3.5}
-    assert faults2 == faults == [{"kind": "payload", "t": 1.0, "factor": 1.25, "trailer": 1}]
+    again = run._parse(["--config", str(path)])
+    assert again.scenario == invocation.scenario
+    assert again.outputs == invocation.outputs
+    s = again.scenario
+    assert s.gains == {"k1_v": 12.5} and s.control_dt == 0.002
+    assert (s.eta, s.eta_schedule, s.phi0_deg) == ("same_path", "path", -3.25)
+    assert s.hitch_feedback is None and s.trailers == 2
+    assert s.params == {"Mw": 3.5}
+    assert s.faults == [{"kind": "payload", "t": 1.0, "factor": 1.25, "trailer": 1}]
 
 
 def test_unknown_fault_key_in_file_names_it(tmp_path):
@@ -171,9 +179,14 @@ def test_a_flags_negative_key_means_what_it_says(tmp_path, flag, value):
     # ``no_video = true`` is --no-video: the option off (it once turned it on, or left it on).
     path = tmp_path / "c.toml"
     path.write_text(f"no_{flag} = {str(value).lower()}\n")
-    assert getattr(parse(["--config", str(path)])[0], flag) is (not value)
+    assert _on(parse(["--config", str(path)])[0], flag) is (not value)
     path.write_text(f"{flag} = {str(value).lower()}\n")
-    assert getattr(parse(["--config", str(path)])[0], flag) is value
+    assert _on(parse(["--config", str(path)])[0], flag) is value
     path.write_text(f"{flag} = true\nno_{flag} = true\n")
     with pytest.raises(ValueError, match="name the same option"):
         parse(["--config", str(path)])
+
+
+def _on(values, flag: str) -> bool:
+    value = getattr(values, flag)
+    return value if isinstance(value, bool) else value is not None  # a table on, or None off

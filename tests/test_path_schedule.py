@@ -266,7 +266,7 @@ def test_sweeps_take_the_schedule_by_name():
     assert convert("eta_schedule", "path") == "path"
     assert convert("eta_schedule", "Curvature") == "curvature"
     assert convert("eta_schedule", "true") is True
-    with pytest.raises(BadSpecError, match=r"eta_schedule='kappa'.*curvature, path"):
+    with pytest.raises(BadSpecError, match=r"eta_schedule='kappa'.*'curvature', 'path'"):
         convert("eta_schedule", "kappa")
 
 

@@ -187,4 +187,4 @@ def test_follower_offtrack_swaps_roles_when_reversing():
 @pytest.mark.parametrize("field", ["eta_schedule", "reverse"])
 def test_scenario_rejects_non_bool_switches(field):
     with pytest.raises(ValueError, match=field):
-        Scenario(**{field: "yes"}).validate()
+        Scenario(**{field: "maybe"}).validate()

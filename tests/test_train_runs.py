@@ -85,7 +85,8 @@ def test_cli_toml_and_sweep_give_the_same_numbers(tmp_path):
     toml_out = tmp_path / "toml"
     assert run.main(["--config", str(config), *flags[:3], "--out", str(toml_out)]) == 0
     written = (toml_out / "config.toml").read_text()
-    assert tomllib.loads(written)["trailers"] == [{"eta": 0.0}, {"L0": 0.5}]
+    assert tomllib.loads(written)["trailers"] == 3
+    assert tomllib.loads(written)["train"] == [{"eta": 0.0}, {"L0": 0.5}]
     toml_metrics = json.loads((toml_out / "metrics.json").read_text())
     assert toml_metrics["config"]["nominal_params"]["train"][0]["eta"] == 0.0
     options = {"traj": "circle", "plant": "reduced", "duration": 4.0, "noise_snr_db": 20.0}
@@ -104,8 +105,8 @@ def test_cli_toml_and_sweep_give_the_same_numbers(tmp_path):
 @pytest.mark.parametrize(
     ("argv", "fragment"),
     [
-        (["--trailers", "0"], "trailers=0 is not allowed"),
-        (["--trailers", "9"], "trailers=9 is not allowed"),
+        (["--trailers", "0"], "--trailers: '0' is not allowed"),
+        (["--trailers", "9"], "--trailers: '9' is not allowed"),
     ],
 )
 def test_bad_train_options_exit_2_naming_the_value(tmp_path, capsys, argv, fragment):

@@ -65,7 +65,7 @@ import mujoco
 
 from tt_mujoco import sim
 from tt_mujoco.reference.feedback import path_errors
-from tt_mujoco.registry import closest
+from tt_mujoco.schema import Schema
 from tt_mujoco.sim.measure import Measurement
 from tt_mujoco.sim.timeseries import train_columns
 from tt_mujoco.viz.render import Offscreen
@@ -86,6 +86,18 @@ def observation_names(n_trailers: int = 1) -> tuple[str, ...]:
 OBSERVATION_NAMES = observation_names(1)
 #: The environment's default control period (s): 100 Hz is plenty for an agent.
 DEFAULT_CONTROL_DT = 0.01
+
+
+def scenario_overrides(overrides: dict, schema: Schema = sim.SCHEMA) -> dict:
+    """The env's keyword arguments as checked Scenario values: the option schema's checks and
+    "did you mean", as the command line, scenario files and sweeps have.
+
+    Raises
+    ------
+    ValueError
+        An unknown name (with the nearest) or a bad value, named.
+    """
+    return schema.values(overrides, "TractorTrailerEnv")
 
 
 class TractorTrailerEnv(gymnasium.Env):
@@ -110,16 +122,7 @@ class TractorTrailerEnv(gymnasium.Env):
         if scenario is None:
             scenario = sim.Scenario(disturbance="none", control_dt=DEFAULT_CONTROL_DT)
         if overrides:
-            fields = [f.name for f in dataclasses.fields(scenario)]
-            for name in overrides:
-                if name not in fields:
-                    close = closest(name, fields)
-                    hint = f"; did you mean {close!r}?" if close else ""
-                    raise ValueError(
-                        f"{name}={overrides[name]!r} is not allowed: {name!r} is not a Scenario "
-                        f"field{hint} (the fields: {', '.join(fields)})"
-                    )
-            scenario = dataclasses.replace(scenario, **overrides)
+            scenario = dataclasses.replace(scenario, **scenario_overrides(overrides))
         if render_mode not in (None, *self.metadata["render_modes"]):
             raise ValueError(f"render_mode={render_mode!r} is not allowed: use None or 'rgb_array'")
         if render_mode is not None and scenario.plant != "mujoco":

@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 from tt_mujoco.outputs import OutputError, atomic_write, claim_folder, release_folder
-from tt_mujoco.run import PARAM_NAMES, parse_param
+from tt_mujoco.sim.scenario import SCHEMA
 from tt_mujoco.vehicle.mjcf import MODELS_DIR, SCENE_FILE, VEHICLE_FILE, scene_xml, vehicle_xml
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.urdf import URDF_FILE, urdf_xml
@@ -38,14 +38,8 @@ def main(argv: list[str] | None = None) -> int:
         "Without --out: regenerate models/ from the default parameters.",
     )
     parser.add_argument("--out", type=Path, default=None, help="a new or empty folder")
-    parser.add_argument(
-        "--param",
-        action="append",
-        type=parse_param,
-        default=None,
-        metavar="NAME=VALUE",
-        help=f"a vehicle parameter, repeatable; NAME one of {', '.join(PARAM_NAMES)}",
-    )
+    vehicle = SCHEMA.only("params")
+    vehicle.add_arguments(parser)
     parser.add_argument(
         "--eta", default=None, help="steering gain: paper, same_path or a number (with --out)"
     )
@@ -60,7 +54,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         if args.out is None:
-            if args.param or args.eta is not None or args.trailers != 1:
+            if vehicle.from_command_line(args) or args.eta is not None or args.trailers != 1:
                 raise OutputError(
                     "--param, --eta and --trailers change the model: give --out DIR (models/ "
                     "holds the "
@@ -74,7 +68,9 @@ def main(argv: list[str] | None = None) -> int:
                 eta = float(eta)
             except ValueError:
                 pass
-            params = Params(eta=eta, **dict(args.param or [])).with_trailers(args.trailers)
+            params = Params(
+                eta=eta, **vehicle.from_command_line(args).get("params", {})
+            ).with_trailers(args.trailers)
             out, _ = claim_folder(args.out, args.out)
     except ValueError as err:  # Params' checks and OutputError name the value
         print(f"error: {err}", file=sys.stderr)

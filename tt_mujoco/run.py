@@ -17,7 +17,6 @@ existing non-empty one; ``metrics.json`` is written last, so its presence marks 
 from __future__ import annotations
 
 import argparse
-import json
 import shutil
 import signal
 import sys
@@ -25,22 +24,21 @@ import tempfile
 import threading
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 from tt_mujoco import config as config_mod
 from tt_mujoco import sim
 from tt_mujoco.analysis.metrics import DEFAULT_SUMMARY_KEYS, metric_name, summary_table
-from tt_mujoco.cliargs import BadInputError, Parser, finite, integer_at_least, positive
+from tt_mujoco.cliargs import BadInputError, Parser
 from tt_mujoco.config import CONFIG_FILE
-from tt_mujoco.controllers import CONTROLLERS, controller_class
+from tt_mujoco.controllers import controller_class
 from tt_mujoco.controllers.base import resolve_gains
 from tt_mujoco.defaults import (
     CONTROLLER,
-    DISTURBANCE_MODEL,
     EXIT_BAD_INPUT,
     EXIT_DIVERGED,
     EXIT_INTERRUPTED,
     EXIT_OK,
-    TIME_LIMIT_S,
 )
 from tt_mujoco.outputs import (
     REFERENCE_FILE,
@@ -53,87 +51,79 @@ from tt_mujoco.outputs import (
     write_timeseries,
 )
 from tt_mujoco.progress import progress_bar
-from tt_mujoco.sim import COLUMNS, DISTURBANCE_MODES, PLANTS, TARGETS, Scenario, build
+from tt_mujoco.schema import Option, Schema, boolean, choice, number
+from tt_mujoco.sim import COLUMNS, SCHEMA, Scenario, build
 from tt_mujoco.sim.checkpoint import read_checkpoint
-from tt_mujoco.sim.faults import RECOVERY_S, parse_fault
-from tt_mujoco.sim.motors import ACTUATORS
+from tt_mujoco.sim.faults import RECOVERY_S
 from tt_mujoco.sim.probe import check_user_code
-from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.sim.timeseries import UNITS, train_columns, unit_of
-from tt_mujoco.sim.wind import parse_wind
 from tt_mujoco.vehicle import reduced
-from tt_mujoco.vehicle.params import SETTABLE_FIELDS
 from tt_mujoco.viz import plots as plots_mod
 from tt_mujoco.viz import render
 from tt_mujoco.viz import viewer as viewer_mod
+from tt_mujoco.viz.scene import CAMERAS
 
-__all__ = ["build_parser", "main", "write_outputs"]
+__all__ = [
+    "OUTPUTS",
+    "RUN_SCHEMA",
+    "Invocation",
+    "build_parser",
+    "main",
+    "options_from_argv",
+    "write_outputs",
+]
 
 RENDERS = Path("renders")
-#: Params fields settable with --param / [params] (eta, timestep and friction have options).
-PARAM_NAMES = SETTABLE_FIELDS
 #: Prefix of the hidden folder, private to one run, where figures and video are made before
 #: they are moved into the output folder.
 STAGING = ".partial-"
 #: Formats of the time-series file (``timeseries.<format>``).
 TIMESERIES_FORMATS = ("parquet", "csv")
-#: ``--eta`` words that schedule the plant's gain (Scenario.eta_schedule) on the same_path model.
-ETA_OPTION_SCHEDULES = {"scheduled": "curvature", "path": "path"}
+#: The command's options besides the scenario: what it writes and how the run is watched.
+OUTPUTS = Schema(
+    (
+        Option("video", True, "write video.mp4", boolean, form="switch"),
+        Option("plots", True, "write PNG figures", boolean, form="switch"),
+        Option(
+            "camera",
+            "follow",
+            "video camera",
+            choice(*CAMERAS),
+            choices=CAMERAS,
+        ),
+        Option("fps", 30.0, "video frame rate", number(0, 240, low_open=True), unit="1/s"),
+        Option(
+            "timeseries_format",
+            "parquet",
+            "timeseries.parquet (compact, columnar; pandas and polars read it) or "
+            "timeseries.csv (text, full precision)",
+            choice(*TIMESERIES_FORMATS),
+            choices=TIMESERIES_FORMATS,
+        ),
+        Option("quiet", False, "no progress bar", boolean, form="switch"),
+        Option(
+            "viewer",
+            False,
+            "show the run live in MuJoCo's viewer (needs a display; MuJoCo plant only)",
+            boolean,
+            form="switch",
+        ),
+    )
+)
+#: Output options read from a file but not written to a run's config.toml: how it was watched.
+NOT_WRITTEN = ("quiet", "viewer")
+#: Every option of the command: the scenario's and the outputs'.
+RUN_SCHEMA = SCHEMA + OUTPUTS
 #: The rows of a run in progress (raw logged columns), removed once the time series is written.
 CHECKPOINT_FILE = "timeseries.partial.arrows"
 #: The traceback of the user's code that stopped a run (status "failed").
 ERROR_LOG = "error.log"
 
 
-def parse_param(text: str) -> tuple[str, float]:
-    name, sep, value = text.partition("=")
-    name = name.strip()
-    if not sep or name not in PARAM_NAMES:
-        raise argparse.ArgumentTypeError(
-            f"--param {text!r} is not allowed: write NAME=VALUE with NAME one of "
-            f"{', '.join(PARAM_NAMES)}"
-        )
-    try:
-        return name, float(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"--param {text!r} is not allowed: {value.strip()!r} is not a number"
-        ) from None
-
-
-def _disturbance_limit(text: str) -> str | float:
-    if text.strip().lower() in ("actuator", "none"):
-        return text.strip().lower()
-    return positive("--disturbance-limit")(text)
-
-
-def _spec(parse):
-    """An argparse type for an option written as a spec text (``--wind``, ``--terrain``): the
-    parsed value's own spelling of it, or the parser's message."""
-
-    def convert(text: str) -> str:
-        try:
-            return parse(text).spec()
-        except ValueError as err:
-            raise argparse.ArgumentTypeError(str(err)) from None
-
-    return convert
-
-
-def _path_option(text: str) -> tuple[str, float | str]:
-    name, sep, value = text.partition("=")
-    name, value = name.strip(), value.strip()
-    if not sep or not name.isidentifier() or not value:
-        raise argparse.ArgumentTypeError(
-            f"--path-option {text!r} is not allowed: write NAME=VALUE, e.g. R=2 or cruise=0.5"
-        )
-    try:
-        return name, float(value)
-    except ValueError:
-        return name, value
-
-
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(schema: Schema | None = None) -> argparse.ArgumentParser:
+    """The command's parser: ``--config``, the options of ``schema`` (default
+    :data:`RUN_SCHEMA`: the scenario's, then the outputs'), and ``--out``."""
+    schema = RUN_SCHEMA if schema is None else schema
     p = Parser(
         prog="python -m tt_mujoco.run",
         description=(
@@ -141,7 +131,6 @@ def build_parser() -> argparse.ArgumentParser:
             "plant or the analytic reduced model, and write metrics.json, timeseries.parquet, "
             "config.toml, plots and a video into a new folder."
         ),
-        formatter_class=argparse.ArgumentDefaultsHelpFormatter,
     )
     p.add_argument(
         "--config",
@@ -151,240 +140,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="read options from this TOML file (e.g. a previous run's config.toml); "
         "options given here override it",
     )
-    g = p.add_argument_group("scenario")
-    g.add_argument(
-        "--traj",
-        default="s_curve",
-        help="reference path: cycloid, s_curve, circle, a CSV file with header x,y[,v], or a "
-        "hook package.module:NAME / path/to/file.py:NAME (a ReferencePath or a factory)",
-    )
-    g.add_argument(
-        "--path-option",
-        action="append",
-        type=_path_option,
-        default=None,
-        metavar="NAME=VALUE",
-        help="a shape option of the path (s_curve/circle: R, cruise, ramp_time; CSV: "
-        "max_curvature, smoothing, cruise, ramp_time; a hook: its keyword arguments); "
-        "repeatable",
-    )
-    g.add_argument(
-        "--controller",
-        default=CONTROLLER,
-        help=f"{', '.join(CONTROLLERS)}, or a hook package.module:Class / "
-        "path/to/file.py:Class (a tt_mujoco.controllers.Controller subclass)",
-    )
-    g.add_argument(
-        "--gains",
-        default=None,
-        help="controller gain preset (ismc_sta: paper_6_1 or paper_6_2) or JSON overrides, "
-        "e.g. '{\"k1_v\": 12}'",
-    )
-    g.add_argument(
-        "--target",
-        default="dynamic",
-        choices=TARGETS,
-        help="dynamic: omega_d = kappa(s) v (paper eq. 34); static: fixed functions of time",
-    )
-    g.add_argument("--plant", default="mujoco", choices=PLANTS)
-    g.add_argument(
-        "--eta",
-        default="same_path",
-        help="passive steering gain: paper (3, jackknifes forward), same_path "
-        "((L-L0)/(L+L0) = -1/7), scheduled (the exact same-path gain for the local "
-        "curvature, updated every step), path (each trailer's gain eta_k(s) from the path's "
-        "geometry, at its own arc length; |eta| <= 3), or a number",
-    )
-    g.add_argument(
-        "--reverse",
-        action=argparse.BooleanOptionalAction,
-        default=False,
-        help="drive the path backwards, trailer first (where eta > 1 is stable)",
-    )
-    g.add_argument(
-        "--hitch-feedback",
-        action=argparse.BooleanOptionalAction,
-        default=True,
-        help="reversing without --path-feedback: the leading trailer's axle tracks the path "
-        "and a cascade on the hitch angles sets the tractor's yaw rate "
-        "(tt_mujoco.controllers.backing); --no-hitch-feedback leaves the hitches to themselves",
-    )
-    g.add_argument(
-        "--path-feedback",
-        action=argparse.BooleanOptionalAction,
-        default=False,
-        help="outer loop: lateral and heading errors feed the yaw-rate target "
-        "(tt_mujoco.reference.feedback; k_y = k_psi = 4)",
-    )
-    g.add_argument(
-        "--no-disturbance",
-        dest="disturbance",
-        action="store_const",
-        const="none",
-        default=argparse.SUPPRESS,  # the default is --disturbance-mode's
-        help="switch off the paper's disturbance (same as --disturbance-mode none)",
-    )
-    g.add_argument(
-        "--disturbance-mode",
-        dest="disturbance",
-        default="matched",
-        choices=DISTURBANCE_MODES,
-        help="matched: wheel torques g^-1 Delta; wrench: force and moment on the chassis "
-        "(can exceed traction); none",
-    )
-    g.add_argument(
-        "--disturbance-model",
-        default=DISTURBANCE_MODEL,
-        help="the disturbance Delta(t): paper, or a hook package.module:Name / file.py:Name",
-    )
-    g.add_argument(
-        "--disturbance-limit",
-        type=_disturbance_limit,
-        default="actuator",
-        help="bound on each wheel's matched disturbance torque: actuator (the torque limit), "
-        "none (the paper's unbounded g^-1 Delta) or a number in N m",
-    )
-    g.add_argument(
-        "--metric",
-        action="append",
-        default=None,
-        metavar="HOOK",
-        help="an extra metric fn(timeseries, path) added to metrics.json: a registered name or "
-        "a hook package.module:fn / path/to/file.py:fn (repeatable)",
-    )
-    g.add_argument(
-        "--noise-snr-db",
-        "--noise-snr",
-        type=finite("--noise-snr-db"),
-        default=None,
-        metavar="DB",
-        help="Gaussian measurement noise on v and omega at this SNR (dB); none by default",
-    )
-    g.add_argument(
-        "--param-scale",
-        type=positive("--param-scale"),
-        default=1.0,
-        metavar="F",
-        help="scale the plant's masses and inertias (the controller keeps the nominal model)",
-    )
-    g.add_argument(
-        "--param",
-        action="append",
-        type=parse_param,
-        default=None,
-        metavar="NAME=VALUE",
-        help="override a vehicle parameter of both plant and controller model, e.g. Mr=7.5 "
-        "(repeatable; see tt_mujoco.vehicle.params.Params)",
-    )
-    g.add_argument(
-        "--duration",
-        type=positive("--duration"),
-        default=None,
-        metavar="S",
-        help="run length in s, at most 600 (default: the path's own duration)",
-    )
-    g.add_argument(
-        "--seed",
-        type=integer_at_least("--seed", 0),
-        default=0,
-        help="seed for the measurement noise",
-    )
-    g.add_argument(
-        "--start",
-        default="on_path",
-        choices=("on_path", "paper"),
-        help="on_path: start in the reference's initial state (pose and speed); paper: the "
-        "paper's initial condition, at rest (on the cycloid at its pose (0, 0, pi/4))",
-    )
-    g.add_argument(
-        "--trailers",
-        type=int,
-        default=1,
-        metavar="N",
-        help="number of trailers, 1 to 8: trailers 2..N copy trailer 1 and steer with their "
-        "own gain of the --eta preset (a config file's [[trailers]] tables override them)",
-    )
-    g.add_argument(
-        "--phi0-deg",
-        "--phi0",
-        type=finite("--phi0-deg"),
-        default=0.0,
-        metavar="DEG",
-        help="initial articulation phi (deg), short of the jackknife",
-    )
-    g.add_argument(
-        "--time-limit",
-        dest="time_limit_s",
-        type=positive("--time-limit"),
-        default=TIME_LIMIT_S,
-        help=f"wall-clock limit of the run (s; default {TIME_LIMIT_S:g}): a run still going "
-        "then stops, its rows kept (exit code 3)",
-    )
-    g.add_argument(
-        "--friction",
-        type=positive("--friction"),
-        default=1.0,
-        help="tyre friction coefficient",
-    )
-    g.add_argument(
-        "--actuator",
-        choices=ACTUATORS,
-        default="ideal",
-        help="ideal: the wheels get the commanded torque; dc_motor: a DC motor per wheel with "
-        "its lag and current and voltage limits (Params motor_*, set with --param)",
-    )
-    g.add_argument(
-        "--sensor-delay",
-        type=finite("--sensor-delay"),
-        default=0.0,
-        metavar="S",
-        help="the sensors' delay (s, a multiple of the control period, shorter than the run)",
-    )
-    g.add_argument(
-        "--ground",
-        action="append",
-        default=None,
-        metavar="band:S0:S1:MU|rect:X0:Y0:X1:Y1:MU",
-        help="a patch of other friction (repeatable): a stretch of the path or a rectangle of "
-        "the floor; MuJoCo plant only",
-    )
-    g.add_argument(
-        "--wind",
-        type=_spec(parse_wind),
-        default="none",
-        metavar="SPEED[:DIRECTION_DEG[:GUST_STD]]",
-        help="wind blowing toward DIRECTION_DEG (m/s, deg from +x, gusts' std in m/s); "
-        "MuJoCo plant only",
-    )
-    g.add_argument(
-        "--terrain",
-        type=_spec(parse_terrain),
-        default="flat",
-        metavar="flat|slope:GRADE_DEG[:HEADING_DEG]",
-        help="the ground: flat, or a constant grade rising along HEADING_DEG (default 0, +x); "
-        "MuJoCo plant only",
-    )
-    g.add_argument(
-        "--timestep",
-        type=positive("--timestep"),
-        default=0.001,
-        help="physics step (s), in [1e-5, 0.01]",
-    )
-    g.add_argument(
-        "--control-dt",
-        type=positive("--control-dt"),
-        default=None,
-        help="control period (s), a multiple of the timestep, at most 0.05; default: the timestep",
-    )
-    g.add_argument(
-        "--fault",
-        action="append",
-        default=None,
-        metavar="KIND:K=V,...",
-        help="inject a fault (repeatable; replaces a config file's faults): "
-        "payload:t=S[,factor=1.5] | dropout:t=S[,duration=0.1] | "
-        "actuator:t=S[,duration=1,scale=0.3,wheel=both|right|left]",
-    )
+    outputs = Schema(tuple(o for o in schema.options if o.name in OUTPUTS.names))
+    scenario = Schema(tuple(o for o in schema.options if o.name not in OUTPUTS.names))
+    scenario.add_arguments(p.add_argument_group("scenario"))
     o = p.add_argument_group("outputs")
     o.add_argument(
         "--out",
@@ -393,66 +151,56 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="DIR",
         help="output folder (must not exist or be empty); default: a new folder under renders/",
     )
-    o.add_argument(
-        "--video", action=argparse.BooleanOptionalAction, default=True, help="write video.mp4"
-    )
-    o.add_argument(
-        "--plots", action=argparse.BooleanOptionalAction, default=True, help="write PNG figures"
-    )
-    o.add_argument(
-        "--camera", default="follow", choices=("follow", "overview"), help="video camera"
-    )
-    o.add_argument("--fps", type=positive("--fps"), default=30.0, help="video frame rate")
-    o.add_argument(
-        "--timeseries-format",
-        default="parquet",
-        choices=TIMESERIES_FORMATS,
-        help="timeseries.parquet (compact, columnar; pandas and polars read it) or "
-        "timeseries.csv (text, full precision)",
-    )
-    o.add_argument(
-        "--quiet", action=argparse.BooleanOptionalAction, default=False, help="no progress bar"
-    )
-    o.add_argument(
-        "--viewer",
-        action=argparse.BooleanOptionalAction,
-        default=False,
-        help="show the run live in MuJoCo's viewer (needs a display; MuJoCo plant only)",
-    )
+    outputs.add_arguments(o)
     return p
 
 
-def _parse(argv) -> tuple[argparse.Namespace, argparse.ArgumentParser, dict, list]:
-    """Command line over config file over defaults; returns (args, parser, params, faults)."""
+class Invocation(NamedTuple):
+    """What a command line (with its ``--config`` file) asks for."""
 
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    params, faults = {}, []
+    scenario: Scenario
+    #: The output options (:data:`OUTPUTS`), by name.
+    outputs: dict
+    #: ``--out`` and ``--config``.
+    args: argparse.Namespace
+
+    def file_form(self) -> dict:
+        """The resolved options in file form: what ``config.toml`` holds."""
+        written = {k: v for k, v in self.outputs.items() if k not in NOT_WRITTEN}
+        return RUN_SCHEMA.file_form({**self.scenario.to_dict(), **written})
+
+
+def options_from_argv(argv, schema: Schema | None = None) -> dict:
+    """Every option's value a command line stands for: the command line over its ``--config``
+    file over the defaults, by field name, with ``config`` and ``out`` besides.
+
+    Raises
+    ------
+    tt_mujoco.cliargs.BadInputError
+        A bad option (the message names it).
+    ValueError
+        A bad config file (the message names the file and the key).
+    """
+    schema = RUN_SCHEMA if schema is None else schema
+    args = build_parser(schema).parse_args(argv)
+    given = schema.from_command_line(args)
+    from_file = {}
     if args.config is not None:
-        table = config_mod.load_config(args.config)
-        found = config_mod.options_from_file(table, parser, args.config, PARAM_NAMES)
-        parser.set_defaults(**found.defaults)
-        args = parser.parse_args(argv)
-        if "gains" in found.defaults and args.gains == found.defaults["gains"]:
-            _check_gains(args.controller, args.gains, f"config file {str(args.config)!r} [gains]")
-        params = dict(found.params)
-        faults = found.faults or []
-    params.update(dict(args.param or []))
-    if args.fault is not None:
-        faults = list(args.fault)
-    faults = [parse_fault(f).to_dict() for f in faults]
-    gains = args.gains
-    if isinstance(gains, str) and gains.strip().startswith("{"):
-        try:
-            gains = json.loads(gains)
-        except json.JSONDecodeError as err:
-            raise BadInputError(f"--gains {args.gains!r} is not valid JSON: {err.msg}") from None
-        if not isinstance(gains, dict):
-            raise BadInputError(f"--gains {args.gains!r} is not a JSON object")
-    args.gains = gains
-    if args.control_dt is None:
-        args.control_dt = args.timestep
-    return args, parser, params, faults
+        from_file = config_mod.read_options(
+            config_mod.load_config(args.config), args.config, schema
+        )
+        if "gains" in from_file and "gains" not in given:
+            controller = given.get("controller", from_file.get("controller", CONTROLLER))
+            _check_gains(controller, from_file["gains"], f"config file {str(args.config)!r}")
+    return {**schema.merged(from_file, given), "config": args.config, "out": args.out}
+
+
+def _parse(argv) -> Invocation:
+    """Command line over config file over defaults, through :data:`RUN_SCHEMA`."""
+    values = options_from_argv(argv)
+    scenario = Scenario(**{name: values[name] for name in SCHEMA.names})
+    args = argparse.Namespace(config=values["config"], out=values["out"])
+    return Invocation(scenario, {name: values[name] for name in OUTPUTS.names}, args)
 
 
 def scenario_from_argv(argv) -> Scenario:
@@ -464,8 +212,7 @@ def scenario_from_argv(argv) -> Scenario:
     tt_mujoco.cliargs.BadInputError
         A bad option or config file (the message names it).
     """
-    args, _, params, faults = _parse(list(argv))
-    return _scenario(args, params, faults)
+    return _parse(list(argv)).scenario
 
 
 def _check_gains(controller: str, gains, where: str) -> None:
@@ -474,60 +221,7 @@ def _check_gains(controller: str, gains, where: str) -> None:
         cls = controller_class(controller)
         resolve_gains(cls.name, cls.PRESETS, cls.DEFAULT_PRESET, gains)
     except ValueError as err:
-        raise BadInputError(f"{where}: {err}") from None
-
-
-def _scenario(args, params: dict, faults: list) -> Scenario:
-    path_options = dict(args.path_option or [])
-    traj = args.traj
-    if traj.lower().endswith(".csv"):
-        traj = str(Path(traj))
-    eta = args.eta
-    eta_schedule = ETA_OPTION_SCHEDULES.get(eta.strip().lower()) if isinstance(eta, str) else None
-    if eta_schedule:
-        eta = "same_path"  # the nominal model's gain; the plant's follows the schedule
-    else:
-        eta_schedule = False
-    try:
-        eta = float(eta)
-    except ValueError:
-        pass
-    return Scenario(
-        traj=traj,
-        controller=args.controller,
-        gains=args.gains,
-        target=args.target,
-        plant=args.plant,
-        eta=eta,
-        disturbance=args.disturbance,
-        noise_snr_db=args.noise_snr_db,
-        param_scale=args.param_scale,
-        duration=args.duration,
-        seed=args.seed,
-        timestep=args.timestep,
-        control_dt=args.control_dt,
-        start=args.start,
-        friction=args.friction,
-        params=dict(params),
-        phi0_deg=args.phi0_deg,
-        faults=list(faults),
-        eta_schedule=eta_schedule,
-        reverse=bool(args.reverse),
-        path_feedback={} if args.path_feedback else None,
-        hitch_feedback={} if args.hitch_feedback else None,
-        disturbance_model=args.disturbance_model,
-        disturbance_limit=args.disturbance_limit,
-        path_options=dict(path_options),
-        metrics=list(args.metric or []),
-        trailers=args.trailers,
-        train=list(getattr(args, "train", None) or []),
-        time_limit_s=args.time_limit_s,
-        terrain=args.terrain,
-        actuator=args.actuator,
-        sensor_delay=args.sensor_delay,
-        wind=args.wind,
-        ground=list(args.ground or []),
-    )
+        raise BadInputError(f"{where} [gains]: {err}") from None
 
 
 def _output_dir(out: Path | None, scenario: Scenario) -> tuple[Path, bool]:
@@ -657,16 +351,14 @@ def main(argv: list[str] | None = None) -> int:
 
 def _main(argv: list[str] | None) -> int:
     try:
-        args, parser, params, faults = _parse(argv)
-        scenario = _scenario(args, params, faults)
+        invocation = _parse(argv)
+        scenario, args, shown = invocation.scenario, invocation.args, invocation.outputs
         # Everything simulate checks, before an output folder exists; simulate reuses it.
         built = build(scenario)
         check_user_code(built)
-        config_toml = config_mod.dump_config(
-            config_mod.resolved_options(args, parser, params, faults)
-        )
+        config_toml = config_mod.dump_config(invocation.file_form())
         live = None
-        if args.viewer:
+        if shown["viewer"]:
             if scenario.plant != "mujoco":
                 raise BadInputError(
                     f"--viewer shows the MuJoCo plant; --plant {scenario.plant!r} has no "
@@ -684,7 +376,7 @@ def _main(argv: list[str] | None) -> int:
     except viewer_mod.ViewerUnavailable as err:
         return _fail(str(err))
 
-    update, bar = _progress_bar("simulating", args.quiet or args.viewer)
+    update, bar = _progress_bar("simulating", shown["quiet"] or shown["viewer"])
     try:
         # Rows reach the disk every 8192 steps while the run goes on: a killed run keeps them.
         checkpoint = out / CHECKPOINT_FILE
@@ -704,13 +396,13 @@ def _main(argv: list[str] | None) -> int:
         written, notes = write_outputs(
             result,
             out,
-            video=args.video,
-            plots=args.plots,
-            camera=args.camera,
-            fps=args.fps,
-            quiet=args.quiet,
+            video=shown["video"],
+            plots=shown["plots"],
+            camera=shown["camera"],
+            fps=shown["fps"],
+            quiet=shown["quiet"],
             config_toml=config_toml,
-            timeseries_format=args.timeseries_format,
+            timeseries_format=shown["timeseries_format"],
         )
     except OSError as err:  # a full disk, a quota, a vanished folder
         if live is not None:

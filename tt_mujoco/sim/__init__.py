@@ -26,6 +26,7 @@ from tt_mujoco.sim.plant import Plant, StopRun
 from tt_mujoco.sim.scenario import (
     DISTURBANCE_MODES,
     PLANTS,
+    SCHEMA,
     TARGETS,
     Scenario,
     jackknife_phi_deg,
@@ -40,6 +41,7 @@ __all__ = [
     "JACKKNIFE_DEG",
     "MAX_SPEED",
     "PLANTS",
+    "SCHEMA",
     "TARGETS",
     "Build",
     "Plant",

@@ -1,29 +1,53 @@
-"""The scenario: everything that defines a run, validated field by field.
+"""The scenario: everything that defines a run, each field declared once as an option.
 
-Defaults live in :mod:`tt_mujoco.defaults`. A :class:`Scenario` is plain data (it pickles, and
-``to_dict`` gives its TOML/JSON form); :func:`tt_mujoco.sim.build.build` turns it into the
-objects of a run.
+Every field of :class:`Scenario` is an :func:`~tt_mujoco.schema.option`: its default, help,
+unit and the one check of its values. :data:`SCHEMA`, read from these fields, is what the
+command line, scenario files, sweeps and the Gym env are made from
+(:mod:`tt_mujoco.schema`), so a new option is one field here. Project-wide defaults live in
+:mod:`tt_mujoco.defaults`. A :class:`Scenario` is plain data (it pickles, and ``to_dict`` gives
+its TOML/JSON form); :func:`tt_mujoco.sim.build.build` turns it into the objects of a run.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
-from tt_mujoco.defaults import CONTROL_DT, MAX_DURATION, TIME_LIMIT_S, TIMESTEP
+from tt_mujoco.defaults import CONTROLLER, DISTURBANCE_MODEL, MAX_DURATION, TIME_LIMIT_S, TIMESTEP
 from tt_mujoco.reference.feedback import check_config
-from tt_mujoco.sim.faults import parse_faults
-from tt_mujoco.sim.ground import parse_patches
+from tt_mujoco.registry import is_hook
+from tt_mujoco.schema import (
+    Schema,
+    boolean,
+    choice,
+    number,
+    option,
+    optional_table,
+    spec_list,
+    table,
+    text,
+)
+from tt_mujoco.sim.faults import parse_fault
+from tt_mujoco.sim.ground import parse_patch, parse_patches
 from tt_mujoco.sim.motors import ACTUATORS
 from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.sim.wind import parse_wind
-from tt_mujoco.vehicle.params import INERTIA_FIELDS, MASS_FIELDS, Params, jackknife_phi_deg
+from tt_mujoco.vehicle.params import (
+    INERTIA_FIELDS,
+    MASS_FIELDS,
+    MAX_TRAILERS,
+    SETTABLE_FIELDS,
+    Params,
+    jackknife_phi_deg,
+)
 
 __all__ = [
     "DISTURBANCE_MODES",
     "ETA_SCHEDULES",
     "PLANTS",
+    "SCHEMA",
     "TARGETS",
     "Scenario",
     "jackknife_phi_deg",
@@ -32,95 +56,455 @@ __all__ = [
 PLANTS = ("mujoco", "reduced")
 TARGETS = ("dynamic", "static")
 DISTURBANCE_MODES = ("matched", "wrench", "none")
+STARTS = ("on_path", "paper")
 #: What ``Scenario.eta_schedule`` may name besides False / True.
 ETA_SCHEDULES = ("curvature", "path")
+#: ``eta`` words that schedule the plant's gain on the same-path model (``eta_schedule``).
+ETA_WORDS = {"scheduled": "curvature", "path": "path"}
+
+
+def _reraised(parse):
+    """A parser from a module's own (``parse(value) -> record``), its message after the label."""
+
+    def convert(value, label):
+        try:
+            return parse(value)
+        except ValueError as err:
+            raise ValueError(f"{label}: {err}") from None
+
+    return convert
+
+
+def _spec(parse):
+    def convert(value, label):
+        if not isinstance(value, str):
+            raise ValueError(f"{label}={value!r} is not allowed: give its text, e.g. 'flat'")
+        try:
+            return parse(value).spec()
+        except ValueError as err:
+            raise ValueError(str(err)) from None
+
+    return convert
+
+
+def _controller(value, label):
+    from tt_mujoco.controllers import CONTROLLERS  # the registry as it is when asked
+
+    name = text(value, label)
+    if is_hook(name):
+        return name
+    return choice(*CONTROLLERS)(name, label)
+
+
+_finite = number()
+
+
+def _gain(value, label):
+    if label.endswith(".preset"):
+        return text(value, label)
+    return _finite(value, label)
+
+
+def _gains(value, label):
+    """None (the default preset), a preset name, a JSON object text, or a table of gains (a
+    ``preset`` entry names the preset they change)."""
+    if value is None:
+        return None
+    if isinstance(value, str) and value.strip().startswith("{"):
+        try:
+            value = json.loads(value)
+        except json.JSONDecodeError as err:
+            raise ValueError(f"{label} {value!r} is not valid JSON: {err.msg}") from None
+        if not isinstance(value, dict):
+            raise ValueError(f"{label} {value!r} is not a JSON object")
+    if isinstance(value, dict):
+        return table(_gain)(value, label)
+    return text(value, label)
+
+
+def _eta(value, label):
+    if isinstance(value, str):
+        key = value.strip().lower().replace("-", "_")
+        if key in ("paper", "same_path", *ETA_WORDS):
+            return key
+    return number(words=("paper", "same_path", *ETA_WORDS))(value, label)
+
+
+def _eta_schedule(value, label):
+    if isinstance(value, str) and value.strip().lower() in ETA_SCHEDULES:
+        return value.strip().lower()
+    try:
+        return boolean(value, label)
+    except ValueError:
+        raise ValueError(
+            f"{label}={value!r} is not allowed: use False, True (curvature) or one of "
+            f"{', '.join(repr(e) for e in ETA_SCHEDULES)}"
+        ) from None
+
+
+def _trailers(value, label):
+    if isinstance(value, list):  # a file's [[trailers]]: one table per trailer behind the first
+        if not all(isinstance(t, dict) for t in value):
+            raise ValueError(
+                f"{label}: trailers must be a number or an array of tables [[trailers]], one "
+                "per trailer behind the first"
+            )
+        return [dict(t) for t in value]
+    return number(1, MAX_TRAILERS, integer=True)(value, label)
+
+
+def _train(value, label):
+    if not isinstance(value, list | tuple) or not all(isinstance(t, dict) for t in value):
+        raise ValueError(f"{label}={value!r} is not allowed: give a list of tables")
+    return [dict(t) for t in value]
+
+
+def _path_option(value, label):
+    if isinstance(value, str) and value.strip():
+        try:
+            return float(value)
+        except ValueError:
+            return value.strip()
+    return _finite(value, label)
+
+
+def _fault(value, label):
+    return _reraised(lambda v: parse_fault(v).to_dict())(value, label)
+
+
+def _patch(value, label):
+    return _reraised(lambda v: parse_patch(v).spec())(value, label)
+
+
+_positive = number(0, low_open=True)
+_param_table = table(_finite, SETTABLE_FIELDS)
+
+
+def _params(value, label):
+    """Overrides of :class:`Params` fields, checked by Params itself."""
+    out = _param_table(value, label)
+    try:
+        Params(**out)
+    except ValueError as err:
+        raise ValueError(f"{label}: {err}") from None
+    return out
+
+
+_params.names = _param_table.names  # the allowed entries, as a table's parser has them
 
 
 @dataclass
 class Scenario:
     """Everything that defines a run. Defaults are the project's main run."""
 
-    traj: str = "s_curve"
-    controller: str = "ismc_sta"
-    gains: str | dict | None = None
-    target: str = "dynamic"
-    plant: str = "mujoco"
-    eta: str | float = "same_path"
+    traj: str = option(
+        "s_curve",
+        text,
+        "reference path: cycloid, s_curve, circle, a CSV file with header x,y[,v], or a hook "
+        "package.module:NAME / path/to/file.py:NAME (a ReferencePath or a factory)",
+        file=True,
+    )
+    controller: str = option(
+        CONTROLLER,
+        _controller,
+        "a registered controller (ismc_sta, pid, fbl, ...), or a hook package.module:Class / "
+        "path/to/file.py:Class (a Controller subclass or a plain_law)",
+        file=True,
+    )
+    gains: str | dict | None = option(
+        None,
+        _gains,
+        "controller gain preset (ismc_sta: paper_6_1 or paper_6_2) or JSON overrides, e.g. "
+        "'{\"k1_v\": 12}'",
+        entry="gain",
+    )
+    target: str = option(
+        "dynamic",
+        choice(*TARGETS),
+        "dynamic: omega_d = kappa(s) v (paper eq. 34); static: fixed functions of time",
+        choices=TARGETS,
+    )
+    plant: str = option(
+        "mujoco", choice(*PLANTS), "the MuJoCo multibody model or the reduced model", choices=PLANTS
+    )
+    #: The passive steering gain: "paper" (3), "same_path" ((L-L0)/(L+L0)) or a number; the
+    #: words "scheduled" and "path" keep "same_path" for the controller and set
+    #: ``eta_schedule``.
+    eta: str | float = option(
+        "same_path",
+        _eta,
+        "passive steering gain: paper (3, jackknifes forward), same_path ((L-L0)/(L+L0) = "
+        "-1/7), scheduled (the exact same-path gain for the local curvature, every step), path "
+        "(each trailer's gain eta_k(s) from the path's geometry at its own arc length; |eta| "
+        "<= 3), or a number",
+    )
     #: How the disturbance enters: "matched" (wheel torques g^-1 Delta), "wrench" (a force and
     #: yaw moment on the chassis, MuJoCo only) or "none".
-    disturbance: str = "matched"
+    disturbance: str = option(
+        "matched",
+        choice(*DISTURBANCE_MODES),
+        "matched: wheel torques g^-1 Delta; wrench: force and moment on the chassis (can "
+        "exceed traction); none",
+        flags=("--disturbance-mode",),
+        consts=(("--no-disturbance", "none"),),
+        choices=DISTURBANCE_MODES,
+    )
     #: Which disturbance Delta(t): a name in :data:`tt_mujoco.sim.disturbances.DISTURBANCES`
     #: ("paper") or a hook ``module:Name`` / ``file.py:Name``.
-    disturbance_model: str = "paper"
-    #: Bound on each wheel's matched disturbance torque (N m): "actuator" (default: the
-    #: nominal torque limit, what a motor-sized disturbance can apply), "none" (the paper's
-    #: unbounded idealisation g^-1 Delta), or a number > 0.
-    disturbance_limit: str | float = "actuator"
-    noise_snr_db: float | None = None
-    param_scale: float = 1.0
-    duration: float | None = None
-    seed: int = 0
-    timestep: float = TIMESTEP
-    control_dt: float = CONTROL_DT
+    disturbance_model: str = option(
+        DISTURBANCE_MODEL,
+        text,
+        "the disturbance Delta(t): paper, or a hook package.module:Name / file.py:Name",
+        file=True,
+    )
+    #: Bound on each wheel's matched disturbance torque (N m): "actuator" (the nominal torque
+    #: limit, what a motor-sized disturbance can apply), "none" (the paper's unbounded
+    #: idealisation g^-1 Delta), or a number > 0.
+    disturbance_limit: str | float = option(
+        "actuator",
+        number(0, low_open=True, words=("actuator", "none")),
+        "bound on each wheel's matched disturbance torque: actuator (the torque limit), none "
+        "(the paper's unbounded g^-1 Delta) or a number",
+        unit="N m",
+    )
+    noise_snr_db: float | None = option(
+        None,
+        number(optional=True),
+        "Gaussian measurement noise on v and omega at this SNR; none by default",
+        unit="dB",
+        flags=("--noise-snr-db", "--noise-snr"),
+        metavar="DB",
+    )
+    param_scale: float = option(
+        1.0,
+        _positive,
+        "scale the plant's masses and inertias (the controller keeps the nominal model)",
+        metavar="F",
+    )
+    duration: float | None = option(
+        None,
+        number(0, MAX_DURATION, low_open=True, optional=True, unit="s"),
+        f"run length, at most {MAX_DURATION:g} (default: the path's own duration)",
+        unit="s",
+        metavar="S",
+    )
+    seed: int = option(0, number(0, integer=True), "seed for the measurement noise and gusts")
+    timestep: float = option(
+        TIMESTEP, number(1e-5, 0.01, unit="s"), "physics step, in [1e-5, 0.01]", unit="s"
+    )
+    #: The control period (s); None: the physics timestep.
+    control_dt: float | None = option(
+        None,
+        number(0, 0.05, low_open=True, optional=True, unit="s"),
+        "control period, a multiple of the timestep, at most 0.05; default: the timestep",
+        unit="s",
+    )
     #: "on_path": start in the reference's initial state (pose and speed); "paper": the
     #: paper's initial condition, at rest (and, on the cycloid, at its pose (0, 0, pi/4)).
-    start: str = "on_path"
-    friction: float = 1.0
-    params: dict = field(default_factory=dict)
+    start: str = option(
+        "on_path",
+        choice(*STARTS),
+        "on_path: start in the reference's initial state (pose and speed); paper: the paper's "
+        "initial condition, at rest (on the cycloid at its pose (0, 0, pi/4))",
+        choices=STARTS,
+    )
+    friction: float = option(1.0, _positive, "tyre friction coefficient")
+    #: Overrides of vehicle parameters, of the plant and the controller's model alike.
+    params: dict = option(
+        parse=_params,
+        help="override a vehicle parameter of both plant and controller model, e.g. Mr=7.5 "
+        "(repeatable; see tt_mujoco.vehicle.params.Params)",
+        default_factory=dict,
+        flags=("--param",),
+        form="table",
+        entry="param",
+        merge=True,
+        axis=False,
+    )
     #: Per-field factors on the *plant's* masses and inertias only (e.g. ``{"Mr": 1.2}``), on
     #: top of ``param_scale``: a model mismatch the controller does not know about.
-    plant_scale: dict = field(default_factory=dict)
+    plant_scale: dict = option(
+        parse=table(_positive, MASS_FIELDS + INERTIA_FIELDS),
+        help="scale one of the plant's masses or inertias, e.g. Mr=1.2 (the controller keeps "
+        "the nominal model; repeatable)",
+        default_factory=dict,
+        form="table",
+        entry="scale",
+        merge=True,
+        metavar="FIELD=F",
+        axis=False,
+    )
     #: Initial articulation phi (deg), with beta = eta phi; must stay short of the jackknife.
-    phi0_deg: float = 0.0
+    phi0_deg: float = option(
+        0.0,
+        _finite,
+        "initial articulation phi, short of the jackknife",
+        unit="deg",
+        flags=("--phi0-deg", "--phi0"),
+        metavar="DEG",
+    )
     #: Fault specs (dicts or ``KIND:key=value,...`` strings), see :mod:`tt_mujoco.sim.faults`.
-    faults: list = field(default_factory=list)
-    #: Outer path-feedback loop on omega_d (:mod:`tt_mujoco.reference.feedback`): None (off) or a
-    #: dict
-    #: of gains, ``{}`` for the defaults (k_y, k_psi, c_max).
-    path_feedback: dict | None = None
+    faults: list = option(
+        parse=spec_list(_fault),
+        help="inject a fault (repeatable; replaces a config file's faults): "
+        "payload:t=S[,factor=1.5,trailer=K] | dropout:t=S[,duration=0.1] | "
+        "actuator:t=S[,duration=1,scale=0.3,wheel=both|right|left]",
+        default_factory=list,
+        flags=("--fault",),
+        form="repeat",
+        metavar="KIND:K=V,...",
+    )
+    #: Outer path-feedback loop on omega_d (:mod:`tt_mujoco.reference.feedback`): None (off) or
+    #: a dict of gains, ``{}`` for the defaults (k_y, k_psi, c_max).
+    path_feedback: dict | None = option(
+        None,
+        optional_table(_finite),
+        "outer loop: lateral and heading errors feed the yaw-rate target "
+        "(tt_mujoco.reference.feedback; k_y = k_psi = 4)",
+        form="switch",
+        entry="path_feedback",
+    )
     #: Reversing without path feedback: the hitch-angle cascade that backs the train along the
     #: path (:class:`tt_mujoco.controllers.backing.HitchCascade`): a dict of its gains, ``{}``
     #: for the defaults, or None (the hitches left to themselves). Ignored driving forward.
-    hitch_feedback: dict | None = field(default_factory=dict)
+    hitch_feedback: dict | None = option(
+        parse=optional_table(_finite),
+        help="reversing without --path-feedback: the leading trailer's axle tracks the path "
+        "and a cascade on the hitch angles sets the tractor's yaw rate "
+        "(tt_mujoco.controllers.backing); --no-hitch-feedback leaves the hitches to themselves",
+        default_factory=dict,
+        form="switch",
+        entry="hitch_feedback",
+    )
     #: Scheduled passive steering (:mod:`tt_mujoco.sim.schedule`): False (the constant ``eta``),
     #: ``"curvature"`` (or True: the exact same-path gain of the target's curvature) or
     #: ``"path"`` (each trailer's gain eta_k(s) from the path's geometry at its own arc length,
-    #: :mod:`tt_mujoco.vehicle.path_schedule`). The controller keeps ``eta``.
-    eta_schedule: bool | str = False
+    #: :mod:`tt_mujoco.vehicle.path_schedule`). The controller keeps ``eta``. On the command
+    #: line it is ``--eta scheduled`` / ``--eta path``.
+    eta_schedule: bool | str = option(
+        False,
+        _eta_schedule,
+        "schedule the plant's steering gain: false, curvature (or true) or path",
+        cli=False,
+    )
     #: Drive the path backwards, trailer first
     #: (:class:`tt_mujoco.reference.reverse.ReverseTarget`).
-    reverse: bool = False
+    reverse: bool = option(
+        False,
+        boolean,
+        "drive the path backwards, trailer first (where eta > 1 is stable)",
+        form="switch",
+    )
     #: Shape options of the path (``R``, ``cruise``, ``ramp_time``, ... see
     #: :func:`tt_mujoco.reference.targets.make_target`; for a path hook, its keyword arguments).
-    path_options: dict = field(default_factory=dict)
+    path_options: dict = option(
+        parse=table(_path_option),
+        help="a shape option of the path (s_curve/circle: R, cruise, ramp_time; CSV: "
+        "max_curvature, smoothing, cruise, ramp_time; a hook: its keyword arguments); "
+        "repeatable",
+        default_factory=dict,
+        flags=("--path-option",),
+        form="table",
+        entry="path_option",
+        merge=True,
+    )
     #: Extra metrics: names in :data:`tt_mujoco.analysis.metrics.METRICS` or hooks
     #: ``module:function`` / ``file.py:function``, each added to ``metrics.json``.
-    metrics: list = field(default_factory=list)
+    metrics: list = option(
+        parse=spec_list(text),
+        help="an extra metric fn(timeseries, path) added to metrics.json: a registered name or "
+        "a hook package.module:fn / path/to/file.py:fn (repeatable)",
+        default_factory=list,
+        flags=("--metric",),
+        form="repeat",
+        metavar="HOOK",
+        file=True,
+    )
     #: Number of trailers N (1: the paper's vehicle). Trailers 2..N copy trailer 1 (lengths,
     #: masses, and ``eta``: a preset gives each trailer its own value) ...
-    trailers: int = 1
+    trailers: int = option(
+        1,
+        _trailers,
+        f"number of trailers, 1 to {MAX_TRAILERS}: trailers 2..N copy trailer 1 and steer with "
+        "their own gain of the --eta preset (a config file's [[train]] tables override them)",
+        metavar="N",
+    )
     #: ... then take these overrides, one table of ``Trailer`` fields per trailer 2, 3, ...
-    train: list = field(default_factory=list)
+    train: list = option(
+        parse=_train,
+        help="overrides of trailers 2, 3, ...: one table of Trailer fields each",
+        default_factory=list,
+        cli=False,
+        axis=False,
+    )
     #: Wall-clock limit of the run (s): a run still going then (a hung controller, say) stops
     #: with status "failed" and its rows so far kept. Enforced where the run is in a
     #: process's main thread (the CLI, a sweep's process workers), by SIGALRM.
-    time_limit_s: float = TIME_LIMIT_S
+    time_limit_s: float = option(
+        TIME_LIMIT_S,
+        _positive,
+        "wall-clock limit of the run: a run still going then stops, its rows kept (exit code 3)",
+        unit="s",
+        flags=("--time-limit",),
+    )
     #: The ground (:mod:`tt_mujoco.sim.terrain`): ``"flat"`` or ``"slope:GRADE_DEG[:HEADING_DEG]"``,
     #: a constant grade rising along the heading (MuJoCo plant only).
-    terrain: str = "flat"
+    terrain: str = option(
+        "flat",
+        _spec(parse_terrain),
+        "the ground: flat, or a constant grade rising along HEADING_DEG (default 0, +x); "
+        "MuJoCo plant only",
+        metavar="flat|slope:GRADE_DEG[:HEADING_DEG]",
+    )
     #: What turns the torque command into wheel torque (:mod:`tt_mujoco.sim.motors`):
     #: ``"ideal"`` (at once, the paper's) or ``"dc_motor"`` (a DC motor per wheel with its
     #: lag and its current and voltage limits, the ``motor_*`` fields of ``Params``).
-    actuator: str = "ideal"
+    actuator: str = option(
+        "ideal",
+        choice(*ACTUATORS),
+        "ideal: the wheels get the commanded torque; dc_motor: a DC motor per wheel with its "
+        "lag and current and voltage limits (Params motor_*, set with --param)",
+        choices=ACTUATORS,
+    )
     #: The sensors' delay (s, a whole multiple of ``control_dt``): the controller and the outer
     #: loops see the readings of that long ago (the first reading until then).
-    sensor_delay: float = 0.0
+    sensor_delay: float = option(
+        0.0,
+        number(0, unit="s"),
+        "the sensors' delay (a multiple of the control period, shorter than the run)",
+        unit="s",
+        metavar="S",
+    )
     #: Wind on the bodies (:mod:`tt_mujoco.sim.wind`): ``"none"`` or
     #: ``"SPEED[:DIRECTION_DEG[:GUST_STD]]"`` (m/s, deg, m/s). MuJoCo plant only.
-    wind: str = "none"
+    wind: str = option(
+        "none",
+        _spec(parse_wind),
+        "wind blowing toward DIRECTION_DEG (m/s, deg from +x, gusts' std in m/s); MuJoCo "
+        "plant only",
+        metavar="SPEED[:DIRECTION_DEG[:GUST_STD]]",
+    )
     #: Patches of other friction (:mod:`tt_mujoco.sim.ground`): ``"band:S0:S1:MU"`` along the
     #: path, ``"rect:X0:Y0:X1:Y1:MU"`` on the floor. MuJoCo plant only.
-    ground: list = field(default_factory=list)
+    ground: list = option(
+        parse=spec_list(_patch),
+        help="a patch of other friction (repeatable): a stretch of the path or a rectangle of "
+        "the floor; MuJoCo plant only",
+        default_factory=list,
+        form="repeat",
+        metavar="band:S0:S1:MU|rect:X0:Y0:X1:Y1:MU",
+    )
+
+    def __post_init__(self):
+        # The shorthands every interface accepts, written into the fields they stand for.
+        if isinstance(self.eta, str) and self.eta.strip().lower() in ETA_WORDS:
+            self.eta_schedule = ETA_WORDS[self.eta.strip().lower()]
+            self.eta = "same_path"  # the nominal model's gain; the plant's follows the schedule
+        if isinstance(self.trailers, list):
+            self.train = [dict(t) for t in self.trailers]
+            self.trailers = len(self.trailers) + 1
+        if self.control_dt is None:
+            self.control_dt = self.timestep
 
     @property
     def backs_with_cascade(self) -> bool:
@@ -139,68 +523,15 @@ class Scenario:
         return self.eta_schedule or None
 
     def validate(self) -> None:
-        """Raise ValueError naming the first bad field and what is allowed."""
-        limit = self.time_limit_s
-        if (
-            isinstance(limit, bool)
-            or not isinstance(limit, int | float)
-            or not (math.isfinite(limit) and limit > 0)
-        ):
-            raise ValueError(
-                f"time_limit_s={limit!r} is not allowed: it must be a finite number of seconds > 0"
-            )
-        if self.plant not in PLANTS:
-            raise ValueError(f"plant={self.plant!r} is not allowed: use one of {PLANTS}")
-
-        if self.target not in TARGETS:
-            raise ValueError(f"target={self.target!r} is not allowed: use one of {TARGETS}")
-        limit = self.disturbance_limit
-        if limit not in ("actuator", "none") and not (
-            isinstance(limit, int | float)
-            and not isinstance(limit, bool)
-            and math.isfinite(limit)
-            and limit > 0
-        ):
-            raise ValueError(
-                f"disturbance_limit={limit!r} is not allowed: use 'actuator', 'none' or a number "
-                "> 0 (N m)"
-            )
-        if self.disturbance not in DISTURBANCE_MODES:
-            raise ValueError(
-                f"disturbance={self.disturbance!r} is not allowed: use one of {DISTURBANCE_MODES}"
-            )
-        if self.duration is not None and not (
-            isinstance(self.duration, int | float) and 0 < self.duration <= MAX_DURATION
-        ):
-            raise ValueError(
-                f"duration={self.duration!r} is not allowed: it must be in (0, {MAX_DURATION:g}] s"
-            )
-        if (
-            self.duration is not None
-            and isinstance(self.control_dt, int | float)
-            and self.duration < self.control_dt
-        ):
+        """Check every field by its option, then how they combine; raise ValueError naming the
+        first bad field and what is allowed. Values are kept in their checked form (``seed``
+        3.0 becomes 3, a fault's text its table)."""
+        for opt in SCHEMA.options:
+            setattr(self, opt.name, opt.parse(getattr(self, opt.name), opt.name))
+        if self.duration is not None and self.duration < self.control_dt:
             raise ValueError(
                 f"duration={self.duration!r} is not allowed: it is shorter than one control "
                 f"period ({self.control_dt!r} s)"
-            )
-        if self.noise_snr_db is not None and not (
-            isinstance(self.noise_snr_db, int | float) and math.isfinite(self.noise_snr_db)
-        ):
-            raise ValueError(
-                f"noise SNR={self.noise_snr_db!r} is not allowed: it must be a finite number (dB)"
-            )
-        if not (
-            isinstance(self.timestep, int | float)
-            and not isinstance(self.timestep, bool)
-            and 1e-5 <= self.timestep <= 0.01
-        ):
-            raise ValueError(
-                f"timestep={self.timestep!r} is not allowed: it must be in [1e-05, 0.01] s"
-            )
-        if not (isinstance(self.control_dt, int | float) and 0 < self.control_dt <= 0.05):
-            raise ValueError(
-                f"control_dt={self.control_dt!r} is not allowed: it must be in (0, 0.05] s"
             )
         ratio = self.control_dt / self.timestep
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
@@ -208,40 +539,12 @@ class Scenario:
                 f"control_dt={self.control_dt!r} is not allowed: it must be a whole multiple of "
                 f"the physics timestep {self.timestep!r}"
             )
-        if not isinstance(self.seed, int) or isinstance(self.seed, bool) or self.seed < 0:
-            raise ValueError(f"seed={self.seed!r} is not allowed: it must be an integer >= 0")
-        if not isinstance(self.reverse, bool):
-            raise ValueError(f"reverse={self.reverse!r} is not allowed: use True or False")
-        if not isinstance(self.eta_schedule, bool) and self.eta_schedule not in ETA_SCHEDULES:
-            raise ValueError(
-                f"eta_schedule={self.eta_schedule!r} is not allowed: use False, True "
-                f"(curvature) or one of {ETA_SCHEDULES}"
-            )
-        for name in ("params", "plant_scale", "path_options"):
-            if not isinstance(getattr(self, name), dict):
-                raise ValueError(f"{name}={getattr(self, name)!r} is not allowed: give a table")
-        if not isinstance(self.metrics, list | tuple) or not all(
-            isinstance(m, str) for m in self.metrics
-        ):
-            raise ValueError(f"metrics={self.metrics!r} is not allowed: give a list of names")
         if self.path_feedback is not None:
             check_config(self.path_feedback)
         if self.hitch_feedback is not None:
             from tt_mujoco.controllers.backing import check_config as check_hitch
 
             check_hitch(self.hitch_feedback)
-        parse_faults(self.faults)
-        delay = self.sensor_delay
-        if (
-            isinstance(delay, bool)
-            or not isinstance(delay, int | float)
-            or not (math.isfinite(delay) and delay >= 0)
-        ):
-            raise ValueError(
-                f"sensor_delay={delay!r} is not allowed: it must be a finite number of seconds >= 0"
-            )
-        if self.actuator not in ACTUATORS:
-            raise ValueError(f"actuator={self.actuator!r} is not allowed: use one of {ACTUATORS}")
         if parse_patches(self.ground) and self.plant != "mujoco":
             raise ValueError(
                 f"ground={self.ground!r} with plant={self.plant!r} is not allowed: the reduced "
@@ -257,8 +560,6 @@ class Scenario:
                 f"terrain={self.terrain!r} with plant={self.plant!r} is not allowed: the reduced "
                 "plant has flat ground only; use plant='mujoco'"
             )
-        if not isinstance(self.train, list | tuple):
-            raise ValueError(f"train={self.train!r} is not allowed: give a list of tables")
         self.nominal_params()  # the trailers' count and tables, checked by Params
         self._check_phi0()
 
@@ -306,4 +607,9 @@ class Scenario:
         return p
 
     def to_dict(self) -> dict:
+        """The fields as plain data (the form of ``metrics.json``'s configuration)."""
         return dataclasses.asdict(self)
+
+
+#: The options of a run: the :class:`Scenario`'s fields (:mod:`tt_mujoco.schema`).
+SCHEMA = Schema.of(Scenario)

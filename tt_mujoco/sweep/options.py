@@ -2,34 +2,17 @@
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from collections.abc import Sequence
 from pathlib import Path
 
-from tt_mujoco.controllers import CONTROLLERS
-from tt_mujoco.registry import closest, is_hook, normalise_hook
-from tt_mujoco.sim import DISTURBANCE_MODES, PLANTS, TARGETS, Scenario
-from tt_mujoco.sim.motors import ACTUATORS
-from tt_mujoco.sim.scenario import ETA_SCHEDULES
-from tt_mujoco.sim.terrain import parse_terrain
-from tt_mujoco.sim.wind import parse_wind
-from tt_mujoco.vehicle.params import (
-    INERTIA_FIELDS,
-    MASS_FIELDS,
-    MAX_TRAILERS,
-    SETTABLE_FIELDS,
-    TRAILER_FIELDS,
-)
-
-STARTS = ("on_path", "paper")
-
+from tt_mujoco.registry import closest
+from tt_mujoco.schema import Schema
+from tt_mujoco.sim import SCHEMA
+from tt_mujoco.vehicle.params import MAX_TRAILERS, TRAILER_FIELDS
 
 #: Scenario fields that are options, in the table's column order (``params`` is reached through
 #: ``scale.*`` and ``param.*``; ``gains`` here is the preset name, single gains are ``gain.*``).
-SCENARIO_OPTIONS = tuple(
-    f.name for f in dataclasses.fields(Scenario) if f.name not in ("params", "plant_scale", "train")
-)
+SCENARIO_OPTIONS = tuple(o.name for o in SCHEMA.options if o.axis)
 
 
 #: Per-trailer options of a train: ``trailer<k>.<field>`` for trailer k >= 2 (e.g.
@@ -48,32 +31,26 @@ def trailer_option(name: str) -> tuple[int, str] | None:
 
 #: Scenario fields that hold a list of specs; a sweep value is one text, specs separated by ";"
 #: ("none" for no spec), e.g. faults="payload:t=2,factor=1.5;dropout:t=5".
-LIST_OPTIONS = tuple(
-    f.name for f in dataclasses.fields(Scenario) if f.default_factory is list and f.name != "train"
-)
+LIST_OPTIONS = tuple(o.name for o in SCHEMA.options if o.form == "repeat")
 
 
-#: Scenario fields that are an optional dict of numbers (e.g. ``path_feedback``): ``NAME=on``
-#: (the defaults, ``{}``) or ``off`` (None), and ``NAME.<key>=x`` for one entry (implies on).
-DICT_OPTIONS = tuple(
-    f.name
-    for f in dataclasses.fields(Scenario)
-    if f.name not in ("gains", "params", "plant_scale") and str(f.type).startswith("dict")
+#: Scenario fields that are a table of numbers that may be off (e.g. ``path_feedback``):
+#: ``NAME=on`` (the defaults, ``{}``) or ``off`` (None), and ``NAME.<key>=x`` for one entry
+#: (implies on).
+DICT_OPTIONS = tuple(o.name for o in SCHEMA.options if o.entry and o.form == "switch")
+#: Tables of any names reached entry by entry as ``NAME.<key>`` besides the gains.
+ENTRY_OPTIONS = tuple(
+    o.name
+    for o in SCHEMA.options
+    if o.entry and o.axis and SCHEMA.entry_names(o) is None and o.entry != "gain"
 )
 
 
 #: Fields of :class:`Params` that ``scale.<field>`` multiplies (docs/model.md Section 8
-#: uncertainty).
-SCALABLE = MASS_FIELDS + INERTIA_FIELDS
-
-
-#: Fields of :class:`Params` that ``param.<field>`` may set (eta, friction and timestep are
-#: Scenario options of their own).
-SETTABLE = SETTABLE_FIELDS
-
-
-#: Options written as a spec text, each with its parser (the run keeps the parsed spelling).
-SPEC_OPTIONS = {"terrain": parse_terrain, "wind": parse_wind}
+#: uncertainty) and that ``param.<field>`` may set: the entries of the schema's tables.
+TABLE_ENTRIES = {o.entry: SCHEMA.entry_names(o) for o in SCHEMA.options if o.entry and not o.axis}
+SCALABLE = TABLE_ENTRIES["scale"]
+SETTABLE = TABLE_ENTRIES["param"]
 
 
 #: Grid generators (expand to a list) and random distributions (random mode only).
@@ -152,116 +129,36 @@ def as_integer(name: str, value) -> int:
     return value
 
 
-def _choice(name: str, value, allowed: Sequence[str]) -> str:
-    if value not in allowed:
-        raise BadSpecError(
-            f"{name}={value!r} is not allowed: use one of {', '.join(repr(a) for a in allowed)}"
-        )
-    return value
-
-
-def _optional_number(name: str, value, positive: bool = False) -> float | None:
-    if value is None or (isinstance(value, str) and value.strip().lower() == "none"):
-        return None
-    return as_number(name, value, positive)
-
-
-def _eta(name: str, value) -> float | str:
-    if isinstance(value, str):
-        key = value.strip().lower().replace("-", "_")
-        if key in ("paper", "same_path"):
-            return key
-    return as_number(name, value)
-
-
-def _boolean(name: str, value, extra: str = "true or false") -> bool:
-    if isinstance(value, bool):
-        return value
-    key = str(value).strip().lower()
-    if key in ("true", "on", "yes", "1"):
-        return True
-    if key in ("false", "off", "no", "0", "none"):
-        return False
-    raise BadSpecError(f"{name}={value!r} is not allowed: use {extra}")
-
-
-def _text(name: str, value) -> str:
-    if not isinstance(value, str) or not value.strip():
-        raise BadSpecError(f"{name}={value!r} is not allowed: it must be a non-empty string")
-    return value.strip()
-
-
-def convert(name: str, value):
+def convert(name: str, value, schema: Schema = SCHEMA):
     """Check and convert one value of option ``name`` (text from the command line, or a TOML
-    value). Raises :class:`BadSpecError` naming the value and what is allowed."""
-    if name == "controller" and not is_hook(value):
-        return _choice(name, value, tuple(CONTROLLERS))  # the registry as it is now
-    if name == "traj" and _text(name, value).lower().endswith(".csv"):
-        return str(Path(_text(name, value)).resolve())  # the same file from any folder
-    if name in ("controller", "traj", "disturbance_model"):
-        # hook files are made absolute: the workers may run in another folder
-        return normalise_hook(_text(name, value))
-    if name == "target":
-        return _choice(name, value, TARGETS)
-    if name == "plant":
-        return _choice(name, value, PLANTS)
-    if name == "disturbance":
-        return _choice(name, value, DISTURBANCE_MODES)
-    if name == "start":
-        return _choice(name, value, STARTS)
-    if name == "gains":
-        return _text(name, value)
-    if name == "eta":
-        return _eta(name, value)
-    if name == "disturbance_limit":
-        if isinstance(value, str) and value.strip().lower() in ("actuator", "none"):
-            return value.strip().lower()
+    value) by the option schema; raises :class:`BadSpecError` naming the value and what is
+    allowed.
+
+    The value is kept in a sweep's own spelling, one JSON value per option: a list of specs as
+    its text, a table that may be off as "on" or "off", a table's entry (``gain.k1_v``) as its
+    number.
+    """
+    name = check_option_name(name, schema)
+    trailer = trailer_option(name)
+    if trailer is not None:
+        if trailer[1] == "eta":
+            return schema["eta"].parse(value, name)
         return as_number(name, value, positive=True)
-    if name == "noise_snr_db":
-        return _optional_number(name, value)
-    if name == "duration":
-        return _optional_number(name, value, positive=True)
-    if name in ("param_scale", "timestep", "control_dt", "friction"):
-        return as_number(name, value, positive=True)
-    if name == "seed":
-        return as_integer(name, value)
-    if name.startswith(("gain.", "scale.")):
-        return as_number(name, value, positive=True)
-    if name.startswith("param."):
-        return as_number(name, value)
-    if trailer_option(name) is not None:
-        check_option_name(name)
-        if trailer_option(name)[1] == "eta":
-            return _eta(name, value)
-        return as_number(name, value, positive=True)
-    if name in LIST_OPTIONS:
-        return _text(name, value)
-    if name in DICT_OPTIONS:
-        return "on" if _boolean(name, value, extra="'on' (defaults) or 'off'") else "off"
-    if name.partition(".")[0] in DICT_OPTIONS:
-        return as_number(name, value)
-    if name == "eta_schedule":
-        if isinstance(value, str) and value.strip().lower() in ETA_SCHEDULES:
-            return value.strip().lower()
-        return _boolean(name, value, extra=f"true, false or one of {', '.join(ETA_SCHEDULES)}")
-    if name == "actuator":
-        return _choice(name, value, ACTUATORS)
-    if name in SPEC_OPTIONS:
-        try:
-            return SPEC_OPTIONS[name](_text(name, value)).spec()
-        except ValueError as err:
-            raise BadSpecError(str(err)) from None
-    if name in SCENARIO_OPTIONS:  # a newer Scenario field: checked by the type of its default
-        default = next(f.default for f in dataclasses.fields(Scenario) if f.name == name)
-        if isinstance(default, bool):
-            return _boolean(name, value)
-        if isinstance(default, float):
-            return as_number(name, value)
-        if isinstance(default, int) and not isinstance(default, bool):
-            return as_integer(name, value)
-        if isinstance(default, str):
-            return _text(name, value)
-    raise BadSpecError(_unknown_option_message(name))
+    try:
+        parsed = schema.values({name: value}, "")
+    except ValueError as err:
+        raise BadSpecError(str(err)) from None
+    field, checked = next(iter(parsed.items()))
+    if field != name and schema.entry_option(name) is not None:
+        key = name.partition(".")[2]
+        return checked[key] if isinstance(checked, dict) else checked
+    if field in LIST_OPTIONS:
+        return value.strip() if isinstance(value, str) else ";".join(map(str, checked))
+    if field in DICT_OPTIONS:
+        return "off" if checked is None else "on"
+    if schema[field].file and isinstance(checked, str) and checked.lower().endswith(".csv"):
+        return str(Path(checked).resolve())  # the same file from any folder
+    return checked
 
 
 def _unknown_option_message(name: str) -> str:
@@ -279,24 +176,25 @@ def _unknown_option_message(name: str) -> str:
         f"Params default times the factor), param.<field> (field one of {', '.join(SETTABLE)}), "
         f"trailer<k>.<field> (k in 2..{MAX_TRAILERS}, field one of "
         f"{', '.join(TRAILER_OPTION_FIELDS)})"
-        + "".join(f" or {option}.<key>" for option in DICT_OPTIONS)
+        + "".join(f" or {option}.<key>" for option in ENTRY_OPTIONS)
     )
 
 
-def check_option_name(name: str) -> str:
-    """Return ``name`` if it is an option, else raise :class:`BadSpecError` listing them."""
-    if name in SCENARIO_OPTIONS:
-        return name
-    prefix, dot, rest = name.partition(".")
+def check_option_name(name: str, schema: Schema = SCHEMA) -> str:
+    """The option's name in a sweep (a field's name for any of its keys: ``noise_snr`` is
+    ``noise_snr_db``), else raise :class:`BadSpecError` listing them."""
+    key = name.replace("-", "_")
+    for opt in schema.options:
+        if key in opt.keys and opt.axis:
+            return opt.name
+    _, dot, rest = name.partition(".")
     if dot and rest:
-        if prefix == "gain":
-            return name  # checked against the controller's gains when the runs are expanded
-        if prefix == "scale" and rest in SCALABLE:
-            return name
-        if prefix == "param" and rest in SETTABLE:
-            return name
-        if prefix in DICT_OPTIONS:
-            return name  # its keys are checked by Scenario.validate when runs are expanded
+        table_option = schema.entry_option(name)
+        names = None if table_option is None else schema.entry_names(table_option)
+        if names is not None and rest in names:
+            return f"{table_option.entry}.{rest}"
+        if table_option is not None and names is None:
+            return name  # gains and the tables' keys are checked when runs are expanded
         trailer = trailer_option(name)
         if trailer is not None and 2 <= trailer[0] <= MAX_TRAILERS:
             if trailer[1] in TRAILER_OPTION_FIELDS:

@@ -15,7 +15,8 @@ import numpy as np
 from tt_mujoco.controllers import controller_class
 from tt_mujoco.controllers.base import resolve_gains
 from tt_mujoco.registry import is_hook
-from tt_mujoco.sim import Scenario, build, simulate
+from tt_mujoco.schema import Schema
+from tt_mujoco.sim import SCHEMA, Scenario, build, simulate
 from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sweep.options import (
     DICT_OPTIONS,
@@ -52,8 +53,10 @@ def _draw(axis: Axis, rng: np.random.Generator):
 def input_files(options: Mapping) -> list[Path]:
     """The files a run reads besides the package: a CSV path, the files of hooks."""
     files = []
-    values = [options.get(k) for k in ("traj", "controller", "disturbance_model")]
-    values += str(options.get("metrics", "")).split(";")
+    values = []
+    for opt in SCHEMA.options:
+        if opt.file and isinstance(options.get(opt.name), str):
+            values += options[opt.name].split(";") if opt.form == "repeat" else [options[opt.name]]
     for value in values:
         if not isinstance(value, str):
             continue
@@ -145,41 +148,20 @@ def build_scenario(options: Mapping) -> Scenario:
     Without ``control_dt`` the control period is the ``timestep`` (as in
     ``python -m tt_mujoco.run``).
     """
-    kwargs = {k: v for k, v in options.items() if k in SCENARIO_OPTIONS}
-    for name in LIST_OPTIONS:
-        if name in kwargs:
-            text = kwargs[name].strip()
-            kwargs[name] = [] if text.lower() == "none" else [p.strip() for p in text.split(";")]
-    gains = {k[5:]: v for k, v in options.items() if k.startswith("gain.")}
-    if gains:
-        if "gains" in kwargs:
-            gains["preset"] = kwargs["gains"]
-        kwargs["gains"] = gains
-    params = {}
-    plant_scale = {}
-    for k, v in options.items():
-        if k.startswith("scale."):
-            plant_scale[k[6:]] = v
-        elif k.startswith("param."):
-            params[k[6:]] = v
-    for name in DICT_OPTIONS:
-        entries = {k[len(name) + 1 :]: v for k, v in options.items() if k.startswith(name + ".")}
-        switch = options.get(name)
-        if switch == "off" and entries:
-            raise ValueError(f"{name}=off contradicts {', '.join(map(str, entries))} set for it")
-        if switch == "on" or entries:
-            kwargs[name] = entries
-        elif switch == "off":
-            kwargs[name] = None
-    if "timestep" in kwargs and "control_dt" not in kwargs:
-        kwargs["control_dt"] = kwargs["timestep"]
+    return Scenario(**scenario_values(options))
+
+
+def scenario_values(options: Mapping, schema: Schema = SCHEMA) -> dict:
+    """The checked values of one run's options, by field name (the schema's, plus the
+    per-trailer options ``trailer<k>.<field>``, which become ``train``)."""
+    values = schema.values({k: v for k, v in options.items() if not trailer_option(k)}, "")
     overrides = [(trailer_option(k), v) for k, v in options.items() if trailer_option(k)]
     if overrides:
         train = [{} for _ in range(max(k for (k, _), _ in overrides) - 1)]
         for (k, field), value in overrides:
             train[k - 2][field] = value
-        kwargs["train"] = train
-    return Scenario(params=params, plant_scale=plant_scale, **kwargs)
+        values["train"] = train
+    return values
 
 
 def _resolved_gains(scenario: Scenario) -> tuple[str, dict]:

@@ -162,7 +162,7 @@ def parse_item(item: str) -> Axis:
         raise BadSpecError(
             f"{item!r} is not an option setting: write OPTION=VALUES, e.g. gain.k1_v=5,10,20"
         )
-    check_option_name(name)
+    name = check_option_name(name)
     text = text.strip()
     if not text:
         raise BadSpecError(f"{name}= has no value")
@@ -177,7 +177,7 @@ def parse_item(item: str) -> Axis:
 
 
 def _toml_axis(name: str, value) -> Axis:
-    check_option_name(name)
+    name = check_option_name(name)
     if isinstance(value, dict):
         if len(value) != 1 or next(iter(value)) not in GRID_GENERATORS + DISTRIBUTIONS:
             raise BadSpecError(

@@ -1,0 +1,214 @@
+"""The option schema: one declaration per option, and every interface made from it."""
+
+import ast
+import dataclasses
+import json
+from pathlib import Path
+
+import pytest
+
+from tt_mujoco import config, gym_env, run, schema
+from tt_mujoco.cliargs import BadInputError
+from tt_mujoco.schema import Option, Schema, choice, number, option
+from tt_mujoco.sim import SCHEMA, Scenario
+from tt_mujoco.sweep import options as sweep_options
+from tt_mujoco.sweep import runs as sweep_runs
+
+
+@dataclasses.dataclass
+class TyreScenario(Scenario):
+    """A scenario with one more option, as a contributor would add it: one field."""
+
+    tyre_model: str = option(
+        "linear",
+        choice("linear", "pacejka"),
+        "the tyre model",
+        choices=("linear", "pacejka"),
+    )
+    tyre_stiffness: float = option(
+        8.0, number(0, low_open=True), "cornering stiffness", unit="N/rad"
+    )
+
+
+TYRE_SCHEMA = Schema.of(TyreScenario)
+
+
+def test_a_new_field_reaches_the_command_line_files_sweeps_and_the_gym_env(tmp_path):
+    extra = {"tyre_model": "pacejka", "tyre_stiffness": 12.5}
+    run_schema = TYRE_SCHEMA + run.OUTPUTS
+    # The command line: its options, help and checks.
+    parser = run.build_parser(run_schema)
+    assert "--tyre-model {linear,pacejka}" in parser.format_help()
+    assert "[N/rad]" in parser.format_help()
+    given = run.options_from_argv(
+        ["--tyre-model", "pacejka", "--tyre-stiffness", "12.5"], run_schema
+    )
+    assert {k: given[k] for k in extra} == extra
+    with pytest.raises(BadInputError, match=r"'pacejk' is not allowed.*did you mean 'pacejka'"):
+        run.options_from_argv(["--tyre-model", "pacejk"], run_schema)
+    # A scenario file (and the command line over it).
+    file = tmp_path / "tyre.toml"
+    file.write_text('tyre_model = "pacejka"\ntyre-stiffness = 12.5\n')
+    assert config.read_options(config.load_config(file), file, run_schema) == extra
+    merged = run.options_from_argv(["--config", str(file), "--tyre-stiffness", "3"], run_schema)
+    assert (merged["tyre_model"], merged["tyre_stiffness"]) == ("pacejka", 3.0)
+    with pytest.raises(ValueError, match=r"tyre\.toml': unknown key 'tyre_mode'.*'tyre_model'"):
+        config.read_options({"tyre_mode": "linear"}, file, run_schema)
+    # A sweep's options.
+    assert sweep_options.convert("tyre_stiffness", "12.5", TYRE_SCHEMA) == 12.5
+    with pytest.raises(sweep_options.BadSpecError, match="tyre_stiffness='-1' is not allowed"):
+        sweep_options.convert("tyre_stiffness", "-1", TYRE_SCHEMA)
+    values = sweep_runs.scenario_values({"tyre_model": "pacejka", "seed": 3}, TYRE_SCHEMA)
+    assert values == {"tyre_model": "pacejka", "seed": 3}
+    # The Gym env's keyword arguments.
+    assert gym_env.scenario_overrides({"tyre_model": "pacejka"}, TYRE_SCHEMA) == {
+        "tyre_model": "pacejka"
+    }
+    with pytest.raises(ValueError, match="did you mean 'tyre_model'"):
+        gym_env.scenario_overrides({"tyre_modle": "pacejka"}, TYRE_SCHEMA)
+    # Every route's values make the scenario, and its file form repeats it.
+    scenario = TyreScenario(**{k: given[k] for k in TYRE_SCHEMA.names})
+    assert (scenario.tyre_model, scenario.tyre_stiffness) == ("pacejka", 12.5)
+    written = TYRE_SCHEMA.file_form(scenario.to_dict())
+    assert TYRE_SCHEMA.values(written, "") == {
+        k: v for k, v in scenario.to_dict().items() if v is not None
+    }
+
+
+def test_every_scenario_field_is_an_option_with_help():
+    fields = [f.name for f in dataclasses.fields(Scenario)]
+    assert list(SCHEMA.names) == fields
+    for opt in SCHEMA.options:
+        assert opt.help and opt.parse is not None, opt.name
+        assert opt.default_value() == getattr(Scenario(), opt.name) or opt.name == "control_dt"
+
+
+def _spellings(tree: ast.AST) -> set[str]:
+    """The option spellings a module's code uses: flags in its strings, fields it reads or
+    sets as attributes or keyword arguments (docstrings left out)."""
+    docstrings = {
+        id(node.body[0].value)
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Module | ast.FunctionDef | ast.ClassDef)
+        and node.body
+        and isinstance(node.body[0], ast.Expr)
+        and isinstance(node.body[0].value, ast.Constant)
+    }
+    found = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Constant) and isinstance(node.value, str):
+            if id(node) not in docstrings:
+                found.add(node.value)
+        elif isinstance(node, ast.Attribute):
+            found.add(node.attr)
+        elif isinstance(node, ast.keyword) and node.arg:
+            found.add(node.arg)
+    return found
+
+
+def test_the_routes_keep_no_mapping_of_their_own():
+    # No interface spells out a scenario option: each comes from the schema. (The sweep's
+    # per-trailer options and its "on"/"off" are its own spelling, not a field's.)
+    root = Path(run.__file__).parent
+    flags = set()
+    for opt in SCHEMA.options:
+        flags |= {*opt.cli_flags, *(f for f, _ in opt.consts)}
+    # The fields with names of their own (a report may read ``scenario.plant`` or
+    # ``result.metrics``; no interface should need ``noise_snr_db`` or ``path_feedback``).
+    fields = {o.name for o in SCHEMA.options if "_" in o.name}
+    for module in ("run.py", "config.py", "sweep/runs.py", "sweep/options.py", "gym_env.py"):
+        # The env steps the scenario itself (its control period, a reset's phi0): fields it
+        # reads are its work, not a mapping; its keyword arguments go through the schema.
+        spellings = flags if module == "gym_env.py" else flags | fields
+        used = _spellings(ast.parse((root / module).read_text())) & spellings
+        assert not used, (module, sorted(used))
+
+
+@pytest.mark.parametrize(
+    ("parse", "value", "expected"),
+    [
+        (number(0, low_open=True), "2.5", 2.5),
+        (number(0, low_open=True), 3, 3.0),
+        (number(0, integer=True), "7", 7),
+        (number(0, integer=True), 7.0, 7),
+        (number(optional=True), "none", None),
+        (number(0, words=("actuator",)), "Actuator", "actuator"),
+        (schema.boolean, "off", False),
+        (schema.boolean, True, True),
+        (schema.spec_list(schema.text), "a; b", ["a", "b"]),
+        (schema.spec_list(schema.text), "none", []),
+        (schema.optional_table(number()), "on", {}),
+        (schema.optional_table(number()), False, None),
+        (schema.optional_table(number()), {"k_y": "2"}, {"k_y": 2.0}),
+        (schema.table(number(), ("a", "b")), {"a": 1}, {"a": 1.0}),
+    ],
+)
+def test_parsers_convert_text_and_toml_values_alike(parse, value, expected):
+    assert parse(value, "x") == expected
+    assert parse(parse(value, "x"), "x") == expected  # a converted value passes unchanged
+
+
+@pytest.mark.parametrize(
+    ("parse", "value", "message"),
+    [
+        (number(0, low_open=True), "0", r"x='0' is not allowed: it must be a finite number > 0"),
+        (number(1, 8, integer=True), 9, r"x=9 is not allowed: it must be an integer in \[1, 8\]"),
+        (number(), float("nan"), "it must be a finite number"),
+        (number(), True, "it must be a finite number"),
+        (choice("linear", "pacejka"), "lin", r"use one of 'linear', 'pacejka'"),
+        (schema.boolean, "maybe", "use true or false"),
+        (schema.text, "  ", "non-empty string"),
+        (schema.table(number(), ("a",)), {"b": 1}, r"x: 'b' is not allowed.*use one of a"),
+        (schema.optional_table(number()), "sometimes", "use on"),
+    ],
+)
+def test_parsers_refuse_naming_the_value_and_what_is_allowed(parse, value, message):
+    with pytest.raises(ValueError, match=message):
+        parse(value, "x")
+
+
+def test_keys_aliases_and_negated_switches():
+    values = SCHEMA.values(
+        {"noise-snr": 20, "no_reverse": True, "no_disturbance": True, "param.Mr": 7.5}, "here"
+    )
+    assert values == {
+        "noise_snr_db": 20.0,
+        "reverse": False,
+        "disturbance": "none",
+        "params": {"Mr": 7.5},
+    }
+    with pytest.raises(ValueError, match="name the same option"):
+        SCHEMA.values({"noise_snr": 1, "noise_snr_db": 2}, "here")
+    with pytest.raises(ValueError, match=r"here: unknown key 'tarjet' \(did you mean 'target'"):
+        SCHEMA.values({"tarjet": "static"}, "here")
+    with pytest.raises(ValueError, match="path_feedback=off contradicts k_y"):
+        SCHEMA.values({"path_feedback": "off", "path_feedback.k_y": 2}, "")
+
+
+def test_tables_merge_key_by_key_and_lists_replace():
+    merged = SCHEMA.merged(
+        {"params": {"Mr": 7.0, "Ird": 0.02}, "faults": [{"kind": "dropout", "t": 1.0}]},
+        {"params": {"Mr": 8.0}, "faults": []},
+    )
+    assert merged["params"] == {"Mr": 8.0, "Ird": 0.02}
+    assert merged["faults"] == []
+    assert merged["hitch_feedback"] == {} and merged["seed"] == 0
+
+
+def test_file_form_writes_off_tables_as_false_and_skips_none_defaults():
+    form = SCHEMA.file_form(Scenario(hitch_feedback=None).to_dict())
+    assert form["hitch_feedback"] is False
+    assert "duration" not in form and "path_feedback" not in form
+    assert json.loads(json.dumps(form)) == form  # plain data
+
+
+def test_the_options_page_lists_every_option():
+    table = SCHEMA.markdown_table()
+    for opt in SCHEMA.options:
+        assert f"`{opt.name}`" in table
+    assert "`--noise-snr-db`" in table and "dB" in table
+
+
+def test_a_bad_form_is_refused():
+    with pytest.raises(ValueError, match="form='flag' is not allowed"):
+        Option("x", 1, "help", number(), form="flag")

@@ -1,0 +1,655 @@
+"""The option schema: every option of a run declared once, every interface derived from it.
+
+An :class:`Option` carries a field's default, help text, unit, allowed values and the one
+function that checks and converts a value of it (:attr:`Option.parse`). :class:`Schema` is a
+set of options; :data:`tt_mujoco.sim.scenario.SCHEMA` is the :class:`~tt_mujoco.sim.Scenario`'s,
+read from its dataclass fields (each declared with :func:`option`). From a schema come
+
+* the command line's options (:meth:`Schema.add_arguments`),
+* the values of a TOML table, a sweep's options or keyword arguments (:meth:`Schema.values`),
+  with the same checks and the same "did you mean" for a misspelt key,
+* the resolved file form written to a run's ``config.toml`` (:meth:`Schema.file_form`).
+
+A value given as text (the command line, a sweep axis) or as a TOML value goes through the same
+``parse``, which raises ``ValueError`` naming the key and what is allowed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import dataclasses
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tt_mujoco.registry import closest, is_hook, normalise_hook, shown
+
+__all__ = [
+    "Option",
+    "Schema",
+    "boolean",
+    "choice",
+    "number",
+    "option",
+    "optional_table",
+    "spec_list",
+    "table",
+    "text",
+]
+
+#: The forms an option takes on the command line.
+FORMS = ("value", "switch", "repeat", "table")
+
+
+def _refuse(label: str, value, allowed: str) -> ValueError:
+    return ValueError(f"{label}={shown(value)} is not allowed: {allowed}")
+
+
+@dataclass(frozen=True)
+class Option:
+    """One option: what it is, its default, and how a value of it is checked.
+
+    Parameters
+    ----------
+    name : str
+        The field it sets (a :class:`~tt_mujoco.sim.Scenario` field, or a run's output option).
+    default : object
+        Its value when not given.
+    help : str
+        One line for ``--help`` and the docs.
+    parse : callable
+        ``parse(value, label) -> value``: a text (command line, sweep) or a TOML value checked
+        and converted, or ``ValueError`` naming ``label``; a converted value passes unchanged.
+    unit : str
+        SI unit of a number ("" if none).
+    flags : tuple of str
+        The command-line spellings, the first shown (default ``--name`` with ``-`` for ``_``).
+    form : str
+        On the command line: "value" (``--x V``), "switch" (``--x`` / ``--no-x``), "repeat"
+        (``--x V`` again and again, a list) or "table" (``--x NAME=VALUE``, repeatable).
+    entry : str or None
+        Of a table: the name of one entry in a flat key ``ENTRY.NAME`` (a sweep's ``param.Mr``).
+    merge : bool
+        Of a table: a later source (the command line over a file) adds entries key by key
+        instead of replacing the table.
+    file : bool
+        The value names a file or a hook ``file.py:Name``: a relative one is resolved against
+        the folder of the source that gave it.
+    cli : bool
+        Whether the command line has it.
+    consts : tuple of (str, object)
+        Extra flags that each set one value (``--no-disturbance`` is disturbance "none").
+    metavar : str or None
+        The value's name in ``--help``.
+    choices : tuple
+        The allowed values, where they are a short list (for ``--help`` and hints).
+    axis : bool
+        Whether a sweep varies the whole option as one axis; a table of named entries (the
+        vehicle's parameters) is swept entry by entry instead, as ``ENTRY.NAME``.
+    """
+
+    name: str
+    default: Any
+    help: str
+    parse: Callable[[Any, str], Any]
+    unit: str = ""
+    flags: tuple[str, ...] = ()
+    form: str = "value"
+    entry: str | None = None
+    merge: bool = False
+    file: bool = False
+    cli: bool = True
+    consts: tuple[tuple[str, Any], ...] = ()
+    metavar: str | None = None
+    choices: tuple = ()
+    axis: bool = True
+
+    def __post_init__(self):
+        if self.form not in FORMS:
+            raise ValueError(f"form={self.form!r} is not allowed: use one of {FORMS}")
+
+    @property
+    def cli_flags(self) -> tuple[str, ...]:
+        """The command-line spellings of the option."""
+        return self.flags or ("--" + self.name.replace("_", "-"),)
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        """Its keys in a file or a mapping: the field name and every long flag, ``_`` for
+        ``-``."""
+        names = [self.name]
+        for flag in (*self.cli_flags, *(f for f, _ in self.consts)):
+            key = flag.removeprefix("--").replace("-", "_")
+            if key not in names:
+                names.append(key)
+        return tuple(names)
+
+    def default_value(self):
+        """A fresh copy of the default (a table or list is never shared)."""
+        return copy.deepcopy(self.default)
+
+
+def option(default=None, parse=None, help="", *, default_factory=None, **details):
+    """A dataclass field declared as an :class:`Option` (its name is the field's)."""
+    declared = Option(
+        name="",
+        default=default_factory() if default_factory is not None else default,
+        help=help,
+        parse=parse,
+        **details,
+    )
+    metadata = {"option": declared}
+    if default_factory is not None:
+        return dataclasses.field(default_factory=default_factory, metadata=metadata)
+    return dataclasses.field(default=default, metadata=metadata)
+
+
+# --- parsers -----------------------------------------------------------------------------------
+def _interval(low, high, low_open, high_open, unit) -> str:
+    if low is not None and high is not None:
+        text = f"in {'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}"
+    elif low is not None:
+        text = f"{'>' if low_open else '>='} {low:g}"
+    elif high is not None:
+        text = f"{'<' if high_open else '<='} {high:g}"
+    else:
+        return "a finite number" + (f" ({unit})" if unit else "")
+    return f"a finite number {text}" + (f" {unit}" if unit else "")
+
+
+def number(
+    low=None,
+    high=None,
+    *,
+    low_open=False,
+    high_open=False,
+    integer=False,
+    optional=False,
+    unit="",
+    words=(),
+):
+    """A parser of a number in an interval; ``optional``: "none" is None; ``words``: texts
+    allowed besides numbers (kept in lower case)."""
+    if integer:
+        allowed = f"an integer >= {low:g}" if high is None else f"an integer in [{low}, {high}]"
+    else:
+        allowed = _interval(low, high, low_open, high_open, unit)
+    if words:
+        allowed = f"{', '.join(repr(w) for w in words)} or {allowed}"
+    if optional:
+        allowed += " (or none)"
+
+    def parse(value, label):
+        if optional and (value is None or (isinstance(value, str) and value.strip() == "none")):
+            return None
+        if isinstance(value, str) and value.strip().lower() in words:
+            return value.strip().lower()
+        x = value
+        if isinstance(x, str):
+            try:
+                x = int(x) if integer else float(x)
+            except ValueError:
+                raise _refuse(label, value, f"it must be {allowed}") from None
+        if integer and isinstance(x, float) and x.is_integer():
+            x = int(x)
+        ok_type = int if integer else int | float
+        if isinstance(x, bool) or not isinstance(x, ok_type) or not math.isfinite(x):
+            raise _refuse(label, value, f"it must be {allowed}")
+        if (low is not None and (x < low or (low_open and x == low))) or (
+            high is not None and (x > high or (high_open and x == high))
+        ):
+            raise _refuse(label, value, f"it must be {allowed}")
+        return x if integer else float(x)
+
+    return parse
+
+
+def choice(*allowed):
+    """A parser of one of ``allowed`` texts, with a "did you mean" for a near miss."""
+
+    def parse(value, label):
+        if value in allowed:
+            return value
+        close = closest(str(value), [str(a) for a in allowed])
+        hint = f" (did you mean {close!r}?)" if close else ""
+        raise _refuse(label, value, f"use one of {', '.join(repr(a) for a in allowed)}{hint}")
+
+    return parse
+
+
+def text(value, label):
+    """A parser of a non-empty text (kept stripped)."""
+    if not isinstance(value, str) or not value.strip():
+        raise _refuse(label, value, "it must be a non-empty string")
+    return value.strip()
+
+
+_TRUE = ("true", "on", "yes", "1")
+_FALSE = ("false", "off", "no", "0")
+
+
+def boolean(value, label):
+    """A parser of true/false (also on/off, yes/no, 1/0 as text)."""
+    if isinstance(value, bool):
+        return value
+    key = str(value).strip().lower()
+    if key in _TRUE:
+        return True
+    if key in _FALSE:
+        return False
+    raise _refuse(label, value, "use true or false")
+
+
+def spec_list(check_one: Callable[[Any, str], Any]):
+    """A parser of a list of specs: a list, or one text with specs separated by ";" ("none"
+    for no spec); each spec through ``check_one``."""
+
+    def parse(value, label):
+        if isinstance(value, str):
+            stripped = value.strip()
+            items = [] if stripped.lower() in ("", "none") else stripped.split(";")
+        elif isinstance(value, list | tuple):
+            items = list(value)
+        else:
+            raise _refuse(label, value, "give a list of specs")
+        return [check_one(item.strip() if isinstance(item, str) else item, label) for item in items]
+
+    return parse
+
+
+def table(entry_parse, names: Sequence[str] | None = None):
+    """A parser of a table ``{NAME: value}`` (each value through ``entry_parse``; ``names``:
+    the allowed names, None for any identifier)."""
+
+    def parse(value, label):
+        if not isinstance(value, Mapping):
+            raise _refuse(label, value, "give a table of NAME = value")
+        out = {}
+        for key, item in value.items():
+            if names is not None and key not in names:
+                close = closest(str(key), list(names))
+                hint = f" (did you mean {close!r}?)" if close else ""
+                raise ValueError(
+                    f"{label}: {key!r} is not allowed{hint}: use one of {', '.join(names)}"
+                )
+            if names is None and not (isinstance(key, str) and key.isidentifier()):
+                raise ValueError(f"{label}: {key!r} is not allowed: a name is an identifier")
+            out[key] = entry_parse(item, f"{label}.{key}")
+        return out
+
+    parse.names = tuple(names) if names is not None else None  # the allowed entries
+    return parse
+
+
+def optional_table(entry_parse):
+    """A parser of a table that may be off: ``None``/false/"off" is off, true/"on" is the
+    defaults (``{}``), a table gives its entries."""
+    inner = table(entry_parse)
+
+    def parse(value, label):
+        if value is None:
+            return None
+        if isinstance(value, Mapping):
+            return inner(value, label)
+        try:
+            on = boolean(value, label)
+        except ValueError:
+            raise _refuse(label, value, "use on (the defaults), off, or a table of gains") from None
+        return {} if on else None
+
+    return parse
+
+
+def resolve_file(value, base: Path | None):
+    """A file or hook value resolved against ``base`` (None: the current folder)."""
+    if isinstance(value, list):
+        return [resolve_file(v, base) for v in value]
+    if not isinstance(value, str):
+        return value
+    if value.lower().endswith(".csv"):
+        path = Path(value)
+        return str(path if path.is_absolute() else ((base or Path.cwd()) / path).absolute())
+    if is_hook(value):
+        return normalise_hook(value, base.absolute() if base is not None else None)
+    return value
+
+
+# --- the schema --------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Schema:
+    """A set of options, each found by its name or any of its keys."""
+
+    options: tuple[Option, ...]
+
+    @classmethod
+    def of(cls, record) -> Schema:
+        """The schema of a dataclass whose fields are declared with :func:`option`."""
+        found = []
+        for f in dataclasses.fields(record):
+            declared = f.metadata.get("option")
+            if declared is not None:
+                found.append(dataclasses.replace(declared, name=f.name))
+        return cls(tuple(found))
+
+    def __add__(self, other: Schema) -> Schema:
+        return Schema(self.options + other.options)
+
+    def with_option(self, extra: Option) -> Schema:
+        """This schema and one more option."""
+        return Schema((*self.options, extra))
+
+    def only(self, *names: str) -> Schema:
+        """The options named, in this schema's order."""
+        return Schema(tuple(o for o in self.options if o.name in names))
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        return tuple(o.name for o in self.options)
+
+    def __getitem__(self, name: str) -> Option:
+        for o in self.options:
+            if o.name == name:
+                return o
+        raise KeyError(name)
+
+    def defaults(self) -> dict:
+        """Every option's default (fresh copies)."""
+        return {o.name: o.default_value() for o in self.options}
+
+    def _key_map(self) -> dict[str, tuple[Option, Any]]:
+        """Each accepted key: (its option, the const it stands for, or a marker)."""
+        keys: dict[str, tuple[Option, Any]] = {}
+        for o in self.options:
+            for key in o.keys:
+                keys.setdefault(key, (o, _PLAIN))
+            if o.form == "switch":
+                for flag in o.cli_flags:
+                    keys.setdefault("no_" + flag.removeprefix("--").replace("-", "_"), (o, _NOT))
+            for flag, const in o.consts:
+                keys[flag.removeprefix("--").replace("-", "_")] = (o, const)
+        return keys
+
+    def key_names(self) -> list[str]:
+        """Every accepted key, flat entries ``ENTRY.NAME`` shown as ``ENTRY.<name>``."""
+        names = list(self._key_map())
+        names += [f"{o.entry or o.name}.<name>" for o in self.options if o.entry]
+        return names
+
+    def unknown(self, key: str, where: str) -> ValueError:
+        """The message for a key no option has, with the nearest one."""
+        known = [k for k in self._key_map() if not k.startswith("no_")]
+        close = closest(key, known)
+        hint = f" (did you mean {close!r}?)" if close else ""
+        return ValueError(
+            f"{where}: unknown key {key!r}{hint}; allowed keys are {', '.join(sorted(known))}"
+        )
+
+    def entry_names(self, opt: Option) -> tuple[str, ...] | None:
+        """The allowed entries of a table option, None where any name is allowed."""
+        return getattr(opt.parse, "names", None)
+
+    def entry_option(self, key: str) -> Option | None:
+        """The table option of a flat key ``ENTRY.NAME`` (``param.Mr``, ``path_feedback.k_y``)."""
+        prefix, dot, rest = key.partition(".")
+        if not (dot and rest):
+            return None
+        for o in self.options:
+            if o.entry and prefix in (o.entry, o.name):
+                return o
+        return None
+
+    def values(self, given: Mapping, where: str, base: Path | None = None) -> dict:
+        """The checked values of ``given`` (a TOML table, a sweep's options, keyword
+        arguments), by field name.
+
+        Keys are field names or long flags (``noise_snr`` as ``noise_snr_db``; a switch's
+        ``no_x = true`` is ``x = false``); a table's entries may also come as flat keys
+        ``ENTRY.NAME``. Files are resolved against ``base``.
+
+        Raises
+        ------
+        ValueError
+            An unknown key (with the nearest), a key given twice, or a bad value; the
+            message starts with ``where``.
+        """
+        keys = self._key_map()
+        out: dict = {}
+        seen: dict[str, str] = {}
+        entries: dict[str, dict] = {}
+        for raw_key, value in given.items():
+            key = str(raw_key).replace("-", "_")
+            if key not in keys:
+                table_option = self.entry_option(key)
+                if table_option is None:
+                    raise self.unknown(str(raw_key), where)
+                entries.setdefault(table_option.name, {})[key.partition(".")[2]] = value
+                continue
+            opt, const = keys[key]
+            if opt.name in seen:
+                raise ValueError(
+                    f"{where + ': ' if where else ''}keys {seen[opt.name]!r} and {raw_key!r} "
+                    "name the same option: keep one"
+                )
+            seen[opt.name] = str(raw_key)
+            label = f"{where}: {raw_key}" if where else str(raw_key)
+            if const is _PLAIN:
+                parsed = opt.parse(value, label)
+            elif const is _NOT:  # ``no_video = true`` is ``--no-video``
+                parsed = opt.parse(not boolean(value, label), label)
+            elif boolean(value, label):
+                parsed = const
+            else:
+                raise _refuse(label, value, f"use true (it means {opt.name} = {const!r})")
+            if opt.file:
+                parsed = resolve_file(parsed, base)
+            out[opt.name] = parsed
+        for name, found in entries.items():
+            opt = self[name]
+            label = f"{where}: {opt.entry or name}" if where else (opt.entry or name)
+            current = out.get(name)
+            if current is None or not isinstance(current, Mapping):
+                if isinstance(current, str):  # a preset name, kept beside its entries
+                    found = {"preset": current, **found}
+                elif name in out and current is None:
+                    raise ValueError(
+                        f"{label}: {name}=off contradicts {', '.join(map(str, found))} set for it"
+                    )
+                current = {}
+            out[name] = {**current, **opt.parse(found, label)}
+        return out
+
+    def merged(self, *layers: Mapping) -> dict:
+        """Defaults, then each layer over the one before: tables with ``merge`` key by key,
+        everything else replaced."""
+        out = self.defaults()
+        for layer in layers:
+            for name, value in layer.items():
+                opt = self[name]
+                if opt.merge and isinstance(out.get(name), Mapping) and isinstance(value, Mapping):
+                    out[name] = {**out[name], **value}
+                else:
+                    out[name] = value
+        return out
+
+    # --- the command line -------------------------------------------------------------------
+    def add_arguments(self, group) -> None:
+        """Add every option with ``cli`` to an argparse parser or group.
+
+        Each option stores its parsed value under its field name and only when given (the
+        default is ``argparse.SUPPRESS``): what the command line set is ``vars(namespace)``.
+        """
+        for opt in self.options:
+            if not opt.cli:
+                continue
+            flags = opt.cli_flags
+            shown_default = _shown_default(opt)
+            help_text = opt.help + (f" [{opt.unit}]" if opt.unit else "")
+            help_text += f" (default: {shown_default})" if shown_default else ""
+            common = dict(dest=opt.name, default=argparse.SUPPRESS, help=help_text)
+            if opt.form == "switch":
+                group.add_argument(*flags, action=_Switch, option=opt, **common)
+            elif opt.form == "repeat":
+                group.add_argument(
+                    *flags,
+                    action="append",
+                    type=_cli_type(opt, lambda v, label: v),
+                    metavar=opt.metavar,
+                    **common,
+                )
+            elif opt.form == "table":
+                group.add_argument(
+                    *flags,
+                    action="append",
+                    type=_entry_type(flags[0]),
+                    metavar=opt.metavar or "NAME=VALUE",
+                    **common,
+                )
+            else:
+                metavar = opt.metavar
+                if metavar is None and opt.choices:
+                    metavar = "{" + ",".join(map(str, opt.choices)) + "}"
+                group.add_argument(
+                    *flags, type=_cli_type(opt, opt.parse), metavar=metavar, **common
+                )
+            for flag, const in opt.consts:
+                group.add_argument(
+                    flag,
+                    dest=opt.name,
+                    action="store_const",
+                    const=const,
+                    default=argparse.SUPPRESS,
+                    help=f"same as {flags[0]} {const}",
+                )
+
+    def from_command_line(self, namespace: argparse.Namespace) -> dict:
+        """The checked values the command line gave, by field name (files resolved against the
+        current folder)."""
+        given = {k: v for k, v in vars(namespace).items() if k in self.names}
+        out = {}
+        for name, value in given.items():
+            opt = self[name]
+            label = opt.cli_flags[0]
+            if opt.form == "table":
+                value = dict(value)
+            if opt.form in ("repeat", "table"):
+                value = opt.parse(value, label)
+            if opt.file:
+                value = resolve_file(value, None)
+            out[name] = value
+        return out
+
+    # --- the documentation -----------------------------------------------------------------
+    def markdown_table(self) -> str:
+        """Every option as a row of a Markdown table (the docs' options page)."""
+        rows = [
+            "| option | command line | default | unit | what it sets |",
+            "|---|---|---|---|---|",
+        ]
+        for opt in self.options:
+            name = f"`{opt.name}`"
+            if opt.entry:
+                name += f", `{opt.entry}.<name>`"
+            if opt.cli:
+                flags = [f"`{f}`" for f in opt.cli_flags]
+                if opt.form == "switch":
+                    flags = [f"`{f}`, `--no-{f[2:]}`" for f in opt.cli_flags]
+                flags += [f"`{f}`" for f, _ in opt.consts]
+                line = ", ".join(flags)
+                line += " (repeatable)" if opt.form in ("repeat", "table") else ""
+            else:
+                line = "files, sweeps, Python"
+            default = "" if opt.default in (None, [], {}) else f"`{_plain(opt.default)}`"
+            text = opt.help.replace("|", "\\|")
+            if opt.choices and opt.form == "value":
+                text += ". One of " + ", ".join(f"`{c}`" for c in opt.choices) + "."
+            rows.append(f"| {name} | {line} | {default} | {opt.unit} | {text} |")
+        return "\n".join(rows) + "\n"
+
+    # --- the file form ---------------------------------------------------------------------
+    def file_form(self, values: Mapping) -> dict:
+        """``values`` as TOML-ready keys (field names): None is left out where it is the
+        default and written false where it switches a default table off."""
+        out = {}
+        for opt in self.options:
+            if opt.name not in values:
+                continue
+            value = values[opt.name]
+            if value is None:
+                if opt.default is not None:
+                    out[opt.name] = False
+                continue
+            out[opt.name] = _plain(value)
+        return out
+
+
+_PLAIN = object()
+_NOT = object()
+
+
+def _plain(value):
+    if isinstance(value, Path):
+        return str(value)
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError(f"cannot write {value!r} to TOML")
+    if isinstance(value, Mapping):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _shown_default(opt: Option) -> str:
+    value = opt.default
+    if opt.form == "switch":
+        return "on" if value not in (None, False) else "off"
+    if value is None or value in ([], {}) or isinstance(value, Mapping | list):
+        return ""
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def _cli_type(opt: Option, parse):
+    def convert(text: str):
+        try:
+            return parse(text, opt.cli_flags[0])
+        except ValueError as err:
+            raise argparse.ArgumentTypeError(_without_label(str(err), opt.cli_flags[0])) from None
+
+    convert.__name__ = opt.name  # argparse names the type in some messages
+    return convert
+
+
+def _without_label(message: str, flag: str) -> str:
+    # argparse already starts with "argument --flag:"; keep the value as typed and the rule.
+    head = f"{flag}="
+    return message.removeprefix(head) if message.startswith(head) else message
+
+
+def _entry_type(flag: str):
+    def convert(text: str):
+        name, sep, value = text.partition("=")
+        name, value = name.strip(), value.strip()
+        if not sep or not name or not value:
+            raise argparse.ArgumentTypeError(
+                f"{shown(text)} is not allowed: write NAME=VALUE, e.g. {flag} R=2"
+            )
+        try:
+            return name, float(value)
+        except ValueError:
+            return name, value
+
+    return convert
+
+
+class _Switch(argparse.BooleanOptionalAction):
+    """``--x`` / ``--no-x``, storing what the option's parse makes of true or false."""
+
+    def __init__(self, option_strings, dest, option: Option, **kwargs):
+        self._option = option
+        super().__init__(option_strings, dest, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        on = not option_string.startswith("--no-")
+        setattr(namespace, self.dest, self._option.parse(on, option_string))
