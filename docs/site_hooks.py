@@ -1,7 +1,9 @@
 """MkDocs hooks: the README's images (``renders/reference/``) are published with the site, so
-the pages show them from where the repository keeps them (no second copy in ``docs/``); and the
-options page's table is made from the option schema at every build, never pasted."""
+the pages show them from where the repository keeps them (no second copy in ``docs/``); the
+options page's table is made from the option schema at every build, and a benchmark's recorded
+output is shown from its file, never pasted."""
 
+import re
 from pathlib import Path
 
 from mkdocs.structure.files import File
@@ -11,7 +13,16 @@ ROOT = Path(__file__).resolve().parents[1]
 OPTIONS_MARKER = "<!-- options-table -->"
 
 
+#: ``<!-- recorded: FILE -->`` shows a recorded benchmark output (``benchmarks/record.py``).
+RECORDED = re.compile(r"<!-- recorded: (\S+) -->")
+
+
 def on_page_markdown(markdown, page, config, files):
+    def recorded(found):
+        text = (ROOT / found.group(1)).read_text().rstrip()
+        return f"```text\n{text}\n```"
+
+    markdown = RECORDED.sub(recorded, markdown)
     if OPTIONS_MARKER not in markdown:
         return markdown
     from tt_mujoco.sim import SCHEMA

@@ -295,3 +295,26 @@ def test_docs_paper_quotes_the_suites_robustness_table():
     cycloid = page.split("cycloid:\n", 1)[1].split("s_curve:\n", 1)[0]
     quoted = next(line for line in cycloid.splitlines() if line.startswith("| no dist"))
     assert quoted.strip("|").split("|")[1 + lqr].strip() == cell
+
+
+def test_docs_paper_is_the_suites_summary_as_written_by_its_command():
+    from tt_mujoco.paper.cli import docs_page
+
+    page = docs_page(
+        "## The results\n\ntext\n\n### Table 1\n\n| a |\n", "python -m x --docs-page p"
+    )
+    assert page == (
+        "# The results\n\ntext\n\n## Table 1\n\n| a |\n\nWritten by `python -m x --docs-page p`.\n"
+    )
+    docs = (Path(__file__).resolve().parents[1] / "docs" / "paper.md").read_text()
+    assert docs.startswith("# The paper's results in contact physics\n")
+    assert docs.endswith("Written by `python -m tt_mujoco.paper --docs-page docs/paper.md`.\n")
+
+
+def test_a_docs_page_in_a_missing_folder_is_refused_before_the_suite(tmp_path, capsys):
+    from tt_mujoco.paper.cli import main
+
+    code = main(["--docs-page", str(tmp_path / "nope" / "paper.md"), "--out", str(tmp_path / "o")])
+    assert code == 2
+    assert "its folder does not exist" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()

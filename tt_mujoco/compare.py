@@ -25,6 +25,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from tt_mujoco.cliargs import BadInputError, Parser
+from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_OK
 from tt_mujoco.outputs import (
     REFERENCE_FILE,
     OutputError,
@@ -220,10 +221,10 @@ def main(argv: list[str] | None = None) -> int:
         folder = compare(folders, args.out, args.allow_different_paths)
     except (BadInputError, OutputError) as err:
         print(f"error: {err}", file=sys.stderr)
-        return 2
+        return EXIT_BAD_INPUT
     print((folder / "compare.md").read_text())
     print(f"wrote compare.md, compare.json, paths.png, errors.png, signals.png to {folder}/")
-    return 0
+    return EXIT_OK
 
 
 if __name__ == "__main__":

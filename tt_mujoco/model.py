@@ -12,6 +12,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_OK
 from tt_mujoco.outputs import OutputError, atomic_write, claim_folder, release_folder
 from tt_mujoco.sim.scenario import SCHEMA
 from tt_mujoco.vehicle.mjcf import MODELS_DIR, SCENE_FILE, VEHICLE_FILE, scene_xml, vehicle_xml
@@ -74,12 +75,12 @@ def main(argv: list[str] | None = None) -> int:
             out, _ = claim_folder(args.out, args.out)
     except ValueError as err:  # Params' checks and OutputError name the value
         print(f"error: {err}", file=sys.stderr)
-        return 2
+        return EXIT_BAD_INPUT
     for path in write_models(params, out):
         print(f"wrote {path}")
     if args.out is not None:
         release_folder(out)
-    return 0
+    return EXIT_OK
 
 
 if __name__ == "__main__":

@@ -28,6 +28,7 @@ import mujoco
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_OK
 from tt_mujoco.outputs import (
     OutputError,
     atomic_write,
@@ -466,12 +467,12 @@ def main(argv: list[str] | None = None) -> int:
             f"error: --trailers {args.trailers} is not allowed: use 1 to {MAX_TRAILERS}",
             file=sys.stderr,
         )
-        return 2
+        return EXIT_BAD_INPUT
     try:
         out, _ = claim_folder(args.out, DEFAULT_OUT)
     except OutputError as err:
         print(f"error: {err}", file=sys.stderr)
-        return 2
+        return EXIT_BAD_INPUT
     results = run_all() if args.trailers == 1 else run_train(args.trailers)
     write_json(out / "report.json", {**results, "verdicts": verdicts(results)}, strict=True)
     text = validation_markdown(results, args.trailers)
@@ -483,7 +484,7 @@ def main(argv: list[str] | None = None) -> int:
     if failed:
         print(f"error: {len(failed)} validation bound(s) do not hold", file=sys.stderr)
         return 1
-    return 0
+    return EXIT_OK
 
 
 if __name__ == "__main__":

@@ -5,9 +5,11 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
 
 from tt_mujoco.cliargs import BadInputError, Parser, integer_at_least
-from tt_mujoco.outputs import claim_folder, release_folder, remove_if_empty
+from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_OK
+from tt_mujoco.outputs import atomic_write, claim_folder, release_folder, remove_if_empty
 from tt_mujoco.paper.execute import run_suite
 from tt_mujoco.paper.report import build_report
 from tt_mujoco.paper.suite import COMMAND, DEFAULT_OUT, suite
@@ -36,17 +38,34 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="a reduced set of short runs (smoke test)")
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument(
+        "--docs-page",
+        default=None,
+        metavar="FILE",
+        help="also write the summary as this documentation page (docs/paper.md), replacing it",
+    )
     return p
+
+
+def docs_page(summary: str, command: str) -> str:
+    """The summary as a page of its own: its headings one level up, and the command that
+    wrote it."""
+    lines = [line[1:] if line.startswith("##") else line for line in summary.splitlines()]
+    return "\n".join(lines).rstrip() + f"\n\nWritten by `{command}`.\n"
 
 
 def main(argv: list[str] | None = None) -> int:
     """Exit 0 done, 2 bad input, 1 if a run raised an error (it is in the report)."""
     try:
         args = build_parser().parse_args(argv)
+        if args.docs_page is not None and not Path(args.docs_page).parent.is_dir():
+            raise BadInputError(
+                f"--docs-page {args.docs_page!r} is not allowed: its folder does not exist"
+            )
         out, _ = claim_folder(args.out, DEFAULT_OUT)  # before the suite: a bad --out fails now
     except (BadInputError, ValueError) as err:
         print(f"error: {err}", file=sys.stderr)
-        return 2
+        return EXIT_BAD_INPUT
     specs = suite(quick=args.quick)
     start = time.perf_counter()
     try:
@@ -54,7 +73,7 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         remove_if_empty(out)
         print("interrupted: the suite was abandoned; nothing was written", file=sys.stderr)
-        return 130
+        return EXIT_INTERRUPTED
     wall = time.perf_counter() - start
     info = {
         "command": COMMAND + (" --quick" if args.quick else ""),
@@ -64,10 +83,13 @@ def main(argv: list[str] | None = None) -> int:
         "wall_time_s": wall,
     }
     report = build_report(records, out, info, figures=not args.no_figures)
+    if args.docs_page is not None:
+        command = f"{info['command']} --docs-page {args.docs_page}"
+        atomic_write(Path(args.docs_page), docs_page((out / "summary.md").read_text(), command))
     release_folder(out)
     errors = [k for k, r in records.items() if r.get("status") == "error"]
     print(f"report: {report} ({len(specs)} runs in {wall:.1f} s)")
     if errors:
         print(f"{len(errors)} run(s) failed, see the report: {', '.join(errors)}", file=sys.stderr)
         return 1
-    return 0
+    return EXIT_OK

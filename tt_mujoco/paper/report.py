@@ -328,8 +328,32 @@ def _summary_markdown(rows, records, steering, feedback, checks, info) -> str:
                         f"{fmt(r['offtrack_rms'], 2)} / {fmt(r['offtrack_steady_rms'], 2)}"
                     )
             md.append(f"| {path} | {PLANT_LABEL[plant]} | " + " | ".join(cells) + " |")
-    md += ["", "### Path feedback (paper disturbances, 20 dB noise unless stated)", ""]
+    md += ["", *BEYOND_THE_TABLES, ""]
+    md += ["### Path feedback (paper disturbances, 20 dB noise unless stated)", ""]
     md += feedback_markdown(feedback, ("rmse_lateral", "cross_track_rms", "rmse_v"))
     md += ["", "Checks:", ""]
     md += [f"- [{'x' if c['passed'] else ' '}] {c['check']}: {c['detail']}" for c in checks]
+    md += ["", *FULL_REPORT]
     return "\n".join(md) + "\n"
+
+
+#: What the summary says of the two steering studies beyond the table (their figures are on
+#: their own pages, which their scripts write).
+BEYOND_THE_TABLES = (
+    "`--eta path` schedules every trailer's gain along the path from its geometry, eta_k(s),",
+    "looked up at the trailer's own arc length: it keeps every axle of a train on the circle and",
+    "the cycloid, and where a passive axle cannot follow (the S-curve's inflection) it is",
+    "bounded to |eta| <= 3: docs/model.md Section 13 and `docs/path_schedule_study.md`.",
+    "",
+    "`--reverse` backs the train up: the last trailer's axle tracks the path and a cascade on",
+    "the hitch angles sets the tractor's yaw rate (`controllers/backing.py`;",
+    '`--no-hitch-feedback` leaves the hitches to themselves, as the table\'s "eta = 3 reverse"',
+    "column does): docs/model.md Section 14, `docs/backing_study.md` and",
+    "`docs/backing_roa.md`.",
+)
+FULL_REPORT = (
+    "The full report, with the exact configuration of every run, the isolation runs behind each",
+    "cause, and the curvature-error split of the paper's eq. 37-39 (the e_omega / v part and the",
+    "static target's mismatch part, plotted in `fig_curvature_split.png`), is",
+    "`renders/paper/report.md`.",
+)

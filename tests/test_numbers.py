@@ -1,0 +1,114 @@
+"""Numbers that cannot go stale: every figure quoted on the front pages is in the file a command
+of the repository wrote.
+
+A quoted figure stands in a paragraph or table headed by ``<!-- numbers: FILE[, FILE] -->``;
+every decimal number in it (outside inline code) must appear, as written, in one of the FILEs.
+A FILE is a generated page (its "Written by `python ...`" line names the command), a
+benchmark's recorded output (``benchmarks/record.py``, whose first line is the command), a
+test that asserts the figure, or the module that defines it (a constant such as Delta_1's).
+On the front pages every decimal number outside code must stand in such a block.
+"""
+
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+#: Pages where every figure must be sourced: what a newcomer reads first.
+FRONT_PAGES = (
+    "README.md",
+    "docs/index.md",
+    "docs/getting-started.md",
+    "docs/results.md",
+    "docs/performance.md",
+)
+MARKER = re.compile(r"<!-- numbers: (.+?) -->")
+#: A figure: a decimal number or a number with thousands separators.
+FIGURE = re.compile(
+    r"(?<![\w.,])-?(?:\d{1,3}(?:,\d{3})+(?:\.\d+)?|\d+\.\d+)(?!\.\d|[0-9_A-Za-wyz])"
+)
+#: What is not a figure: versions of the tools named, and numbered sections and equations.
+NOT_FIGURES = re.compile(r"Python 3\.\d+|(?:Sections?|Tables?|eqs?\.|Appendix) \d+(?:\.\d+)*")
+
+
+def _prose(line: str) -> str:
+    """A line without its inline code and link targets."""
+    line = re.sub(r"`[^`]*`", " ", line)
+    return re.sub(r"\]\([^)]*\)", "]", line)
+
+
+def blocks(text: str):
+    """(source files, first line number, lines) of each marked block, and the lines outside
+    code and blocks with their numbers."""
+    marked, loose = [], []
+    lines = text.splitlines()
+    fenced = False
+    k = 0
+    while k < len(lines):
+        line = lines[k]
+        if line.startswith("```"):
+            fenced = not fenced
+            k += 1
+            continue
+        found = MARKER.search(re.sub(r"`[^`]*`", " ", line))  # a marker shown as code is text
+        if found and not fenced:
+            sources = [s.strip() for s in found.group(1).split(",")]
+            start, body = k + 1, []
+            k += 1
+            while k < len(lines) and lines[k].strip():
+                body.append(lines[k])
+                k += 1
+            marked.append((sources, start + 1, body))
+            continue
+        if not fenced:
+            loose.append((k + 1, line))
+        k += 1
+    return marked, loose
+
+
+def figures(line: str) -> list[str]:
+    return FIGURE.findall(NOT_FIGURES.sub(" ", _prose(line)))
+
+
+def _source_figures(path: Path) -> set[str]:
+    return set(FIGURE.findall(path.read_text()))
+
+
+def _all_pages():
+    return [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+
+
+@pytest.mark.parametrize("page", _all_pages(), ids=lambda p: p.name)
+def test_every_quoted_figure_is_in_its_source(page):
+    marked, _ = blocks(page.read_text())
+    for sources, line_no, body in marked:
+        known: set[str] = set()
+        for name in sources:
+            source = ROOT / name
+            assert source.is_file(), f"{page.name}:{line_no}: source {name} does not exist"
+            # A test asserts its numbers; a module of the package defines its constants.
+            if source.parts[len(ROOT.parts)] not in ("tests", "tt_mujoco"):
+                head = source.read_text()[:4000]
+                assert "python " in head, f"{name} does not say which command wrote it"
+            known |= _source_figures(source)
+        for offset, line in enumerate(body):
+            for figure in figures(line):
+                assert figure in known, (
+                    f"{page.name}:{line_no + offset}: {figure} is not in {', '.join(sources)}"
+                )
+
+
+@pytest.mark.parametrize("page", FRONT_PAGES)
+def test_front_pages_quote_figures_only_from_their_sources(page):
+    _, loose = blocks((ROOT / page).read_text())
+    unsourced = [(n, f) for n, line in loose for f in figures(line) if "<!--" not in line]
+    assert not unsourced, f"{page}: figures without a <!-- numbers: FILE --> source: {unsourced}"
+
+
+def test_the_marker_reader_finds_blocks_and_figures():
+    text = "a 1.5 b\n<!-- numbers: x.txt -->\n| 2.25 | 1,200 |\n| `3.5` |\n\nc 4.75\n"
+    marked, loose = blocks(text)
+    assert marked == [(["x.txt"], 3, ["| 2.25 | 1,200 |", "| `3.5` |"])]
+    assert [f for _, line in loose for f in figures(line)] == ["1.5", "4.75"]
+    assert figures("Python 3.11, 0.88-0.91 of it, 3.2x, v0.6 run_2.5") == ["0.88", "0.91", "3.2"]
