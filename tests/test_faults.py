@@ -259,3 +259,50 @@ def test_fault_specs_parse_and_refuse():
         faults.parse_fault("actuator:t=1,scale=1.5")
     with pytest.raises(ValueError, match="'oops' is not key=value"):
         faults.parse_fault("dropout:t=1,oops")
+
+
+# --- a payload placed along the path -------------------------------------------------------------
+@pytest.mark.parametrize("plant", ["mujoco", "reduced"])
+def test_a_payload_at_an_arc_length_acts_where_the_reference_reaches_it(plant):
+    kw = {"traj": "circle", "disturbance": "none", "plant": plant, "duration": 2.0}
+    placed = simulate(Scenario(**kw, faults=["payload:s=0.3,factor=2"]))
+    (report,) = placed.metrics["faults"]
+    assert report["s"] == 0.3 and "t" not in report and report["reached"]
+    ts = placed.timeseries
+    # It acted at the first control step whose reference arc length had reached 0.3 m.
+    k = int(np.argmax(ts["s"] >= 0.3))
+    assert report["t_acted"] == pytest.approx(ts["t"][k], abs=1e-12)
+    # The same payload at that time gives the same run, bit for bit.
+    timed = simulate(Scenario(**kw, faults=[f"payload:t={report['t_acted']!r},factor=2"]))
+    for name in ("x", "y", "v", "omega", "phi"):
+        np.testing.assert_array_equal(ts[name], timed.timeseries[name])
+
+
+def test_a_payload_placed_backing_up_acts_as_the_arc_length_falls():
+    kw = {"traj": "circle", "disturbance": "none", "plant": "reduced", "duration": 2.0}
+    run = simulate(Scenario(**kw, reverse=True, faults=["payload:s=0.5,factor=0.5"]))
+    (report,) = run.metrics["faults"]
+    s = run.timeseries["s"]
+    assert s[0] > 0.5 > s[-1]  # driven from the run's end of the path towards its start
+    k = int(np.argmax(s <= 0.5))
+    assert report["reached"] and report["t_acted"] == pytest.approx(run.timeseries["t"][k])
+
+
+def test_a_placed_payload_not_reached_and_bad_places_are_reported():
+    kw = {"traj": "circle", "disturbance": "none", "plant": "reduced", "duration": 0.5}
+    run = simulate(Scenario(**kw, faults=["payload:s=5"]))
+    assert run.metrics["faults"][0]["reached"] is False
+    assert run.metrics["faults"][0]["t_acted"] is None
+    with pytest.raises(ValueError, match="not both"):
+        faults.parse_fault("payload:t=1,s=2")
+    with pytest.raises(ValueError, match=r"the start time t \(s\) or the arc length s \(m\)"):
+        faults.parse_fault("payload:factor=2")
+    with pytest.raises(ValueError, match="option 's' is not allowed"):
+        faults.parse_fault("dropout:s=2")
+    with pytest.raises(ValueError, match=r"s='-1' is not allowed"):
+        faults.parse_fault("payload:s=-1")
+    with pytest.raises(ValueError, match=r"s=99.0 m is beyond the end of the path"):
+        build(Scenario(**kw, faults=["payload:s=99"]))
+    f = faults.parse_fault("payload:s=2.5,trailer=1")
+    assert f.to_dict() == {"kind": "payload", "s": 2.5, "factor": 1.5, "trailer": 1}
+    assert faults.parse_fault(f.to_dict()) == f

@@ -483,14 +483,17 @@ def _print_summary(result, out: Path, written, notes) -> None:
     print(summary_table(result.metrics, keys=keys))
     for fault in result.metrics.get("faults", []):
         w = fault["window"]
+        where = f"s={fault['s']:g} m" if "s" in fault else f"t={fault['t']:g} s"
         if w is None:
             print(
-                f"fault {fault['kind']} at t={fault['t']:g} s: not reached, the run stopped at "
+                f"fault {fault['kind']} at {where}: not reached, the run stopped at "
                 f"t={result.metrics['sim_time_s']:.3f} s ({result.status})"
             )
             continue
+        if "t_acted" in fault:
+            where += f" (t={fault['t_acted']:.3f} s)"
         print(
-            f"fault {fault['kind']} at t={fault['t']:g} s, until {RECOVERY_S:g} s after its end: "
+            f"fault {fault['kind']} at {where}, until {RECOVERY_S:g} s after its end: "
             f"max|e_v| {w['max_abs_v']:.4g} m/s, max|e_omega| {w['max_abs_omega']:.4g} rad/s, "
             f"max lateral {w['max_lateral']:.4g} m"
         )

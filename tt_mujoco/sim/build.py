@@ -116,7 +116,9 @@ class Build:
         if not specs:
             return None
         n = self.plant_params.n_trailers
-        return FaultSchedule(specs, self.control_dt, self.duration, n_trailers=n)
+        return FaultSchedule(
+            specs, self.control_dt, self.duration, n_trailers=n, path_length=self.path.length
+        )
 
     def new_scheduler(self, plant: Plant) -> EtaScheduler | None:
         """The scheduler of the scenario's ``eta_schedule`` on ``plant``, or None."""

@@ -3,10 +3,11 @@
 A fault is a small spec, given as a dict (a TOML ``[[faults]]`` table) or as the text of
 ``--fault KIND:key=value,...``:
 
-- ``payload``: at time ``t`` the body of trailer ``trailer`` (default 1) has its mass and yaw
-  inertia (``Mr``, ``Ird``; the payload bed at P0) multiplied by ``factor`` (default 1.5,
-  "+50 %"; below 1 it unloads) for the rest of the run. The controller keeps its nominal model,
-  so it does not know.
+- ``payload``: at time ``t``, or where the reference reaches the arc length ``s`` (m) along the
+  path (forward or backing up), the body of trailer ``trailer`` (default 1) has its mass and
+  yaw inertia (``Mr``, ``Ird``; the payload bed at P0) multiplied by ``factor`` (default 1.5,
+  "+50 %"; below 1 it unloads) for the rest of the run: loading or unloading at a place. The
+  controller keeps its nominal model, so it does not know.
 - ``dropout``: from ``t`` for ``duration`` s (default 0.1) the controller's measurements
   (phi, v, omega, after any noise) hold the last value received before the dropout; the
   dynamic target integrates the held speed too, as it would on a vehicle.
@@ -19,7 +20,9 @@ Two further faults of the issue are ordinary scenario options, not specs: low fr
 
 Timing is by control step: a fault starting at ``t`` acts from the first control step at or
 after ``t``, and a ``duration`` covers ``round(duration / control_dt)`` steps, so runs are
-exactly repeatable. :func:`fault_report` summarises each fault's effect for ``metrics.json``.
+exactly repeatable. A payload at ``s`` acts from the first control step whose reference arc
+length has reached ``s``; the report gives the time that was. :func:`fault_report`
+summarises each fault's effect for ``metrics.json``.
 """
 
 from __future__ import annotations
@@ -52,6 +55,8 @@ FAULT_KINDS: dict[str, dict[str, float | str]] = {
 WHEELS = ("right", "left", "both")
 #: A fault's report window runs this long past its end: the controller's recovery.
 RECOVERY_S = 1.0
+#: Largest arc length a payload may be placed at (m): 600 s at the speed cap is far less.
+MAX_ARC_LENGTH = 12_000.0
 
 
 @dataclass(frozen=True)
@@ -59,17 +64,21 @@ class Fault:
     """One fault, validated. ``duration`` is ``inf`` for a payload step (it stays)."""
 
     kind: str
-    t: float
+    #: The start time (s); None for a payload placed at an arc length instead.
+    t: float | None
     duration: float = math.inf
     factor: float = 1.0
     scale: float = 1.0
     wheel: str = "both"
     trailer: int = 1
+    #: The arc length (m) along the path where a payload acts; None: at ``t``.
+    s: float | None = None
 
     def to_dict(self) -> dict:
         """The spec as it would be written in TOML: only the kind's own options."""
         full = asdict(self)
-        return {"kind": self.kind, "t": self.t, **{k: full[k] for k in FAULT_KINDS[self.kind]}}
+        when = {"t": self.t} if self.s is None else {"s": self.s}
+        return {"kind": self.kind, **when, **{k: full[k] for k in FAULT_KINDS[self.kind]}}
 
     @property
     def label(self) -> str:
@@ -127,17 +136,30 @@ def parse_fault(spec) -> Fault:
     kind = spec.get("kind")
     if kind not in FAULT_KINDS:
         raise ValueError(f"fault kind={kind!r} is not allowed: use one of {', '.join(FAULT_KINDS)}")
-    allowed = ("kind", "t", *FAULT_KINDS[kind])
+    when = ("t", "s") if kind == "payload" else ("t",)  # a payload may be placed instead
+    allowed = ("kind", *when, *FAULT_KINDS[kind])
     unknown = [k for k in spec if k not in allowed]
     if unknown:
         raise ValueError(
             f"fault {kind}: option {unknown[0]!r} is not allowed: use {', '.join(allowed[1:])}"
         )
-    if "t" not in spec:
-        raise ValueError(f"fault {kind}: the start time t (s) is missing")
+    given = [k for k in when if k in spec]
+    if not given:
+        what = (
+            "the start time t (s) or the arc length s (m)"
+            if kind == "payload"
+            else ("the start time t (s)")
+        )
+        raise ValueError(f"fault {kind}: {what} is missing")
+    if len(given) > 1:
+        raise ValueError(
+            f"fault {kind}: give the start time t or the arc length s, not both "
+            f"(t={spec['t']!r}, s={spec['s']!r})"
+        )
     options = {**FAULT_KINDS[kind], **{k: v for k, v in spec.items() if k != "kind"}}
-    t = _number(kind, "t", options["t"], 0.0, 600.0)
     if kind == "payload":
+        t = _number(kind, "t", options["t"], 0.0, 600.0) if "t" in options else None
+        s = _number(kind, "s", options["s"], 0.0, MAX_ARC_LENGTH) if "s" in options else None
         factor = _number(kind, "factor", options["factor"], 0.0, 100.0, low_open=True)
         trailer = _number(kind, "trailer", options["trailer"], 1.0, MAX_TRAILERS)
         if trailer != int(trailer):
@@ -145,7 +167,8 @@ def parse_fault(spec) -> Fault:
                 f"fault payload: trailer={options['trailer']!r} is not allowed: it must be a "
                 f"whole number from 1 to {MAX_TRAILERS}"
             )
-        return Fault(kind, t, factor=factor, trailer=int(trailer))
+        return Fault(kind, t, factor=factor, trailer=int(trailer), s=s)
+    t = _number(kind, "t", options["t"], 0.0, 600.0)
     duration = _number(kind, "duration", options["duration"], 0.0, 600.0, low_open=True)
     if kind == "dropout":
         return Fault(kind, t, duration=duration)
@@ -175,14 +198,30 @@ class FaultSchedule:
         Control period (s).
     duration : float
         Run length (s); a fault starting after it is refused.
+    n_trailers : int
+        The train's trailers; a payload on another is refused.
+    path_length : float, optional
+        The reference path's length (m); a payload placed beyond it is refused.
     """
 
-    def __init__(self, faults, control_dt: float, duration: float, n_trailers: int = 1):
+    def __init__(
+        self,
+        faults,
+        control_dt: float,
+        duration: float,
+        n_trailers: int = 1,
+        path_length: float | None = None,
+    ):
         self.faults = tuple(faults)
         for f in self.faults:
-            if f.t > duration:
+            if f.t is not None and f.t > duration:
                 raise ValueError(
                     f"fault {f.label}: t={f.t!r} s is after the end of the run ({duration:.6g} s)"
+                )
+            if f.s is not None and path_length is not None and f.s > path_length:
+                raise ValueError(
+                    f"fault {f.label}: s={f.s!r} m is beyond the end of the path "
+                    f"({path_length:.6g} m)"
                 )
             if f.kind == "payload" and f.trailer > n_trailers:
                 raise ValueError(
@@ -191,7 +230,14 @@ class FaultSchedule:
                 )
         # First step at or after t (the 1e-9 forgives t = k dt written in decimal).
         self._windows = []
+        self._placed = [(i, f) for i, f in enumerate(self.faults) if f.s is not None]
+        #: When each placed payload acted (s), by its index in ``faults``.
+        self.acted_at: dict[int, float] = {}
+        self._dt = control_dt
+        self._s_prev = None
         for f in self.faults:
+            if f.t is None:
+                continue
             k0 = math.ceil(f.t / control_dt - 1e-9)
             k1 = math.inf if math.isinf(f.duration) else k0 + round(f.duration / control_dt)
             self._windows.append((f, k0, k1))
@@ -224,9 +270,22 @@ class FaultSchedule:
                     T_l *= f.scale
         return T_r, T_l
 
-    def payloads(self, k: int) -> list[tuple[int, float]]:
-        """``(trailer, factor)`` of each payload change taking effect at step k."""
-        return self._payloads.get(k, [])
+    def payloads(self, k: int, s: float | None = None) -> list[tuple[int, float]]:
+        """``(trailer, factor)`` of each payload change taking effect at step k, the reference
+        being at arc length ``s`` (m): at its time, or where ``s`` reaches its place (from
+        either side: backing up, the arc length falls)."""
+        changes = self._payloads.get(k, [])
+        if not self._placed or s is None:
+            return changes
+        prev, self._s_prev = self._s_prev, s
+        for i, f in self._placed:
+            if i in self.acted_at:
+                continue
+            reached = s == f.s if prev is None else min(prev, s) <= f.s <= max(prev, s)
+            if reached:
+                self.acted_at[i] = k * self._dt
+                changes = [*changes, (f.trailer, f.factor)]
+        return changes
 
 
 def window_errors(ts, polyline, t_start: float, t_end: float) -> dict:
@@ -273,20 +332,23 @@ def fault_report(schedule: FaultSchedule, ts, polyline, torque_limit: float) -> 
     t = np.asarray(ts["t"])
     t_last = float(t[-1]) if t.size else 0.0
     report = []
-    for f in schedule.faults:
-        t_end = t_last if math.isinf(f.duration) else f.t + f.duration
-        reached = bool(t.size and t_last >= f.t)
+    for i, f in enumerate(schedule.faults):
+        start = f.t if f.s is None else schedule.acted_at.get(i)
+        t_end = t_last if math.isinf(f.duration) else start + f.duration
+        reached = bool(t.size and start is not None and t_last >= start)
         entry = {
             **f.to_dict(),
             "t_end": t_end,
             "reached": reached,
             # A fault the run never reached (it stopped before) has no window: None, not NaN.
             "window": (
-                window_errors(ts, polyline, f.t, min(t_last, t_end + RECOVERY_S))
+                window_errors(ts, polyline, start, min(t_last, t_end + RECOVERY_S))
                 if reached
                 else None
             ),
         }
+        if f.s is not None:
+            entry["t_acted"] = start  # where the reference reached s; None if it never did
         if f.kind == "dropout":
             entry["held_steps"] = schedule.held_steps
         elif f.kind == "actuator":

@@ -275,7 +275,7 @@ class Stepper:
         faults = self.faults
         if faults is not None:
             T_r, T_l = faults.torque(k, T_r, T_l)
-            for trailer, factor in faults.payloads(k):
+            for trailer, factor in faults.payloads(k, ref.s):
                 self.plant.scale_trailer_mass(factor, trailer)
         if self.motors is not None:  # what the motors deliver of the command, over this step
             T_r, T_l = self.motors.deliver(T_r, T_l, me.theta_r_dot, me.theta_l_dot)
