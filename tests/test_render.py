@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from tt_mujoco import render as render_cli
+from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.viz import demo, gl, render
@@ -430,3 +431,40 @@ def test_render_refuses_plant_params_edited_off_the_recorded_trace(tmp_path, cap
     assert not (tmp_path / "v.mp4").exists()
     series = demo.open_loop_timeseries(Params(), duration=1.0, dt=0.02)[0]
     assert render.check_trace(Params(), series) == ""
+
+
+def test_a_grade_is_drawn_as_a_slope_the_whole_scene_turned_alike(series):
+    ts, polyline = series
+    grade = "slope:20:90"  # rising along +y
+    tilt = np.array(parse_terrain(grade).world_rotation)
+    try:
+        flat = render.RunRenderer(ts, Params(), polyline, WIDTH, HEIGHT, FPS, "overview")
+        sloped = render.RunRenderer(
+            ts, Params(), polyline, WIDTH, HEIGHT, FPS, "overview", terrain=grade
+        )
+    except render.RenderUnavailable as exc:
+        pytest.skip(str(exc))
+    with flat as f, sloped as s:
+        frame = 40
+        image_flat, image_sloped = f.render_frame(frame), s.render_frame(frame)
+        assert np.abs(image_flat.astype(int) - image_sloped.astype(int)).mean() > 5
+        level, turned = f._off.scene, s._off.scene
+        assert level.ngeom == turned.ngeom
+        for a, b in zip(level.geoms[: level.ngeom], turned.geoms[: turned.ngeom], strict=True):
+            if a.type == mujoco.mjtGeom.mjGEOM_LINE:  # the path and traces: their ends turned
+                for end_a, end_b in zip(_line_ends(a), _line_ends(b), strict=True):
+                    np.testing.assert_allclose(tilt @ end_a, end_b, atol=1e-5)
+                continue
+            # Every body, the floor included, at the turned place and orientation (float32).
+            np.testing.assert_allclose(tilt @ a.pos, b.pos, atol=1e-5)
+            if a.type != mujoco.mjtGeom.mjGEOM_SPHERE:  # a sphere has no orientation to keep
+                np.testing.assert_allclose(
+                    tilt @ a.mat.reshape(3, 3), b.mat.reshape(3, 3), atol=1e-5
+                )
+        floor = next(
+            g for g in turned.geoms[: turned.ngeom] if g.type == mujoco.mjtGeom.mjGEOM_PLANE
+        )
+        a = math.radians(20)
+        np.testing.assert_allclose(
+            floor.mat.reshape(3, 3)[:, 2], [0, -math.sin(a), math.cos(a)], atol=1e-6
+        )

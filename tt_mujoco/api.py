@@ -109,6 +109,7 @@ class Run:
                 progress=False,
                 info=info,
                 outcome=outcome,
+                terrain=self.scenario.terrain,
             )
         )
 

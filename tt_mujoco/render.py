@@ -104,6 +104,7 @@ def main(argv: list[str] | None = None) -> int:
             progress=not args.no_progress,
             info=info,
             outcome=outcome,
+            terrain=config.get("scenario", {}).get("terrain", "flat"),
         )
     except (ValueError, FileExistsError, json.JSONDecodeError) as exc:
         return fail(str(exc))

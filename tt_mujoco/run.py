@@ -300,6 +300,7 @@ def write_outputs(
                     progress=not quiet,
                     info=info,
                     outcome=outcome,
+                    terrain=result.scenario.terrain,
                 )
                 written.append(publish_new(Path(path), out / "video.mp4"))
             except render.RenderUnavailable as err:  # no GL must not lose the results

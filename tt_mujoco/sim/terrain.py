@@ -53,6 +53,21 @@ class Terrain:
         return (-along * math.cos(h), -along * math.sin(h), -GRAVITY * math.cos(a))
 
     @property
+    def world_rotation(self) -> tuple[tuple[float, float, float], ...]:
+        """The rotation from the plane's frame to the world's (row-major 3 x 3): the plane
+        turned by the grade about the horizontal axis across the heading. It takes the plane's
+        normal to ``(-sin(a) cos(h), -sin(a) sin(h), cos(a))`` and world gravity to
+        :attr:`gravity`; the video draws the ground with it, as a slope."""
+        a, h = math.radians(self.grade_deg), math.radians(self.heading_deg)
+        ux, uy = -math.sin(h), math.cos(h)  # the axis; the rotation is by -a about it
+        c, s = math.cos(-a), math.sin(-a)
+        return (
+            (c + ux * ux * (1 - c), ux * uy * (1 - c), uy * s),
+            (ux * uy * (1 - c), c + uy * uy * (1 - c), -ux * s),
+            (-uy * s, ux * s, c),
+        )
+
+    @property
     def equivalent_delta1(self) -> float:
         """``g sin(grade)`` (m/s^2): a free body's acceleration down the fall line."""
         return GRAVITY * math.sin(math.radians(self.grade_deg))

@@ -27,6 +27,7 @@ from tt_mujoco.analysis.geometry import Polyline
 from tt_mujoco.outputs import REFERENCE_FILE, publish_new, read_timeseries, temporary_beside
 from tt_mujoco.progress import progress_bar
 from tt_mujoco.sim.physics import Vehicle
+from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.sim.timeseries import train_columns
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.viz.annotate import END_CARD_S, Legend, end_card
@@ -215,6 +216,9 @@ class RunRenderer:
     camera : {"follow", "overview"}
     info : str
         Shown in the top-right corner (e.g. "ismc_sta | mujoco plant | dynamic target").
+    terrain : str
+        The run's ground (``Scenario.terrain``): a grade is drawn as a slope, the whole scene
+        turned from the plane's frame, where the run is computed, into the world's.
     """
 
     def __init__(
@@ -227,9 +231,13 @@ class RunRenderer:
         fps: float = 30.0,
         camera: str = "follow",
         info: str = "",
+        terrain: str = "flat",
     ):
         _check_video_args(width, height, fps, camera)
         self.info = info
+        ground = parse_terrain(terrain)
+        #: Plane frame to world (None: flat ground, nothing to turn).
+        self.tilt = None if ground.flat else np.array(ground.world_rotation)
         self.has_reference_point = "x_ref" in ts and "y_ref" in ts
         extra = ("x_ref", "y_ref") if self.has_reference_point else ()
         extra += train_columns(params.n_trailers)
@@ -343,6 +351,18 @@ class RunRenderer:
         self._off.close()
 
     # --- geoms ------------------------------------------------------------------------------------
+    def _world(self, point) -> np.ndarray:
+        """A point of the plane's frame in the world the picture shows."""
+        point = np.asarray(point, dtype=float)
+        return point if self.tilt is None else self.tilt @ point
+
+    def _tilt_model_geoms(self) -> None:
+        """Turn the geoms ``mjv_updateScene`` just wrote into the world (a grade's slope)."""
+        tilt = self.tilt
+        for g in self._geoms[: self._off.scene.ngeom]:
+            g.pos[:] = tilt @ g.pos
+            g.mat[:] = (tilt @ g.mat.reshape(3, 3)).reshape(g.mat.shape)
+
     def _segment(self, slot: int, a, b, z: float, rgba: np.ndarray) -> None:
         g = self._geoms[slot]
         mujoco.mjv_initGeom(g, mujoco.mjtGeom.mjGEOM_LINE, _ZERO3, _ZERO3, _EYE9, rgba)
@@ -350,8 +370,8 @@ class RunRenderer:
             g,
             mujoco.mjtGeom.mjGEOM_LINE,
             self._line_px,
-            np.array([a[0], a[1], z]),
-            np.array([b[0], b[1], z]),
+            self._world([a[0], a[1], z]),
+            self._world([b[0], b[1], z]),
         )
 
     def _user_geoms(self, frame: int, rewrite: bool) -> None:
@@ -374,7 +394,7 @@ class RunRenderer:
         slot = base + self._n_fixed
         if self.has_reference_point:
             i = self.index[frame]
-            pos = np.array([self.cols["x_ref"][i], self.cols["y_ref"][i], TRACE_Z])
+            pos = self._world([self.cols["x_ref"][i], self.cols["y_ref"][i], TRACE_Z])
             mujoco.mjv_initGeom(
                 self._geoms[slot],
                 mujoco.mjtGeom.mjGEOM_SPHERE,
@@ -450,9 +470,9 @@ class RunRenderer:
             self._train[i],
         )
         if self.camera_mode == "follow":
-            self._mjv_camera.lookat[:] = self.camera_at(frame)["lookat"]
+            self._mjv_camera.lookat[:] = self._world(self.camera_at(frame)["lookat"])
         else:
-            self._mjv_camera.lookat[:] = self.camera["lookat"]
+            self._mjv_camera.lookat[:] = self._world(self.camera["lookat"])
         mujoco.mjv_updateScene(
             self.model,
             self.vehicle.data,
@@ -462,6 +482,8 @@ class RunRenderer:
             mujoco.mjtCatBit.mjCAT_ALL,
             self._off.scene,
         )
+        if self.tilt is not None:
+            self._tilt_model_geoms()
         self._user_geoms(frame, rewrite)
         if self._compact is None:
             image = self._off.render(*self.overlay_text(frame), info=self.info)
@@ -506,7 +528,7 @@ def run_labels(scenario: Mapping, status: str | None, message: str) -> tuple[str
         for k, suffix in (("controller", ""), ("plant", " plant"), ("target", " target"))
     )
     terrain = scenario.get("terrain", "flat")
-    if terrain != "flat":  # the ground is drawn flat: the plane's own frame
+    if terrain != "flat":  # drawn as a slope too; the line says how steep, and which way
         grade, _, heading = terrain.removeprefix("slope:").partition(":")
         info += f" | grade {grade}@{heading or 0} deg"
     if status is None:
@@ -526,6 +548,7 @@ def render_video(
     progress: bool = True,
     info: str = "",
     outcome: tuple[str, list[str]] | None = None,
+    terrain: str = "flat",
 ) -> Path:
     """Render a run to an H.264 MP4 (see :class:`RunRenderer` for what is drawn).
 
@@ -535,7 +558,7 @@ def render_video(
 
     Parameters
     ----------
-    ts, params, reference_polyline, width, height, fps, camera
+    ts, params, reference_polyline, width, height, fps, camera, terrain
         As for :class:`RunRenderer`.
     out_path : str or Path
         The ``.mp4`` to write, in an existing folder; never overwritten.
@@ -578,7 +601,9 @@ def render_video(
     mediapy.set_ffmpeg(imageio_ffmpeg.get_ffmpeg_exe())
 
     with (
-        RunRenderer(ts, params, reference_polyline, width, height, fps, camera, info) as renderer,
+        RunRenderer(
+            ts, params, reference_polyline, width, height, fps, camera, info, terrain
+        ) as renderer,
         temporary_beside(out, suffix=".tmp.mp4") as tmp,
     ):
         with mediapy.VideoWriter(tmp, shape=(height, width), fps=fps, codec="h264") as writer:
