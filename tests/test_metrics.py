@@ -650,3 +650,75 @@ def test_projection_with_a_window_matches_brute_force():
     for i in range(0, n, 5):
         expected = brute_force_distance(points[i : i + 1], vertices[first[i] : count[i] + 1])[0]
         assert proj.distance[i] == pytest.approx(expected, rel=1e-12, abs=1e-14)
+
+
+# --- the compiled search: the same nearest points as the vectorised one -------------------------
+@pytest.fixture(scope="module")
+def compiled_projection():
+    from tt_mujoco.analysis import geometry
+    from tt_mujoco.sim import compiled
+
+    compiled.kernel()  # loading it hands its projection to the geometry module
+    projection = geometry._COMPILED
+    yield projection
+    geometry.use_compiled_projection(projection)
+
+
+def _both(compiled_projection, line, points, **options):
+    from tt_mujoco.analysis import geometry
+
+    geometry.use_compiled_projection(compiled_projection)
+    fast = line.project(points, **options)
+    geometry.use_compiled_projection(None)
+    slow = line.project(points, **options)
+    geometry.use_compiled_projection(compiled_projection)
+    return fast, slow
+
+
+def test_the_compiled_search_finds_the_vectorised_search_s_nearest_points(compiled_projection):
+    rng = np.random.default_rng(17)
+    cases = []
+    for vertices in random_polylines(rng):
+        scale = float(np.ptp(vertices, axis=0).max())
+        spread = scale * 10.0 ** rng.uniform(-5, 0, (1500, 1))
+        near = vertices[rng.integers(0, len(vertices), 1500)] + rng.normal(size=(1500, 2)) * spread
+        around = rng.uniform(vertices.min(0) - scale, vertices.max(0) + scale, (300, 2))
+        cases.append((vertices, np.vstack([near, around, [[np.nan, 0.0]]]), {}))
+    # Laps with windows, as the off-tracking asks, and a path known up to some time.
+    angle = np.linspace(0.0, 6.0 * np.pi, 6000)
+    laps = (
+        np.column_stack([np.cos(angle), np.sin(angle)]) * (1.0 + 0.002 * np.sin(7 * angle))[:, None]
+    )
+    count = rng.integers(1, 5999, 800)
+    first = np.maximum(count - rng.integers(1, 2500, 800), 0)
+    points = laps[np.maximum(count - rng.integers(0, 3000, 800), 0)] + rng.normal(0, 0.02, (800, 2))
+    cases.append((laps, points, {"segment_count": count, "segment_first": first}))
+    cases.append((laps, points, {"segment_count": rng.integers(0, 5999, 800)}))
+    # A square: points on its diagonals are equally near two sides (ties go to the lower one).
+    square = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0, 0]], dtype=float)
+    cases.append((square, np.array([[0.5, 0.5], [0.25, 0.25], [0.75, 0.25], [2.0, 2.0]]), {}))
+    for vertices, points, options in cases:
+        line = Polyline(vertices)
+        for extend_ends in (False, True):
+            fast, slow = _both(
+                compiled_projection, line, points, extend_ends=extend_ends, **options
+            )
+            for name in fast._fields:  # bit for bit, the segment chosen on ties included
+                np.testing.assert_array_equal(
+                    getattr(fast, name), getattr(slow, name), err_msg=name
+                )
+
+
+def test_nearest_segment_of_is_the_brute_force_nearest_in_plain_python():
+    from tt_mujoco.analysis.geometry import nearest_segment_of
+
+    rng = np.random.default_rng(3)
+    vertices = np.cumsum(rng.normal(size=(80, 2)), axis=0)
+    line = Polyline(vertices)
+    for point in rng.normal(0, 5, (60, 2)):
+        lo, hi = sorted(rng.integers(0, line.n_segments + 1, 2))
+        hi = max(hi, lo + 1)
+        d2, seg, _ = nearest_segment_of(point[0], point[1], lo, hi, False, line.table, lo)
+        expected = brute_force_distance(point[None], line.vertices[lo : hi + 1])[0]
+        assert math.sqrt(d2) == pytest.approx(expected, rel=1e-12, abs=1e-14)
+        assert lo <= seg < hi

@@ -19,9 +19,13 @@ from scipy.spatial import cKDTree
 __all__ = [
     "Polyline",
     "PolylineProjection",
+    "SegmentTable",
     "distance_to_polyline",
+    "nearest_segment_of",
+    "segment_distance2_of",
     "signed_lateral_error",
     "trailer_offtrack",
+    "use_compiled_projection",
 ]
 
 # Tree entries asked for per point in successive queries; points the distance bound does not
@@ -44,6 +48,106 @@ _SEARCH_BLOCK = 1 << 20
 _POINT_BLOCK = 1 << 14
 # A window of at most this many chunks is enumerated; a longer one is asked of the chunk tree.
 _WINDOW_CHUNKS = 512
+
+
+class SegmentTable(NamedTuple):
+    """A polyline's segments and their bounding circles as plain arrays: what the compiled
+    projection reads. Segment ``k`` starts at ``(sx, sy)[k]`` and runs ``(dx, dy)[k]``; chunk
+    ``c`` holds segments ``c * _CHUNK`` to ``c * _CHUNK + _CHUNK - 1`` inside the circle
+    ``(chunk_cx, chunk_cy, chunk_r)[c]``, and group ``g`` chunks ``g * _CHUNK`` to
+    ``g * _CHUNK + _CHUNK - 1`` inside ``(group_cx, group_cy, group_r)[g]``."""
+
+    sx: np.ndarray
+    sy: np.ndarray
+    dx: np.ndarray
+    dy: np.ndarray
+    inv_len2: np.ndarray
+    chunk_cx: np.ndarray
+    chunk_cy: np.ndarray
+    chunk_r: np.ndarray
+    group_cx: np.ndarray
+    group_cy: np.ndarray
+    group_r: np.ndarray
+
+
+def segment_distance2_of(px, py, sx, sy, dx, dy, inv_len2, lower, upper):
+    """Squared distance from ``(px, py)`` to the segment from ``(sx, sy)`` along ``(dx, dy)``,
+    and the foot's parameter ``t``, clamped to ``[lower, upper]`` (``[0, 1]``; an end ray takes
+    an infinite bound). Numbers or arrays alike: the one formula of every projection here."""
+    rx = px - sx
+    ry = py - sy
+    t = np.minimum(np.maximum((rx * dx + ry * dy) * inv_len2, lower), upper)
+    rx = rx - t * dx
+    ry = ry - t * dy
+    return rx * rx + ry * ry, t
+
+
+def _better(d2, seg, best_d2, best_seg) -> bool:
+    """Nearer, or as near with a lower segment index: one nearest point however it is found."""
+    return d2 < best_d2 or (d2 == best_d2 and seg < best_seg)
+
+
+def _beyond(px, py, cx, cy, r, best_d2) -> bool:
+    """Whether the circle ``(cx, cy, r)`` lies wholly farther than ``sqrt(best_d2)``."""
+    reach = r + np.sqrt(best_d2)
+    return (px - cx) ** 2 + (py - cy) ** 2 > reach * reach * (1.0 + 1e-9)
+
+
+def _scan(px, py, a, b, extend, table, best):
+    """Segments ``a`` to ``b - 1`` against the best ``(d2, segment, t)`` so far."""
+    n_seg = table.sx.shape[0]
+    best_d2, best_seg, best_t = best
+    for s in range(a, b):
+        low = -np.inf if extend and s == 0 else 0.0
+        high = np.inf if extend and s == n_seg - 1 else 1.0
+        d2, t = segment_distance2_of(
+            px, py, table.sx[s], table.sy[s], table.dx[s], table.dy[s], table.inv_len2[s],
+            low, high,
+        )  # fmt: skip
+        if _better(d2, s, best_d2, best_seg):
+            best_d2, best_seg, best_t = d2, s, t
+    return best_d2, best_seg, best_t
+
+
+def nearest_segment_of(px, py, lo, hi, extend, table, warm):
+    """The nearest of segments ``lo`` to ``hi - 1`` to one point: ``(d2, segment, t)``.
+
+    Exact: it starts from the segments around ``warm`` (the previous sample's, for a time
+    series), then searches every group, and in it every chunk, whose circle is not beyond the
+    best so far. ``extend`` continues the polyline's first and last segments as rays, which no
+    circle bounds, so those are tried first. Ties go to the lower segment index.
+    """
+    n_seg = table.sx.shape[0]
+    best = (np.inf, -1, 0.0)
+    if extend:
+        for s in (0, n_seg - 1):
+            if lo <= s < hi:
+                best = _scan(px, py, s, s + 1, extend, table, best)
+    best = _scan(px, py, max(lo, warm - _CHUNK // 2), min(hi, warm + _CHUNK // 2 + 1), extend,
+                 table, best)  # fmt: skip
+    c_lo, c_hi = lo // _CHUNK, (hi - 1) // _CHUNK + 1
+    for g in range(c_lo // _CHUNK, (c_hi - 1) // _CHUNK + 1):
+        if _beyond(px, py, table.group_cx[g], table.group_cy[g], table.group_r[g], best[0]):
+            continue
+        for c in range(max(c_lo, g * _CHUNK), min(c_hi, g * _CHUNK + _CHUNK)):
+            if _beyond(px, py, table.chunk_cx[c], table.chunk_cy[c], table.chunk_r[c], best[0]):
+                continue
+            best = _scan(px, py, max(lo, c * _CHUNK), min(hi, c * _CHUNK + _CHUNK), extend,
+                         table, best)  # fmt: skip
+    return best
+
+
+#: The compiled loop over :func:`nearest_segment_of`, once :mod:`tt_mujoco.sim.compiled` has
+#: loaded its kernel in this process (None: the vectorised search below serves alone).
+_COMPILED = None
+
+
+def use_compiled_projection(project_points) -> None:
+    """Let :meth:`Polyline.project` run ``project_points(px, py, lo, hi, extend, table, d2,
+    seg, t)``, the compiled loop over :func:`nearest_segment_of` (same numbers); it returns
+    False when it could not run, and the vectorised search serves instead. None: none."""
+    global _COMPILED
+    _COMPILED = project_points
 
 
 class _Best:
@@ -128,6 +232,46 @@ class Polyline:
         self._vertex_tangents = self._make_vertex_tangents()
         self._build_search()
 
+    def _make_trees(self) -> None:
+        """The vectorised search's k-d trees, made on its first use (the compiled search needs
+        neither): one over the chunk centres, and one over short stretches of path.
+
+        The path is cut into pieces no longer than ``spacing`` (long segments into several
+        pieces, so one long straight does not weaken the bound for the whole path), and runs of
+        ``_GROUP_PIECES`` consecutive pieces form groups. Each group lies inside a circle (centre
+        c, radius R, around its bounding box); the tree holds the centres. A segment whose
+        groups' centres are all at least D from a query point is at least ``D - R_max`` away.
+        The spacing is the median segment length, but at least ``length / (2 * n_segments)``, so
+        there are at most 3 pieces per segment.
+        """
+        if self._tree is not None:
+            return
+        n_seg = self.n_segments
+        spacing = max(float(np.median(self._seg_lengths)), self.length / (2.0 * n_seg))
+        pieces = np.maximum(1, np.ceil(self._seg_lengths / spacing).astype(np.int64))
+        segment_of_piece = np.repeat(np.arange(n_seg), pieces)
+        first_piece = np.cumsum(pieces) - pieces
+        within = np.arange(segment_of_piece.size) - np.repeat(first_piece, pieces)
+        seg_start = self._starts[segment_of_piece]
+        seg_delta = self._deltas[segment_of_piece]
+        piece_start = seg_start + (within / pieces[segment_of_piece])[:, None] * seg_delta
+        piece_end = seg_start + ((within + 1) / pieces[segment_of_piece])[:, None] * seg_delta
+        # Groups of _GROUP_PIECES consecutive pieces, each in a circle around its bounding box.
+        n_pieces = segment_of_piece.size
+        n_groups = -(-n_pieces // _GROUP_PIECES)
+        piece_of = np.minimum(
+            np.arange(n_groups)[:, None] * _GROUP_PIECES + np.arange(_GROUP_PIECES),
+            n_pieces - 1,
+        )
+        corners = np.concatenate([piece_start[piece_of], piece_end[piece_of]], axis=1)
+        centre = 0.5 * (corners.min(axis=1) + corners.max(axis=1))
+        offset = corners - centre[:, None, :]
+        radius = np.sqrt(np.max(np.einsum("ijk,ijk->ij", offset, offset), axis=1))
+        self._group_segments = segment_of_piece[piece_of]
+        self._group_radius_max = float(radius.max())
+        self._chunk_tree = cKDTree(self._chunk_centre)
+        self._tree = cKDTree(centre)
+
     @property
     def n_segments(self) -> int:
         """Number of segments (``len(vertices) - 1``)."""
@@ -155,45 +299,13 @@ class Polyline:
         return tangents
 
     def _build_search(self) -> None:
-        """Search structures: a k-d tree over short stretches of path, and chunk circles.
-
-        Tree: the path is cut into pieces no longer than ``spacing`` (long segments into several
-        pieces, so one long straight does not weaken the bound for the whole path), and runs of
-        ``_GROUP_PIECES`` consecutive pieces form groups. Each group lies inside a circle (centre
-        c, radius R, around its bounding box); the tree holds the centres. A segment whose
-        groups' centres are all at least D from a query point is at least ``D - R_max`` away.
-        The spacing is the median segment length, but at least ``length / (2 * n_segments)``, so
-        there are at most 3 pieces per segment.
-
-        Chunks: runs of ``_CHUNK`` consecutive segments, each inside a circle around its
-        vertices' bounding box (a segment lies in the convex hull of its end points). A chunk
-        whose circle is farther than a known distance cannot hold the nearest point; this prunes
-        the exact search for points far from the path, where the tree's bound is weak.
+        """Chunk circles: runs of ``_CHUNK`` consecutive segments, each inside a circle around
+        its vertices' bounding box (a segment lies in the convex hull of its end points), and
+        groups of ``_CHUNK`` chunks inside circles around theirs. A chunk or group whose circle
+        is farther than a known distance cannot hold the nearest point: the compiled search
+        walks these, and the vectorised one prunes its exact search with the chunks'.
         """
         n_seg = self.n_segments
-        spacing = max(float(np.median(self._seg_lengths)), self.length / (2.0 * n_seg))
-        pieces = np.maximum(1, np.ceil(self._seg_lengths / spacing).astype(np.int64))
-        segment_of_piece = np.repeat(np.arange(n_seg), pieces)
-        first_piece = np.cumsum(pieces) - pieces
-        within = np.arange(segment_of_piece.size) - np.repeat(first_piece, pieces)
-        seg_start = self._starts[segment_of_piece]
-        seg_delta = self._deltas[segment_of_piece]
-        piece_start = seg_start + (within / pieces[segment_of_piece])[:, None] * seg_delta
-        piece_end = seg_start + ((within + 1) / pieces[segment_of_piece])[:, None] * seg_delta
-        # Groups of _GROUP_PIECES consecutive pieces, each inside a circle around its bounding box.
-        n_pieces = segment_of_piece.size
-        n_groups = -(-n_pieces // _GROUP_PIECES)
-        piece_of = np.minimum(
-            np.arange(n_groups)[:, None] * _GROUP_PIECES + np.arange(_GROUP_PIECES), n_pieces - 1
-        )
-        corners = np.concatenate([piece_start[piece_of], piece_end[piece_of]], axis=1)
-        centre = 0.5 * (corners.min(axis=1) + corners.max(axis=1))
-        offset = corners - centre[:, None, :]
-        radius = np.sqrt(np.max(np.einsum("ijk,ijk->ij", offset, offset), axis=1))
-        self._group_segments = segment_of_piece[piece_of]
-        self._group_radius_max = float(radius.max())
-        self._tree = cKDTree(centre)
-
         n_chunks = -(-n_seg // _CHUNK)
         self._chunk_first = np.arange(n_chunks) * _CHUNK
         vertex_of = np.minimum(
@@ -205,7 +317,33 @@ class Polyline:
         self._chunk_centre = centre
         self._chunk_radius = np.sqrt(np.max(np.einsum("ijk,ijk->ij", offset, offset), axis=1))
         self._chunk_radius_max = float(self._chunk_radius.max())
-        self._chunk_tree = cKDTree(centre)
+        self._tree = self._chunk_tree = None  # made by _make_trees when the vectorised search runs
+        # Groups of _CHUNK chunks, each inside a circle around its chunks' circles.
+        n_groups = -(-n_chunks // _CHUNK)
+        chunk_of = np.minimum(
+            np.arange(n_groups)[:, None] * _CHUNK + np.arange(_CHUNK), n_chunks - 1
+        )
+        reach_lo = (centre - self._chunk_radius[:, None])[chunk_of].min(axis=1)
+        reach_hi = (centre + self._chunk_radius[:, None])[chunk_of].max(axis=1)
+        group_centre = 0.5 * (reach_lo + reach_hi)
+        group_radius = np.max(
+            np.hypot(*(centre[chunk_of] - group_centre[:, None, :]).transpose(2, 0, 1))
+            + self._chunk_radius[chunk_of],
+            axis=1,
+        )
+        self.table = SegmentTable(
+            self._sx,
+            self._sy,
+            self._dx,
+            self._dy,
+            self._inv_len2,
+            np.ascontiguousarray(centre[:, 0]),
+            np.ascontiguousarray(centre[:, 1]),
+            self._chunk_radius,
+            np.ascontiguousarray(group_centre[:, 0]),
+            np.ascontiguousarray(group_centre[:, 1]),
+            group_radius,
+        )
 
     def project(
         self, points, *, extend_ends: bool = False, segment_count=None, segment_first=None
@@ -278,7 +416,19 @@ class Polyline:
             best.seg[only_start] = 0
 
         pending = np.flatnonzero(finite & (limit > 0))
-        if segment_first is not None:
+        if _COMPILED is not None and pending.size:
+            px = np.ascontiguousarray(pts[pending, 0])
+            py = np.ascontiguousarray(pts[pending, 1])
+            n_pending = pending.size
+            d2, seg, t = np.empty(n_pending), np.empty(n_pending, np.int64), np.empty(n_pending)
+            if _COMPILED(
+                px, py, first[pending], limit[pending], extend_ends, self.table, d2, seg, t
+            ):
+                best.d2[pending], best.seg[pending], best.t[pending] = d2, seg, t
+                pending = pending[:0]
+        if pending.size:
+            self._make_trees()
+        if segment_first is not None and pending.size:
             # A short window is searched directly: the tree holds the whole path, whose other
             # laps crowd out the window's candidates.
             lo_chunk, hi_chunk = self._window_chunks(limit, first)
@@ -288,12 +438,21 @@ class Polyline:
                 # the chunk tree then finds the few chunks nearer than it, where enumerating
                 # every chunk of the window would cost the window's length for every point.
                 k = min(_CANDIDATE_ROUNDS[0], self._tree.n)
-                _, group_idx = self._tree.query(pts[direct], k=k)
+                group_dist, group_idx = self._tree.query(pts[direct], k=k)
+                group_dist = group_dist.reshape(direct.size, -1)
                 candidates = self._group_segments[group_idx].reshape(direct.size, -1)
                 self._try(
                     pts[direct], direct, candidates, limit[direct], extend_ends, best, first[direct]
                 )
-                self._chunk_search(pts, direct, limit, extend_ends, best, first)
+                # The tree's bound holds for every segment, in the window or not: a point whose
+                # best usable candidate is within it is settled (the rays, which the bound does
+                # not cover, are for extend_ends, which a windowed search goes on to check).
+                if k < self._tree.n and not extend_ends:
+                    bound = group_dist[:, -1] - self._group_radius_max
+                    unsettled = direct[np.sqrt(best.d2[direct]) > bound]
+                else:
+                    unsettled = direct
+                self._chunk_search(pts, unsettled, limit, extend_ends, best, first)
                 pending = np.setdiff1d(pending, direct, assume_unique=True)
         for k in _CANDIDATE_ROUNDS:
             if pending.size == 0 or k >= self._tree.n:
@@ -322,20 +481,22 @@ class Polyline:
         ``px``, ``py`` have shape (P,), ``candidates`` (P, C). Plain x/y arrays: several times
         faster than gathering (P, C, 2) blocks.
         """
-        dx = self._dx[candidates]
-        dy = self._dy[candidates]
-        rx = px[:, None] - self._sx[candidates]
-        ry = py[:, None] - self._sy[candidates]
-        t = (rx * dx + ry * dy) * self._inv_len2[candidates]
         if extend_ends:
             lower = np.where(candidates == 0, -np.inf, 0.0)
             upper = np.where(candidates == self.n_segments - 1, np.inf, 1.0)
-            t = np.clip(t, lower, upper)
         else:
-            np.clip(t, 0.0, 1.0, out=t)
-        rx -= t * dx
-        ry -= t * dy
-        return rx * rx + ry * ry, t
+            lower, upper = 0.0, 1.0
+        return segment_distance2_of(
+            px[:, None],
+            py[:, None],
+            self._sx[candidates],
+            self._sy[candidates],
+            self._dx[candidates],
+            self._dy[candidates],
+            self._inv_len2[candidates],
+            lower,
+            upper,
+        )
 
     def _try(
         self,
@@ -364,17 +525,20 @@ class Polyline:
             cand = candidates[part]
             d2, t = self._segment_distance2(px[part], py[part], cand, extend_ends)
             d2[(cand >= limit[part, None]) | (cand < first[part, None])] = np.inf
-            col = np.argmin(d2, axis=1)
+            # The nearest, and of equally near ones the lowest segment (nearest_segment_of's).
+            tied = d2 == d2.min(axis=1)[:, None]
+            col = np.argmin(np.where(tied, cand, np.iinfo(np.int64).max), axis=1)
             i = np.arange(cand.shape[0])
             d2_min[part], seg_min[part], t_min[part] = d2[i, col], cand[i, col], t[i, col]
         if rows.size > 1 and np.any(rows[1:] <= rows[:-1]):
-            # Repeated rows: keep each point's smallest (stable: first on ties).
-            order = np.lexsort((d2_min, rows))
+            # Repeated rows: keep each point's nearest (the lowest segment on ties).
+            order = np.lexsort((seg_min, d2_min, rows))
             rows, d2_min, seg_min, t_min = rows[order], d2_min[order], seg_min[order], t_min[order]
             first = np.ones(rows.size, dtype=bool)
             first[1:] = rows[1:] != rows[:-1]
             rows, d2_min, seg_min, t_min = rows[first], d2_min[first], seg_min[first], t_min[first]
-        better = d2_min < best.d2[rows]
+        held, held_seg = best.d2[rows], best.seg[rows]
+        better = (d2_min < held) | ((d2_min == held) & (seg_min < held_seg))
         rows = rows[better]
         best.d2[rows] = d2_min[better]
         best.seg[rows] = seg_min[better]

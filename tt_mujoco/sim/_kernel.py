@@ -20,6 +20,7 @@ from llvmlite import binding
 from numba import cfunc, njit, types
 from numba.extending import intrinsic, register_jitable
 
+from tt_mujoco.analysis import geometry
 from tt_mujoco.controllers import base, fbl, ismc_sta, pid
 from tt_mujoco.reference import path_base, paths, spline, targets
 from tt_mujoco.sim import disturbances, measure, plant_mujoco, plant_reduced, step
@@ -64,6 +65,18 @@ def _pointer(typingctx, array):
         return builder.bitcast(data, context.get_value_type(_P))
 
     return _P(array), codegen
+
+
+@njit(cache=True)
+def project_points(px, py, lo, hi, extend, table, d2, seg, t):
+    """Every point's nearest segment (:func:`tt_mujoco.analysis.geometry.nearest_segment_of`),
+    each search started from the previous point's: a time series moves little a sample."""
+    warm = lo[0] if px.shape[0] else 0
+    for i in range(px.shape[0]):
+        d2[i], seg[i], t[i] = geometry.nearest_segment_of(
+            px[i], py[i], lo[i], hi[i], extend, table, max(warm, lo[i])
+        )
+        warm = seg[i]
 
 
 @njit(cache=True)

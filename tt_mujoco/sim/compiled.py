@@ -41,6 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tt_mujoco.analysis import geometry
 from tt_mujoco.outputs import atomic_write
 from tt_mujoco.sim import step
 
@@ -220,6 +221,10 @@ def warm_up() -> None:
         controller = built.new_controller()
         controller.reset()
         run_compiled(stepper, controller)
+    # The metrics' projection, for both its modes.
+    line = geometry.Polyline(np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 1.0]]))
+    for extend in (False, True):
+        line.project(np.array([[0.5, 0.5], [3.0, 1.0]]), extend_ends=extend)
 
 
 def _cache_dir() -> Path:
@@ -275,7 +280,24 @@ def kernel():
         sys.modules[name] = module
         spec.loader.exec_module(module)
         _KERNEL = module
+        geometry.use_compiled_projection(_projection)
     return _KERNEL
+
+
+def _projection(*args) -> bool:
+    """The metrics' compiled projection (:func:`tt_mujoco.analysis.geometry.nearest_segment_of`
+    in a loop); the cache's manifest is rewritten once this process has compiled it. False
+    (and the cache set aside) when its compiled code fails to load."""
+    project = _KERNEL.project_points
+    compiled_before = sum(project.stats.cache_misses.values())
+    try:
+        project(*args)
+    except Exception as err:  # a damaged cache: the vectorised search serves instead
+        set_aside_cache(err)
+        return False
+    if sum(project.stats.cache_misses.values()) > compiled_before:
+        _write_manifest(compiled_here=True)
+    return True
 
 
 def set_aside_cache(err: BaseException) -> None:
@@ -290,6 +312,7 @@ def set_aside_cache(err: BaseException) -> None:
     except OSError:
         where = f"left at {cache}"
     _KERNEL = None
+    geometry.use_compiled_projection(None)
     sys.modules.pop("tt_mujoco.sim._kernel", None)
     print(
         f"note: the compiled-code cache could not be loaded ({type(err).__name__}: {err}); "

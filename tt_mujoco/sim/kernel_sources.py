@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import inspect
 
+from tt_mujoco.analysis import geometry
 from tt_mujoco.controllers import base, fbl, ismc_sta, pid
 from tt_mujoco.reference import path_base, paths, spline, targets
 from tt_mujoco.sim import disturbances, measure, plant_mujoco, plant_reduced, records, step
@@ -73,6 +74,11 @@ SHARED = (
     disturbances.paper_disturbance_of,
     disturbances.wrench_of,
     plant_mujoco.chassis_wrench_of,
+    geometry.segment_distance2_of,
+    geometry._better,
+    geometry._beyond,
+    geometry._scan,
+    geometry.nearest_segment_of,
 )
 
 
