@@ -722,3 +722,17 @@ def test_nearest_segment_of_is_the_brute_force_nearest_in_plain_python():
         expected = brute_force_distance(point[None], line.vertices[lo : hi + 1])[0]
         assert math.sqrt(d2) == pytest.approx(expected, rel=1e-12, abs=1e-14)
         assert lo <= seg < hi
+
+
+def test_lateral_error_from_the_cross_track_projection_is_the_projection_itself():
+    from tt_mujoco.analysis.metrics import cross_track_and_lateral
+
+    rng = np.random.default_rng(23)
+    for vertices in random_polylines(rng):
+        line = Polyline(vertices)
+        scale = float(np.ptp(vertices, axis=0).max())
+        points = rng.uniform(vertices.min(0) - scale, vertices.max(0) + scale, (800, 2))
+        points = np.vstack([points, vertices[[0, -1]], [[np.nan, 1.0]]])
+        cross, lateral = cross_track_and_lateral(line, points)
+        np.testing.assert_array_equal(cross, line.project(points, extend_ends=True).signed_distance)
+        np.testing.assert_array_equal(lateral, line.project(points).signed_distance)

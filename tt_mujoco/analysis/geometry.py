@@ -87,9 +87,9 @@ def _better(d2, seg, best_d2, best_seg) -> bool:
     return d2 < best_d2 or (d2 == best_d2 and seg < best_seg)
 
 
-def _beyond(px, py, cx, cy, r, best_d2) -> bool:
-    """Whether the circle ``(cx, cy, r)`` lies wholly farther than ``sqrt(best_d2)``."""
-    reach = r + np.sqrt(best_d2)
+def _beyond(px, py, cx, cy, r, best_distance) -> bool:
+    """Whether the circle ``(cx, cy, r)`` lies wholly farther than ``best_distance``."""
+    reach = r + best_distance
     return (px - cx) ** 2 + (py - cy) ** 2 > reach * reach * (1.0 + 1e-9)
 
 
@@ -112,10 +112,10 @@ def _scan(px, py, a, b, extend, table, best):
 def nearest_segment_of(px, py, lo, hi, extend, table, warm):
     """The nearest of segments ``lo`` to ``hi - 1`` to one point: ``(d2, segment, t)``.
 
-    Exact: it starts from the segments around ``warm`` (the previous sample's, for a time
-    series), then searches every group, and in it every chunk, whose circle is not beyond the
-    best so far. ``extend`` continues the polyline's first and last segments as rays, which no
-    circle bounds, so those are tried first. Ties go to the lower segment index.
+    Exact: it starts from the chunk of segment ``warm`` (the previous sample's nearest, for a
+    time series), then searches every other group, and in it every chunk, whose circle is not
+    beyond the best so far. ``extend`` continues the polyline's first and last segments as
+    rays, which no circle bounds, so those are tried first. Ties go to the lower segment index.
     """
     n_seg = table.sx.shape[0]
     best = (np.inf, -1, 0.0)
@@ -123,17 +123,22 @@ def nearest_segment_of(px, py, lo, hi, extend, table, warm):
         for s in (0, n_seg - 1):
             if lo <= s < hi:
                 best = _scan(px, py, s, s + 1, extend, table, best)
-    best = _scan(px, py, max(lo, warm - _CHUNK // 2), min(hi, warm + _CHUNK // 2 + 1), extend,
-                 table, best)  # fmt: skip
+    first_chunk = warm // _CHUNK
+    a, b = max(lo, first_chunk * _CHUNK), min(hi, first_chunk * _CHUNK + _CHUNK)
+    best = _scan(px, py, a, b, extend, table, best)
+    reach = np.sqrt(best[0])
     c_lo, c_hi = lo // _CHUNK, (hi - 1) // _CHUNK + 1
     for g in range(c_lo // _CHUNK, (c_hi - 1) // _CHUNK + 1):
-        if _beyond(px, py, table.group_cx[g], table.group_cy[g], table.group_r[g], best[0]):
+        if _beyond(px, py, table.group_cx[g], table.group_cy[g], table.group_r[g], reach):
             continue
         for c in range(max(c_lo, g * _CHUNK), min(c_hi, g * _CHUNK + _CHUNK)):
-            if _beyond(px, py, table.chunk_cx[c], table.chunk_cy[c], table.chunk_r[c], best[0]):
+            if c == first_chunk:
                 continue
-            best = _scan(px, py, max(lo, c * _CHUNK), min(hi, c * _CHUNK + _CHUNK), extend,
-                         table, best)  # fmt: skip
+            if _beyond(px, py, table.chunk_cx[c], table.chunk_cy[c], table.chunk_r[c], reach):
+                continue
+            a, b = max(lo, c * _CHUNK), min(hi, c * _CHUNK + _CHUNK)
+            best = _scan(px, py, a, b, extend, table, best)
+            reach = np.sqrt(best[0])
     return best
 
 

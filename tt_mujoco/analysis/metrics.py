@@ -220,8 +220,7 @@ def error_signals(
         out["e_omega_tracked"] = c["omega"] - tracked
     tractor = np.column_stack([c["x"], c["y"]])
     trailer = np.column_stack([c["x0"], c["y0"]])
-    out["lateral"] = reference.project(tractor).signed_distance
-    out["cross_track"] = reference.project(tractor, extend_ends=True).signed_distance
+    out["cross_track"], out["lateral"] = cross_track_and_lateral(reference, tractor)
     direction = -1.0 if reverse else 1.0
     if "theta_ref" in c:
         th = c["theta_ref"]
@@ -237,6 +236,22 @@ def error_signals(
         trailer_cross if reverse else np.where(np.isnan(offtrack), np.nan, trailer_cross)
     )
     return out
+
+
+def cross_track_and_lateral(reference: Polyline, points) -> tuple[np.ndarray, np.ndarray]:
+    """Signed distances to the path with its ends continued as rays, and without.
+
+    The rays serve only points whose nearest point lies beyond an end: elsewhere the nearest
+    point without them is the same one (the path without its rays is a part of the path with
+    them, and it holds that nearest point), so only the others are projected again.
+    """
+    with_rays = reference.project(points, extend_ends=True)
+    lateral = with_rays.signed_distance.copy()
+    arc = with_rays.arc_length
+    beyond = ~((arc >= 0.0) & (arc <= reference.length))  # NaN rows too: NaN again
+    if beyond.any():
+        lateral[beyond] = reference.project(np.asarray(points)[beyond]).signed_distance
+    return with_rays.signed_distance, lateral
 
 
 def compute_metrics(
