@@ -1,10 +1,12 @@
-"""Run a benchmark and keep what it printed: the file the docs quote its figures from.
+"""Run a benchmark (or a study) and keep what it printed: the file the docs quote it from.
 
     python benchmarks/record.py [--runs 2] bench_cli.py [ARGS ...]
+    python benchmarks/record.py --runs 1 docs/backing_study.py [ARGS ...]
 
-runs ``python benchmarks/BENCH ARGS`` ``--runs`` times, one after the other, and writes
-``benchmarks/results/<bench>[--<args>].txt``: the command, the machine (cores, CPU, Python,
-MuJoCo and numba versions, the date) and each run's output. A page that quotes a figure names
+runs ``python benchmarks/BENCH ARGS`` (a script named with its folder: that script)
+``--runs`` times, one after the other, and writes ``benchmarks/results/<script>[--<args>].txt``:
+the command, the machine (cores, CPU, Python, MuJoCo and numba versions, the date) and each
+run's output. A page that quotes a figure names
 this file in a ``<!-- numbers: ... -->`` marker, and ``tests/test_numbers.py`` fails when the
 figure is not in it, so re-recording a benchmark shows every page whose figures moved.
 """
@@ -54,11 +56,16 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("bench", help="a script in benchmarks/, e.g. bench_cli.py")
     p.add_argument("args", nargs=argparse.REMAINDER, help="its arguments")
     a = p.parse_args(argv)
-    script = HERE / Path(a.bench).name
-    if not script.is_file() or a.runs < 1:
-        print(f"error: {a.bench!r} is not a benchmark in {HERE} (or --runs < 1)", file=sys.stderr)
+    named = Path(a.bench)
+    script = (HERE.parent / named) if named.parent != Path() else HERE / named
+    if script.suffix != ".py" or not script.is_file() or a.runs < 1:
+        print(
+            f"error: {a.bench!r} is not a script of the repository (give bench_X.py or "
+            "FOLDER/SCRIPT.py), or --runs < 1",
+            file=sys.stderr,
+        )
         return 2
-    command = " ".join(["python", f"benchmarks/{script.name}", *a.args])
+    command = " ".join(["python", str(script.relative_to(HERE.parent)), *a.args])
     lines = [f"# {command}  ({a.runs} runs)", f"# {machine()}", f"# {time.strftime('%Y-%m-%d')}"]
     for k in range(1, a.runs + 1):
         done = subprocess.run(

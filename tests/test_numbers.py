@@ -6,7 +6,8 @@ every decimal number in it (outside inline code) must appear, as written, in one
 A FILE is a generated page (its "Written by `python ...`" line names the command), a
 benchmark's recorded output (``benchmarks/record.py``, whose first line is the command), a
 test that asserts the figure, or the module that defines it (a constant such as Delta_1's).
-On the front pages every decimal number outside code must stand in such a block.
+On the pages of :data:`SOURCED_PAGES` every decimal number outside code must stand in such a
+block.
 """
 
 import re
@@ -15,13 +16,14 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-#: Pages where every figure must be sourced: what a newcomer reads first.
-FRONT_PAGES = (
+#: Pages where every figure must be sourced: what a newcomer reads first, and the timings.
+SOURCED_PAGES = (
     "README.md",
     "docs/index.md",
     "docs/getting-started.md",
     "docs/results.md",
     "docs/performance.md",
+    "docs/sweeps.md",
 )
 MARKER = re.compile(r"<!-- numbers: (.+?) -->")
 #: A figure: a decimal number or a number with thousands separators.
@@ -99,7 +101,7 @@ def test_every_quoted_figure_is_in_its_source(page):
                 )
 
 
-@pytest.mark.parametrize("page", FRONT_PAGES)
+@pytest.mark.parametrize("page", SOURCED_PAGES)
 def test_front_pages_quote_figures_only_from_their_sources(page):
     _, loose = blocks((ROOT / page).read_text())
     unsourced = [(n, f) for n, line in loose for f in figures(line) if "<!--" not in line]
