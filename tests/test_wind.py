@@ -109,3 +109,49 @@ def test_a_negative_drag_area_is_refused_naming_it(tmp_path, capsys):
     argv = ["--wind", "5", "--param", "drag_area_trailer=-0.1", "--no-video", "--no-plots"]
     assert run.main([*argv, "--out", str(out)]) == 2
     assert "drag_area_trailer=-0.1" in capsys.readouterr().err and not out.exists()
+
+
+def test_a_lever_gives_the_drag_a_yaw_moment_about_the_centre_of_mass():
+    from tt_mujoco.sim.wind import drag_moment
+
+    assert drag_moment(0.5, 0.0, 0.0, 10.0) == pytest.approx(5.0)  # a side force ahead: +z
+    assert drag_moment(0.5, math.pi / 2, 10.0, 0.0) == pytest.approx(-5.0)
+    assert drag_moment(0.0, 1.0, 3.0, 4.0) == 0.0
+    assert drag_moment(-0.2, 0.0, 7.0, 0.0) == 0.0  # along the heading: no moment
+
+
+def test_the_wind_moment_reaches_the_bodies_and_turns_a_parked_tractor_its_way(monkeypatch):
+    from tt_mujoco.sim import plant_mujoco
+
+    seen = []
+    blow = plant_mujoco.MujocoPlant.blow
+
+    def watched(self, tractor, trailer):
+        blow(self, tractor, trailer)
+        seen.append((tractor, trailer, self.data.xfrc_applied[self._tractor, 5]))
+
+    monkeypatch.setattr(plant_mujoco.MujocoPlant, "blow", watched)
+    base = {  # the wind blows across the circle's start heading (+y)
+        "controller": f"{__file__}:Zero", "traj": "circle", "start": "paper",
+        "disturbance": "none", "duration": 0.5, "wind": "20:0",
+    }  # fmt: skip
+    plain = simulate(Scenario(**base)).timeseries
+    assert all(t[2] == 0.0 and tr[2] == 0.0 for t, tr, _ in seen)  # no lever, no moment
+    seen.clear()
+    turned = {}
+    for lever in (0.2, -0.2):
+        ts = simulate(Scenario(**base, params={"drag_centre_tractor": lever})).timeseries
+        tractor, _, applied = seen[-1]
+        assert applied == tractor[2] != 0.0
+        turned[lever] = ts["theta"][-1] - plain["theta"][-1]
+    # Wind toward +x on a tractor heading +y pushes a point ahead of it clockwise.
+    assert turned[0.2] < 0.0 < turned[-0.2]
+    np.testing.assert_array_equal(
+        simulate(Scenario(**base, params={"drag_centre_tractor": 0.0})).timeseries["theta"],
+        plain["theta"],
+    )
+
+
+def test_a_lever_beyond_reason_is_refused_naming_it():
+    with pytest.raises(ValueError, match=r"drag_centre_trailer=20\.0 is not allowed"):
+        Params(drag_centre_trailer=20.0)

@@ -59,9 +59,9 @@ class Plant(ABC):
         heading ``theta`` and yaw moment) in wrench mode."""
 
     def blow(self, tractor, trailer) -> None:
-        """Horizontal forces ``(F_x, F_y)`` (N) on the tractor's and the trailer's bodies for
-        the next :meth:`advance` (the wind, :mod:`tt_mujoco.sim.wind`); a plant without bodies
-        to push refuses."""
+        """Horizontal forces and yaw moments ``(F_x, F_y, M_z)`` (N, N m) on the tractor's and
+        the trailer's bodies, at their centres of mass, for the next :meth:`advance` (the wind,
+        :mod:`tt_mujoco.sim.wind`); a plant without bodies to push refuses."""
         raise NotImplementedError(f"{type(self).__name__} has no aerodynamics")
 
     @abstractmethod

@@ -40,7 +40,7 @@ from tt_mujoco.sim.step import (
     stop_code,
 )
 from tt_mujoco.sim.timeseries import LOOP_COLUMNS, assemble_columns, train_columns
-from tt_mujoco.sim.wind import drag_force, parse_wind
+from tt_mujoco.sim.wind import drag_force, drag_moment, parse_wind
 from tt_mujoco.vehicle.reduced import SingularityError
 
 __all__ = ["CHECKPOINT_COLUMNS", "Stepper"]
@@ -245,7 +245,9 @@ class Stepper:
         trailer = drag_force(
             wx, wy, me.v0 * math.cos(alpha), me.v0 * math.sin(alpha), p.drag_area_trailer
         )
-        self.plant.blow(tractor, trailer)
+        tractor_moment = drag_moment(p.drag_centre_tractor, me.theta, *tractor)
+        trailer_moment = drag_moment(p.drag_centre_trailer, me.theta0, *trailer)
+        self.plant.blow((*tractor, tractor_moment), (*trailer, trailer_moment))
 
     def _check_train(self, me, t: float) -> None:
         """Stop when any hitch behind the first jackknifes."""

@@ -99,6 +99,13 @@ def parse_wind(text) -> Wind:
     return Wind(*numbers)
 
 
+def drag_moment(lever: float, heading: float, force_x: float, force_y: float) -> float:
+    """The yaw moment (N m) about a body's centre of mass of a force ``(F_x, F_y)`` acting
+    ``lever`` metres ahead of it along ``heading`` (rad): ``r x F`` with ``r`` along the
+    heading."""
+    return lever * (math.cos(heading) * force_y - math.sin(heading) * force_x)
+
+
 def drag_force(wind_x: float, wind_y: float, u_x: float, u_y: float, drag_area: float):
     """``(F_x, F_y)`` (N): the drag of the air moving at ``(wind_x, wind_y)`` on a body moving
     at ``(u_x, u_y)`` (m/s) with drag area ``drag_area`` (m^2)."""

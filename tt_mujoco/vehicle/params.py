@@ -264,6 +264,10 @@ class Params:
     drag_area_tractor, drag_area_trailer : float
         Drag coefficient times reference area (m^2) of the tractor's and the trailer's bodies,
         for ``Scenario.wind`` (:mod:`tt_mujoco.sim.wind`, not in the paper).
+    drag_centre_tractor, drag_centre_trailer : float
+        Where each body's drag acts (m), ahead of its centre of mass along its heading
+        (negative: behind): the wind's yaw moment about the centre of mass is this lever times
+        the drag's component across the heading. 0 (the default): no moment.
     train : tuple of Trailer (or dicts of its fields)
         Trailers 2..N behind the first (empty: the paper's single trailer). Build copies of
         trailer 1 with :meth:`with_trailers`.
@@ -298,6 +302,8 @@ class Params:
     motor_lag: float = 0.005
     drag_area_tractor: float = 0.03
     drag_area_trailer: float = 0.04
+    drag_centre_tractor: float = 0.0
+    drag_centre_trailer: float = 0.0
     train: tuple = ()
     steering: str = field(default="", init=False, compare=False)
 
@@ -319,6 +325,15 @@ class Params:
         )
         for name in positive:
             object.__setattr__(self, name, _positive(name, getattr(self, name)))
+        for name in ("drag_centre_tractor", "drag_centre_trailer"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise ValueError(f"{name}={value!r} is not allowed: it must be a number (m)")
+            if not (math.isfinite(value) and abs(value) <= 10.0):
+                raise ValueError(
+                    f"{name}={value!r} is not allowed: it must be a finite lever within 10 m"
+                )
+            object.__setattr__(self, name, float(value))
         if not 1e-5 <= self.timestep <= 0.01:
             raise ValueError(
                 f"timestep={self.timestep!r} is not allowed: it must be in [1e-05, 0.01] s"
