@@ -6,8 +6,8 @@ every decimal number in it (outside inline code) must appear, as written, in one
 A FILE is a generated page (its "Written by `python ...`" line names the command), a
 benchmark's recorded output (``benchmarks/record.py``, whose first line is the command), a
 test that asserts the figure, or the module that defines it (a constant such as Delta_1's).
-On the pages of :data:`SOURCED_PAGES` every decimal number outside code must stand in such a
-block.
+On every page but a command's output and those of :data:`NOT_YET_SOURCED`, every decimal
+number outside code must stand in such a block.
 """
 
 import re
@@ -16,14 +16,14 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-#: Pages where every figure must be sourced: what a newcomer reads first, and the timings.
-SOURCED_PAGES = (
-    "README.md",
-    "docs/index.md",
-    "docs/getting-started.md",
-    "docs/results.md",
-    "docs/performance.md",
-    "docs/sweeps.md",
+#: Pages whose prose still quotes figures without naming their source: every other page, the
+#: README included, must source each figure or be a command's output ("Written by").
+NOT_YET_SOURCED = (
+    "docs/extending.md",
+    "docs/model.md",
+    "docs/paper-notes.md",
+    "docs/trains.md",
+    "docs/validation.md",
 )
 MARKER = re.compile(r"<!-- numbers: (.+?) -->")
 #: A figure: a decimal number or a number with thousands separators.
@@ -74,7 +74,9 @@ def figures(line: str) -> list[str]:
 
 
 def _source_figures(path: Path) -> set[str]:
-    return set(FIGURE.findall(path.read_text()))
+    text = path.read_text()
+    text = re.sub(r"(?<=\d)_(?=\d{3})", ",", text)  # Python's 1_200_000 is the page's 1,200,000
+    return set(FIGURE.findall(text))
 
 
 def _all_pages():
@@ -90,7 +92,7 @@ def test_every_quoted_figure_is_in_its_source(page):
             source = ROOT / name
             assert source.is_file(), f"{page.name}:{line_no}: source {name} does not exist"
             # A test asserts its numbers; a module of the package defines its constants.
-            if source.parts[len(ROOT.parts)] not in ("tests", "tt_mujoco"):
+            if source.parts[len(ROOT.parts)] not in ("tests", "tt_mujoco", "controllers"):
                 head = source.read_text()[:4000]
                 assert "python " in head, f"{name} does not say which command wrote it"
             known |= _source_figures(source)
@@ -101,11 +103,27 @@ def test_every_quoted_figure_is_in_its_source(page):
                 )
 
 
-@pytest.mark.parametrize("page", SOURCED_PAGES)
-def test_front_pages_quote_figures_only_from_their_sources(page):
-    _, loose = blocks((ROOT / page).read_text())
+def _held_pages():
+    return [p for p in _all_pages() if str(p.relative_to(ROOT)) not in NOT_YET_SOURCED]
+
+
+@pytest.mark.parametrize("page", _held_pages(), ids=lambda p: p.name)
+def test_every_figure_on_a_page_has_a_source(page):
+    text = page.read_text()
+    if "Written by `python" in text:
+        return  # the page is a command's output: its figures are that command's
+    _, loose = blocks(text)
     unsourced = [(n, f) for n, line in loose for f in figures(line) if "<!--" not in line]
-    assert not unsourced, f"{page}: figures without a <!-- numbers: FILE --> source: {unsourced}"
+    assert not unsourced, (
+        f"{page.name}: figures without a <!-- numbers: FILE --> source: {unsourced}"
+    )
+
+
+def test_the_pages_not_yet_sourced_still_need_it():
+    # Once a page sources its figures, it leaves NOT_YET_SOURCED and the test above holds it.
+    for name in NOT_YET_SOURCED:
+        _, loose = blocks((ROOT / name).read_text())
+        assert any(figures(line) for _, line in loose), f"{name} is sourced: drop it from the list"
 
 
 def test_the_marker_reader_finds_blocks_and_figures():
