@@ -2,9 +2,11 @@
 
     python benchmarks/record.py [--runs 2] bench_cli.py [ARGS ...]
     python benchmarks/record.py --runs 1 docs/backing_study.py [ARGS ...]
+    python benchmarks/record.py --runs 1 tt_mujoco.validate [ARGS ...]
 
-runs ``python benchmarks/BENCH ARGS`` (a script named with its folder: that script)
-``--runs`` times, one after the other, and writes ``benchmarks/results/<script>[--<args>].txt``:
+runs ``python benchmarks/BENCH ARGS`` (a script named with its folder: that script; a dotted
+name without ``.py``: ``python -m`` that module) ``--runs`` times, one after the other, and
+writes ``benchmarks/results/<script>[--<args>].txt``:
 the command, the machine (cores, CPU, Python, MuJoCo and numba versions, the date) and each
 run's output. A page that quotes a figure names
 this file in a ``<!-- numbers: ... -->`` marker, and ``tests/test_numbers.py`` fails when the
@@ -30,7 +32,8 @@ RESULTS = HERE / "results"
 def result_file(bench: str, args: list[str]) -> Path:
     """Where the output of ``bench`` with ``args`` is kept."""
     slug = re.sub(r"[^A-Za-z0-9_.=-]+", "_", "_".join(a.lstrip("-") for a in args)).strip("_")
-    return RESULTS / (Path(bench).stem + (f"--{slug}" if slug else "") + ".txt")
+    stem = bench.removesuffix(".py").replace("/", "_")
+    return RESULTS / (Path(stem).name + (f"--{slug}" if slug else "") + ".txt")
 
 
 def machine() -> str:
@@ -57,19 +60,22 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("args", nargs=argparse.REMAINDER, help="its arguments")
     a = p.parse_args(argv)
     named = Path(a.bench)
+    module = a.bench if named.suffix != ".py" and a.bench.replace(".", "").isidentifier() else None
     script = (HERE.parent / named) if named.parent != Path() else HERE / named
-    if script.suffix != ".py" or not script.is_file() or a.runs < 1:
+    if (module is None and (script.suffix != ".py" or not script.is_file())) or a.runs < 1:
         print(
-            f"error: {a.bench!r} is not a script of the repository (give bench_X.py or "
-            "FOLDER/SCRIPT.py), or --runs < 1",
+            f"error: {a.bench!r} is not a script of the repository (give bench_X.py, "
+            "FOLDER/SCRIPT.py or a module such as tt_mujoco.validate), or --runs < 1",
             file=sys.stderr,
         )
         return 2
-    command = " ".join(["python", str(script.relative_to(HERE.parent)), *a.args])
+    target = ["-m", module] if module else [str(script)]
+    shown = ["-m", module] if module else [str(script.relative_to(HERE.parent))]
+    command = " ".join(["python", *shown, *a.args])
     lines = [f"# {command}  ({a.runs} runs)", f"# {machine()}", f"# {time.strftime('%Y-%m-%d')}"]
     for k in range(1, a.runs + 1):
         done = subprocess.run(
-            [sys.executable, str(script), *a.args], capture_output=True, text=True, check=False
+            [sys.executable, *target, *a.args], capture_output=True, text=True, check=False
         )
         if done.returncode != 0:
             print(done.stdout + done.stderr, file=sys.stderr)
@@ -77,7 +83,7 @@ def main(argv: list[str] | None = None) -> int:
             return 1
         lines += [f"## run {k}", done.stdout.rstrip()]
         print(done.stdout, end="")
-    out = result_file(script.name, a.args)
+    out = result_file(module or script.name, a.args)
     out.parent.mkdir(exist_ok=True)
     temporary = out.with_suffix(".partial")
     temporary.write_text("\n".join(lines) + "\n")

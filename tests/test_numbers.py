@@ -22,8 +22,6 @@ NOT_YET_SOURCED = (
     "docs/extending.md",
     "docs/model.md",
     "docs/paper-notes.md",
-    "docs/trains.md",
-    "docs/validation.md",
 )
 MARKER = re.compile(r"<!-- numbers: (.+?) -->")
 #: A figure: a decimal number or a number with thousands separators.

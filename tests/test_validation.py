@@ -114,3 +114,28 @@ def test_report_gives_a_verdict_per_bound_and_never_none():
     text = validate.validation_markdown(results)
     assert "**Verdict: 4 of 6 bounds hold; FAILED: energy.rel_error" in text
     assert "None" not in text and "| never |" in text
+
+
+def test_the_kinematic_error_is_first_order_in_the_timestep():
+    # Contact softness has a time constant of two steps, so the creep, and the kinematic error
+    # after the same drive, scale with the timestep (docs/validation.md quotes these).
+    errors = {
+        dt: validate.check_kinematics(Params(timestep=dt), +1)["final_P_error_m"]
+        for dt in (0.0005, 0.001, 0.002)
+    }
+    assert errors[0.001] / errors[0.0005] == pytest.approx(2.0, rel=0.05)
+    assert errors[0.002] / errors[0.001] == pytest.approx(2.0, rel=0.05)
+    shown = " / ".join(f"{1e3 * e:.2f}" for e in errors.values())
+    assert shown == "0.38 / 0.75 / 1.50"  # mm, docs/validation.md
+
+
+@pytest.mark.parametrize(
+    ("options", "at"),
+    [({}, "1.142"), ({"disturbance_limit": "none"}, "1.130"), ({"disturbance": "none"}, "1.115")],
+)
+def test_the_papers_eta_jackknifes_forward_whatever_the_disturbance(options, at):
+    from tt_mujoco.sim import Scenario, simulate
+
+    result = simulate(Scenario(traj="s_curve", eta="paper", **options))
+    assert result.status == "jackknife"
+    assert f"jackknife at t={at} s" in result.message  # docs/validation.md
