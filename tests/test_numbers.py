@@ -6,8 +6,8 @@ every decimal number in it (outside inline code) must appear, as written, in one
 A FILE is a generated page (its "Written by `python ...`" line names the command), a
 benchmark's recorded output (``benchmarks/record.py``, whose first line is the command), a
 test that asserts the figure, or the module that defines it (a constant such as Delta_1's).
-On every page but a command's output and those of :data:`NOT_YET_SOURCED`, every decimal
-number outside code must stand in such a block.
+On every page but a command's output, every decimal number outside code must stand in such a
+block.
 """
 
 import re
@@ -16,17 +16,11 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-#: Pages whose prose still quotes figures without naming their source: every other page, the
-#: README included, must source each figure or be a command's output ("Written by").
-NOT_YET_SOURCED = (
-    "docs/extending.md",
-    "docs/model.md",
-    "docs/paper-notes.md",
-)
 MARKER = re.compile(r"<!-- numbers: (.+?) -->")
-#: A figure: a decimal number or a number with thousands separators.
+#: A figure: a decimal number, a number in scientific notation or one with thousands separators.
 FIGURE = re.compile(
-    r"(?<![\w.,])-?(?:\d{1,3}(?:,\d{3})+(?:\.\d+)?|\d+\.\d+)(?!\.\d|[0-9_A-Za-wyz])"
+    r"(?<![\w.,])-?(?:\d+(?:\.\d+)?e[-+]?\d+|\d{1,3}(?:,\d{3})+(?:\.\d+)?|\d+\.\d+)"
+    r"(?!\.\d|[0-9_A-Za-wyz])"
 )
 #: What is not a figure: versions of the tools named, and numbered sections and equations.
 NOT_FIGURES = re.compile(r"Python 3\.\d+|(?:Sections?|Tables?|eqs?\.|Appendix) \d+(?:\.\d+)*")
@@ -54,21 +48,38 @@ def blocks(text: str):
         found = MARKER.search(re.sub(r"`[^`]*`", " ", line))  # a marker shown as code is text
         if found and not fenced:
             sources = [s.strip() for s in found.group(1).split(",")]
-            start, body = k + 1, []
             k += 1
+            while k < len(lines) and MARKER.search(lines[k]):  # markers in a row: one block
+                sources += [s.strip() for s in MARKER.search(lines[k]).group(1).split(",")]
+                k += 1
+            start, body = k, []
             while k < len(lines) and lines[k].strip():
                 body.append(lines[k])
                 k += 1
             marked.append((sources, start + 1, body))
             continue
         if not fenced:
-            loose.append((k + 1, line))
+            # The previous line's last word joins it: "Section" may end one line, "6.1" begin the
+            # next.
+            loose.append((k + 1, _with_tail(lines[k - 1] if k else "", line)))
         k += 1
     return marked, loose
 
 
 def figures(line: str) -> list[str]:
     return FIGURE.findall(NOT_FIGURES.sub(" ", _prose(line)))
+
+
+def _with_tail(previous: str, line: str) -> str:
+    """``line`` after the previous line's last word when that is a word ("Section" may end one
+    line and "6.1" begin the next)."""
+    tail = previous.split()[-1:]
+    return f"{tail[0]} {line}" if tail and tail[0].rstrip(".").isalpha() else line
+
+
+def _joined(body: list[str]) -> list[str]:
+    """Each line of a block after the previous one's last word (:func:`_with_tail`)."""
+    return [_with_tail(body[i - 1] if i else "", line) for i, line in enumerate(body)]
 
 
 def _source_figures(path: Path) -> set[str]:
@@ -94,18 +105,14 @@ def test_every_quoted_figure_is_in_its_source(page):
                 head = source.read_text()[:4000]
                 assert "python " in head, f"{name} does not say which command wrote it"
             known |= _source_figures(source)
-        for offset, line in enumerate(body):
+        for offset, line in enumerate(_joined(body)):
             for figure in figures(line):
                 assert figure in known, (
                     f"{page.name}:{line_no + offset}: {figure} is not in {', '.join(sources)}"
                 )
 
 
-def _held_pages():
-    return [p for p in _all_pages() if str(p.relative_to(ROOT)) not in NOT_YET_SOURCED]
-
-
-@pytest.mark.parametrize("page", _held_pages(), ids=lambda p: p.name)
+@pytest.mark.parametrize("page", _all_pages(), ids=lambda p: p.name)
 def test_every_figure_on_a_page_has_a_source(page):
     text = page.read_text()
     if "Written by `python" in text:
@@ -115,13 +122,6 @@ def test_every_figure_on_a_page_has_a_source(page):
     assert not unsourced, (
         f"{page.name}: figures without a <!-- numbers: FILE --> source: {unsourced}"
     )
-
-
-def test_the_pages_not_yet_sourced_still_need_it():
-    # Once a page sources its figures, it leaves NOT_YET_SOURCED and the test above holds it.
-    for name in NOT_YET_SOURCED:
-        _, loose = blocks((ROOT / name).read_text())
-        assert any(figures(line) for _, line in loose), f"{name} is sourced: drop it from the list"
 
 
 def test_the_marker_reader_finds_blocks_and_figures():
