@@ -1,4 +1,5 @@
-"""Command-line parsing shared by the applications: one error style, one set of value types.
+"""Command-line parsing shared by the applications: one error style (the scenario's value types
+are the option schema's, :mod:`tt_mujoco.schema`).
 
 Every CLI builds its parser from :class:`Parser`: a usage error is one line (no usage dump), exit
 code 2, and a misspelt option or choice gets a "did you mean" hint, as the TOML keys, sweep
@@ -8,12 +9,11 @@ options and registries do (:func:`tt_mujoco.registry.closest`).
 from __future__ import annotations
 
 import argparse
-import math
 import re
 
 from tt_mujoco.registry import closest
 
-__all__ = ["BadInputError", "Parser", "finite", "integer_at_least", "number", "positive"]
+__all__ = ["BadInputError", "Parser", "integer_at_least"]
 
 
 class BadInputError(ValueError):
@@ -42,37 +42,6 @@ class Parser(argparse.ArgumentParser):
             if close:
                 return f"; did you mean {close!r}?"
         return ""
-
-
-def number(name: str, text: str) -> float:
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"{name} {text!r} is not a number") from None
-
-
-def positive(name: str):
-    """An argparse type: a finite number > 0, the message naming ``name``."""
-
-    def parse(text: str) -> float:
-        value = number(name, text)
-        if not (math.isfinite(value) and value > 0):
-            raise argparse.ArgumentTypeError(f"{name} {text!r} must be a finite number > 0")
-        return value
-
-    return parse
-
-
-def finite(name: str):
-    """An argparse type: a finite number, the message naming ``name``."""
-
-    def parse(text: str) -> float:
-        value = number(name, text)
-        if not math.isfinite(value):
-            raise argparse.ArgumentTypeError(f"{name} {text!r} must be a finite number")
-        return value
-
-    return parse
 
 
 def integer_at_least(name: str, low: int):
