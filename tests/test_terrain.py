@@ -133,12 +133,13 @@ def test_the_cli_refuses_a_bad_grade_and_writes_nothing(tmp_path, capsys):
     assert "90.0 deg" in capsys.readouterr().err and not out.exists()
 
 
-def test_every_route_gives_the_same_numbers(tmp_path):
-    options = {"traj": "circle", "duration": 1.0, "terrain": "slope:8:45", "seed": 4}
+@pytest.mark.parametrize("terrain", ["slope:8:45", "rough:0.01:0.5:2"])
+def test_every_route_gives_the_same_numbers(tmp_path, terrain):
+    options = {"traj": "circle", "duration": 1.0, "terrain": terrain, "seed": 4}
     direct = simulate(Scenario(noise_snr_db=30.0, **options)).metrics["rmse_v"]
     toml = tmp_path / "s.toml"
     toml.write_text(
-        'traj = "circle"\nduration = 1.0\nterrain = "slope:8:45"\nseed = 4\nnoise_snr_db = 30.0\n'
+        f'traj = "circle"\nduration = 1.0\nterrain = "{terrain}"\nseed = 4\nnoise_snr_db = 30.0\n'
     )
     cli = tmp_path / "cli"
     args = ["--config", str(toml), "--no-video", "--no-plots", "--quiet", "--out", str(cli)]
@@ -146,18 +147,25 @@ def test_every_route_gives_the_same_numbers(tmp_path):
     assert done.returncode == 0, done.stderr
     assert json.loads((cli / "metrics.json").read_text())["rmse_v"] == direct
     sweep = tmp_path / "sweep"
-    args = ["traj=circle", "duration=1", "terrain=slope:8:45", "noise_snr_db=30"]
+    args = ["traj=circle", "duration=1", f"terrain={terrain}", "noise_snr_db=30"]
     args += ["--repeats", "1", "--out", str(sweep)]
     done = subprocess.run([sys.executable, "-m", "tt_mujoco.sweep", *args], capture_output=True)
     assert done.returncode == 0, done.stderr
     with open(sweep / "runs.csv") as f:
         row = next(csv.DictReader(f))
-    assert row["terrain"] == "slope:8:45"
+    assert row["terrain"] == terrain
     again = {**options, "seed": int(row["seed"])}
     assert float(row["rmse_v"]) == simulate(Scenario(noise_snr_db=30.0, **again)).metrics["rmse_v"]
     pytest.importorskip("gymnasium")
     from tt_mujoco.gym_env import TractorTrailerEnv
 
-    env = TractorTrailerEnv(terrain="slope:8:45", traj="circle", plant="mujoco")
+    env = TractorTrailerEnv(terrain=terrain, traj="circle", plant="mujoco", duration=1.0)
     env.reset(seed=0)
-    np.testing.assert_allclose(env._stepper.plant.model.opt.gravity, Terrain(8, 45).gravity)
+    model, built = env._stepper.plant.model, env._stepper.built
+    if terrain.startswith("slope"):
+        np.testing.assert_allclose(model.opt.gravity, Terrain(8, 45).gravity)
+    else:  # the run's own ground, placed as the CLI's run placed it
+        assert np.array_equal(
+            model.hfield_data, build(Scenario(**options)).new_plant().model.hfield_data
+        )
+        assert built.relief.heights.size == model.hfield_data.size

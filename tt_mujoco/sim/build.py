@@ -17,7 +17,7 @@ import numpy as np
 from tt_mujoco.analysis.metrics import resolve_metrics
 from tt_mujoco.controllers import Controller, ControllerSetup, controller_class, reduced_model
 from tt_mujoco.controllers.backing import HitchCascade
-from tt_mujoco.defaults import MAX_DURATION, MAX_PHYSICS_STEPS
+from tt_mujoco.defaults import MAX_DURATION, MAX_PHYSICS_STEPS, MAX_SPEED
 from tt_mujoco.reference.feedback import PathFeedback
 from tt_mujoco.reference.reverse import ReverseTarget
 from tt_mujoco.reference.targets import make_target
@@ -26,6 +26,7 @@ from tt_mujoco.sim.faults import FaultSchedule, parse_faults
 from tt_mujoco.sim.ground import GroundPatches, parse_patches
 from tt_mujoco.sim.plant import Plant
 from tt_mujoco.sim.plant_reduced import ReducedPlant
+from tt_mujoco.sim.relief import relief_of
 from tt_mujoco.sim.scenario import Scenario
 from tt_mujoco.sim.schedule import EtaScheduler, PathEtaScheduler
 from tt_mujoco.sim.terrain import parse_terrain
@@ -88,6 +89,8 @@ class Build:
     initial_hitches: tuple = ()
     #: The sensor delay in control steps (``Scenario.sensor_delay / control_dt``).
     delay_steps: int = 0
+    #: The ground's shape (a ramp, a rough ground: :mod:`tt_mujoco.sim.relief`), else None.
+    relief: Any = None
 
     def new_plant(self, phi0_deg: float | None = None) -> Plant:
         """A fresh plant in the initial state (``phi0_deg`` overrides the scenario's)."""
@@ -103,7 +106,13 @@ class Build:
             terrain = parse_terrain(s.terrain)
             gravity = None if terrain.flat else terrain.gravity
             plant = _plant_class("mujoco")(
-                self.plant_params, self.initial_pose, self.v_init, wrench, phi0, gravity
+                self.plant_params,
+                self.initial_pose,
+                self.v_init,
+                wrench,
+                phi0,
+                gravity,
+                self.relief,
             )
             patches = parse_patches(s.ground)
             if patches:
@@ -129,6 +138,14 @@ class Build:
 
     def new_controller(self) -> Controller:
         return self.controller_class.from_setup(self.controller_setup, self.scenario.gains)
+
+
+def drawn_polyline(path, duration: float) -> np.ndarray:
+    """The reference path as a run of ``duration`` can reach it (``(N, 2)``): sized by the
+    distance it can cover (``MAX_SPEED`` for its duration), not by the path, so a circle of
+    R = 1e4 m on a 1 s run is a 20 m arc, not 63 km of polyline. Every run keeps it (its
+    ``reference_path.parquet``); the ground's shapes are placed along it."""
+    return path.dense(length=min(path.length, MAX_SPEED * duration))
 
 
 def _delay_steps(scenario: Scenario, dt: float, duration: float) -> int:
@@ -271,6 +288,7 @@ def build(scenario: Scenario) -> Build:
         start_s=start_s,
         initial_hitches=_initial_hitches(scenario, path, start_s, plant_p),
         delay_steps=_delay_steps(scenario, dt, duration),
+        relief=relief_of(parse_terrain(scenario.terrain), drawn_polyline(path, duration), plant_p),
     )
     result.new_faults()  # a fault after the end of the run is refused now
     result.new_controller()  # bad gains fail before any work

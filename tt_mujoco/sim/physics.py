@@ -27,17 +27,20 @@ _COMPILED: dict[str, mujoco.MjModel] = {}
 _COMPILED_MAX = 16
 
 
-def compile_model(p: Params) -> mujoco.MjModel:
-    """Compile the scene for ``p`` from the generated XML (no files are read or written).
+def compile_model(p: Params, relief=None) -> mujoco.MjModel:
+    """Compile the scene for ``p`` from the generated XML (no files are read or written), on
+    the ground ``relief`` (:mod:`tt_mujoco.sim.relief`; None: the flat floor).
 
     Returns a private copy: callers may change it (faults edit ``body_mass``, the steering
     schedule ``eq_data``) without touching the cached original.
     """
-    xml = vehicle_xml(p)
-    model = _COMPILED.get(xml)
+    xml = vehicle_xml(p, uneven=relief is not None)
+    scene = scene_xml() if relief is None else scene_xml(ground=relief.geoms_xml())
+    key = xml if relief is None else xml + scene
+    model = _COMPILED.get(key)
     if model is None:
         try:
-            model = mujoco.MjModel.from_xml_string(scene_xml(), assets={VEHICLE_FILE: xml.encode()})
+            model = mujoco.MjModel.from_xml_string(scene, assets={VEHICLE_FILE: xml.encode()})
         except ValueError as err:
             default = Params(eta=p.eta, timestep=p.timestep, friction=p.friction)
             changed = {
@@ -52,8 +55,26 @@ def compile_model(p: Params) -> mujoco.MjModel:
             ) from None
         if len(_COMPILED) >= _COMPILED_MAX:
             _COMPILED.pop(next(iter(_COMPILED)))
-        _COMPILED[xml] = model
+        _COMPILED[key] = model
     return copy.copy(model)
+
+
+#: The joints only the vehicle for uneven ground has (``vehicle_xml(uneven=True)``).
+UNEVEN_JOINTS = ("hitch_roll", "hitch_pitch")
+#: How long (s) a vehicle settles on a ramp or a rough ground before its run starts.
+SETTLE_S = 0.5
+
+
+def _rotation_onto(normal: np.ndarray) -> np.ndarray:
+    """The smallest rotation taking the vertical onto the unit vector ``normal``."""
+    axis = np.array([-normal[1], normal[0], 0.0])  # e_z x normal
+    sin = float(np.linalg.norm(axis))
+    if sin < 1e-15:
+        return np.eye(3)
+    axis /= sin
+    cos = float(normal[2])
+    cross = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + sin * cross + (1 - cos) * cross @ cross
 
 
 def layout_of(model: mujoco.MjModel, p: Params) -> Layout:
@@ -98,11 +119,14 @@ class Vehicle:
     ----------
     params : Params
         Parameters the MJCF is built from (the *plant's* parameters).
+    relief : RampRelief or RoughRelief, optional
+        The ground's shape (:mod:`tt_mujoco.sim.relief`): the vehicle is placed resting on it.
     """
 
-    def __init__(self, params: Params):
+    def __init__(self, params: Params, relief=None):
         self.params = params
-        self.model = compile_model(params)
+        self.relief = relief
+        self.model = compile_model(params, relief)
         self.data = mujoco.MjData(self.model)
         self.layout = layout_of(self.model, params)
         self._settled_height = None
@@ -181,7 +205,64 @@ class Vehicle:
             d.qpos[steer_q] = eta * angle
         selection = self.full_selection(phis if p.n_trailers > 1 else phis[0], theta)
         d.qvel[:] = selection @ np.array([v, omega])
+        if self.relief is not None and z is None:
+            mujoco.mj_kinematics(self.model, d)
+            tilt = self.rest_on_relief()
+            self._settle()
+            d.qvel[:] = selection @ np.array([v, omega])
+            d.qvel[lay.root_v : lay.root_v + 3] = tilt @ d.qvel[lay.root_v : lay.root_v + 3]
         mujoco.mj_forward(self.model, d)
+
+    def _settle(self) -> None:
+        """Let the vehicle come to rest on the relief under gravity, every planar coordinate
+        held (position, heading, hitch and steering angles, wheel spins): only its height, roll
+        and pitch and the hitches' roll and pitch move, for :data:`SETTLE_S` of simulated
+        time. A plane fitted under the wheels (:meth:`rest_on_relief`) leaves a wheel of an
+        articulated train above a rough ground; this puts every wheel on it."""
+        m, d, lay = self.model, self.data, self.layout
+        uneven = [j for j in range(m.njnt) if m.joint(j).name.startswith(UNEVEN_JOINTS)]
+        free_v = {lay.root_v + 2, lay.root_v + 3, lay.root_v + 4}
+        free_v |= {int(m.jnt_dofadr[j]) for j in uneven}
+        held_v = [i for i in range(m.nv) if i not in free_v]
+        root, free_q = lay.root_q, {int(m.jnt_qposadr[j]) for j in uneven}
+        held_q = [i for i in range(m.nq) if i in (root, root + 1) or i >= root + 7]
+        held_q = [i for i in held_q if i not in free_q]
+        kept = d.qpos[held_q].copy()
+        for _ in range(round(SETTLE_S / m.opt.timestep)):
+            d.qvel[held_v] = 0.0
+            mujoco.mj_step(m, d)
+            d.qpos[held_q] = kept
+        d.qvel[:] = 0.0
+        d.time = 0.0
+
+    def rest_on_relief(self) -> np.ndarray:
+        """Tilt and lift the whole vehicle, from its pose on the flat floor (kinematics
+        computed), onto the ground's plane fitted under its wheels, high enough that no wheel
+        is below the ground; its (x, y) and heading stay. Returns the tilt (3 x 3).
+
+        The train is rigid in pitch and roll (its hitches are vertical hinges), so on a
+        ground that is not a plane it stands on some of its wheels; a wheel above the ground
+        at the start drops by at most the plane fit's misfit."""
+        m, d, lay = self.model, self.data, self.layout
+        wheels = [g for g in range(m.ngeom) if m.geom_contype[g] and m.geom_priority[g] == 1]
+        centres = d.geom_xpos[wheels]
+        below = np.asarray(self.relief.height(centres[:, 0], centres[:, 1]))
+        fit = np.column_stack([np.ones(len(wheels)), centres[:, 0], centres[:, 1]])
+        _, gx, gy = np.linalg.lstsq(fit, below, rcond=None)[0]
+        normal = np.array([-gx, -gy, 1.0]) / math.sqrt(1.0 + gx * gx + gy * gy)
+        tilt = _rotation_onto(normal)
+        i = lay.root_q
+        root = d.qpos[i : i + 3].copy()
+        moved = root + (centres - root) @ tilt.T
+        heights = np.asarray(self.relief.height(moved[:, 0], moved[:, 1]))
+        radius = m.geom_size[wheels, 0]
+        lift = np.max(heights + radius / normal[2] - moved[:, 2])
+        d.qpos[i + 2] += lift
+        quat = np.empty(4)
+        mujoco.mju_mat2Quat(quat, tilt.ravel())
+        mujoco.mju_mulQuat(d.qpos[i + 3 : i + 7], quat, d.qpos[i + 3 : i + 7].copy())
+        mujoco.mj_kinematics(m, d)
+        return tilt
 
     def measure(self) -> Measurement:
         if self.params.n_trailers > 1:

@@ -44,15 +44,24 @@ class MujocoPlant(Plant):
     gravity : (gx, gy, gz) or None
         Gravity in the ground's frame (m/s^2): a grade (:mod:`tt_mujoco.sim.terrain`); None
         keeps the model's flat-ground gravity.
+    relief : RampRelief or RoughRelief, optional
+        The ground's shape (:mod:`tt_mujoco.sim.relief`), the vehicle resting on it.
     """
 
     name = "mujoco"
     DISTURBANCE_MODES = ("matched", "wrench", "none")
 
     def __init__(
-        self, params: Params, pose, v_init: float, wrench: bool, phi0: float = 0.0, gravity=None
+        self,
+        params: Params,
+        pose,
+        v_init: float,
+        wrench: bool,
+        phi0: float = 0.0,
+        gravity=None,
+        relief=None,
     ):
-        self.vehicle = Vehicle(params)
+        self.vehicle = Vehicle(params, relief)
         if gravity is not None:  # the model is the vehicle's own copy (physics.compile_model)
             self.vehicle.model.opt.gravity[:] = gravity
         self.vehicle.set_state(x=pose[0], y=pose[1], theta=pose[2], phi=phi0, v=v_init)

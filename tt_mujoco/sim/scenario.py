@@ -447,14 +447,18 @@ class Scenario:
         unit="s",
         flags=("--time-limit",),
     )
-    #: The ground (:mod:`tt_mujoco.sim.terrain`): ``"flat"`` or ``"slope:GRADE_DEG[:HEADING_DEG]"``,
-    #: a constant grade rising along the heading (MuJoCo plant only).
+    #: The ground (:mod:`tt_mujoco.sim.terrain`): ``"flat"``, ``"slope:GRADE_DEG[:HEADING_DEG]"``
+    #: (a constant grade rising along the heading), ``"ramp:START_S_M:GRADE_DEG[:LENGTH_M]"``
+    #: (flat, then rising along the path's direction at its arc length START_S_M) or
+    #: ``"rough:AMPLITUDE_M:WAVELENGTH_M[:SEED]"`` (a heightfield); MuJoCo plant only.
     terrain: str = option(
         "flat",
         _spec(parse_terrain),
-        "the ground: flat, or a constant grade rising along HEADING_DEG (default 0, +x); "
-        "MuJoCo plant only",
-        metavar="flat|slope:GRADE_DEG[:HEADING_DEG]",
+        "the ground: flat; a constant grade rising along HEADING_DEG (default 0, +x); a ramp "
+        "rising from the path's arc length START_S (for LENGTH m, then level); or a rough "
+        "ground of bumps of AMPLITUDE and about WAVELENGTH from SEED; MuJoCo plant only",
+        metavar="flat|slope:GRADE_DEG[:HEADING_DEG]|ramp:START_S:GRADE_DEG[:LENGTH]|"
+        "rough:AMPLITUDE:WAVELENGTH[:SEED]",
     )
     #: What turns the torque command into wheel torque (:mod:`tt_mujoco.sim.motors`):
     #: ``"ideal"`` (at once, the paper's) or ``"dc_motor"`` (a DC motor per wheel with its

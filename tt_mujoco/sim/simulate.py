@@ -18,10 +18,11 @@ from tt_mujoco.registry import describe_failure as usercode_failure
 from tt_mujoco.registry import shown
 from tt_mujoco.sim import compiled, usercode
 from tt_mujoco.sim import faults as faults_mod
-from tt_mujoco.sim.build import Build, build
+from tt_mujoco.sim.build import Build, build, drawn_polyline
 from tt_mujoco.sim.ground import ground_report, parse_patches
 from tt_mujoco.sim.plant import StopRun
 from tt_mujoco.sim.probe import check_user_code
+from tt_mujoco.sim.relief import RampRelief
 from tt_mujoco.sim.scenario import Scenario
 from tt_mujoco.sim.stepper import Stepper
 from tt_mujoco.sim.terrain import parse_terrain
@@ -218,19 +219,35 @@ def user_metric(fn, ts: dict, path) -> tuple[float | None, str | None]:
 
 
 def reference_polylines(built: Build) -> tuple[np.ndarray, np.ndarray]:
-    """The reference path as the run can reach it (``(N, 2)``, to draw), and as distances are
-    measured to it: one period of a path that repeats itself (a circle's laps coincide, and
-    projecting onto every lap would cost the run's length times its laps).
-
-    Both are sized by the distance the run can cover (``MAX_SPEED`` for its duration), not by
-    the path: a circle of R = 1e4 m on a 1 s run is a 20 m arc here, not 63 km of polyline.
+    """The reference path as the run can reach it (``(N, 2)``, to draw: :func:`drawn_polyline`),
+    and as distances are measured to it: one period of a path that repeats itself (a circle's
+    laps coincide, and projecting onto every lap would cost the run's length times its laps).
     """
     path = built.path
-    reach = min(path.length, MAX_SPEED * built.duration)
-    drawn = path.dense(length=reach)
-    if path.period is None or path.period >= reach:
+    drawn = drawn_polyline(path, built.duration)
+    if (
+        path.period is None
+        or path.period >= path.length
+        or path.period >= MAX_SPEED * built.duration
+    ):
         return drawn, drawn
     return drawn, path.dense(length=path.period)
+
+
+def _relief_times(relief, ts) -> dict:
+    """On a ramp: when the tractor's axle P reached its foot (None: never) and the mean torque
+    it took from then on."""
+    if not isinstance(relief, RampRelief):
+        return {}
+    up = relief.height(ts["x"], ts["y"]) > 0.0
+    if not up.any():
+        return {"t_ramp_reached": None, "torque_sum_mean_on_ramp": None}
+    first = int(np.argmax(up))
+    torque = ts["T_r"][first:] + ts["T_l"][first:]
+    return {
+        "t_ramp_reached": float(ts["t"][first]),
+        "torque_sum_mean_on_ramp": float(torque.mean()),
+    }
 
 
 def finish(built: Build, stepper: Stepper, controller, status, message, wall) -> Result:
@@ -251,11 +268,10 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
     terrain = parse_terrain(scenario.terrain)
     if not terrain.flat and len(ts["t"]):
         metrics["terrain"] = {
-            "grade_deg": terrain.grade_deg,
-            "heading_deg": terrain.heading_deg,
-            # the paper's Delta_1 bias a free body on this grade would see
-            "equivalent_delta1": terrain.equivalent_delta1,
+            **terrain.report(),
+            **(built.relief.report() if built.relief is not None else {}),
             "torque_sum_mean": float(np.mean(ts["T_r"] + ts["T_l"])),
+            **_relief_times(built.relief, ts),
         }
     if scenario.ground and len(ts["t"]):
         metrics["ground"] = ground_report(parse_patches(scenario.ground), stepper.ground_masks, ts)

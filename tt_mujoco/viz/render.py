@@ -27,7 +27,8 @@ from tt_mujoco.analysis.geometry import Polyline
 from tt_mujoco.outputs import REFERENCE_FILE, publish_new, read_timeseries, temporary_beside
 from tt_mujoco.progress import progress_bar
 from tt_mujoco.sim.physics import Vehicle
-from tt_mujoco.sim.terrain import parse_terrain
+from tt_mujoco.sim.relief import relief_of
+from tt_mujoco.sim.terrain import Terrain, parse_terrain
 from tt_mujoco.sim.timeseries import train_columns
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.viz.annotate import END_CARD_S, Legend, end_card
@@ -218,7 +219,9 @@ class RunRenderer:
         Shown in the top-right corner (e.g. "ismc_sta | mujoco plant | dynamic target").
     terrain : str
         The run's ground (``Scenario.terrain``): a grade is drawn as a slope, the whole scene
-        turned from the plane's frame, where the run is computed, into the world's.
+        turned from the plane's frame, where the run is computed, into the world's; a ramp or
+        a rough ground is placed along ``reference_polyline`` as the run placed it, the
+        vehicle resting on it in every frame.
     """
 
     def __init__(
@@ -236,8 +239,10 @@ class RunRenderer:
         _check_video_args(width, height, fps, camera)
         self.info = info
         ground = parse_terrain(terrain)
-        #: Plane frame to world (None: flat ground, nothing to turn).
-        self.tilt = None if ground.flat else np.array(ground.world_rotation)
+        #: Plane frame to world (None: no grade, nothing to turn).
+        self.tilt = np.array(ground.world_rotation) if isinstance(ground, Terrain) else None
+        if self.tilt is not None and ground.flat:
+            self.tilt = None
         self.has_reference_point = "x_ref" in ts and "y_ref" in ts
         extra = ("x_ref", "y_ref") if self.has_reference_point else ()
         extra += train_columns(params.n_trailers)
@@ -248,7 +253,9 @@ class RunRenderer:
         self.path = decimate(polyline, MAX_PATH_SEGMENTS) if len(polyline) > 1 else polyline
         self.width, self.height, self.fps, self.camera_mode = width, height, fps, camera
         self.params = params
-        self.vehicle = Vehicle(params)
+        #: A ramp or a rough ground, placed along the run's reference as the run placed it.
+        self.relief = relief_of(ground, polyline, params) if len(polyline) > 1 else None
+        self.vehicle = Vehicle(params, self.relief)
         self.model = self.vehicle.model
         self.times, self.index = frame_schedule(self.cols["t"], fps)
         self.n_frames = len(self.times)
@@ -352,8 +359,11 @@ class RunRenderer:
 
     # --- geoms ------------------------------------------------------------------------------------
     def _world(self, point) -> np.ndarray:
-        """A point of the plane's frame in the world the picture shows."""
+        """A point of the plane's frame in the world the picture shows (on a relief: lifted
+        by the ground's height under it)."""
         point = np.asarray(point, dtype=float)
+        if self.relief is not None:
+            point = point + np.array([0.0, 0.0, float(self.relief.height(point[0], point[1]))])
         return point if self.tilt is None else self.tilt @ point
 
     def _tilt_model_geoms(self) -> None:
@@ -528,9 +538,11 @@ def run_labels(scenario: Mapping, status: str | None, message: str) -> tuple[str
         for k, suffix in (("controller", ""), ("plant", " plant"), ("target", " target"))
     )
     terrain = scenario.get("terrain", "flat")
-    if terrain != "flat":  # drawn as a slope too; the line says how steep, and which way
+    if terrain.startswith("slope:"):  # drawn as a slope too; the line says how steep, which way
         grade, _, heading = terrain.removeprefix("slope:").partition(":")
         info += f" | grade {grade}@{heading or 0} deg"
+    elif terrain != "flat":
+        info += f" | {terrain}"
     if status is None:
         return info, None
     return info, (_TITLES.get(status, status.upper()), textwrap.wrap(message, 58))

@@ -138,8 +138,9 @@ def trailer_wheel_angles(ts: Mapping, params: Params, k: int = 1) -> tuple[np.nd
 def pose_vehicle(vehicle, x, y, theta, phi, beta, wheels, train=()) -> None:
     """Put a :class:`~tt_mujoco.sim.physics.Vehicle` in a planar pose and compute its kinematics.
 
-    Free joint at (x, y, r) with yaw ``theta``; ``q_hitch = -phi``; ``q_steer = beta`` (the
-    recorded angle, so an equality-constraint violation shows); ``wheels`` are the spin angles
+    Free joint at (x, y, r) with yaw ``theta`` (resting on the vehicle's relief if it has
+    one); ``q_hitch = -phi``; ``q_steer = beta`` (the recorded angle, so an equality-constraint
+    violation shows); ``wheels`` are the spin angles
     (tractor left, tractor right, trailer left, trailer right, then trailer k's left and
     right for k = 2..N); ``train`` holds ``(phi_k, beta_k)`` of trailers 2..N.
     """
@@ -154,6 +155,8 @@ def pose_vehicle(vehicle, x, y, theta, phi, beta, wheels, train=()) -> None:
     for address, angle in zip(_wheel_qpos(vehicle), wheels, strict=True):
         d.qpos[address] = angle
     mujoco.mj_kinematics(vehicle.model, d)
+    if vehicle.relief is not None:  # a ramp or a rough ground: resting on it, as at the start
+        vehicle.rest_on_relief()
     mujoco.mj_camlight(vehicle.model, d)
 
 
