@@ -10,7 +10,7 @@ import pytest
 from tt_mujoco import run
 from tt_mujoco.sim import Scenario, build, simulate
 from tt_mujoco.sim.build import drawn_polyline
-from tt_mujoco.sim.physics import Vehicle
+from tt_mujoco.sim.physics import Vehicle, wheel_geoms
 from tt_mujoco.sim.relief import (
     MAX_RELIEF_NODES,
     SAMPLES_PER_WAVELENGTH,
@@ -116,7 +116,7 @@ def test_the_vehicle_starts_at_rest_on_every_wheel(terrain, trailers):
     built, _ = _relief(terrain, trailers=trailers)
     plant = built.new_plant()
     m, d = plant.model, plant.data
-    wheels = {g for g in range(m.ngeom) if m.geom_contype[g] and m.geom_priority[g] == 1}
+    wheels = set(wheel_geoms(m))
     touching = set()
     for contact in d.contact[: d.ncon]:
         pair = {int(contact.geom1), int(contact.geom2)}
@@ -172,7 +172,7 @@ def test_a_frame_poses_the_vehicle_on_the_ground():
     built, relief = _relief("rough:0.02:0.4:3", trailers=2)
     vehicle = Vehicle(built.plant_params, relief)
     m, d = vehicle.model, vehicle.data
-    wheels = [g for g in range(m.ngeom) if m.geom_contype[g] and m.geom_priority[g] == 1]
+    wheels = wheel_geoms(m)
     for x, y, theta in [(0.0, 0.0, 0.0), (1.0, 2.0, 1.0), (-0.5, 4.0, 2.5)]:
         pose_vehicle(vehicle, x, y, theta, 0.1, 0.0, np.zeros(6), [(0.05, 0.0)])
         centres = d.geom_xpos[wheels]

@@ -23,7 +23,7 @@ __all__ = ["Vehicle", "compile_model", "layout_of"]
 
 #: Compiled models by their vehicle XML: compiling costs several copies, and sweeps build
 #: thousands of vehicles with a handful of distinct parameter sets.
-_COMPILED: dict[str, mujoco.MjModel] = {}
+_COMPILED: dict[tuple[str, str], mujoco.MjModel] = {}
 _COMPILED_MAX = 16
 
 
@@ -36,7 +36,7 @@ def compile_model(p: Params, relief=None) -> mujoco.MjModel:
     """
     xml = vehicle_xml(p, uneven=relief is not None)
     scene = scene_xml() if relief is None else scene_xml(ground=relief.geoms_xml())
-    key = xml if relief is None else xml + scene
+    key = (xml, scene)
     model = _COMPILED.get(key)
     if model is None:
         try:
@@ -63,6 +63,12 @@ def compile_model(p: Params, relief=None) -> mujoco.MjModel:
 UNEVEN_JOINTS = ("hitch_roll", "hitch_pitch")
 #: How long (s) a vehicle settles on a ramp or a rough ground before its run starts.
 SETTLE_S = 0.5
+
+
+def wheel_geoms(model: mujoco.MjModel) -> list[int]:
+    """The wheels' collision spheres: the geoms that touch the ground and whose friction
+    (priority 1) sets their contacts'."""
+    return [g for g in range(model.ngeom) if model.geom_contype[g] and model.geom_priority[g] == 1]
 
 
 def _rotation_onto(normal: np.ndarray) -> np.ndarray:
@@ -204,13 +210,13 @@ class Vehicle:
             d.qpos[hitch_q] = -angle
             d.qpos[steer_q] = eta * angle
         selection = self.full_selection(phis if p.n_trailers > 1 else phis[0], theta)
-        d.qvel[:] = selection @ np.array([v, omega])
+        rolling = selection @ np.array([v, omega])
         if self.relief is not None and z is None:
             mujoco.mj_kinematics(self.model, d)
             tilt = self.rest_on_relief()
             self._settle()
-            d.qvel[:] = selection @ np.array([v, omega])
-            d.qvel[lay.root_v : lay.root_v + 3] = tilt @ d.qvel[lay.root_v : lay.root_v + 3]
+            rolling[lay.root_v : lay.root_v + 3] = tilt @ rolling[lay.root_v : lay.root_v + 3]
+        d.qvel[:] = rolling
         mujoco.mj_forward(self.model, d)
 
     def _settle(self) -> None:
@@ -225,8 +231,8 @@ class Vehicle:
         free_v |= {int(m.jnt_dofadr[j]) for j in uneven}
         held_v = [i for i in range(m.nv) if i not in free_v]
         root, free_q = lay.root_q, {int(m.jnt_qposadr[j]) for j in uneven}
-        held_q = [i for i in range(m.nq) if i in (root, root + 1) or i >= root + 7]
-        held_q = [i for i in held_q if i not in free_q]
+        # the root's x and y, and every joint after it but the hitches' roll and pitch
+        held_q = [root, root + 1, *(i for i in range(root + 7, m.nq) if i not in free_q)]
         kept = d.qpos[held_q].copy()
         for _ in range(round(SETTLE_S / m.opt.timestep)):
             d.qvel[held_v] = 0.0
@@ -244,7 +250,7 @@ class Vehicle:
         ground that is not a plane it stands on some of its wheels; a wheel above the ground
         at the start drops by at most the plane fit's misfit."""
         m, d, lay = self.model, self.data, self.layout
-        wheels = [g for g in range(m.ngeom) if m.geom_contype[g] and m.geom_priority[g] == 1]
+        wheels = wheel_geoms(m)
         centres = d.geom_xpos[wheels]
         below = np.asarray(self.relief.height(centres[:, 0], centres[:, 1]))
         fit = np.column_stack([np.ones(len(wheels)), centres[:, 0], centres[:, 1]])

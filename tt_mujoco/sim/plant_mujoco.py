@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 
 from tt_mujoco.sim.measure import measure, measure_train
-from tt_mujoco.sim.physics import Vehicle
+from tt_mujoco.sim.physics import Vehicle, wheel_geoms
 from tt_mujoco.sim.plant import Plant, StopRun
 from tt_mujoco.vehicle.params import Params
 
@@ -127,9 +127,7 @@ class MujocoPlant(Plant):
         step sets every wheel's contact friction from where it touches the floor."""
         m = self.model
         self._ground = ground
-        self._contact_geoms = [
-            g for g in range(m.ngeom) if m.geom_contype[g] and m.geom_priority[g] == 1
-        ]
+        self._contact_geoms = wheel_geoms(m)
         self.ground_mask = 0
 
     def blow(self, tractor, trailer) -> None:

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tt_mujoco.sim.terrain import Ramp, Rough
+from tt_mujoco.vehicle.mjcf import floor_xml
 
 __all__ = ["MAX_RELIEF_NODES", "RampRelief", "RoughRelief", "ground_margin", "relief_of"]
 
@@ -31,7 +32,6 @@ MAX_RELIEF_NODES = 400_000
 ROUGH_WAVES = 24
 #: A rough ground's samples per wavelength.
 SAMPLES_PER_WAVELENGTH = 8
-_FLOOR = '<geom name="floor" size="0 0 0.05" type="plane" material="groundplane"{pos}/>'
 
 
 def ground_margin(params) -> float:
@@ -84,7 +84,7 @@ class RampRelief:
         axes = " ".join(_num(c) for c in (*slope, *side))
         sizes = f"{_num(half_length)} {_num(self.reach)} {_num(thickness)}"
         geoms = [
-            _FLOOR.format(pos=""),
+            floor_xml(),
             f'<geom name="ramp" type="box" size="{sizes}" pos="{" ".join(map(_num, centre))}" '
             f'xyaxes="{axes}" material="groundplane"/>',
         ]
@@ -147,7 +147,7 @@ class RoughRelief:
         )
         centre = f"{_num(self.x_min + rx)} {_num(self.y_min + ry)} {_num(low)}"
         geoms = (
-            _FLOOR.format(pos=f' pos="0 0 {_num(low)}"')
+            floor_xml(low)
             + f'\n    <geom name="rough" type="hfield" hfield="rough" pos="{centre}" '
             'material="groundplane"/>'
         )

@@ -225,11 +225,7 @@ def reference_polylines(built: Build) -> tuple[np.ndarray, np.ndarray]:
     """
     path = built.path
     drawn = drawn_polyline(path, built.duration)
-    if (
-        path.period is None
-        or path.period >= path.length
-        or path.period >= MAX_SPEED * built.duration
-    ):
+    if path.period is None or path.period >= min(path.length, MAX_SPEED * built.duration):
         return drawn, drawn
     return drawn, path.dense(length=path.period)
 

@@ -251,8 +251,14 @@ diaginertia="{_g(axle_yaw)} {_g(axle_yaw)} {_g(axle_yaw)}"/>
     return body + "</body>"
 
 
+def floor_xml(z: float = 0.0) -> str:
+    """The scene's floor: a plane at height ``z``."""
+    pos = "" if z == 0.0 else f' pos="0 0 {_g(z)}"'
+    return f'<geom name="floor" size="0 0 0.05" type="plane" material="groundplane"{pos}/>'
+
+
 #: The scene's ground: a plane at z = 0.
-FLOOR_XML = '<geom name="floor" size="0 0 0.05" type="plane" material="groundplane"/>'
+FLOOR_XML = floor_xml()
 
 
 def scene_xml(vehicle_file: str = VEHICLE_FILE, ground: tuple[str, str] = ("", FLOOR_XML)) -> str:

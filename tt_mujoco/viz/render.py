@@ -240,9 +240,8 @@ class RunRenderer:
         self.info = info
         ground = parse_terrain(terrain)
         #: Plane frame to world (None: no grade, nothing to turn).
-        self.tilt = np.array(ground.world_rotation) if isinstance(ground, Terrain) else None
-        if self.tilt is not None and ground.flat:
-            self.tilt = None
+        graded = isinstance(ground, Terrain) and not ground.flat
+        self.tilt = np.array(ground.world_rotation) if graded else None
         self.has_reference_point = "x_ref" in ts and "y_ref" in ts
         extra = ("x_ref", "y_ref") if self.has_reference_point else ()
         extra += train_columns(params.n_trailers)
