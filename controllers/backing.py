@@ -9,9 +9,12 @@ outer loop first, every loop's rate proportional to the speed (gains per metre o
 1. **Path.** The leading axle P_N (the last trailer's) is taken as a unicycle rolling along
    ``alpha_N = theta_N + beta_N``; the path-following law of :mod:`tt_mujoco.reference.feedback`
    on its errors (e_y, e_psi) gives the curvature it should run at,
-   ``kappa_N = kappa(s_N) + clip(-k_y e_y - k_psi sgn(v_N) e_psi, +-c_max)``.
-2. **Hitch N, ..., 2.** The steady relation between a trailer's curvature and its hitch angle
-   (:func:`steady_hitch_angle`) turns ``kappa_k`` into ``phi_k,d`` (bounded by ``phi_max``); the
+   ``kappa_N = kappa(s_N) + clip(-k_y e_y - k_psi sgn(v_N) e_psi, +-c_max)``; for a train
+   the feed-forward is the path's curvature averaged over ``preview (N - 1)`` metres ahead of
+   the axle, so that the hitches behind it start to re-form before a curvature step.
+2. **Hitch N, ..., 2.** The steady relation between a trailer's own axle curvature and its
+   hitch angle behind a unit steering by ``beta_(k-1)`` (:func:`steady_axle_curvature`) turns
+   ``kappa_k`` into ``phi_k,d`` (bounded by ``phi_max``); the
    hitch rate ``phi_k_dot = theta_(k-1)_dot - theta_k_dot`` then asks the unit ahead to turn at
    ``theta_(k-1)_dot = theta_k_dot - k_phi |v_k| (phi_k - phi_k,d)``, i.e. at curvature
    ``kappa_(k-1) = theta_(k-1)_dot / v_(k-1)``.
@@ -50,14 +53,23 @@ __all__ = [
 #: k_y (1/m^2), k_psi (1/m): the leading axle's path loop, critically damped in arc length
 #: (k_psi = 2 sqrt(k_y)), its offset halved over ~1.2 m; k_phi (1/m): the last hitch's loop,
 #: doubling per hitch towards the tractor; c_max (1/m): bound on the added curvature;
-#: phi_max_deg: bound on a wanted hitch angle, well short of the jackknife limits.
+#: phi_max_deg: bound on a wanted hitch angle, well short of the jackknife limits; preview (m):
+#: per trailer behind the first, how far ahead of the leading axle the path's curvature is
+#: averaged for the feed-forward (a train's hitches need that much travel to re-form).
 DEFAULT_GAINS = {
     "k_y": 2.0,
     "k_psi": 2.8,
     "k_phi": 3.0,
     "c_max": 1.0,
     "phi_max_deg": 45.0,
+    "preview": 0.2,
 }
+#: Points of the preview window's curvature average.
+_PREVIEW_POINTS = 5
+
+
+#: Bisection steps of :meth:`SteadyInverse.solve`: a branch of ~1.6 rad shrinks below 1e-11 rad.
+_BISECTIONS = 38
 
 
 def check_config(config: dict | None) -> dict[str, float]:
@@ -78,12 +90,32 @@ def steady_curvature(phi, L: float, L0: float, eta: float):
     return -np.sin((eta - 1.0) * phi) / (L0 * np.cos(eta * phi) + L * np.cos((eta - 1.0) * phi))
 
 
-class SteadyInverse:
-    """``phi(kappa)``: the inverse of :func:`steady_curvature` on its monotone branch through 0."""
+def steady_axle_curvature(phi, L: float, L0: float, eta: float, beta_ahead=0.0):
+    """The curvature (1/m) of a trailer's own axle path when hitch angle ``phi`` is steady
+    behind a unit whose axle steers by ``beta_ahead`` (0 for the tractor).
 
-    def __init__(self, L: float, L0: float, eta: float, phi_max: float):
+    In a steady turn every unit rotates about one centre C. In the frame of the unit ahead
+    (its axle at the origin, rolling along ``beta_ahead``), C lies on the normal to that
+    direction; the trailer's axle ``P = (-L - L0 cos phi, L0 sin phi)`` rolls along
+    ``(eta - 1) phi``, so C also lies on the normal there. Intersecting the two normals,
+    ``kappa = -sin((eta - 1) phi - beta_ahead) / (L cos beta_ahead + L0 cos(phi + beta_ahead))``
+    (checked against :func:`tt_mujoco.vehicle.rolling.hitch_rates` in tests/test_backing.py).
+    It is the curvature the cascade asks of each axle; :func:`steady_curvature` is the unit
+    ahead's.
+    """
+    phi = np.asarray(phi, dtype=float)
+    b = beta_ahead
+    return -np.sin((eta - 1.0) * phi - b) / (L * np.cos(b) + L0 * np.cos(phi + b))
+
+
+class SteadyInverse:
+    """``phi(kappa)``: the inverse of a steady relation (:func:`steady_curvature`, or
+    ``curvature``) on its monotone branch through 0."""
+
+    def __init__(self, L: float, L0: float, eta: float, phi_max: float, curvature=steady_curvature):
+        self._relation = (L, L0, eta, curvature)
         phi = np.linspace(-phi_max, phi_max, 2001)
-        kappa = steady_curvature(phi, L, L0, eta)
+        kappa = curvature(phi, L, L0, eta)
         mid = phi.size // 2
         slope = np.sign(kappa[mid + 1] - kappa[mid - 1])
         if slope == 0:
@@ -101,6 +133,23 @@ class SteadyInverse:
     def __call__(self, kappa: float) -> float:
         """The hitch angle (rad) for curvature ``kappa``, held at the branch's ends beyond."""
         return float(np.interp(kappa, self._kappa, self._phi))
+
+    def solve(self, kappa: float, beta_ahead: float) -> float:
+        """The hitch angle (rad) for ``kappa`` behind a unit steering by ``beta_ahead``: the
+        relation's extra argument, by bisection on the branch (held at its ends beyond)."""
+        L, L0, eta, curvature = self._relation
+        lo, hi = float(self._phi[0]), float(self._phi[-1])  # kappa rises from lo to hi
+        if kappa <= float(curvature(lo, L, L0, eta, beta_ahead)):
+            return lo
+        if kappa >= float(curvature(hi, L, L0, eta, beta_ahead)):
+            return hi
+        for _ in range(_BISECTIONS):
+            mid = 0.5 * (lo + hi)
+            if float(curvature(mid, L, L0, eta, beta_ahead)) < kappa:
+                lo = mid
+            else:
+                hi = mid
+        return 0.5 * (lo + hi)
 
 
 def steady_hitch_angle(kappa: float, L: float, L0: float, eta: float, phi_max: float) -> float:
@@ -143,9 +192,16 @@ class HitchCascade(TargetWrapper):
         # A wanted hitch angle stays within 80 % of where a run stops as a jackknife (|beta| =
         # |eta phi| = 85 deg: 22.7 deg for the paper's eta = 3).
         self._inverse = [
-            SteadyInverse(L, L0, eta, min(self.phi_max, 0.8 * math.radians(jackknife_phi_deg(eta))))
+            SteadyInverse(
+                L,
+                L0,
+                eta,
+                min(self.phi_max, 0.8 * math.radians(jackknife_phi_deg(eta))),
+                curvature=steady_axle_curvature,
+            )
             for (L, L0), eta in zip(self.lengths, self.etas, strict=True)
         ]
+        self.preview = g["preview"] * (len(self.lengths) - 1)
         self._pose_at = self.path.pose_at
         self._curvature = self.path.curvature_and_rate
         self.reset()
@@ -182,16 +238,20 @@ class HitchCascade(TargetWrapper):
         self.lateral_error, self.heading_error = e_y, e_psi
         v_lead = rates[-1][1]
         c = -self.k_y * e_y - self.k_psi * math.copysign(1.0, v_lead) * e_psi
-        feed = curvature_and_rate_at(self.path, s)[0]
-        kappa = feed + max(-self.c_max, min(self.c_max, c))
+        step = math.copysign(self.preview, v_lead) / (_PREVIEW_POINTS - 1)
+        feed = sum(
+            curvature_and_rate_at(self.path, s + j * step)[0] for j in range(_PREVIEW_POINTS)
+        )
+        kappa = feed / _PREVIEW_POINTS + max(-self.c_max, min(self.c_max, c))
         for k in range(n - 1, 0, -1):  # hitches N..2 (index k is trailer k + 1)
-            wanted = self._inverse[k](kappa)
+            # the unit ahead is a steered trailer: its steering moves the turn's centre
+            wanted = self._inverse[k].solve(kappa, self.etas[k - 1] * phis[k - 1])
             self.hitch_targets[k] = wanted
             gain = self.k_phi * 2.0 ** (n - 1 - k)
             turn = rates[k][2] - gain * abs(rates[k][1]) * (phis[k] - wanted)
             speed = rates[k - 1][1]
             kappa = turn / speed if abs(speed) > 1e-3 else 0.0
-        wanted = self._inverse[0](kappa)
+        wanted = self._inverse[0].solve(kappa, 0.0)
         self.hitch_targets[0] = wanted
         gain = self.k_phi * 2.0 ** (n - 1)
         phi_dot_wanted = -gain * abs(v) * (phis[0] - wanted)

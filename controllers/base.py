@@ -85,6 +85,8 @@ def reduced_model(params) -> ModelFn:
         ``model(phi, v, omega) -> (f1, f2, g11, g12, g21, g22)`` with ``V_dot = f + g tau`` and
         ``tau = (T_r, T_l)`` (docs/model.md Section 4). Raises
         :class:`tt_mujoco.vehicle.reduced.SingularityError` at a jackknife, like ``dynamics``.
+        It carries ``params``, from which :meth:`VelocityController.steering_changed`
+        rebuilds it with a scheduler's gains.
     """
     # Imported here so that importing ``controllers`` stays free of tt_mujoco and numpy.
     from tt_mujoco.vehicle import train
@@ -97,12 +99,14 @@ def reduced_model(params) -> ModelFn:
             return train.dynamics_scalar(phi, v, omega, params)
 
         train_model.builtin = True  # the compiled episode may run its closed form instead
+        train_model.params = params
         return train_model
 
     def model(phi: float, v: float, omega: float):
         return dynamics_scalar(phi, v, omega, params)
 
     model.builtin = True  # the compiled episode may run its closed form instead
+    model.params = params
     return model
 
 
@@ -231,6 +235,11 @@ class Controller(ABC):
 
     def reset(self) -> None:  # noqa: B027 - optional hook: stateless controllers need none
         """Forget everything from a previous run (called before the first step)."""
+
+    def steering_changed(self, etas) -> None:  # noqa: B027 - optional hook
+        """The plant's passive gains are now ``etas`` (eta_1..eta_N), set by a scheduled
+        steering (``--eta path`` or ``scheduled``): called before the first step and after
+        every change. A law with a model of the vehicle updates it; the default ignores it."""
 
     def report(self) -> dict:
         """Figures of the whole run for ``metrics.json`` (under ``controller``): numbers or
@@ -483,6 +492,13 @@ class VelocityController(Controller):
     def reset(self) -> None:
         """Zero every integrator and forget the previous step."""
         raise NotImplementedError
+
+    def steering_changed(self, etas) -> None:
+        """The nominal model takes the plant's gains (the mechanism's ratio is known): with
+        a path schedule they range over [-3, 3], far from the scenario's constant eta."""
+        params = getattr(self.model, "params", None)  # a reduced_model's
+        if params is not None and params.etas != tuple(etas):
+            self.model = reduced_model(params.with_etas(etas))
 
     def state(self) -> dict[str, float]:
         """Integrator values (and related internals) for logging."""

@@ -4,9 +4,10 @@ Run: ``python docs/readme_images.py``. It runs the main command
 (``python -m tt_mujoco.run --traj s_curve``) and the paper's forward-jackknifing gain
 (``--eta paper``) into a temporary folder, then saves, reduced to 480 px wide: frame 5 of the
 main video (the start), frame 200 (in the second turn), the end card of the jackknife video,
-the main run's ``path.png``, and frame 250 of a three-trailer train on the S-curve
-(``--trailers 3 --no-disturbance``). Existing images are replaced only because they are this
-script's own outputs.
+the main run's ``path.png``, frame 250 of a three-trailer train on the S-curve
+(``--trailers 3 --no-disturbance``), and the ``path.png`` of a three-trailer train on the circle
+with the path schedule (``--traj circle --trailers 3 --eta path --no-disturbance``). Existing
+images are replaced only because they are this script's own outputs.
 """
 
 import subprocess
@@ -40,8 +41,8 @@ def frames(video: Path, wanted: set[int]) -> dict[int, np.ndarray]:
     return out
 
 
-def run(folder: Path, *options: str) -> None:
-    cmd = [sys.executable, "-m", "tt_mujoco.run", "--traj", "s_curve", "--quiet", *options]
+def run(folder: Path, *options: str, traj: str = "s_curve") -> None:
+    cmd = [sys.executable, "-m", "tt_mujoco.run", "--traj", traj, "--quiet", *options]
     subprocess.run([*cmd, "--out", str(folder)], check=False)  # the jackknife exits with 3
 
 
@@ -55,6 +56,12 @@ def main() -> int:
         run(train, "--trailers", "3", "--no-disturbance", "--no-plots")
         got_train = frames(train / "video.mp4", {250})
         small(Image.fromarray(got_train[250])).save(OUT / "train_frame.png", optimize=True)
+        scheduled = Path(tmp) / "scheduled"
+        options = ("--trailers", "3", "--eta", "path", "--no-disturbance", "--no-video")
+        run(scheduled, *options, traj="circle")
+        small(Image.open(scheduled / "path.png").convert("RGB")).save(
+            OUT / "circle_path_schedule.png", optimize=True
+        )
         got = frames(main_run / "video.mp4", {5, 200})
         small(Image.fromarray(got[5])).save(OUT / "s_curve_start.png", optimize=True)
         small(Image.fromarray(got[200])).save(OUT / "s_curve_frame.png", optimize=True)
@@ -65,7 +72,7 @@ def main() -> int:
         )
     print(
         "wrote s_curve_start.png, s_curve_frame.png, jackknife_end.png, s_curve_path.png, "
-        f"train_frame.png to {OUT}"
+        f"train_frame.png, circle_path_schedule.png to {OUT}"
     )
     return 0
 

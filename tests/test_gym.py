@@ -93,6 +93,8 @@ def _drive_with_ismc_sta(scenario) -> list[dict]:
         o = dict(zip(names, obs, strict=True))
         rows.append(o)
         phi = o["phi"] if env.n_trailers == 1 else tuple(o[h] for h in hitches)
+        if scenario.eta_schedule:  # the scheduled gains reach the model, as in simulate
+            ctrl.steering_changed(info["etas"])
         torques = ctrl.step(
             env.dt, phi, o["v"], o["omega"], o["v_d"], o["omega_d"],
             info["v_d_dot"], info["omega_d_dot"],

@@ -225,16 +225,36 @@ def _offtracks(metrics, n):
     ("plant", "traj", "n"),
     [
         *((plant, traj, n) for plant in PLANTS for traj in ("circle", "cycloid") for n in (1, 2)),
+        ("reduced", "circle", 3),
+        ("reduced", "cycloid", 3),
+        ("mujoco", "circle", 3),
     ],
 )
 def test_runs_keep_every_trailer_within_five_millimetres(plant, traj, n):
-    # Issue "same path", must-show 1, from rest, no disturbance: measured at worst 3.25 mm
-    # (MuJoCo, cycloid, trailer 2); the same-path limit gains leave 13-33 mm here.
+    # Issue "same path", must-show 1, from rest, no disturbance: measured at worst 4.3 mm
+    # (MuJoCo, cycloid, trailer 2); the same-path limit gains leave 13-78 mm here. MuJoCo's
+    # cycloid with three trailers is not within it (docs/path_schedule_study.md).
     result = simulate(
         Scenario(plant=plant, traj=traj, trailers=n, disturbance="none", eta_schedule="path")
     )
     assert result.status == "ok"
     assert max(_offtracks(result.metrics, n)) < 5e-3
+
+
+@pytest.mark.parametrize("plant", PLANTS)
+def test_a_user_csv_path_without_an_inflection_keeps_three_trailers_on_it(plant, tmp_path):
+    # Must-show 1's user path: the parabola y = 0.3 x^2 (its curvature falls from 0.6 1/m, no
+    # inflection) from 16 waypoints. Measured 0.82 mm at worst (MuJoCo, trailer 3), against
+    # 17-35 mm with the same-path limit gains.
+    x = np.linspace(0.0, 3.0, 16)
+    csv = tmp_path / "bend.csv"
+    csv.write_text("x,y\n" + "".join(f"{a!r},{0.3 * a * a!r}\n" for a in x.tolist()))
+    common = dict(traj=str(csv), plant=plant, trailers=3, disturbance="none")
+    result = simulate(Scenario(eta="path", **common))
+    assert result.status == "ok"
+    assert max(_offtracks(result.metrics, 3)) < 5e-3
+    limit = simulate(Scenario(eta="same_path", **common))
+    assert min(_offtracks(limit.metrics, 3)) > 15e-3
 
 
 @pytest.mark.parametrize("plant", ["mujoco", "reduced"])
@@ -270,14 +290,34 @@ def test_sweeps_take_the_schedule_by_name():
         convert("eta_schedule", "kappa")
 
 
-def test_s_curve_in_contact_physics_jackknifes_after_the_inflection():
-    # What docs/model.md Section 13 reports as open: the gain's swing at the inflection kicks
-    # the MuJoCo vehicle (t = 7.2 s); the reduced plant, without tyres, completes.
+def test_s_curve_in_contact_physics_runs_through_the_inflection():
+    # The hitch lags its schedule through the inflection (phi = 5.4 deg where the table's
+    # crosses zero); the gain of the other side (+3 for -3) used to flip beta by 32 deg there
+    # and jackknife the MuJoCo vehicle at 7.2 s. Holding the gain of the hitch's own side until
+    # it crosses zero itself, the run completes; what the inflection still costs is in
+    # docs/path_schedule_study.md.
     common = dict(traj="s_curve", disturbance="none", eta_schedule="path")
-    contact = simulate(Scenario(plant="mujoco", **common))
-    assert contact.status == "jackknife"
-    assert 7.0 < contact.metrics["sim_time_s"] < 7.5
-    assert simulate(Scenario(plant="reduced", **common)).status == "ok"
+    for plant in PLANTS:
+        assert simulate(Scenario(plant=plant, **common)).status == "ok"
+
+
+def test_a_hitch_on_the_wrong_side_of_its_schedule_keeps_the_gain_in_force():
+    schedule = path_schedule(make_target("s_curve").path, [LINKS])
+    axle = schedule.axles[0]
+    i = int(np.flatnonzero(np.diff(np.sign(axle["phi"])) != 0)[0]) + 50  # past the crossing
+    s, phi = float(axle["s"][i]), float(axle["phi"][i])
+    assert schedule.gain(0, s, phi, held=-3.0) == pytest.approx(schedule.eta(0, s))
+    assert schedule.gain(0, s, -phi, held=-3.0) == -3.0
+
+
+def test_the_nominal_model_follows_the_scheduled_gains():
+    # ISMC-STA's model takes the plant's gains (Controller.steering_changed): on the reduced
+    # plant a 3-trailer train then stays on the path (0.1 mm at worst; with the scenario's
+    # constant eta in the model, 5.6 mm)
+    result = simulate(
+        Scenario(plant="reduced", traj="cycloid", trailers=3, disturbance="none", eta="path")
+    )
+    assert max(_offtracks(result.metrics, 3)) < 0.5e-3
 
 
 @pytest.mark.parametrize(

@@ -28,7 +28,9 @@ chooses the wheel torques:
 - **truncated** when the scenario's duration is reached.
 - **info**: ``t``, ``status`` ("running", "jackknife", "diverged", "failed"), the errors ``e_v``,
   ``e_omega``, the target's derivatives ``v_d_dot``, ``omega_d_dot`` (what the project's
-  controllers also use) and ``slip_longitudinal`` (m/s).
+  controllers also use), ``slip_longitudinal`` (m/s) and ``etas``, the trailers' steering gains
+  in force (a scheduled eta changes them; a model-based agent hands them to its model, as
+  :meth:`controllers.base.Controller.steering_changed` does).
 
 The action keeps physical units (N m); wrap it in ``gymnasium.wrappers.RescaleAction`` for a
 normalised ``[-1, 1]`` space. The observation is unbounded (positions, wheel angles).
@@ -271,6 +273,7 @@ class TractorTrailerEnv(gymnasium.Env):
             "v_d_dot": ref.v_d_dot,
             "omega_d_dot": ref.omega_d_dot,
             "slip_longitudinal": max(abs(me.slip_left), abs(me.slip_right)),
+            "etas": self._stepper.plant_etas,
         }
 
 

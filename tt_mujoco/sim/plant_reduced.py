@@ -80,11 +80,7 @@ class ReducedPlant(Plant):
         self._set_params(self.params.replace(eta=eta))
 
     def set_etas(self, etas) -> None:
-        p = self.params
-        rest = zip(p.train, etas[1:], strict=True)
-        self._set_params(
-            p.replace(eta=etas[0], train=tuple(dataclasses.replace(t, eta=e) for t, e in rest))
-        )
+        self._set_params(self.params.with_etas(etas))
 
     def _set_params(self, params: Params) -> None:
         self.params = params

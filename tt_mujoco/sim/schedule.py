@@ -138,7 +138,8 @@ class PathEtaScheduler(EtaScheduler):
             )
         self.schedule = schedule
         self.arc_lengths = schedule.arc_lengths_at(start_s)
-        for k, (x, y) in enumerate(_axle_positions(plant.measure())):
+        me = plant.measure()
+        for k, (x, y) in enumerate(_axle_positions(me)):
             self.arc_lengths[k] = schedule.project(self.arc_lengths[k], x, y)
         start = tuple(schedule.eta(k, s) for k, s in enumerate(self.arc_lengths))
         self._apply(start)
@@ -150,11 +151,17 @@ class PathEtaScheduler(EtaScheduler):
         schedule = self.schedule
         arcs = self.arc_lengths
         etas = []
+        phis = _hitch_angles(measurement)
         for k, (x, y) in enumerate(_axle_positions(measurement)):
             arcs[k] = schedule.project(arcs[k], x, y)
-            etas.append(schedule.eta(k, arcs[k]))
+            etas.append(schedule.gain(k, arcs[k], phis[k], self.etas[k]))
         self._offer(tuple(etas), step)
         return self.eta
+
+
+def _hitch_angles(me) -> tuple:
+    """Every hitch angle phi_1..phi_N (rad) in a measurement."""
+    return (me.phi, *(row[3] for row in getattr(me, "train", ())))
 
 
 def _axle_positions(me) -> list[tuple[float, float]]:

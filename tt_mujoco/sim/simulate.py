@@ -100,8 +100,14 @@ def run_episode(stepper: Stepper, controller, progress=None, on_step=None) -> tu
     report_every = max(1, n // 100)
     sense, actuate, compute = stepper.sense, stepper.actuate, controller.compute
     who = usercode.controller_label(stepper.built)
+    scheduler = stepper.scheduler
+    steering_changed = getattr(controller, "steering_changed", None)
+    etas = None
     try:
         while True:
+            if scheduler is not None and steering_changed and scheduler.etas is not etas:
+                etas = scheduler.etas
+                steering_changed(etas)
             me, ref = sense()
             try:
                 out = compute(ref.t, me, ref)

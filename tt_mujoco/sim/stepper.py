@@ -166,6 +166,14 @@ class Stepper:
         self.measurement = None
 
     @property
+    def plant_etas(self) -> tuple:
+        """The trailers' steering gains eta_1..eta_N in force (a scheduler's, else the plant's
+        constant ones)."""
+        if self.scheduler is not None:
+            return self.scheduler.etas
+        return self.built.plant_params.etas
+
+    @property
     def t(self) -> float:
         return self.k * self.dt
 

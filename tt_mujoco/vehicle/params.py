@@ -428,6 +428,16 @@ class Params:
         """The steering gains eta_1..eta_N."""
         return (self.eta, *(t.eta for t in self.train))
 
+    def with_etas(self, etas) -> Params:
+        """A copy steering with the gains ``etas`` (eta_1..eta_N, one per trailer)."""
+        if len(etas) != self.n_trailers:
+            raise ValueError(
+                f"{len(etas)} gains are not allowed: this vehicle has {self.n_trailers} trailer(s)"
+            )
+        rest = zip(self.train, etas[1:], strict=True)
+        train = tuple(dataclasses.replace(t, eta=float(e)) for t, e in rest)
+        return self.replace(eta=float(etas[0]), train=train)
+
     def with_trailers(self, n: int, overrides=()) -> Params:
         """A train of ``n`` trailers: trailers 2..n copy trailer 1's lengths, masses and
         steering (a preset gives each trailer its own value), then take ``overrides[k - 2]``

@@ -167,11 +167,12 @@ class PathSchedule:
     def __post_init__(self) -> None:
         # Plain lists and slopes for the per-step lookup (bisect on a list beats numpy on
         # scalars); derived from the arrays above, so the object stays a value.
-        tables = tuple(
-            (axle["s"].tolist(), axle["eta"].tolist(), np.gradient(axle["eta"], axle["s"]).tolist())
-            for axle in self.axles
-        )
-        object.__setattr__(self, "_tables", tables)
+        def table(axle, name):
+            s, y = axle["s"], axle[name]
+            return s.tolist(), y.tolist(), np.gradient(y, s).tolist()
+
+        object.__setattr__(self, "_tables", tuple(table(axle, "eta") for axle in self.axles))
+        object.__setattr__(self, "_angles", tuple(table(axle, "phi") for axle in self.axles))
 
     @property
     def n_trailers(self) -> int:
@@ -182,6 +183,19 @@ class PathSchedule:
 
         Cubic Hermite interpolation of the table; held at the table's end values beyond it.
         """
+        return _hermite(self._tables[k], s_axle)
+
+    def gain(self, k: int, s_axle: float, phi: float, held: float) -> float:
+        """Trailer ``k``'s gain at arc length ``s_axle`` with the hitch angle ``phi`` (rad)
+        as it is: :meth:`eta` where the schedule's hitch angle there has the sign of ``phi``,
+        else ``held`` (the gain in force).
+
+        Across an inflection the schedule's gain changes sign where its phi_k passes through
+        zero; a hitch that lags its schedule keeps the gain of its own side until it crosses
+        zero itself, so that beta_k = eta_k phi_k stays continuous.
+        """
+        if phi * _hermite(self._angles[k], s_axle) < 0.0:
+            return held
         return _hermite(self._tables[k], s_axle)
 
     def arc_lengths_at(self, s_tractor: float) -> list[float]:
