@@ -154,7 +154,7 @@ class PathEtaScheduler(EtaScheduler):
         phis = _hitch_angles(measurement)
         for k, (x, y) in enumerate(_axle_positions(measurement)):
             arcs[k] = schedule.project(arcs[k], x, y)
-            etas.append(schedule.gain(k, arcs[k], phis[k], self.etas[k]))
+            etas.append(schedule.gain(k, arcs[k], phis[k]))
         self._offer(tuple(etas), step)
         return self.eta
 

@@ -23,9 +23,9 @@ Where the ratio is not a usable gain the schedule is bounded:
   bounded gain nearest the steering asked for; where phi_k is zero to rounding (a straight
   stretch), the ratio is interpolated from its neighbours;
 - everything is tabulated once per path on the tractor's arc length (:func:`path_schedule`), and
-  looked up at run time by each trailer's own arc length (:meth:`PathSchedule.eta`), the
-  projection of its axle onto the path, so that a trailer off its schedule still gets the gain
-  of where it is.
+  looked up at run time by each trailer's own arc length, the projection of its axle onto the
+  path, and its hitch angle as it is (:meth:`PathSchedule.gain`), so that a trailer off its
+  schedule still gets the steering of where it is.
 """
 
 from __future__ import annotations
@@ -39,6 +39,7 @@ import numpy as np
 from tt_mujoco.vehicle.steering import wrap_angle
 
 __all__ = [
+    "BLEND_PHI",
     "DEFAULT_ETA_MAX",
     "PathSchedule",
     "axle_chain",
@@ -51,6 +52,10 @@ DEFAULT_ETA_MAX = 3.0
 #: Tractor arc-length spacing (m) of the tabulated schedule: cubic interpolation on it is exact
 #: to ~1e-10 in eta on the paper's paths (tests/test_path_schedule.py).
 TABLE_SPACING = 0.002
+#: Hitch angle (rad) below which :meth:`PathSchedule.gain` leans on the table's gain rather than
+#: on the path's steering (3 deg: 1 deg left a 3-trailer train on MuJoCo's cycloid 34 mm off,
+#: its hitches crossing zero in the start's shaking; docs/model.md Section 13).
+BLEND_PHI = math.radians(3.0)
 #: |phi_k| (rad) below which beta_k / phi_k is rounding noise, not a gain.
 _PHI_TINY = 1e-7
 #: Bisection steps for the axle's arc length: brackets of ~1 m shrink below 1e-15 m.
@@ -172,7 +177,7 @@ class PathSchedule:
             return s.tolist(), y.tolist(), np.gradient(y, s).tolist()
 
         object.__setattr__(self, "_tables", tuple(table(axle, "eta") for axle in self.axles))
-        object.__setattr__(self, "_angles", tuple(table(axle, "phi") for axle in self.axles))
+        object.__setattr__(self, "_steering", tuple(table(axle, "beta") for axle in self.axles))
 
     @property
     def n_trailers(self) -> int:
@@ -185,18 +190,26 @@ class PathSchedule:
         """
         return _hermite(self._tables[k], s_axle)
 
-    def gain(self, k: int, s_axle: float, phi: float, held: float) -> float:
-        """Trailer ``k``'s gain at arc length ``s_axle`` with the hitch angle ``phi`` (rad)
-        as it is: :meth:`eta` where the schedule's hitch angle there has the sign of ``phi``,
-        else ``held`` (the gain in force).
+    def gain(self, k: int, s_axle: float, phi: float) -> float:
+        """Trailer ``k``'s gain at arc length ``s_axle`` with the hitch angle ``phi`` (rad) as
+        it is, bounded to ``eta_max``.
 
-        Across an inflection the schedule's gain changes sign where its phi_k passes through
-        zero; a hitch that lags its schedule keeps the gain of its own side until it crosses
-        zero itself, so that beta_k = eta_k phi_k stays continuous.
+        The gain nearest both the steering the path asks for there and the table's gain,
+
+            eta = (beta_k(s) phi + w^2 eta_k(s)) / (phi^2 + w^2),   w = BLEND_PHI,
+
+        minimises ``(eta phi - beta_k(s))^2 + w^2 (eta - eta_k(s))^2``. On the schedule
+        (``phi = phi_k(s)``) it is :meth:`eta` exactly. Off it, a hitch well away from zero
+        gets the path's steering, ``beta ~ beta_k(s)``, and a hitch near zero the table's gain,
+        so ``beta = eta phi`` is continuous in ``s`` and ``phi``: a hitch that lags its schedule
+        through an inflection, where the table's gain changes sign, never meets the gain of the
+        other side, and the steering asks no faster motion than the path's own.
         """
-        if phi * _hermite(self._angles[k], s_axle) < 0.0:
-            return held
-        return _hermite(self._tables[k], s_axle)
+        w2 = BLEND_PHI * BLEND_PHI
+        eta = _hermite(self._tables[k], s_axle)
+        steering = _hermite(self._steering[k], s_axle)
+        blended = (steering * phi + w2 * eta) / (phi * phi + w2)
+        return min(max(blended, -self.eta_max), self.eta_max)
 
     def arc_lengths_at(self, s_tractor: float) -> list[float]:
         """Each axle's arc length on the schedule when the tractor is at ``s_tractor`` (the

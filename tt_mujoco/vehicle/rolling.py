@@ -120,9 +120,10 @@ def constant_steering(etas) -> Callable:
 
 
 def schedule_steering(schedule) -> Callable:
-    """The path schedule's law beta_k = eta_k(s_k) phi_k at the axle's own arc length, as the
-    running plant applies it (:class:`tt_mujoco.vehicle.path_schedule.PathSchedule`)."""
-    return lambda k, s_axle, phi: schedule.eta(k, s_axle) * phi
+    """The path schedule's law beta_k = eta_k phi_k with the gain of the axle's own arc length
+    and hitch angle, as the running plant applies it
+    (:meth:`tt_mujoco.vehicle.path_schedule.PathSchedule.gain`)."""
+    return lambda k, s_axle, phi: schedule.gain(k, s_axle, phi) * phi
 
 
 def hitch_rates(phis, v: float, omega: float, lengths, etas) -> list[tuple[float, float, float]]:
