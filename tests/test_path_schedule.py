@@ -258,7 +258,7 @@ def test_three_trailers_spin_the_drive_wheels_on_the_cycloids_start():
 @pytest.mark.parametrize("plant", PLANTS)
 def test_a_user_csv_path_without_an_inflection_keeps_three_trailers_on_it(plant, tmp_path):
     # Must-show 1's user path: the parabola y = 0.3 x^2 (its curvature falls from 0.6 1/m, no
-    # inflection) from 16 waypoints. Measured 0.82 mm at worst (MuJoCo, trailer 3), against
+    # inflection) from 16 waypoints. Measured 0.73 mm at worst (MuJoCo, trailers 2, 3), against
     # 17-35 mm with the same-path limit gains.
     x = np.linspace(0.0, 3.0, 16)
     csv = tmp_path / "bend.csv"
