@@ -455,3 +455,20 @@ def test_singular_input_matrix_and_nan_raise(name):
     ctrl = make_controller(name, fake_model)
     with pytest.raises(FloatingPointError, match="not finite"):
         ctrl.step(DT, 0.0, math.nan, 0.0, 0.5, 0.0, 0.0, 0.0)
+
+
+def test_steering_changed_rebuilds_the_builtin_model_with_the_new_gains():
+    p = Params().with_trailers(2)
+    ctrl = make_controller("ismc_sta", reduced_model(p))
+    ctrl.steering_changed((0.5, -0.2))
+    assert ctrl.model.params.etas == (0.5, -0.2)
+    state = ((0.1, 0.05), 0.5, 0.2)  # (phi_1, phi_2), v, omega
+    assert ctrl.model(*state) != reduced_model(p)(*state)
+    assert ctrl.model(*state) == reduced_model(p.with_etas((0.5, -0.2)))(*state)
+
+    def own(phi, v, omega):  # a user's model: not rebuilt
+        return reduced_model(p)(phi, v, omega)
+
+    user = make_controller("ismc_sta", own)
+    user.steering_changed((0.5, -0.2))
+    assert user.model is own

@@ -142,6 +142,17 @@ def test_with_trailers_copies_trailer_one_and_takes_overrides():
     assert again.etas == p.etas and again.trailers == p.trailers
 
 
+def test_with_etas_changes_only_the_gains():
+    p = Params(Mr=7.0).with_trailers(3, [{"L0": 0.5}])
+    q = p.with_etas((0.5, -1.0, 2.0))
+    assert q.etas == (0.5, -1.0, 2.0)
+    assert [t.L0 for t in q.trailers] == [t.L0 for t in p.trailers]
+    assert [t.Mr for t in q.trailers] == [7.0, 7.0, 7.0]
+    assert p.etas == tuple(train_same_path_etas([(t.L, t.L0) for t in p.trailers]))
+    with pytest.raises(ValueError, match=r"2 gains are not allowed: this vehicle has 3 trailer"):
+        p.with_etas((0.1, 0.2))
+
+
 @pytest.mark.parametrize(
     ("call", "fragment"),
     [
