@@ -284,7 +284,7 @@ def test_cli_eta_path_reaches_the_scenario_and_replays(tmp_path):
     assert run.main([*argv, "--no-video", "--no-plots", "--quiet", "--out", str(out)]) == 0
     doc = json.loads((out / "metrics.json").read_text())
     assert doc["config"]["scenario"]["eta_schedule"] == "path"
-    assert doc["config"]["scenario"]["eta"] == "same_path"  # the controller's model
+    assert doc["config"]["scenario"]["eta"] == "same_path"  # the constant gain it replaces
     assert doc["trailer_offtrack_max"] < 5e-3
     ts = outputs.read_timeseries(out / "timeseries.parquet")
     # the plant's gain on the steady arc is the exact same-path gain of kappa = 1, not -1/7

@@ -379,8 +379,9 @@ class Scenario:
     #: Scheduled passive steering (:mod:`tt_mujoco.sim.schedule`): False (the constant ``eta``),
     #: ``"curvature"`` (or True: the exact same-path gain of the target's curvature) or
     #: ``"path"`` (each trailer's gain eta_k(s) from the path's geometry at its own arc length,
-    #: :mod:`tt_mujoco.vehicle.path_schedule`). The controller keeps ``eta``. On the command
-    #: line it is ``--eta scheduled`` / ``--eta path``.
+    #: :mod:`tt_mujoco.vehicle.path_schedule`), which replace the constant ``eta``; the
+    #: controllers' model follows the gains in force (``Controller.steering_changed``). On the
+    #: command line it is ``--eta scheduled`` / ``--eta path``.
     eta_schedule: bool | str = option(
         False,
         _eta_schedule,

@@ -34,10 +34,12 @@ class EtaScheduler:
 
     Notes
     -----
-    The controllers' nominal model keeps the scenario's constant eta; eta enters Mbar only
-    through the trailer wheels (docs/model.md Section 4), and the scheduled gains stay within
-    [-0.160, -0.143] for |kappa| <= 2 1/m, so the mismatch is a small model error the controllers
-    treat like any other.
+    Every change reaches the controller through
+    :meth:`~tt_mujoco.controllers.base.Controller.steering_changed` (the loop calls it), and the
+    built-in laws rebuild their nominal model with the gains in force: eta enters Mbar through
+    the trailer wheels (docs/model.md Section 4). With the curvature schedule the gains stay
+    within [-0.160, -0.143] for |kappa| <= 2 1/m; with the path schedule they range over
+    [-3, 3].
     """
 
     def __init__(self, plant, params: Params, tolerance: float = SCHEDULE_TOLERANCE):
