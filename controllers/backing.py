@@ -68,8 +68,8 @@ DEFAULT_GAINS = {
 _PREVIEW_POINTS = 5
 
 
-#: Bisection steps of :meth:`SteadyInverse.solve`: a branch of ~1.6 rad shrinks below 1e-11 rad.
-_BISECTIONS = 38
+#: Most steps of :meth:`SteadyInverse.solve` (it converges to rounding in about ten).
+_ROOT_STEPS = 60
 
 
 def check_config(config: dict | None) -> dict[str, float]:
@@ -136,20 +136,37 @@ class SteadyInverse:
 
     def solve(self, kappa: float, beta_ahead: float) -> float:
         """The hitch angle (rad) for ``kappa`` behind a unit steering by ``beta_ahead``: the
-        relation's extra argument, by bisection on the branch (held at its ends beyond)."""
+        relation's extra argument, by regula falsi (Illinois) on the branch, to rounding
+        (held at its ends beyond)."""
         L, L0, eta, curvature = self._relation
         lo, hi = float(self._phi[0]), float(self._phi[-1])  # kappa rises from lo to hi
-        if kappa <= float(curvature(lo, L, L0, eta, beta_ahead)):
+        f_lo = float(curvature(lo, L, L0, eta, beta_ahead)) - kappa
+        f_hi = float(curvature(hi, L, L0, eta, beta_ahead)) - kappa
+        if f_lo >= 0.0:
             return lo
-        if kappa >= float(curvature(hi, L, L0, eta, beta_ahead)):
+        if f_hi <= 0.0:
             return hi
-        for _ in range(_BISECTIONS):
-            mid = 0.5 * (lo + hi)
-            if float(curvature(mid, L, L0, eta, beta_ahead)) < kappa:
-                lo = mid
+        side = 0
+        for _ in range(_ROOT_STEPS):
+            mid = hi - f_hi * (hi - lo) / (f_hi - f_lo)
+            if not lo < mid < hi:  # the bracket is down to rounding
+                break
+            f_mid = float(curvature(mid, L, L0, eta, beta_ahead)) - kappa
+            if f_mid == 0.0:
+                return mid
+            if f_mid < 0.0:
+                lo, f_lo = mid, f_mid
+                if side == -1:
+                    f_hi *= 0.5
+                side = -1
             else:
-                hi = mid
-        return 0.5 * (lo + hi)
+                hi, f_hi = mid, f_mid
+                if side == 1:
+                    f_lo *= 0.5
+                side = 1
+            if hi - lo < 1e-15:
+                break
+        return lo if -f_lo < f_hi else hi
 
 
 def steady_hitch_angle(kappa: float, L: float, L0: float, eta: float, phi_max: float) -> float:

@@ -173,9 +173,9 @@ def test_two_trailers_back_without_jackknifing(traj, plant):
 
 
 def test_three_trailers_on_the_cycloids_start_lose_traction_backing_up():
-    # docs/model.md Section 14: the one N = 3 case that jackknifes (MuJoCo, cycloid, 1.27 s)
-    # does so while the drive wheels spin (5.23 m/s of slip; 0.006 with one trailer) and the
-    # torques sit at their limit for 51 % of its steps.
+    # docs/model.md Section 14: the one N = 3 case that jackknifes (MuJoCo, cycloid, 1.32 s)
+    # does so while the drive wheels spin (4.92 m/s of slip; 0.006 with one trailer) and the
+    # torques sit at their limit for 52 % of its steps.
     m = simulate(Scenario(traj="cycloid", trailers=3, reverse=True, disturbance="none")).metrics
     assert m["status"] == "jackknife"
     assert m["slip_longitudinal_max"] > 1.0 and m["torque_saturation_fraction"] > 0.3

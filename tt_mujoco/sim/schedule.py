@@ -140,8 +140,7 @@ class PathEtaScheduler(EtaScheduler):
             )
         self.schedule = schedule
         self.arc_lengths = schedule.arc_lengths_at(start_s)
-        me = plant.measure()
-        for k, (x, y) in enumerate(_axle_positions(me)):
+        for k, (x, y) in enumerate(_axle_positions(plant.measure())):
             self.arc_lengths[k] = schedule.project(self.arc_lengths[k], x, y)
         start = tuple(schedule.eta(k, s) for k, s in enumerate(self.arc_lengths))
         self._apply(start)
