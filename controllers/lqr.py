@@ -98,7 +98,7 @@ class LqrController(Controller):
         s, e_y, e_psi = path_errors(path.pose_at, path.curvature_and_rate, s, m.x, m.y, m.theta)
         self._s = s
         kappa = curvature_and_rate_at(path, s)[0]
-        phis = [m.phi, *(row[3] for row in getattr(m, "train", ()))]
+        phis = m.phis
         phis_ref = [
             steady(curvature_and_rate_at(path, s - behind)[0])
             for steady, behind in zip(self._steady, self._behind, strict=True)

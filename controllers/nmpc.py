@@ -117,10 +117,6 @@ class NmpcController(Controller):
         }
 
     # -- the model ---------------------------------------------------------------------------
-    def _phis(self, measurement) -> list[float]:
-        rows = getattr(measurement, "train", ())
-        return [measurement.phi, *(row[3] for row in rows)]
-
     def _rates(self, x, u):
         """``(x_dot, J = dx_dot/dx, G = dx_dot/du)`` at state ``x`` and torques ``u``."""
         n, path = self.n, self.setup.path
@@ -180,7 +176,7 @@ class NmpcController(Controller):
         s0 = r.s if self._s is None else self._s
         s, e_y, e_psi = path_errors(path.pose_at, path.curvature_and_rate, s0, m.x, m.y, m.theta)
         self._s = s
-        return np.array([s, e_y, e_psi, *self._phis(m), m.v, m.omega])
+        return np.array([s, e_y, e_psi, *m.phis, m.v, m.omega])
 
     def _references(self, r) -> np.ndarray:
         n, path = self.n, self.setup.path

@@ -161,7 +161,7 @@ def check_kinematics(p: Params, direction: int = 1, duration: float = 10.0) -> d
     program = damped_program(0.2 * direction * scale, 0.1 * scale, 2.0 * scale)
     run, hitch_rates = _mujoco_run(p, duration, program)
     dt = p.timestep
-    q = np.array([run[0].x, run[0].y, run[0].theta, *_phis(run[0])])
+    q = np.array([run[0].x, run[0].y, run[0].theta, *run[0].phis])
     for a, b in itertools.pairwise(run):
         v, w = 0.5 * (a.v + b.v), 0.5 * (a.omega + b.omega)
         half = q + 0.5 * dt * np.array(train.rates(q[2], tuple(q[3:]), v, w, p)[: 3 + n])
@@ -174,7 +174,7 @@ def check_kinematics(p: Params, direction: int = 1, duration: float = 10.0) -> d
     ]
     violation = max(_violation(me, p) for me in run)
     formula = np.array(
-        [[row[0] for row in train.trailer_rates(_phis(me), me.v, me.omega, p)] for me in run]
+        [[row[0] for row in train.trailer_rates(me.phis, me.v, me.omega, p)] for me in run]
     )
     rate_error = np.sqrt(np.mean((np.array(hitch_rates) - formula) ** 2)) / np.sqrt(
         np.mean(formula**2)
@@ -185,7 +185,7 @@ def check_kinematics(p: Params, direction: int = 1, duration: float = 10.0) -> d
         "trailers": n,
         "direction": "forward" if direction > 0 else "reverse",
         "distance_m": float(np.sum(np.hypot(*np.diff(xy, axis=0).T))),
-        "phi_max_abs_deg": float(max(math.degrees(max(abs(a) for a in _phis(me))) for me in run)),
+        "phi_max_abs_deg": float(max(math.degrees(max(abs(a) for a in me.phis)) for me in run)),
         "final_P_error_m": float(math.hypot(q[0] - last.x, q[1] - last.y)),
         "final_P0_error_m": float(max(errors)),
     }
@@ -201,10 +201,6 @@ def _violation(me, p: Params) -> float:
     train_rows = zip(getattr(me, "train", ()), p.train, strict=True)
     rows += [(row[3], row[4], t.eta) for row, t in train_rows]
     return max(abs(beta - eta * phi) for phi, beta, eta in rows)
-
-
-def _phis(me) -> tuple:
-    return getattr(me, "phis", (me.phi,))
 
 
 def check_energy(p: Params, forced: bool, duration: float = 2.0) -> dict:
@@ -258,7 +254,7 @@ def check_jackknife(p: Params, direction: int = 1, duration: float = 4.0) -> dic
         veh.set_torque(*program(0.0, veh.data.qvel[veh.layout.root_v + 5]))
         mujoco.mj_step(veh.model, veh.data)
         me = veh.measure()
-        worst_mujoco = [max(w, abs(a)) for w, a in zip(worst_mujoco, _phis(me), strict=True)]
+        worst_mujoco = [max(w, abs(a)) for w, a in zip(worst_mujoco, me.phis, strict=True)]
         if max(worst_mujoco) > math.radians(45.0) or veh.data.warning.number.any():
             break
     ode = train.TrainODE(p, state=[0.0, 0.0, 0.0, *([phi0] * n), 0.0, 0.0, 0.5 * direction, 0.0])

@@ -119,6 +119,12 @@ class Measurement(NamedTuple):
     slip_left: float
     slip_right: float
 
+    @property
+    def phis(self) -> tuple:
+        """The hitch angles phi_1..phi_N: one trailer's, here (a :class:`TrainMeasurement`
+        gives every trailer's)."""
+        return (self.phi,)
+
 
 _new_measurement = Measurement._make
 

@@ -152,17 +152,12 @@ class PathEtaScheduler(EtaScheduler):
         schedule = self.schedule
         arcs = self.arc_lengths
         etas = []
-        phis = _hitch_angles(measurement)
+        phis = measurement.phis
         for k, (x, y) in enumerate(_axle_positions(measurement)):
             arcs[k] = schedule.project(arcs[k], x, y)
             etas.append(schedule.gain(k, arcs[k], phis[k]))
         self._offer(tuple(etas), step)
         return self.eta
-
-
-def _hitch_angles(me) -> tuple:
-    """Every hitch angle phi_1..phi_N (rad) in a measurement."""
-    return (me.phi, *(row[3] for row in getattr(me, "train", ())))
 
 
 def _axle_positions(me) -> list[tuple[float, float]]:
