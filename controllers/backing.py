@@ -242,7 +242,7 @@ class HitchCascade(TargetWrapper):
         v_d, w_d, v_d_dot, _ = self.target.update(t, dt, v_measured)
         self.reference_omega_d = w_d
         rows = getattr(me, "train", ())
-        phis = [me.phi, *(row[3] for row in rows)]
+        phis = me.phis
         v = float(v_measured)
         rates = hitch_rates(phis, v, me.omega, self.lengths, self.etas)
         n = len(phis)
@@ -255,11 +255,10 @@ class HitchCascade(TargetWrapper):
         self.lateral_error, self.heading_error = e_y, e_psi
         v_lead = rates[-1][1]
         c = -self.k_y * e_y - self.k_psi * math.copysign(1.0, v_lead) * e_psi
+        points = _PREVIEW_POINTS if self.preview else 1  # one trailer: the axle's own point
         step = math.copysign(self.preview, v_lead) / (_PREVIEW_POINTS - 1)
-        feed = sum(
-            curvature_and_rate_at(self.path, s + j * step)[0] for j in range(_PREVIEW_POINTS)
-        )
-        kappa = feed / _PREVIEW_POINTS + max(-self.c_max, min(self.c_max, c))
+        feed = sum(curvature_and_rate_at(self.path, s + j * step)[0] for j in range(points))
+        kappa = feed / points + max(-self.c_max, min(self.c_max, c))
         for k in range(n - 1, 0, -1):  # hitches N..2 (index k is trailer k + 1)
             # the unit ahead is a steered trailer: its steering moves the turn's centre
             wanted = self._inverse[k].solve(kappa, self.etas[k - 1] * phis[k - 1])
