@@ -6,8 +6,9 @@ Run: ``python docs/readme_images.py``. It runs the main command
 main video (the start), frame 200 (in the second turn), the end card of the jackknife video,
 the main run's ``path.png``, frame 250 of a three-trailer train on the S-curve
 (``--trailers 3 --no-disturbance``), and the ``path.png`` of a three-trailer train on the circle
-with the path schedule (``--traj circle --trailers 3 --eta path --no-disturbance``). Existing
-images are replaced only because they are this script's own outputs.
+with the path schedule (``--traj circle --trailers 3 --eta path --no-disturbance``), and the
+``path.png`` of the main command with the path schedule (``--eta path``). Existing images are
+replaced only because they are this script's own outputs.
 """
 
 import subprocess
@@ -62,6 +63,11 @@ def main() -> int:
         small(Image.open(scheduled / "path.png").convert("RGB")).save(
             OUT / "circle_path_schedule.png", optimize=True
         )
+        same_path = Path(tmp) / "same_path"
+        run(same_path, "--eta", "path", "--no-video")
+        small(Image.open(same_path / "path.png").convert("RGB")).save(
+            OUT / "s_curve_path_schedule.png", optimize=True
+        )
         got = frames(main_run / "video.mp4", {5, 200})
         small(Image.fromarray(got[5])).save(OUT / "s_curve_start.png", optimize=True)
         small(Image.fromarray(got[200])).save(OUT / "s_curve_frame.png", optimize=True)
@@ -72,7 +78,7 @@ def main() -> int:
         )
     print(
         "wrote s_curve_start.png, s_curve_frame.png, jackknife_end.png, s_curve_path.png, "
-        f"train_frame.png, circle_path_schedule.png to {OUT}"
+        f"train_frame.png, circle_path_schedule.png, s_curve_path_schedule.png to {OUT}"
     )
     return 0
 

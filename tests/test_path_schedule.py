@@ -232,8 +232,8 @@ def _offtracks(metrics, n):
     ],
 )
 def test_runs_keep_every_trailer_within_five_millimetres(plant, traj, n):
-    # Issue "same path", must-show 1, from rest, no disturbance: measured at worst 4.3 mm
-    # (MuJoCo, cycloid, trailer 2); the same-path limit gains leave 13-78 mm here. MuJoCo's
+    # Issue "same path", must-show 1, from rest, no disturbance: measured at worst 2.8 mm
+    # (MuJoCo, cycloid, trailers 1 and 2); the same-path limit gains leave 13-78 mm here. MuJoCo's
     # cycloid with three trailers is not within it (docs/path_schedule_study.md).
     result = simulate(
         Scenario(plant=plant, traj=traj, trailers=n, disturbance="none", eta_schedule="path")
@@ -243,9 +243,9 @@ def test_runs_keep_every_trailer_within_five_millimetres(plant, traj, n):
 
 
 def test_three_trailers_spin_the_drive_wheels_on_the_cycloids_start():
-    # Why MuJoCo's cycloid leaves three scheduled trailers 8-10 mm off (docs/model.md Section
+    # Why MuJoCo's cycloid leaves three scheduled trailers 7-8 mm off (docs/model.md Section
     # 13): the cycloid's timed start accelerates four bodies on the tractor's two driven wheels,
-    # which slip by up to 1.12 m/s (0.025 m/s with one trailer); the reduced plant cannot slip.
+    # which slip by up to 1.16 m/s (0.005 m/s with one trailer); the reduced plant cannot slip.
     slips = [
         simulate(Scenario(traj="cycloid", trailers=n, disturbance="none", eta="path")).metrics[
             "slip_longitudinal_max"
@@ -258,7 +258,7 @@ def test_three_trailers_spin_the_drive_wheels_on_the_cycloids_start():
 @pytest.mark.parametrize("plant", PLANTS)
 def test_a_user_csv_path_without_an_inflection_keeps_three_trailers_on_it(plant, tmp_path):
     # Must-show 1's user path: the parabola y = 0.3 x^2 (its curvature falls from 0.6 1/m, no
-    # inflection) from 16 waypoints. Measured 0.73 mm at worst (MuJoCo, trailers 2, 3), against
+    # inflection) from 16 waypoints. Measured 0.61 mm at worst (MuJoCo, trailer 3), against
     # 17-35 mm with the same-path limit gains.
     x = np.linspace(0.0, 3.0, 16)
     csv = tmp_path / "bend.csv"
@@ -275,7 +275,7 @@ def test_a_user_csv_path_without_an_inflection_keeps_three_trailers_on_it(plant,
 def test_the_paper_disturbance_keeps_the_bound_for_one_trailer(plant):
     result = simulate(Scenario(plant=plant, traj="cycloid", eta_schedule="path"))
     assert result.status == "ok"
-    assert result.metrics["trailer_offtrack_max"] < 5e-3  # measured 1.94 mm (MuJoCo)
+    assert result.metrics["trailer_offtrack_max"] < 5e-3  # measured 1.5 mm (MuJoCo)
 
 
 def test_cli_eta_path_reaches_the_scenario_and_replays(tmp_path):
@@ -320,14 +320,24 @@ def test_s_curve_closed_loop_is_four_times_better_than_same_path_on_the_reduced_
             assert ratio > 4.0, (key, stat, ratio)
 
 
-def test_s_curve_in_contact_physics_fails_after_the_inflection():
-    # What docs/model.md Section 13 reports as open: through the inflection the scheduled
-    # steering swings and the MuJoCo vehicle cannot follow; the run ends after it (t > 7 s).
-    # (With the table's gain looked up by arc length alone, a hitch still at 5.4 deg where the
-    # table's crosses zero met the other side's gain and jackknifed at 7.2 s.)
-    result = simulate(Scenario(plant="mujoco", traj="s_curve", disturbance="none", eta="path"))
-    assert result.status == "jackknife"
-    assert result.metrics["sim_time_s"] > 7.0
+def test_s_curve_in_contact_physics_completes_with_one_trailer_and_fails_with_three():
+    # What docs/model.md Section 13 reports: with the axles steered by an actuator one trailer
+    # completes the S-curve, 17.4 mm max and 3.7 mm rms against the same-path limit gains'
+    # 59.7 / 12.8 mm (3.4x and 3.5x: short of the issue's 4x); with the gain applied through
+    # the linkage, whose reaction loads the hitch eta times, it jackknifed at 10.42 s. Three
+    # trailers still jackknife after the inflection (t > 7 s). (With the table's gain looked up
+    # by arc length alone, a hitch still at 5.4 deg where the table's crosses zero met the other
+    # side's gain and jackknifed at 7.2 s.)
+    common = dict(plant="mujoco", traj="s_curve", disturbance="none")
+    one = simulate(Scenario(eta="path", **common)).metrics
+    limit = simulate(Scenario(eta="same_path", **common)).metrics
+    assert one["status"] == limit["status"] == "ok"
+    for stat in ("max", "rms"):
+        key = f"trailer_offtrack_{stat}"
+        assert limit[key] / one[key] > 3.0, (stat, limit[key], one[key])
+    three = simulate(Scenario(eta="path", trailers=3, **common)).metrics
+    assert three["status"] == "jackknife"
+    assert three["sim_time_s"] > 7.0
 
 
 def test_the_gain_is_the_table_on_the_schedule_and_the_path_steering_off_it():
@@ -369,3 +379,15 @@ def test_the_study_table_is_what_its_command_prints(path, plant, n, steering):
     spec.loader.exec_module(study)
     line = "| " + " | ".join(study.row(path, plant, n, "none", steering)) + " |"
     assert line in (docs / "path_schedule_study.md").read_text()
+
+
+def test_s_curve_gain_swings_from_the_linkage_to_both_bounds_within_a_short_travel():
+    # docs/model.md Section 13: at the S-curve's junction the ideal schedule's gain leaves its
+    # steady -1/7 and swings to -3 and +3 within 0.3 m of the axle's travel (measured 0.25 m).
+    axle = path_schedule(make_target("s_curve").path, [LINKS]).axles[0]
+    s, eta = axle["s"], axle["eta"]
+    lowest, highest = np.argmin(eta), np.argmax(eta)
+    leaves = s[np.flatnonzero(np.abs(eta[:lowest] + 1.0 / 7.0) < 0.01)[-1]]
+    lowest, highest = s[lowest], s[highest]
+    assert eta.min() == -3.0 and eta.max() == 3.0
+    assert leaves < lowest < highest < leaves + 0.3

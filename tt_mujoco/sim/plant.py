@@ -76,6 +76,14 @@ class Plant(ABC):
     def set_eta(self, eta: float) -> None:
         """Change the passive steering gain beta = eta phi from the next step on."""
 
+    def steer_by_actuator(self) -> None:
+        """From now on each trailer's axle is steered by an actuator that holds
+        beta_k = eta_k phi_k, its reaction on the trailer's own body, instead of by a linkage
+        whose reaction acts on the hitch (a gain that changes along the path is not a fixed
+        linkage ratio: docs/model.md Section 13). A kinematic plant steers the same either way,
+        so by default this does nothing."""
+        return None
+
     def set_etas(self, etas) -> None:
         """Change every trailer's gain, eta_1..eta_N (a plant of one trailer needs only
         :meth:`set_eta`)."""

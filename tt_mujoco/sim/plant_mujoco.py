@@ -71,8 +71,6 @@ class MujocoPlant(Plant):
         self._act_r, self._act_l = lay.act_right, lay.act_left
         self._tractor = self.model.body("tractor").id
         self._trailer = self.model.body("trailer_body").id
-        # eq_data row of the joint equality q_steer = polycoef(q_hitch): polycoef[1] = -eta.
-        self._steering_row = self.model.eq_data[self.model.equality("steering").id]
         self._wrench = wrench
         self._ground = None  # friction patches, see set_ground
         # Views into MjData, made once: building them costs more than the writes.
@@ -82,10 +80,19 @@ class MujocoPlant(Plant):
         self._warnings = self.data.warning.number
         self._qpos, self._qvel, self._layout = self.data.qpos, self.data.qvel, lay
         self._measure = measure if params.n_trailers == 1 else measure_train
-        self._steering_rows = [self._steering_row] + [
-            self.model.eq_data[self.model.equality(f"steering_{k}").id]
-            for k in range(2, params.n_trailers + 1)
-        ]
+        # eq_data rows of the joint equalities q_steer = polycoef(q_hitch): polycoef[1] = -eta.
+        names = ["steering"] + [f"steering_{k}" for k in range(2, params.n_trailers + 1)]
+        self._steering_ids = [self.model.equality(name).id for name in names]
+        self._steering_rows = [self.model.eq_data[i] for i in self._steering_ids]
+        self._hitches_q = [lay.hitch_q, *(hitch_q for hitch_q, *_ in lay.train)]
+        self._actuated_etas: list[float] | None = None  # see steer_by_actuator
+
+    def _aim_steering(self) -> None:
+        qpos = self._qpos
+        for row, hitch_q, eta in zip(
+            self._steering_rows, self._hitches_q, self._actuated_etas, strict=True
+        ):
+            row[0] = -eta * qpos[hitch_q]  # the hitch joint's angle is -phi
 
     @property
     def tractor_body(self) -> int:
@@ -103,10 +110,29 @@ class MujocoPlant(Plant):
         self.model.body_mass[body] *= factor
         self.model.body_inertia[body] *= factor
 
+    def steer_by_actuator(self) -> None:
+        """Each coupling becomes an equality on the steering joint alone, ``q_steer =
+        polycoef[0]``, its target set to ``eta_k phi_k`` from the hitch before every physics
+        step: the constraint's force then acts between the axle and its trailer's body, and
+        the hitch carries none of it (the linkage's acts on the hitch times eta)."""
+        if self._actuated_etas is None:
+            self._actuated_etas = [-row[1] for row in self._steering_rows]
+            for i, row in zip(self._steering_ids, self._steering_rows, strict=True):
+                self.model.eq_obj2id[i] = -1
+                row[1] = 0.0
+
     def set_eta(self, eta: float) -> None:
-        self._steering_row[1] = -eta
+        self.set_etas((eta,))
 
     def set_etas(self, etas) -> None:
+        if len(etas) != len(self._steering_rows):
+            raise ValueError(
+                f"{len(etas)} gains are not allowed: the plant has {len(self._steering_rows)} "
+                "trailers"
+            )
+        if self._actuated_etas is not None:
+            self._actuated_etas = [float(eta) for eta in etas]
+            return
         for row, eta in zip(self._steering_rows, etas, strict=True):
             row[1] = -eta
 
@@ -149,7 +175,12 @@ class MujocoPlant(Plant):
             mus, self.ground_mask = self._ground.frictions(self.data.geom_xpos[ids, :2])
             self.model.geom_friction[ids, 0] = mus
         start = self.data.time  # a warning resets MuJoCo's state, its clock included
-        mujoco.mj_step(self.model, self.data, nstep=substeps)
+        if self._actuated_etas is None:
+            mujoco.mj_step(self.model, self.data, nstep=substeps)
+        else:  # the actuated axles' targets follow the hitches every physics step
+            for _ in range(substeps):
+                self._aim_steering()
+                mujoco.mj_step(self.model, self.data)
         # MuJoCo resets the state when a warning fires: stop at once, before it is measured.
         if self._warnings.any():
             i = int(np.flatnonzero(self._warnings)[0])

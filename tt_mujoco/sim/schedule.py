@@ -38,7 +38,7 @@ class EtaScheduler:
     :meth:`~tt_mujoco.controllers.base.Controller.steering_changed` (the loop calls it), and the
     built-in laws rebuild their nominal model with the gains in force: eta enters Mbar through
     the trailer wheels (docs/model.md Section 4). With the curvature schedule the gains stay
-    within [-0.160, -0.143] for |kappa| <= 2 1/m; with the path schedule they range over
+    within [-0.159, -0.143] for |kappa| <= 2 1/m; with the path schedule they range over
     [-3, 3].
     """
 
@@ -121,7 +121,9 @@ class PathEtaScheduler(EtaScheduler):
     Each step projects every axle onto the path (Newton steps from its previous arc length)
     and looks its gain up there, so a trailer that is off its schedule gets the gain of where
     it is, not of where the tractor is. The plant starts on the gains of where its axles
-    stand (before the first step).
+    stand (before the first step). A gain that sweeps [-3, 3] and changes sign along the path
+    is no fixed linkage ratio, so the plant's axles are steered by an actuator
+    (:meth:`~tt_mujoco.sim.plant.Plant.steer_by_actuator`).
     """
 
     def __init__(
@@ -143,6 +145,7 @@ class PathEtaScheduler(EtaScheduler):
         for k, (x, y) in enumerate(_axle_positions(plant.measure())):
             self.arc_lengths[k] = schedule.project(self.arc_lengths[k], x, y)
         start = tuple(schedule.eta(k, s) for k, s in enumerate(self.arc_lengths))
+        plant.steer_by_actuator()
         self._apply(start)
         self._changes = [(0, self.eta)]
 
