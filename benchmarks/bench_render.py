@@ -5,11 +5,12 @@
 A frame is everything :meth:`tt_mujoco.viz.render.RunRenderer.render_frame` does: pose the vehicle
 (mj_kinematics), build the scene with the path and traces, render offscreen, read the pixels
 back and draw the text overlay. Encoding is timed separately, on frames held in memory, with
-the same ffmpeg (imageio-ffmpeg's) and settings as :func:`tt_mujoco.viz.render.render_video`; in a
-real render the encoder runs in its own process, in parallel with the rendering. The series is
-the reduced model under constant torques (10 s), so the numbers do not depend on the simulation
-loop. On a shared machine the load average is printed with the results: the minimum over
-rounds is the best estimate of the cost, the median of what a user sees.
+the same ffmpeg (imageio-ffmpeg's), once with mediapy's default settings and once with those of
+:func:`tt_mujoco.viz.render.render_video` (the encoder's CPU, the file's size and the decoded
+picture's PSNR); in a real render the encoder runs in its own process, beside the rendering.
+The series is the reduced model under constant torques (10 s), so the numbers do not depend on
+the simulation loop. On a shared machine the load average is printed with the results: the
+minimum over rounds is the best estimate of the cost, the median of what a user sees.
 """
 
 from __future__ import annotations
@@ -77,14 +78,35 @@ def main() -> None:
 
     mediapy.set_ffmpeg(imageio_ffmpeg.get_ffmpeg_exe())
     with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "encode.mp4"
-        start = time.perf_counter()
-        mediapy.write_video(out, np.stack(kept), fps=30, codec="h264")
-        seconds = time.perf_counter() - start
-        print(
-            f"encode    {size}: {len(kept)} frames in {seconds:.2f} s "
-            f"({1e3 * seconds / len(kept):.1f} ms/frame), {out.stat().st_size / 1e3:.0f} kB"
-        )
+        # mediapy's own default (x264's "medium" preset at quantiser 20) against the renderer's
+        # setting, on the same frames: the encoder's CPU (its own process), the file, and the
+        # picture decoded against the frames given (PSNR).
+        source = np.stack(kept).astype(float)
+        settings = {
+            "default": {},
+            f"{render.H264_PRESET}": {
+                "qp": render.H264_QP,
+                "ffmpeg_args": ["-preset", render.H264_PRESET],
+            },
+        }
+        for name, options in settings.items():
+            out = Path(tmp) / f"encode-{name}.mp4"
+            before, start = os.times(), time.perf_counter()
+            with mediapy.VideoWriter(out, shape=kept[0].shape[:2], fps=30, **options) as writer:
+                for image in kept:
+                    writer.add_image(image)
+            seconds, after = time.perf_counter() - start, os.times()
+            cpu = after.children_user + after.children_system
+            cpu -= before.children_user + before.children_system
+            decoded = imageio_ffmpeg.read_frames(str(out))
+            height, width = next(decoded)["size"][::-1]
+            got = np.stack([np.frombuffer(f, np.uint8).reshape(height, width, 3) for f in decoded])
+            mse = float(np.mean((got[: len(source)].astype(float) - source) ** 2))
+            print(
+                f"encode    {size} {name:9s}: {len(kept)} frames in {seconds:.2f} s, encoder "
+                f"CPU {1e3 * cpu / len(kept):.1f} ms/frame, {out.stat().st_size / 1e3:.0f} kB, "
+                f"PSNR {10 * np.log10(255.0**2 / mse):.1f} dB"
+            )
         start = time.perf_counter()
         video = render.render_video(
             ts,

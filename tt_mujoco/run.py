@@ -29,6 +29,7 @@ from typing import NamedTuple
 from tt_mujoco import config as config_mod
 from tt_mujoco import sim
 from tt_mujoco.analysis.metrics import DEFAULT_SUMMARY_KEYS, metric_name, summary_table
+from tt_mujoco.background import BackgroundCall
 from tt_mujoco.cliargs import BadInputError, Parser
 from tt_mujoco.config import CONFIG_FILE
 from tt_mujoco.controllers import controller_class
@@ -276,15 +277,17 @@ def write_outputs(
         notes.append("figures and video skipped: the run has fewer than 2 samples")
         plots = video = False
     staging = Path(tempfile.mkdtemp(dir=out, prefix=STAGING))  # this run's own
+    figures = None
     try:
-        if plots:
-            made = plots_mod.plot_run(
+        if plots:  # drawn in a forked process while the video renders here
+            figures = BackgroundCall(
+                plots_mod.plot_run,
                 result.timeseries,
                 result.reference_polyline,
                 staging,
                 params=result.scenario.plant_params(),
+                forked=None if video else False,  # nothing to overlap without a video
             )
-            written += [publish_new(Path(f), out / Path(f).name) for f in made]
         if video:
             try:
                 info, outcome = render.run_labels(
@@ -305,7 +308,13 @@ def write_outputs(
                 written.append(publish_new(Path(path), out / "video.mp4"))
             except render.RenderUnavailable as err:  # no GL must not lose the results
                 notes.append(f"video skipped: {err}")
+        if figures is not None:
+            made = figures.result()
+            figures = None
+            written += [publish_new(Path(f), out / Path(f).name) for f in made]
     finally:
+        if figures is not None:
+            figures.cancel()
         shutil.rmtree(staging, ignore_errors=True)
     doc = {
         **result.metrics,

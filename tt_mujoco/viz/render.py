@@ -47,6 +47,7 @@ from tt_mujoco.viz.scene import (
     overview_camera,
     pose_vehicle,
     project_to_pixel,
+    simplified,
     trailer_wheel_angles,
     validated_columns,
 )
@@ -75,8 +76,12 @@ __all__ = [
 ]
 
 
-# Scene budget. The reference path and the traces are decimated to these many segments, so a
-# long run costs the same per frame as a short one (each line segment is one user geom).
+# Each drawn line segment is one user geom, and on a software renderer the geoms, not the
+# pixels, set a frame's cost. The reference path and the traces are drawn as chords within
+# DRAW_TOLERANCE of the curve (a fraction of a pixel: the follow camera's 640 pixels span about
+# 2.5 m), then decimated to at most these many segments, so a long run costs the same per frame
+# as a short one.
+DRAW_TOLERANCE = 1e-3  # m
 MAX_PATH_SEGMENTS = 400
 
 
@@ -121,6 +126,12 @@ REFERENCE_POINT_RADIUS = 0.015  # m
 # mjr_readPixels resolve the buffer in software, several times the cost of the frame itself.
 OFFSCREEN_SAMPLES = 0
 
+
+#: The encoder's constant quantiser (mediapy's own default for frames up to 640x480) and x264's
+#: preset: "veryfast" encodes with half the CPU of the default "medium" at the same quantiser,
+#: the picture within 0.3 dB and the file within 6 % (``benchmarks/bench_render.py``); the
+#: encoder runs beside the renderer, on the same two cores.
+H264_QP, H264_PRESET = 20, "veryfast"
 
 _ZERO3 = np.zeros(3)
 
@@ -249,7 +260,11 @@ class RunRenderer:
         polyline = np.asarray(reference_polyline, dtype=float).reshape(-1, 2)
         if not np.all(np.isfinite(polyline)):
             raise ValueError("reference_polyline has non-finite values")
-        self.path = decimate(polyline, MAX_PATH_SEGMENTS) if len(polyline) > 1 else polyline
+        if len(polyline) > 1:
+            polyline_drawn = polyline[simplified(polyline, DRAW_TOLERANCE)]
+            self.path = decimate(polyline_drawn, MAX_PATH_SEGMENTS)
+        else:
+            self.path = polyline
         self.width, self.height, self.fps, self.camera_mode = width, height, fps, camera
         self.params = params
         #: A ramp or a rough ground, placed along the run's reference as the run placed it.
@@ -272,8 +287,6 @@ class RunRenderer:
             self._train[:, j, 0] = self.cols[f"phi_{k}"]
             self._train[:, j, 1] = self.cols[f"beta_{k}"]
 
-        # Traces: one point a frame, every stride-th point kept, plus a live segment to "now".
-        self.trace_stride = max(1, math.ceil(self.n_frames / MAX_TRACE_POINTS))
         self._tractor_xy = np.column_stack([self.cols["x"], self.cols["y"]])[self.index]
         # P's cross-track error at each frame, against the full path (docs/metrics.md).
         self._cross = (
@@ -290,7 +303,11 @@ class RunRenderer:
             TRAIN_TRACE_RGBA[j % len(TRAIN_TRACE_RGBA)] for j in range(params.n_trailers - 1)
         ]
         self._last = f"x0{sfx[-1]}", f"y0{sfx[-1]}"  # the last axle, for the follow camera
-        max_committed = (self.n_frames - 1) // self.trace_stride + 1
+        # Traces: one point a frame; the frames where some axle's trace leaves the chord by
+        # more than DRAW_TOLERANCE are committed, and a live segment runs to "now".
+        kept = np.unique(np.concatenate([simplified(xy, DRAW_TOLERANCE) for xy in self._units]))
+        self.trace_frames = decimate(kept[:, None], MAX_TRACE_POINTS - 1)[:, 0].astype(int)
+        max_committed = len(self.trace_frames)
         self._n_fixed = max(len(self.path) - 1, 0)
         n_user = self._n_fixed + 1 + len(self._units) * (max_committed + 1)
         # Room for the model's geoms twice over (mjv_updateScene may add decor) plus ours.
@@ -394,7 +411,7 @@ class RunRenderer:
         """
         scn = self._off.scene
         base = scn.ngeom
-        committed = frame // self.trace_stride + 1
+        committed = int(np.searchsorted(self.trace_frames, frame, side="right"))
         if rewrite or base != self._base or committed < self._committed:
             for i in range(self._n_fixed):
                 self._segment(base + i, self.path[i], self.path[i + 1], PATH_Z, PATH_RGBA)
@@ -414,13 +431,13 @@ class RunRenderer:
             )
             slot += 1
         trace0 = slot
-        stride = self.trace_stride
+        kept = self.trace_frames
         units = len(self._units)
         for j in range(self._committed, committed):
-            self._trace_group(trace0 + units * (j - 1), (j - 1) * stride, j * stride)
+            self._trace_group(trace0 + units * (j - 1), kept[j - 1], kept[j])
         self._committed = committed
         slot = trace0 + units * (committed - 1)
-        last = (committed - 1) * stride
+        last = kept[committed - 1]
         if frame > last:  # a zero-length line would take its direction from stale memory
             self._trace_group(slot, last, frame)
             slot += units
@@ -617,7 +634,14 @@ def render_video(
         ) as renderer,
         temporary_beside(out, suffix=".tmp.mp4") as tmp,
     ):
-        with mediapy.VideoWriter(tmp, shape=(height, width), fps=fps, codec="h264") as writer:
+        with mediapy.VideoWriter(
+            tmp,
+            shape=(height, width),
+            fps=fps,
+            codec="h264",
+            qp=H264_QP,
+            ffmpeg_args=["-preset", H264_PRESET],
+        ) as writer:
             bar = progress_bar(renderer.n_frames, f"video {out.name}", "frame", progress)
             with bar:
                 for k in range(renderer.n_frames):

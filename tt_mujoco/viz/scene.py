@@ -178,6 +178,36 @@ def decimate(points: np.ndarray, max_segments: int) -> np.ndarray:
     return kept
 
 
+def simplified(points: np.ndarray, tolerance: float) -> np.ndarray:
+    """Indices of the points of a polyline that keep every other point within ``tolerance`` of
+    the segment between the kept points around it (Ramer-Douglas-Peucker); the first and the
+    last are kept.
+
+    A drawn line costs the renderer one geom whatever its length, and a chord within a
+    fraction of a pixel of the curve draws the same pixels: on an arc of radius R a chord of
+    length c is ``c^2 / (8 R)`` off at its middle. The distance is to the segment, not its line,
+    so that a trace that doubles back (a stop, a reversal) keeps its turning point.
+    """
+    n = len(points)
+    keep = np.zeros(n, dtype=bool)
+    keep[[0, n - 1]] = True
+    spans = [(0, n - 1)]
+    while spans:
+        a, b = spans.pop()
+        if b - a < 2:
+            continue
+        chord = points[b] - points[a]
+        inner = points[a + 1 : b] - points[a]
+        length2 = float(chord @ chord)
+        t = np.clip(inner @ chord / length2, 0.0, 1.0) if length2 > 0.0 else np.zeros(len(inner))
+        off = np.hypot(*(inner - t[:, None] * chord).T)
+        i = int(np.argmax(off))
+        if off[i] > tolerance:
+            keep[a + 1 + i] = True
+            spans += [(a, a + 1 + i), (a + 1 + i, b)]
+    return np.flatnonzero(keep)
+
+
 # --- offscreen rendering --------------------------------------------------------------------------
 def _camera_axes(azimuth: float, elevation: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Forward, up and right unit vectors of a MuJoCo free camera (as in mjv_updateCamera)."""
