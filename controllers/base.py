@@ -47,15 +47,19 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from numbers import Real
-from typing import Any, ClassVar
+from typing import Any, ClassVar, NamedTuple
 
 from tt_mujoco.defaults import TORQUE_LIMIT
 
 __all__ = [
     "Controller",
     "ControllerSetup",
+    "LawStep",
     "ModelFn",
+    "Nominal",
     "Reference",
+    "Saturation",
+    "Tracking",
     "VelocityController",
     "reduced_model",
     "resolve_gains",
@@ -356,6 +360,55 @@ def resolve_gains(
 LAW_OK, LAW_SINGULAR, LAW_NOT_FINITE = 0, 1, 2
 
 
+class Tracking(NamedTuple):
+    """What a velocity law tracks at one control step: the measured ``z = (v, omega)``, its
+    target ``z_d`` and the target's rate ``z_d_dot`` (the feed-forward)."""
+
+    v: float
+    omega: float
+    v_d: float
+    omega_d: float
+    v_d_dot: float
+    omega_d_dot: float
+
+
+class Nominal(NamedTuple):
+    """The nominal model ``z_dot = f + g tau`` at the measurement (docs/model.md Section 4)."""
+
+    f1: float
+    f2: float
+    g11: float
+    g12: float
+    g21: float
+    g22: float
+
+
+class Saturation(NamedTuple):
+    """The torque limit (N m), whether the previous step saturated, and whether the
+    integrators are held under saturation (module docstring)."""
+
+    limit: float
+    saturated: bool
+    anti_windup: bool
+
+
+class LawStep(NamedTuple):
+    """One step of a plain-number law: ``status`` (:data:`LAW_OK`, :data:`LAW_SINGULAR` or
+    :data:`LAW_NOT_FINITE`), the clipped torques, the unclipped request ``(u1, u2)``, whether
+    it saturated, two values the law reports (ISMC-STA: its sliding variables) and its new
+    state (8 floats)."""
+
+    status: int
+    T_r: float
+    T_l: float
+    u1: float
+    u2: float
+    saturated: bool
+    aux1: float
+    aux2: float
+    state: tuple
+
+
 def inverse_of(g11: float, g12: float, g21: float, g22: float):
     """``(ok, g^-1 entries)``: ``ok`` False where g is singular or not finite."""
     det = g11 * g22 - g12 * g21
@@ -401,8 +454,9 @@ def deepens(x: float, gi_1: float, gi_2: float, s1: float, s2: float) -> bool:
 class VelocityController(Controller):
     """The built-in laws' base: validation, the 2x2 solve, saturation and the anti-windup test.
 
-    Subclasses set :attr:`name`, :attr:`PRESETS` and :attr:`DEFAULT_PRESET` and implement
-    :meth:`step`, :meth:`reset` and :meth:`state`.
+    Subclasses set :attr:`name`, :attr:`LAW`, :attr:`PRESETS` and :attr:`DEFAULT_PRESET` and
+    implement :meth:`reset` and :meth:`state` (and, for a law with memory, :meth:`law_state`
+    and :meth:`set_law_state`).
 
     Parameters
     ----------
@@ -515,14 +569,15 @@ class VelocityController(Controller):
         v_d_dot: float,
         omega_d_dot: float,
     ) -> tuple[float, float]:
-        """Saturated wheel torques ``(T_r, T_l)`` for the measurement at this control step.
+        """Saturated wheel torques ``(T_r, T_l)`` for the measurement at this control step:
+        one step of :attr:`LAW`.
 
         Parameters
         ----------
         dt : float
             Time since the previous call, s (> 0).
         phi : float
-            Measured articulation angle, rad.
+            Measured articulation angle, rad (a train: every hitch angle).
         v, omega : float
             Measured forward speed (m/s) and yaw rate (rad/s).
         v_d, omega_d : float
@@ -530,7 +585,10 @@ class VelocityController(Controller):
         v_d_dot, omega_d_dot : float
             Target time derivatives (feedforward).
         """
-        raise NotImplementedError
+        if not 0.0 < dt < _INF:
+            self._check_dt(dt)
+        tracking = Tracking(v, omega, v_d, omega_d, v_d_dot, omega_d_dot)
+        return self.run_law(type(self).LAW, dt, phi, tracking)
 
     def __repr__(self) -> str:
         return (
@@ -555,6 +613,9 @@ class VelocityController(Controller):
         self.command = (u1, u2)
         return T_r, T_l, s1, s2
 
+    #: The plain-number law :meth:`step` runs: ``law(dt, tracking, model, state, gains,
+    #: saturation) -> LawStep`` (:func:`tt_mujoco.controllers.ismc_sta.ismc_sta_law`).
+    LAW: ClassVar[Callable]
     #: The law's gains as its plain-number function takes them (set by ``_set_gains``).
     law_gains: tuple = ()
 
@@ -565,20 +626,18 @@ class VelocityController(Controller):
     def set_law_state(self, state, aux1: float = 0.0, aux2: float = 0.0) -> None:
         """Take back the memory :meth:`law_state` gave, as the law returned it."""
 
-    def run_law(self, law, dt, phi, v, omega, v_d, omega_d, v_d_dot, omega_d_dot):
+    def run_law(self, law: Callable, dt: float, phi, tracking: Tracking) -> tuple[float, float]:
         """One step of ``law`` (a plain-number law such as
         :func:`tt_mujoco.controllers.ismc_sta.ismc_sta_law`) on the nominal model at the
-        measurement: the built-in laws' :meth:`step`."""
-        f1, f2, g11, g12, g21, g22 = self.model(phi, v, omega)
-        status, T_r, T_l, u1, u2, saturated, aux1, aux2, state = law(
-            dt, v, omega, v_d, omega_d, v_d_dot, omega_d_dot, f1, f2, g11, g12, g21, g22,
-            self.law_state(), self.law_gains, self.torque_limit, self.saturated, self.anti_windup,
-        )  # fmt: skip
-        self.set_law_state(state, aux1, aux2)
-        self._raise_for(status, (g11, g12, g21, g22), u1, u2)
-        self.saturated = saturated
-        self.command = (u1, u2)
-        return T_r, T_l
+        measurement, its memory and saturation flag carried over: :meth:`step`."""
+        model = Nominal(*self.model(phi, tracking.v, tracking.omega))
+        saturation = Saturation(self.torque_limit, self.saturated, self.anti_windup)
+        out = law(dt, tracking, model, self.law_state(), self.law_gains, saturation)
+        self.set_law_state(out.state, out.aux1, out.aux2)
+        self._raise_for(out.status, model[2:], out.u1, out.u2)
+        self.saturated = out.saturated
+        self.command = (out.u1, out.u2)
+        return out.T_r, out.T_l
 
     def _raise_for(self, status: int, g: tuple, u1: float, u2: float) -> None:
         """The FloatingPointError of a law's failed ``status`` (none for :data:`LAW_OK`)."""

@@ -11,12 +11,26 @@ the paper's Delta1 mean of 3.5 m/s^2 and K_v = 8). FBL has no integrator, so not
 
 from __future__ import annotations
 
-import math
 from typing import ClassVar
 
-from tt_mujoco.controllers.base import LAW_OK, VelocityController, torques_of
+from tt_mujoco.controllers.base import LAW_OK, LawStep, VelocityController, torques_of
 
 __all__ = ["FblController", "fbl_law"]
+
+
+def fbl_law(dt, tracking, model, state, gains, saturation):
+    """One step of the law (module docstring) from plain numbers, in the form of
+    :func:`tt_mujoco.controllers.ismc_sta.ismc_sta_law` (the compiled episode shares it);
+    ``gains`` is ``(k_v, k_omega, 0, 0, 0, 0, 0)`` and ``state`` is passed through."""
+    z, f = tracking, model
+    r1 = z.v_d_dot - f.f1 - gains[0] * (z.v - z.v_d)
+    r2 = z.omega_d_dot - f.f2 - gains[1] * (z.omega - z.omega_d)
+    status, T_r, T_l, u1, u2, s1, s2, _, _, _, _ = torques_of(
+        f.g11, f.g12, f.g21, f.g22, r1, r2, saturation.limit
+    )
+    if status != LAW_OK:
+        return LawStep(status, T_r, T_l, u1, u2, saturation.saturated, 0.0, 0.0, state)
+    return LawStep(LAW_OK, T_r, T_l, u1, u2, s1 != 0.0 or s2 != 0.0, 0.0, 0.0, state)
 
 
 class FblController(VelocityController):
@@ -28,6 +42,7 @@ class FblController(VelocityController):
     """
 
     name = "fbl"
+    LAW = staticmethod(fbl_law)
     PRESETS: ClassVar[dict[str, dict[str, float]]] = {"paper_6_2": {"k_v": 8.0, "k_omega": 5.0}}
     DEFAULT_PRESET = "paper_6_2"
 
@@ -40,23 +55,3 @@ class FblController(VelocityController):
 
     def state(self):
         return {}
-
-    def step(self, dt, phi, v, omega, v_d, omega_d, v_d_dot, omega_d_dot):
-        if not 0.0 < dt < math.inf:
-            self._check_dt(dt)
-        return self.run_law(fbl_law, dt, phi, v, omega, v_d, omega_d, v_d_dot, omega_d_dot)
-
-
-def fbl_law(
-    dt, v, omega, v_d, omega_d, v_d_dot, omega_d_dot, f1, f2, g11, g12, g21, g22, state, gains,
-    limit, saturated, anti_windup,
-):  # fmt: skip
-    """One step of the law (module docstring) from plain numbers, in the form of
-    :func:`tt_mujoco.controllers.ismc_sta.ismc_sta_law` (the compiled episode shares it);
-    ``gains`` is ``(k_v, k_omega, 0, 0, 0, 0, 0)`` and ``state`` is passed through."""
-    r1 = v_d_dot - f1 - gains[0] * (v - v_d)
-    r2 = omega_d_dot - f2 - gains[1] * (omega - omega_d)
-    status, T_r, T_l, u1, u2, s1, s2, _, _, _, _ = torques_of(g11, g12, g21, g22, r1, r2, limit)
-    if status != LAW_OK:
-        return status, T_r, T_l, u1, u2, saturated, 0.0, 0.0, state
-    return LAW_OK, T_r, T_l, u1, u2, s1 != 0.0 or s2 != 0.0, 0.0, 0.0, state

@@ -39,11 +39,82 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from tt_mujoco.controllers.base import LAW_OK, VelocityController, deepens, torques_of
+from tt_mujoco.controllers.base import (
+    LAW_OK,
+    LawStep,
+    VelocityController,
+    deepens,
+    torques_of,
+)
 
 __all__ = ["IsmcStaController", "ismc_sta_law"]
 
 _sqrt = math.sqrt
+
+
+def ismc_sta_law(dt, tracking, model, state, gains, saturation):
+    """One step of the law (module docstring) from plain numbers: the one implementation,
+    which :meth:`IsmcStaController.step` and the compiled episode (:mod:`tt_mujoco.sim.compiled`)
+    both run.
+
+    Parameters
+    ----------
+    dt : float
+        Time since the previous step, s.
+    tracking : Tracking
+        Measured ``(v, omega)``, their targets and the targets' rates.
+    model : Nominal
+        The nominal model's ``f`` and ``g`` at the measurement.
+    state : tuple of 8 floats
+        ``(int_e_v, int_e_omega, sta_v, sta_omega, rate_e1, rate_e2, rate_w1, rate_w2)``.
+    gains : sequence of 7 floats
+        ``(lambda_v, lambda_omega, k1_v, k1_omega, k2_v, k2_omega, eps)``.
+    saturation : Saturation
+        The torque limit, whether the previous step saturated, and the anti-windup switch.
+
+    Returns
+    -------
+    LawStep
+        ``aux1, aux2`` are the sliding variables ``(S_v, S_omega)``; ``status`` is
+        :data:`~tt_mujoco.controllers.base.LAW_OK`, ``LAW_SINGULAR`` (g cannot be inverted) or
+        ``LAW_NOT_FINITE`` (the torques are not finite).
+    """
+    lam1, lam2, k11, k12, k21, k22, eps = gains
+    z, f = tracking, model
+    # Explicit Euler over the elapsed interval with the integrands of the previous call.
+    I1 = state[0] + dt * state[4]
+    I2 = state[1] + dt * state[5]
+    W1 = state[2] + dt * state[6]
+    W2 = state[3] + dt * state[7]
+
+    e1 = z.v - z.v_d
+    e2 = z.omega - z.omega_d
+    S1 = e1 + lam1 * I1
+    S2 = e2 + lam2 * I2
+    sig1 = S1 / (eps + abs(S1))
+    sig2 = S2 / (eps + abs(S2))
+    r1 = z.v_d_dot - f.f1 - lam1 * e1 - k11 * _sqrt(abs(S1)) * sig1 - W1
+    r2 = z.omega_d_dot - f.f2 - lam2 * e2 - k12 * _sqrt(abs(S2)) * sig2 - W2
+
+    w1 = k21 * sig1
+    w2 = k22 * sig2
+    status, T_r, T_l, u1, u2, s1, s2, a11, a12, a21, a22 = torques_of(
+        f.g11, f.g12, f.g21, f.g22, r1, r2, saturation.limit
+    )
+    if status != LAW_OK:
+        held = (I1, I2, W1, W2, e1, e2, w1, w2)
+        return LawStep(status, T_r, T_l, u1, u2, saturation.saturated, S1, S2, held)
+    saturated = s1 != 0.0 or s2 != 0.0
+    if saturated and saturation.anti_windup:
+        if deepens(e1, a11, a21, s1, s2):
+            e1 = 0.0
+        if deepens(e2, a12, a22, s1, s2):
+            e2 = 0.0
+        if deepens(w1, a11, a21, s1, s2):
+            w1 = 0.0
+        if deepens(w2, a12, a22, s1, s2):
+            w2 = 0.0
+    return LawStep(LAW_OK, T_r, T_l, u1, u2, saturated, S1, S2, (I1, I2, W1, W2, e1, e2, w1, w2))
 
 
 class IsmcStaController(VelocityController):
@@ -54,6 +125,7 @@ class IsmcStaController(VelocityController):
     """
 
     name = "ismc_sta"
+    LAW = staticmethod(ismc_sta_law)
     PRESETS: ClassVar[dict[str, dict[str, float]]] = {
         "paper_6_1": {
             "lambda_v": 5.0,
@@ -115,79 +187,7 @@ class IsmcStaController(VelocityController):
             self._rate_w2,
         )
 
-    def step(self, dt, phi, v, omega, v_d, omega_d, v_d_dot, omega_d_dot):
-        if not 0.0 < dt < math.inf:
-            self._check_dt(dt)
-        return self.run_law(ismc_sta_law, dt, phi, v, omega, v_d, omega_d, v_d_dot, omega_d_dot)
-
     def set_law_state(self, state, S_v: float = 0.0, S_omega: float = 0.0) -> None:
         self.int_e_v, self.int_e_omega, self.sta_v, self.sta_omega = state[:4]
         self._rate_e1, self._rate_e2, self._rate_w1, self._rate_w2 = state[4:]
         self.S_v, self.S_omega = S_v, S_omega
-
-
-def ismc_sta_law(
-    dt,
-    v,
-    omega,
-    v_d,
-    omega_d,
-    v_d_dot,
-    omega_d_dot,
-    f1,
-    f2,
-    g11,
-    g12,
-    g21,
-    g22,
-    state,
-    gains,
-    limit,
-    saturated,
-    anti_windup,
-):
-    """One step of the law (module docstring) from plain numbers, given the nominal model's
-    ``f`` and ``g`` at the measurement: the one implementation, which
-    :meth:`IsmcStaController.step` and the compiled episode (:mod:`tt_mujoco.sim.compiled`)
-    both run.
-
-    ``state`` is ``(int_e_v, int_e_omega, sta_v, sta_omega, rate_e1, rate_e2, rate_w1,
-    rate_w2)``, ``gains`` ``(lambda_v, lambda_omega, k1_v, k1_omega, k2_v, k2_omega, eps)``,
-    ``saturated`` whether the previous step saturated. Returns ``(status, T_r, T_l, u1, u2,
-    saturated, S_v, S_omega, state)``; ``status`` is :data:`~tt_mujoco.controllers.base.LAW_OK`,
-    ``LAW_SINGULAR`` (g cannot be inverted) or ``LAW_NOT_FINITE`` (the torques are not finite).
-    """
-    lam1, lam2, k11, k12, k21, k22, eps = gains
-    # Explicit Euler over the elapsed interval with the integrands of the previous call.
-    I1 = state[0] + dt * state[4]
-    I2 = state[1] + dt * state[5]
-    W1 = state[2] + dt * state[6]
-    W2 = state[3] + dt * state[7]
-
-    e1 = v - v_d
-    e2 = omega - omega_d
-    S1 = e1 + lam1 * I1
-    S2 = e2 + lam2 * I2
-    sig1 = S1 / (eps + abs(S1))
-    sig2 = S2 / (eps + abs(S2))
-    r1 = v_d_dot - f1 - lam1 * e1 - k11 * _sqrt(abs(S1)) * sig1 - W1
-    r2 = omega_d_dot - f2 - lam2 * e2 - k12 * _sqrt(abs(S2)) * sig2 - W2
-
-    w1 = k21 * sig1
-    w2 = k22 * sig2
-    status, T_r, T_l, u1, u2, s1, s2, a11, a12, a21, a22 = torques_of(
-        g11, g12, g21, g22, r1, r2, limit
-    )
-    if status != LAW_OK:
-        return status, T_r, T_l, u1, u2, saturated, S1, S2, (I1, I2, W1, W2, e1, e2, w1, w2)
-    saturated = s1 != 0.0 or s2 != 0.0
-    if saturated and anti_windup:
-        if deepens(e1, a11, a21, s1, s2):
-            e1 = 0.0
-        if deepens(e2, a12, a22, s1, s2):
-            e2 = 0.0
-        if deepens(w1, a11, a21, s1, s2):
-            w1 = 0.0
-        if deepens(w2, a12, a22, s1, s2):
-            w2 = 0.0
-    return LAW_OK, T_r, T_l, u1, u2, saturated, S1, S2, (I1, I2, W1, W2, e1, e2, w1, w2)

@@ -20,12 +20,54 @@ increment would push a saturated torque further out.
 
 from __future__ import annotations
 
-import math
 from typing import ClassVar
 
-from tt_mujoco.controllers.base import LAW_OK, VelocityController, deepens, torques_of
+from tt_mujoco.controllers.base import (
+    LAW_OK,
+    LawStep,
+    VelocityController,
+    deepens,
+    torques_of,
+)
 
 __all__ = ["PidController", "pid_law"]
+
+
+def pid_law(dt, tracking, model, state, gains, saturation):
+    """One step of the PID law (module docstring) from plain numbers, in the form of
+    :func:`tt_mujoco.controllers.ismc_sta.ismc_sta_law` (the compiled episode shares it).
+
+    ``state`` is ``(int_e_v, int_e_omega, prev_e_v, prev_e_omega, has_prev, rate_v,
+    rate_omega, 0)``, ``gains`` ``(kp_v, kp_omega, ki_v, ki_omega, kd_v, kd_omega, 0)``.
+    """
+    kp1, kp2, ki1, ki2, kd1, kd2, _ = gains
+    z, f = tracking, model
+    I1 = state[0] + dt * state[5]
+    I2 = state[1] + dt * state[6]
+    e1 = z.v - z.v_d
+    e2 = z.omega - z.omega_d
+    if state[4] == 0.0:
+        de1 = de2 = 0.0
+    else:
+        de1 = (e1 - state[2]) / dt
+        de2 = (e2 - state[3]) / dt
+    r1 = z.v_d_dot - f.f1 - kp1 * e1 - ki1 * I1 - kd1 * de1
+    r2 = z.omega_d_dot - f.f2 - kp2 * e2 - ki2 * I2 - kd2 * de2
+    status, T_r, T_l, u1, u2, s1, s2, a11, a12, a21, a22 = torques_of(
+        f.g11, f.g12, f.g21, f.g22, r1, r2, saturation.limit
+    )
+    if status != LAW_OK:
+        held = (I1, I2, e1, e2, 1.0, state[5], state[6], 0.0)
+        return LawStep(status, T_r, T_l, u1, u2, saturation.saturated, 0.0, 0.0, held)
+    saturated = s1 != 0.0 or s2 != 0.0
+    rate1, rate2 = e1, e2
+    if saturated and saturation.anti_windup:
+        if deepens(e1, a11, a21, s1, s2):
+            rate1 = 0.0
+        if deepens(e2, a12, a22, s1, s2):
+            rate2 = 0.0
+    held = (I1, I2, e1, e2, 1.0, rate1, rate2, 0.0)
+    return LawStep(LAW_OK, T_r, T_l, u1, u2, saturated, 0.0, 0.0, held)
 
 
 class PidController(VelocityController):
@@ -36,6 +78,7 @@ class PidController(VelocityController):
     """
 
     name = "pid"
+    LAW = staticmethod(pid_law)
     PRESETS: ClassVar[dict[str, dict[str, float]]] = {
         "paper_6_2": {
             "kp_v": 5.0,
@@ -84,46 +127,3 @@ class PidController(VelocityController):
 
     def state(self):
         return {"int_e_v": self.int_e_v, "int_e_omega": self.int_e_omega}
-
-    def step(self, dt, phi, v, omega, v_d, omega_d, v_d_dot, omega_d_dot):
-        if not 0.0 < dt < math.inf:
-            self._check_dt(dt)
-        return self.run_law(pid_law, dt, phi, v, omega, v_d, omega_d, v_d_dot, omega_d_dot)
-
-
-def pid_law(
-    dt, v, omega, v_d, omega_d, v_d_dot, omega_d_dot, f1, f2, g11, g12, g21, g22, state, gains,
-    limit, saturated, anti_windup,
-):  # fmt: skip
-    """One step of the PID law (module docstring) from plain numbers, in the form of
-    :func:`tt_mujoco.controllers.ismc_sta.ismc_sta_law` (the compiled episode shares it).
-
-    ``state`` is ``(int_e_v, int_e_omega, prev_e_v, prev_e_omega, has_prev, rate_v,
-    rate_omega, 0)``, ``gains`` ``(kp_v, kp_omega, ki_v, ki_omega, kd_v, kd_omega, 0)``.
-    """
-    kp1, kp2, ki1, ki2, kd1, kd2, _ = gains
-    I1 = state[0] + dt * state[5]
-    I2 = state[1] + dt * state[6]
-    e1 = v - v_d
-    e2 = omega - omega_d
-    if state[4] == 0.0:
-        de1 = de2 = 0.0
-    else:
-        de1 = (e1 - state[2]) / dt
-        de2 = (e2 - state[3]) / dt
-    r1 = v_d_dot - f1 - kp1 * e1 - ki1 * I1 - kd1 * de1
-    r2 = omega_d_dot - f2 - kp2 * e2 - ki2 * I2 - kd2 * de2
-    status, T_r, T_l, u1, u2, s1, s2, a11, a12, a21, a22 = torques_of(
-        g11, g12, g21, g22, r1, r2, limit
-    )
-    if status != LAW_OK:
-        held = (I1, I2, e1, e2, 1.0, state[5], state[6], 0.0)
-        return status, T_r, T_l, u1, u2, saturated, 0.0, 0.0, held
-    saturated = s1 != 0.0 or s2 != 0.0
-    rate1, rate2 = e1, e2
-    if saturated and anti_windup:
-        if deepens(e1, a11, a21, s1, s2):
-            rate1 = 0.0
-        if deepens(e2, a12, a22, s1, s2):
-            rate2 = 0.0
-    return LAW_OK, T_r, T_l, u1, u2, saturated, 0.0, 0.0, (I1, I2, e1, e2, 1.0, rate1, rate2, 0.0)

@@ -41,7 +41,7 @@ from collections import namedtuple
 from collections.abc import Callable, Mapping, Sequence
 from typing import ClassVar
 
-from tt_mujoco.controllers.base import Controller
+from tt_mujoco.controllers.base import Controller, Nominal
 
 __all__ = ["NOMINAL_FIELDS", "REFERENCE_FIELDS", "PlainLawController", "plain_law"]
 
@@ -51,10 +51,9 @@ REFERENCE_FIELDS = (
     *("x_ref", "y_ref", "theta_ref"),
 )
 #: The nominal model's values at the measurement.
-NOMINAL_FIELDS = ("f1", "f2", "g11", "g12", "g21", "g22")
+NOMINAL_FIELDS = Nominal._fields
 
 LawReference = namedtuple("LawReference", REFERENCE_FIELDS)
-Nominal = namedtuple("Nominal", NOMINAL_FIELDS)
 
 
 class LawState:

@@ -61,3 +61,44 @@ def test_a_record_is_read_and_written_by_name():
     assert math.isnan(record[0]["v_prev"]) and record[0]["kappa"] == 0.5 and record[0]["s"] == 0.0
     log = np.zeros(3, dtype=records.LOG_DTYPE)
     assert log.view(np.float64).reshape(3, -1).shape == (3, len(records.LOG_DTYPE))
+
+
+def _positional_counts(functions):
+    """``name -> number of positional parameters`` of each plain-number function."""
+    import inspect
+
+    counts = {}
+    for fn in functions:
+        kinds = (inspect.Parameter.POSITIONAL_ONLY, inspect.Parameter.POSITIONAL_OR_KEYWORD)
+        params = inspect.signature(fn).parameters.values()
+        counts[f"{fn.__module__}.{fn.__name__}"] = sum(p.kind in kinds for p in params)
+    return counts
+
+
+def test_no_function_of_the_step_takes_more_than_eight_positional_arguments():
+    # Named records carry what a long argument list would (Tracking, Nominal, Saturation, ...).
+    import ast
+    from pathlib import Path
+
+    from tt_mujoco.sim import kernel_sources
+
+    counts = _positional_counts(kernel_sources.SHARED)
+    kernel = Path(kernel_sources.__file__).with_name("_kernel.py")
+    for node in ast.walk(ast.parse(kernel.read_text())):
+        if isinstance(node, ast.FunctionDef):
+            counts[f"_kernel.{node.name}"] = len(node.args.posonlyargs) + len(node.args.args)
+    assert len(counts) > len(kernel_sources.SHARED)  # the kernel's own functions counted
+    too_long = {name: n for name, n in counts.items() if n > 8}
+    assert not too_long
+
+
+def test_a_built_in_law_takes_named_records_and_returns_one():
+    from tt_mujoco.controllers import base, fbl
+
+    tracking = base.Tracking(v=1.0, omega=0.0, v_d=0.5, omega_d=0.0, v_d_dot=0.0, omega_d_dot=0.0)
+    model = base.Nominal(f1=0.0, f2=0.0, g11=1.0, g12=0.0, g21=0.0, g22=1.0)
+    saturation = base.Saturation(limit=15.0, saturated=False, anti_windup=True)
+    out = fbl.fbl_law(0.001, tracking, model, (0.0,) * 8, (8.0, 5.0) + (0.0,) * 5, saturation)
+    # u = g^-1 (v_d_dot - f - K e) with g = I: -8 * 0.5 on the first wheel
+    assert out.status == base.LAW_OK and (out.T_r, out.T_l) == (-4.0, 0.0)
+    assert not out.saturated and out.state == (0.0,) * 8

@@ -70,13 +70,15 @@ class SegmentTable(NamedTuple):
     group_r: np.ndarray
 
 
-def segment_distance2_of(px, py, sx, sy, dx, dy, inv_len2, lower, upper):
-    """Squared distance from ``(px, py)`` to the segment from ``(sx, sy)`` along ``(dx, dy)``,
-    and the foot's parameter ``t``, clamped to ``[lower, upper]`` (``[0, 1]``; an end ray takes
-    an infinite bound). Numbers or arrays alike: the one formula of every projection here."""
-    rx = px - sx
-    ry = py - sy
-    t = np.minimum(np.maximum((rx * dx + ry * dy) * inv_len2, lower), upper)
+def segment_distance2_of(px, py, table, segments, lower, upper):
+    """Squared distance from ``(px, py)`` to segment ``segments`` of ``table`` (the segment from
+    ``(sx, sy)`` along ``(dx, dy)``), and the foot's parameter ``t``, clamped to ``[lower,
+    upper]`` (``[0, 1]``; an end ray takes an infinite bound). One index or an index array
+    alike: the one formula of every projection here."""
+    dx, dy = table.dx[segments], table.dy[segments]
+    rx = px - table.sx[segments]
+    ry = py - table.sy[segments]
+    t = np.minimum(np.maximum((rx * dx + ry * dy) * table.inv_len2[segments], lower), upper)
     rx = rx - t * dx
     ry = ry - t * dy
     return rx * rx + ry * ry, t
@@ -100,10 +102,7 @@ def _scan(px, py, a, b, extend, table, best):
     for s in range(a, b):
         low = -np.inf if extend and s == 0 else 0.0
         high = np.inf if extend and s == n_seg - 1 else 1.0
-        d2, t = segment_distance2_of(
-            px, py, table.sx[s], table.sy[s], table.dx[s], table.dy[s], table.inv_len2[s],
-            low, high,
-        )  # fmt: skip
+        d2, t = segment_distance2_of(px, py, table, s, low, high)
         if _better(d2, s, best_d2, best_seg):
             best_d2, best_seg, best_t = d2, s, t
     return best_d2, best_seg, best_t
@@ -148,8 +147,8 @@ _COMPILED = None
 
 
 def use_compiled_projection(project_points) -> None:
-    """Let :meth:`Polyline.project` run ``project_points(px, py, lo, hi, extend, table, d2,
-    seg, t)``, the compiled loop over :func:`nearest_segment_of` (same numbers); it returns
+    """Let :meth:`Polyline.project` run ``project_points((px, py), (lo, hi), extend, table,
+    (d2, seg, t))``, the compiled loop over :func:`nearest_segment_of` (same numbers); it returns
     False when it could not run, and the vectorised search serves instead. None: none."""
     global _COMPILED
     _COMPILED = project_points
@@ -426,9 +425,8 @@ class Polyline:
             py = np.ascontiguousarray(pts[pending, 1])
             n_pending = pending.size
             d2, seg, t = np.empty(n_pending), np.empty(n_pending, np.int64), np.empty(n_pending)
-            if _COMPILED(
-                px, py, first[pending], limit[pending], extend_ends, self.table, d2, seg, t
-            ):
+            window = (first[pending], limit[pending])
+            if _COMPILED((px, py), window, extend_ends, self.table, (d2, seg, t)):
                 best.d2[pending], best.seg[pending], best.t[pending] = d2, seg, t
                 pending = pending[:0]
         if pending.size:
@@ -491,17 +489,7 @@ class Polyline:
             upper = np.where(candidates == self.n_segments - 1, np.inf, 1.0)
         else:
             lower, upper = 0.0, 1.0
-        return segment_distance2_of(
-            px[:, None],
-            py[:, None],
-            self._sx[candidates],
-            self._sy[candidates],
-            self._dx[candidates],
-            self._dy[candidates],
-            self._inv_len2[candidates],
-            lower,
-            upper,
-        )
+        return segment_distance2_of(px[:, None], py[:, None], self.table, candidates, lower, upper)
 
     def _try(
         self,

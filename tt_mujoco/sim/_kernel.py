@@ -24,7 +24,7 @@ from tt_mujoco.analysis import geometry
 from tt_mujoco.controllers import base, fbl, ismc_sta, pid
 from tt_mujoco.reference import path_base, paths, spline, targets
 from tt_mujoco.sim import disturbances, measure, plant_mujoco, plant_reduced, step
-from tt_mujoco.sim.kernel_sources import SHARED
+from tt_mujoco.sim.kernel_sources import LAWS, SHARED
 from tt_mujoco.vehicle import reduced, train
 
 for _fn in SHARED:
@@ -34,7 +34,9 @@ RUNNING, FINISHED, BLEW_UP, JACKKNIFE = step.RUNNING, step.FINISHED, step.BLEW_U
 WARNING, LAW_FAILED, SINGULAR = step.WARNING, step.LAW_FAILED, step.SINGULAR
 LAW_OK, LAW_SINGULAR = base.LAW_OK, base.LAW_SINGULAR
 COS_BETA_MIN = reduced.COS_BETA_MIN
-ISMC_STA, PID, FBL, USER = 0, 1, 2, 3
+ISMC_STA, PID, FBL = (LAWS.index(fn) for fn in (ismc_sta.ismc_sta_law, pid.pid_law, fbl.fbl_law))
+#: ``law.kind`` of a user's plain-number law
+USER = len(LAWS)
 #: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
 NOMINAL_SINGULAR = -1.0
 
@@ -68,9 +70,11 @@ def _pointer(typingctx, array):
 
 
 @njit(cache=True)
-def project_points(px, py, lo, hi, extend, table, d2, seg, t):
-    """Every point's nearest segment (:func:`tt_mujoco.analysis.geometry.nearest_segment_of`),
-    each search started from the previous point's: a time series moves little a sample."""
+def project_points(points, window, extend, table, out):
+    """Every point of ``points = (px, py)``'s nearest segment between ``window = (lo, hi)``
+    (:func:`tt_mujoco.analysis.geometry.nearest_segment_of`) into ``out = (d2, seg, t)``, each
+    search started from the previous point's: a time series moves little a sample."""
+    (px, py), (lo, hi), (d2, seg, t) = points, window, out
     warm = lo[0] if px.shape[0] else 0
     for i in range(px.shape[0]):
         d2[i], seg[i], t[i] = geometry.nearest_segment_of(
@@ -170,17 +174,15 @@ def _law(law, v_m, w_m, dt, limit):
         return LAW_OK, T_r, T_l, T_r, T_l
     s = law.state
     state = (s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7])
-    args = (
-        *(dt, v_m, w_m, r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot),
-        *(nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22, state),
-    )
-    saturated = flags.saturated != 0.0
+    tracking = base.Tracking(v_m, w_m, r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot)
+    model = base.Nominal(nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22)
+    saturation = base.Saturation(limit, flags.saturated != 0.0, law.anti_windup)
     if law.kind == ISMC_STA:
-        out = ismc_sta.ismc_sta_law(*args, law.gains, limit, saturated, law.anti_windup)
+        out = ismc_sta.ismc_sta_law(dt, tracking, model, state, law.gains, saturation)
     elif law.kind == PID:
-        out = pid.pid_law(*args, law.gains, limit, saturated, law.anti_windup)
+        out = pid.pid_law(dt, tracking, model, state, law.gains, saturation)
     else:
-        out = fbl.fbl_law(*args, law.gains, limit, saturated, law.anti_windup)
+        out = fbl.fbl_law(dt, tracking, model, state, law.gains, saturation)
     status, T_r, T_l, u1, u2, saturated, aux1, aux2, state = out
     flags.aux1, flags.aux2 = aux1, aux2
     for i in range(8):

@@ -1,12 +1,14 @@
 """The compiled episode: the closed loop of a built-in or plain-number law as machine code.
 
 :func:`tt_mujoco.sim.simulate.run_episode` hands an episode here when every part of it has a
-compiled form (:func:`unsupported` says why not otherwise): a built-in law (ISMC-STA, PID, FBL)
-or a user's plain-number law (:mod:`tt_mujoco.controllers.plain`, compiled once per process by
-:func:`compile_law`) on the built-in nominal model, a static or dynamic target on a
-closed-form path (the S-curve, the circle, the cycloid), the paper's disturbance (matched) or
-none, measurement noise, one trailer, no faults, path feedback, steering schedule, reversing
-or per-step callback. The loop then runs in numba, chunk by chunk, calling ``mj_step`` through
+compiled form (:func:`unsupported` says why not otherwise): a built-in law
+(:data:`tt_mujoco.sim.kernel_sources.LAWS`: ISMC-STA, PID, FBL) or a user's plain-number law
+(:mod:`tt_mujoco.controllers.plain`, compiled once per process by :func:`compile_law`) on the
+built-in nominal model, a static or dynamic target on a closed-form path (the S-curve, the
+circle, the cycloid, a CSV spline), forwards or reversing, the paper's disturbance (matched
+or as a wrench) or none, measurement noise, one trailer or a train; not faults, path
+feedback, a steering schedule, a motor model, a sensor delay, wind, friction patches or a
+per-step callback. The loop then runs in numba, chunk by chunk, calling ``mj_step`` through
 MuJoCo's C library or stepping the reduced ODE, over the named records of
 :mod:`tt_mujoco.sim.records`.
 
@@ -61,14 +63,12 @@ def _enabled() -> bool:
 
 def unsupported(built, controller, on_step=None) -> str | None:
     """Why the episode has no compiled form (None when it has one); only a query."""
-    from tt_mujoco.controllers.fbl import FblController
-    from tt_mujoco.controllers.ismc_sta import IsmcStaController
-    from tt_mujoco.controllers.pid import PidController
     from tt_mujoco.controllers.plain import PlainLawController
     from tt_mujoco.reference.paths import ArcsPath, CycloidPath
     from tt_mujoco.reference.spline import SplinePath
     from tt_mujoco.reference.targets import DynamicTarget, StaticTarget
     from tt_mujoco.sim.disturbances import PaperDisturbance
+    from tt_mujoco.sim.kernel_sources import LAWS
 
     s = built.scenario
     reasons = [
@@ -81,8 +81,7 @@ def unsupported(built, controller, on_step=None) -> str | None:
         (bool(s.ground), "friction patches"),
         (on_step is not None, "a per-step callback"),
         (
-            type(controller) not in (IsmcStaController, PidController, FblController)
-            and not isinstance(controller, PlainLawController),
+            not (_built_in(type(controller), LAWS) or isinstance(controller, PlainLawController)),
             "a Python controller class",
         ),
         (not getattr(_model_of(controller), "builtin", False), "a custom model"),
@@ -101,6 +100,12 @@ def unsupported(built, controller, on_step=None) -> str | None:
     except ImportError:
         return "numba is not installed"
     return None
+
+
+def _built_in(cls, laws) -> bool:
+    """Whether ``cls`` is a compiled law's own class (a subclass may change what it runs)."""
+    law = getattr(cls, "LAW", None)
+    return law in laws and cls.__module__ == law.__module__
 
 
 def _model_of(controller):
@@ -463,15 +468,16 @@ def _train_constants(params):
 def _law_record(controller, nominal, user):
     from tt_mujoco.controllers.plain import PlainLawController
     from tt_mujoco.sim import records
+    from tt_mujoco.sim.kernel_sources import LAWS
     from tt_mujoco.vehicle import reduced
 
     if isinstance(controller, PlainLawController):
-        kind, gains, state, flags = 3, np.zeros(0), np.zeros(8), (0.0, 0.0, 0.0)
+        kind, gains, state, flags = len(LAWS), np.zeros(0), np.zeros(8), (0.0, 0.0, 0.0)
         user_gains = np.array(list(controller.gain_record), dtype=float)
         user_state = np.array([getattr(controller.law_state, f) for f in controller.STATE])
         anti_windup = False
     else:
-        kind = {"ismc_sta": 0, "pid": 1, "fbl": 2}[controller.name]
+        kind = LAWS.index(type(controller).LAW)
         gains = np.array(controller.law_gains, dtype=float)
         state = np.array(controller.law_state(), dtype=float)
         flags = (float(controller.saturated), 0.0, 0.0)

@@ -16,7 +16,11 @@ from tt_mujoco.reference import path_base, paths, spline, targets
 from tt_mujoco.sim import disturbances, measure, plant_mujoco, plant_reduced, records, step
 from tt_mujoco.vehicle import reduced, train
 
-__all__ = ["RECORDS", "SHARED", "source_files"]
+__all__ = ["LAWS", "RECORDS", "SHARED", "source_files"]
+
+#: The built-in laws the compiled loop runs, ``law(dt, tracking, model, state, gains,
+#: saturation) -> LawStep``; a law's index here is its ``kind`` in the kernel's law record.
+LAWS = (ismc_sta.ismc_sta_law, pid.pid_law, fbl.fbl_law)
 
 SHARED = (
     step.stop_code,
@@ -67,9 +71,7 @@ SHARED = (
     base.deepens,
     base.finite_pair,
     base.torques_of,
-    ismc_sta.ismc_sta_law,
-    pid.pid_law,
-    fbl.fbl_law,
+    *LAWS,
     paths.cycloid_curvature_and_rate,
     disturbances.paper_disturbance_of,
     disturbances.wrench_of,

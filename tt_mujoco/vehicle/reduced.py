@@ -118,13 +118,15 @@ def rolling_rates(theta: float, phi: float, v: float, omega: float, p: Params) -
     """``q_dot = S(q) V`` as plain floats: ``(x_dot, y_dot, theta_dot, phi_dot, theta_l_dot,
     theta_r_dot)`` (docs/model.md Section 2); :func:`kinematics` and the plant use it."""
     _cos_beta(phi, p.eta)
-    return rolling_rates_of(theta, phi, v, omega, p.eta, p.L, p.L0, p.r, p.d)
+    return rolling_rates_of(theta, phi, v, omega, p)
 
 
-def rolling_rates_of(theta, phi, v, omega, eta, L, L0, r, d) -> tuple:
-    """:func:`rolling_rates` from plain numbers (no singularity check)."""
-    s1, s2 = phi_rate_of(phi, eta, L, L0)
-    spin = d * omega / (2.0 * r)
+def rolling_rates_of(theta, phi, v, omega, c) -> tuple:
+    """:func:`rolling_rates` without the singularity check; ``c`` is anything with the fields
+    ``eta, L, L0, r, d`` (:class:`Params`, or :class:`ModelConstants` in compiled code)."""
+    s1, s2 = phi_rate_of(phi, c.eta, c.L, c.L0)
+    r = c.r
+    spin = c.d * omega / (2.0 * r)
     return (
         v * math.cos(theta),
         v * math.sin(theta),
@@ -524,9 +526,7 @@ def derivative_of(y, T_r: float, T_l: float, a_v: float, a_w: float, c: ModelCon
     if math.cos(c.eta * phi) < COS_BETA_MIN:
         return False, (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     f1, f2, g11, g12, g21, g22 = nominal_of(phi, v, omega, c)
-    x_dot, y_dot, theta_dot, phi_dot, thl_dot, thr_dot = rolling_rates_of(
-        theta, phi, v, omega, c.eta, c.L, c.L0, c.r, c.d
-    )
+    x_dot, y_dot, theta_dot, phi_dot, thl_dot, thr_dot = rolling_rates_of(theta, phi, v, omega, c)
     v_dot = f1 + g11 * T_r + g12 * T_l + a_v
     w_dot = f2 + g21 * T_r + g22 * T_l + a_w
     return True, (x_dot, y_dot, theta_dot, phi_dot, thl_dot, thr_dot, v_dot, w_dot)
