@@ -601,13 +601,13 @@ class VelocityController(Controller):
         """``g^-1`` by hand; FloatingPointError if g is singular or not finite."""
         ok, a11, a12, a21, a22 = inverse_of(g11, g12, g21, g22)
         if not ok:
-            self._raise_for(LAW_SINGULAR, (g11, g12, g21, g22), 0.0, 0.0)
+            self.raise_for(LAW_SINGULAR, (g11, g12, g21, g22), 0.0, 0.0)
         return a11, a12, a21, a22
 
     def _saturate(self, u1: float, u2: float):
         """Clip ``(u1, u2)``; return the torques and the saturation signs (+1, -1 or 0)."""
         if not finite_pair(u1, u2):
-            self._raise_for(LAW_NOT_FINITE, (), u1, u2)
+            self.raise_for(LAW_NOT_FINITE, (), u1, u2)
         T_r, T_l, s1, s2 = saturate_of(u1, u2, self.torque_limit)
         self.saturated = s1 != 0.0 or s2 != 0.0
         self.command = (u1, u2)
@@ -634,12 +634,12 @@ class VelocityController(Controller):
         saturation = Saturation(self.torque_limit, self.saturated, self.anti_windup)
         out = law(dt, tracking, model, self.law_state(), self.law_gains, saturation)
         self.set_law_state(out.state, out.aux1, out.aux2)
-        self._raise_for(out.status, model[2:], out.u1, out.u2)
+        self.raise_for(out.status, model[2:], out.u1, out.u2)
         self.saturated = out.saturated
         self.command = (out.u1, out.u2)
         return out.T_r, out.T_l
 
-    def _raise_for(self, status: int, g: tuple, u1: float, u2: float) -> None:
+    def raise_for(self, status: int, g: tuple, u1: float, u2: float) -> None:
         """The FloatingPointError of a law's failed ``status`` (none for :data:`LAW_OK`)."""
         if status == LAW_SINGULAR:
             g11, g12, g21, g22 = g

@@ -353,16 +353,7 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
     from tt_mujoco.sim.measure import TRAIN_FIELDS
 
     steps = stepper.steps
-    loop = records.LoopRecord(
-        limits=stepper.limits,
-        dt=stepper.dt,
-        steps=steps,
-        noise=np.zeros(0) if stepper._noise is None else np.array(stepper._noise),
-        disturbed=stepper.built.disturbance is not None and stepper._mode == "matched",
-        wrench=stepper.built.disturbance is not None and stepper._mode == "wrench",
-        n_trailers=stepper.built.plant_params.n_trailers,
-        hitch_limits=np.array(stepper._train_limits, dtype=float),
-    )
+    loop = stepper.loop_record()
     plant = _plant_record(stepper.plant, stepper.built.substeps, stepper.built.nominal)
     law = _law_record(controller, stepper.built.nominal, user)
     target = _target_record(stepper.built, steps)
@@ -416,7 +407,7 @@ def _plant_record(plant, substeps: int, nominal):
     from tt_mujoco.vehicle import reduced
 
     if isinstance(plant, MujocoPlant):
-        d, lay = plant.data, plant._layout
+        d, lay = plant.data, plant.layout
         mj = records.MujocoRecord(
             pointers=np.array([plant.model._address, d._address], dtype=np.int64),
             qpos=d.qpos,
@@ -568,7 +559,7 @@ def _profile_table(target, dt: float, steps: int) -> np.ndarray:
     table = _PROFILES.get(key)
     if table is None:
         times = [k * dt for k in range(steps + 1)]
-        table = np.array([target._profile_state(t) for t in times], dtype=float)
+        table = np.array([target.profile.state(t) for t in times], dtype=float)
         if len(_PROFILES) >= 8:
             _PROFILES.pop(next(iter(_PROFILES)))
         _PROFILES[key] = table
@@ -617,7 +608,7 @@ def _outcome(status, stop, stepper, controller, k) -> tuple[str, str]:
         if law_status == NOMINAL_SINGULAR:
             raise SingularityError(value["phi"], value["eta"])
         g = tuple(value[name] for name in ("g11", "g12", "g21", "g22"))
-        controller._raise_for(law_status, g if law_status == LAW_SINGULAR else (), u1, u2)
+        controller.raise_for(law_status, g if law_status == LAW_SINGULAR else (), u1, u2)
     except FloatingPointError as err:
         return "diverged", f"controller failed at t={t:.3f} s: {err}"
     raise AssertionError(f"unknown status {status}")  # pragma: no cover

@@ -99,6 +99,12 @@ class MujocoPlant(Plant):
         """The tractor's body id (where the wrench disturbance and the wind act)."""
         return self._tractor
 
+    @property
+    def layout(self):
+        """The model's addresses and lengths (:class:`tt_mujoco.sim.measure.Layout`) that a
+        measurement reads."""
+        return self._layout
+
     def measure(self):
         return self._measure(self._qpos, self._qvel, self._layout)
 

@@ -28,7 +28,7 @@ from tt_mujoco.sim.disturbances import injected
 from tt_mujoco.sim.measure import Measurement
 from tt_mujoco.sim.motors import DcMotors
 from tt_mujoco.sim.plant import StopRun
-from tt_mujoco.sim.records import Limits
+from tt_mujoco.sim.records import Limits, LoopRecord
 from tt_mujoco.sim.scenario import jackknife_phi_deg
 from tt_mujoco.sim.step import (
     BLEW_UP,
@@ -164,6 +164,22 @@ class Stepper:
         self._train_logged: list = []
         self._blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self.measurement = None
+
+    def loop_record(self) -> LoopRecord:
+        """The episode's constants and noise as the compiled loop reads them (after
+        :meth:`reset`)."""
+        dist = self.built.disturbance is not None
+        noise = self._noise
+        return LoopRecord(
+            limits=self.limits,
+            dt=self.dt,
+            steps=self.steps,
+            noise=np.zeros(0) if noise is None else np.array(noise),
+            disturbed=dist and self._mode == "matched",
+            wrench=dist and self._mode == "wrench",
+            n_trailers=self.built.plant_params.n_trailers,
+            hitch_limits=np.array(self._train_limits, dtype=float),
+        )
 
     @property
     def plant_etas(self) -> tuple:
