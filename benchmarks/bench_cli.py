@@ -13,7 +13,10 @@ of ``python -m tt_mujoco.run``, with ``--no-video --no-plots``), in this one pro
 3. prints the CLI's simulation time (``wall_time_s`` of ``metrics.json``: the loop as the user
    runs it), the whole ``main()`` call's, the rollout's, and the ratio floor / loop (1.0: the
    loop costs nothing beyond MuJoCo's own stepping). The reduced-plant case prints its loop's
-   speed against the MuJoCo case's instead (it has no MuJoCo floor).
+   speed against the MuJoCo case's instead (it has no MuJoCo floor), and the path-scheduled
+   case (``--eta path``) against the same command in the Python loop
+   (``TT_MUJOCO_COMPILED=0``) and the main case's loop: its axles' targets are set from the
+   hitches before every physics step, which a rollout of fixed inputs cannot replay.
 
 Ratios are taken in one process, so a busy machine moves both sides alike.
 """
@@ -54,6 +57,7 @@ CASES = {
         f"{ROOT}/examples/kanayama.py:kanayama_law",
     ],
     "reduced": ["--traj", "s_curve", "--plant", "reduced"],
+    "path": ["--traj", "s_curve", "--eta", "path"],
 }
 QUIET = ["--no-video", "--no-plots", "--quiet"]
 #: What the rollout's control vector holds: the actuators' ctrl, then qfrc_applied.
@@ -126,6 +130,15 @@ def main() -> None:
                 if case == "reduced":
                     if "main" in loops:
                         line += f"; {steps / loop / loops['main'][i]:.1f}x the MuJoCo loop"
+                elif case == "path":
+                    os.environ["TT_MUJOCO_COMPILED"] = "0"
+                    try:
+                        python_loop = cli_run(argv, Path(tmp) / f"{case}-{i}-python")[1]
+                    finally:
+                        os.environ.pop("TT_MUJOCO_COMPILED")
+                    line += f"; {python_loop / loop:.1f}x the Python loop"
+                    if "main" in loops:
+                        line += f", at {steps / loop / loops['main'][i]:.2f} of the main case's"
                 else:
                     c_floor = floor(argv, ts)
                     line += f"; C rollout {c_floor:.3f} s; loop at {c_floor / loop:.2f} of it"

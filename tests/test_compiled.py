@@ -37,6 +37,15 @@ CASES = [
     dict(traj="circle", trailers=3, plant="reduced", duration=3.0),
     dict(traj="s_curve", trailers=2, train=[{"eta": 2.5}], duration=3.0),
     dict(traj="s_curve", trailers=2, train=[{"eta": 2.5}], plant="reduced", duration=3.0),
+    # the path schedule: gains that follow each axle, an actuated MuJoCo axle, the law's model
+    # on the gains in force and the disturbance on the nominal's; a 3-trailer train that
+    # jackknifes at hitch 3, and a plain-number law whose model keeps the nominal gains
+    dict(traj="s_curve", eta="path", duration=4.0),
+    dict(traj="s_curve", eta="path", plant="reduced", noise_snr_db=20.0, duration=3.0),
+    dict(traj="cycloid", eta="path", trailers=3, disturbance="none", duration=3.0),
+    dict(traj="circle", eta="path", trailers=2, plant="reduced", duration=3.0),
+    dict(traj="s_curve", eta="path", trailers=3, disturbance="none"),
+    dict(traj="s_curve", eta="path", controller="examples/kanayama.py:kanayama_law", duration=3.0),
 ]
 
 
@@ -99,7 +108,7 @@ def test_checkpoint_rows_are_the_same(monkeypatch, tmp_path):
     [
         (dict(faults=["dropout:t=1"]), "faults or feedback"),
         (dict(path_feedback={}), "faults or feedback"),
-        (dict(eta_schedule=True), "faults or feedback"),
+        (dict(eta_schedule=True), "the curvature schedule"),
         (dict(duration=1.0), "fewer than 2000 steps"),
         (dict(reverse=True), "this target"),
     ],
@@ -226,3 +235,37 @@ def test_the_cache_key_lists_the_sources_the_kernel_compiles():
     assert len(files) == len(set(files))
     modules = sorted({fn.__module__ for fn in shared})
     assert [inspect.getsourcefile(__import__(m, fromlist=["_"])) for m in modules] == files
+
+
+@pytest.mark.parametrize("plant", ["mujoco", "reduced"])
+def test_the_path_schedule_hands_its_state_back(monkeypatch, plant):
+    # After a compiled episode the scheduler, the plant and the law's model stand where the
+    # Python loop leaves them: the gains in force, each axle's arc length, every change.
+    import numpy as np
+
+    from tt_mujoco.sim.simulate import run_episode
+    from tt_mujoco.sim.stepper import Stepper
+
+    built = build(Scenario(traj="cycloid", eta="path", trailers=2, plant=plant, duration=3.0))
+    assert compiled.unsupported(built, built.new_controller()) is None
+    states = []
+    for flag in ("0", "1"):
+        monkeypatch.setenv("TT_MUJOCO_COMPILED", flag)
+        stepper = Stepper(built)
+        stepper.reset(np.random.default_rng(0))
+        controller = built.new_controller()
+        controller.reset()
+        assert run_episode(stepper, controller)[0] == "ok"
+        scheduler = stepper.scheduler
+        states.append(
+            (
+                scheduler.etas,
+                scheduler.updates,
+                scheduler.arc_lengths,
+                scheduler.eta_series(stepper.samples).tolist(),
+                controller.model.params.etas,
+                stepper.plant_etas,
+            )
+        )
+    assert states[0] == states[1]
+    assert states[0][1] > 100  # the gains did change along the cycloid

@@ -18,14 +18,14 @@ import os
 import mujoco
 from llvmlite import binding
 from numba import cfunc, njit, types
-from numba.extending import intrinsic, register_jitable
+from numba.extending import intrinsic, overload, register_jitable
 
 from tt_mujoco.analysis import geometry
 from tt_mujoco.controllers import base, fbl, ismc_sta, pid
 from tt_mujoco.reference import path_base, paths, spline, targets
-from tt_mujoco.sim import disturbances, measure, plant_mujoco, plant_reduced, step
+from tt_mujoco.sim import disturbances, measure, plant_mujoco, plant_reduced, schedule, step
 from tt_mujoco.sim.kernel_sources import LAWS, SHARED
-from tt_mujoco.vehicle import reduced, train
+from tt_mujoco.vehicle import path_schedule, reduced, train
 
 for _fn in SHARED:
     register_jitable(_fn)
@@ -39,6 +39,11 @@ ISMC_STA, PID, FBL = (LAWS.index(fn) for fn in (ismc_sta.ismc_sta_law, pid.pid_l
 USER = len(LAWS)
 #: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
 NOMINAL_SINGULAR = -1.0
+#: ``steering.kind`` of the path schedule
+PATH_SCHEDULE = 1
+#: where trailer 1's axle is in the measurement, and a trailer's gain in a train's row
+X0, Y0 = measure.Measurement._fields.index("x0"), measure.Measurement._fields.index("y0")
+ETA_COLUMN = train.TRAILER_ROW.index("eta")
 
 # mj_step by its symbol in MuJoCo's library, which the Python bindings load: no pointer is
 # baked into the compiled code, so it can be cached on disk.
@@ -108,6 +113,12 @@ def _pose_at(target, s):
     return path_base.continued_pose(s, clipped, x, y, heading)
 
 
+@overload(path_schedule.path_pose)
+def _path_pose(target, s):
+    """The path schedule's projection reads the target record's path (:func:`_pose_at`)."""
+    return lambda target, s: _pose_at(target, s)
+
+
 @njit(cache=True)
 def _sense(plant, n, rows):
     """The Measurement fields of the plant's state; trailers 2..N of ``n`` into ``rows``."""
@@ -119,12 +130,20 @@ def _sense(plant, n, rows):
                 mj.qpos, mj.qvel, mj.addresses, mj.lengths, me, plant.train_joints, rows
             )
         return me
-    y = plant.ode_state
+    y, ode = plant.ode_state, _ode(plant)
     if n == 1:
-        return plant_reduced.reduced_measure_values(y, plant.ode)
+        return plant_reduced.reduced_measure_values(y, ode)
     first = (y[0], y[1], y[2], y[3], y[3 + n], y[4 + n], y[5 + n], y[6 + n])
     plant_reduced.reduced_train_rows_of(y, plant.train, plant.places, plant.speeds, rows)
-    return plant_reduced.reduced_measure_values(first, plant.ode)
+    return plant_reduced.reduced_measure_values(first, ode)
+
+
+@njit(cache=True)
+def _ode(plant):
+    """The reduced plant's constants with trailer 1's gain in force."""
+    if plant.steering.kind == 0:
+        return plant.ode
+    return reduced.with_eta_of(plant.ode, plant.steering.etas[0])
 
 
 @njit(cache=True)
@@ -208,7 +227,12 @@ def _advance(plant, T_r, T_l, push, stop):
         else:
             mj.qfrc_applied[a.wheel_right_v] = dist_r
             mj.qfrc_applied[a.wheel_left_v] = dist_l
+        steering = plant.steering
         for _ in range(plant.substeps):
+            if steering.actuated:  # the axles' targets follow the hitches every physics step
+                plant_mujoco.aim_steering_of(
+                    steering.eq_data, steering.ids, steering.hitches_q, steering.etas, mj.qpos
+                )
             mj_step(mj.pointers[0], mj.pointers[1])
         for i in range(mj.warnings.size):
             if mj.warnings[i] != 0:
@@ -226,16 +250,62 @@ def _advance(plant, T_r, T_l, push, stop):
                 _first_singular(plant.slopes[4][3 : 3 + n], plant.train, stop)
                 return SINGULAR
         return RUNNING
+    ode = _ode(plant)
     for _ in range(plant.substeps):
         ok, phi, new = reduced.rk4_step_of(
-            y, T_r + dist_r, T_l + dist_l, 0.0, 0.0, plant.ode, plant.timestep
+            y, T_r + dist_r, T_l + dist_l, 0.0, 0.0, ode, plant.timestep
         )
         if not ok:
-            stop.phi, stop.eta = phi, plant.ode.eta
+            stop.phi, stop.eta = phi, ode.eta
             return SINGULAR
         for i in range(8):
             y[i] = new[i]
     return RUNNING
+
+
+@njit(cache=True)
+def _nominal_mass(law, n, phi, phis, v_m, w_m):
+    """The nominal model's mass matrix at the measured hitches (the disturbance's, when the
+    law's model takes scheduled gains)."""
+    if n == 1:
+        c = law.nominal
+        return reduced.coriolis_of(reduced.inertia_terms_of(phi, c), c.gamma, v_m, w_m)[0]
+    return train.mass_and_bias_of(phis, v_m, w_m, law.nominal_train, law.rates)[1]
+
+
+@njit(cache=True)
+def _schedule_path(steering, target, me, rows, n):
+    """PathEtaScheduler.update: every axle projected onto the path and its gain there; the
+    gains applied when one moved by more than the tolerance. Whether they changed."""
+    offered, arcs = steering.offered, steering.arcs
+    for k in range(n):
+        if k == 0:
+            x, y, phi = me[X0], me[Y0], me[3]
+        else:
+            x, y, phi = rows[k - 1][0], rows[k - 1][1], rows[k - 1][3]
+        arcs[k], offered[k] = path_schedule.axle_gain_of(
+            target, arcs[k], (x, y), phi, steering.tables[k], steering.bounds
+        )
+    if not schedule.gains_moved(offered, steering.etas, steering.tolerance):
+        return False
+    steering.etas[:] = offered
+    steering.updates[0] += 1
+    return True
+
+
+@njit(cache=True)
+def _steer(plant, law):
+    """The scheduled gains into the plant (a linkage's ratio, a reduced train's rows) and
+    the law's train model."""
+    steering, n = plant.steering, len(plant.train.trailers)
+    etas = steering.etas
+    for k in range(etas.size):
+        if plant.mujoco and not steering.actuated:
+            steering.eq_data[steering.ids[k], 1] = -etas[k]
+        if n > 1:
+            plant.train.trailers[k, ETA_COLUMN] = etas[k]
+        if law.steered_train.trailers.shape[0] > 1:
+            law.steered_train.trailers[k, ETA_COLUMN] = etas[k]
 
 
 @njit(cache=True, nogil=True)
@@ -245,6 +315,8 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
     lim, dt, noise = loop.limits, loop.dt, loop.noise
     stop, r, nm = stop_record[0], law.reference[0], law.model[0]
     n, phis = loop.n_trailers, law.phis
+    steering = plant.steering
+    steered = steering.kind != 0 and law.follows_steering
     row = 0
     while k <= k_end:
         t = k * dt
@@ -269,8 +341,11 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot = _update_target(target, k, v_m, dt)
         state = target.state[0]
         r.t, r.s, r.kappa = t, state.s, state.kappa
-        # The nominal model at the measurement, for the law and the matched disturbance.
-        c = law.nominal
+        # The nominal model at the measurement, for the law and the matched disturbance (a
+        # built-in law's model takes the scheduled gains; the disturbance keeps the nominal's).
+        c, model_train = law.nominal, law.nominal_train
+        if steered:
+            c, model_train = reduced.with_eta_of(c, steering.etas[0]), law.steered_train
         if n == 1:
             if math.cos(c.eta * phi) < COS_BETA_MIN:
                 stop.law_status, stop.phi, stop.eta = NOMINAL_SINGULAR, phi, c.eta
@@ -281,10 +356,10 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
             phis[0] = phi
             for i in range(n - 1):
                 phis[i + 1] = rows[i][3]
-            ok, mass, bias = train.mass_and_bias_of(phis, v_m, w_m, law.nominal_train, law.rates)
+            ok, mass, bias = train.mass_and_bias_of(phis, v_m, w_m, model_train, law.rates)
             if not ok:
                 stop.law_status = NOMINAL_SINGULAR
-                _first_singular(phis, law.nominal_train, stop)
+                _first_singular(phis, model_train, stop)
                 return LAW_FAILED, k
         nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22 = reduced.solve_dynamics_of(
             mass, bias, c.r, c.d
@@ -309,6 +384,8 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         T_r = step.clip(T_r, lim.torque_limit)
         T_l = step.clip(T_l, lim.torque_limit)
         dist_r = dist_l = clipped = fx = fy = mz = 0.0
+        if steered and (loop.disturbed or loop.wrench):
+            mass = _nominal_mass(law, n, phi, phis, v_m, w_m)
         if loop.disturbed:
             a_v, a_w = disturbances.paper_disturbance_of(t)
             dist_r, dist_l = reduced.torque_for_force_of(mass, a_v, a_w, c.r, c.d)
@@ -328,9 +405,13 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         out.T_r, out.T_l, out.T_r_cmd, out.T_l_cmd = T_r, T_l, T_r_cmd, T_l_cmd
         out.dist_T_r, out.dist_T_l, out.kappa_d = dist_r, dist_l, state.kappa
         out.omega_d_tracked, out.dist_clipped = r.omega_d, clipped
+        if steering.kind != 0:
+            log.etas[row, :] = steering.etas
         row += 1
         if k == loop.steps:
             return FINISHED, k
+        if steering.kind == PATH_SCHEDULE and _schedule_path(steering, target, me, rows, n):
+            _steer(plant, law)
         push = (dist_r, dist_l, 1.0 if loop.wrench else 0.0, fx, fy, mz)
         code = _advance(plant, T_r, T_l, push, stop)
         if code != RUNNING:

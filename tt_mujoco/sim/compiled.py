@@ -74,7 +74,8 @@ def unsupported(built, controller, on_step=None) -> str | None:
     reasons = [
         (not _enabled(), "TT_MUJOCO_COMPILED=0"),
         (built.steps < MIN_STEPS, f"fewer than {MIN_STEPS} steps"),
-        (bool(s.faults) or s.path_feedback is not None or s.eta_schedule, "faults or feedback"),
+        (bool(s.faults) or s.path_feedback is not None, "faults or feedback"),
+        (s.eta_schedule_kind == "curvature", "the curvature schedule"),
         (s.actuator != "ideal", "a motor model"),
         (s.sensor_delay != 0.0, "a sensor delay"),
         (s.wind != "none", "wind"),
@@ -354,13 +355,14 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
 
     steps = stepper.steps
     loop = stepper.loop_record()
-    plant = _plant_record(stepper.plant, stepper.built.substeps, stepper.built.nominal)
-    law = _law_record(controller, stepper.built.nominal, user)
+    plant = _plant_record(stepper, stepper.built.nominal)
+    law = _law_record(controller, stepper.built.nominal, user, plant.steering)
     target = _target_record(stepper.built, steps)
     stop = records.new_record(records.STOP_FIELDS)
     report_every = max(1, steps // 100)
     chunk = min(8192, report_every * max(1, 8192 // report_every))
     k, status = 0, step.RUNNING
+    changes = [(0, tuple(plant.steering.etas.tolist()))]  # (first row, gains) of each change
     while status == step.RUNNING:
         k_end = min(steps, k + chunk - 1)
         n = k_end - k + 1
@@ -368,6 +370,7 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
             measurement=np.empty((n, len(records.MEASUREMENT_DTYPE))),
             loop=np.empty(n, dtype=records.LOG_DTYPE),
             train=np.empty((n, loop.n_trailers - 1, len(TRAIN_FIELDS))),
+            etas=np.empty((n if plant.steering.kind else 0, loop.n_trailers)),
         )
         args = (k, k_end, loop, plant, law, target, log, stop)
         if k == 0:
@@ -384,10 +387,14 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
         columns = log.loop.view(np.float64).reshape(n, -1)
         trains = log.train.reshape(n, -1)
         stepper.add_block(log.measurement[:logged], columns[:logged], trains[:logged])
+        if plant.steering.kind:
+            changes.extend(_changes(log.etas[:logged], changes, stepper.samples - logged))
         if progress is not None:
             progress(k_next, steps)
         k = k_next
     _hand_back(stepper, controller, status, k, plant, law, target)
+    if plant.steering.kind:
+        _hand_back_steering(stepper, controller, plant.steering, changes)
     return _outcome(status, stop[0], stepper, controller, k)
 
 
@@ -400,11 +407,72 @@ def _user_law(k_mod, controller):
     return k_mod.no_user_law
 
 
-def _plant_record(plant, substeps: int, nominal):
+def _changes(etas: np.ndarray, changes: list, first_row: int) -> list:
+    """``(row, gains)`` of each logged row whose gains differ from the row before it."""
+    out, last = [], changes[-1][1]
+    for i, row in enumerate(map(tuple, etas.tolist())):
+        if row != last:
+            out.append((first_row + i, row))
+            last = row
+    return out
+
+
+def _hand_back_steering(stepper, controller, steering, changes) -> None:
+    """The schedule's state after a compiled episode: to the scheduler (its gains, arc
+    lengths and change log), the plant and a built-in law's model."""
+    etas, seen = tuple(steering.etas.tolist()), changes[-1][1]  # the last row's: the law's
+    if etas != seen:  # applied after the last logged row
+        changes.append((stepper.samples, etas))
+    scheduler = stepper.scheduler
+    scheduler.arc_lengths = steering.arcs.tolist()
+    logged = [(row, gains[0]) for row, gains in changes[1:]]
+    scheduler.restore(etas, logged, int(steering.updates[0]))
+    steering_changed = getattr(controller, "steering_changed", None)
+    if steering_changed is not None:
+        steering_changed(seen)
+
+
+def _steering_record(stepper, mujoco_plant: bool):
+    """The scheduler's gains and tables, and where the plant's couplings are."""
+    from tt_mujoco.sim import records
+    from tt_mujoco.sim.schedule import PathEtaScheduler
+    from tt_mujoco.vehicle.path_schedule import BLEND_PHI
+
+    scheduler, n = stepper.scheduler, stepper.built.plant_params.n_trailers
+    if mujoco_plant:
+        eq_data, ids, hitches_q, actuated = stepper.plant.steering
+    else:
+        eq_data, ids, hitches_q, actuated = np.zeros((1, 1)), [0] * n, [0] * n, False
+    kind, tables, arcs, bounds = 0, np.zeros((n, 5, 1)), np.zeros(n), (0.0, 0.0)
+    etas, tolerance = stepper.plant_etas, 0.0
+    if isinstance(scheduler, PathEtaScheduler):
+        kind, tolerance = 1, scheduler.tolerance
+        tables = np.array(scheduler.schedule.tables, dtype=float)
+        arcs = np.array(scheduler.arc_lengths, dtype=float)
+        bounds = (BLEND_PHI, scheduler.schedule.eta_max)
+    return records.SteeringRecord(
+        kind=kind,
+        etas=np.array(etas, dtype=float),
+        offered=np.zeros(n),
+        tolerance=tolerance,
+        arcs=arcs,
+        tables=tables,
+        bounds=bounds,
+        eq_data=eq_data,
+        ids=np.array(ids, dtype=np.int64),
+        hitches_q=np.array(hitches_q, dtype=np.int64),
+        actuated=actuated,
+        updates=np.zeros(1, dtype=np.int64),
+    )
+
+
+def _plant_record(stepper, nominal):
     from tt_mujoco.sim import records
     from tt_mujoco.sim.measure import Addresses, Lengths
     from tt_mujoco.sim.plant_mujoco import MujocoPlant
     from tt_mujoco.vehicle import reduced
+
+    plant, substeps = stepper.plant, stepper.built.substeps
 
     if isinstance(plant, MujocoPlant):
         d, lay = plant.data, plant.layout
@@ -444,6 +512,7 @@ def _plant_record(plant, substeps: int, nominal):
         places=np.zeros((n, 5)),
         speeds=np.zeros((n, 3)),
         slopes=np.zeros((5, len(ode_state))),
+        steering=_steering_record(stepper, isinstance(plant, MujocoPlant)),
     )
 
 
@@ -456,7 +525,7 @@ def _train_constants(params):
     return c._replace(trailers=rows.reshape(-1, len(TRAILER_ROW)))
 
 
-def _law_record(controller, nominal, user):
+def _law_record(controller, nominal, user, steering):
     from tt_mujoco.controllers.plain import PlainLawController
     from tt_mujoco.sim import records
     from tt_mujoco.sim.kernel_sources import LAWS
@@ -495,6 +564,8 @@ def _law_record(controller, nominal, user):
         measurement=measurement,
         measurement_values=measurement.view(np.float64),
         torques=np.zeros(2),
+        follows_steering=not isinstance(controller, PlainLawController),
+        steered_train=_train_constants(nominal.with_etas(tuple(steering.etas.tolist()))),
     )
 
 

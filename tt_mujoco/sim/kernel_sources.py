@@ -13,8 +13,16 @@ import inspect
 from tt_mujoco.analysis import geometry
 from tt_mujoco.controllers import base, fbl, ismc_sta, pid
 from tt_mujoco.reference import path_base, paths, spline, targets
-from tt_mujoco.sim import disturbances, measure, plant_mujoco, plant_reduced, records, step
-from tt_mujoco.vehicle import reduced, train
+from tt_mujoco.sim import (
+    disturbances,
+    measure,
+    plant_mujoco,
+    plant_reduced,
+    records,
+    schedule,
+    step,
+)
+from tt_mujoco.vehicle import path_schedule, reduced, train
 
 __all__ = ["LAWS", "RECORDS", "SHARED", "source_files"]
 
@@ -56,6 +64,7 @@ SHARED = (
     reduced.trailer_speed_of,
     reduced.rk4_stage,
     reduced.rk4_combine,
+    reduced.with_eta_of,
     plant_reduced.reduced_measure_values,
     targets.yaw_rate_targets,
     targets.travelled,
@@ -76,6 +85,14 @@ SHARED = (
     disturbances.paper_disturbance_of,
     disturbances.wrench_of,
     plant_mujoco.chassis_wrench_of,
+    plant_mujoco.aim_steering_of,
+    schedule.gains_moved,
+    path_schedule.nearest_arc_length_of,
+    path_schedule.bisect_right_of,
+    path_schedule.hermite_of,
+    path_schedule.blended_gain_of,
+    path_schedule.table_gain_of,
+    path_schedule.axle_gain_of,
     geometry.segment_distance2_of,
     geometry._better,
     geometry._beyond,
@@ -89,6 +106,7 @@ RECORDS = (
     records.Limits,
     records.LoopRecord,
     records.PlantRecord,
+    records.SteeringRecord,
     records.MujocoRecord,
     records.LawRecord,
     records.TargetRecord,

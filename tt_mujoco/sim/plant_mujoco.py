@@ -21,6 +21,14 @@ def chassis_wrench_of(force: float, torque: float, theta: float) -> tuple[float,
     return force * math.cos(theta), force * math.sin(theta), torque
 
 
+def aim_steering_of(eq_data, ids, hitches_q, etas, qpos) -> None:
+    """Actuated axles (:meth:`MujocoPlant.steer_by_actuator`): each steering equality's target
+    ``eq_data[id, 0]`` set to ``eta_k phi_k`` from its hitch, before a physics step (the
+    compiled episode shares it)."""
+    for k in range(len(ids)):
+        eq_data[ids[k], 0] = -etas[k] * qpos[hitches_q[k]]  # the hitch joint's angle is -phi
+
+
 def warning_message(name: str, t: float) -> str:
     """The stop for a MuJoCo warning in the control step that started at ``t``."""
     return f"MuJoCo warning {name} in the step from t={t:.3f} s"
@@ -83,16 +91,17 @@ class MujocoPlant(Plant):
         # eq_data rows of the joint equalities q_steer = polycoef(q_hitch): polycoef[1] = -eta.
         names = ["steering"] + [f"steering_{k}" for k in range(2, params.n_trailers + 1)]
         self._steering_ids = [self.model.equality(name).id for name in names]
-        self._steering_rows = [self.model.eq_data[i] for i in self._steering_ids]
+        self._eq_data = self.model.eq_data
+        self._steering_rows = [self._eq_data[i] for i in self._steering_ids]
         self._hitches_q = [lay.hitch_q, *(hitch_q for hitch_q, *_ in lay.train)]
         self._actuated_etas: list[float] | None = None  # see steer_by_actuator
 
-    def _aim_steering(self) -> None:
-        qpos = self._qpos
-        for row, hitch_q, eta in zip(
-            self._steering_rows, self._hitches_q, self._actuated_etas, strict=True
-        ):
-            row[0] = -eta * qpos[hitch_q]  # the hitch joint's angle is -phi
+    @property
+    def steering(self) -> tuple:
+        """``(eq_data, equality ids, hitch qpos addresses, actuated)``: where the trailers'
+        steering couplings are (the compiled episode writes its scheduled gains there)."""
+        actuated = self._actuated_etas is not None
+        return self._eq_data, self._steering_ids, self._hitches_q, actuated
 
     @property
     def tractor_body(self) -> int:
@@ -185,7 +194,10 @@ class MujocoPlant(Plant):
             mujoco.mj_step(self.model, self.data, nstep=substeps)
         else:  # the actuated axles' targets follow the hitches every physics step
             for _ in range(substeps):
-                self._aim_steering()
+                aim_steering_of(
+                    self._eq_data, self._steering_ids, self._hitches_q, self._actuated_etas,
+                    self._qpos,
+                )  # fmt: skip
                 mujoco.mj_step(self.model, self.data)
         # MuJoCo resets the state when a warning fires: stop at once, before it is measured.
         if self._warnings.any():

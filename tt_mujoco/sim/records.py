@@ -34,6 +34,7 @@ __all__ = [
     "LoopRecord",
     "MujocoRecord",
     "PlantRecord",
+    "SteeringRecord",
     "TargetRecord",
     "new_record",
     "record_dtype",
@@ -111,6 +112,33 @@ class MujocoRecord(NamedTuple):
     lengths: Lengths
 
 
+class SteeringRecord(NamedTuple):
+    """The trailers' steering gains and how the compiled loop schedules them."""
+
+    #: 0 constant gains, 1 the path schedule (:class:`~tt_mujoco.sim.schedule.PathEtaScheduler`)
+    kind: int
+    #: the gains eta_1..eta_N in force: the plant's, and a built-in law's model's
+    etas: np.ndarray
+    #: the gains a step's schedule offers (scratch)
+    offered: np.ndarray
+    #: a gain is re-applied when one moved by more than this
+    tolerance: float
+    #: the path schedule: each axle's arc length, and per trailer its table (s, eta,
+    #: d eta/ds, beta, d beta/ds) as an N x 5 x M array
+    arcs: np.ndarray
+    tables: np.ndarray
+    #: (w, eta_max) of :func:`~tt_mujoco.vehicle.path_schedule.blended_gain_of`
+    bounds: tuple
+    #: MuJoCo: the model's ``eq_data``, the steering equalities' ids, their hitches' qpos
+    #: addresses, and whether the axles are steered by actuator (else by linkage)
+    eq_data: np.ndarray
+    ids: np.ndarray
+    hitches_q: np.ndarray
+    actuated: bool
+    #: the changes applied so far
+    updates: np.ndarray
+
+
 class PlantRecord(NamedTuple):
     """The plant the compiled loop advances: MuJoCo (``mj_step``) or the reduced ODE (RK4)."""
 
@@ -132,6 +160,7 @@ class PlantRecord(NamedTuple):
     places: np.ndarray
     speeds: np.ndarray
     slopes: np.ndarray
+    steering: SteeringRecord
 
 
 class LawRecord(NamedTuple):
@@ -165,6 +194,10 @@ class LawRecord(NamedTuple):
     measurement_values: np.ndarray
     #: where the user's law writes its two torques
     torques: np.ndarray
+    #: whether the law's model takes the scheduled gains (a built-in law's does), and a
+    #: train's nominal constants with those gains
+    follows_steering: bool
+    steered_train: TrainConstants
 
 
 class TargetRecord(NamedTuple):
@@ -212,3 +245,5 @@ class LogRecord(NamedTuple):
     loop: np.ndarray
     #: trailers 2..N per row: (N - 1) x :data:`~tt_mujoco.sim.measure.TRAIN_FIELDS`
     train: np.ndarray
+    #: the gains eta_1..eta_N in force at each row (a schedule's)
+    etas: np.ndarray

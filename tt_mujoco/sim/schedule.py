@@ -16,7 +16,7 @@ from tt_mujoco.vehicle.steering import (
     exact_train_same_path_etas,
 )
 
-__all__ = ["EtaScheduler", "PathEtaScheduler"]
+__all__ = ["EtaScheduler", "PathEtaScheduler", "gains_moved"]
 
 
 class EtaScheduler:
@@ -79,7 +79,7 @@ class EtaScheduler:
 
     def _offer(self, etas: tuple, step: int) -> None:
         """Apply ``etas`` if any moved by more than the tolerance."""
-        if max(abs(a - b) for a, b in zip(etas, self.etas, strict=True)) > self.tolerance:
+        if gains_moved(etas, self.etas, self.tolerance):
             self._apply(etas)
             self._changes.append((step + 1, self.eta))
 
@@ -91,6 +91,14 @@ class EtaScheduler:
         ):
             out[start : max(start, min(stop, n))] = eta
         return out
+
+    def restore(self, etas: tuple, changes: list[tuple[int, float]], updates: int) -> None:
+        """Take the state a compiled episode left: the gains in force (applied to the plant),
+        the changes it made, ``(first sample, eta_1)`` each, and how many."""
+        self._plant.set_etas(etas)
+        self.etas, self.eta = etas, etas[0]
+        self._changes.extend(changes)
+        self.updates += updates
 
     def _apply(self, etas: tuple) -> None:
         self._plant.set_etas(etas)
@@ -156,11 +164,20 @@ class PathEtaScheduler(EtaScheduler):
         arcs = self.arc_lengths
         etas = []
         phis = measurement.phis
-        for k, (x, y) in enumerate(_axle_positions(measurement)):
-            arcs[k] = schedule.project(arcs[k], x, y)
-            etas.append(schedule.gain(k, arcs[k], phis[k]))
+        for k, point in enumerate(_axle_positions(measurement)):
+            arcs[k], eta = schedule.axle_gain(k, arcs[k], point, phis[k])
+            etas.append(eta)
         self._offer(tuple(etas), step)
         return self.eta
+
+
+def gains_moved(etas, current, tolerance: float) -> bool:
+    """Whether any of the scheduled ``etas`` moved from the ``current`` ones by more than
+    ``tolerance`` (then all are applied; the compiled episode shares it)."""
+    for i in range(len(etas)):
+        if abs(etas[i] - current[i]) > tolerance:
+            return True
+    return False
 
 
 def _axle_positions(me) -> list[tuple[float, float]]:

@@ -30,7 +30,6 @@ Where the ratio is not a usable gain the schedule is bounded:
 
 from __future__ import annotations
 
-import bisect
 import math
 from dataclasses import dataclass
 
@@ -170,14 +169,16 @@ class PathSchedule:
     eta_max: float
 
     def __post_init__(self) -> None:
-        # Plain lists and slopes for the per-step lookup (bisect on a list beats numpy on
-        # scalars); derived from the arrays above, so the object stays a value.
-        def table(axle, name):
-            s, y = axle["s"], axle[name]
-            return s.tolist(), y.tolist(), np.gradient(y, s).tolist()
+        # Per trailer, the lookup table (s, eta, d eta/ds, beta, d beta/ds) as plain lists (the
+        # per-step lookup reads scalars); derived from the arrays above, so the object stays a
+        # value.
+        def table(axle):
+            s = axle["s"]
+            columns = (s, axle["eta"], np.gradient(axle["eta"], s))
+            columns += (axle["beta"], np.gradient(axle["beta"], s))
+            return tuple(column.tolist() for column in columns)
 
-        object.__setattr__(self, "_tables", tuple(table(axle, "eta") for axle in self.axles))
-        object.__setattr__(self, "_steering", tuple(table(axle, "beta") for axle in self.axles))
+        object.__setattr__(self, "tables", tuple(table(axle) for axle in self.axles))
 
     @property
     def n_trailers(self) -> int:
@@ -188,28 +189,13 @@ class PathSchedule:
 
         Cubic Hermite interpolation of the table; held at the table's end values beyond it.
         """
-        return _hermite(self._tables[k], s_axle)
+        xs, etas, slopes = self.tables[k][:3]
+        return hermite_of(bisect_right_of(xs, s_axle), xs, etas, slopes, s_axle)
 
     def gain(self, k: int, s_axle: float, phi: float) -> float:
         """Trailer ``k``'s gain at arc length ``s_axle`` with the hitch angle ``phi`` (rad) as
-        it is, bounded to ``eta_max``.
-
-        The gain nearest both the steering the path asks for there and the table's gain,
-
-            eta = (beta_k(s) phi + w^2 eta_k(s)) / (phi^2 + w^2),   w = BLEND_PHI,
-
-        minimises ``(eta phi - beta_k(s))^2 + w^2 (eta - eta_k(s))^2``. On the schedule
-        (``phi = phi_k(s)``) it is :meth:`eta` exactly. Off it, a hitch well away from zero
-        gets the path's steering, ``beta ~ beta_k(s)``, and a hitch near zero the table's gain,
-        so ``beta = eta phi`` is continuous in ``s`` and ``phi``: a hitch that lags its schedule
-        through an inflection, where the table's gain changes sign, never meets the gain of the
-        other side, and the steering asks no faster motion than the path's own.
-        """
-        w2 = BLEND_PHI * BLEND_PHI
-        eta = _hermite(self._tables[k], s_axle)
-        steering = _hermite(self._steering[k], s_axle)
-        blended = (steering * phi + w2 * eta) / (phi * phi + w2)
-        return min(max(blended, -self.eta_max), self.eta_max)
+        it is, bounded to ``eta_max`` (:func:`blended_gain_of`)."""
+        return table_gain_of(self.tables[k], s_axle, phi, (BLEND_PHI, self.eta_max))
 
     def arc_lengths_at(self, s_tractor: float) -> list[float]:
         """Each axle's arc length on the schedule when the tractor is at ``s_tractor`` (the
@@ -221,16 +207,34 @@ class PathSchedule:
         """Arc length of the path point nearest (x, y) (:func:`nearest_arc_length`)."""
         return nearest_arc_length(self.path, s_guess, x, y)
 
+    def axle_gain(self, k: int, s_guess: float, point, phi: float) -> tuple[float, float]:
+        """``(s, eta)``: trailer ``k``'s axle at ``point = (x, y)`` projected onto the path from
+        ``s_guess``, and its gain there with the hitch angle ``phi`` (:func:`axle_gain_of`)."""
+        bounds = (BLEND_PHI, self.eta_max)
+        return axle_gain_of(self.path, s_guess, point, phi, self.tables[k], bounds)
+
+
+def path_pose(path, s: float) -> tuple[float, float, float]:
+    """The path's pose at ``s`` (:meth:`~tt_mujoco.reference.path_base.ReferencePath.pose_at`);
+    the compiled episode gives it the same for its path record."""
+    return path.pose_at(s)
+
 
 def nearest_arc_length(path, s_guess: float, x: float, y: float) -> float:
-    """Arc length of the path point nearest (x, y), by Newton steps from ``s_guess``.
+    """Arc length of the path point nearest (x, y), by Newton steps from ``s_guess``
+    (:func:`nearest_arc_length_of`)."""
+    return nearest_arc_length_of(path, s_guess, x, y)
+
+
+def nearest_arc_length_of(path, s: float, x: float, y: float) -> float:
+    """Arc length of the path point nearest (x, y), by Newton steps from ``s``; the pose is
+    :func:`path_pose`'s (the compiled episode shares it).
 
     Converges in two or three steps from the previous control step's value (an axle moves
     millimetres a step); the path continues along its end tangents beyond its ends.
     """
-    s = s_guess
     for _ in range(4):
-        px, py, heading = path.pose_at(s)
+        px, py, heading = path_pose(path, s)
         ds = (x - px) * math.cos(heading) + (y - py) * math.sin(heading)
         s += ds
         if abs(ds) < 1e-12:
@@ -238,22 +242,72 @@ def nearest_arc_length(path, s_guess: float, x: float, y: float) -> float:
     return s
 
 
-def _hermite(table, x: float) -> float:
-    """Cubic Hermite interpolation of ``(xs, ys, slopes)`` at ``x``, held beyond the ends."""
-    xs, ys, slopes = table
-    i = bisect.bisect_right(xs, x)
+def bisect_right_of(xs, x: float) -> int:
+    """Where ``x`` goes in the ascending ``xs``, after its equals (:func:`bisect.bisect_right`;
+    the compiled episode shares it)."""
+    lo, hi = 0, len(xs)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if x < xs[mid]:
+            hi = mid
+        else:
+            lo = mid + 1
+    return lo
+
+
+def hermite_of(i: int, xs, ys, slopes, x: float) -> float:
+    """Cubic Hermite interpolation of ``(xs, ys, slopes)`` at ``x``, ``i =
+    bisect_right_of(xs, x)``; held beyond the ends (the compiled episode shares it)."""
     if i <= 0:
         return ys[0]
     if i >= len(xs):
-        return ys[-1]
+        return ys[len(xs) - 1]
     x0, x1 = xs[i - 1], xs[i]
     h = x1 - x0
     u = (x - x0) / h
-    h00 = (1.0 + 2.0 * u) * (1.0 - u) ** 2
-    h10 = u * (1.0 - u) ** 2
+    w2 = (1.0 - u) * (1.0 - u)  # not ** 2: Python's pow may differ from the product by an ulp
+    h00 = (1.0 + 2.0 * u) * w2
+    h10 = u * w2
     h01 = u * u * (3.0 - 2.0 * u)
     h11 = u * u * (u - 1.0)
     return h00 * ys[i - 1] + h10 * h * slopes[i - 1] + h01 * ys[i] + h11 * h * slopes[i]
+
+
+def blended_gain_of(eta: float, steering: float, phi: float, bounds) -> float:
+    """The gain nearest both the steering the path asks for and the table's gain, with the
+    hitch angle ``phi`` as it is; ``bounds = (w, eta_max)`` (the compiled episode shares it).
+
+        eta* = (beta_k(s) phi + w^2 eta_k(s)) / (phi^2 + w^2),   clipped to |eta*| <= eta_max,
+
+    minimises ``(eta* phi - beta_k(s))^2 + w^2 (eta* - eta_k(s))^2``. On the schedule
+    (``phi = phi_k(s)``) it is the table's gain exactly. Off it, a hitch well away from zero
+    gets the path's steering, ``beta ~ beta_k(s)``, and a hitch near zero the table's gain, so
+    ``beta = eta* phi`` is continuous in ``s`` and ``phi``: a hitch that lags its schedule
+    through an inflection, where the table's gain changes sign, never meets the gain of the
+    other side, and the steering asks no faster motion than the path's own.
+    """
+    blend, eta_max = bounds
+    w2 = blend * blend
+    blended = (steering * phi + w2 * eta) / (phi * phi + w2)
+    return min(max(blended, -eta_max), eta_max)
+
+
+def table_gain_of(table, s: float, phi: float, bounds) -> float:
+    """:func:`blended_gain_of` of an axle's ``table = (s, eta, d eta/ds, beta, d beta/ds)``
+    at arc length ``s`` (the compiled episode shares it)."""
+    xs = table[0]
+    i = bisect_right_of(xs, s)
+    eta = hermite_of(i, xs, table[1], table[2], s)
+    steering = hermite_of(i, xs, table[3], table[4], s)
+    return blended_gain_of(eta, steering, phi, bounds)
+
+
+def axle_gain_of(path, s_guess: float, point, phi: float, table, bounds):
+    """``(s, eta)``: the axle at ``point = (x, y)`` projected onto the path from ``s_guess``
+    (:func:`nearest_arc_length_of`), and :func:`table_gain_of` there (the compiled episode
+    shares it)."""
+    s = nearest_arc_length_of(path, s_guess, point[0], point[1])
+    return s, table_gain_of(table, s, phi, bounds)
 
 
 def path_schedule(path, lengths, eta_max: float = DEFAULT_ETA_MAX, spacing: float = TABLE_SPACING):

@@ -279,6 +279,14 @@ def _constants(p: Params) -> ModelConstants:
 model_constants = _constants
 
 
+def with_eta_of(c: ModelConstants, eta: float) -> ModelConstants:
+    """``c`` with the steering gain ``eta``: the lumped constants do not depend on it (the
+    compiled episode shares it)."""
+    return ModelConstants(
+        eta, c.L, c.L0, c.m_t, c.J_t, c.J_a, c.J_0, c.q, c.mk, c.gamma, c.r, c.d
+    )  # fmt: skip
+
+
 def _inertia_terms(phi: float, p: Params):
     """Mbar(phi) and N(phi) as nested tuples, plus the articulation row s (see
     :func:`_compute_inertia_terms`).
