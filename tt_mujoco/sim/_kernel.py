@@ -39,8 +39,8 @@ ISMC_STA, PID, FBL = (LAWS.index(fn) for fn in (ismc_sta.ismc_sta_law, pid.pid_l
 USER = len(LAWS)
 #: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
 NOMINAL_SINGULAR = -1.0
-#: ``steering.kind`` of the path schedule
-PATH_SCHEDULE = 1
+#: ``steering.kind`` of the path schedule and of the curvature schedule
+PATH_SCHEDULE, CURVATURE_SCHEDULE = 1, 2
 #: where trailer 1's axle is in the measurement, and a trailer's gain in a train's row
 X0, Y0 = measure.Measurement._fields.index("x0"), measure.Measurement._fields.index("y0")
 ETA_COLUMN = train.TRAILER_ROW.index("eta")
@@ -294,6 +294,20 @@ def _schedule_path(steering, target, me, rows, n):
 
 
 @njit(cache=True)
+def _schedule_curvature(steering, kappa):
+    """EtaScheduler.update: the exact same-path gains of the target's curvature, applied when
+    one moved by more than the tolerance. Whether they changed."""
+    offered = steering.offered
+    if not schedule.curvature_gains_of(kappa, steering.lengths, offered):
+        return False
+    if not schedule.gains_moved(offered, steering.etas, steering.tolerance):
+        return False
+    steering.etas[:] = offered
+    steering.updates[0] += 1
+    return True
+
+
+@njit(cache=True)
 def _steer(plant, law):
     """The scheduled gains into the plant (a linkage's ratio, a reduced train's rows) and
     the law's train model."""
@@ -411,6 +425,8 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         if k == loop.steps:
             return FINISHED, k
         if steering.kind == PATH_SCHEDULE and _schedule_path(steering, target, me, rows, n):
+            _steer(plant, law)
+        elif steering.kind == CURVATURE_SCHEDULE and _schedule_curvature(steering, state.kappa):
             _steer(plant, law)
         push = (dist_r, dist_l, 1.0 if loop.wrench else 0.0, fx, fy, mz)
         code = _advance(plant, T_r, T_l, push, stop)

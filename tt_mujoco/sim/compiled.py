@@ -5,12 +5,12 @@ compiled form (:func:`unsupported` says why not otherwise): a built-in law
 (:data:`tt_mujoco.sim.kernel_sources.LAWS`: ISMC-STA, PID, FBL) or a user's plain-number law
 (:mod:`tt_mujoco.controllers.plain`, compiled once per process by :func:`compile_law`) on the
 built-in nominal model, a static or dynamic target on a closed-form path (the S-curve, the
-circle, the cycloid, a CSV spline), forwards or reversing, the paper's disturbance (matched
-or as a wrench) or none, measurement noise, one trailer or a train; not faults, path
-feedback, a steering schedule, a motor model, a sensor delay, wind, friction patches or a
-per-step callback. The loop then runs in numba, chunk by chunk, calling ``mj_step`` through
-MuJoCo's C library or stepping the reduced ODE, over the named records of
-:mod:`tt_mujoco.sim.records`.
+circle, the cycloid, a CSV spline) driven forwards, the paper's disturbance (matched or as
+a wrench) or none, measurement noise, one trailer or a train, constant steering gains or
+either schedule (:mod:`tt_mujoco.sim.schedule`); not faults, path feedback, reversing, a
+motor model, a sensor delay, wind, friction patches or a per-step callback. The loop then
+runs in numba, chunk by chunk, calling ``mj_step`` through MuJoCo's C library or stepping the
+reduced ODE, over the named records of :mod:`tt_mujoco.sim.records`.
 
 Every rule and formula it runs is the Python one: the step's checks and clips
 (:mod:`tt_mujoco.sim.step`) and the functions marked "the compiled episode shares it"
@@ -75,7 +75,6 @@ def unsupported(built, controller, on_step=None) -> str | None:
         (not _enabled(), "TT_MUJOCO_COMPILED=0"),
         (built.steps < MIN_STEPS, f"fewer than {MIN_STEPS} steps"),
         (bool(s.faults) or s.path_feedback is not None, "faults or feedback"),
-        (s.eta_schedule_kind == "curvature", "the curvature schedule"),
         (s.actuator != "ideal", "a motor model"),
         (s.sensor_delay != 0.0, "a sensor delay"),
         (s.wind != "none", "wind"),
@@ -424,7 +423,8 @@ def _hand_back_steering(stepper, controller, steering, changes) -> None:
     if etas != seen:  # applied after the last logged row
         changes.append((stepper.samples, etas))
     scheduler = stepper.scheduler
-    scheduler.arc_lengths = steering.arcs.tolist()
+    if steering.kind == 1:  # the path schedule's axles
+        scheduler.arc_lengths = steering.arcs.tolist()
     logged = [(row, gains[0]) for row, gains in changes[1:]]
     scheduler.restore(etas, logged, int(steering.updates[0]))
     steering_changed = getattr(controller, "steering_changed", None)
@@ -435,7 +435,7 @@ def _hand_back_steering(stepper, controller, steering, changes) -> None:
 def _steering_record(stepper, mujoco_plant: bool):
     """The scheduler's gains and tables, and where the plant's couplings are."""
     from tt_mujoco.sim import records
-    from tt_mujoco.sim.schedule import PathEtaScheduler
+    from tt_mujoco.sim.schedule import EtaScheduler, PathEtaScheduler
     from tt_mujoco.vehicle.path_schedule import BLEND_PHI
 
     scheduler, n = stepper.scheduler, stepper.built.plant_params.n_trailers
@@ -450,11 +450,14 @@ def _steering_record(stepper, mujoco_plant: bool):
         tables = np.array(scheduler.schedule.tables, dtype=float)
         arcs = np.array(scheduler.arc_lengths, dtype=float)
         bounds = (BLEND_PHI, scheduler.schedule.eta_max)
+    elif isinstance(scheduler, EtaScheduler):
+        kind, tolerance = 2, scheduler.tolerance
     return records.SteeringRecord(
         kind=kind,
         etas=np.array(etas, dtype=float),
         offered=np.zeros(n),
         tolerance=tolerance,
+        lengths=np.array([(t.L, t.L0) for t in stepper.built.plant_params.trailers]),
         arcs=arcs,
         tables=tables,
         bounds=bounds,

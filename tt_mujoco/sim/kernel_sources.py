@@ -22,7 +22,7 @@ from tt_mujoco.sim import (
     schedule,
     step,
 )
-from tt_mujoco.vehicle import path_schedule, reduced, train
+from tt_mujoco.vehicle import params, path_schedule, reduced, steering, train
 
 __all__ = ["LAWS", "RECORDS", "SHARED", "source_files"]
 
@@ -87,6 +87,13 @@ SHARED = (
     plant_mujoco.chassis_wrench_of,
     plant_mujoco.aim_steering_of,
     schedule.gains_moved,
+    schedule.curvature_gains_of,
+    params.same_path_eta,
+    params.train_same_path_etas_of,
+    steering.wrap_angle,
+    steering.same_path_geometry_of,
+    steering.exact_same_path_eta_of,
+    steering.exact_train_same_path_etas_of,
     path_schedule.nearest_arc_length_of,
     path_schedule.bisect_right_of,
     path_schedule.hermite_of,

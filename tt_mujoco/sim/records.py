@@ -115,7 +115,8 @@ class MujocoRecord(NamedTuple):
 class SteeringRecord(NamedTuple):
     """The trailers' steering gains and how the compiled loop schedules them."""
 
-    #: 0 constant gains, 1 the path schedule (:class:`~tt_mujoco.sim.schedule.PathEtaScheduler`)
+    #: 0 constant gains, 1 the path schedule (:class:`~tt_mujoco.sim.schedule.PathEtaScheduler`),
+    #: 2 the curvature schedule (:class:`~tt_mujoco.sim.schedule.EtaScheduler`)
     kind: int
     #: the gains eta_1..eta_N in force: the plant's, and a built-in law's model's
     etas: np.ndarray
@@ -123,6 +124,8 @@ class SteeringRecord(NamedTuple):
     offered: np.ndarray
     #: a gain is re-applied when one moved by more than this
     tolerance: float
+    #: the trailers' (L_k, L0_k), N x 2
+    lengths: np.ndarray
     #: the path schedule: each axle's arc length, and per trailer its table (s, eta,
     #: d eta/ds, beta, d beta/ds) as an N x 5 x M array
     arcs: np.ndarray

@@ -12,11 +12,11 @@ from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.path_schedule import PathSchedule
 from tt_mujoco.vehicle.steering import (
     SCHEDULE_TOLERANCE,
-    exact_same_path_eta,
-    exact_train_same_path_etas,
+    exact_same_path_eta_of,
+    exact_train_same_path_etas_of,
 )
 
-__all__ = ["EtaScheduler", "PathEtaScheduler", "gains_moved"]
+__all__ = ["EtaScheduler", "PathEtaScheduler", "curvature_gains_of", "gains_moved"]
 
 
 class EtaScheduler:
@@ -70,11 +70,9 @@ class EtaScheduler:
         if kappa == self._kappa:  # arcs: constant curvature, nothing to recompute
             return self.eta
         self._kappa = kappa
-        if len(self.lengths) > 1:  # a train: every trailer's own exact gain
-            etas = tuple(exact_train_same_path_etas(kappa, self.lengths))
-        else:
-            etas = (exact_same_path_eta(kappa, self.L, self.L0),)
-        self._offer(etas, step)
+        etas = [0.0] * len(self.lengths)
+        if curvature_gains_of(kappa, self.lengths, etas):
+            self._offer(tuple(etas), step)
         return self.eta
 
     def _offer(self, etas: tuple, step: int) -> None:
@@ -169,6 +167,17 @@ class PathEtaScheduler(EtaScheduler):
             etas.append(eta)
         self._offer(tuple(etas), step)
         return self.eta
+
+
+def curvature_gains_of(kappa: float, lengths, out) -> bool:
+    """The exact same-path gains at curvature ``kappa`` of trailers with ``lengths`` (rows of
+    L_k, L0_k) into ``out``: each trailer's own in a train (docs/model.md Section 12). False
+    where the path is too tight for some axle to reach it: the gains in force are then kept
+    (the compiled episode shares it)."""
+    if len(lengths) > 1:
+        return exact_train_same_path_etas_of(kappa, lengths, out) == 0
+    out[0] = exact_same_path_eta_of(kappa, lengths[0][0], lengths[0][1])
+    return not math.isnan(out[0])
 
 
 def gains_moved(etas, current, tolerance: float) -> bool:

@@ -71,12 +71,21 @@ def train_same_path_etas(lengths) -> list[float]:
         trailer k-1, whose axle rolls at beta_(k-1) to it: -1/35 for a copy of the paper's
         trailer behind it.
     """
-    etas, b_prev = [], 0.0
-    for k, (L, L0) in enumerate(lengths):
-        b = (L * L - L0 * L0) / (2.0 * L0) - (L / L0) * b_prev
-        etas.append(same_path_eta(L, L0) if k == 0 else b / (L + L0 + b - b_prev))
-        b_prev = b
+    lengths = [(float(L), float(L0)) for L, L0 in lengths]
+    etas = [0.0] * len(lengths)
+    train_same_path_etas_of(lengths, etas)
     return etas
+
+
+def train_same_path_etas_of(lengths, out) -> None:
+    """:func:`train_same_path_etas` of ``lengths`` (N rows of L_k, L0_k) into ``out`` (the
+    compiled episode shares it)."""
+    b_prev = 0.0
+    for k in range(len(lengths)):
+        L, L0 = lengths[k][0], lengths[k][1]
+        b = (L * L - L0 * L0) / (2.0 * L0) - (L / L0) * b_prev
+        out[k] = same_path_eta(L, L0) if k == 0 else b / (L + L0 + b - b_prev)
+        b_prev = b
 
 
 def _positive(name: str, value, label: str = "") -> float:

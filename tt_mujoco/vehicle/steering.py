@@ -34,7 +34,11 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from tt_mujoco.vehicle.params import Params, same_path_eta, train_same_path_etas
+from tt_mujoco.vehicle.params import (
+    Params,
+    same_path_eta,
+    train_same_path_etas_of,
+)
 
 __all__ = [
     "exact_same_path_eta",
@@ -64,15 +68,25 @@ def same_path_eta_limit(L: float, L0: float) -> float:
 
 def _same_path_geometry(kappa: float, L: float, L0: float) -> tuple[float, float]:
     """``(phi, beta)`` of the steady turn at |kappa| in which P0 runs on the tractor's path."""
-    R = 1.0 / abs(kappa)
-    hyp = math.hypot(R, L)
-    ratio = (L * L + L0 * L0) / (2.0 * L0 * hyp)
-    if ratio > 1.0:
+    phi, beta = same_path_geometry_of(kappa, L, L0)
+    if math.isnan(phi):
+        R = 1.0 / abs(kappa)
         r_min = math.sqrt(max(((L * L + L0 * L0) / (2.0 * L0)) ** 2 - L * L, 0.0))
         raise ValueError(
             f"kappa={kappa!r} is not allowed: no trailer pose puts P0 on a path of radius "
             f"{R:.4g} m (it needs R >= {r_min:.4g} m)"
         )
+    return phi, beta
+
+
+def same_path_geometry_of(kappa: float, L: float, L0: float) -> tuple[float, float]:
+    """``(phi, beta)`` of the steady turn at |kappa| (> 0) in which P0 runs on the tractor's
+    path; NaNs where no pose does (the compiled episode shares it)."""
+    R = 1.0 / abs(kappa)
+    hyp = math.hypot(R, L)
+    ratio = (L * L + L0 * L0) / (2.0 * L0 * hyp)
+    if ratio > 1.0:
+        return math.nan, math.nan
     # 2 L0 (R sin(phi) - L cos(phi)) = L^2 + L0^2  <=>  sin(phi - atan2(L, R)) = ratio.
     phi = math.atan2(L, R) + math.asin(ratio)
     # Tractor at P = (R, 0) heading +y, turning about C = 0; O = (R, -L); P0 = O - L0 e(theta0),
@@ -108,9 +122,18 @@ def exact_same_path_eta(kappa: float, L: float, L0: float) -> float:
     kappa = float(kappa)
     if not math.isfinite(kappa):
         raise ValueError(f"kappa={kappa!r} is not allowed: it must be finite")
+    eta = exact_same_path_eta_of(kappa, L, L0)
+    if math.isnan(eta):
+        _same_path_geometry(kappa, L, L0)  # says why
+    return eta
+
+
+def exact_same_path_eta_of(kappa: float, L: float, L0: float) -> float:
+    """:func:`exact_same_path_eta` in plain numbers, NaN where no pose exists (the compiled
+    episode shares it)."""
     if abs(kappa) < _KAPPA_TINY:
-        return same_path_eta_limit(L, L0)
-    phi, beta = _same_path_geometry(kappa, L, L0)
+        return same_path_eta(L, L0)
+    phi, beta = same_path_geometry_of(kappa, L, L0)
     return beta / phi
 
 
@@ -196,21 +219,33 @@ def exact_train_same_path_etas(kappa: float, lengths) -> list[float]:
     if not math.isfinite(kappa):
         raise ValueError(f"kappa={kappa!r} is not allowed: it must be finite")
     lengths = [(float(L), float(L0)) for L, L0 in lengths]
+    etas = [0.0] * len(lengths)
+    k = exact_train_same_path_etas_of(kappa, lengths, etas)
+    if k:
+        raise ValueError(
+            f"kappa={kappa!r} is not allowed: trailer {k}'s axle cannot reach a path of "
+            f"radius {1.0 / abs(kappa):.4g} m"
+        )
+    return etas
+
+
+def exact_train_same_path_etas_of(kappa: float, lengths, out) -> int:
+    """:func:`exact_train_same_path_etas` of ``lengths`` (N rows of L_k, L0_k) into ``out``;
+    0, or the first trailer (from 1) whose axle cannot reach the path (the compiled episode
+    shares it)."""
     if abs(kappa) < _KAPPA_TINY:
-        return train_same_path_etas(lengths)
+        train_same_path_etas_of(lengths, out)
+        return 0
     R = 1.0 / abs(kappa)
     # Turning left about C = 0: the tractor's P at (R, 0) heading +y.
     fx, fy, fth = R, 0.0, 0.5 * math.pi
-    etas = []
-    for k, (L, L0) in enumerate(lengths, start=1):
+    for k in range(len(lengths)):
+        L, L0 = lengths[k][0], lengths[k][1]
         ox, oy = fx - L * math.cos(fth), fy - L * math.sin(fth)
         dist = math.hypot(ox, oy)
         a = (R * R - L0 * L0 + dist * dist) / (2.0 * dist)
         if R * R - a * a < 0.0:
-            raise ValueError(
-                f"kappa={kappa!r} is not allowed: trailer {k}'s axle cannot reach a path of "
-                f"radius {R:.4g} m"
-            )
+            return k + 1
         h = math.sqrt(R * R - a * a)
         ux, uy = ox / dist, oy / dist
         # The meeting point behind O (clockwise from it, as the train turns left).
@@ -219,9 +254,9 @@ def exact_train_same_path_etas(kappa: float, lengths) -> list[float]:
         alpha = math.atan2(py, px) + 0.5 * math.pi
         phi = wrap_angle(fth - thk)
         beta = wrap_angle(alpha - thk)
-        etas.append(beta / phi)
+        out[k] = beta / phi
         fx, fy, fth = px, py, thk
-    return etas
+    return 0
 
 
 def wrap_angle(angle):
