@@ -17,6 +17,7 @@ from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.steering import (
     exact_same_path_eta,
+    exact_train_same_path_etas,
     same_path_eta_limit,
     steady_offtrack,
 )
@@ -249,3 +250,26 @@ def test_the_curvature_schedule_keeps_the_gain_near_the_paper_linkage():
     p = Params()
     etas = [exact_same_path_eta(kappa, p.L, p.L0) for kappa in np.linspace(-2.0, 2.0, 401)]
     assert (round(min(etas), 3), round(max(etas), 3)) == (-0.159, -0.143)
+
+
+def test_the_curvature_schedule_keeps_its_gains_where_no_axle_can_reach_the_path():
+    # The scheduler's plain form: the public functions' gains where a pose exists, and False
+    # (the gains in force kept) on a path tighter than the trailer can follow, where the
+    # public functions raise.
+    from tt_mujoco.sim.schedule import curvature_gains_of
+
+    one, train = [(0.3, 0.4)], [(0.3, 0.4), (0.3, 0.4)]
+    for kappa in (0.0, 1e-7, 0.5, -1.5):
+        out = [0.0]
+        assert curvature_gains_of(kappa, one, out)
+        assert out == [exact_same_path_eta(kappa, 0.3, 0.4)]
+        out = [0.0, 0.0]
+        assert curvature_gains_of(kappa, train, out)
+        assert out == exact_train_same_path_etas(kappa, train)
+    for lengths in (one, train):
+        assert not curvature_gains_of(20.0, lengths, [0.0] * len(lengths))
+        with pytest.raises(ValueError, match=r"kappa=20\.0 is not allowed"):
+            if len(lengths) == 1:
+                exact_same_path_eta(20.0, 0.3, 0.4)
+            else:
+                exact_train_same_path_etas(20.0, lengths)
