@@ -50,6 +50,10 @@ CASES = [
     dict(traj="cycloid", eta="scheduled", duration=3.0),
     dict(traj="s_curve", eta="scheduled", trailers=3, plant="reduced", duration=3.0),
     dict(traj="circle", eta="scheduled", trailers=2, noise_snr_db=20.0, duration=3.0),
+    # path feedback on omega_d, with either target, a train and the path schedule
+    dict(traj="s_curve", path_feedback={}, duration=4.0),
+    dict(traj="cycloid", path_feedback={"k_y": 9.0}, target="static", plant="reduced"),
+    dict(traj="s_curve", path_feedback={}, eta="path", trailers=2, noise_snr_db=20.0),
 ]
 
 
@@ -110,8 +114,7 @@ def test_checkpoint_rows_are_the_same(monkeypatch, tmp_path):
 @pytest.mark.parametrize(
     ("changes", "reason"),
     [
-        (dict(faults=["dropout:t=1"]), "faults or feedback"),
-        (dict(path_feedback={}), "faults or feedback"),
+        (dict(faults=["dropout:t=1"]), "faults"),
         (dict(duration=1.0), "fewer than 2000 steps"),
         (dict(reverse=True), "this target"),
     ],

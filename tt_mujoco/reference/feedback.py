@@ -36,7 +36,9 @@ __all__ = [
     "check_config",
     "check_gain_table",
     "curvature_and_rate_at",
+    "feedback_of",
     "path_errors",
+    "path_errors_of",
 ]
 
 #: Default gains. k_y = 4 1/m^2 and k_psi = 4 1/m: critically damped in arc length
@@ -58,26 +60,70 @@ def curvature_and_rate_at(path, s: float) -> tuple[float, float]:
     return path.curvature_and_rate(s) if 0.0 <= s <= path.length else (0.0, 0.0)
 
 
-def path_errors(pose_at, curvature_and_rate, s: float, x: float, y: float, theta: float):
-    """``(s*, e_y, e_psi)``: the nearest path point to (x, y) by Newton steps warm-started at
-    arc length ``s``, the signed distance from it (positive left of the path's direction) and
-    the heading error ``theta - psi_path(s*)`` in (-pi, pi].
+def feedback_pose(path, s: float) -> tuple[float, float, float]:
+    """The path's pose at ``s`` as the feedback reads it (the compiled episode gives its path
+    record's)."""
+    return path.pose_at(s)
 
-    ``pose_at`` and ``curvature_and_rate`` are the path's (:class:`~tt_mujoco.reference.
-    path_base.ReferencePath`); called every control step from near the last answer.
-    """
+
+def feedback_curvature(path, s: float) -> tuple[float, float]:
+    """The path's ``(kappa, dkappa/ds)`` at ``s`` as the feedback reads it (the compiled
+    episode gives its path record's)."""
+    return path.curvature_and_rate(s)
+
+
+def path_errors(path, s: float, x: float, y: float, theta: float):
+    """``(s*, e_y, e_psi)``: the nearest point of ``path`` to (x, y) by Newton steps
+    warm-started at arc length ``s``, the signed distance from it (positive left of the path's
+    direction) and the heading error ``theta - psi_path(s*)`` in (-pi, pi]; called every
+    control step from near the last answer (:func:`path_errors_of`)."""
+    return path_errors_of(path, s, x, y, theta)
+
+
+def path_errors_of(path, s: float, x: float, y: float, theta: float):
+    """:func:`path_errors` through :func:`feedback_pose` and :func:`feedback_curvature` (the
+    compiled episode shares it)."""
     for _ in range(_NEWTON_STEPS):
-        xr, yr, h = pose_at(s)
+        xr, yr, h = feedback_pose(path, s)
         c, sn = math.cos(h), math.sin(h)
         dx, dy = x - xr, y - yr
         along, e_y = dx * c + dy * sn, dy * c - dx * sn
         # Newton on |P - r(s)|^2 / 2, whose second derivative is 1 - kappa e_y. On the inside
         # of a turn it is below 1 and vanishes at the centre of curvature: there a plain step
         # (metric 1) converges linearly instead of overshooting.
-        s += along / max(1.0 - curvature_and_rate(s)[0] * e_y, 1.0)
-    xr, yr, h = pose_at(s)
+        s += along / max(1.0 - feedback_curvature(path, s)[0] * e_y, 1.0)
+    xr, yr, h = feedback_pose(path, s)
     e_y = (y - yr) * math.cos(h) - (x - xr) * math.sin(h)
     return s, e_y, math.remainder(theta - h, 2.0 * math.pi)
+
+
+def feedback_of(gains, target, v: float, errors, kappa: float) -> tuple[float, float]:
+    """``(omega_d, omega_d_dot)``: the target's ``(omega_d, v_d_dot, omega_d_dot)`` with the
+    correction of :class:`PathFeedback` (``gains = (k_y, k_psi, c_max)``) for the measured
+    speed ``v``, the ``errors = (e_y, e_psi)`` and the curvature ``kappa`` at the nearest path
+    point (the compiled episode shares it).
+
+    ``omega_d_dot`` adds the correction's derivative ``v_d_dot c + v c_dot`` along the
+    path-error kinematics, ``d e_y/dt = v sin(e_psi)`` and ``d e_psi/dt = omega -
+    kappa(s*) v cos(e_psi) / (1 - kappa(s*) e_y)``, evaluated with omega = omega_d (what the
+    inner loop is asked to track) rather than the noisy measured yaw rate; c_dot = 0 while c
+    is clipped.
+    """
+    k_y, k_psi, c_max = gains
+    w_d, v_d_dot, w_d_dot = target
+    e_y, e_psi = errors
+    sign = 1.0 if v >= 0.0 else -1.0
+    c = -k_y * e_y - k_psi * sign * e_psi
+    clipped = abs(c) >= c_max
+    if clipped:
+        c = math.copysign(c_max, c)
+    omega_d = w_d + v * c
+    c_dot = 0.0
+    if not clipped:
+        metric = max(1.0 - kappa * e_y, _MIN_METRIC)
+        e_psi_dot = omega_d - kappa * v * math.cos(e_psi) / metric
+        c_dot = -k_y * v * math.sin(e_psi) - k_psi * sign * e_psi_dot
+    return omega_d, w_d_dot + v_d_dot * c + v * c_dot
 
 
 def check_gain_table(option: str, config: dict | None, defaults: dict) -> dict[str, float]:
@@ -167,8 +213,6 @@ class PathFeedback(TargetWrapper):
         self.target = target
         self.path = target.path
         self.k_y, self.k_psi, self.c_max = gains["k_y"], gains["k_psi"], gains["c_max"]
-        self._pose_at = self.path.pose_at
-        self._curvature = self.path.curvature_and_rate
         self.reset()
 
     @classmethod
@@ -181,44 +225,40 @@ class PathFeedback(TargetWrapper):
         self.path_arc_length = float(self.target.arc_length)
         self.lateral_error = 0.0
         self.heading_error = 0.0
-        self._kappa_near = self._curvature(self.path_arc_length)[0]
+        self._kappa_near = feedback_curvature(self.path, self.path_arc_length)[0]
 
     # --- the loop ------------------------------------------------------------------------
     def errors(self, x: float, y: float, theta: float) -> tuple[float, float]:
         """Update s* (Newton, warm-started) and return ``(e_y, e_psi)`` for pose (x, y, theta)."""
-        s, e_y, e_psi = path_errors(
-            self._pose_at, self._curvature, self.path_arc_length, x, y, theta
-        )
+        s, e_y, e_psi = path_errors_of(self.path, self.path_arc_length, x, y, theta)
         self.path_arc_length = s
-        self._kappa_near = self._curvature(s)[0]
+        self._kappa_near = feedback_curvature(self.path, s)[0]
         self.lateral_error, self.heading_error = e_y, e_psi
         return e_y, e_psi
 
     def update(
         self, t: float, dt: float, v_measured: float, x: float, y: float, theta: float
     ) -> tuple[float, float, float, float]:
-        """``(v_d, omega_d, v_d_dot, omega_d_dot)``: the target's, with the correction added.
-
-        ``omega_d_dot`` adds the correction's derivative ``v_d_dot c + v c_dot`` along the
-        path-error kinematics, ``d e_y/dt = v sin(e_psi)`` and ``d e_psi/dt = omega -
-        kappa(s*) v cos(e_psi) / (1 - kappa(s*) e_y)``, evaluated with omega = omega_d (what the
-        inner loop is asked to track) rather than the noisy measured yaw rate; c_dot = 0 while
-        c is clipped.
-        """
+        """``(v_d, omega_d, v_d_dot, omega_d_dot)``: the target's, with the correction added
+        (:func:`feedback_of`)."""
         v_d, w_d, v_d_dot, w_d_dot = self.target.update(t, dt, v_measured)
         self.reference_omega_d = w_d  # the path's own target, before the correction
-        e_y, e_psi = self.errors(x, y, theta)
-        v = float(v_measured)
-        sign = 1.0 if v >= 0.0 else -1.0
-        c = -self.k_y * e_y - self.k_psi * sign * e_psi
-        clipped = abs(c) >= self.c_max
-        if clipped:
-            c = math.copysign(self.c_max, c)
-        omega_d = w_d + v * c
-        c_dot = 0.0
-        if not clipped:
-            kappa = self._kappa_near
-            metric = max(1.0 - kappa * e_y, _MIN_METRIC)
-            e_psi_dot = omega_d - kappa * v * math.cos(e_psi) / metric
-            c_dot = -self.k_y * v * math.sin(e_psi) - self.k_psi * sign * e_psi_dot
-        return v_d, omega_d, v_d_dot, w_d_dot + v_d_dot * c + v * c_dot
+        errors = self.errors(x, y, theta)
+        omega_d, omega_d_dot = feedback_of(
+            self.gains, (w_d, v_d_dot, w_d_dot), float(v_measured), errors, self._kappa_near
+        )
+        return v_d, omega_d, v_d_dot, omega_d_dot
+
+    @property
+    def gains(self) -> tuple[float, float, float]:
+        """``(k_y, k_psi, c_max)``."""
+        return self.k_y, self.k_psi, self.c_max
+
+    def set_state(self, s_near: float, errors, omega_ref: float) -> None:
+        """Take the state a compiled episode's updates left: the nearest path point's arc
+        length, ``errors = (e_y, e_psi)`` and the path's own omega_d (the wrapped target's
+        state is handed back to it)."""
+        self.path_arc_length = s_near
+        self._kappa_near = feedback_curvature(self.path, s_near)[0]
+        self.lateral_error, self.heading_error = errors
+        self.reference_omega_d = omega_ref

@@ -22,7 +22,7 @@ from numba.extending import intrinsic, overload, register_jitable
 
 from tt_mujoco.analysis import geometry
 from tt_mujoco.controllers import base, fbl, ismc_sta, pid
-from tt_mujoco.reference import path_base, paths, spline, targets
+from tt_mujoco.reference import feedback, path_base, paths, spline, targets
 from tt_mujoco.sim import disturbances, measure, plant_mujoco, plant_reduced, schedule, step
 from tt_mujoco.sim.kernel_sources import LAWS, SHARED
 from tt_mujoco.vehicle import path_schedule, reduced, train
@@ -119,6 +119,27 @@ def _path_pose(target, s):
     return lambda target, s: _pose_at(target, s)
 
 
+@overload(feedback.feedback_pose)
+def _feedback_pose(target, s):
+    """The path feedback reads the target record's path (:func:`_pose_at`)."""
+    return lambda target, s: _pose_at(target, s)
+
+
+@overload(feedback.feedback_curvature)
+def _feedback_curvature(target, s):
+    """The path feedback reads the target record's path (:func:`_path_at`)."""
+    return lambda target, s: _path_at(target, s)
+
+
+#: C's IEEE remainder (exact, as Python's ``math.remainder``), which numba does not provide.
+_remainder = types.ExternalFunction("remainder", types.float64(types.float64, types.float64))
+
+
+@overload(math.remainder)
+def _math_remainder(x, y):
+    return lambda x, y: _remainder(x, y)
+
+
 @njit(cache=True)
 def _sense(plant, n, rows):
     """The Measurement fields of the plant's state; trailers 2..N of ``n`` into ``rows``."""
@@ -157,9 +178,10 @@ def _first_singular(phis, c, stop):
 
 
 @njit(cache=True)
-def _update_target(target, k, v_m, dt):
-    """The target's update at step ``k`` (StaticTarget / DynamicTarget.update): ``(v_d,
-    omega_d, v_d_dot, omega_d_dot)``, its state (s, v_prev, kappa) updated in place."""
+def _update_target(target, k, v_m, dt, pose):
+    """The target's update at step ``k`` (StaticTarget / DynamicTarget.update, and
+    PathFeedback.update at the measured ``pose``): ``(v_d, omega_d, v_d_dot, omega_d_dot)``,
+    its state updated in place."""
     state = target.state[0]
     s_ref, v_ref, a_ref = target.profile[k, 0], target.profile[k, 1], target.profile[k, 2]
     if target.dynamic:
@@ -173,6 +195,20 @@ def _update_target(target, k, v_m, dt):
         state.s = s_ref
         omega_d, omega_d_dot = targets.yaw_rate_targets(kappa, rate, v_ref, a_ref)
     state.kappa = kappa
+    state.omega_ref = omega_d
+    if target.feedback:
+        s_near, e_y, e_psi = feedback.path_errors_of(
+            target, state.s_near, pose[0], pose[1], pose[2]
+        )
+        state.s_near, state.e_y, state.e_psi = s_near, e_y, e_psi
+        state.kappa_near = _path_at(target, s_near)[0]
+        omega_d, omega_d_dot = feedback.feedback_of(
+            target.feedback_gains,
+            (omega_d, a_ref, omega_d_dot),
+            v_m,
+            (e_y, e_psi),
+            state.kappa_near,
+        )
     return v_ref, omega_d, a_ref, omega_d_dot
 
 
@@ -352,7 +388,8 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
             w_m = step.noisy(omega, lim.noise_w, noise, 2 * k + 1)
         else:
             v_m, w_m = v, omega
-        r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot = _update_target(target, k, v_m, dt)
+        pose = (x, y, me[2])
+        r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot = _update_target(target, k, v_m, dt, pose)
         state = target.state[0]
         r.t, r.s, r.kappa = t, state.s, state.kappa
         # The nominal model at the measurement, for the law and the matched disturbance (a
@@ -409,7 +446,7 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
             force, torque = disturbances.wrench_of(mass, a_v, a_w)
             fx, fy, mz = plant_mujoco.chassis_wrench_of(force, torque, me[2])
         out = log.loop[row]
-        out.t, out.s, out.v_d, out.omega_d = t, state.s, r.v_d, r.omega_d
+        out.t, out.s, out.v_d, out.omega_d = t, state.s, r.v_d, state.omega_ref
         out.v_d_dot, out.omega_d_dot, out.v_meas, out.omega_meas = (
             r.v_d_dot,
             r.omega_d_dot,

@@ -7,7 +7,7 @@ compiled form (:func:`unsupported` says why not otherwise): a built-in law
 built-in nominal model, a static or dynamic target on a closed-form path (the S-curve, the
 circle, the cycloid, a CSV spline) driven forwards, the paper's disturbance (matched or as
 a wrench) or none, measurement noise, one trailer or a train, constant steering gains or
-either schedule (:mod:`tt_mujoco.sim.schedule`); not faults, path feedback, reversing, a
+either schedule (:mod:`tt_mujoco.sim.schedule`), path feedback; not faults, reversing, a
 motor model, a sensor delay, wind, friction patches or a per-step callback. The loop then
 runs in numba, chunk by chunk, calling ``mj_step`` through MuJoCo's C library or stepping the
 reduced ODE, over the named records of :mod:`tt_mujoco.sim.records`.
@@ -74,7 +74,7 @@ def unsupported(built, controller, on_step=None) -> str | None:
     reasons = [
         (not _enabled(), "TT_MUJOCO_COMPILED=0"),
         (built.steps < MIN_STEPS, f"fewer than {MIN_STEPS} steps"),
-        (bool(s.faults) or s.path_feedback is not None, "faults or feedback"),
+        (bool(s.faults), "faults"),
         (s.actuator != "ideal", "a motor model"),
         (s.sensor_delay != 0.0, "a sensor delay"),
         (s.wind != "none", "wind"),
@@ -85,7 +85,7 @@ def unsupported(built, controller, on_step=None) -> str | None:
             "a Python controller class",
         ),
         (not getattr(_model_of(controller), "builtin", False), "a custom model"),
-        (type(built.target) not in (StaticTarget, DynamicTarget), "this target"),
+        (type(_inner(built.target)) not in (StaticTarget, DynamicTarget), "this target"),
         (type(built.path) not in (ArcsPath, CycloidPath, SplinePath), "a path without closed form"),
         (
             built.disturbance is not None and type(built.disturbance) is not PaperDisturbance,
@@ -100,6 +100,13 @@ def unsupported(built, controller, on_step=None) -> str | None:
     except ImportError:
         return "numba is not installed"
     return None
+
+
+def _inner(target):
+    """The tracking target itself (inside path feedback, if any)."""
+    from tt_mujoco.reference.feedback import PathFeedback
+
+    return target.target if type(target) is PathFeedback else target
 
 
 def _built_in(cls, laws) -> bool:
@@ -577,7 +584,8 @@ def _target_record(built, steps: int):
     from tt_mujoco.reference.spline import SplinePath
     from tt_mujoco.sim import records
 
-    target, path = built.target, built.path
+    target, path = _inner(built.target), built.path
+    fed = built.target is not target  # path feedback around it
     kappas, starts = np.zeros(0), np.zeros((0, 3))
     cells, pose_cells, kappa_ends = np.zeros((0, 5)), np.zeros((0, 10)), np.zeros(2)
     if isinstance(path, ArcsPath):
@@ -597,7 +605,14 @@ def _target_record(built, steps: int):
         cells=cells,
         pose_cells=pose_cells,
         kappa_ends=kappa_ends,
-        state=records.new_record(records.TARGET_FIELDS, v_prev=math.nan, kappa=target.curvature),
+        state=records.new_record(
+            records.TARGET_FIELDS,
+            v_prev=math.nan,
+            kappa=target.curvature,
+            s_near=built.target.path_arc_length if fed else 0.0,
+        ),
+        feedback=fed,
+        feedback_gains=built.target.gains if fed else (0.0, 0.0, 0.0),
     )
 
 
@@ -608,7 +623,12 @@ def _hand_back(stepper, controller, status, k, plant, law, target) -> None:
     stepper.k = k
     stepper.finished = status == step.FINISHED
     state = target.state[0]
-    stepper.built.target.set_state(float(state["s"]), float(state["v_prev"]), float(state["kappa"]))
+    _inner(stepper.built.target).set_state(
+        float(state["s"]), float(state["v_prev"]), float(state["kappa"])
+    )
+    if target.feedback:
+        errors = (float(state["e_y"]), float(state["e_psi"]))
+        stepper.built.target.set_state(float(state["s_near"]), errors, float(state["omega_ref"]))
     if isinstance(controller, PlainLawController):
         for name, value in zip(controller.STATE, law.user_state.tolist(), strict=False):
             setattr(controller.law_state, name, value)

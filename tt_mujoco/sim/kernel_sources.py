@@ -12,7 +12,7 @@ import inspect
 
 from tt_mujoco.analysis import geometry
 from tt_mujoco.controllers import base, fbl, ismc_sta, pid
-from tt_mujoco.reference import path_base, paths, spline, targets
+from tt_mujoco.reference import feedback, path_base, paths, spline, targets
 from tt_mujoco.sim import (
     disturbances,
     measure,
@@ -82,6 +82,8 @@ SHARED = (
     base.torques_of,
     *LAWS,
     paths.cycloid_curvature_and_rate,
+    feedback.path_errors_of,
+    feedback.feedback_of,
     disturbances.paper_disturbance_of,
     disturbances.wrench_of,
     plant_mujoco.chassis_wrench_of,

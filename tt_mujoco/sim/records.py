@@ -53,8 +53,9 @@ MEASUREMENT_DTYPE = record_dtype(Measurement._fields)
 LOG_DTYPE = record_dtype(LOOP_COLUMNS)
 
 #: The target's state between steps: arc length, the previous measured speed (NaN before the
-#: first update) and the curvature at the last update.
-TARGET_FIELDS = ("s", "v_prev", "kappa")
+#: first update) and the curvature at the last update; with path feedback the nearest path
+#: point's arc length and curvature, the errors (e_y, e_psi) and the path's own omega_d.
+TARGET_FIELDS = ("s", "v_prev", "kappa", "s_near", "kappa_near", "e_y", "e_psi", "omega_ref")
 
 #: A built-in law's values beside its state vector: whether the last torques saturated and the
 #: two auxiliary outputs (the sliding variables of ISMC-STA).
@@ -221,6 +222,10 @@ class TargetRecord(NamedTuple):
     kappa_ends: np.ndarray
     #: :data:`TARGET_FIELDS`
     state: np.ndarray
+    #: whether path feedback corrects omega_d (:class:`~tt_mujoco.reference.feedback.
+    #: PathFeedback`), and its (k_y, k_psi, c_max)
+    feedback: bool
+    feedback_gains: tuple
 
 
 class LoopRecord(NamedTuple):
