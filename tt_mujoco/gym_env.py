@@ -145,6 +145,7 @@ class TractorTrailerEnv(gymnasium.Env):
             -np.inf, np.inf, shape=(len(self.observation_names),), dtype=np.float64
         )
         self._reverse = bool(scenario.reverse)
+        self._pose_at, self._curvature = self.path.pose_at, self.path.curvature_and_rate
         self.dt = scenario.control_dt
         self.max_steps = self._built.steps
         self._seeded = False
@@ -255,7 +256,9 @@ class TractorTrailerEnv(gymnasium.Env):
         poses += [(row[0], row[1], row[2]) for row in getattr(me, "train", ())]
         out = []
         for i, (x, y, theta) in enumerate(poses):
-            s, e_y, e_psi = path_errors(self.path, self._unit_s[i], x, y, theta)
+            s, e_y, e_psi = path_errors(
+                self._pose_at, self._curvature, self._unit_s[i], x, y, theta
+            )
             self._unit_s[i] = s
             out += [e_y, e_psi]
         return out

@@ -28,6 +28,7 @@ without noise: the paper's noise model covers v and omega only (docs/model.md Se
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 __all__ = [
     "DEFAULT_GAINS",
@@ -72,11 +73,15 @@ def feedback_curvature(path, s: float) -> tuple[float, float]:
     return path.curvature_and_rate(s)
 
 
-def path_errors(path, s: float, x: float, y: float, theta: float):
-    """``(s*, e_y, e_psi)``: the nearest point of ``path`` to (x, y) by Newton steps
-    warm-started at arc length ``s``, the signed distance from it (positive left of the path's
-    direction) and the heading error ``theta - psi_path(s*)`` in (-pi, pi]; called every
-    control step from near the last answer (:func:`path_errors_of`)."""
+def path_errors(pose_at, curvature_and_rate, s: float, x: float, y: float, theta: float):
+    """``(s*, e_y, e_psi)``: the nearest path point to (x, y) by Newton steps warm-started at
+    arc length ``s``, the signed distance from it (positive left of the path's direction) and
+    the heading error ``theta - psi_path(s*)`` in (-pi, pi] (:func:`path_errors_of`).
+
+    ``pose_at`` and ``curvature_and_rate`` are the path's (:class:`~tt_mujoco.reference.
+    path_base.ReferencePath`); called every control step from near the last answer.
+    """
+    path = SimpleNamespace(pose_at=pose_at, curvature_and_rate=curvature_and_rate)
     return path_errors_of(path, s, x, y, theta)
 
 

@@ -120,10 +120,11 @@ class GroundPatches:
             table = np.array([self.path.pose_at(s)[:2] for s in grid])
             self._s = [float(grid[np.argmin(np.hypot(*(table - point).T))]) for point in points]
         mus, mask = [], 0
+        pose_at, curvature = self.path.pose_at, self.path.curvature_and_rate
         for i, (x, y) in enumerate(points):
             s = math.nan
             if self._bands:
-                s = path_errors(self.path, self._s[i], x, y, 0.0)[0]
+                s = path_errors(pose_at, curvature, self._s[i], x, y, 0.0)[0]
                 self._s[i] = s
             mu = self.base_mu
             for j, patch in enumerate(self.patches):
