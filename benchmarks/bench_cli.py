@@ -58,6 +58,7 @@ CASES = {
     ],
     "reduced": ["--traj", "s_curve", "--plant", "reduced"],
     "path": ["--traj", "s_curve", "--eta", "path"],
+    "reverse": ["--traj", "s_curve", "--reverse", "--trailers", "2"],
 }
 QUIET = ["--no-video", "--no-plots", "--quiet"]
 #: What the rollout's control vector holds: the actuators' ctrl, then qfrc_applied.

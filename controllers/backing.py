@@ -30,6 +30,7 @@ The inner loops are made faster than the outer ones by ``k_phi`` growing towards
 from __future__ import annotations
 
 import math
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -37,10 +38,10 @@ from tt_mujoco.reference.feedback import (
     TargetWrapper,
     check_gain_table,
     curvature_and_rate_at,
-    path_errors,
+    path_errors_of,
 )
 from tt_mujoco.vehicle.params import Params, jackknife_phi_deg
-from tt_mujoco.vehicle.rolling import hitch_rates
+from tt_mujoco.vehicle.rolling import hitch_rates_of
 
 __all__ = [
     "DEFAULT_GAINS",
@@ -65,7 +66,7 @@ DEFAULT_GAINS = {
     "preview": 0.2,
 }
 #: Points of the preview window's curvature average.
-_PREVIEW_POINTS = 5
+PREVIEW_POINTS = 5
 
 
 #: Most steps of :meth:`SteadyInverse.solve` (it converges to rounding in about ten).
@@ -135,38 +136,114 @@ class SteadyInverse:
         return float(np.interp(kappa, self._kappa, self._phi))
 
     def solve(self, kappa: float, beta_ahead: float) -> float:
-        """The hitch angle (rad) for ``kappa`` behind a unit steering by ``beta_ahead``: the
-        relation's extra argument, by regula falsi (Illinois) on the branch, to rounding
-        (held at its ends beyond)."""
+        """The hitch angle (rad) for ``kappa`` behind a unit steering by ``beta_ahead`` on the
+        branch of :func:`steady_axle_curvature` (:func:`steady_solve_of`)."""
         L, L0, eta, curvature = self._relation
-        lo, hi = float(self._phi[0]), float(self._phi[-1])  # kappa rises from lo to hi
-        f_lo = float(curvature(lo, L, L0, eta, beta_ahead)) - kappa
-        f_hi = float(curvature(hi, L, L0, eta, beta_ahead)) - kappa
-        if f_lo >= 0.0:
-            return lo
-        if f_hi <= 0.0:
-            return hi
-        side = 0
-        for _ in range(_ROOT_STEPS):
-            mid = hi - f_hi * (hi - lo) / (f_hi - f_lo)
-            if not lo < mid < hi:  # the bracket is down to rounding
-                break
-            f_mid = float(curvature(mid, L, L0, eta, beta_ahead)) - kappa
-            if f_mid == 0.0:
-                return mid
-            if f_mid < 0.0:
-                lo, f_lo = mid, f_mid
-                if side == -1:
-                    f_hi *= 0.5
-                side = -1
-            else:
-                hi, f_hi = mid, f_mid
-                if side == 1:
-                    f_lo *= 0.5
-                side = 1
-            if hi - lo < 1e-15:
-                break
-        return lo if -f_lo < f_hi else hi
+        if curvature is not steady_axle_curvature:
+            raise ValueError("solve() is not allowed here: it inverts steady_axle_curvature")
+        return steady_solve_of(self.ends, (L, L0), eta, kappa, beta_ahead)
+
+    @property
+    def ends(self) -> tuple[float, float]:
+        """The branch's hitch angles (rad) at its lowest and highest curvature."""
+        return float(self._phi[0]), float(self._phi[-1])
+
+
+def steady_axle_curvature_of(phi: float, L: float, L0: float, eta: float, b: float) -> float:
+    """:func:`steady_axle_curvature` of one hitch angle, behind a unit steering by ``b`` (the
+    compiled episode shares it)."""
+    return -math.sin((eta - 1.0) * phi - b) / (L * math.cos(b) + L0 * math.cos(phi + b))
+
+
+def steady_solve_of(ends, lengths, eta: float, kappa: float, beta_ahead: float) -> float:
+    """The hitch angle (rad) at which :func:`steady_axle_curvature_of` is ``kappa`` on the
+    branch from ``ends[0]`` to ``ends[1]`` (where it rises), by regula falsi (Illinois), to
+    rounding; held at the branch's ends beyond (the compiled episode shares it)."""
+    L, L0 = lengths[0], lengths[1]
+    lo, hi = ends[0], ends[1]
+    f_lo = steady_axle_curvature_of(lo, L, L0, eta, beta_ahead) - kappa
+    f_hi = steady_axle_curvature_of(hi, L, L0, eta, beta_ahead) - kappa
+    if f_lo >= 0.0:
+        return lo
+    if f_hi <= 0.0:
+        return hi
+    side = 0
+    for _ in range(_ROOT_STEPS):
+        mid = hi - f_hi * (hi - lo) / (f_hi - f_lo)
+        if not lo < mid < hi:  # the bracket is down to rounding
+            break
+        f_mid = steady_axle_curvature_of(mid, L, L0, eta, beta_ahead) - kappa
+        if f_mid == 0.0:
+            return mid
+        if f_mid < 0.0:
+            lo, f_lo = mid, f_mid
+            if side == -1:
+                f_hi *= 0.5
+            side = -1
+        else:
+            hi, f_hi = mid, f_mid
+            if side == 1:
+                f_lo *= 0.5
+            side = 1
+        if hi - lo < 1e-15:
+            break
+    return lo if -f_lo < f_hi else hi
+
+
+class CascadeConstants(NamedTuple):
+    """What :func:`cascade_of` reads of a :class:`HitchCascade`, as plain numbers."""
+
+    #: (k_y, k_psi, k_phi, c_max)
+    gains: tuple
+    #: the preview window behind the first trailer (m; 0 for one trailer)
+    preview: float
+    #: per trailer: (L_k, L0_k), eta_k, and its steady branch's ends (rad)
+    lengths: Any
+    etas: Any
+    ends: Any
+
+
+def cascade_of(c, path, phis, lead, speeds, leading_s: float, wanted, rates):
+    """The cascade's yaw-rate target (module docstring): ``(s, e_y, e_psi, omega_d)``, the
+    leading axle's arc length and errors, with each hitch's wanted angle into ``wanted`` and
+    ``rates`` as scratch (N x 3).
+
+    ``lead = (x, y, theta)``: the leading unit's axle and heading; ``speeds = (v, omega)``:
+    the tractor's measured speed and yaw rate (the compiled episode shares it).
+    """
+    k_y, k_psi, k_phi, c_max = c.gains
+    v, omega = speeds
+    n = len(phis)
+    hitch_rates_of(phis, (v, omega), c.lengths, c.etas, rates)
+    alpha = lead[2] + c.etas[n - 1] * phis[n - 1]
+    s, e_y, e_psi = path_errors_of(path, leading_s, lead[0], lead[1], alpha)
+    v_lead = rates[n - 1][1]
+    correction = -k_y * e_y - k_psi * math.copysign(1.0, v_lead) * e_psi
+    points = PREVIEW_POINTS if c.preview else 1  # one trailer: the axle's own point
+    step = math.copysign(c.preview, v_lead) / (PREVIEW_POINTS - 1)
+    feed = 0.0
+    for j in range(points):
+        feed += curvature_and_rate_at(path, s + j * step)[0]
+    kappa = feed / points + max(-c_max, min(c_max, correction))
+    for k in range(n - 1, 0, -1):  # hitches N..2 (index k is trailer k + 1)
+        # the unit ahead is a steered trailer: its steering moves the turn's centre
+        goal = steady_solve_of(
+            c.ends[k], c.lengths[k], c.etas[k], kappa, c.etas[k - 1] * phis[k - 1]
+        )
+        wanted[k] = goal
+        gain = k_phi * 2.0 ** (n - 1 - k)
+        turn = rates[k][2] - gain * abs(rates[k][1]) * (phis[k] - goal)
+        speed = rates[k - 1][1]
+        kappa = turn / speed if abs(speed) > 1e-3 else 0.0
+    goal = steady_solve_of(c.ends[0], c.lengths[0], c.etas[0], kappa, 0.0)
+    wanted[0] = goal
+    gain = k_phi * 2.0 ** (n - 1)
+    phi_dot_wanted = -gain * abs(v) * (phis[0] - goal)
+    hitch_rates_of(phis, (v, 0.0), c.lengths, c.etas, rates)
+    free = rates[0][0]
+    hitch_rates_of(phis, (v, 1.0), c.lengths, c.etas, rates)
+    per_omega = rates[0][0] - free
+    return s, e_y, e_psi, (phi_dot_wanted - free) / per_omega
 
 
 def steady_hitch_angle(kappa: float, L: float, L0: float, eta: float, phi_max: float) -> float:
@@ -219,8 +296,14 @@ class HitchCascade(TargetWrapper):
             for (L, L0), eta in zip(self.lengths, self.etas, strict=True)
         ]
         self.preview = g["preview"] * (len(self.lengths) - 1)
-        self._pose_at = self.path.pose_at
-        self._curvature = self.path.curvature_and_rate
+        self.constants = CascadeConstants(
+            gains=(self.k_y, self.k_psi, self.k_phi, self.c_max),
+            preview=self.preview,
+            lengths=tuple(self.lengths),
+            etas=tuple(self.etas),
+            ends=tuple(inverse.ends for inverse in self._inverse),
+        )
+        self._rates = [[0.0, 0.0, 0.0] for _ in self.lengths]
         self.reset()
 
     @classmethod
@@ -236,42 +319,32 @@ class HitchCascade(TargetWrapper):
         self.hitch_targets = [0.0] * n
         self.reference_omega_d = 0.0
 
+    def set_state(self, leading_s: float, errors, wanted, omega_ref: float) -> None:
+        """Take the state a compiled episode's updates left: the leading axle's arc length,
+        its ``errors = (e_y, e_psi)``, the hitches' wanted angles and the reverse target's
+        own omega_d (the wrapped target's state is handed back to it)."""
+        self.leading_arc_length = leading_s
+        self.lateral_error, self.heading_error = errors
+        self.hitch_targets = list(wanted)
+        self.reference_omega_d = omega_ref
+
     def update(self, t: float, dt: float, v_measured: float, me) -> tuple:
         """``(v_d, omega_d, v_d_dot, omega_d_dot)`` for measurement ``me`` (omega_d_dot = 0:
         the cascade's yaw-rate target moves with the state, not on a schedule)."""
         v_d, w_d, v_d_dot, _ = self.target.update(t, dt, v_measured)
         self.reference_omega_d = w_d
         rows = getattr(me, "train", ())
-        phis = me.phis
-        v = float(v_measured)
-        rates = hitch_rates(phis, v, me.omega, self.lengths, self.etas)
-        n = len(phis)
-        x, y, theta = (me.x0, me.y0, me.theta0) if n == 1 else rows[-1][:3]
-        alpha = theta + self.etas[-1] * phis[-1]
-        s, e_y, e_psi = path_errors(
-            self._pose_at, self._curvature, self.leading_arc_length, x, y, alpha
+        lead = (me.x0, me.y0, me.theta0) if not rows else tuple(rows[-1][:3])
+        s, e_y, e_psi, omega_d = cascade_of(
+            self.constants,
+            self.path,
+            me.phis,
+            lead,
+            (float(v_measured), me.omega),
+            self.leading_arc_length,
+            self.hitch_targets,
+            self._rates,
         )
         self.leading_arc_length = s
         self.lateral_error, self.heading_error = e_y, e_psi
-        v_lead = rates[-1][1]
-        c = -self.k_y * e_y - self.k_psi * math.copysign(1.0, v_lead) * e_psi
-        points = _PREVIEW_POINTS if self.preview else 1  # one trailer: the axle's own point
-        step = math.copysign(self.preview, v_lead) / (_PREVIEW_POINTS - 1)
-        feed = sum(curvature_and_rate_at(self.path, s + j * step)[0] for j in range(points))
-        kappa = feed / points + max(-self.c_max, min(self.c_max, c))
-        for k in range(n - 1, 0, -1):  # hitches N..2 (index k is trailer k + 1)
-            # the unit ahead is a steered trailer: its steering moves the turn's centre
-            wanted = self._inverse[k].solve(kappa, self.etas[k - 1] * phis[k - 1])
-            self.hitch_targets[k] = wanted
-            gain = self.k_phi * 2.0 ** (n - 1 - k)
-            turn = rates[k][2] - gain * abs(rates[k][1]) * (phis[k] - wanted)
-            speed = rates[k - 1][1]
-            kappa = turn / speed if abs(speed) > 1e-3 else 0.0
-        wanted = self._inverse[0].solve(kappa, 0.0)
-        self.hitch_targets[0] = wanted
-        gain = self.k_phi * 2.0 ** (n - 1)
-        phi_dot_wanted = -gain * abs(v) * (phis[0] - wanted)
-        free = hitch_rates(phis, v, 0.0, self.lengths, self.etas)[0][0]
-        per_omega = hitch_rates(phis, v, 1.0, self.lengths, self.etas)[0][0] - free
-        omega_d = (phi_dot_wanted - free) / per_omega
         return v_d, omega_d, v_d_dot, 0.0

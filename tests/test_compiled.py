@@ -54,6 +54,12 @@ CASES = [
     dict(traj="s_curve", path_feedback={}, duration=4.0),
     dict(traj="cycloid", path_feedback={"k_y": 9.0}, target="static", plant="reduced"),
     dict(traj="s_curve", path_feedback={}, eta="path", trailers=2, noise_snr_db=20.0),
+    # backing up: the reverse target, with the hitch cascade (the default) or path feedback
+    dict(traj="s_curve", reverse=True, duration=4.0),
+    dict(traj="cycloid", reverse=True, trailers=2, plant="reduced", noise_snr_db=20.0),
+    dict(traj="circle", reverse=True, trailers=3, disturbance="none", duration=4.0),
+    dict(traj="s_curve", reverse=True, target="static", controller="pid", duration=3.0),
+    dict(traj="s_curve", reverse=True, eta="paper", path_feedback={}, duration=3.0),
 ]
 
 
@@ -116,7 +122,6 @@ def test_checkpoint_rows_are_the_same(monkeypatch, tmp_path):
     [
         (dict(faults=["dropout:t=1"]), "faults"),
         (dict(duration=1.0), "fewer than 2000 steps"),
-        (dict(reverse=True), "this target"),
     ],
 )
 def test_the_python_loop_runs_what_has_no_compiled_form(changes, reason):
@@ -277,3 +282,39 @@ def test_a_schedule_hands_its_state_back(monkeypatch, plant, eta):
         )
     assert states[0] == states[1]
     assert states[0][1] > 10  # the gains did change along the cycloid
+
+
+@pytest.mark.parametrize("options", [dict(trailers=2), dict(path_feedback={}, eta="paper")])
+def test_backing_up_hands_its_targets_state_back(monkeypatch, options):
+    # After a compiled reversing episode the reverse target, the hitch cascade or the path
+    # feedback around it stand where the Python loop leaves them.
+    from tt_mujoco.sim.simulate import run_episode
+    from tt_mujoco.sim.stepper import Stepper
+
+    scenario = Scenario(traj="s_curve", reverse=True, duration=3.0, **options)
+    built = build(scenario)
+    assert compiled.unsupported(built, built.new_controller()) is None
+    states = []
+    for flag in ("0", "1"):
+        monkeypatch.setenv("TT_MUJOCO_COMPILED", flag)
+        stepper = Stepper(built)
+        stepper.reset(np.random.default_rng(0))
+        controller = built.new_controller()
+        controller.reset()
+        assert run_episode(stepper, controller)[0] == "ok"
+        outer = built.target
+        inner = outer.target
+        states.append(
+            (
+                inner.arc_length,
+                inner.curvature,
+                inner._v_prev,
+                outer.lateral_error,
+                outer.heading_error,
+                outer.reference_omega_d,
+                getattr(outer, "leading_arc_length", None),
+                getattr(outer, "hitch_targets", None),
+                getattr(outer, "path_arc_length", None),
+            )
+        )
+    assert states[0] == states[1]

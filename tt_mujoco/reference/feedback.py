@@ -57,8 +57,9 @@ _MIN_METRIC = 0.2
 
 def curvature_and_rate_at(path, s: float) -> tuple[float, float]:
     """``(kappa, dkappa/ds)`` of ``path`` at arc length ``s``, zero beyond its ends: there the
-    path continues straight along its end tangents (as its pose does)."""
-    return path.curvature_and_rate(s) if 0.0 <= s <= path.length else (0.0, 0.0)
+    path continues straight along its end tangents (as its pose does; the compiled episode
+    shares it)."""
+    return feedback_curvature(path, s) if 0.0 <= s <= path.length else (0.0, 0.0)
 
 
 def feedback_pose(path, s: float) -> tuple[float, float, float]:

@@ -2,10 +2,19 @@
 
 from __future__ import annotations
 
-from tt_mujoco.reference.paths import Pose
-from tt_mujoco.reference.targets import Target
+import math
 
-__all__ = ["ReverseTarget"]
+from tt_mujoco.reference.paths import Pose
+from tt_mujoco.reference.targets import Target, travelled
+
+__all__ = ["ReverseTarget", "reverse_targets_of"]
+
+
+def reverse_targets_of(kappa: float, rate: float, v: float, v_ref: float, a_ref: float):
+    """``(v_d, omega_d, v_d_dot, omega_d_dot)`` reversing at speed ``v`` (<= 0) where the path
+    has curvature ``kappa`` and rate ``dkappa/ds``: d/dt kappa(s_path) v = kappa' v^2 + kappa
+    v_dot, with v_dot ~ -a_ref (the compiled episode shares it)."""
+    return -v_ref, kappa * v, -a_ref, rate * v * v - kappa * a_ref
 
 
 class ReverseTarget(Target):
@@ -47,15 +56,18 @@ class ReverseTarget(Target):
         if self.kind == "dynamic":
             v = float(v_measured)
             if self._v_prev is not None:
-                self._s += 0.5 * (self._v_prev + v) * dt
+                self._s = travelled(self._s, self._v_prev, v, dt)
             self._v_prev = v
         else:
             v = -v_ref
             self._s = self.s_end - s_ref
         kappa, rate = self._curvature_and_rate(self._s)
         self._kappa = kappa
-        # d/dt kappa(s_path) v = kappa' v^2 + kappa v_dot, with v_dot ~ -a_ref (as forward).
-        return -v_ref, kappa * v, -a_ref, rate * v * v - kappa * a_ref
+        return reverse_targets_of(kappa, rate, v, v_ref, a_ref)
+
+    def set_state(self, s: float, v_prev: float, kappa: float) -> None:
+        super().set_state(s, v_prev, kappa)
+        self._v_prev = None if math.isnan(v_prev) else v_prev
 
     def reference_speed(self, t):
         return -self.forward.reference_speed(t)

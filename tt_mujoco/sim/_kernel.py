@@ -21,8 +21,8 @@ from numba import cfunc, njit, types
 from numba.extending import intrinsic, overload, register_jitable
 
 from tt_mujoco.analysis import geometry
-from tt_mujoco.controllers import base, fbl, ismc_sta, pid
-from tt_mujoco.reference import feedback, path_base, paths, spline, targets
+from tt_mujoco.controllers import backing, base, fbl, ismc_sta, pid
+from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
 from tt_mujoco.sim import disturbances, measure, plant_mujoco, plant_reduced, schedule, step
 from tt_mujoco.sim.kernel_sources import LAWS, SHARED
 from tt_mujoco.vehicle import path_schedule, reduced, train
@@ -42,7 +42,7 @@ NOMINAL_SINGULAR = -1.0
 #: ``steering.kind`` of the path schedule and of the curvature schedule
 PATH_SCHEDULE, CURVATURE_SCHEDULE = 1, 2
 #: where trailer 1's axle is in the measurement, and a trailer's gain in a train's row
-X0, Y0 = measure.Measurement._fields.index("x0"), measure.Measurement._fields.index("y0")
+X0, Y0, THETA0 = (measure.Measurement._fields.index(name) for name in ("x0", "y0", "theta0"))
 ETA_COLUMN = train.TRAILER_ROW.index("eta")
 
 # mj_step by its symbol in MuJoCo's library, which the Python bindings load: no pointer is
@@ -179,12 +179,25 @@ def _first_singular(phis, c, stop):
 
 @njit(cache=True)
 def _update_target(target, k, v_m, dt, pose):
-    """The target's update at step ``k`` (StaticTarget / DynamicTarget.update, and
-    PathFeedback.update at the measured ``pose``): ``(v_d, omega_d, v_d_dot, omega_d_dot)``,
-    its state updated in place."""
+    """The target's update at step ``k`` (StaticTarget / DynamicTarget / ReverseTarget.update,
+    and PathFeedback.update at the measured ``pose``): ``(v_d, omega_d, v_d_dot,
+    omega_d_dot)``, its state updated in place."""
     state = target.state[0]
     s_ref, v_ref, a_ref = target.profile[k, 0], target.profile[k, 1], target.profile[k, 2]
-    if target.dynamic:
+    if target.reverse:
+        v = -v_ref
+        if target.dynamic:
+            v = v_m
+            if not math.isnan(state.v_prev):
+                state.s = targets.travelled(state.s, state.v_prev, v, dt)
+            state.v_prev = v
+        else:
+            state.s = target.s_end - s_ref
+        kappa, rate = _path_at(target, state.s)
+        v_ref, omega_d, a_ref, omega_d_dot = reverse.reverse_targets_of(
+            kappa, rate, v, v_ref, a_ref
+        )
+    elif target.dynamic:
         if not math.isnan(state.v_prev):
             state.s = targets.travelled(state.s, state.v_prev, v_m, dt)
         state.v_prev = v_m
@@ -210,6 +223,26 @@ def _update_target(target, k, v_m, dt, pose):
             state.kappa_near,
         )
     return v_ref, omega_d, a_ref, omega_d_dot
+
+
+@njit(cache=True)
+def _cascade(target, me, rows, phis, v_m):
+    """HitchCascade.update's ``(omega_d, omega_d_dot)``; its state updated in place."""
+    n = phis.size
+    phis[0] = me[3]
+    for i in range(n - 1):
+        phis[i + 1] = rows[i][3]
+    if n == 1:
+        lead = (me[X0], me[Y0], me[THETA0])
+    else:
+        lead = (rows[n - 2][0], rows[n - 2][1], rows[n - 2][2])
+    state = target.state[0]
+    s, e_y, e_psi, omega_d = backing.cascade_of(
+        target.cascade_constants, target, phis, lead, (v_m, me[6]), state.s_lead,
+        target.wanted, target.rates,
+    )  # fmt: skip
+    state.s_lead, state.e_y, state.e_psi = s, e_y, e_psi
+    return omega_d, 0.0
 
 
 @njit(cache=True)
@@ -390,6 +423,8 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
             v_m, w_m = v, omega
         pose = (x, y, me[2])
         r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot = _update_target(target, k, v_m, dt, pose)
+        if target.cascade:  # HitchCascade.update: the hitches set the yaw rate
+            r.omega_d, r.omega_d_dot = _cascade(target, me, rows, phis, v_m)
         state = target.state[0]
         r.t, r.s, r.kappa = t, state.s, state.kappa
         # The nominal model at the measurement, for the law and the matched disturbance (a

@@ -5,9 +5,10 @@ compiled form (:func:`unsupported` says why not otherwise): a built-in law
 (:data:`tt_mujoco.sim.kernel_sources.LAWS`: ISMC-STA, PID, FBL) or a user's plain-number law
 (:mod:`tt_mujoco.controllers.plain`, compiled once per process by :func:`compile_law`) on the
 built-in nominal model, a static or dynamic target on a closed-form path (the S-curve, the
-circle, the cycloid, a CSV spline) driven forwards, the paper's disturbance (matched or as
+circle, the cycloid, a CSV spline) driven forwards or backing up (the reverse target, with
+the hitch cascade or path feedback), the paper's disturbance (matched or as
 a wrench) or none, measurement noise, one trailer or a train, constant steering gains or
-either schedule (:mod:`tt_mujoco.sim.schedule`), path feedback; not faults, reversing, a
+either schedule (:mod:`tt_mujoco.sim.schedule`), path feedback; not faults, a
 motor model, a sensor delay, wind, friction patches or a per-step callback. The loop then
 runs in numba, chunk by chunk, calling ``mj_step`` through MuJoCo's C library or stepping the
 reduced ODE, over the named records of :mod:`tt_mujoco.sim.records`.
@@ -65,6 +66,7 @@ def unsupported(built, controller, on_step=None) -> str | None:
     """Why the episode has no compiled form (None when it has one); only a query."""
     from tt_mujoco.controllers.plain import PlainLawController
     from tt_mujoco.reference.paths import ArcsPath, CycloidPath
+    from tt_mujoco.reference.reverse import ReverseTarget
     from tt_mujoco.reference.spline import SplinePath
     from tt_mujoco.reference.targets import DynamicTarget, StaticTarget
     from tt_mujoco.sim.disturbances import PaperDisturbance
@@ -85,7 +87,10 @@ def unsupported(built, controller, on_step=None) -> str | None:
             "a Python controller class",
         ),
         (not getattr(_model_of(controller), "builtin", False), "a custom model"),
-        (type(_inner(built.target)) not in (StaticTarget, DynamicTarget), "this target"),
+        (
+            type(_inner(built.target)) not in (StaticTarget, DynamicTarget, ReverseTarget),
+            "this target",
+        ),
         (type(built.path) not in (ArcsPath, CycloidPath, SplinePath), "a path without closed form"),
         (
             built.disturbance is not None and type(built.disturbance) is not PaperDisturbance,
@@ -103,10 +108,11 @@ def unsupported(built, controller, on_step=None) -> str | None:
 
 
 def _inner(target):
-    """The tracking target itself (inside path feedback, if any)."""
+    """The tracking target itself (inside path feedback or the hitch cascade, if any)."""
+    from tt_mujoco.controllers.backing import HitchCascade
     from tt_mujoco.reference.feedback import PathFeedback
 
-    return target.target if type(target) is PathFeedback else target
+    return target.target if type(target) in (PathFeedback, HitchCascade) else target
 
 
 def _built_in(cls, laws) -> bool:
@@ -580,12 +586,24 @@ def _law_record(controller, nominal, user, steering):
 
 
 def _target_record(built, steps: int):
+    from tt_mujoco.controllers.backing import CascadeConstants, HitchCascade
+    from tt_mujoco.reference.feedback import PathFeedback
     from tt_mujoco.reference.paths import ArcsPath
+    from tt_mujoco.reference.reverse import ReverseTarget
     from tt_mujoco.reference.spline import SplinePath
     from tt_mujoco.sim import records
 
-    target, path = _inner(built.target), built.path
-    fed = built.target is not target  # path feedback around it
+    target, path, outer = _inner(built.target), built.path, built.target
+    fed, cascade = type(outer) is PathFeedback, type(outer) is HitchCascade
+    n = built.plant_params.n_trailers
+    constants = CascadeConstants(
+        (0.0, 0.0, 0.0, 0.0), 0.0, np.zeros((n, 2)), np.zeros(n), np.zeros((n, 2))
+    )
+    if cascade:
+        c = outer.constants
+        constants = CascadeConstants(
+            c.gains, c.preview, *(np.array(x, dtype=float) for x in (c.lengths, c.etas, c.ends))
+        )
     kappas, starts = np.zeros(0), np.zeros((0, 3))
     cells, pose_cells, kappa_ends = np.zeros((0, 5)), np.zeros((0, 10)), np.zeros(2)
     if isinstance(path, ArcsPath):
@@ -609,10 +627,18 @@ def _target_record(built, steps: int):
             records.TARGET_FIELDS,
             v_prev=math.nan,
             kappa=target.curvature,
-            s_near=built.target.path_arc_length if fed else 0.0,
+            s=target.arc_length,
+            s_near=outer.path_arc_length if fed else 0.0,
+            s_lead=outer.leading_arc_length if cascade else 0.0,
         ),
         feedback=fed,
-        feedback_gains=built.target.gains if fed else (0.0, 0.0, 0.0),
+        feedback_gains=outer.gains if fed else (0.0, 0.0, 0.0),
+        reverse=isinstance(target, ReverseTarget),
+        s_end=float(getattr(target, "s_end", 0.0)),
+        cascade=cascade,
+        cascade_constants=constants,
+        wanted=np.array(outer.hitch_targets if cascade else [0.0] * n, dtype=float),
+        rates=np.zeros((n, 3)),
     )
 
 
@@ -626,9 +652,12 @@ def _hand_back(stepper, controller, status, k, plant, law, target) -> None:
     _inner(stepper.built.target).set_state(
         float(state["s"]), float(state["v_prev"]), float(state["kappa"])
     )
+    errors, omega_ref = (float(state["e_y"]), float(state["e_psi"])), float(state["omega_ref"])
     if target.feedback:
-        errors = (float(state["e_y"]), float(state["e_psi"]))
-        stepper.built.target.set_state(float(state["s_near"]), errors, float(state["omega_ref"]))
+        stepper.built.target.set_state(float(state["s_near"]), errors, omega_ref)
+    elif target.cascade:
+        wanted = target.wanted.tolist()
+        stepper.built.target.set_state(float(state["s_lead"]), errors, wanted, omega_ref)
     if isinstance(controller, PlainLawController):
         for name, value in zip(controller.STATE, law.user_state.tolist(), strict=False):
             setattr(controller.law_state, name, value)

@@ -11,8 +11,8 @@ from __future__ import annotations
 import inspect
 
 from tt_mujoco.analysis import geometry
-from tt_mujoco.controllers import base, fbl, ismc_sta, pid
-from tt_mujoco.reference import feedback, path_base, paths, spline, targets
+from tt_mujoco.controllers import backing, base, fbl, ismc_sta, pid
+from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
 from tt_mujoco.sim import (
     disturbances,
     measure,
@@ -22,7 +22,7 @@ from tt_mujoco.sim import (
     schedule,
     step,
 )
-from tt_mujoco.vehicle import params, path_schedule, reduced, steering, train
+from tt_mujoco.vehicle import params, path_schedule, reduced, rolling, steering, train
 
 __all__ = ["LAWS", "RECORDS", "SHARED", "source_files"]
 
@@ -84,6 +84,12 @@ SHARED = (
     paths.cycloid_curvature_and_rate,
     feedback.path_errors_of,
     feedback.feedback_of,
+    feedback.curvature_and_rate_at,
+    reverse.reverse_targets_of,
+    rolling.hitch_rates_of,
+    backing.steady_axle_curvature_of,
+    backing.steady_solve_of,
+    backing.cascade_of,
     disturbances.paper_disturbance_of,
     disturbances.wrench_of,
     plant_mujoco.chassis_wrench_of,
@@ -113,6 +119,7 @@ SHARED = (
 #: The record types the kernel takes: their fields are part of its compiled signature.
 RECORDS = (
     records.Limits,
+    backing.CascadeConstants,
     records.LoopRecord,
     records.PlantRecord,
     records.SteeringRecord,

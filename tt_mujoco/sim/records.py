@@ -14,6 +14,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 # What a law sees of the target and of the nominal model: the plain-number law's records.
+from tt_mujoco.controllers.backing import CascadeConstants
 from tt_mujoco.controllers.plain import NOMINAL_FIELDS, REFERENCE_FIELDS
 from tt_mujoco.sim.measure import Addresses, Lengths, Measurement
 from tt_mujoco.sim.timeseries import LOOP_COLUMNS
@@ -54,8 +55,12 @@ LOG_DTYPE = record_dtype(LOOP_COLUMNS)
 
 #: The target's state between steps: arc length, the previous measured speed (NaN before the
 #: first update) and the curvature at the last update; with path feedback the nearest path
-#: point's arc length and curvature, the errors (e_y, e_psi) and the path's own omega_d.
-TARGET_FIELDS = ("s", "v_prev", "kappa", "s_near", "kappa_near", "e_y", "e_psi", "omega_ref")
+#: point's arc length and curvature, the errors (e_y, e_psi) and the path's own omega_d; backing
+#: up with the hitch cascade, the leading axle's arc length (and its errors).
+TARGET_FIELDS = (
+    *("s", "v_prev", "kappa", "s_near", "kappa_near", "e_y", "e_psi", "omega_ref"),
+    "s_lead",
+)
 
 #: A built-in law's values beside its state vector: whether the last torques saturated and the
 #: two auxiliary outputs (the sliding variables of ISMC-STA).
@@ -226,6 +231,15 @@ class TargetRecord(NamedTuple):
     #: PathFeedback`), and its (k_y, k_psi, c_max)
     feedback: bool
     feedback_gains: tuple
+    #: reversing (:class:`~tt_mujoco.reference.reverse.ReverseTarget`) from arc length s_end
+    reverse: bool
+    s_end: float
+    #: whether the hitch cascade sets omega_d (:class:`~tt_mujoco.controllers.backing.
+    #: HitchCascade`), its constants (arrays), the hitches' wanted angles and scratch rates
+    cascade: bool
+    cascade_constants: CascadeConstants
+    wanted: np.ndarray
+    rates: np.ndarray
 
 
 class LoopRecord(NamedTuple):

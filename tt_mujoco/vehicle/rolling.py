@@ -22,7 +22,13 @@ import numpy as np
 
 from tt_mujoco.vehicle.path_schedule import nearest_arc_length
 
-__all__ = ["constant_steering", "drive_along_path", "hitch_rates", "schedule_steering"]
+__all__ = [
+    "constant_steering",
+    "drive_along_path",
+    "hitch_rates",
+    "hitch_rates_of",
+    "schedule_steering",
+]
 
 
 def _rates(path, s, thetas, lengths, steering, arcs, v):
@@ -142,9 +148,22 @@ def hitch_rates(phis, v: float, omega: float, lengths, etas) -> list[tuple[float
     etas : sequence of float
         The steering gains (beta_k = eta_k phi_k).
     """
-    out = []
-    heading, vx, vy, rate = 0.0, v, 0.0, omega
-    for (L, L0), phi, eta in zip(lengths, phis, etas, strict=True):
+    if not len(lengths) == len(phis) == len(etas):
+        raise ValueError(
+            f"{len(phis)} hitch angles, {len(lengths)} lengths and {len(etas)} gains are not "
+            "allowed: give one of each per trailer"
+        )
+    out = [[0.0, 0.0, 0.0] for _ in phis]
+    hitch_rates_of(phis, (v, omega), lengths, etas, out)
+    return [tuple(row) for row in out]
+
+
+def hitch_rates_of(phis, speeds, lengths, etas, out) -> None:
+    """:func:`hitch_rates` of the tractor's ``speeds = (v, omega)`` into the rows of ``out``
+    (the compiled episode shares it)."""
+    heading, (vx, rate), vy = 0.0, speeds, 0.0
+    for k in range(len(phis)):
+        L, L0, phi, eta = lengths[k][0], lengths[k][1], phis[k], etas[k]
         c, s = math.cos(heading), math.sin(heading)
         ox, oy = vx + L * rate * s, vy - L * rate * c  # the hitch, L behind along the heading
         theta = heading - phi
@@ -153,9 +172,8 @@ def hitch_rates(phis, v: float, omega: float, lengths, etas) -> list[tuple[float
         alpha = theta + beta
         v_k = (ox * math.cos(theta) + oy * math.sin(theta)) / cos_beta
         theta_dot = (-ox * math.sin(alpha) + oy * math.cos(alpha)) / (L0 * cos_beta)
-        out.append((rate - theta_dot, v_k, theta_dot))
+        out[k][0], out[k][1], out[k][2] = rate - theta_dot, v_k, theta_dot
         # the axle: the hitch's velocity minus the drawbar's rotation
         vx = ox + L0 * theta_dot * math.sin(theta)
         vy = oy - L0 * theta_dot * math.cos(theta)
         heading, rate = theta, theta_dot
-    return out
