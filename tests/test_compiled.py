@@ -60,6 +60,21 @@ CASES = [
     dict(traj="circle", reverse=True, trailers=3, disturbance="none", duration=4.0),
     dict(traj="s_curve", reverse=True, target="static", controller="pid", duration=3.0),
     dict(traj="s_curve", reverse=True, eta="paper", path_feedback={}, duration=3.0),
+    # sensor dropouts (from the first step, and overlapping) and actuator faults
+    dict(traj="s_curve", faults=["dropout:t=1,duration=0.3", "actuator:t=1.2,wheel=left"]),
+    dict(
+        traj="cycloid",
+        plant="reduced",
+        noise_snr_db=20.0,
+        faults=["dropout:t=0,duration=0.05", "dropout:t=0.02,duration=0.2", "actuator:t=0.5"],
+    ),
+    dict(
+        traj="s_curve",
+        trailers=2,
+        controller="examples/kanayama.py:kanayama_law",
+        faults=["dropout:t=2,duration=0.5", "actuator:t=2,scale=0.5,wheel=right"],
+        duration=4.0,
+    ),
 ]
 
 
@@ -120,7 +135,7 @@ def test_checkpoint_rows_are_the_same(monkeypatch, tmp_path):
 @pytest.mark.parametrize(
     ("changes", "reason"),
     [
-        (dict(faults=["dropout:t=1"]), "faults"),
+        (dict(faults=["dropout:t=1", "payload:t=1"]), "a payload fault"),
         (dict(duration=1.0), "fewer than 2000 steps"),
     ],
 )

@@ -23,7 +23,15 @@ from numba.extending import intrinsic, overload, register_jitable
 from tt_mujoco.analysis import geometry
 from tt_mujoco.controllers import backing, base, fbl, ismc_sta, pid
 from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
-from tt_mujoco.sim import disturbances, measure, plant_mujoco, plant_reduced, schedule, step
+from tt_mujoco.sim import (
+    disturbances,
+    faults,
+    measure,
+    plant_mujoco,
+    plant_reduced,
+    schedule,
+    step,
+)
 from tt_mujoco.sim.kernel_sources import LAWS, SHARED
 from tt_mujoco.vehicle import path_schedule, reduced, train
 
@@ -421,6 +429,9 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
             w_m = step.noisy(omega, lim.noise_w, noise, 2 * k + 1)
         else:
             v_m, w_m = v, omega
+        phi_m, fault = phi, loop.faults
+        if fault.dropouts.shape[0]:  # FaultSchedule.sensor
+            phi_m, v_m, w_m = faults.sensor_of(k, fault.dropouts, fault.held, phi, v_m, w_m)
         pose = (x, y, me[2])
         r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot = _update_target(target, k, v_m, dt, pose)
         if target.cascade:  # HitchCascade.update: the hitches set the yaw rate
@@ -433,13 +444,13 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         if steered:
             c, model_train = reduced.with_eta_of(c, steering.etas[0]), law.steered_train
         if n == 1:
-            if math.cos(c.eta * phi) < COS_BETA_MIN:
-                stop.law_status, stop.phi, stop.eta = NOMINAL_SINGULAR, phi, c.eta
+            if math.cos(c.eta * phi_m) < COS_BETA_MIN:
+                stop.law_status, stop.phi, stop.eta = NOMINAL_SINGULAR, phi_m, c.eta
                 return LAW_FAILED, k
-            terms = reduced.inertia_terms_of(phi, c)
+            terms = reduced.inertia_terms_of(phi_m, c)
             mass, bias = reduced.coriolis_of(terms, c.gamma, v_m, w_m)
         else:
-            phis[0] = phi
+            phis[0] = phi_m
             for i in range(n - 1):
                 phis[i + 1] = rows[i][3]
             ok, mass, bias = train.mass_and_bias_of(phis, v_m, w_m, model_train, law.rates)
@@ -457,7 +468,7 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
             for i in range(measured.size):
                 law.measurement_values[i] = me[i]
             seen = law.measurement[0]
-            seen.v, seen.omega = v_m, w_m
+            seen.phi, seen.v, seen.omega = phi_m, v_m, w_m
             r.x_ref, r.y_ref, r.theta_ref = _pose_at(target, state.s)
         status, T_r, T_l, u1, u2 = _law(law, v_m, w_m, dt, lim.torque_limit)
         if status != LAW_OK:
@@ -470,7 +481,10 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         T_r = step.clip(T_r, lim.torque_limit)
         T_l = step.clip(T_l, lim.torque_limit)
         dist_r = dist_l = clipped = fx = fy = mz = 0.0
-        if steered and (loop.disturbed or loop.wrench):
+        if fault.actuators.shape[0]:  # FaultSchedule.torque
+            T_r, T_l = faults.fault_torque_of(k, fault.actuators, T_r, T_l)
+        if (steered or phi_m != phi) and (loop.disturbed or loop.wrench):
+            phis[0] = phi  # the disturbance acts at the true hitch angles
             mass = _nominal_mass(law, n, phi, phis, v_m, w_m)
         if loop.disturbed:
             a_v, a_w = disturbances.paper_disturbance_of(t)

@@ -5,13 +5,13 @@ compiled form (:func:`unsupported` says why not otherwise): a built-in law
 (:data:`tt_mujoco.sim.kernel_sources.LAWS`: ISMC-STA, PID, FBL) or a user's plain-number law
 (:mod:`tt_mujoco.controllers.plain`, compiled once per process by :func:`compile_law`) on the
 built-in nominal model, a static or dynamic target on a closed-form path (the S-curve, the
-circle, the cycloid, a CSV spline) driven forwards or backing up (the reverse target, with
-the hitch cascade or path feedback), the paper's disturbance (matched or as
-a wrench) or none, measurement noise, one trailer or a train, constant steering gains or
-either schedule (:mod:`tt_mujoco.sim.schedule`), path feedback; not faults, a
-motor model, a sensor delay, wind, friction patches or a per-step callback. The loop then
-runs in numba, chunk by chunk, calling ``mj_step`` through MuJoCo's C library or stepping the
-reduced ODE, over the named records of :mod:`tt_mujoco.sim.records`.
+circle, the cycloid, a CSV spline) driven forwards or backing up (the reverse target, with the
+hitch cascade or path feedback), the paper's disturbance (matched or as a wrench) or none,
+measurement noise, one trailer or a train, constant steering gains or either schedule
+(:mod:`tt_mujoco.sim.schedule`), path feedback, sensor dropouts and actuator faults; not a
+payload fault, a motor model, a sensor delay, wind, friction patches or a per-step callback.
+The loop then runs in numba, chunk by chunk, calling ``mj_step`` through MuJoCo's C library or
+stepping the reduced ODE, over the named records of :mod:`tt_mujoco.sim.records`.
 
 Every rule and formula it runs is the Python one: the step's checks and clips
 (:mod:`tt_mujoco.sim.step`) and the functions marked "the compiled episode shares it"
@@ -76,7 +76,7 @@ def unsupported(built, controller, on_step=None) -> str | None:
     reasons = [
         (not _enabled(), "TT_MUJOCO_COMPILED=0"),
         (built.steps < MIN_STEPS, f"fewer than {MIN_STEPS} steps"),
-        (bool(s.faults), "faults"),
+        (_payloads(built), "a payload fault"),
         (s.actuator != "ideal", "a motor model"),
         (s.sensor_delay != 0.0, "a sensor delay"),
         (s.wind != "none", "wind"),
@@ -105,6 +105,12 @@ def unsupported(built, controller, on_step=None) -> str | None:
     except ImportError:
         return "numba is not installed"
     return None
+
+
+def _payloads(built) -> bool:
+    """Whether the scenario has a payload fault (the sensor and actuator faults compile)."""
+    faults = built.new_faults()
+    return faults is not None and faults.has_payloads
 
 
 def _inner(target):
@@ -405,6 +411,8 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
             progress(k_next, steps)
         k = k_next
     _hand_back(stepper, controller, status, k, plant, law, target)
+    if stepper.faults is not None:  # what a dropout holds
+        stepper.faults.held[:] = loop.faults.held.tolist()
     if plant.steering.kind:
         _hand_back_steering(stepper, controller, plant.steering, changes)
     return _outcome(status, stop[0], stepper, controller, k)

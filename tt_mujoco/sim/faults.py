@@ -40,9 +40,12 @@ __all__ = [
     "RECOVERY_S",
     "Fault",
     "FaultSchedule",
+    "dropped_of",
     "fault_report",
+    "fault_torque_of",
     "parse_fault",
     "parse_faults",
+    "sensor_of",
     "window_errors",
 ]
 
@@ -241,34 +244,37 @@ class FaultSchedule:
             k0 = math.ceil(f.t / control_dt - 1e-9)
             k1 = math.inf if math.isinf(f.duration) else k0 + round(f.duration / control_dt)
             self._windows.append((f, k0, k1))
-        self._dropouts = [(k0, k1) for f, k0, k1 in self._windows if f.kind == "dropout"]
-        self._actuators = [(f, k0, k1) for f, k0, k1 in self._windows if f.kind == "actuator"]
+        #: The dropouts' step windows (k0, k1), and the actuator faults' (k0, k1, scale of the
+        #: right wheel, of the left): the rows :func:`sensor_of` and :func:`fault_torque_of` read.
+        self.dropouts = [(k0, k1) for f, k0, k1 in self._windows if f.kind == "dropout"]
+        self.actuators = [
+            (k0, k1, _scale(f, "right"), _scale(f, "left"))
+            for f, k0, k1 in self._windows
+            if f.kind == "actuator"
+        ]
         self._payloads: dict[int, list[tuple[int, float]]] = {}
         for f, k0, _ in self._windows:
             if f.kind == "payload":
                 self._payloads.setdefault(k0, []).append((f.trailer, f.factor))
-        self._held = None
-        self.held_steps = 0
+        #: :data:`HELD`: the last sample the controller received, and the steps held so far
+        self.held = [0.0] * len(HELD)
+
+    @property
+    def held_steps(self) -> int:
+        """Control steps whose measurement a dropout held."""
+        return int(self.held[HELD.index("steps")])
+
+    @property
+    def has_payloads(self) -> bool:
+        return any(f.kind == "payload" for f in self.faults)
 
     def sensor(self, k: int, phi: float, v: float, omega: float) -> tuple[float, float, float]:
         """The controller's (phi, v, omega) at step k: held during a dropout."""
-        if any(k0 <= k < k1 for k0, k1 in self._dropouts):
-            if self._held is None:  # a dropout from the first step holds the first sample
-                self._held = (phi, v, omega)
-            self.held_steps += 1
-            return self._held
-        self._held = (phi, v, omega)
-        return phi, v, omega
+        return sensor_of(k, self.dropouts, self.held, phi, v, omega)
 
     def torque(self, k: int, T_r: float, T_l: float) -> tuple[float, float]:
         """The torques the wheels deliver at step k for the controller's (saturated) ones."""
-        for f, k0, k1 in self._actuators:
-            if k0 <= k < k1:
-                if f.wheel in ("right", "both"):
-                    T_r *= f.scale
-                if f.wheel in ("left", "both"):
-                    T_l *= f.scale
-        return T_r, T_l
+        return fault_torque_of(k, self.actuators, T_r, T_l)
 
     def payloads(self, k: int, s: float | None = None) -> list[tuple[int, float]]:
         """``(trailer, factor)`` of each payload change taking effect at step k, the reference
@@ -286,6 +292,48 @@ class FaultSchedule:
                 self.acted_at[i] = k * self._dt
                 changes = [*changes, (f.trailer, f.factor)]
         return changes
+
+
+#: What a dropout holds: whether a sample was received, its (phi, v, omega), and the steps held.
+HELD = ("received", "phi", "v", "omega", "steps")
+
+
+def _scale(fault: Fault, wheel: str) -> float:
+    """An actuator fault's torque scale on ``wheel`` (1 where it does not act)."""
+    return fault.scale if fault.wheel in (wheel, "both") else 1.0
+
+
+def dropped_of(k: int, dropouts) -> bool:
+    """Whether step ``k`` lies in one of the ``dropouts`` windows (k0, k1) (the compiled
+    episode shares it)."""
+    for i in range(len(dropouts)):
+        if dropouts[i][0] <= k < dropouts[i][1]:
+            return True
+    return False
+
+
+def sensor_of(k: int, dropouts, held, phi: float, v: float, omega: float):
+    """The controller's ``(phi, v, omega)`` at step ``k``: during a dropout the last sample
+    received before it (the first one, for a dropout from the first step), else the sample,
+    which ``held`` (:data:`HELD`) keeps (the compiled episode shares it)."""
+    if dropped_of(k, dropouts):
+        if held[0] == 0.0:
+            held[0], held[1], held[2], held[3] = 1.0, phi, v, omega
+        held[4] += 1.0
+        return held[1], held[2], held[3]
+    held[0], held[1], held[2], held[3] = 1.0, phi, v, omega
+    return phi, v, omega
+
+
+def fault_torque_of(k: int, actuators, T_r: float, T_l: float) -> tuple[float, float]:
+    """The torques the wheels deliver at step ``k`` under the ``actuators`` faults (rows k0,
+    k1, scale right, scale left), in their order (the compiled episode shares it)."""
+    for i in range(len(actuators)):
+        row = actuators[i]
+        if row[0] <= k < row[1]:
+            T_r *= row[2]
+            T_l *= row[3]
+    return T_r, T_l
 
 
 def window_errors(ts, polyline, t_start: float, t_end: float) -> dict:

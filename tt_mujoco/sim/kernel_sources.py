@@ -15,6 +15,7 @@ from tt_mujoco.controllers import backing, base, fbl, ismc_sta, pid
 from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
 from tt_mujoco.sim import (
     disturbances,
+    faults,
     measure,
     plant_mujoco,
     plant_reduced,
@@ -95,6 +96,9 @@ SHARED = (
     plant_mujoco.chassis_wrench_of,
     plant_mujoco.aim_steering_of,
     schedule.gains_moved,
+    faults.dropped_of,
+    faults.sensor_of,
+    faults.fault_torque_of,
     schedule.curvature_gains_of,
     params.same_path_eta,
     params.train_same_path_etas_of,
@@ -121,6 +125,7 @@ RECORDS = (
     records.Limits,
     backing.CascadeConstants,
     records.LoopRecord,
+    records.FaultRecord,
     records.PlantRecord,
     records.SteeringRecord,
     records.MujocoRecord,

@@ -29,6 +29,7 @@ __all__ = [
     "REFERENCE_FIELDS",
     "STOP_FIELDS",
     "TARGET_FIELDS",
+    "FaultRecord",
     "LawRecord",
     "Limits",
     "LogRecord",
@@ -242,6 +243,16 @@ class TargetRecord(NamedTuple):
     rates: np.ndarray
 
 
+class FaultRecord(NamedTuple):
+    """The sensor and actuator faults (:class:`~tt_mujoco.sim.faults.FaultSchedule`)."""
+
+    #: dropout windows (k0, k1) and actuator faults (k0, k1, scale right, scale left), per row
+    dropouts: np.ndarray
+    actuators: np.ndarray
+    #: :data:`~tt_mujoco.sim.faults.HELD`: what a dropout holds
+    held: np.ndarray
+
+
 class LoopRecord(NamedTuple):
     """The episode's constants and its noise."""
 
@@ -257,6 +268,7 @@ class LoopRecord(NamedTuple):
     n_trailers: int
     #: the hitch limits of trailers 2..N (rad)
     hitch_limits: np.ndarray
+    faults: FaultRecord
 
 
 class LogRecord(NamedTuple):

@@ -25,10 +25,11 @@ from tt_mujoco.sim import usercode
 from tt_mujoco.sim.build import Build
 from tt_mujoco.sim.checkpoint import Checkpoint
 from tt_mujoco.sim.disturbances import injected
+from tt_mujoco.sim.faults import HELD
 from tt_mujoco.sim.measure import Measurement
 from tt_mujoco.sim.motors import DcMotors
 from tt_mujoco.sim.plant import StopRun
-from tt_mujoco.sim.records import Limits, LoopRecord
+from tt_mujoco.sim.records import FaultRecord, Limits, LoopRecord
 from tt_mujoco.sim.scenario import jackknife_phi_deg
 from tt_mujoco.sim.step import (
     BLEW_UP,
@@ -169,7 +170,7 @@ class Stepper:
         """The episode's constants and noise as the compiled loop reads them (after
         :meth:`reset`)."""
         dist = self.built.disturbance is not None
-        noise = self._noise
+        noise, faults = self._noise, self.faults
         return LoopRecord(
             limits=self.limits,
             dt=self.dt,
@@ -179,6 +180,11 @@ class Stepper:
             wrench=dist and self._mode == "wrench",
             n_trailers=self.built.plant_params.n_trailers,
             hitch_limits=np.array(self._train_limits, dtype=float),
+            faults=FaultRecord(
+                dropouts=np.array(faults.dropouts if faults else [], dtype=float).reshape(-1, 2),
+                actuators=np.array(faults.actuators if faults else [], dtype=float).reshape(-1, 4),
+                held=np.array(faults.held if faults else [0.0] * len(HELD), dtype=float),
+            ),
         )
 
     @property
