@@ -75,6 +75,10 @@ CASES = [
         faults=["dropout:t=2,duration=0.5", "actuator:t=2,scale=0.5,wheel=right"],
         duration=4.0,
     ),
+    # payload steps on the MuJoCo plant: at a time, at places (forward and backing up)
+    dict(traj="s_curve", faults=["payload:t=1,factor=2", "payload:s=2.5,factor=0.5"]),
+    dict(traj="s_curve", reverse=True, faults=["payload:s=3,factor=2"], duration=5.0),
+    dict(traj="circle", trailers=3, faults=["payload:s=1,trailer=3,factor=3"], duration=4.0),
 ]
 
 
@@ -135,7 +139,10 @@ def test_checkpoint_rows_are_the_same(monkeypatch, tmp_path):
 @pytest.mark.parametrize(
     ("changes", "reason"),
     [
-        (dict(faults=["dropout:t=1", "payload:t=1"]), "a payload fault"),
+        (
+            dict(faults=["dropout:t=1", "payload:t=1"], plant="reduced"),
+            "a payload fault on the reduced plant",
+        ),
         (dict(duration=1.0), "fewer than 2000 steps"),
     ],
 )

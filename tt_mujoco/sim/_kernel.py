@@ -483,6 +483,14 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         dist_r = dist_l = clipped = fx = fy = mz = 0.0
         if fault.actuators.shape[0]:  # FaultSchedule.torque
             T_r, T_l = faults.fault_torque_of(k, fault.actuators, T_r, T_l)
+        if fault.payloads.shape[0]:  # FaultSchedule.payloads, on the MuJoCo plant
+            changes = fault.payload_changes
+            for i in range(
+                faults.payloads_of(k, state.s, fault.payloads, fault.payload_state, changes)
+            ):
+                mj = plant.mj
+                body = mj.trailer_bodies[int(changes[i][0]) - 1]
+                plant_mujoco.scale_body_of(mj.body_mass, mj.body_inertia, body, changes[i][1])
         if (steered or phi_m != phi) and (loop.disturbed or loop.wrench):
             phis[0] = phi  # the disturbance acts at the true hitch angles
             mass = _nominal_mass(law, n, phi, phis, v_m, w_m)

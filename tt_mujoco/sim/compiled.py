@@ -8,8 +8,8 @@ built-in nominal model, a static or dynamic target on a closed-form path (the S-
 circle, the cycloid, a CSV spline) driven forwards or backing up (the reverse target, with the
 hitch cascade or path feedback), the paper's disturbance (matched or as a wrench) or none,
 measurement noise, one trailer or a train, constant steering gains or either schedule
-(:mod:`tt_mujoco.sim.schedule`), path feedback, sensor dropouts and actuator faults; not a
-payload fault, a motor model, a sensor delay, wind, friction patches or a per-step callback.
+(:mod:`tt_mujoco.sim.schedule`), path feedback, faults (a payload step on the MuJoCo plant); not
+a payload step on the reduced plant, a motor model, a sensor delay, wind, friction patches or a per-step callback.
 The loop then runs in numba, chunk by chunk, calling ``mj_step`` through MuJoCo's C library or
 stepping the reduced ODE, over the named records of :mod:`tt_mujoco.sim.records`.
 
@@ -76,7 +76,7 @@ def unsupported(built, controller, on_step=None) -> str | None:
     reasons = [
         (not _enabled(), "TT_MUJOCO_COMPILED=0"),
         (built.steps < MIN_STEPS, f"fewer than {MIN_STEPS} steps"),
-        (_payloads(built), "a payload fault"),
+        (_payloads(built), "a payload fault on the reduced plant"),
         (s.actuator != "ideal", "a motor model"),
         (s.sensor_delay != 0.0, "a sensor delay"),
         (s.wind != "none", "wind"),
@@ -108,9 +108,10 @@ def unsupported(built, controller, on_step=None) -> str | None:
 
 
 def _payloads(built) -> bool:
-    """Whether the scenario has a payload fault (the sensor and actuator faults compile)."""
+    """Whether the scenario has a payload fault on the reduced plant (the MuJoCo plant's, the
+    sensor and actuator faults compile)."""
     faults = built.new_faults()
-    return faults is not None and faults.has_payloads
+    return faults is not None and faults.has_payloads and built.scenario.plant != "mujoco"
 
 
 def _inner(target):
@@ -411,8 +412,11 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
             progress(k_next, steps)
         k = k_next
     _hand_back(stepper, controller, status, k, plant, law, target)
-    if stepper.faults is not None:  # what a dropout holds
-        stepper.faults.held[:] = loop.faults.held.tolist()
+    faults = stepper.faults
+    if faults is not None:  # what a dropout holds, where the payloads acted
+        faults.held[:] = loop.faults.held.tolist()
+        faults.payload_rows[:] = loop.faults.payloads.tolist()
+        faults.payload_state[:] = loop.faults.payload_state.tolist()
     if plant.steering.kind:
         _hand_back_steering(stepper, controller, plant.steering, changes)
     return _outcome(status, stop[0], stepper, controller, k)
@@ -511,6 +515,9 @@ def _plant_record(stepper, nominal):
             tractor_body=plant.tractor_body,
             addresses=lay.addresses,
             lengths=lay.lengths,
+            body_mass=plant.model.body_mass,
+            body_inertia=plant.model.body_inertia,
+            trailer_bodies=np.array(plant.trailer_bodies, dtype=np.int64),
         )
         ode_state, ode, timestep = np.zeros(8), reduced.model_constants(nominal), 0.0
         params, joints = nominal, np.array(lay.train, dtype=float).reshape(-1, 5)
@@ -519,6 +526,7 @@ def _plant_record(stepper, nominal):
         mj = records.MujocoRecord(
             none, one, one, one, one, np.zeros(1, dtype=np.int32), np.zeros((1, 6)), 0,
             Addresses(*[0] * len(Addresses._fields)), Lengths(0.0, 0.0, 0.0, 0.0),
+            np.zeros(1), np.zeros((1, 3)), np.zeros(1, dtype=np.int64),
         )  # fmt: skip
         ode_state = np.array(plant.ode.state, dtype=float)
         ode, timestep = reduced.model_constants(plant.params), plant.timestep

@@ -45,6 +45,7 @@ __all__ = [
     "fault_torque_of",
     "parse_fault",
     "parse_faults",
+    "payloads_of",
     "sensor_of",
     "window_errors",
 ]
@@ -233,11 +234,6 @@ class FaultSchedule:
                 )
         # First step at or after t (the 1e-9 forgives t = k dt written in decimal).
         self._windows = []
-        self._placed = [(i, f) for i, f in enumerate(self.faults) if f.s is not None]
-        #: When each placed payload acted (s), by its index in ``faults``.
-        self.acted_at: dict[int, float] = {}
-        self._dt = control_dt
-        self._s_prev = None
         for f in self.faults:
             if f.t is None:
                 continue
@@ -252,10 +248,14 @@ class FaultSchedule:
             for f, k0, k1 in self._windows
             if f.kind == "actuator"
         ]
-        self._payloads: dict[int, list[tuple[int, float]]] = {}
-        for f, k0, _ in self._windows:
-            if f.kind == "payload":
-                self._payloads.setdefault(k0, []).append((f.trailer, f.factor))
+        #: :data:`PAYLOAD_ROW` of every payload, those at a time first, each group in the
+        #: faults' order; and :data:`PAYLOAD_STATE` (the reference's last arc length, dt)
+        timed = [(1.0, k0, math.nan, f.trailer, f.factor, math.nan, -1.0)
+                 for f, k0, _ in self._windows if f.kind == "payload"]  # fmt: skip
+        placed = [(0.0, -1.0, f.s, f.trailer, f.factor, math.nan, i)
+                  for i, f in enumerate(self.faults) if f.s is not None]  # fmt: skip
+        self.payload_rows = [list(row) for row in (*timed, *placed)]
+        self.payload_state = [math.nan, float(control_dt)]
         #: :data:`HELD`: the last sample the controller received, and the steps held so far
         self.held = [0.0] * len(HELD)
 
@@ -266,7 +266,17 @@ class FaultSchedule:
 
     @property
     def has_payloads(self) -> bool:
-        return any(f.kind == "payload" for f in self.faults)
+        return bool(self.payload_rows)
+
+    @property
+    def acted_at(self) -> dict[int, float]:
+        """When each payload placed at an arc length acted (s), by its index in ``faults``."""
+        acted = PAYLOAD_ROW.index("acted")
+        return {
+            int(row[-1]): row[acted]
+            for row in self.payload_rows
+            if row[0] == 0.0 and not math.isnan(row[acted])
+        }
 
     def sensor(self, k: int, phi: float, v: float, omega: float) -> tuple[float, float, float]:
         """The controller's (phi, v, omega) at step k: held during a dropout."""
@@ -276,22 +286,13 @@ class FaultSchedule:
         """The torques the wheels deliver at step k for the controller's (saturated) ones."""
         return fault_torque_of(k, self.actuators, T_r, T_l)
 
-    def payloads(self, k: int, s: float | None = None) -> list[tuple[int, float]]:
+    def payloads(self, k: int, s: float) -> list[tuple[int, float]]:
         """``(trailer, factor)`` of each payload change taking effect at step k, the reference
         being at arc length ``s`` (m): at its time, or where ``s`` reaches its place (from
-        either side: backing up, the arc length falls)."""
-        changes = self._payloads.get(k, [])
-        if not self._placed or s is None:
-            return changes
-        prev, self._s_prev = self._s_prev, s
-        for i, f in self._placed:
-            if i in self.acted_at:
-                continue
-            reached = s == f.s if prev is None else min(prev, s) <= f.s <= max(prev, s)
-            if reached:
-                self.acted_at[i] = k * self._dt
-                changes = [*changes, (f.trailer, f.factor)]
-        return changes
+        either side: backing up, the arc length falls; :func:`payloads_of`)."""
+        out = [[0.0, 0.0] for _ in self.payload_rows]
+        count = payloads_of(k, s, self.payload_rows, self.payload_state, out)
+        return [(int(trailer), factor) for trailer, factor in out[:count]]
 
 
 #: What a dropout holds: whether a sample was received, its (phi, v, omega), and the steps held.
@@ -334,6 +335,41 @@ def fault_torque_of(k: int, actuators, T_r: float, T_l: float) -> tuple[float, f
             T_r *= row[2]
             T_l *= row[3]
     return T_r, T_l
+
+
+#: A payload's row: at a time (1) or a place (0), its step, its arc length, the trailer, the
+#: factor, when it acted (s; NaN before) and its index among the faults.
+PAYLOAD_ROW = ("timed", "k0", "s", "trailer", "factor", "acted", "index")
+
+
+def payloads_of(k: int, s: float, rows, state, out) -> int:
+    """The payload changes taking effect at step ``k`` with the reference at arc length ``s``,
+    as ``(trailer, factor)`` rows of ``out``; how many. ``rows`` (:data:`PAYLOAD_ROW`) record
+    when a placed one acted, ``state`` holds the last ``s`` and the control period (the
+    compiled episode shares it)."""
+    count, placed = 0, False
+    for i in range(len(rows)):
+        row = rows[i]
+        if row[0] == 1.0:
+            if row[1] == k:
+                out[count][0], out[count][1] = row[3], row[4]
+                count += 1
+        else:
+            placed = True
+    if not placed:
+        return count
+    prev = state[0]
+    state[0] = s
+    for i in range(len(rows)):
+        row = rows[i]
+        if row[0] == 1.0 or not math.isnan(row[5]):
+            continue
+        reached = s == row[2] if math.isnan(prev) else min(prev, s) <= row[2] <= max(prev, s)
+        if reached:
+            row[5] = k * state[1]
+            out[count][0], out[count][1] = row[3], row[4]
+            count += 1
+    return count
 
 
 def window_errors(ts, polyline, t_start: float, t_end: float) -> dict:

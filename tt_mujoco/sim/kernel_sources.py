@@ -99,6 +99,8 @@ SHARED = (
     faults.dropped_of,
     faults.sensor_of,
     faults.fault_torque_of,
+    faults.payloads_of,
+    plant_mujoco.scale_body_of,
     schedule.curvature_gains_of,
     params.same_path_eta,
     params.train_same_path_etas_of,

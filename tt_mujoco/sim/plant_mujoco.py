@@ -21,6 +21,13 @@ def chassis_wrench_of(force: float, torque: float, theta: float) -> tuple[float,
     return force * math.cos(theta), force * math.sin(theta), torque
 
 
+def scale_body_of(body_mass, body_inertia, body: int, factor: float) -> None:
+    """A payload step: ``body``'s mass and inertia times ``factor`` (the compiled episode
+    shares it)."""
+    body_mass[body] *= factor
+    body_inertia[body] *= factor
+
+
 def aim_steering_of(eq_data, ids, hitches_q, etas, qpos) -> None:
     """Actuated axles (:meth:`MujocoPlant.steer_by_actuator`): each steering equality's target
     ``eq_data[id, 0]`` set to ``eta_k phi_k`` from its hitch, before a physics step (the
@@ -121,9 +128,15 @@ class MujocoPlant(Plant):
         """MuJoCo builds the mass matrix from ``body_mass``/``body_inertia`` every step, so this
         acts at once (only the solver's compile-time ``body_invweight0``, which scales contact
         softness, keeps its old value)."""
-        body = self._trailer if trailer == 1 else self.model.body(f"trailer_body_{trailer}").id
-        self.model.body_mass[body] *= factor
-        self.model.body_inertia[body] *= factor
+        scale_body_of(
+            self.model.body_mass, self.model.body_inertia, self.trailer_bodies[trailer - 1], factor
+        )
+
+    @property
+    def trailer_bodies(self) -> list[int]:
+        """The body ids of trailers 1..N (where a payload fault acts)."""
+        n = len(self._steering_ids)
+        return [self._trailer, *(self.model.body(f"trailer_body_{k}").id for k in range(2, n + 1))]
 
     def steer_by_actuator(self) -> None:
         """Each coupling becomes an equality on the steering joint alone, ``q_steer =

@@ -117,6 +117,10 @@ class MujocoRecord(NamedTuple):
     tractor_body: int
     addresses: Addresses
     lengths: Lengths
+    #: ``MjModel.body_mass``, ``body_inertia`` and the trailers' body ids (payload faults)
+    body_mass: np.ndarray
+    body_inertia: np.ndarray
+    trailer_bodies: np.ndarray
 
 
 class SteeringRecord(NamedTuple):
@@ -251,6 +255,11 @@ class FaultRecord(NamedTuple):
     actuators: np.ndarray
     #: :data:`~tt_mujoco.sim.faults.HELD`: what a dropout holds
     held: np.ndarray
+    #: :data:`~tt_mujoco.sim.faults.PAYLOAD_ROW` per payload, their state (last s, dt), and
+    #: scratch for the changes of a step
+    payloads: np.ndarray
+    payload_state: np.ndarray
+    payload_changes: np.ndarray
 
 
 class LoopRecord(NamedTuple):

@@ -25,7 +25,7 @@ from tt_mujoco.sim import usercode
 from tt_mujoco.sim.build import Build
 from tt_mujoco.sim.checkpoint import Checkpoint
 from tt_mujoco.sim.disturbances import injected
-from tt_mujoco.sim.faults import HELD
+from tt_mujoco.sim.faults import HELD, PAYLOAD_ROW
 from tt_mujoco.sim.measure import Measurement
 from tt_mujoco.sim.motors import DcMotors
 from tt_mujoco.sim.plant import StopRun
@@ -171,6 +171,7 @@ class Stepper:
         :meth:`reset`)."""
         dist = self.built.disturbance is not None
         noise, faults = self._noise, self.faults
+        rows = faults.payload_rows if faults else []
         return LoopRecord(
             limits=self.limits,
             dt=self.dt,
@@ -184,6 +185,9 @@ class Stepper:
                 dropouts=np.array(faults.dropouts if faults else [], dtype=float).reshape(-1, 2),
                 actuators=np.array(faults.actuators if faults else [], dtype=float).reshape(-1, 4),
                 held=np.array(faults.held if faults else [0.0] * len(HELD), dtype=float),
+                payloads=np.array(rows, dtype=float).reshape(-1, len(PAYLOAD_ROW)),
+                payload_state=np.array(faults.payload_state if faults else [0.0, 0.0]),
+                payload_changes=np.zeros((len(rows), 2)),
             ),
         )
 
