@@ -8,10 +8,11 @@ built-in nominal model, a static or dynamic target on a closed-form path (the S-
 circle, the cycloid, a CSV spline) driven forwards or backing up (the reverse target, with the
 hitch cascade or path feedback), the paper's disturbance (matched or as a wrench) or none,
 measurement noise, one trailer or a train, constant steering gains or either schedule
-(:mod:`tt_mujoco.sim.schedule`), path feedback, faults (a payload step on the MuJoCo plant); not
-a payload step on the reduced plant, a motor model, a sensor delay, wind, friction patches or a per-step callback.
-The loop then runs in numba, chunk by chunk, calling ``mj_step`` through MuJoCo's C library or
-stepping the reduced ODE, over the named records of :mod:`tt_mujoco.sim.records`.
+(:mod:`tt_mujoco.sim.schedule`), path feedback, faults (a payload step on the MuJoCo plant);
+not a payload step on the reduced plant, a motor model, a sensor delay, wind, friction patches
+or a per-step callback. The loop then runs in numba, chunk by chunk, calling ``mj_step``
+through MuJoCo's C library or stepping the reduced ODE, over the named records of
+:mod:`tt_mujoco.sim.records`.
 
 Every rule and formula it runs is the Python one: the step's checks and clips
 (:mod:`tt_mujoco.sim.step`) and the functions marked "the compiled episode shares it"
