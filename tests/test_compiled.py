@@ -79,6 +79,9 @@ CASES = [
     dict(traj="s_curve", faults=["payload:t=1,factor=2", "payload:s=2.5,factor=0.5"]),
     dict(traj="s_curve", reverse=True, faults=["payload:s=3,factor=2"], duration=5.0),
     dict(traj="circle", trailers=3, faults=["payload:s=1,trailer=3,factor=3"], duration=4.0),
+    # DC motors between the command and the wheels
+    dict(traj="s_curve", actuator="dc_motor", duration=4.0),
+    dict(traj="cycloid", actuator="dc_motor", plant="reduced", trailers=2, noise_snr_db=20.0),
 ]
 
 

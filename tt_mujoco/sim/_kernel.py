@@ -27,6 +27,7 @@ from tt_mujoco.sim import (
     disturbances,
     faults,
     measure,
+    motors,
     plant_mujoco,
     plant_reduced,
     schedule,
@@ -51,6 +52,7 @@ NOMINAL_SINGULAR = -1.0
 PATH_SCHEDULE, CURVATURE_SCHEDULE = 1, 2
 #: where trailer 1's axle is in the measurement, and a trailer's gain in a train's row
 X0, Y0, THETA0 = (measure.Measurement._fields.index(name) for name in ("x0", "y0", "theta0"))
+WHEEL_RATES = tuple(measure.Measurement._fields.index(f"theta_{w}_dot") for w in ("r", "l"))
 ETA_COLUMN = train.TRAILER_ROW.index("eta")
 
 # mj_step by its symbol in MuJoCo's library, which the Python bindings load: no pointer is
@@ -491,6 +493,9 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
                 mj = plant.mj
                 body = mj.trailer_bodies[int(changes[i][0]) - 1]
                 plant_mujoco.scale_body_of(mj.body_mass, mj.body_inertia, body, changes[i][1])
+        if loop.dc_motor:  # what the motors deliver of the command, over this step
+            omegas = (me[WHEEL_RATES[0]], me[WHEEL_RATES[1]])
+            T_r, T_l = motors.deliver_of(loop.motor, loop.motor_torques, (T_r, T_l), omegas)
         if (steered or phi_m != phi) and (loop.disturbed or loop.wrench):
             phis[0] = phi  # the disturbance acts at the true hitch angles
             mass = _nominal_mass(law, n, phi, phis, v_m, w_m)

@@ -8,10 +8,10 @@ built-in nominal model, a static or dynamic target on a closed-form path (the S-
 circle, the cycloid, a CSV spline) driven forwards or backing up (the reverse target, with the
 hitch cascade or path feedback), the paper's disturbance (matched or as a wrench) or none,
 measurement noise, one trailer or a train, constant steering gains or either schedule
-(:mod:`tt_mujoco.sim.schedule`), path feedback, faults (a payload step on the MuJoCo plant);
-not a payload step on the reduced plant, a motor model, a sensor delay, wind, friction patches
-or a per-step callback. The loop then runs in numba, chunk by chunk, calling ``mj_step``
-through MuJoCo's C library or stepping the reduced ODE, over the named records of
+(:mod:`tt_mujoco.sim.schedule`), path feedback, faults (a payload step on the MuJoCo plant), DC
+motors; not a payload step on the reduced plant, a sensor delay, wind, friction patches or a
+per-step callback. The loop then runs in numba, chunk by chunk, calling ``mj_step`` through
+MuJoCo's C library or stepping the reduced ODE, over the named records of
 :mod:`tt_mujoco.sim.records`.
 
 Every rule and formula it runs is the Python one: the step's checks and clips
@@ -78,7 +78,6 @@ def unsupported(built, controller, on_step=None) -> str | None:
         (not _enabled(), "TT_MUJOCO_COMPILED=0"),
         (built.steps < MIN_STEPS, f"fewer than {MIN_STEPS} steps"),
         (_payloads(built), "a payload fault on the reduced plant"),
-        (s.actuator != "ideal", "a motor model"),
         (s.sensor_delay != 0.0, "a sensor delay"),
         (s.wind != "none", "wind"),
         (bool(s.ground), "friction patches"),
@@ -418,6 +417,8 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
         faults.held[:] = loop.faults.held.tolist()
         faults.payload_rows[:] = loop.faults.payloads.tolist()
         faults.payload_state[:] = loop.faults.payload_state.tolist()
+    if stepper.motors is not None:
+        stepper.motors.torques[:] = loop.motor_torques.tolist()
     if plant.steering.kind:
         _hand_back_steering(stepper, controller, plant.steering, changes)
     return _outcome(status, stop[0], stepper, controller, k)

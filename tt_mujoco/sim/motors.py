@@ -21,8 +21,9 @@ Each control step advances that lag exactly over the step. The constants are fie
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
-__all__ = ["ACTUATORS", "DcMotors", "available_torque"]
+__all__ = ["ACTUATORS", "DcMotors", "MotorConstants", "available_torque", "deliver_of"]
 
 #: The actuator models of ``Scenario.actuator`` / ``--actuator``.
 ACTUATORS = ("ideal", "dc_motor")
@@ -39,6 +40,30 @@ def available_torque(omega_wheel: float, p) -> tuple[float, float]:
     return per_amp * max(0.0, forward), per_amp * max(0.0, backward)
 
 
+class MotorConstants(NamedTuple):
+    """The motors' constants as plain numbers, named as the fields of
+    :class:`~tt_mujoco.vehicle.params.Params` (so :func:`available_torque` reads either), and
+    ``keep``, the lag's factor over one control step."""
+
+    motor_gear: float
+    motor_kt: float
+    motor_voltage: float
+    motor_resistance: float
+    motor_current_limit: float
+    keep: float
+
+
+def deliver_of(motor, torques, commands, omegas) -> tuple[float, float]:
+    """One control step of both motors (right, left): the ``commands`` (N m) at wheel speeds
+    ``omegas`` (rad/s); ``torques`` (the torques delivered now) advanced in place and returned
+    (the compiled episode shares it)."""
+    for i in range(2):
+        forward, backward = available_torque(omegas[i], motor)
+        wanted = max(-backward, min(forward, commands[i]))
+        torques[i] = wanted + motor.keep * (torques[i] - wanted)
+    return torques[0], torques[1]
+
+
 class DcMotors:
     """The two drive motors' state: the torques they deliver now (module docstring).
 
@@ -52,17 +77,13 @@ class DcMotors:
 
     def __init__(self, params, dt: float):
         self.params = params
-        self._keep = math.exp(-dt / params.motor_lag)  # the lag's exact step over dt
+        self.constants = MotorConstants(
+            *(float(getattr(params, name)) for name in MotorConstants._fields[:-1]),
+            keep=math.exp(-dt / params.motor_lag),  # the lag's exact step over dt
+        )
         self.torques = [0.0, 0.0]
 
     def deliver(self, T_r: float, T_l: float, omega_r: float, omega_l: float) -> tuple:
         """Advance one control step with the commands ``T_r, T_l`` (N m) at wheel speeds
         ``omega_r, omega_l`` (rad/s); returns the torques the wheels get over the step."""
-        keep = self._keep
-        out = []
-        for i, (command, omega) in enumerate(((T_r, omega_r), (T_l, omega_l))):
-            forward, backward = available_torque(omega, self.params)
-            wanted = max(-backward, min(forward, command))
-            self.torques[i] = wanted + keep * (self.torques[i] - wanted)
-            out.append(self.torques[i])
-        return out[0], out[1]
+        return deliver_of(self.constants, self.torques, (T_r, T_l), (omega_r, omega_l))

@@ -17,6 +17,7 @@ import numpy as np
 from tt_mujoco.controllers.backing import CascadeConstants
 from tt_mujoco.controllers.plain import NOMINAL_FIELDS, REFERENCE_FIELDS
 from tt_mujoco.sim.measure import Addresses, Lengths, Measurement
+from tt_mujoco.sim.motors import MotorConstants
 from tt_mujoco.sim.timeseries import LOOP_COLUMNS
 from tt_mujoco.vehicle.reduced import ModelConstants
 from tt_mujoco.vehicle.train import TrainConstants
@@ -278,6 +279,11 @@ class LoopRecord(NamedTuple):
     #: the hitch limits of trailers 2..N (rad)
     hitch_limits: np.ndarray
     faults: FaultRecord
+    #: the DC motors (:mod:`tt_mujoco.sim.motors`; ``dc_motor`` False: ideal actuators), and
+    #: the torques they deliver now (right, left)
+    dc_motor: bool
+    motor: MotorConstants
+    motor_torques: np.ndarray
 
 
 class LogRecord(NamedTuple):

@@ -27,7 +27,7 @@ from tt_mujoco.sim.checkpoint import Checkpoint
 from tt_mujoco.sim.disturbances import injected
 from tt_mujoco.sim.faults import HELD, PAYLOAD_ROW
 from tt_mujoco.sim.measure import Measurement
-from tt_mujoco.sim.motors import DcMotors
+from tt_mujoco.sim.motors import DcMotors, MotorConstants
 from tt_mujoco.sim.plant import StopRun
 from tt_mujoco.sim.records import FaultRecord, Limits, LoopRecord
 from tt_mujoco.sim.scenario import jackknife_phi_deg
@@ -172,6 +172,7 @@ class Stepper:
         dist = self.built.disturbance is not None
         noise, faults = self._noise, self.faults
         rows = faults.payload_rows if faults else []
+        motors = self.motors
         return LoopRecord(
             limits=self.limits,
             dt=self.dt,
@@ -189,6 +190,9 @@ class Stepper:
                 payload_state=np.array(faults.payload_state if faults else [0.0, 0.0]),
                 payload_changes=np.zeros((len(rows), 2)),
             ),
+            dc_motor=motors is not None,
+            motor=motors.constants if motors else MotorConstants(*[0.0] * 6),
+            motor_torques=np.array(motors.torques if motors else [0.0, 0.0]),
         )
 
     @property
