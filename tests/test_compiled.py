@@ -273,50 +273,11 @@ def test_the_cache_key_lists_the_sources_the_kernel_compiles():
     assert [inspect.getsourcefile(__import__(m, fromlist=["_"])) for m in modules] == files
 
 
-@pytest.mark.parametrize(
-    ("plant", "eta"), [("mujoco", "path"), ("reduced", "path"), ("mujoco", "scheduled")]
-)
-def test_a_schedule_hands_its_state_back(monkeypatch, plant, eta):
-    # After a compiled episode the scheduler, the plant and the law's model stand where the
-    # Python loop leaves them: the gains in force, each axle's arc length, every change.
-    import numpy as np
-
+def _states_after_both_loops(monkeypatch, scenario, state_of) -> list:
+    """``state_of(stepper, controller)`` after the episode on the Python loop, then compiled."""
     from tt_mujoco.sim.simulate import run_episode
     from tt_mujoco.sim.stepper import Stepper
 
-    built = build(Scenario(traj="cycloid", eta=eta, trailers=2, plant=plant, duration=3.0))
-    assert compiled.unsupported(built, built.new_controller()) is None
-    states = []
-    for flag in ("0", "1"):
-        monkeypatch.setenv("TT_MUJOCO_COMPILED", flag)
-        stepper = Stepper(built)
-        stepper.reset(np.random.default_rng(0))
-        controller = built.new_controller()
-        controller.reset()
-        assert run_episode(stepper, controller)[0] == "ok"
-        scheduler = stepper.scheduler
-        states.append(
-            (
-                scheduler.etas,
-                scheduler.updates,
-                getattr(scheduler, "arc_lengths", None),
-                scheduler.eta_series(stepper.samples).tolist(),
-                controller.model.params.etas,
-                stepper.plant_etas,
-            )
-        )
-    assert states[0] == states[1]
-    assert states[0][1] > 10  # the gains did change along the cycloid
-
-
-@pytest.mark.parametrize("options", [dict(trailers=2), dict(path_feedback={}, eta="paper")])
-def test_backing_up_hands_its_targets_state_back(monkeypatch, options):
-    # After a compiled reversing episode the reverse target, the hitch cascade or the path
-    # feedback around it stand where the Python loop leaves them.
-    from tt_mujoco.sim.simulate import run_episode
-    from tt_mujoco.sim.stepper import Stepper
-
-    scenario = Scenario(traj="s_curve", reverse=True, duration=3.0, **options)
     built = build(scenario)
     assert compiled.unsupported(built, built.new_controller()) is None
     states = []
@@ -327,19 +288,52 @@ def test_backing_up_hands_its_targets_state_back(monkeypatch, options):
         controller = built.new_controller()
         controller.reset()
         assert run_episode(stepper, controller)[0] == "ok"
-        outer = built.target
-        inner = outer.target
-        states.append(
-            (
-                inner.arc_length,
-                inner.curvature,
-                inner._v_prev,
-                outer.lateral_error,
-                outer.heading_error,
-                outer.reference_omega_d,
-                getattr(outer, "leading_arc_length", None),
-                getattr(outer, "hitch_targets", None),
-                getattr(outer, "path_arc_length", None),
-            )
+        states.append(state_of(stepper, controller))
+    return states
+
+
+@pytest.mark.parametrize(
+    ("plant", "eta"), [("mujoco", "path"), ("reduced", "path"), ("mujoco", "scheduled")]
+)
+def test_a_schedule_hands_its_state_back(monkeypatch, plant, eta):
+    # After a compiled episode the scheduler, the plant and the law's model stand where the
+    # Python loop leaves them: the gains in force, each axle's arc length, every change.
+    def state_of(stepper, controller):
+        scheduler = stepper.scheduler
+        return (
+            scheduler.etas,
+            scheduler.updates,
+            getattr(scheduler, "arc_lengths", None),
+            scheduler.eta_series(stepper.samples).tolist(),
+            controller.model.params.etas,
+            stepper.plant_etas,
         )
+
+    scenario = Scenario(traj="cycloid", eta=eta, trailers=2, plant=plant, duration=3.0)
+    states = _states_after_both_loops(monkeypatch, scenario, state_of)
+    assert states[0] == states[1]
+    assert states[0][1] > 10  # the gains did change along the cycloid
+
+
+@pytest.mark.parametrize("options", [dict(trailers=2), dict(path_feedback={}, eta="paper")])
+def test_backing_up_hands_its_targets_state_back(monkeypatch, options):
+    # After a compiled reversing episode the reverse target, the hitch cascade or the path
+    # feedback around it stand where the Python loop leaves them.
+    def state_of(stepper, controller):
+        outer = stepper.built.target
+        inner = outer.target
+        return (
+            inner.arc_length,
+            inner.curvature,
+            inner._v_prev,
+            outer.lateral_error,
+            outer.heading_error,
+            outer.reference_omega_d,
+            getattr(outer, "leading_arc_length", None),
+            getattr(outer, "hitch_targets", None),
+            getattr(outer, "path_arc_length", None),
+        )
+
+    scenario = Scenario(traj="s_curve", reverse=True, duration=3.0, **options)
+    states = _states_after_both_loops(monkeypatch, scenario, state_of)
     assert states[0] == states[1]

@@ -30,6 +30,8 @@ from __future__ import annotations
 import math
 from types import SimpleNamespace
 
+from tt_mujoco.vehicle.path_schedule import path_pose
+
 __all__ = [
     "DEFAULT_GAINS",
     "PathFeedback",
@@ -62,12 +64,6 @@ def curvature_and_rate_at(path, s: float) -> tuple[float, float]:
     return feedback_curvature(path, s) if 0.0 <= s <= path.length else (0.0, 0.0)
 
 
-def feedback_pose(path, s: float) -> tuple[float, float, float]:
-    """The path's pose at ``s`` as the feedback reads it (the compiled episode gives its path
-    record's)."""
-    return path.pose_at(s)
-
-
 def feedback_curvature(path, s: float) -> tuple[float, float]:
     """The path's ``(kappa, dkappa/ds)`` at ``s`` as the feedback reads it (the compiled
     episode gives its path record's)."""
@@ -87,10 +83,10 @@ def path_errors(pose_at, curvature_and_rate, s: float, x: float, y: float, theta
 
 
 def path_errors_of(path, s: float, x: float, y: float, theta: float):
-    """:func:`path_errors` through :func:`feedback_pose` and :func:`feedback_curvature` (the
-    compiled episode shares it)."""
+    """:func:`path_errors` through :func:`~tt_mujoco.vehicle.path_schedule.path_pose` and
+    :func:`feedback_curvature` (the compiled episode shares it)."""
     for _ in range(_NEWTON_STEPS):
-        xr, yr, h = feedback_pose(path, s)
+        xr, yr, h = path_pose(path, s)
         c, sn = math.cos(h), math.sin(h)
         dx, dy = x - xr, y - yr
         along, e_y = dx * c + dy * sn, dy * c - dx * sn
@@ -98,7 +94,7 @@ def path_errors_of(path, s: float, x: float, y: float, theta: float):
         # of a turn it is below 1 and vanishes at the centre of curvature: there a plain step
         # (metric 1) converges linearly instead of overshooting.
         s += along / max(1.0 - feedback_curvature(path, s)[0] * e_y, 1.0)
-    xr, yr, h = feedback_pose(path, s)
+    xr, yr, h = path_pose(path, s)
     e_y = (y - yr) * math.cos(h) - (x - xr) * math.sin(h)
     return s, e_y, math.remainder(theta - h, 2.0 * math.pi)
 

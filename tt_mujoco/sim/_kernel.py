@@ -30,6 +30,7 @@ from tt_mujoco.sim import (
     motors,
     plant_mujoco,
     plant_reduced,
+    records,
     schedule,
     step,
 )
@@ -48,8 +49,7 @@ ISMC_STA, PID, FBL = (LAWS.index(fn) for fn in (ismc_sta.ismc_sta_law, pid.pid_l
 USER = len(LAWS)
 #: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
 NOMINAL_SINGULAR = -1.0
-#: ``steering.kind`` of the path schedule and of the curvature schedule
-PATH_SCHEDULE, CURVATURE_SCHEDULE = 1, 2
+PATH_SCHEDULE, CURVATURE_SCHEDULE = records.PATH_SCHEDULE, records.CURVATURE_SCHEDULE
 #: where trailer 1's axle is in the measurement, and a trailer's gain in a train's row
 X0, Y0, THETA0 = (measure.Measurement._fields.index(name) for name in ("x0", "y0", "theta0"))
 WHEEL_RATES = tuple(measure.Measurement._fields.index(f"theta_{w}_dot") for w in ("r", "l"))
@@ -125,13 +125,8 @@ def _pose_at(target, s):
 
 @overload(path_schedule.path_pose)
 def _path_pose(target, s):
-    """The path schedule's projection reads the target record's path (:func:`_pose_at`)."""
-    return lambda target, s: _pose_at(target, s)
-
-
-@overload(feedback.feedback_pose)
-def _feedback_pose(target, s):
-    """The path feedback reads the target record's path (:func:`_pose_at`)."""
+    """The path schedule's projection and the path feedback read the target record's path
+    (:func:`_pose_at`)."""
     return lambda target, s: _pose_at(target, s)
 
 
@@ -237,11 +232,9 @@ def _update_target(target, k, v_m, dt, pose):
 
 @njit(cache=True)
 def _cascade(target, me, rows, phis, v_m):
-    """HitchCascade.update's ``(omega_d, omega_d_dot)``; its state updated in place."""
+    """HitchCascade.update's ``(omega_d, omega_d_dot)`` at the measured hitch angles
+    ``phis``; its state updated in place."""
     n = phis.size
-    phis[0] = me[3]
-    for i in range(n - 1):
-        phis[i + 1] = rows[i][3]
     if n == 1:
         lead = (me[X0], me[Y0], me[THETA0])
     else:
@@ -353,9 +346,9 @@ def _nominal_mass(law, n, phi, phis, v_m, w_m):
 
 
 @njit(cache=True)
-def _schedule_path(steering, target, me, rows, n):
-    """PathEtaScheduler.update: every axle projected onto the path and its gain there; the
-    gains applied when one moved by more than the tolerance. Whether they changed."""
+def _offer_path(steering, target, me, rows, n):
+    """PathEtaScheduler.update: every axle projected onto the path and its gain there, into
+    ``steering.offered``."""
     offered, arcs = steering.offered, steering.arcs
     for k in range(n):
         if k == 0:
@@ -365,33 +358,19 @@ def _schedule_path(steering, target, me, rows, n):
         arcs[k], offered[k] = path_schedule.axle_gain_of(
             target, arcs[k], (x, y), phi, steering.tables[k], steering.bounds
         )
-    if not schedule.gains_moved(offered, steering.etas, steering.tolerance):
-        return False
-    steering.etas[:] = offered
-    steering.updates[0] += 1
-    return True
-
-
-@njit(cache=True)
-def _schedule_curvature(steering, kappa):
-    """EtaScheduler.update: the exact same-path gains of the target's curvature, applied when
-    one moved by more than the tolerance. Whether they changed."""
-    offered = steering.offered
-    if not schedule.curvature_gains_of(kappa, steering.lengths, offered):
-        return False
-    if not schedule.gains_moved(offered, steering.etas, steering.tolerance):
-        return False
-    steering.etas[:] = offered
-    steering.updates[0] += 1
-    return True
 
 
 @njit(cache=True)
 def _steer(plant, law):
-    """The scheduled gains into the plant (a linkage's ratio, a reduced train's rows) and
-    the law's train model."""
+    """EtaScheduler._offer: the offered gains applied when one moved by more than the
+    tolerance, into the plant (a linkage's ratio, a reduced train's rows) and the law's
+    train model."""
     steering, n = plant.steering, len(plant.train.trailers)
+    if not schedule.gains_moved(steering.offered, steering.etas, steering.tolerance):
+        return
     etas = steering.etas
+    etas[:] = steering.offered
+    steering.updates[0] += 1
     for k in range(etas.size):
         if plant.mujoco and not steering.actuated:
             steering.eq_data[steering.ids[k], 1] = -etas[k]
@@ -434,6 +413,9 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         phi_m, fault = phi, loop.faults
         if fault.dropouts.shape[0]:  # FaultSchedule.sensor
             phi_m, v_m, w_m = faults.sensor_of(k, fault.dropouts, fault.held, phi, v_m, w_m)
+        phis[0] = phi  # the hitch angles as measured (trailers 2..N are never held)
+        for i in range(n - 1):
+            phis[i + 1] = rows[i][3]
         pose = (x, y, me[2])
         r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot = _update_target(target, k, v_m, dt, pose)
         if target.cascade:  # HitchCascade.update: the hitches set the yaw rate
@@ -452,9 +434,7 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
             terms = reduced.inertia_terms_of(phi_m, c)
             mass, bias = reduced.coriolis_of(terms, c.gamma, v_m, w_m)
         else:
-            phis[0] = phi_m
-            for i in range(n - 1):
-                phis[i + 1] = rows[i][3]
+            phis[0] = phi_m  # what the law sees
             ok, mass, bias = train.mass_and_bias_of(phis, v_m, w_m, model_train, law.rates)
             if not ok:
                 stop.law_status = NOMINAL_SINGULAR
@@ -523,9 +503,12 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         row += 1
         if k == loop.steps:
             return FINISHED, k
-        if steering.kind == PATH_SCHEDULE and _schedule_path(steering, target, me, rows, n):
+        if steering.kind == PATH_SCHEDULE:
+            _offer_path(steering, target, me, rows, n)
             _steer(plant, law)
-        elif steering.kind == CURVATURE_SCHEDULE and _schedule_curvature(steering, state.kappa):
+        elif steering.kind == CURVATURE_SCHEDULE and schedule.curvature_gains_of(
+            state.kappa, steering.lengths, steering.offered
+        ):
             _steer(plant, law)
         push = (dist_r, dist_l, 1.0 if loop.wrench else 0.0, fx, fy, mz)
         code = _advance(plant, T_r, T_l, push, stop)

@@ -110,8 +110,10 @@ def unsupported(built, controller, on_step=None) -> str | None:
 def _payloads(built) -> bool:
     """Whether the scenario has a payload fault on the reduced plant (the MuJoCo plant's, the
     sensor and actuator faults compile)."""
-    faults = built.new_faults()
-    return faults is not None and faults.has_payloads and built.scenario.plant != "mujoco"
+    from tt_mujoco.sim.faults import parse_faults
+
+    s = built.scenario
+    return s.plant != "mujoco" and any(f.kind == "payload" for f in parse_faults(s.faults))
 
 
 def _inner(target):
@@ -446,11 +448,13 @@ def _changes(etas: np.ndarray, changes: list, first_row: int) -> list:
 def _hand_back_steering(stepper, controller, steering, changes) -> None:
     """The schedule's state after a compiled episode: to the scheduler (its gains, arc
     lengths and change log), the plant and a built-in law's model."""
+    from tt_mujoco.sim import records
+
     etas, seen = tuple(steering.etas.tolist()), changes[-1][1]  # the last row's: the law's
     if etas != seen:  # applied after the last logged row
         changes.append((stepper.samples, etas))
     scheduler = stepper.scheduler
-    if steering.kind == 1:  # the path schedule's axles
+    if steering.kind == records.PATH_SCHEDULE:  # the path schedule's axles
         scheduler.arc_lengths = steering.arcs.tolist()
     logged = [(row, gains[0]) for row, gains in changes[1:]]
     scheduler.restore(etas, logged, int(steering.updates[0]))
@@ -473,12 +477,12 @@ def _steering_record(stepper, mujoco_plant: bool):
     kind, tables, arcs, bounds = 0, np.zeros((n, 5, 1)), np.zeros(n), (0.0, 0.0)
     etas, tolerance = stepper.plant_etas, 0.0
     if isinstance(scheduler, PathEtaScheduler):
-        kind, tolerance = 1, scheduler.tolerance
+        kind, tolerance = records.PATH_SCHEDULE, scheduler.tolerance
         tables = np.array(scheduler.schedule.tables, dtype=float)
         arcs = np.array(scheduler.arc_lengths, dtype=float)
         bounds = (BLEND_PHI, scheduler.schedule.eta_max)
     elif isinstance(scheduler, EtaScheduler):
-        kind, tolerance = 2, scheduler.tolerance
+        kind, tolerance = records.CURVATURE_SCHEDULE, scheduler.tolerance
     return records.SteeringRecord(
         kind=kind,
         etas=np.array(etas, dtype=float),

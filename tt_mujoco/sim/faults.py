@@ -265,10 +265,6 @@ class FaultSchedule:
         return int(self.held[HELD.index("steps")])
 
     @property
-    def has_payloads(self) -> bool:
-        return bool(self.payload_rows)
-
-    @property
     def acted_at(self) -> dict[int, float]:
         """When each payload placed at an arc length acted (s), by its index in ``faults``."""
         acted = PAYLOAD_ROW.index("acted")

@@ -45,7 +45,6 @@ class EtaScheduler:
     def __init__(self, plant, params: Params, tolerance: float = SCHEDULE_TOLERANCE):
         if not (isinstance(tolerance, int | float) and math.isfinite(tolerance) and tolerance >= 0):
             raise ValueError(f"tolerance={tolerance!r} is not allowed: it must be a number >= 0")
-        self.L, self.L0 = params.L, params.L0
         self.lengths = [(t.L, t.L0) for t in params.trailers]
         self.tolerance = float(tolerance)
         self.eta = params.eta

@@ -215,8 +215,9 @@ class PathSchedule:
 
 
 def path_pose(path, s: float) -> tuple[float, float, float]:
-    """The path's pose at ``s`` (:meth:`~tt_mujoco.reference.path_base.ReferencePath.pose_at`);
-    the compiled episode gives it the same for its path record."""
+    """The path's pose at ``s`` (:meth:`~tt_mujoco.reference.path_base.ReferencePath.pose_at`),
+    as the path schedule and the path feedback read it; the compiled episode gives it the same
+    for its path record."""
     return path.pose_at(s)
 
 
