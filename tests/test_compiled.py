@@ -82,6 +82,12 @@ CASES = [
     # DC motors between the command and the wheels
     dict(traj="s_curve", actuator="dc_motor", duration=4.0),
     dict(traj="cycloid", actuator="dc_motor", plant="reduced", trailers=2, noise_snr_db=20.0),
+    # wind: steady, gusty with noise (the gusts drawn after the noise), on top of the wrench
+    # disturbance, and on a path-scheduled train
+    dict(traj="circle", wind="6:90", duration=3.0),
+    dict(traj="s_curve", wind="8:45:3", noise_snr_db=20.0, seed=3, duration=3.0),
+    dict(traj="s_curve", wind="5:180:2", disturbance="wrench", trailers=2, duration=3.0),
+    dict(traj="cycloid", wind="4:270:1", eta="path", trailers=3, disturbance="none"),
 ]
 
 

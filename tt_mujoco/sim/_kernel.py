@@ -16,6 +16,7 @@ import math
 import os
 
 import mujoco
+import numpy as np
 from llvmlite import binding
 from numba import cfunc, njit, types
 from numba.extending import intrinsic, overload, register_jitable
@@ -33,6 +34,7 @@ from tt_mujoco.sim import (
     records,
     schedule,
     step,
+    wind,
 )
 from tt_mujoco.sim.kernel_sources import LAWS, SHARED
 from tt_mujoco.vehicle import path_schedule, reduced, train
@@ -50,8 +52,12 @@ USER = len(LAWS)
 #: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
 NOMINAL_SINGULAR = -1.0
 PATH_SCHEDULE, CURVATURE_SCHEDULE = records.PATH_SCHEDULE, records.CURVATURE_SCHEDULE
-#: where trailer 1's axle is in the measurement, and a trailer's gain in a train's row
-X0, Y0, THETA0 = (measure.Measurement._fields.index(name) for name in ("x0", "y0", "theta0"))
+#: where trailer 1's axle and the bodies' motion are in the measurement, and a trailer's gain
+#: in a train's row
+X0, Y0, THETA0, V0, V, THETA, BETA = (
+    measure.Measurement._fields.index(name)
+    for name in ("x0", "y0", "theta0", "v0", "v", "theta", "beta")
+)
 WHEEL_RATES = tuple(measure.Measurement._fields.index(f"theta_{w}_dot") for w in ("r", "l"))
 ETA_COLUMN = train.TRAILER_ROW.index("eta")
 
@@ -284,9 +290,24 @@ def _law(law, v_m, w_m, dt, limit):
 
 
 @njit(cache=True)
-def _advance(plant, T_r, T_l, push, stop):
-    """Apply the torques and the disturbance ``push = (dist_r, dist_l, wrench?, fx, fy, mz)``
-    and advance the plant one control period; the stop code."""
+def _blow(mj, wrench, gusts):
+    """MujocoPlant.blow: the wind's ``gusts = (F_x, F_y, M_z)`` on the tractor, then on the
+    trailer, added to the tractor's chassis wrench when the disturbance is one."""
+    tractor, trailer = mj.xfrc_applied[mj.tractor_body], mj.xfrc_applied[mj.trailer_bodies[0]]
+    if wrench:
+        tractor[0] += gusts[0]
+        tractor[1] += gusts[1]
+        tractor[5] += gusts[2]
+    else:
+        tractor[0], tractor[1], tractor[5] = gusts[0], gusts[1], gusts[2]
+    trailer[0], trailer[1], trailer[5] = gusts[3], gusts[4], gusts[5]
+
+
+@njit(cache=True)
+def _advance(plant, T_r, T_l, push, gusts, stop):
+    """Apply the torques, the disturbance ``push = (dist_r, dist_l, wrench?, fx, fy, mz)`` and
+    the wind's ``gusts`` (none when empty) and advance the plant one control period; the stop
+    code."""
     dist_r, dist_l = push[0], push[1]
     if plant.mujoco:
         mj = plant.mj
@@ -299,6 +320,8 @@ def _advance(plant, T_r, T_l, push, stop):
         else:
             mj.qfrc_applied[a.wheel_right_v] = dist_r
             mj.qfrc_applied[a.wheel_left_v] = dist_l
+        if len(gusts):
+            _blow(mj, push[2] != 0.0, gusts)
         steering = plant.steering
         for _ in range(plant.substeps):
             if steering.actuated:  # the axles' targets follow the hitches every physics step
@@ -378,6 +401,21 @@ def _steer(plant, law):
             plant.train.trailers[k, ETA_COLUMN] = etas[k]
         if law.steered_train.trailers.shape[0] > 1:
             law.steered_train.trailers[k, ETA_COLUMN] = etas[k]
+
+
+@njit(cache=True)
+def _gusts(weather, k, me):
+    """Stepper._blow: the wind's wrenches on the tractor and the trailer over step ``k``, at the
+    measured motion (an empty array when calm)."""
+    out = np.empty(6 if weather.speeds.size else 0)
+    if weather.speeds.size:
+        speed = weather.speeds[k]
+        air = (speed * weather.direction[0], speed * weather.direction[1])
+        motion = (me[V], me[THETA], me[V0], me[THETA0], me[BETA])
+        wrenches = wind.wind_wrenches_of(air, motion, weather.drag)
+        for i in range(6):
+            out[i] = wrenches[i]
+    return out
 
 
 @njit(cache=True, nogil=True)
@@ -511,7 +549,8 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         ):
             _steer(plant, law)
         push = (dist_r, dist_l, 1.0 if loop.wrench else 0.0, fx, fy, mz)
-        code = _advance(plant, T_r, T_l, push, stop)
+        gusts = _gusts(loop.wind, k, me)
+        code = _advance(plant, T_r, T_l, push, gusts, stop)
         if code != RUNNING:
             return code, k
         k += 1

@@ -9,7 +9,7 @@ circle, the cycloid, a CSV spline) driven forwards or backing up (the reverse ta
 hitch cascade or path feedback), the paper's disturbance (matched or as a wrench) or none,
 measurement noise, one trailer or a train, constant steering gains or either schedule
 (:mod:`tt_mujoco.sim.schedule`), path feedback, faults (a payload step on the MuJoCo plant), DC
-motors; not a payload step on the reduced plant, a sensor delay, wind, friction patches or a
+motors, wind; not a payload step on the reduced plant, a sensor delay, friction patches or a
 per-step callback. The loop then runs in numba, chunk by chunk, calling ``mj_step`` through
 MuJoCo's C library or stepping the reduced ODE, over the named records of
 :mod:`tt_mujoco.sim.records`.
@@ -79,7 +79,6 @@ def unsupported(built, controller, on_step=None) -> str | None:
         (built.steps < MIN_STEPS, f"fewer than {MIN_STEPS} steps"),
         (_payloads(built), "a payload fault on the reduced plant"),
         (s.sensor_delay != 0.0, "a sensor delay"),
-        (s.wind != "none", "wind"),
         (bool(s.ground), "friction patches"),
         (on_step is not None, "a per-step callback"),
         (

@@ -23,6 +23,7 @@ from tt_mujoco.sim import (
     records,
     schedule,
     step,
+    wind,
 )
 from tt_mujoco.vehicle import params, path_schedule, reduced, rolling, steering, train
 
@@ -104,6 +105,9 @@ SHARED = (
     motors.available_torque,
     motors.deliver_of,
     plant_mujoco.scale_body_of,
+    wind.drag_force,
+    wind.drag_moment,
+    wind.wind_wrenches_of,
     schedule.curvature_gains_of,
     params.same_path_eta,
     params.train_same_path_etas_of,
@@ -131,6 +135,8 @@ RECORDS = (
     backing.CascadeConstants,
     records.LoopRecord,
     records.FaultRecord,
+    records.WindRecord,
+    wind.DragConstants,
     motors.MotorConstants,
     records.PlantRecord,
     records.SteeringRecord,

@@ -19,6 +19,7 @@ from tt_mujoco.controllers.plain import NOMINAL_FIELDS, REFERENCE_FIELDS
 from tt_mujoco.sim.measure import Addresses, Lengths, Measurement
 from tt_mujoco.sim.motors import MotorConstants
 from tt_mujoco.sim.timeseries import LOOP_COLUMNS
+from tt_mujoco.sim.wind import DragConstants
 from tt_mujoco.vehicle.reduced import ModelConstants
 from tt_mujoco.vehicle.train import TrainConstants
 
@@ -39,6 +40,7 @@ __all__ = [
     "PlantRecord",
     "SteeringRecord",
     "TargetRecord",
+    "WindRecord",
     "new_record",
     "record_dtype",
 ]
@@ -268,6 +270,16 @@ class FaultRecord(NamedTuple):
     payload_changes: np.ndarray
 
 
+class WindRecord(NamedTuple):
+    """The wind (:mod:`tt_mujoco.sim.wind`) on the MuJoCo plant's tractor and trailer."""
+
+    #: the wind's speed along its direction at each control step (m/s; empty: calm)
+    speeds: np.ndarray
+    #: its direction's (cos, sin)
+    direction: tuple
+    drag: DragConstants
+
+
 class LoopRecord(NamedTuple):
     """The episode's constants and its noise."""
 
@@ -289,6 +301,7 @@ class LoopRecord(NamedTuple):
     dc_motor: bool
     motor: MotorConstants
     motor_torques: np.ndarray
+    wind: WindRecord
 
 
 class LogRecord(NamedTuple):

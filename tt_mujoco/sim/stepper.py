@@ -29,7 +29,7 @@ from tt_mujoco.sim.faults import HELD, PAYLOAD_ROW
 from tt_mujoco.sim.measure import Measurement
 from tt_mujoco.sim.motors import DcMotors, MotorConstants
 from tt_mujoco.sim.plant import StopRun
-from tt_mujoco.sim.records import FaultRecord, Limits, LoopRecord
+from tt_mujoco.sim.records import FaultRecord, Limits, LoopRecord, WindRecord
 from tt_mujoco.sim.scenario import jackknife_phi_deg
 from tt_mujoco.sim.step import (
     BLEW_UP,
@@ -41,7 +41,7 @@ from tt_mujoco.sim.step import (
     stop_code,
 )
 from tt_mujoco.sim.timeseries import LOOP_COLUMNS, assemble_columns, train_columns
-from tt_mujoco.sim.wind import drag_force, drag_moment, parse_wind
+from tt_mujoco.sim.wind import DragConstants, parse_wind, wind_wrenches_of
 from tt_mujoco.vehicle.reduced import SingularityError
 
 __all__ = ["CHECKPOINT_COLUMNS", "Stepper"]
@@ -160,6 +160,7 @@ class Stepper:
         self._wind = None if wind.calm else wind.speeds(rng, self.steps, self.dt).tolist()
         direction = math.radians(wind.direction_deg)
         self._wind_direction = (math.cos(direction), math.sin(direction))
+        self._drag = DragConstants(*(getattr(b.plant_params, f) for f in DragConstants._fields))
         self._measured: list = []
         self._logged: list = []
         self._train_logged: list = []
@@ -193,6 +194,9 @@ class Stepper:
             dc_motor=motors is not None,
             motor=motors.constants if motors else MotorConstants(*[0.0] * 6),
             motor_torques=np.array(motors.torques if motors else [0.0, 0.0]),
+            wind=WindRecord(
+                np.array(self._wind or [], dtype=float), self._wind_direction, self._drag
+            ),
         )
 
     @property
@@ -274,18 +278,10 @@ class Stepper:
     def _blow(self, k: int, me) -> None:
         """The wind's drag on the tractor and the trailer over step ``k`` (sim/wind.py)."""
         speed = self._wind[k]
-        wx, wy = speed * self._wind_direction[0], speed * self._wind_direction[1]
-        p = self.built.plant_params
-        tractor = drag_force(
-            wx, wy, me.v * math.cos(me.theta), me.v * math.sin(me.theta), p.drag_area_tractor
-        )
-        alpha = me.theta0 + me.beta  # the trailer axle's rolling direction
-        trailer = drag_force(
-            wx, wy, me.v0 * math.cos(alpha), me.v0 * math.sin(alpha), p.drag_area_trailer
-        )
-        tractor_moment = drag_moment(p.drag_centre_tractor, me.theta, *tractor)
-        trailer_moment = drag_moment(p.drag_centre_trailer, me.theta0, *trailer)
-        self.plant.blow((*tractor, tractor_moment), (*trailer, trailer_moment))
+        wind = (speed * self._wind_direction[0], speed * self._wind_direction[1])
+        motion = (me.v, me.theta, me.v0, me.theta0, me.beta)
+        wrenches = wind_wrenches_of(wind, motion, self._drag)
+        self.plant.blow(wrenches[:3], wrenches[3:])
 
     def _check_train(self, me, t: float) -> None:
         """Stop when any hitch behind the first jackknifes."""
