@@ -11,14 +11,17 @@ It prints:
    itself): setup (target, MuJoCo model, controller), the control loop (compiled, see
    :mod:`tt_mujoco.sim.compiled`) and the metrics, beside the episode's physics floor: the
    replay of its own ``mj_step`` inputs (recorded with the Python loop, which gives the same
-   numbers; the replay's final state is checked against the run's).
+   numbers; the replay's final state is checked against the run's). The same replays are then
+   run on ``--workers`` forked processes at once, each replaying all of them: the floor of an
+   episode when that many run side by side on the same cores, as the sweep's do.
 2. Scaling: the same ``--scaling-runs`` episodes through :func:`tt_mujoco.sweep.run_sweep` on 1
    and 2 local worker processes: runs/s, and the executor's own overhead per run (wall time x
    workers minus the episodes' own time, over the runs: pool start, transfer, journal, table).
 3. The ``--episodes`` sweep on ``--workers`` workers (``--trailers 3``: of a three-trailer
-   train): wall time, runs/s, failures, and its ratio
-   to the physics floor, the mean replay time of the profiled episodes times the episodes over
-   the workers (issue "one step"'s goals: <= 1.1 for one trailer, <= 1.25 for a train).
+   train): wall time, runs/s, failures, and its ratio to the physics floor, the mean replay
+   time of the profiled episodes times the episodes over the workers, taken both ways: with
+   each replay alone, and with the replays on the workers at once (issue "one step"'s goals:
+   <= 1.1 for one trailer, <= 1.25 for a train).
 
 Numbers depend on what else runs on the machine; the load average is printed with them.
 """
@@ -27,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import multiprocessing
 import os
 import statistics
 import tempfile
@@ -52,6 +56,7 @@ def episode_breakdown(spec, n: int) -> dict:
     their physics floor: the replay of each episode's own ``mj_step`` inputs."""
     simulate(Scenario(duration=2.5))  # imports, caches and the compiled loop out of the way
     parts = {"episode": [], "setup": [], "loop": [], "metrics": [], "replay": []}
+    recorded = []
     for run in sweep_runs.expand(spec)[:n]:
         scenario = sweep_runs.build_scenario(run["options"])
         t = time.perf_counter()
@@ -64,6 +69,7 @@ def episode_breakdown(spec, n: int) -> dict:
             _, _, inputs, initial, final, plant, _ = closed_loop(scenario, record=True)
         replay_s, replay_final = replay(plant, inputs, initial)
         assert np.array_equal(replay_final, final)
+        recorded.append((plant, inputs, initial, final))
         parts["episode"].append(episode)
         parts["loop"].append(result.wall_time_s)
         parts["metrics"].append(metrics_s)
@@ -72,7 +78,34 @@ def episode_breakdown(spec, n: int) -> dict:
     out = {k: statistics.median(v) for k, v in parts.items()}
     out["replay_mean"] = statistics.mean(parts["replay"])
     out["steps"] = int(result.metrics["steps"])
-    return out
+    return out, recorded
+
+
+def _replay_all(recorded, results) -> None:
+    """One worker of :func:`replay_on_workers`: every recorded episode replayed, checked."""
+    spent = []
+    for plant, inputs, initial, final in recorded:
+        replay_s, replay_final = replay(plant, inputs, initial)
+        assert np.array_equal(replay_final, final)
+        spent.append(replay_s)
+    results.put(statistics.mean(spent))
+
+
+def replay_on_workers(recorded, workers: int) -> float:
+    """The physics floor of an episode on ``workers`` processes at once: each forked process
+    replays every recorded episode while the others do the same, as the sweep's workers run
+    side by side on the same cores and memory; the mean replay time (s)."""
+    context = multiprocessing.get_context("fork")
+    results = context.Queue()
+    procs = [context.Process(target=_replay_all, args=(recorded, results)) for _ in range(workers)]
+    for proc in procs:
+        proc.start()
+    means = [results.get() for _ in procs]
+    for proc in procs:
+        proc.join()
+        if proc.exitcode:
+            raise RuntimeError(f"a replay worker failed (exit code {proc.exitcode})")
+    return statistics.mean(means)
 
 
 def sweep_rate(n_runs: int, workers: int, scheduler: str | None = None) -> dict:
@@ -121,7 +154,9 @@ def main() -> None:
     trailers = f"{args.trailers} trailer" + ("s" if args.trailers > 1 else "")
     print(f"control period {1e3 * args.control_dt:g} ms, physics step 1 ms, {trailers}")
     spec = sweep.parse_spec(ITEMS, repeats=max(args.episodes, args.profile), seed=0)
-    b = episode_breakdown(spec, args.profile)
+    b, recorded = episode_breakdown(spec, args.profile)
+    b["replay_on_workers"] = replay_on_workers(recorded, args.workers)
+    del recorded
     ms = {k: 1e3 * v for k, v in b.items() if k != "steps"}
     print(
         f"one 10 s episode ({b['steps']} control steps), median of {args.profile}, in-process:\n"
@@ -129,7 +164,10 @@ def main() -> None:
         f"{ms['loop']:.0f} + metrics {ms['metrics']:.0f}\n"
         f"  the replay of its own mj_step inputs (the physics floor): {ms['replay']:.0f} ms; "
         f"control loop / floor {b['loop'] / b['replay']:.2f}, episode / floor "
-        f"{b['episode'] / b['replay']:.2f}"
+        f"{b['episode'] / b['replay']:.2f}\n"
+        f"  the same replays on {args.workers} workers at once: "
+        f"{1e3 * b['replay_on_workers']:.0f} ms an episode "
+        f"({b['replay_on_workers'] / b['replay_mean']:.3f} of the replay alone)"
     )
     results = {"breakdown_s": b, "scaling": [], "load_start": os.getloadavg()[0]}
     points = [(1, None), (2, None)] + ([(2, "local")] if args.dask else [])
@@ -147,15 +185,21 @@ def main() -> None:
         r = sweep_rate(args.episodes, args.workers)
         results["big"] = r
         floor = b["replay_mean"] * args.episodes / args.workers
+        floor_on_workers = b["replay_on_workers"] * args.episodes / args.workers
         goal = 1.1 if args.trailers == 1 else 1.25
         r["floor_s"], r["ratio_to_floor"] = floor, r["wall_s"] / floor
+        r["floor_on_workers_s"] = floor_on_workers
+        r["ratio_to_floor_on_workers"] = r["wall_s"] / floor_on_workers
         print(
             f"{args.episodes} episodes on {args.workers} workers: {r['wall_s']:.1f} s "
             f"({r['wall_s'] / 60:.2f} min), {r['runs_per_s']:.2f} runs/s, {r['failed']} failed, "
             f"episode median {r['episode_median_s']:.3f} s (loop {r['loop_median_s']:.3f} s)\n"
-            f"physics floor (mean replay of {args.profile} episodes x {args.episodes} / "
+            f"physics floor (mean replay of {args.profile} episodes alone x {args.episodes} / "
             f"{args.workers} workers): {floor:.1f} s; ratio to the floor "
-            f"{r['ratio_to_floor']:.3f} (goal <= {goal:g})"
+            f"{r['ratio_to_floor']:.3f} (goal <= {goal:g})\n"
+            f"physics floor on {args.workers} workers (the same replays run on {args.workers} "
+            f"workers at once): {floor_on_workers:.1f} s; ratio to it "
+            f"{r['ratio_to_floor_on_workers']:.3f}"
         )
     results["load_end"] = os.getloadavg()[0]
     print(f"load average now {results['load_end']:.2f}")
