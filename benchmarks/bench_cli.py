@@ -14,9 +14,10 @@ of ``python -m tt_mujoco.run``, with ``--no-video --no-plots``), in this one pro
    runs it), the whole ``main()`` call's, the rollout's, and the ratio floor / loop (1.0: the
    loop costs nothing beyond MuJoCo's own stepping). The reduced-plant case prints its loop's
    speed against the MuJoCo case's instead (it has no MuJoCo floor), and the path-scheduled
-   case (``--eta path``) against the same command in the Python loop
-   (``TT_MUJOCO_COMPILED=0``) and the main case's loop: its axles' targets are set from the
-   hitches before every physics step, which a rollout of fixed inputs cannot replay.
+   case (``--eta path``) and the wind case against the same command in the Python loop
+   (``TT_MUJOCO_COMPILED=0``) and the main case's loop: the path schedule's axles' targets are
+   set from the hitches before every physics step and the wind pushes the bodies, which a
+   rollout of the logged inputs cannot replay.
 
 Ratios are taken in one process, so a busy machine moves both sides alike.
 """
@@ -59,7 +60,13 @@ CASES = {
     "reduced": ["--traj", "s_curve", "--plant", "reduced"],
     "path": ["--traj", "s_curve", "--eta", "path"],
     "reverse": ["--traj", "s_curve", "--reverse", "--trailers", "2"],
+    "delay": ["--traj", "s_curve", "--sensor-delay", "0.01"],
+    "wind": ["--traj", "s_curve", "--wind", "8:90:2"],
 }
+#: Cases whose physics a rollout of the logged inputs cannot replay: the path schedule sets its
+#: axles' targets from the hitches before every physics step, and the wind pushes the bodies
+#: (forces the time series does not log); they are timed against the Python loop instead.
+NO_ROLLOUT = ("path", "wind")
 QUIET = ["--no-video", "--no-plots", "--quiet"]
 #: What the rollout's control vector holds: the actuators' ctrl, then qfrc_applied.
 CONTROL_SPEC = mujoco.mjtState.mjSTATE_CTRL | mujoco.mjtState.mjSTATE_QFRC_APPLIED
@@ -131,7 +138,7 @@ def main() -> None:
                 if case == "reduced":
                     if "main" in loops:
                         line += f"; {steps / loop / loops['main'][i]:.1f}x the MuJoCo loop"
-                elif case == "path":
+                elif case in NO_ROLLOUT:
                     os.environ["TT_MUJOCO_COMPILED"] = "0"
                     try:
                         python_loop = cli_run(argv, Path(tmp) / f"{case}-{i}-python")[1]

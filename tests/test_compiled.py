@@ -88,6 +88,28 @@ CASES = [
     dict(traj="s_curve", wind="8:45:3", noise_snr_db=20.0, seed=3, duration=3.0),
     dict(traj="s_curve", wind="5:180:2", disturbance="wrench", trailers=2, duration=3.0),
     dict(traj="cycloid", wind="4:270:1", eta="path", trailers=3, disturbance="none"),
+    # a sensor delay: the law and the outer loops read the readings of its steps ago, the
+    # disturbance and the schedule the plant as it is; with noise and a dropout, a train,
+    # backing up with the hitch cascade, path feedback and a plain-number law
+    dict(traj="s_curve", sensor_delay=0.01, duration=3.0),
+    dict(
+        traj="circle",
+        sensor_delay=0.005,
+        noise_snr_db=20.0,
+        faults=["dropout:t=1,duration=0.2"],
+        plant="reduced",
+        duration=3.0,
+    ),
+    dict(traj="s_curve", sensor_delay=0.004, trailers=2, eta="path", duration=3.0),
+    dict(traj="s_curve", sensor_delay=0.003, reverse=True, trailers=2, duration=3.0),
+    dict(traj="cycloid", sensor_delay=0.002, path_feedback={}, disturbance="wrench"),
+    dict(
+        traj="s_curve",
+        sensor_delay=0.005,
+        controller="examples/kanayama.py:kanayama_law",
+        noise_snr_db=20.0,
+        duration=3.0,
+    ),
 ]
 
 

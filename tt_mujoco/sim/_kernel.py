@@ -404,6 +404,23 @@ def _steer(plant, law):
 
 
 @njit(cache=True)
+def _delayed(delay, k, me, rows, seen):
+    """Stepper.sense's delay line: step ``k``'s measurement ``me``, its train ``rows`` and the
+    ``seen = (phi, v, omega)`` stored, and those of the delay's steps ago returned (the first
+    step's until there are that many): ``(measurement, rows, phi, v, omega)``."""
+    depth = delay.seen.shape[0]
+    slot = k % depth
+    store = delay.measurements[slot]
+    for i in range(store.size):
+        store[i] = me[i]
+    delay.rows[slot][:, :] = rows
+    delay.seen[slot, 0], delay.seen[slot, 1], delay.seen[slot, 2] = seen
+    read = max(0, k - depth + 1) % depth
+    got = delay.seen[read]
+    return delay.measurements[read], delay.rows[read], got[0], got[1], got[2]
+
+
+@njit(cache=True)
 def _gusts(weather, k, me):
     """Stepper._blow: the wind's wrenches on the tractor and the trailer over step ``k``, at the
     measured motion (an empty array when calm)."""
@@ -451,13 +468,16 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         phi_m, fault = phi, loop.faults
         if fault.dropouts.shape[0]:  # FaultSchedule.sensor
             phi_m, v_m, w_m = faults.sensor_of(k, fault.dropouts, fault.held, phi, v_m, w_m)
-        phis[0] = phi  # the hitch angles as measured (trailers 2..N are never held)
+        # What the outer loops (sensed: no noise, no fault) and the law read: the readings of
+        # the sensor delay's steps ago, or this step's
+        sensed, sensed_rows, phi_m, v_m, w_m = _delayed(loop.delay, k, me, rows, (phi_m, v_m, w_m))
+        phis[0] = sensed[3]  # the hitch angles as sensed (trailers 2..N are never held)
         for i in range(n - 1):
-            phis[i + 1] = rows[i][3]
-        pose = (x, y, me[2])
+            phis[i + 1] = sensed_rows[i][3]
+        pose = (sensed[0], sensed[1], sensed[2])
         r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot = _update_target(target, k, v_m, dt, pose)
         if target.cascade:  # HitchCascade.update: the hitches set the yaw rate
-            r.omega_d, r.omega_d_dot = _cascade(target, me, rows, phis, v_m)
+            r.omega_d, r.omega_d_dot = _cascade(target, sensed, sensed_rows, phis, v_m)
         state = target.state[0]
         r.t, r.s, r.kappa = t, state.s, state.kappa
         # The nominal model at the measurement, for the law and the matched disturbance (a
@@ -486,7 +506,7 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
             measured[i] = me[i]
         if law.kind == USER:  # the user's law sees the measurement with its noise
             for i in range(measured.size):
-                law.measurement_values[i] = me[i]
+                law.measurement_values[i] = sensed[i]
             seen = law.measurement[0]
             seen.phi, seen.v, seen.omega = phi_m, v_m, w_m
             r.x_ref, r.y_ref, r.theta_ref = _pose_at(target, state.s)
@@ -514,8 +534,11 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         if loop.dc_motor:  # what the motors deliver of the command, over this step
             omegas = (me[WHEEL_RATES[0]], me[WHEEL_RATES[1]])
             T_r, T_l = motors.deliver_of(loop.motor, loop.motor_torques, (T_r, T_l), omegas)
-        if (steered or phi_m != phi) and (loop.disturbed or loop.wrench):
+        delayed = loop.delay.seen.shape[0] > 1
+        if (steered or delayed or phi_m != phi) and (loop.disturbed or loop.wrench):
             phis[0] = phi  # the disturbance acts at the true hitch angles
+            for i in range(n - 1):
+                phis[i + 1] = rows[i][3]
             mass = _nominal_mass(law, n, phi, phis, v_m, w_m)
         if loop.disturbed:
             a_v, a_w = disturbances.paper_disturbance_of(t)

@@ -9,7 +9,7 @@ circle, the cycloid, a CSV spline) driven forwards or backing up (the reverse ta
 hitch cascade or path feedback), the paper's disturbance (matched or as a wrench) or none,
 measurement noise, one trailer or a train, constant steering gains or either schedule
 (:mod:`tt_mujoco.sim.schedule`), path feedback, faults (a payload step on the MuJoCo plant), DC
-motors, wind; not a payload step on the reduced plant, a sensor delay, friction patches or a
+motors, wind, a sensor delay; not a payload step on the reduced plant, friction patches or a
 per-step callback. The loop then runs in numba, chunk by chunk, calling ``mj_step`` through
 MuJoCo's C library or stepping the reduced ODE, over the named records of
 :mod:`tt_mujoco.sim.records`.
@@ -78,7 +78,6 @@ def unsupported(built, controller, on_step=None) -> str | None:
         (not _enabled(), "TT_MUJOCO_COMPILED=0"),
         (built.steps < MIN_STEPS, f"fewer than {MIN_STEPS} steps"),
         (_payloads(built), "a payload fault on the reduced plant"),
-        (s.sensor_delay != 0.0, "a sensor delay"),
         (bool(s.ground), "friction patches"),
         (on_step is not None, "a per-step callback"),
         (

@@ -136,6 +136,7 @@ RECORDS = (
     records.LoopRecord,
     records.FaultRecord,
     records.WindRecord,
+    records.DelayRecord,
     wind.DragConstants,
     motors.MotorConstants,
     records.PlantRecord,

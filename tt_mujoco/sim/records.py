@@ -31,6 +31,7 @@ __all__ = [
     "REFERENCE_FIELDS",
     "STOP_FIELDS",
     "TARGET_FIELDS",
+    "DelayRecord",
     "FaultRecord",
     "LawRecord",
     "Limits",
@@ -280,6 +281,19 @@ class WindRecord(NamedTuple):
     drag: DragConstants
 
 
+class DelayRecord(NamedTuple):
+    """The sensor delay's line (:class:`~tt_mujoco.sim.stepper.Stepper`): the readings of the
+    last ``depth = delay steps + 1`` steps, step ``j`` in slot ``j % depth`` (one slot without a
+    delay)."""
+
+    #: the measurement, field by field (depth x Measurement fields)
+    measurements: np.ndarray
+    #: trailers 2..N (depth x (N - 1) x :data:`~tt_mujoco.sim.measure.TRAIN_FIELDS`)
+    rows: np.ndarray
+    #: (phi, v, omega) as the law sees them: noise and sensor faults included (depth x 3)
+    seen: np.ndarray
+
+
 class LoopRecord(NamedTuple):
     """The episode's constants and its noise."""
 
@@ -302,6 +316,7 @@ class LoopRecord(NamedTuple):
     motor: MotorConstants
     motor_torques: np.ndarray
     wind: WindRecord
+    delay: DelayRecord
 
 
 class LogRecord(NamedTuple):

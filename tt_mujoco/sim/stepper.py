@@ -26,10 +26,10 @@ from tt_mujoco.sim.build import Build
 from tt_mujoco.sim.checkpoint import Checkpoint
 from tt_mujoco.sim.disturbances import injected
 from tt_mujoco.sim.faults import HELD, PAYLOAD_ROW
-from tt_mujoco.sim.measure import Measurement
+from tt_mujoco.sim.measure import TRAIN_FIELDS, Measurement
 from tt_mujoco.sim.motors import DcMotors, MotorConstants
 from tt_mujoco.sim.plant import StopRun
-from tt_mujoco.sim.records import FaultRecord, Limits, LoopRecord, WindRecord
+from tt_mujoco.sim.records import DelayRecord, FaultRecord, Limits, LoopRecord, WindRecord
 from tt_mujoco.sim.scenario import jackknife_phi_deg
 from tt_mujoco.sim.step import (
     BLEW_UP,
@@ -174,6 +174,7 @@ class Stepper:
         noise, faults = self._noise, self.faults
         rows = faults.payload_rows if faults else []
         motors = self.motors
+        depth = self.built.delay_steps + 1
         return LoopRecord(
             limits=self.limits,
             dt=self.dt,
@@ -196,6 +197,11 @@ class Stepper:
             motor_torques=np.array(motors.torques if motors else [0.0, 0.0]),
             wind=WindRecord(
                 np.array(self._wind or [], dtype=float), self._wind_direction, self._drag
+            ),
+            delay=DelayRecord(
+                measurements=np.zeros((depth, len(Measurement._fields))),
+                rows=np.zeros((depth, len(self._train_limits), len(TRAIN_FIELDS))),
+                seen=np.zeros((depth, 3)),
             ),
         )
 
