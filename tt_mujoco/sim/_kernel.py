@@ -21,6 +21,7 @@ from llvmlite import binding
 from numba import cfunc, njit, types
 from numba.extending import intrinsic, overload, register_jitable
 
+from tt_mujoco import exact
 from tt_mujoco.analysis import geometry
 from tt_mujoco.controllers import backing, base, fbl, ismc_sta, pid
 from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
@@ -149,6 +150,63 @@ _remainder = types.ExternalFunction("remainder", types.float64(types.float64, ty
 @overload(math.remainder)
 def _math_remainder(x, y):
     return lambda x, y: _remainder(x, y)
+
+
+#: The smallest normal float (C's DBL_MIN).
+_DBL_MIN = 2.2250738585072014e-308
+
+
+@njit(cache=True)
+def _square(a):
+    """``a * a`` as an unevaluated sum ``(hi, lo)``, exactly (Dekker's split, no fma)."""
+    t = a * 134217729.0  # 2**27 + 1
+    hi = t - (t - a)
+    lo = a - hi
+    p = hi * hi
+    q = hi * lo + lo * hi
+    z = p + q
+    return z, p - z + q + lo * lo
+
+
+@njit(cache=True)
+def _hypot(x, y):
+    """CPython's ``math.hypot`` of two floats, the same to the last bit (tested on normal floats;
+    a pair of subnormals may differ): the squares summed exactly after scaling by a power of
+    two, then one differential correction of the root."""
+    x, y = abs(x), abs(y)
+    if math.isinf(x) or math.isinf(y):
+        return math.inf
+    if math.isnan(x) or math.isnan(y):
+        return math.nan
+    top = max(x, y)
+    if top == 0.0:
+        return top
+    exponent, factor = math.frexp(top)[1], 1.0
+    if exponent < -1023:  # 2**-exponent would overflow: scaled up first, as CPython does
+        x, y, factor = x / _DBL_MIN, y / _DBL_MIN, _DBL_MIN
+        exponent = math.frexp(top / _DBL_MIN)[1]
+    scale = math.ldexp(1.0, -exponent)
+    total, low1, low2 = 1.0, 0.0, 0.0
+    for value in (x * scale, y * scale):
+        hi, lo = _square(value)
+        added = total + hi
+        low2 += (total - added) + hi
+        total = added
+        low1 += lo
+    h = math.sqrt(total - 1.0 + (low1 + low2))
+    hi, lo = _square(h)
+    added = total - hi
+    low2 += (total - added) - hi
+    total = added
+    low1 -= lo
+    h += (total - 1.0 + (low1 + low2)) / (2.0 * h)
+    return factor * (h / scale)
+
+
+@overload(exact.hypot_of)
+def _hypot_of(x, y):
+    """The shared functions' hypot gives Python's numbers (:func:`_hypot`)."""
+    return lambda x, y: _hypot(x, y)
 
 
 @njit(cache=True)

@@ -20,6 +20,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from tt_mujoco.exact import hypot_of
 from tt_mujoco.registry import check_finite_fields
 
 __all__ = [
@@ -121,9 +122,7 @@ def drag_force(wind_x: float, wind_y: float, u_x: float, u_y: float, drag_area: 
     at ``(u_x, u_y)`` (m/s) with drag area ``drag_area`` (m^2) (the compiled episode shares
     it)."""
     rel_x, rel_y = wind_x - u_x, wind_y - u_y
-    # Not math.hypot: numba's differs from Python's in the last bit for about 0.6 % of inputs,
-    # and the compiled episode runs this too.
-    scale = 0.5 * AIR_DENSITY * drag_area * math.sqrt(rel_x * rel_x + rel_y * rel_y)
+    scale = 0.5 * AIR_DENSITY * drag_area * hypot_of(rel_x, rel_y)
     return scale * rel_x, scale * rel_y
 
 

@@ -34,6 +34,7 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
+from tt_mujoco.exact import hypot_of
 from tt_mujoco.vehicle.params import (
     Params,
     same_path_eta,
@@ -83,7 +84,7 @@ def same_path_geometry_of(kappa: float, L: float, L0: float) -> tuple[float, flo
     """``(phi, beta)`` of the steady turn at |kappa| (> 0) in which P0 runs on the tractor's
     path; NaNs where no pose does (the compiled episode shares it)."""
     R = 1.0 / abs(kappa)
-    hyp = math.hypot(R, L)
+    hyp = hypot_of(R, L)
     ratio = (L * L + L0 * L0) / (2.0 * L0 * hyp)
     if ratio > 1.0:
         return math.nan, math.nan
@@ -242,7 +243,7 @@ def exact_train_same_path_etas_of(kappa: float, lengths, out) -> int:
     for k in range(len(lengths)):
         L, L0 = lengths[k][0], lengths[k][1]
         ox, oy = fx - L * math.cos(fth), fy - L * math.sin(fth)
-        dist = math.hypot(ox, oy)
+        dist = hypot_of(ox, oy)
         a = (R * R - L0 * L0 + dist * dist) / (2.0 * dist)
         if R * R - a * a < 0.0:
             return k + 1
