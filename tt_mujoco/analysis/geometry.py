@@ -749,7 +749,9 @@ def signed_lateral_error(
     return np.where(inside, proj.signed_distance, np.nan), proj.arc_length
 
 
-def trailer_offtrack(tractor_xy, trailer_xy, window: float | None = None) -> np.ndarray:
+def trailer_offtrack(
+    tractor_xy, trailer_xy, window: float | None = None, path: Polyline | None = None
+) -> np.ndarray:
     """Distance from the following axle (P0 driving forward) to the path its leading axle (P)
     has driven: the off-tracking, sample by sample (docs/metrics.md).
 
@@ -775,6 +777,9 @@ def trailer_offtrack(tractor_xy, trailer_xy, window: float | None = None) -> np.
         leader.)
     window : float, optional
         Length (m) of the recent driven path that serves a sample.
+    path : Polyline, optional
+        ``Polyline(tractor_xy)``, when the caller measures several followers against one
+        leader (built here otherwise).
 
     Returns
     -------
@@ -801,7 +806,7 @@ def trailer_offtrack(tractor_xy, trailer_xy, window: float | None = None) -> np.
         along = max(0.0, float(np.dot(p[0] - p0[0], heading) / np.hypot(*heading)))
     if window is None:
         window = 3.0 * spacing if spacing > 0.0 else np.inf
-    path = Polyline(p)
+    path = Polyline(p) if path is None else path
     count = path.vertex_index  # segments driven up to each sample
     driven = path.arc_length[count]
     first = np.searchsorted(path.arc_length, driven - window, side="right") - 1

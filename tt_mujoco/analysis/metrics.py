@@ -419,6 +419,7 @@ def train_metrics(ts, n: int, reference, first: Mapping, reverse: bool = False) 
             col[f"{name}_{k}"] = np.asarray(ts[f"{name}_{k}"], dtype=float)[:n]
     last = np.column_stack([col[f"x0_{count}"], col[f"y0_{count}"]])
     leader = last if reverse else np.column_stack([col["x"], col["y"]])
+    leader_path = None  # the leader's driven path, built once for every follower
     out: dict = {}
     worst_rms = [first["trailer_offtrack_rms"]]
     worst_max = [first["trailer_offtrack_max"]]
@@ -428,7 +429,9 @@ def train_metrics(ts, n: int, reference, first: Mapping, reverse: bool = False) 
         if (reverse and k == count) or not n:
             offtrack = np.full(n, np.nan)  # the leading unit follows nothing
         else:
-            offtrack = trailer_offtrack(leader, follower)
+            if leader_path is None and n >= 2 and np.any(leader != leader[0]):
+                leader_path = Polyline(leader)
+            offtrack = trailer_offtrack(leader, follower, path=leader_path)
         cross = reference.project(follower, extend_ends=True).signed_distance
         counted = ~np.isnan(offtrack) if not reverse else np.ones(n, dtype=bool)
         out[f"trailer_{k}_offtrack_rms"] = rmse(offtrack[~np.isnan(offtrack)])
