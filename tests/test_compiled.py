@@ -110,6 +110,11 @@ CASES = [
         noise_snr_db=20.0,
         duration=3.0,
     ),
+    # friction patches: bands along the path and rectangles, overlapping (the first counts),
+    # with a train and backing up
+    dict(traj="s_curve", ground=["band:0.5:1.5:0.1", "rect:-1:-1:1:3:0.3"], duration=3.0),
+    dict(traj="circle", ground=["rect:0:0:2:2:0.2"], trailers=2, noise_snr_db=20.0),
+    dict(traj="s_curve", ground=["band:2:3:0.05"], reverse=True, duration=4.0),
 ]
 
 
@@ -129,6 +134,7 @@ def test_compiled_loop_equals_python_loop_bit_for_bit(monkeypatch, case):
     for name, column in python.timeseries.items():
         assert np.array_equal(column, fast.timeseries[name], equal_nan=True), name
     assert (python.status, python.message) == (fast.status, fast.message)
+    assert python.metrics.get("ground") == fast.metrics.get("ground")  # the patches' report
 
 
 @pytest.mark.parametrize("plant", ["mujoco", "reduced"])

@@ -28,6 +28,7 @@ from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, tar
 from tt_mujoco.sim import (
     disturbances,
     faults,
+    ground,
     measure,
     motors,
     plant_mujoco,
@@ -479,6 +480,20 @@ def _delayed(delay, k, me, rows, seen):
 
 
 @njit(cache=True)
+def _ground(patches, target):
+    """MujocoPlant.advance's friction patches: each wheel's friction set from where it stands
+    (GroundPatches.frictions); the bit mask of the patches some wheel is on."""
+    points, xpos = patches.points, patches.geom_xpos
+    for i in range(patches.geoms.size):
+        points[i, 0], points[i, 1] = xpos[patches.geoms[i], 0], xpos[patches.geoms[i], 1]
+    table = (patches.kinds, patches.bounds, patches.mus, patches.base_mu)
+    mask = ground.wheel_frictions_of(target, points, patches.arcs, table, patches.frictions)
+    for i in range(patches.geoms.size):
+        patches.geom_friction[patches.geoms[i], 0] = patches.frictions[i]
+    return mask
+
+
+@njit(cache=True)
 def _gusts(weather, k, me):
     """Stepper._blow: the wind's wrenches on the tractor and the trailer over step ``k``, at the
     measured motion (an empty array when calm)."""
@@ -631,6 +646,8 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
             _steer(plant, law)
         push = (dist_r, dist_l, 1.0 if loop.wrench else 0.0, fx, fy, mz)
         gusts = _gusts(loop.wind, k, me)
+        if loop.ground.geoms.size:  # logged for step k; a failed advance is not handed back
+            loop.ground.masks[k] = _ground(loop.ground, target)
         code = _advance(plant, T_r, T_l, push, gusts, stop)
         if code != RUNNING:
             return code, k

@@ -9,7 +9,7 @@ circle, the cycloid, a CSV spline) driven forwards or backing up (the reverse ta
 hitch cascade or path feedback), the paper's disturbance (matched or as a wrench) or none,
 measurement noise, one trailer or a train, constant steering gains or either schedule
 (:mod:`tt_mujoco.sim.schedule`), path feedback, faults (a payload step on the MuJoCo plant), DC
-motors, wind, a sensor delay; not a payload step on the reduced plant, friction patches or a
+motors, wind, a sensor delay, friction patches; not a payload step on the reduced plant or a
 per-step callback. The loop then runs in numba, chunk by chunk, calling ``mj_step`` through
 MuJoCo's C library or stepping the reduced ODE, over the named records of
 :mod:`tt_mujoco.sim.records`.
@@ -73,12 +73,10 @@ def unsupported(built, controller, on_step=None) -> str | None:
     from tt_mujoco.sim.disturbances import PaperDisturbance
     from tt_mujoco.sim.kernel_sources import LAWS
 
-    s = built.scenario
     reasons = [
         (not _enabled(), "TT_MUJOCO_COMPILED=0"),
         (built.steps < MIN_STEPS, f"fewer than {MIN_STEPS} steps"),
         (_payloads(built), "a payload fault on the reduced plant"),
-        (bool(s.ground), "friction patches"),
         (on_step is not None, "a per-step callback"),
         (
             not (_built_in(type(controller), LAWS) or isinstance(controller, PlainLawController)),
@@ -419,6 +417,8 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
         faults.payload_state[:] = loop.faults.payload_state.tolist()
     if stepper.motors is not None:
         stepper.motors.torques[:] = loop.motor_torques.tolist()
+    if loop.ground.geoms.size:  # one mask per advance: k of them
+        stepper.log_ground(loop.ground.masks[:k], loop.ground.arcs)
     if plant.steering.kind:
         _hand_back_steering(stepper, controller, plant.steering, changes)
     return _outcome(status, stop[0], stepper, controller, k)

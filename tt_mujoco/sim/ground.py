@@ -17,12 +17,21 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from types import SimpleNamespace
 
 import numpy as np
 
-from tt_mujoco.reference.feedback import path_errors
+from tt_mujoco.reference.feedback import path_errors_of
 
-__all__ = ["GroundPatches", "Patch", "ground_report", "parse_patch", "parse_patches"]
+__all__ = [
+    "GroundPatches",
+    "Patch",
+    "ground_report",
+    "parse_patch",
+    "parse_patches",
+    "patch_contains_of",
+    "wheel_frictions_of",
+]
 
 _ALLOWED = (
     "use 'band:S0:S1:MU' (m along the path) or 'rect:X0:Y0:X1:Y1:MU' (m), e.g. 'band:2:3:0.1'"
@@ -43,10 +52,49 @@ class Patch:
         return ":".join([self.kind, *(f"{b:g}" for b in self.bounds), f"{self.mu:g}"])
 
     def contains(self, x: float, y: float, s: float) -> bool:
-        if self.kind == "band":
-            return self.bounds[0] <= s <= self.bounds[1]
-        x0, y0, x1, y1 = self.bounds
-        return min(x0, x1) <= x <= max(x0, x1) and min(y0, y1) <= y <= max(y0, y1)
+        return patch_contains_of(_KINDS.index(self.kind), _row(self.bounds), x, y, s)
+
+
+#: A patch's kind as a number (the compiled episode's), and its bounds as a row of four.
+_KINDS = ("band", "rect")
+
+
+def _row(bounds) -> tuple:
+    return (*bounds, *[0.0] * (4 - len(bounds)))
+
+
+def patch_contains_of(kind: int, bounds, x: float, y: float, s: float) -> bool:
+    """Whether a patch holds the point ``(x, y)`` whose nearest path point is at arc length
+    ``s``: a band (``kind`` 0, ``bounds = (s0, s1, -, -)``) the stretch s0 <= s <= s1, a
+    rectangle (1, ``(x0, y0, x1, y1)``) its corners' box (the compiled episode shares it)."""
+    if kind == 0:
+        return bounds[0] <= s <= bounds[1]
+    x0, y0, x1, y1 = bounds[0], bounds[1], bounds[2], bounds[3]
+    return min(x0, x1) <= x <= max(x0, x1) and min(y0, y1) <= y <= max(y0, y1)
+
+
+def wheel_frictions_of(path, points, arcs, patches, out) -> int:
+    """Each wheel's friction coefficient into ``out``, for the wheels' contact ``points`` ((n,
+    2): x, y), and the bit mask of the patches some wheel is on. ``patches = (kinds, bounds,
+    mus, base_mu)`` (:func:`patch_contains_of`; the first listed counts); with ``arcs`` (each
+    wheel's arc length, updated) a band is measured along ``path`` from each wheel's nearest
+    point, else ``arcs`` is empty (the compiled episode shares it)."""
+    kinds, bounds, mus, base_mu = patches
+    mask = 0
+    for i in range(points.shape[0]):
+        x, y = points[i, 0], points[i, 1]
+        s = math.nan
+        if len(arcs):
+            s = path_errors_of(path, arcs[i], x, y, 0.0)[0]
+            arcs[i] = s
+        mu = base_mu
+        for j in range(len(kinds)):
+            if patch_contains_of(kinds[j], bounds[j], x, y, s):
+                mu = mus[j]
+                mask |= 1 << j
+                break
+        out[i] = mu
+    return mask
 
 
 def parse_patch(text) -> Patch:
@@ -109,31 +157,37 @@ class GroundPatches:
         self.path = path
         self.base_mu = float(base_mu)
         self._bands = any(p.kind == "band" for p in self.patches)
-        self._s: list[float] | None = None  # each wheel's arc length, warm start of the next
+        self.arc_lengths: list[float] | None = None  # each wheel's, warm start of the next
+        self.kinds = np.array([_KINDS.index(p.kind) for p in self.patches], dtype=np.int64)
+        self.bounds = np.array([_row(p.bounds) for p in self.patches], dtype=float).reshape(-1, 4)
+        self.mus = np.array([p.mu for p in self.patches], dtype=float)
+
+    def start(self, points) -> np.ndarray:
+        """Each wheel's arc length to start from, for the wheels' contact ``points``: the
+        nearest point of a coarse table of the path, on the first call (empty without bands)."""
+        if self.arc_lengths is None and self._bands:
+            grid = np.linspace(0.0, self.path.length, 2001)
+            table = np.array([self.path.pose_at(s)[:2] for s in grid])
+            points = np.asarray(points, dtype=float)
+            self.arc_lengths = [
+                float(grid[np.argmin(np.hypot(*(table - point).T))]) for point in points
+            ]
+        return np.array(self.arc_lengths or [], dtype=float)
 
     def frictions(self, points) -> tuple[list[float], int]:
         """``(mu of each wheel, bit mask of the patches some wheel is on)`` for the wheels'
         contact points ``points`` (an (n, 2) array of x, y)."""
         points = np.asarray(points, dtype=float)
-        if self._s is None and self._bands:  # a first guess from a coarse table of the path
-            grid = np.linspace(0.0, self.path.length, 2001)
-            table = np.array([self.path.pose_at(s)[:2] for s in grid])
-            self._s = [float(grid[np.argmin(np.hypot(*(table - point).T))]) for point in points]
-        mus, mask = [], 0
-        pose_at, curvature = self.path.pose_at, self.path.curvature_and_rate
-        for i, (x, y) in enumerate(points):
-            s = math.nan
-            if self._bands:
-                s = path_errors(pose_at, curvature, self._s[i], x, y, 0.0)[0]
-                self._s[i] = s
-            mu = self.base_mu
-            for j, patch in enumerate(self.patches):
-                if patch.contains(x, y, s):
-                    mu = patch.mu
-                    mask |= 1 << j
-                    break
-            mus.append(mu)
-        return mus, mask
+        arcs = self.start(points)
+        path = SimpleNamespace(
+            pose_at=self.path.pose_at, curvature_and_rate=self.path.curvature_and_rate
+        )
+        mus = np.empty(points.shape[0])
+        patches = (self.kinds, self.bounds, self.mus, self.base_mu)
+        mask = wheel_frictions_of(path, points, arcs, patches, mus)
+        if self._bands:
+            self.arc_lengths = arcs.tolist()
+        return mus.tolist(), mask
 
 
 def ground_report(patches, masks, ts) -> list[dict]:

@@ -184,6 +184,14 @@ class MujocoPlant(Plant):
         self._contact_geoms = wheel_geoms(m)
         self.ground_mask = 0
 
+    @property
+    def ground(self):
+        """``(GroundPatches, the wheels' contact geom ids)`` of :meth:`set_ground`, or None:
+        what the compiled episode reads to set each wheel's friction."""
+        if self._ground is None:
+            return None
+        return self._ground, self._contact_geoms
+
     def blow(self, tractor, trailer) -> None:
         """Horizontal forces and yaw moments (N, N m) on the tractor's and the trailer's
         bodies for this step, the wind's (on top of the chassis wrench of the "wrench"

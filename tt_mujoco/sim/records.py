@@ -33,6 +33,7 @@ __all__ = [
     "TARGET_FIELDS",
     "DelayRecord",
     "FaultRecord",
+    "GroundRecord",
     "LawRecord",
     "Limits",
     "LogRecord",
@@ -294,6 +295,29 @@ class DelayRecord(NamedTuple):
     seen: np.ndarray
 
 
+class GroundRecord(NamedTuple):
+    """Friction patches (:mod:`tt_mujoco.sim.ground`) under the MuJoCo plant's wheels."""
+
+    #: the wheels' contact geoms (empty: no patches), ``MjData.geom_xpos`` and
+    #: ``MjModel.geom_friction``
+    geoms: np.ndarray
+    geom_xpos: np.ndarray
+    geom_friction: np.ndarray
+    #: the patches as :func:`~tt_mujoco.sim.ground.wheel_frictions_of` takes them: kinds,
+    #: bounds (P x 4), friction coefficients; the coefficient off them
+    kinds: np.ndarray
+    bounds: np.ndarray
+    mus: np.ndarray
+    base_mu: float
+    #: each wheel's arc length (empty without bands), and scratch: the wheels' points (W x 2)
+    #: and coefficients
+    arcs: np.ndarray
+    points: np.ndarray
+    frictions: np.ndarray
+    #: per control step, the bit mask of the patches some wheel stood on during its advance
+    masks: np.ndarray
+
+
 class LoopRecord(NamedTuple):
     """The episode's constants and its noise."""
 
@@ -317,6 +341,7 @@ class LoopRecord(NamedTuple):
     motor_torques: np.ndarray
     wind: WindRecord
     delay: DelayRecord
+    ground: GroundRecord
 
 
 class LogRecord(NamedTuple):

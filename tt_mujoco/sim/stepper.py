@@ -29,7 +29,14 @@ from tt_mujoco.sim.faults import HELD, PAYLOAD_ROW
 from tt_mujoco.sim.measure import TRAIN_FIELDS, Measurement
 from tt_mujoco.sim.motors import DcMotors, MotorConstants
 from tt_mujoco.sim.plant import StopRun
-from tt_mujoco.sim.records import DelayRecord, FaultRecord, Limits, LoopRecord, WindRecord
+from tt_mujoco.sim.records import (
+    DelayRecord,
+    FaultRecord,
+    GroundRecord,
+    Limits,
+    LoopRecord,
+    WindRecord,
+)
 from tt_mujoco.sim.scenario import jackknife_phi_deg
 from tt_mujoco.sim.step import (
     BLEW_UP,
@@ -203,7 +210,42 @@ class Stepper:
                 rows=np.zeros((depth, len(self._train_limits), len(TRAIN_FIELDS))),
                 seen=np.zeros((depth, 3)),
             ),
+            ground=self._ground_record(),
         )
+
+    def _ground_record(self) -> GroundRecord:
+        """The friction patches under the wheels, as the compiled loop reads them."""
+        ground = getattr(self.plant, "ground", None)
+        if ground is None:
+            none, no_ints = np.zeros(0), np.zeros(0, dtype=np.int64)
+            return GroundRecord(
+                no_ints, np.zeros((1, 3)), np.zeros((1, 3)), no_ints, np.zeros((0, 4)), none,
+                0.0, none, np.zeros((0, 2)), none, no_ints,
+            )  # fmt: skip
+        patches, geoms = ground
+        xpos, friction = self.plant.data.geom_xpos, self.plant.model.geom_friction
+        points = np.array(xpos[geoms, :2], dtype=float)
+        return GroundRecord(
+            geoms=np.array(geoms, dtype=np.int64),
+            geom_xpos=xpos,
+            geom_friction=friction,
+            kinds=patches.kinds,
+            bounds=patches.bounds,
+            mus=patches.mus,
+            base_mu=patches.base_mu,
+            arcs=patches.start(points),
+            points=points,
+            frictions=np.zeros(len(geoms)),
+            masks=np.zeros(self.steps + 1, dtype=np.int64),
+        )
+
+    def log_ground(self, masks, arc_lengths) -> None:
+        """A compiled episode's patch masks (one per advance) and the wheels' last arc lengths
+        (see :attr:`ground_masks`)."""
+        self._ground_masks.extend(int(m) for m in masks)
+        patches = self.plant.ground[0]
+        if len(arc_lengths):
+            patches.arc_lengths = [float(s) for s in arc_lengths]
 
     @property
     def plant_etas(self) -> tuple:
