@@ -46,6 +46,7 @@ for _fn in SHARED:
 
 RUNNING, FINISHED, BLEW_UP, JACKKNIFE = step.RUNNING, step.FINISHED, step.BLEW_UP, step.JACKKNIFE
 WARNING, LAW_FAILED, SINGULAR = step.WARNING, step.LAW_FAILED, step.SINGULAR
+PAYLOAD = step.PAYLOAD
 LAW_OK, LAW_SINGULAR = base.LAW_OK, base.LAW_SINGULAR
 COS_BETA_MIN = reduced.COS_BETA_MIN
 ISMC_STA, PID, FBL = (LAWS.index(fn) for fn in (ismc_sta.ismc_sta_law, pid.pid_law, fbl.fbl_law))
@@ -418,6 +419,15 @@ def _advance(plant, T_r, T_l, push, gusts, stop):
 
 
 @njit(cache=True)
+def advance_after_payload(plant, stop_record):
+    """The step a payload on the reduced plant interrupted (:data:`PAYLOAD`), advanced on the
+    plant's new constants with the torques and disturbance in ``stop_record``; the stop code."""
+    stop = stop_record[0]
+    push = (stop.dist_r, stop.dist_l, 0.0, 0.0, 0.0, 0.0)
+    return _advance(plant, stop.T_r, stop.T_l, push, np.empty(0), stop)
+
+
+@njit(cache=True)
 def _nominal_mass(law, n, phi, phis, v_m, w_m):
     """The nominal model's mass matrix at the measured hitches (the disturbance's, when the
     law's model takes scheduled gains)."""
@@ -596,14 +606,17 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         dist_r = dist_l = clipped = fx = fy = mz = 0.0
         if fault.actuators.shape[0]:  # FaultSchedule.torque
             T_r, T_l = faults.fault_torque_of(k, fault.actuators, T_r, T_l)
-        if fault.payloads.shape[0]:  # FaultSchedule.payloads, on the MuJoCo plant
+        pending = 0  # payload changes the caller makes to the reduced plant's constants
+        if fault.payloads.shape[0]:  # FaultSchedule.payloads
             changes = fault.payload_changes
-            for i in range(
-                faults.payloads_of(k, state.s, fault.payloads, fault.payload_state, changes)
-            ):
-                mj = plant.mj
-                body = mj.trailer_bodies[int(changes[i][0]) - 1]
-                plant_mujoco.scale_body_of(mj.body_mass, mj.body_inertia, body, changes[i][1])
+            count = faults.payloads_of(k, state.s, fault.payloads, fault.payload_state, changes)
+            if plant.mujoco:
+                for i in range(count):
+                    mj = plant.mj
+                    body = mj.trailer_bodies[int(changes[i][0]) - 1]
+                    plant_mujoco.scale_body_of(mj.body_mass, mj.body_inertia, body, changes[i][1])
+            else:
+                pending = count
         if loop.dc_motor:  # what the motors deliver of the command, over this step
             omegas = (me[WHEEL_RATES[0]], me[WHEEL_RATES[1]])
             T_r, T_l = motors.deliver_of(loop.motor, loop.motor_torques, (T_r, T_l), omegas)
@@ -635,6 +648,7 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         if steering.kind != 0:
             log.etas[row, :] = steering.etas
         row += 1
+        stop.payloads = pending
         if k == loop.steps:
             return FINISHED, k
         if steering.kind == PATH_SCHEDULE:
@@ -648,6 +662,9 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         gusts = _gusts(loop.wind, k, me)
         if loop.ground.geoms.size:  # logged for step k; a failed advance is not handed back
             loop.ground.masks[k] = _ground(loop.ground, target)
+        if pending:  # the caller changes the reduced plant's constants, then advances
+            stop.T_r, stop.T_l, stop.dist_r, stop.dist_l = T_r, T_l, dist_r, dist_l
+            return PAYLOAD, k
         code = _advance(plant, T_r, T_l, push, gusts, stop)
         if code != RUNNING:
             return code, k

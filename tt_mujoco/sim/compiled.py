@@ -8,9 +8,10 @@ built-in nominal model, a static or dynamic target on a closed-form path (the S-
 circle, the cycloid, a CSV spline) driven forwards or backing up (the reverse target, with the
 hitch cascade or path feedback), the paper's disturbance (matched or as a wrench) or none,
 measurement noise, one trailer or a train, constant steering gains or either schedule
-(:mod:`tt_mujoco.sim.schedule`), path feedback, faults (a payload step on the MuJoCo plant), DC
-motors, wind, a sensor delay, friction patches; not a payload step on the reduced plant or a
-per-step callback. The loop then runs in numba, chunk by chunk, calling ``mj_step`` through
+(:mod:`tt_mujoco.sim.schedule`), path feedback, faults, DC motors, wind, a sensor delay,
+friction patches; not a per-step callback (a payload step on the reduced plant returns to
+Python, which recomputes the plant's constants and advances that step, then the kernel goes
+on). The loop then runs in numba, chunk by chunk, calling ``mj_step`` through
 MuJoCo's C library or stepping the reduced ODE, over the named records of
 :mod:`tt_mujoco.sim.records`.
 
@@ -76,7 +77,6 @@ def unsupported(built, controller, on_step=None) -> str | None:
     reasons = [
         (not _enabled(), "TT_MUJOCO_COMPILED=0"),
         (built.steps < MIN_STEPS, f"fewer than {MIN_STEPS} steps"),
-        (_payloads(built), "a payload fault on the reduced plant"),
         (on_step is not None, "a per-step callback"),
         (
             not (_built_in(type(controller), LAWS) or isinstance(controller, PlainLawController)),
@@ -101,15 +101,6 @@ def unsupported(built, controller, on_step=None) -> str | None:
     except ImportError:
         return "numba is not installed"
     return None
-
-
-def _payloads(built) -> bool:
-    """Whether the scenario has a payload fault on the reduced plant (the MuJoCo plant's, the
-    sensor and actuator faults compile)."""
-    from tt_mujoco.sim.faults import parse_faults
-
-    s = built.scenario
-    return s.plant != "mujoco" and any(f.kind == "payload" for f in parse_faults(s.faults))
 
 
 def _inner(target):
@@ -399,13 +390,20 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
             _write_manifest(sum(k_mod.run_chunk.stats.cache_misses.values()) > 0)
         else:
             status, k_next = k_mod.run_chunk(*args)
-        # Rows k..k_next-1 are logged; a stop in the plant's advance or the end logs k_next too.
-        logged = k_next - k + (1 if status in (step.FINISHED, step.WARNING, step.SINGULAR) else 0)
+        # Rows k..k_next-1 are logged; a stop in the plant's advance, a payload step on the
+        # reduced plant or the end logs k_next too.
+        ends = (step.FINISHED, step.WARNING, step.SINGULAR, step.PAYLOAD)
+        logged = k_next - k + (1 if status in ends else 0)
         columns = log.loop.view(np.float64).reshape(n, -1)
         trains = log.train.reshape(n, -1)
         stepper.add_block(log.measurement[:logged], columns[:logged], trains[:logged])
         if plant.steering.kind:
             changes.extend(_changes(log.etas[:logged], changes, stepper.samples - logged))
+        if stop[0]["payloads"]:  # the reduced plant's constants change, then step k_next goes on
+            plant = _carry_payloads(stepper, plant, loop.faults, stop[0])
+            if status == step.PAYLOAD:
+                status = k_mod.advance_after_payload(plant, stop)
+                k_next += 1 if status == step.RUNNING else 0
         if progress is not None:
             progress(k_next, steps)
         k = k_next
@@ -422,6 +420,25 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
     if plant.steering.kind:
         _hand_back_steering(stepper, controller, plant.steering, changes)
     return _outcome(status, stop[0], stepper, controller, k)
+
+
+def _carry_payloads(stepper, plant, faults, stop):
+    """The payload changes of a step on the reduced plant: made to the plant (its parameters,
+    in the order made), and the plant record rebuilt on its new constants (the gains in force
+    kept); ``stop.payloads`` cleared."""
+    from tt_mujoco.vehicle import reduced
+    from tt_mujoco.vehicle.train import TRAILER_ROW
+
+    count = int(stop["payloads"])
+    for trailer, factor in faults.payload_changes[:count].tolist():
+        stepper.plant.scale_trailer_mass(factor, int(trailer))
+    stop["payloads"] = 0.0
+    params = stepper.plant.params
+    train = _train_constants(params)
+    eta = TRAILER_ROW.index("eta")
+    if params.n_trailers > 1:  # a schedule's gains in force, not the parameters' own
+        train.trailers[:, eta] = plant.train.trailers[:, eta]
+    return plant._replace(ode=reduced.model_constants(params), train=train)
 
 
 def _user_law(k_mod, controller):

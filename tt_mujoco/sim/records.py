@@ -72,10 +72,13 @@ TARGET_FIELDS = (
 #: two auxiliary outputs (the sliding variables of ISMC-STA).
 LAW_FLAGS = ("saturated", "aux1", "aux2")
 
-#: Why a stretch of steps stopped, with what the message names.
+#: Why a stretch of steps stopped, with what the message names; at a payload step on the
+#: reduced plant, how many changes it made and the step's torques and disturbance, still to
+#: be applied.
 STOP_FIELDS = (
     *("v", "phi", "beta", "x", "y", "eta", "hitch", "warning", "law_status"),
     *("g11", "g12", "g21", "g22", "u1", "u2"),
+    *("payloads", "T_r", "T_l", "dist_r", "dist_l"),
 )
 
 

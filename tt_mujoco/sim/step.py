@@ -16,6 +16,7 @@ __all__ = [
     "FINISHED",
     "JACKKNIFE",
     "LAW_FAILED",
+    "PAYLOAD",
     "RUNNING",
     "SINGULAR",
     "WARNING",
@@ -26,8 +27,10 @@ __all__ = [
     "stop_code",
 ]
 
-#: How a stretch of steps ended: still running, the episode's end, or why it stopped.
-RUNNING, FINISHED, BLEW_UP, JACKKNIFE, WARNING, LAW_FAILED, SINGULAR = range(7)
+#: How a stretch of steps ended: still running, the episode's end, or why it stopped; or
+#: PAYLOAD: the reduced plant's constants change before this step's advance (a payload fault),
+#: which the caller applies before it advances the step and goes on.
+RUNNING, FINISHED, BLEW_UP, JACKKNIFE, WARNING, LAW_FAILED, SINGULAR, PAYLOAD = range(8)
 
 
 def stop_code(x: float, v: float, omega: float, phi: float, beta: float, limits) -> int:
