@@ -186,11 +186,12 @@ class MujocoPlant(Plant):
 
     @property
     def ground(self):
-        """``(GroundPatches, the wheels' contact geom ids)`` of :meth:`set_ground`, or None:
-        what the compiled episode reads to set each wheel's friction."""
+        """``(GroundPatches, the wheels' contact geom ids, MjData.geom_xpos,
+        MjModel.geom_friction)`` of :meth:`set_ground`, or None: what the compiled episode
+        reads and writes to set each wheel's friction."""
         if self._ground is None:
             return None
-        return self._ground, self._contact_geoms
+        return self._ground, self._contact_geoms, self.data.geom_xpos, self.model.geom_friction
 
     def blow(self, tractor, trailer) -> None:
         """Horizontal forces and yaw moments (N, N m) on the tractor's and the trailer's

@@ -222,8 +222,7 @@ class Stepper:
                 no_ints, np.zeros((1, 3)), np.zeros((1, 3)), no_ints, np.zeros((0, 4)), none,
                 0.0, none, np.zeros((0, 2)), none, no_ints,
             )  # fmt: skip
-        patches, geoms = ground
-        xpos, friction = self.plant.data.geom_xpos, self.plant.model.geom_friction
+        patches, geoms, xpos, friction = ground
         points = np.array(xpos[geoms, :2], dtype=float)
         return GroundRecord(
             geoms=np.array(geoms, dtype=np.int64),
