@@ -16,7 +16,6 @@ import math
 import os
 
 import mujoco
-import numpy as np
 from llvmlite import binding
 from numba import cfunc, njit, types
 from numba.extending import intrinsic, overload, register_jitable
@@ -351,7 +350,7 @@ def _law(law, v_m, w_m, dt, limit):
 
 @njit(cache=True)
 def _blow(mj, wrench, gusts):
-    """MujocoPlant.blow: the wind's ``gusts = (F_x, F_y, M_z)`` on the tractor, then on the
+    """MujocoPlant.blow: the wind's ``gusts`` (``F_x, F_y, M_z``) on the tractor, then on the
     trailer, added to the tractor's chassis wrench when the disturbance is one."""
     tractor, trailer = mj.xfrc_applied[mj.tractor_body], mj.xfrc_applied[mj.trailer_bodies[0]]
     if wrench:
@@ -364,10 +363,10 @@ def _blow(mj, wrench, gusts):
 
 
 @njit(cache=True)
-def _advance(plant, T_r, T_l, push, gusts, stop):
+def _advance(plant, T_r, T_l, push, weather, stop):
     """Apply the torques, the disturbance ``push = (dist_r, dist_l, wrench?, fx, fy, mz)`` and
-    the wind's ``gusts`` (none when empty) and advance the plant one control period; the stop
-    code."""
+    the wind (``weather.wrenches`` of this step, when there is a wind) and advance the plant one
+    control period; the stop code."""
     dist_r, dist_l = push[0], push[1]
     if plant.mujoco:
         mj = plant.mj
@@ -380,8 +379,8 @@ def _advance(plant, T_r, T_l, push, gusts, stop):
         else:
             mj.qfrc_applied[a.wheel_right_v] = dist_r
             mj.qfrc_applied[a.wheel_left_v] = dist_l
-        if len(gusts):
-            _blow(mj, push[2] != 0.0, gusts)
+        if weather.speeds.size:
+            _blow(mj, push[2] != 0.0, weather.wrenches)
         steering = plant.steering
         for _ in range(plant.substeps):
             if steering.actuated:  # the axles' targets follow the hitches every physics step
@@ -419,12 +418,12 @@ def _advance(plant, T_r, T_l, push, gusts, stop):
 
 
 @njit(cache=True)
-def advance_after_payload(plant, stop_record):
+def advance_after_payload(plant, weather, stop_record):
     """The step a payload on the reduced plant interrupted (:data:`PAYLOAD`), advanced on the
     plant's new constants with the torques and disturbance in ``stop_record``; the stop code."""
     stop = stop_record[0]
     push = (stop.dist_r, stop.dist_l, 0.0, 0.0, 0.0, 0.0)
-    return _advance(plant, stop.T_r, stop.T_l, push, np.empty(0), stop)
+    return _advance(plant, stop.T_r, stop.T_l, push, weather, stop)
 
 
 @njit(cache=True)
@@ -506,16 +505,13 @@ def _ground(patches, target):
 @njit(cache=True)
 def _gusts(weather, k, me):
     """Stepper._blow: the wind's wrenches on the tractor and the trailer over step ``k``, at the
-    measured motion (an empty array when calm)."""
-    out = np.empty(6 if weather.speeds.size else 0)
-    if weather.speeds.size:
-        speed = weather.speeds[k]
-        air = (speed * weather.direction[0], speed * weather.direction[1])
-        motion = (me[V], me[THETA], me[V0], me[THETA0], me[BETA])
-        wrenches = wind.wind_wrenches_of(air, motion, weather.drag)
-        for i in range(6):
-            out[i] = wrenches[i]
-    return out
+    measured motion, into ``weather.wrenches``."""
+    speed = weather.speeds[k]
+    air = (speed * weather.direction[0], speed * weather.direction[1])
+    motion = (me[V], me[THETA], me[V0], me[THETA0], me[BETA])
+    wrenches = wind.wind_wrenches_of(air, motion, weather.drag)
+    for i in range(6):
+        weather.wrenches[i] = wrenches[i]
 
 
 @njit(cache=True, nogil=True)
@@ -527,6 +523,7 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
     n, phis = loop.n_trailers, law.phis
     steering = plant.steering
     steered = steering.kind != 0 and law.follows_steering
+    delayed = loop.delay.seen.shape[0] > 1
     row = 0
     while k <= k_end:
         t = k * dt
@@ -551,9 +548,15 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         phi_m, fault = phi, loop.faults
         if fault.dropouts.shape[0]:  # FaultSchedule.sensor
             phi_m, v_m, w_m = faults.sensor_of(k, fault.dropouts, fault.held, phi, v_m, w_m)
+        measured = log.measurement[row]
+        for i in range(measured.size):  # the Measurement tuple, in its field order
+            measured[i] = me[i]
         # What the outer loops (sensed: no noise, no fault) and the law read: the readings of
         # the sensor delay's steps ago, or this step's
-        sensed, sensed_rows, phi_m, v_m, w_m = _delayed(loop.delay, k, me, rows, (phi_m, v_m, w_m))
+        sensed, sensed_rows = measured, rows
+        if delayed:
+            readings = (phi_m, v_m, w_m)
+            sensed, sensed_rows, phi_m, v_m, w_m = _delayed(loop.delay, k, me, rows, readings)
         phis[0] = sensed[3]  # the hitch angles as sensed (trailers 2..N are never held)
         for i in range(n - 1):
             phis[i + 1] = sensed_rows[i][3]
@@ -584,9 +587,6 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22 = reduced.solve_dynamics_of(
             mass, bias, c.r, c.d
         )
-        measured = log.measurement[row]
-        for i in range(measured.size):  # the Measurement tuple, in its field order
-            measured[i] = me[i]
         if law.kind == USER:  # the user's law sees the measurement with its noise
             for i in range(measured.size):
                 law.measurement_values[i] = sensed[i]
@@ -620,7 +620,6 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         if loop.dc_motor:  # what the motors deliver of the command, over this step
             omegas = (me[WHEEL_RATES[0]], me[WHEEL_RATES[1]])
             T_r, T_l = motors.deliver_of(loop.motor, loop.motor_torques, (T_r, T_l), omegas)
-        delayed = loop.delay.seen.shape[0] > 1
         if (steered or delayed or phi_m != phi) and (loop.disturbed or loop.wrench):
             phis[0] = phi  # the disturbance acts at the true hitch angles
             for i in range(n - 1):
@@ -659,13 +658,14 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         ):
             _steer(plant, law)
         push = (dist_r, dist_l, 1.0 if loop.wrench else 0.0, fx, fy, mz)
-        gusts = _gusts(loop.wind, k, me)
+        if loop.wind.speeds.size:
+            _gusts(loop.wind, k, me)
         if loop.ground.geoms.size:  # logged for step k; a failed advance is not handed back
             loop.ground.masks[k] = _ground(loop.ground, target)
         if pending:  # the caller changes the reduced plant's constants, then advances
             stop.T_r, stop.T_l, stop.dist_r, stop.dist_l = T_r, T_l, dist_r, dist_l
             return PAYLOAD, k
-        code = _advance(plant, T_r, T_l, push, gusts, stop)
+        code = _advance(plant, T_r, T_l, push, loop.wind, stop)
         if code != RUNNING:
             return code, k
         k += 1

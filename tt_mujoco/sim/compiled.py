@@ -402,7 +402,7 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
         if stop[0]["payloads"]:  # the reduced plant's constants change, then step k_next goes on
             plant = _carry_payloads(stepper, plant, loop.faults, stop[0])
             if status == step.PAYLOAD:
-                status = k_mod.advance_after_payload(plant, stop)
+                status = k_mod.advance_after_payload(plant, loop.wind, stop)
                 k_next += 1 if status == step.RUNNING else 0
         if progress is not None:
             progress(k_next, steps)

@@ -158,6 +158,10 @@ class GroundPatches:
         self.base_mu = float(base_mu)
         self._bands = any(p.kind == "band" for p in self.patches)
         self.arc_lengths: list[float] | None = None  # each wheel's, warm start of the next
+        # the path as wheel_frictions_of reads it (path_errors_of's pose and curvature)
+        self._path_record = SimpleNamespace(
+            pose_at=path.pose_at, curvature_and_rate=path.curvature_and_rate
+        )
         self.kinds = np.array([_KINDS.index(p.kind) for p in self.patches], dtype=np.int64)
         self.bounds = np.array([_row(p.bounds) for p in self.patches], dtype=float).reshape(-1, 4)
         self.mus = np.array([p.mu for p in self.patches], dtype=float)
@@ -179,12 +183,9 @@ class GroundPatches:
         contact points ``points`` (an (n, 2) array of x, y)."""
         points = np.asarray(points, dtype=float)
         arcs = self.start(points)
-        path = SimpleNamespace(
-            pose_at=self.path.pose_at, curvature_and_rate=self.path.curvature_and_rate
-        )
         mus = np.empty(points.shape[0])
         patches = (self.kinds, self.bounds, self.mus, self.base_mu)
-        mask = wheel_frictions_of(path, points, arcs, patches, mus)
+        mask = wheel_frictions_of(self._path_record, points, arcs, patches, mus)
         if self._bands:
             self.arc_lengths = arcs.tolist()
         return mus.tolist(), mask

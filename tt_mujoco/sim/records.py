@@ -283,12 +283,14 @@ class WindRecord(NamedTuple):
     #: its direction's (cos, sin)
     direction: tuple
     drag: DragConstants
+    #: the wind's (F_x, F_y, M_z) on the tractor, then on the trailer, over this step (scratch)
+    wrenches: np.ndarray
 
 
 class DelayRecord(NamedTuple):
     """The sensor delay's line (:class:`~tt_mujoco.sim.stepper.Stepper`): the readings of the
-    last ``depth = delay steps + 1`` steps, step ``j`` in slot ``j % depth`` (one slot without a
-    delay)."""
+    last ``depth = delay steps + 1`` steps, step ``j`` in slot ``j % depth`` (one unused slot
+    without a delay)."""
 
     #: the measurement, field by field (depth x Measurement fields)
     measurements: np.ndarray

@@ -203,7 +203,10 @@ class Stepper:
             motor=motors.constants if motors else MotorConstants(*[0.0] * 6),
             motor_torques=np.array(motors.torques if motors else [0.0, 0.0]),
             wind=WindRecord(
-                np.array(self._wind or [], dtype=float), self._wind_direction, self._drag
+                np.array(self._wind or [], dtype=float),
+                self._wind_direction,
+                self._drag,
+                np.zeros(6),
             ),
             delay=DelayRecord(
                 measurements=np.zeros((depth, len(Measurement._fields))),
