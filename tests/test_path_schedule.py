@@ -18,6 +18,7 @@ from tt_mujoco.sim import Scenario, build, simulate
 from tt_mujoco.sweep import BadSpecError
 from tt_mujoco.sweep.options import convert
 from tt_mujoco.vehicle.params import train_same_path_etas
+from tt_mujoco.vehicle.reduced import phi_rate_of
 from tt_mujoco.vehicle.path_schedule import (
     PathSchedule,
     axle_chain,
@@ -365,19 +366,22 @@ def test_the_nominal_model_follows_the_scheduled_gains():
 
 
 @pytest.mark.parametrize(
-    ("path", "plant", "n", "steering"),
+    ("path", "plant", "n", "disturbance", "steering"),
     [
-        ("cycloid", "reduced", 2, "path"),
-        ("circle", "mujoco", 1, "path"),
-        ("circle", "reduced", 1, "same_path"),
+        ("cycloid", "reduced", 2, "none", "path"),
+        ("circle", "mujoco", 1, "none", "path"),
+        ("circle", "reduced", 1, "none", "same_path"),
+        # the contact-physics S-curve rows move with the last bit of a rounding (Section 13)
+        ("s_curve", "mujoco", 2, "none", "path"),
+        ("s_curve", "mujoco", 3, "matched", "path"),
     ],
 )
-def test_the_study_table_is_what_its_command_prints(path, plant, n, steering):
+def test_the_study_table_is_what_its_command_prints(path, plant, n, disturbance, steering):
     docs = Path(__file__).parents[1] / "docs"
     spec = importlib.util.spec_from_file_location("study", docs / "path_schedule_study.py")
     study = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(study)
-    line = "| " + " | ".join(study.row(path, plant, n, "none", steering)) + " |"
+    line = "| " + " | ".join(study.row(path, plant, n, disturbance, steering)) + " |"
     assert line in (docs / "path_schedule_study.md").read_text()
 
 
@@ -391,3 +395,30 @@ def test_s_curve_gain_swings_from_the_linkage_to_both_bounds_within_a_short_trav
     lowest, highest = s[lowest], s[highest]
     assert eta.min() == -3.0 and eta.max() == 3.0
     assert leaves < lowest < highest < leaves + 0.3
+
+
+def test_at_the_s_curve_inflection_the_gain_flips_and_then_exceeds_one():
+    # docs/model.md Section 13, what is left at the inflection. (i) Where the schedule's hitch
+    # crosses zero the table's gain jumps from -3 to +3 within one entry, and a hitch lagging at
+    # 4.5 deg gets part of it through the blend: -2.63 before, -0.79 after; the axle's target
+    # moves from -11.85 to -3.56 deg within 2 mm of travel.
+    schedule = path_schedule(make_target("s_curve").path, [LINKS])
+    axle = schedule.axles[0]
+    s, eta = axle["s"], axle["eta"]
+    i = int(np.flatnonzero(np.diff(np.sign(eta)) > 0)[-1])
+    assert (eta[i], eta[i + 1]) == (-3.0, 3.0)
+    assert s[i + 1] - s[i] < 2.1e-3
+    phi = math.radians(4.5)
+    before, after = schedule.gain(0, s[i], phi), schedule.gain(0, s[i + 1], phi)
+    assert (round(before, 2), round(after, 2)) == (-2.63, -0.79)
+    steer = [round(math.degrees(gain * phi), 2) for gain in (before, after)]
+    assert steer == [-11.85, -3.56]
+    # (ii) after the crossing the table asks eta > 1 over 0.147 m of the axle's travel, where the
+    # forward hitch is unstable: phi_dot ~ (eta - 1) v phi / L0, 4 1/s at eta = 3, v = 0.8 m/s
+    above = s[eta > 1.0]
+    assert round(above.max() - above.min(), 3) == 0.147
+    L, L0 = LINKS
+    h = 1e-7
+    slope = (phi_rate_of(h, 3.0, L, L0)[0] - phi_rate_of(-h, 3.0, L, L0)[0]) / (2 * h)
+    assert 0.8 * slope == pytest.approx((3.0 - 1.0) * 0.8 / L0, rel=1e-6)
+    assert round(0.8 * slope, 6) == 4.0

@@ -283,9 +283,10 @@ def blended_gain_of(eta: float, steering: float, phi: float, bounds) -> float:
     minimises ``(eta* phi - beta_k(s))^2 + w^2 (eta* - eta_k(s))^2``. On the schedule
     (``phi = phi_k(s)``) it is the table's gain exactly. Off it, a hitch well away from zero
     gets the path's steering, ``beta ~ beta_k(s)``, and a hitch near zero the table's gain, so
-    ``beta = eta* phi`` is continuous in ``s`` and ``phi``: a hitch that lags its schedule
-    through an inflection, where the table's gain changes sign, never meets the gain of the
-    other side, and the steering asks no faster motion than the path's own.
+    ``beta = eta* phi`` is continuous in ``phi``, and in ``s`` wherever the table is. Where the
+    table's gain flips sign (the clipped crossing of an inflection) a hitch lagging its
+    schedule by a few degrees still gets a share ``w^2 / (phi^2 + w^2)`` of the flip
+    (docs/model.md Section 13).
     """
     blend, eta_max = bounds
     w2 = blend * blend
