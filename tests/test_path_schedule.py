@@ -18,13 +18,13 @@ from tt_mujoco.sim import Scenario, build, simulate
 from tt_mujoco.sweep import BadSpecError
 from tt_mujoco.sweep.options import convert
 from tt_mujoco.vehicle.params import train_same_path_etas
-from tt_mujoco.vehicle.reduced import phi_rate_of
 from tt_mujoco.vehicle.path_schedule import (
     PathSchedule,
     axle_chain,
     nearest_arc_length,
     path_schedule,
 )
+from tt_mujoco.vehicle.reduced import phi_rate_of
 from tt_mujoco.vehicle.rolling import constant_steering, drive_along_path, schedule_steering
 from tt_mujoco.vehicle.steering import exact_train_same_path_etas
 
