@@ -188,7 +188,7 @@ def _stop_a_long_run_with_sigterm(out):
     assert str(partial) in err and "Traceback" not in err
     rows = read_checkpoint(partial)
     t = rows["t"]
-    assert len(t) > 8192
+    assert len(t) >= 8192  # a starved machine may compute no row between a block and the signal
     assert f"the {len(t)} rows computed" in err and f"t={t[-1]:.3f} s" in err
     assert (out / outputs.CLAIM_FILE).exists() and not (out / "metrics.json").exists()
     return t
@@ -199,10 +199,11 @@ def test_sigterm_keeps_every_row_computed_and_says_where(tmp_path):
     # computed (the rows since the last block included), and the message names the file.
     # Python runs the handler between bytecodes, so a signal that arrives while a block is
     # being written is handled just after it, at a block boundary, where there is no
-    # unfinished block to keep; a second run then stops elsewhere. A run that dropped its
-    # unfinished block would end on a boundary every time and fail both.
+    # unfinished block to keep (so is one that a loaded machine let compute no row since the
+    # block); another run then stops elsewhere. A run that dropped its unfinished block would
+    # end on a boundary every time and fail them all.
     ends = []
-    for attempt in range(2):
+    for attempt in range(3):
         t = _stop_a_long_run_with_sigterm(tmp_path / f"long{attempt}")
         ends.append(len(t))
         if len(t) % 8192 != 0:
