@@ -26,7 +26,6 @@ import math
 from typing import ClassVar
 
 import numpy as np
-from scipy.linalg import solve_continuous_are
 from tt_mujoco.controllers.backing import SteadyInverse
 from tt_mujoco.controllers.base import Controller, track_velocities
 
@@ -86,6 +85,8 @@ class LqrController(Controller):
             z = (0.0, 0.0, *(steady(kappa_g) for steady in self._steady))
             A, B = jacobians(z, (v_g, kappa_g * v_g), kappa_g, self.lengths, self.etas)
             b = B[:, 1:2]
+            from scipy.linalg import solve_continuous_are  # scipy: only where LQR runs
+
             P = solve_continuous_are(A, b, self._Q, self._R)
             K = (b.T @ P / self._R[0, 0]).ravel()
             self._gain_table[key] = K

@@ -1,13 +1,14 @@
 """Off-tracking of every trailer, forward, under four steerings: docs/model.md Section 13.
 
     python docs/path_schedule_study.py [--plants mujoco reduced] [--trailers 1 2 3]
-        [--disturbance none matched]
+        [--disturbance none matched] [--paths circle cycloid s_curve] [--torque-limit N_M]
 
 For each path (circle, cycloid, S-curve), plant, train size and disturbance, one closed-loop run
 (ISMC-STA, dynamic target, from rest) with plain trailers (eta = 0), the same-path limit gains,
 the curvature schedule (``--eta scheduled``) and the path schedule (``--eta path``). Prints each
 trailer's maximum and rms off-tracking (its axle to the path the unit ahead drove, mm), the
 tractor's cross-track rms (mm), the share of steps at the torque limit, and how the run ended.
+``--torque-limit`` bounds the wheel torques below the paper's 15 N m (docs/model.md Section 13).
 """
 
 from __future__ import annotations
@@ -26,10 +27,23 @@ STEERINGS = {
 }
 
 
-def row(path: str, plant: str, n: int, disturbance: str, steering: str) -> list[str]:
+def row(
+    path: str,
+    plant: str,
+    n: int,
+    disturbance: str,
+    steering: str,
+    torque_limit: float | None = None,
+) -> list[str]:
     """One table row: the run's figures, formatted."""
+    params = {} if torque_limit is None else {"torque_limit": torque_limit}
     scenario = Scenario(
-        traj=path, plant=plant, trailers=n, disturbance=disturbance, **STEERINGS[steering]
+        traj=path,
+        plant=plant,
+        trailers=n,
+        disturbance=disturbance,
+        params=params,
+        **STEERINGS[steering],
     )
     m = simulate(scenario).metrics
     keys = ["trailer_offtrack"] + [f"trailer_{k}_offtrack" for k in range(2, n + 1)]
@@ -47,6 +61,7 @@ def main(argv=None) -> int:
     parser.add_argument("--trailers", nargs="+", type=int, default=[1, 2, 3])
     parser.add_argument("--disturbance", nargs="+", default=["none"])
     parser.add_argument("--paths", nargs="+", default=list(PATHS))
+    parser.add_argument("--torque-limit", type=float, default=None, help="wheel torque bound (N m)")
     args = parser.parse_args(argv)
     head = ["path", "plant", "N", "disturbance", "steering", "max (mm)", "rms (mm)"]
     head += ["tractor cross-track rms (mm)", "torque at limit", "run"]
@@ -57,7 +72,8 @@ def main(argv=None) -> int:
             for disturbance in args.disturbance:
                 for n in args.trailers:
                     for steering in STEERINGS:
-                        print("| " + " | ".join(row(path, plant, n, disturbance, steering)) + " |")
+                        cells = row(path, plant, n, disturbance, steering, args.torque_limit)
+                        print("| " + " | ".join(cells) + " |")
                         sys.stdout.flush()
     return 0
 

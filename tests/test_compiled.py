@@ -3,6 +3,9 @@ for bit, the same stops worded the same way, and the Python loop wherever it can
 
 from __future__ import annotations
 
+import os
+import time
+
 import numpy as np
 import pytest
 
@@ -275,6 +278,28 @@ def test_a_damaged_cache_is_set_aside_and_the_run_takes_the_python_loop(
     assert not compiled.ready() and started == [1]
     err = capsys.readouterr().err
     assert "compiled-code cache could not be loaded" in err and "Python loop" in err
+    assert not cache.exists() and list(cache.parent.glob(f"{cache.name}.damaged-*"))
+
+
+def test_a_cache_a_background_compile_is_writing_is_not_set_aside(monkeypatch, tmp_path, capsys):
+    # The background compile writes the manifest after each signature it compiles, so a run
+    # that starts in between sees more files than the manifest lists. It must take the Python
+    # loop and leave the folder to the compile, not move it aside as damaged (which stranded
+    # the compile's lock there and started a second compile).
+    monkeypatch.setenv("TT_MUJOCO_COMPILE_NOW", "0")
+    monkeypatch.setattr(compiled, "_KERNEL", None)
+    cache, sub = _fake_cache(monkeypatch, tmp_path)
+    (sub / "_kernel.run_chunk-1.py311.2.nbc").write_bytes(b"more")  # a second signature
+    (cache / compiled.COMPILE_LOCK).touch()
+    started = []
+    monkeypatch.setattr(compiled, "_compile_in_background", lambda: started.append(1))
+    assert not compiled.ready()
+    assert cache.exists() and not list(cache.parent.glob(f"{cache.name}.damaged-*"))
+    assert "could not be loaded" not in capsys.readouterr().err
+    # a lock older than the stale age is a compile that died: the folder is judged again
+    old = time.time() - compiled.COMPILE_LOCK_STALE_S - 1
+    os.utime(cache / compiled.COMPILE_LOCK, (old, old))
+    assert not compiled.ready()
     assert not cache.exists() and list(cache.parent.glob(f"{cache.name}.damaged-*"))
 
 

@@ -59,7 +59,6 @@ from tt_mujoco.sim.faults import RECOVERY_S
 from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sim.timeseries import UNITS, train_columns, unit_of
 from tt_mujoco.vehicle import reduced
-from tt_mujoco.viz import plots as plots_mod
 from tt_mujoco.viz import render
 from tt_mujoco.viz import viewer as viewer_mod
 from tt_mujoco.viz.scene import CAMERAS
@@ -280,6 +279,8 @@ def write_outputs(
     figures = None
     try:
         if plots:  # drawn in a forked process while the video renders here
+            from tt_mujoco.viz import plots as plots_mod  # matplotlib: only where it draws
+
             figures = BackgroundCall(
                 plots_mod.plot_run,
                 result.timeseries,

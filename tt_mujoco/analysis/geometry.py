@@ -14,7 +14,6 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 __all__ = [
     "Polyline",
@@ -250,6 +249,8 @@ class Polyline:
         """
         if self._tree is not None:
             return
+        from scipy.spatial import cKDTree  # only where the vectorised search runs
+
         n_seg = self.n_segments
         spacing = max(float(np.median(self._seg_lengths)), self.length / (2.0 * n_seg))
         pieces = np.maximum(1, np.ceil(self._seg_lengths / spacing).astype(np.int64))

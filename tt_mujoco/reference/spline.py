@@ -8,8 +8,6 @@ import csv
 import math
 
 import numpy as np
-from scipy.integrate import cumulative_simpson
-from scipy.interpolate import CubicHermiteSpline, CubicSpline, make_smoothing_spline
 
 from tt_mujoco.defaults import MAX_CSV_ROWS, MAX_SPEED
 from tt_mujoco.reference.path_base import (
@@ -48,6 +46,8 @@ class SplinePath(ReferencePath):
         self._spline = spline
         self._s_fine = s_fine
         self._heading_fine = heading_fine
+        from scipy.interpolate import CubicHermiteSpline  # scipy: only for a CSV path
+
         d1 = spline(u_fine, 1)
         self._u_of_s = CubicHermiteSpline(s_fine, u_fine, 1.0 / np.hypot(d1[:, 0], d1[:, 1]))
         # Per fine cell: kappa at both ends and the rate from each end's own side (the third
@@ -260,6 +260,9 @@ def from_waypoints(
                 f"{name}: v=0 at both {labels[i]} and {labels[i + 1]} is not allowed: "
                 "the vehicle would never get from one to the other"
             )
+
+    from scipy.integrate import cumulative_simpson  # scipy: only for a CSV path
+    from scipy.interpolate import CubicSpline, make_smoothing_spline
 
     u = np.concatenate([[0.0], np.cumsum(step)])  # chord-length parameter
     xy = np.column_stack([x, y])

@@ -19,15 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
+from tt_mujoco.outputs import arrow_float64
+
 __all__ = ["Checkpoint", "read_checkpoint"]
-
-
-def _column(values: np.ndarray):
-    import pyarrow as pa
-
-    # from_buffers, not pa.array: the latter imports pandas on first use (about 0.4 s).
-    values = np.ascontiguousarray(values, dtype=np.float64)
-    return pa.Array.from_buffers(pa.float64(), len(values), [None, pa.py_buffer(values)])
 
 
 class Checkpoint:
@@ -65,7 +59,7 @@ class Checkpoint:
             if self._error is not None:
                 continue
             try:
-                arrays = [_column(part[:, j]) for part in parts for j in range(part.shape[1])]
+                arrays = [arrow_float64(part[:, j]) for part in parts for j in range(part.shape[1])]
                 batch = pa.RecordBatch.from_arrays(arrays, schema=self._schema)
                 with open(self.path, "ab") as handle:
                     handle.write(batch.serialize())

@@ -137,6 +137,20 @@ def ready() -> bool:
 
 #: The cache folder's list of its files and their hashes, written once the kernel has run.
 MANIFEST = "manifest.json"
+#: The lock a background compile holds in the cache folder, and the age (s) past which a lock
+#: is taken for a compile that died.
+COMPILE_LOCK = "compiling.lock"
+COMPILE_LOCK_STALE_S = 300.0
+
+
+def compile_in_progress(cache: Path) -> bool:
+    """Whether a background compile is filling ``cache`` now (its lock is fresh)."""
+    import time
+
+    try:
+        return time.time() - (cache / COMPILE_LOCK).stat().st_mtime <= COMPILE_LOCK_STALE_S
+    except OSError:
+        return False
 
 
 def _cache_files(cache: Path) -> dict[str, str]:
@@ -160,6 +174,8 @@ def _cached() -> bool:
     import json
 
     cache = _cache_dir()
+    if compile_in_progress(cache):
+        return False  # a background compile is still writing it: not whole, not damaged
     try:
         listed = json.loads((cache / MANIFEST).read_text())
     except FileNotFoundError:
@@ -198,17 +214,18 @@ def _compile_in_background() -> None:
     import time
 
     cache = _cache_dir()
-    lock = cache / "compiling.lock"
+    lock = cache / COMPILE_LOCK
     try:
         cache.mkdir(parents=True, exist_ok=True)
-        if lock.exists() and time.time() - lock.stat().st_mtime > 300:
+        if lock.exists() and time.time() - lock.stat().st_mtime > COMPILE_LOCK_STALE_S:
             lock.unlink(missing_ok=True)  # a compile that died
         fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
         os.close(fd)
     except OSError:
         return  # compiling already, or no cache to compile into
+    # At the lowest priority: on a busy machine the user's run, not the compile, gets the core.
     code = (
-        "import os, pathlib; from tt_mujoco.sim import compiled; "
+        "import os, pathlib; os.nice(19); from tt_mujoco.sim import compiled; "
         "os.environ['TT_MUJOCO_COMPILE_NOW'] = '1'; compiled.warm_up(); "
         f"pathlib.Path({str(lock)!r}).unlink(missing_ok=True)"
     )

@@ -32,7 +32,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import brentq
 
 from tt_mujoco.exact import hypot_of
 from tt_mujoco.vehicle.params import (
@@ -187,6 +186,8 @@ def steady_articulation(kappa: float, params: Params | None = None) -> float:
     values = [residual(float(g)) for g in grid]
     for i in range(len(grid) - 1):
         if values[i] == 0.0 or values[i] * values[i + 1] < 0.0:
+            from scipy.optimize import brentq  # scipy costs a run that never calls this
+
             return float(brentq(residual, grid[i], grid[i + 1], xtol=1e-13))
     return math.nan
 
@@ -299,6 +300,8 @@ def steady_train(kappa: float, params: Params) -> tuple[list[float], list[float]
             values = [rate(sign * g) for g in grid]
             for i in range(len(grid) - 1):
                 if values[i] == 0.0 or values[i] * values[i + 1] < 0.0:
+                    from scipy.optimize import brentq
+
                     candidate = brentq(rate, sign * grid[i], sign * grid[i + 1], xtol=1e-15)
                     if math.isnan(root) or abs(candidate) < abs(root):
                         root = candidate
