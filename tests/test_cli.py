@@ -167,3 +167,21 @@ def test_cli_steering_and_feedback_options_reach_the_scenario(tmp_path):
     again = tmp_path / "again"
     assert run.main(["--config", str(out / "config.toml"), "--out", str(again)]) == 0
     assert (again / "timeseries.parquet").read_bytes() == (out / "timeseries.parquet").read_bytes()
+
+
+def test_a_run_without_figures_imports_no_plotting_and_no_pandas(tmp_path):
+    # docs/performance.md: start-up sets a short run's time, so the CLI imports matplotlib only
+    # where it draws, never pandas (pa.array would), and a CSV path's SciPy parts only for one.
+    out = tmp_path / "run"
+    code = (
+        "import sys; from tt_mujoco import run; "
+        f"assert run.main(['--plant', 'reduced', '--duration', '3', '--no-video', '--no-plots', "
+        f"'--quiet', '--out', {str(out)!r}]) == 0; "
+        "print(sorted(m for m in ('matplotlib', 'pandas', 'scipy.interpolate', 'scipy.integrate') "
+        "if m in sys.modules))"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    )
+    assert done.stdout.strip().splitlines()[-1] == "[]", done.stdout
+    assert (out / "timeseries.parquet").is_file() and (out / "metrics.json").is_file()
