@@ -2,13 +2,16 @@
 
     python docs/path_schedule_study.py [--plants mujoco reduced] [--trailers 1 2 3]
         [--disturbance none matched] [--paths circle cycloid s_curve] [--torque-limit N_M]
+        [--driven-path-gain K]
 
 For each path (circle, cycloid, S-curve), plant, train size and disturbance, one closed-loop run
 (ISMC-STA, dynamic target, from rest) with plain trailers (eta = 0), the same-path limit gains,
 the curvature schedule (``--eta scheduled``) and the path schedule (``--eta path``). Prints each
 trailer's maximum and rms off-tracking (its axle to the path the unit ahead drove, mm), the
 tractor's cross-track rms (mm), the share of steps at the torque limit, and how the run ended.
-``--torque-limit`` bounds the wheel torques below the paper's 15 N m (docs/model.md Section 13).
+``--torque-limit`` bounds the wheel torques below the paper's 15 N m, ``--driven-path-gain`` sets
+the path schedule's feedback to the tractor's path (0: the table's steering alone; docs/model.md
+Section 13).
 """
 
 from __future__ import annotations
@@ -34,15 +37,18 @@ def row(
     disturbance: str,
     steering: str,
     torque_limit: float | None = None,
+    driven_path_gain: float | None = None,
 ) -> list[str]:
     """One table row: the run's figures, formatted."""
     params = {} if torque_limit is None else {"torque_limit": torque_limit}
+    options = {} if driven_path_gain is None else {"driven_path_gain": driven_path_gain}
     scenario = Scenario(
         traj=path,
         plant=plant,
         trailers=n,
         disturbance=disturbance,
         params=params,
+        **options,
         **STEERINGS[steering],
     )
     m = simulate(scenario).metrics
@@ -62,6 +68,7 @@ def main(argv=None) -> int:
     parser.add_argument("--disturbance", nargs="+", default=["none"])
     parser.add_argument("--paths", nargs="+", default=list(PATHS))
     parser.add_argument("--torque-limit", type=float, default=None, help="wheel torque bound (N m)")
+    parser.add_argument("--driven-path-gain", type=float, default=None, help="feedback gain (1/m)")
     args = parser.parse_args(argv)
     head = ["path", "plant", "N", "disturbance", "steering", "max (mm)", "rms (mm)"]
     head += ["tractor cross-track rms (mm)", "torque at limit", "run"]
@@ -72,7 +79,15 @@ def main(argv=None) -> int:
             for disturbance in args.disturbance:
                 for n in args.trailers:
                     for steering in STEERINGS:
-                        cells = row(path, plant, n, disturbance, steering, args.torque_limit)
+                        cells = row(
+                            path,
+                            plant,
+                            n,
+                            disturbance,
+                            steering,
+                            args.torque_limit,
+                            args.driven_path_gain,
+                        )
                         print("| " + " | ".join(cells) + " |")
                         sys.stdout.flush()
     return 0

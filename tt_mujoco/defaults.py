@@ -32,6 +32,9 @@ TORQUE_LIMIT = 15.0
 CONTROLLER = "ismc_sta"
 #: Default disturbance Delta(t) (docs/model.md Section 8).
 DISTURBANCE_MODEL = "paper"
+#: Gain (1/m) of the path schedule's feedback to the path the tractor drove: an axle ``e``
+#: beside it is steered ``atan(DRIVEN_PATH_GAIN e)`` back (docs/model.md Section 13).
+DRIVEN_PATH_GAIN = 10.0
 
 #: Exit codes of every command: done; bad input (one message, nothing written); the run
 #: diverged, jackknifed or its user code failed (what was computed is kept); interrupted.

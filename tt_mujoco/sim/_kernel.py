@@ -440,14 +440,17 @@ def _nominal_mass(law, n, phi, phis, v_m, w_m):
 def _offer_path(steering, target, me, rows, n):
     """PathEtaScheduler.update: every axle projected onto the path and its gain there, into
     ``steering.offered``."""
-    offered, arcs = steering.offered, steering.arcs
+    offered, arcs, driven = steering.offered, steering.arcs, steering.driven
+    if driven.gain != 0.0:
+        path_schedule.record_driven_of(target, driven, me[0], me[1])
     for k in range(n):
         if k == 0:
-            x, y, phi = me[X0], me[Y0], me[3]
+            x, y, heading, phi = me[X0], me[Y0], me[THETA0], me[3]
         else:
-            x, y, phi = rows[k - 1][0], rows[k - 1][1], rows[k - 1][3]
+            row = rows[k - 1]
+            x, y, heading, phi = row[0], row[1], row[2], row[3]
         arcs[k], offered[k] = path_schedule.axle_gain_of(
-            target, arcs[k], (x, y), phi, steering.tables[k], steering.bounds
+            target, arcs[k], (x, y), heading, phi, steering.tables[k], steering.bounds, driven
         )
 
 

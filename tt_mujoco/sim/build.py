@@ -133,7 +133,15 @@ class Build:
         """The scheduler of the scenario's ``eta_schedule`` on ``plant``, or None."""
         kind = self.scenario.eta_schedule_kind
         if kind == "path":
-            return PathEtaScheduler(plant, self.plant_params, self.path_schedule, self.start_s)
+            return PathEtaScheduler(
+                plant,
+                self.plant_params,
+                self.path_schedule,
+                self.start_s,
+                steps=self.steps,
+                reverse=bool(self.scenario.reverse),
+                gain=self.scenario.driven_path_gain,
+            )
         return EtaScheduler(plant, self.plant_params) if kind == "curvature" else None
 
     def new_controller(self) -> Controller:

@@ -499,7 +499,7 @@ def _steering_record(stepper, mujoco_plant: bool):
     """The scheduler's gains and tables, and where the plant's couplings are."""
     from tt_mujoco.sim import records
     from tt_mujoco.sim.schedule import EtaScheduler, PathEtaScheduler
-    from tt_mujoco.vehicle.path_schedule import BLEND_PHI
+    from tt_mujoco.vehicle.path_schedule import BLEND_PHI, driven_path
 
     scheduler, n = stepper.scheduler, stepper.built.plant_params.n_trailers
     if mujoco_plant:
@@ -507,12 +507,13 @@ def _steering_record(stepper, mujoco_plant: bool):
     else:
         eq_data, ids, hitches_q, actuated = np.zeros((1, 1)), [0] * n, [0] * n, False
     kind, tables, arcs, bounds = 0, np.zeros((n, 5, 1)), np.zeros(n), (0.0, 0.0)
-    etas, tolerance = stepper.plant_etas, 0.0
+    etas, tolerance, driven = stepper.plant_etas, 0.0, driven_path(0, 0.0, 0.0)
     if isinstance(scheduler, PathEtaScheduler):
         kind, tolerance = records.PATH_SCHEDULE, scheduler.tolerance
         tables = np.array(scheduler.schedule.tables, dtype=float)
         arcs = np.array(scheduler.arc_lengths, dtype=float)
         bounds = (BLEND_PHI, scheduler.schedule.eta_max)
+        driven = scheduler.driven  # its arrays: the compiled steps log into them
     elif isinstance(scheduler, EtaScheduler):
         kind, tolerance = records.CURVATURE_SCHEDULE, scheduler.tolerance
     return records.SteeringRecord(
@@ -524,6 +525,7 @@ def _steering_record(stepper, mujoco_plant: bool):
         arcs=arcs,
         tables=tables,
         bounds=bounds,
+        driven=driven,
         eq_data=eq_data,
         ids=np.array(ids, dtype=np.int64),
         hitches_q=np.array(hitches_q, dtype=np.int64),

@@ -156,6 +156,9 @@ class SteeringRecord(NamedTuple):
     tables: np.ndarray
     #: (w, eta_max) of :func:`~tt_mujoco.vehicle.path_schedule.blended_gain_of`
     bounds: tuple
+    #: the path the tractor drove (:class:`~tt_mujoco.vehicle.path_schedule.DrivenPath`): the
+    #: path scheduler's own arrays
+    driven: Any
     #: MuJoCo: the model's ``eq_data``, the steering equalities' ids, their hitches' qpos
     #: addresses, and whether the axles are steered by actuator (else by linkage)
     eq_data: np.ndarray

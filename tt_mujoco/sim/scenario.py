@@ -15,7 +15,14 @@ import json
 import math
 from dataclasses import dataclass
 
-from tt_mujoco.defaults import CONTROLLER, DISTURBANCE_MODEL, MAX_DURATION, TIME_LIMIT_S, TIMESTEP
+from tt_mujoco.defaults import (
+    CONTROLLER,
+    DISTURBANCE_MODEL,
+    DRIVEN_PATH_GAIN,
+    MAX_DURATION,
+    TIME_LIMIT_S,
+    TIMESTEP,
+)
 from tt_mujoco.reference.feedback import check_config
 from tt_mujoco.registry import is_hook
 from tt_mujoco.schema import (
@@ -387,6 +394,17 @@ class Scenario:
         _eta_schedule,
         "schedule the plant's steering gain: false, curvature (or true) or path",
         cli=False,
+    )
+    #: With ``eta_schedule="path"``, driving forward: the gain (1/m) that steers each axle
+    #: towards the path the tractor drove (``atan(gain e)`` for ``e`` m beside it; 0: the
+    #: table's steering alone; docs/model.md Section 13).
+    driven_path_gain: float = option(
+        DRIVEN_PATH_GAIN,
+        number(0, unit="1/m"),
+        "with --eta path, driving forward: how hard each axle is steered towards the path the "
+        "tractor drove (0: the schedule's steering alone)",
+        unit="1/m",
+        metavar="K",
     )
     #: Drive the path backwards, trailer first
     #: (:class:`tt_mujoco.reference.reverse.ReverseTarget`).

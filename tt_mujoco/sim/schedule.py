@@ -7,9 +7,14 @@ import math
 
 import numpy as np
 
+from tt_mujoco.defaults import DRIVEN_PATH_GAIN
 from tt_mujoco.sim.plant import Plant
 from tt_mujoco.vehicle.params import Params
-from tt_mujoco.vehicle.path_schedule import PathSchedule
+from tt_mujoco.vehicle.path_schedule import (
+    PathSchedule,
+    driven_path,
+    record_driven_of,
+)
 from tt_mujoco.vehicle.steering import (
     SCHEDULE_TOLERANCE,
     exact_same_path_eta_of,
@@ -120,15 +125,25 @@ class PathEtaScheduler(EtaScheduler):
         projection starts from the schedule's place for it there.
     tolerance : float
         As :class:`EtaScheduler`.
+    steps : int
+        The run's control steps (how much of the tractor's driven path to hold).
+    reverse : bool
+        Backing up: the axles lead the tractor and take the table's steering, with no
+        feedback to the tractor's path.
+    gain : float
+        The feedback's gain driving forward (1/m; 0: the table's steering alone).
 
     Notes
     -----
     Each step projects every axle onto the path (Newton steps from its previous arc length)
     and looks its gain up there, so a trailer that is off its schedule gets the gain of where
-    it is, not of where the tractor is. The plant starts on the gains of where its axles
-    stand (before the first step). A gain that sweeps [-3, 3] and changes sign along the path
-    is no fixed linkage ratio, so the plant's axles are steered by an actuator
-    (:meth:`~tt_mujoco.sim.plant.Plant.steer_by_actuator`).
+    it is, not of where the tractor is. Driving forward, the steering it is given is the one
+    that turns it onto the path the tractor drove (:func:`~tt_mujoco.vehicle.path_schedule.
+    driven_steering_of`): along the path's tangent from the trailer's heading as it is, less
+    ``atan(gain e)`` where it stands ``e`` beside that path. The plant starts on
+    the gains of where its axles stand (before the first step). A gain that sweeps [-3, 3] and
+    changes sign along the path is no fixed linkage ratio, so the plant's axles are steered by
+    an actuator (:meth:`~tt_mujoco.sim.plant.Plant.steer_by_actuator`).
     """
 
     def __init__(
@@ -138,6 +153,9 @@ class PathEtaScheduler(EtaScheduler):
         schedule: PathSchedule,
         start_s: float = 0.0,
         tolerance: float = SCHEDULE_TOLERANCE,
+        steps: int = 0,
+        reverse: bool = False,
+        gain: float = DRIVEN_PATH_GAIN,
     ):
         super().__init__(plant, params, tolerance)
         if schedule.n_trailers != len(self.lengths):
@@ -146,6 +164,8 @@ class PathEtaScheduler(EtaScheduler):
                 f"{len(self.lengths)}"
             )
         self.schedule = schedule
+        #: the path the tractor drove (steps + 1 control steps are logged at most)
+        self.driven = driven_path(steps + 1, start_s, 0.0 if reverse else float(gain))
         self.arc_lengths = schedule.arc_lengths_at(start_s)
         for k, (x, y) in enumerate(_axle_positions(plant.measure())):
             self.arc_lengths[k] = schedule.project(self.arc_lengths[k], x, y)
@@ -156,13 +176,16 @@ class PathEtaScheduler(EtaScheduler):
 
     def update(self, kappa: float, step: int = 0, measurement=None) -> float:
         """Schedule every trailer's gain from where its axle is in ``measurement``
-        (:class:`~tt_mujoco.sim.measure.Measurement`); ``kappa`` is not used."""
-        schedule = self.schedule
-        arcs = self.arc_lengths
+        (:class:`~tt_mujoco.sim.measure.Measurement`), driving forward towards the path the
+        tractor drove; ``kappa`` is not used."""
+        schedule, arcs, driven, me = self.schedule, self.arc_lengths, self.driven, measurement
+        if driven.gain != 0.0:
+            record_driven_of(schedule.path, driven, me.x, me.y)
         etas = []
-        phis = measurement.phis
-        for k, point in enumerate(_axle_positions(measurement)):
-            arcs[k], eta = schedule.axle_gain(k, arcs[k], point, phis[k])
+        phis = me.phis
+        headings = (me.theta0, *(row[2] for row in getattr(me, "train", ())))
+        for k, point in enumerate(_axle_positions(me)):
+            arcs[k], eta = schedule.axle_gain(k, arcs[k], point, headings[k], phis[k], driven)
             etas.append(eta)
         self._offer(tuple(etas), step)
         return self.eta

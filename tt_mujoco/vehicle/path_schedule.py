@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -40,8 +41,10 @@ from tt_mujoco.vehicle.steering import wrap_angle
 __all__ = [
     "BLEND_PHI",
     "DEFAULT_ETA_MAX",
+    "DrivenPath",
     "PathSchedule",
     "axle_chain",
+    "driven_path",
     "nearest_arc_length",
     "path_schedule",
 ]
@@ -207,11 +210,14 @@ class PathSchedule:
         """Arc length of the path point nearest (x, y) (:func:`nearest_arc_length`)."""
         return nearest_arc_length(self.path, s_guess, x, y)
 
-    def axle_gain(self, k: int, s_guess: float, point, phi: float) -> tuple[float, float]:
+    def axle_gain(
+        self, k: int, s_guess: float, point, heading: float, phi: float, driven: DrivenPath
+    ) -> tuple[float, float]:
         """``(s, eta)``: trailer ``k``'s axle at ``point = (x, y)`` projected onto the path from
-        ``s_guess``, and its gain there with the hitch angle ``phi`` (:func:`axle_gain_of`)."""
+        ``s_guess``, and its gain there with its trailer heading ``heading`` and hitch angle
+        ``phi`` as they are, steered towards ``driven`` (:func:`axle_gain_of`)."""
         bounds = (BLEND_PHI, self.eta_max)
-        return axle_gain_of(self.path, s_guess, point, phi, self.tables[k], bounds)
+        return axle_gain_of(self.path, s_guess, point, heading, phi, self.tables[k], bounds, driven)
 
 
 def path_pose(path, s: float) -> tuple[float, float, float]:
@@ -304,12 +310,99 @@ def table_gain_of(table, s: float, phi: float, bounds) -> float:
     return blended_gain_of(eta, steering, phi, bounds)
 
 
-def axle_gain_of(path, s_guess: float, point, phi: float, table, bounds):
-    """``(s, eta)``: the axle at ``point = (x, y)`` projected onto the path from ``s_guess``
-    (:func:`nearest_arc_length_of`), and :func:`table_gain_of` there (the compiled episode
+class DrivenPath(NamedTuple):
+    """The path the tractor drove, as its offset from the reference path by arc length: where
+    the path schedule's feedback steers the axles (:func:`driven_steering_of`)."""
+
+    #: the tractor's arc lengths, ascending (the first ``count[0]`` hold), and its signed
+    #: offsets from the reference path there (m, left positive)
+    arcs: np.ndarray
+    offsets: np.ndarray
+    #: how many are held (int64, shape (1,)), and the tractor's arc length at the last step
+    #: (shape (1,): where the next projection starts)
+    count: np.ndarray
+    tractor: np.ndarray
+    #: the feedback's gain (1/m; ``Scenario.driven_path_gain`` driving forward); 0 reversing,
+    #: where the axles lead the tractor, or as asked: the table's steering
+    gain: float
+
+
+def driven_path(capacity: int, start_s: float, gain: float) -> DrivenPath:
+    """An empty :class:`DrivenPath` for ``capacity`` control steps, the tractor at ``start_s``."""
+    return DrivenPath(
+        arcs=np.zeros(max(1, capacity)),
+        offsets=np.zeros(max(1, capacity)),
+        count=np.zeros(1, dtype=np.int64),
+        tractor=np.array([float(start_s)]),
+        gain=float(gain),
+    )
+
+
+def signed_offset_of(path, s: float, x: float, y: float) -> float:
+    """How far (x, y) stands left of the path's point at ``s``, across its tangent (m; the
+    compiled episode shares it)."""
+    px, py, heading = path_pose(path, s)
+    return (y - py) * math.cos(heading) - (x - px) * math.sin(heading)
+
+
+def record_driven_of(path, driven: DrivenPath, x: float, y: float) -> None:
+    """Log the tractor at (x, y): projected onto the path from its last arc length, its offset
+    kept where it has gone further along the path than ever before (the compiled episode
     shares it)."""
+    s = nearest_arc_length_of(path, driven.tractor[0], x, y)
+    driven.tractor[0] = s
+    n = driven.count[0]
+    if (n == 0 or s > driven.arcs[n - 1]) and n < driven.arcs.size:
+        driven.arcs[n] = s
+        driven.offsets[n] = signed_offset_of(path, s, x, y)
+        driven.count[0] = n + 1
+
+
+def driven_offset_of(driven: DrivenPath, s: float) -> float:
+    """The tractor's offset from the reference path where it passed arc length ``s``, linear
+    between the logged ones and held beyond them (the compiled episode shares it)."""
+    n = driven.count[0]
+    if n == 0:
+        return 0.0
+    arcs, offsets = driven.arcs, driven.offsets
+    if s <= arcs[0]:
+        return offsets[0]
+    if s >= arcs[n - 1]:
+        return offsets[n - 1]
+    lo, hi = 0, n - 1  # arcs[lo] < s < arcs[hi]
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if arcs[mid] <= s:
+            lo = mid
+        else:
+            hi = mid
+    return offsets[lo] + (s - arcs[lo]) / (arcs[hi] - arcs[lo]) * (offsets[hi] - offsets[lo])
+
+
+def driven_steering_of(path, s: float, point, heading: float, driven: DrivenPath) -> float:
+    """The steering of an axle at ``point`` (arc length ``s``) whose trailer heads ``heading``:
+    along the path's tangent there, turned back by ``atan(gain e)`` where it stands ``e``
+    beside the path the tractor drove (the compiled episode shares it).
+
+    On the schedule it is the table's ``beta_k(s)`` (``heading(s_k) - theta_k``, ``e = 0``).
+    """
+    tangent = path_pose(path, s)[2]
+    beside = signed_offset_of(path, s, point[0], point[1]) - driven_offset_of(driven, s)
+    return wrap_angle(tangent - heading) - math.atan(driven.gain * beside)
+
+
+def axle_gain_of(path, s_guess: float, point, heading: float, phi: float, table, bounds, driven):
+    """``(s, eta)``: the axle at ``point = (x, y)`` projected onto the path from ``s_guess``
+    (:func:`nearest_arc_length_of`), and its gain there (:func:`blended_gain_of` of the
+    table's gain and :func:`driven_steering_of`; reversing, :func:`table_gain_of`). The
+    compiled episode shares it."""
     s = nearest_arc_length_of(path, s_guess, point[0], point[1])
-    return s, table_gain_of(table, s, phi, bounds)
+    if driven.gain == 0.0:
+        return s, table_gain_of(table, s, phi, bounds)
+    xs = table[0]
+    eta = hermite_of(bisect_right_of(xs, s), xs, table[1], table[2], s)
+    steering = driven_steering_of(path, s, point, heading, driven)
+    return s, blended_gain_of(eta, steering, phi, bounds)
 
 
 def path_schedule(path, lengths, eta_max: float = DEFAULT_ETA_MAX, spacing: float = TABLE_SPACING):
