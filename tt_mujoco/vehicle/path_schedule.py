@@ -338,10 +338,10 @@ def driven_path(capacity: int, start_s: float, gain: float) -> DrivenPath:
     )
 
 
-def signed_offset_of(path, s: float, x: float, y: float) -> float:
-    """How far (x, y) stands left of the path's point at ``s``, across its tangent (m; the
-    compiled episode shares it)."""
-    px, py, heading = path_pose(path, s)
+def signed_offset_of(pose, x: float, y: float) -> float:
+    """How far (x, y) stands left of a path point ``pose = (x, y, heading)``
+    (:func:`path_pose`), across its tangent (m; the compiled episode shares it)."""
+    px, py, heading = pose
     return (y - py) * math.cos(heading) - (x - px) * math.sin(heading)
 
 
@@ -354,7 +354,7 @@ def record_driven_of(path, driven: DrivenPath, x: float, y: float) -> None:
     n = driven.count[0]
     if (n == 0 or s > driven.arcs[n - 1]) and n < driven.arcs.size:
         driven.arcs[n] = s
-        driven.offsets[n] = signed_offset_of(path, s, x, y)
+        driven.offsets[n] = signed_offset_of(path_pose(path, s), x, y)
         driven.count[0] = n + 1
 
 
@@ -386,9 +386,9 @@ def driven_steering_of(path, s: float, point, heading: float, driven: DrivenPath
 
     On the schedule it is the table's ``beta_k(s)`` (``heading(s_k) - theta_k``, ``e = 0``).
     """
-    tangent = path_pose(path, s)[2]
-    beside = signed_offset_of(path, s, point[0], point[1]) - driven_offset_of(driven, s)
-    return wrap_angle(tangent - heading) - math.atan(driven.gain * beside)
+    pose = path_pose(path, s)  # once: the tangent and the offset both read it
+    beside = signed_offset_of(pose, point[0], point[1]) - driven_offset_of(driven, s)
+    return wrap_angle(pose[2] - heading) - math.atan(driven.gain * beside)
 
 
 def axle_gain_of(path, s_guess: float, point, heading: float, phi: float, table, bounds, driven):
