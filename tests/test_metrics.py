@@ -697,6 +697,12 @@ def test_the_compiled_search_finds_the_vectorised_search_s_nearest_points(compil
     # A square: points on its diagonals are equally near two sides (ties go to the lower one).
     square = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0, 0]], dtype=float)
     cases.append((square, np.array([[0.5, 0.5], [0.25, 0.25], [0.75, 0.25], [2.0, 2.0]]), {}))
+    # A straight path far from the origin, its chunks' chords on it: points on the path are at
+    # distance 0 from every chunk they touch, ties the chord bound must not cut away.
+    line = np.column_stack([1e4 + 0.001 * np.arange(200.0), np.full(200, -3e3)])
+    on_line = line[rng.integers(0, 200, 300)]
+    beside = on_line + np.column_stack([rng.normal(0, 1e-3, 300), rng.normal(0, 1e-9, 300)])
+    cases.append((line, np.vstack([on_line, beside, line[::16]]), {}))
     for vertices, points, options in cases:
         line = Polyline(vertices)
         for extend_ends in (False, True):
@@ -707,6 +713,29 @@ def test_the_compiled_search_finds_the_vectorised_search_s_nearest_points(compil
                 np.testing.assert_array_equal(
                     getattr(fast, name), getattr(slow, name), err_msg=name
                 )
+
+
+def test_every_point_of_a_chunk_lies_within_its_chord_reach():
+    from tt_mujoco.analysis import geometry
+
+    rng = np.random.default_rng(11)
+    for vertices in random_polylines(rng):
+        line = Polyline(vertices)
+        table, n_seg = line.table, line.n_segments
+        start = np.column_stack([table.chord_x, table.chord_y])
+        chord = np.column_stack([table.chord_dx, table.chord_dy])
+        for c in range(start.shape[0]):
+            segments = np.arange(c * geometry._CHUNK, min(n_seg, (c + 1) * geometry._CHUNK))
+            s = np.linspace(0.0, 1.0, 9)[:, None, None]
+            points = line.vertices[segments] + s * (
+                line.vertices[segments + 1] - line.vertices[segments]
+            )
+            rel = points.reshape(-1, 2) - start[c]
+            t = np.clip(rel @ chord[c] * table.chord_inv_len2[c], 0.0, 1.0)
+            stray = np.hypot(*(rel - t[:, None] * chord[c]).T)
+            assert stray.max() <= table.chord_reach[c]
+            # and the bound is not loose: the farthest vertex sets it
+            assert table.chord_reach[c] <= stray.max() * (1 + 1e-8) + 1e-11 * np.abs(vertices).max()
 
 
 def test_nearest_segment_of_is_the_brute_force_nearest_in_plain_python():

@@ -50,20 +50,24 @@ _WINDOW_CHUNKS = 512
 
 
 class SegmentTable(NamedTuple):
-    """A polyline's segments and their bounding circles as plain arrays: what the compiled
-    projection reads. Segment ``k`` starts at ``(sx, sy)[k]`` and runs ``(dx, dy)[k]``; chunk
-    ``c`` holds segments ``c * _CHUNK`` to ``c * _CHUNK + _CHUNK - 1`` inside the circle
-    ``(chunk_cx, chunk_cy, chunk_r)[c]``, and group ``g`` chunks ``g * _CHUNK`` to
-    ``g * _CHUNK + _CHUNK - 1`` inside ``(group_cx, group_cy, group_r)[g]``."""
+    """A polyline's segments and their bounds as plain arrays: what the compiled projection
+    reads. Segment ``k`` starts at ``(sx, sy)[k]`` and runs ``(dx, dy)[k]``; chunk ``c`` holds
+    segments ``c * _CHUNK`` to ``c * _CHUNK + _CHUNK - 1``, all within ``chord_reach[c]`` of its
+    chord, the segment from ``(chord_x, chord_y)[c]`` along ``(chord_dx, chord_dy)[c]`` (its
+    first vertex to its last); group ``g`` holds chunks ``g * _CHUNK`` to ``g * _CHUNK + _CHUNK
+    - 1`` inside the circle ``(group_cx, group_cy, group_r)[g]``."""
 
     sx: np.ndarray
     sy: np.ndarray
     dx: np.ndarray
     dy: np.ndarray
     inv_len2: np.ndarray
-    chunk_cx: np.ndarray
-    chunk_cy: np.ndarray
-    chunk_r: np.ndarray
+    chord_x: np.ndarray
+    chord_y: np.ndarray
+    chord_dx: np.ndarray
+    chord_dy: np.ndarray
+    chord_inv_len2: np.ndarray
+    chord_reach: np.ndarray
     group_cx: np.ndarray
     group_cy: np.ndarray
     group_r: np.ndarray
@@ -94,6 +98,19 @@ def _beyond(px, py, cx, cy, r, best_distance) -> bool:
     return (px - cx) ** 2 + (py - cy) ** 2 > reach * reach * (1.0 + 1e-9)
 
 
+def _chunk_beyond(px, py, table, c, best_distance) -> bool:
+    """Whether chunk ``c`` lies wholly farther than ``best_distance``: its chord is farther
+    than that by more than the chunk strays from it. Tighter than a circle around the chunk
+    for a point beside a smooth path, whose neighbouring chunks a circle would keep."""
+    rx, ry = px - table.chord_x[c], py - table.chord_y[c]
+    dx, dy = table.chord_dx[c], table.chord_dy[c]
+    t = min(max((rx * dx + ry * dy) * table.chord_inv_len2[c], 0.0), 1.0)
+    rx -= t * dx
+    ry -= t * dy
+    reach = best_distance + table.chord_reach[c]
+    return rx * rx + ry * ry > reach * reach * (1.0 + 1e-9)
+
+
 def _scan(px, py, a, b, extend, table, best):
     """Segments ``a`` to ``b - 1`` against the best ``(d2, segment, t)`` so far."""
     n_seg = table.sx.shape[0]
@@ -111,9 +128,10 @@ def nearest_segment_of(px, py, lo, hi, extend, table, warm):
     """The nearest of segments ``lo`` to ``hi - 1`` to one point: ``(d2, segment, t)``.
 
     Exact: it starts from the chunk of segment ``warm`` (the previous sample's nearest, for a
-    time series), then searches every other group, and in it every chunk, whose circle is not
-    beyond the best so far. ``extend`` continues the polyline's first and last segments as
-    rays, which no circle bounds, so those are tried first. Ties go to the lower segment index.
+    time series), then searches every other group whose circle is not beyond the best so far,
+    and in it every chunk whose chord bound (:func:`_chunk_beyond`) is not. ``extend``
+    continues the polyline's first and last segments as rays, which no bound covers, so those
+    are tried first. Ties go to the lower segment index.
     """
     n_seg = table.sx.shape[0]
     best = (np.inf, -1, 0.0)
@@ -132,7 +150,7 @@ def nearest_segment_of(px, py, lo, hi, extend, table, warm):
         for c in range(max(c_lo, g * _CHUNK), min(c_hi, g * _CHUNK + _CHUNK)):
             if c == first_chunk:
                 continue
-            if _beyond(px, py, table.chunk_cx[c], table.chunk_cy[c], table.chunk_r[c], reach):
+            if _chunk_beyond(px, py, table, c, reach):
                 continue
             a, b = max(lo, c * _CHUNK), min(hi, c * _CHUNK + _CHUNK)
             best = _scan(px, py, a, b, extend, table, best)
@@ -277,6 +295,23 @@ class Polyline:
         self._chunk_tree = cKDTree(self._chunk_centre)
         self._tree = cKDTree(centre)
 
+    def _chunk_chords(self, chunk_vertices: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Each chunk's chord (its first vertex to its last: start, direction, 1 / length^2, 0
+        for a closed chunk) and how far its vertices, hence its segments, stray from it (a
+        segment lies in the convex hull of its ends, and the distance to the chord is convex),
+        widened by 1e-12 of the path's extent against rounding in the bound."""
+        start, end = chunk_vertices[:, 0], chunk_vertices[:, -1]
+        chord = end - start
+        length2 = np.einsum("ij,ij->i", chord, chord)
+        inv_length2 = np.divide(1.0, length2, out=np.zeros_like(length2), where=length2 > 0.0)
+        rel = chunk_vertices - start[:, None, :]
+        t = np.clip(np.einsum("ijk,ik->ij", rel, chord) * inv_length2[:, None], 0.0, 1.0)
+        off = rel - t[..., None] * chord[:, None, :]
+        stray = np.sqrt(np.max(np.einsum("ijk,ijk->ij", off, off), axis=1))
+        slack = 1e-12 * float(np.max(np.abs(self.vertices)))
+        columns = (start[:, 0], start[:, 1], chord[:, 0], chord[:, 1], inv_length2)
+        return (*(np.ascontiguousarray(c) for c in columns), stray * (1.0 + 1e-9) + slack)
+
     @property
     def n_segments(self) -> int:
         """Number of segments (``len(vertices) - 1``)."""
@@ -342,9 +377,7 @@ class Polyline:
             self._dx,
             self._dy,
             self._inv_len2,
-            np.ascontiguousarray(centre[:, 0]),
-            np.ascontiguousarray(centre[:, 1]),
-            self._chunk_radius,
+            *self._chunk_chords(chunk_vertices),
             np.ascontiguousarray(group_centre[:, 0]),
             np.ascontiguousarray(group_centre[:, 1]),
             group_radius,

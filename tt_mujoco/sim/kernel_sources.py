@@ -131,6 +131,7 @@ SHARED = (
     geometry.segment_distance2_of,
     geometry._better,
     geometry._beyond,
+    geometry._chunk_beyond,
     geometry._scan,
     geometry.nearest_segment_of,
 )
