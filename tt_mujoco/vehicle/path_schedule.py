@@ -369,13 +369,8 @@ def driven_offset_of(driven: DrivenPath, s: float) -> float:
         return offsets[0]
     if s >= arcs[n - 1]:
         return offsets[n - 1]
-    lo, hi = 0, n - 1  # arcs[lo] < s < arcs[hi]
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if arcs[mid] <= s:
-            lo = mid
-        else:
-            hi = mid
+    hi = bisect_right_of(arcs[:n], s)  # arcs[hi - 1] <= s < arcs[hi]
+    lo = hi - 1
     return offsets[lo] + (s - arcs[lo]) / (arcs[hi] - arcs[lo]) * (offsets[hi] - offsets[lo])
 
 
