@@ -211,13 +211,12 @@ def _write_manifest(compiled_here: bool = False) -> None:
 def _compile_in_background() -> None:
     """Start one process that compiles the kernel into the cache (a lock file keeps it one)."""
     import subprocess
-    import time
 
     cache = _cache_dir()
     lock = cache / COMPILE_LOCK
     try:
         cache.mkdir(parents=True, exist_ok=True)
-        if lock.exists() and time.time() - lock.stat().st_mtime > COMPILE_LOCK_STALE_S:
+        if lock.exists() and not compile_in_progress(cache):
             lock.unlink(missing_ok=True)  # a compile that died
         fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
         os.close(fd)
