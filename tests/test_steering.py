@@ -183,6 +183,35 @@ def test_an_actuated_axle_holds_beta_eta_phi_and_loads_the_hitch_with_nothing():
         plant.set_etas((1.0, 1.0))
 
 
+def test_an_actuated_axle_starts_where_it_stands_and_turns_at_its_slew_rate():
+    from tt_mujoco.sim.plant_mujoco import MujocoPlant, aim_steering_of
+
+    # the pure update: at most max_turn a step, the target itself once within reach
+    eq_data, qpos = np.zeros((1, 5)), np.array([-0.2])  # hitch angle -phi: phi = 0.2
+    aim_steering_of(eq_data, [0], [0], [2.0], qpos, 0.05)
+    assert eq_data[0, 0] == 0.05
+    aim_steering_of(eq_data, [0], [0], [-0.5], qpos, 0.05)
+    assert eq_data[0, 0] == 0.0
+    aim_steering_of(eq_data, [0], [0], [-0.1], qpos, 0.05)
+    assert eq_data[0, 0] == -0.1 * 0.2
+
+    params = Params(axle_slew_rate=2.0)
+    plant = MujocoPlant(params, (0.0, 0.0, 0.0), 0.8, wrench=False, phi0=0.2)
+    plant.steer_by_actuator()
+    row = plant.model.eq_data[plant.model.equality("steering").id]
+    start = plant.measure().beta
+    assert row[0] == start == pytest.approx(params.eta * 0.2)  # no step at the hand-over
+    plant.set_etas((2.0,))  # asks beta = 0.4 rad at once
+    targets = []
+    for _ in range(50):
+        plant.advance(1)
+        targets.append(row[0])
+    # 2 rad/s at 1 ms a step: 2 mrad a step, far short of the 0.43 rad asked
+    assert np.diff([start, *targets]) == pytest.approx(np.full(50, 2e-3), abs=1e-12)
+    with pytest.raises(ValueError, match="axle_slew_rate=0 is not allowed"):
+        Params(axle_slew_rate=0)
+
+
 def test_reverse_target_runs_the_path_backwards():
     _, forward, _ = make_target("circle", "dynamic")
     rev = ReverseTarget(forward)

@@ -35,6 +35,11 @@ DISTURBANCE_MODEL = "paper"
 #: Gain (1/m) of the path schedule's feedback to the path the tractor drove: an axle ``e``
 #: beside it is steered ``atan(DRIVEN_PATH_GAIN e)`` back (docs/model.md Section 13).
 DRIVEN_PATH_GAIN = 10.0
+#: Slew rate (rad/s) of an actuated axle (``--eta path`` on the MuJoCo plant): its steering
+#: target moves at most this fast. The path schedule's gain flips sign at an inflection, and an
+#: unbounded actuator passed the flip on as a steering step of several degrees within a physics
+#: step, a jolt that slipped the tractor's tyres (docs/model.md Section 13).
+AXLE_SLEW_RATE = 1.0
 
 #: Exit codes of every command: done; bad input (one message, nothing written); the run
 #: diverged, jackknifed or its user code failed (what was computed is kept); interrupted.

@@ -385,7 +385,12 @@ def _advance(plant, T_r, T_l, push, weather, stop):
         for _ in range(plant.substeps):
             if steering.actuated:  # the axles' targets follow the hitches every physics step
                 plant_mujoco.aim_steering_of(
-                    steering.eq_data, steering.ids, steering.hitches_q, steering.etas, mj.qpos
+                    steering.eq_data,
+                    steering.ids,
+                    steering.hitches_q,
+                    steering.etas,
+                    mj.qpos,
+                    steering.max_turn,
                 )
             mj_step(mj.pointers[0], mj.pointers[1])
         for i in range(mj.warnings.size):

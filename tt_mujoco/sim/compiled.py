@@ -502,9 +502,9 @@ def _steering_record(stepper, mujoco_plant: bool):
 
     scheduler, n = stepper.scheduler, stepper.built.plant_params.n_trailers
     if mujoco_plant:
-        eq_data, ids, hitches_q, actuated = stepper.plant.steering
+        eq_data, ids, hitches_q, actuated, max_turn = stepper.plant.steering
     else:
-        eq_data, ids, hitches_q, actuated = np.zeros((1, 1)), [0] * n, [0] * n, False
+        eq_data, ids, hitches_q, actuated, max_turn = np.zeros((1, 1)), [0] * n, [0] * n, False, 0.0
     kind, tables, arcs, bounds = 0, np.zeros((n, 5, 1)), np.zeros(n), (0.0, 0.0)
     etas, tolerance, driven = stepper.plant_etas, 0.0, driven_path(0, 0.0, 0.0)
     if isinstance(scheduler, PathEtaScheduler):
@@ -529,6 +529,7 @@ def _steering_record(stepper, mujoco_plant: bool):
         ids=np.array(ids, dtype=np.int64),
         hitches_q=np.array(hitches_q, dtype=np.int64),
         actuated=actuated,
+        max_turn=max_turn,
         updates=np.zeros(1, dtype=np.int64),
     )
 

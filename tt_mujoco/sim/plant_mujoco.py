@@ -28,12 +28,18 @@ def scale_body_of(body_mass, body_inertia, body: int, factor: float) -> None:
     body_inertia[body] *= factor
 
 
-def aim_steering_of(eq_data, ids, hitches_q, etas, qpos) -> None:
+def aim_steering_of(eq_data, ids, hitches_q, etas, qpos, max_turn: float) -> None:
     """Actuated axles (:meth:`MujocoPlant.steer_by_actuator`): each steering equality's target
-    ``eq_data[id, 0]`` set to ``eta_k phi_k`` from its hitch, before a physics step (the
-    compiled episode shares it)."""
+    ``eq_data[id, 0]`` moved towards ``eta_k phi_k`` from its hitch, by at most ``max_turn``
+    (rad), before a physics step (the compiled episode shares it)."""
     for k in range(len(ids)):
-        eq_data[ids[k], 0] = -etas[k] * qpos[hitches_q[k]]  # the hitch joint's angle is -phi
+        aim = -etas[k] * qpos[hitches_q[k]]  # the hitch joint's angle is -phi
+        now = eq_data[ids[k], 0]
+        if aim > now + max_turn:  # the slew rate binds (set exactly, not now + (aim - now))
+            aim = now + max_turn
+        elif aim < now - max_turn:
+            aim = now - max_turn
+        eq_data[ids[k], 0] = aim
 
 
 def warning_message(name: str, t: float) -> str:
@@ -101,14 +107,17 @@ class MujocoPlant(Plant):
         self._eq_data = self.model.eq_data
         self._steering_rows = [self._eq_data[i] for i in self._steering_ids]
         self._hitches_q = [lay.hitch_q, *(hitch_q for hitch_q, *_ in lay.train)]
+        self._steers_q = [lay.steer_q, *(steer_q for _, _, steer_q, *_ in lay.train)]
+        self._max_turn = params.axle_slew_rate * params.timestep  # per physics step
         self._actuated_etas: list[float] | None = None  # see steer_by_actuator
 
     @property
     def steering(self) -> tuple:
-        """``(eq_data, equality ids, hitch qpos addresses, actuated)``: where the trailers'
-        steering couplings are (the compiled episode writes its scheduled gains there)."""
+        """``(eq_data, equality ids, hitch qpos addresses, actuated, max_turn)``: where the
+        trailers' steering couplings are (the compiled episode writes its scheduled gains
+        there), and how far an actuated axle's target moves in a physics step at most."""
         actuated = self._actuated_etas is not None
-        return self._eq_data, self._steering_ids, self._hitches_q, actuated
+        return self._eq_data, self._steering_ids, self._hitches_q, actuated, self._max_turn
 
     @property
     def tractor_body(self) -> int:
@@ -142,12 +151,15 @@ class MujocoPlant(Plant):
         """Each coupling becomes an equality on the steering joint alone, ``q_steer =
         polycoef[0]``, its target set to ``eta_k phi_k`` from the hitch before every physics
         step: the constraint's force then acts between the axle and its trailer's body, and
-        the hitch carries none of it (the linkage's acts on the hitch times eta)."""
+        the hitch carries none of it (the linkage's acts on the hitch times eta). The target
+        starts where the axle stands and turns at most at ``Params.axle_slew_rate``."""
         if self._actuated_etas is None:
             self._actuated_etas = [-row[1] for row in self._steering_rows]
             for i, row in zip(self._steering_ids, self._steering_rows, strict=True):
                 self.model.eq_obj2id[i] = -1
                 row[1] = 0.0
+        for row, steer_q in zip(self._steering_rows, self._steers_q, strict=True):
+            row[0] = self._qpos[steer_q]
 
     def set_eta(self, eta: float) -> None:
         self.set_etas((eta,))
@@ -218,7 +230,7 @@ class MujocoPlant(Plant):
             for _ in range(substeps):
                 aim_steering_of(
                     self._eq_data, self._steering_ids, self._hitches_q, self._actuated_etas,
-                    self._qpos,
+                    self._qpos, self._max_turn,
                 )  # fmt: skip
                 mujoco.mj_step(self.model, self.data)
         # MuJoCo resets the state when a warning fires: stop at once, before it is measured.

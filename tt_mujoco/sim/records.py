@@ -160,11 +160,13 @@ class SteeringRecord(NamedTuple):
     #: path scheduler's own arrays
     driven: Any
     #: MuJoCo: the model's ``eq_data``, the steering equalities' ids, their hitches' qpos
-    #: addresses, and whether the axles are steered by actuator (else by linkage)
+    #: addresses, whether the axles are steered by actuator (else by linkage), and how far an
+    #: actuated axle's target moves in a physics step at most (rad)
     eq_data: np.ndarray
     ids: np.ndarray
     hitches_q: np.ndarray
     actuated: bool
+    max_turn: float
     #: the changes applied so far
     updates: np.ndarray
 

@@ -13,7 +13,7 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
-from tt_mujoco.defaults import JACKKNIFE_DEG, TORQUE_LIMIT
+from tt_mujoco.defaults import AXLE_SLEW_RATE, JACKKNIFE_DEG, TORQUE_LIMIT
 
 __all__ = [
     "MAX_TRAILERS",
@@ -244,6 +244,10 @@ class Params:
         :attr:`steering`.
     torque_limit : float
         Wheel torque saturation |T| (N m), the paper's 15 N m (Section 6.2).
+    axle_slew_rate : float
+        How fast an actuated axle turns at most (rad/s): the MuJoCo plant's axles under the
+        path schedule, whose gain is no fixed linkage (docs/model.md Section 13; not in the
+        paper). A linkage and the reduced plant's kinematic steering have no such bound.
     friction : float
         Sliding friction coefficient between the wheels and the floor.
     timestep : float
@@ -299,6 +303,7 @@ class Params:
     d: float = 0.2
     eta: float | str = "same_path"
     torque_limit: float = TORQUE_LIMIT
+    axle_slew_rate: float = AXLE_SLEW_RATE
     friction: float = 1.0
     timestep: float = 0.001
     impratio: float = 10.0
@@ -325,6 +330,7 @@ class Params:
             "r",
             "d",
             "torque_limit",
+            "axle_slew_rate",
             "friction",
             "impratio",
             "body_tilt_inertia_ratio",
