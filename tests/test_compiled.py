@@ -211,10 +211,29 @@ def test_first_use_compiles_in_the_background_and_runs_the_python_loop(monkeypat
     monkeypatch.setattr(compiled, "_KERNEL", None)
     started = []
     monkeypatch.setattr(compiled, "_compile_in_background", lambda: started.append(1))
+    monkeypatch.setattr(compiled, "_ASKED", False)
+    at_exit = []
+    monkeypatch.setattr("atexit.register", at_exit.append)
     built = build(Scenario(traj="circle", duration=3.0))
     assert compiled.unsupported(built, built.new_controller()) is None  # a query: no compile
     assert started == []
-    assert not compiled.ready() and started == [1]
+    # the first episode leaves the machine to the run: the compile starts as the process exits
+    assert not compiled.ready() and started == [] and at_exit == [compiled._compile_at_exit]
+    at_exit[0]()
+    assert started == [1]
+    # a process that runs a second episode starts it then, and registers nothing more
+    started.clear()
+    assert not compiled.ready() and started == [1] and len(at_exit) == 1
+
+
+def test_the_compile_asked_at_exit_is_skipped_once_the_kernel_is_there(monkeypatch, tmp_path):
+    monkeypatch.setenv("TT_MUJOCO_COMPILE_NOW", "0")
+    monkeypatch.setattr(compiled, "_KERNEL", None)
+    _fake_cache(monkeypatch, tmp_path)  # filled meanwhile, by another process
+    started = []
+    monkeypatch.setattr(compiled, "_compile_in_background", lambda: started.append(1))
+    compiled._compile_at_exit()
+    assert started == []
 
 
 def test_a_user_controller_runs_the_python_loop():
@@ -275,6 +294,7 @@ def test_a_damaged_cache_is_set_aside_and_the_run_takes_the_python_loop(
         cache = compiled._cache_dir()
     started = []
     monkeypatch.setattr(compiled, "_compile_in_background", lambda: started.append(1))
+    monkeypatch.setattr(compiled, "_ASKED", True)  # a second episode: the compile starts now
     assert not compiled.ready() and started == [1]
     err = capsys.readouterr().err
     assert "compiled-code cache could not be loaded" in err and "Python loop" in err
@@ -293,6 +313,7 @@ def test_a_cache_a_background_compile_is_writing_is_not_set_aside(monkeypatch, t
     (cache / compiled.COMPILE_LOCK).touch()
     started = []
     monkeypatch.setattr(compiled, "_compile_in_background", lambda: started.append(1))
+    monkeypatch.setattr(compiled, "_ASKED", True)
     assert not compiled.ready()
     assert cache.exists() and not list(cache.parent.glob(f"{cache.name}.damaged-*"))
     assert "could not be loaded" not in capsys.readouterr().err

@@ -96,9 +96,9 @@ def unsupported(built, controller, on_step=None) -> str | None:
     for failed, reason in reasons:
         if failed:
             return reason
-    try:
-        import numba  # noqa: F401
-    except ImportError:
+    from importlib.util import find_spec
+
+    if find_spec("numba") is None:  # not imported: a run that takes the Python loop never needs it
         return "numba is not installed"
     return None
 
@@ -127,12 +127,37 @@ def _model_of(controller):
 
 def ready() -> bool:
     """Whether the compiled kernel can run now without compiling in the foreground: loaded in
-    this process, or in the cache. The first call that finds neither starts one background
-    process that fills the cache (``TT_MUJOCO_COMPILE_NOW=1``: compile here instead)."""
+    this process, or in the cache (``TT_MUJOCO_COMPILE_NOW=1``: compile here instead). When
+    neither, one background process will fill the cache (:func:`_ask_for_compile`)."""
     if _KERNEL is not None or _cached() or os.environ.get("TT_MUJOCO_COMPILE_NOW") == "1":
         return True
-    _compile_in_background()
+    _ask_for_compile()
     return False
+
+
+#: Whether this process has asked for a background compile (see :func:`_ask_for_compile`).
+_ASKED = False
+
+
+def _ask_for_compile() -> None:
+    """Start the background compile when this process exits, or at its second episode that
+    finds no kernel, whichever comes first: started at once, its imports and compile shared the
+    machine with the very run that asked (``benchmarks/bench_first_run.py``); a process that
+    runs more episodes starts it after its first."""
+    global _ASKED
+    if _ASKED:
+        _compile_in_background()
+        return
+    _ASKED = True
+    import atexit
+
+    atexit.register(_compile_at_exit)
+
+
+def _compile_at_exit() -> None:
+    """The asked-for compile, unless this process has loaded or found the kernel since."""
+    if _KERNEL is None and not _cached():
+        _compile_in_background()
 
 
 #: The cache folder's list of its files and their hashes, written once the kernel has run.
