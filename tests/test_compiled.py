@@ -152,6 +152,17 @@ def test_compiled_loop_equals_python_loop_bit_for_bit(monkeypatch, case):
     assert python.metrics.get("ground") == fast.metrics.get("ground")  # the patches' report
 
 
+def test_a_payload_step_leaves_the_cache_as_its_manifest_lists():
+    # The reduced plant's payload step calls a second compiled entry point
+    # (advance_after_payload), which a warm-up does not compile. Its first compile adds files to
+    # the cache folder; unlisted, the next process found the folder differing from its manifest
+    # and set the whole cache aside (Python loop, and a new background compile).
+    faults = ["payload:t=1,factor=2"]
+    scenario = Scenario(traj="s_curve", plant="reduced", faults=faults, duration=3.0)
+    assert simulate(scenario).status == "ok"
+    assert compiled._cached()
+
+
 @pytest.mark.parametrize("plant", ["mujoco", "reduced"])
 def test_a_csv_spline_path_runs_compiled_bit_for_bit(monkeypatch, tmp_path, plant):
     # An ellipse of waypoints: a spline path, compiled like the closed-form ones (its curvature

@@ -443,7 +443,13 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
         if stop[0]["payloads"]:  # the reduced plant's constants change, then step k_next goes on
             plant = _carry_payloads(stepper, plant, loop.faults, stop[0])
             if status == step.PAYLOAD:
-                status = k_mod.advance_after_payload(plant, loop.wind, stop)
+                resume = k_mod.advance_after_payload
+                compiled_before = sum(resume.stats.cache_misses.values())
+                status = resume(plant, loop.wind, stop)
+                # its first compile adds files to the cache: listed, or the next process
+                # would find the folder differing from its manifest and set it aside
+                if sum(resume.stats.cache_misses.values()) > compiled_before:
+                    _write_manifest(compiled_here=True)
                 k_next += 1 if status == step.RUNNING else 0
         if progress is not None:
             progress(k_next, steps)
