@@ -122,6 +122,7 @@ SHARED = (
     path_schedule.bisect_right_of,
     path_schedule.hermite_of,
     path_schedule.blended_gain_of,
+    path_schedule.table_eta_of,
     path_schedule.table_gain_of,
     path_schedule.signed_offset_of,
     path_schedule.record_driven_of,

@@ -192,8 +192,7 @@ class PathSchedule:
 
         Cubic Hermite interpolation of the table; held at the table's end values beyond it.
         """
-        xs, etas, slopes = self.tables[k][:3]
-        return hermite_of(bisect_right_of(xs, s_axle), xs, etas, slopes, s_axle)
+        return table_eta_of(self.tables[k], s_axle)
 
     def gain(self, k: int, s_axle: float, phi: float) -> float:
         """Trailer ``k``'s gain at arc length ``s_axle`` with the hitch angle ``phi`` (rad) as
@@ -300,14 +299,19 @@ def blended_gain_of(eta: float, steering: float, phi: float, bounds) -> float:
     return min(max(blended, -eta_max), eta_max)
 
 
-def table_gain_of(table, s: float, phi: float, bounds) -> float:
-    """:func:`blended_gain_of` of an axle's ``table = (s, eta, d eta/ds, beta, d beta/ds)``
-    at arc length ``s`` (the compiled episode shares it)."""
+def table_eta_of(table, s: float) -> float:
+    """The gain ``eta_k(s)`` of an axle's ``table = (s, eta, d eta/ds, beta, d beta/ds)``: cubic
+    Hermite, held beyond its ends (the compiled episode shares it)."""
     xs = table[0]
-    i = bisect_right_of(xs, s)
-    eta = hermite_of(i, xs, table[1], table[2], s)
-    steering = hermite_of(i, xs, table[3], table[4], s)
-    return blended_gain_of(eta, steering, phi, bounds)
+    return hermite_of(bisect_right_of(xs, s), xs, table[1], table[2], s)
+
+
+def table_gain_of(table, s: float, phi: float, bounds) -> float:
+    """:func:`blended_gain_of` of an axle's table's gain and steering ``beta_k(s)`` at arc
+    length ``s`` (the compiled episode shares it)."""
+    xs = table[0]
+    steering = hermite_of(bisect_right_of(xs, s), xs, table[3], table[4], s)
+    return blended_gain_of(table_eta_of(table, s), steering, phi, bounds)
 
 
 class DrivenPath(NamedTuple):
@@ -394,10 +398,8 @@ def axle_gain_of(path, s_guess: float, point, heading: float, phi: float, table,
     s = nearest_arc_length_of(path, s_guess, point[0], point[1])
     if driven.gain == 0.0:
         return s, table_gain_of(table, s, phi, bounds)
-    xs = table[0]
-    eta = hermite_of(bisect_right_of(xs, s), xs, table[1], table[2], s)
     steering = driven_steering_of(path, s, point, heading, driven)
-    return s, blended_gain_of(eta, steering, phi, bounds)
+    return s, blended_gain_of(table_eta_of(table, s), steering, phi, bounds)
 
 
 def path_schedule(path, lengths, eta_max: float = DEFAULT_ETA_MAX, spacing: float = TABLE_SPACING):
