@@ -343,16 +343,23 @@ def _projection(*args) -> bool:
     """The metrics' compiled projection (:func:`tt_mujoco.analysis.geometry.nearest_segment_of`
     in a loop); the cache's manifest is rewritten once this process has compiled it. False
     (and the cache set aside) when its compiled code fails to load."""
-    project = _KERNEL.project_points
-    compiled_before = sum(project.stats.cache_misses.values())
     try:
-        project(*args)
+        _call_listed(_KERNEL.project_points, *args)
     except Exception as err:  # a damaged cache: the vectorised search serves instead
         set_aside_cache(err)
         return False
-    if sum(project.stats.cache_misses.values()) > compiled_before:
-        _write_manifest(compiled_here=True)
     return True
+
+
+def _call_listed(entry, *args):
+    """``entry(*args)``, a kernel entry point called from Python; when the call compiled it
+    (a signature new to the cache), the cache's files are listed again: unlisted, the next
+    process would find the folder differing from its manifest and set it aside."""
+    compiled_before = sum(entry.stats.cache_misses.values())
+    out = entry(*args)
+    if sum(entry.stats.cache_misses.values()) > compiled_before:
+        _write_manifest(compiled_here=True)
+    return out
 
 
 def set_aside_cache(err: BaseException) -> None:
@@ -443,13 +450,8 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
         if stop[0]["payloads"]:  # the reduced plant's constants change, then step k_next goes on
             plant = _carry_payloads(stepper, plant, loop.faults, stop[0])
             if status == step.PAYLOAD:
-                resume = k_mod.advance_after_payload
-                compiled_before = sum(resume.stats.cache_misses.values())
-                status = resume(plant, loop.wind, stop)
-                # its first compile adds files to the cache: listed, or the next process
-                # would find the folder differing from its manifest and set it aside
-                if sum(resume.stats.cache_misses.values()) > compiled_before:
-                    _write_manifest(compiled_here=True)
+                # not compiled by the warm-up: its first call here may add to the cache
+                status = _call_listed(k_mod.advance_after_payload, plant, loop.wind, stop)
                 k_next += 1 if status == step.RUNNING else 0
         if progress is not None:
             progress(k_next, steps)

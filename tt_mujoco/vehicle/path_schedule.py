@@ -310,8 +310,10 @@ def table_gain_of(table, s: float, phi: float, bounds) -> float:
     """:func:`blended_gain_of` of an axle's table's gain and steering ``beta_k(s)`` at arc
     length ``s`` (the compiled episode shares it)."""
     xs = table[0]
-    steering = hermite_of(bisect_right_of(xs, s), xs, table[3], table[4], s)
-    return blended_gain_of(table_eta_of(table, s), steering, phi, bounds)
+    i = bisect_right_of(xs, s)  # one search for both columns: this runs every control step
+    eta = hermite_of(i, xs, table[1], table[2], s)
+    steering = hermite_of(i, xs, table[3], table[4], s)
+    return blended_gain_of(eta, steering, phi, bounds)
 
 
 class DrivenPath(NamedTuple):
