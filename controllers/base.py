@@ -75,13 +75,19 @@ _INF = math.inf
 _SINGULAR_RTOL = 1e-12
 
 
-def reduced_model(params) -> ModelFn:
+def reduced_model(params, axle_slew_rate: float = _INF) -> ModelFn:
     """Wrap :func:`~tt_mujoco.vehicle.reduced.dynamics` as the controllers' plain-float model.
 
     Parameters
     ----------
     params : tt_mujoco.vehicle.params.Params
         The controller's *nominal* parameters (they may differ from the plant's).
+    axle_slew_rate : float
+        How fast the trailers' axles turn at most (rad/s), when actuators steer them (the path
+        schedule): the model then takes, at each call, the gains the axles can follow at the
+        hitch rates of ``(phi, v, omega)``
+        (:func:`~tt_mujoco.vehicle.steering.followed_gain_of`), not ``params.etas`` whole.
+        Infinite (default): a linkage, ``params.etas`` as they are.
 
     Returns
     -------
@@ -89,28 +95,43 @@ def reduced_model(params) -> ModelFn:
         ``model(phi, v, omega) -> (f1, f2, g11, g12, g21, g22)`` with ``V_dot = f + g tau`` and
         ``tau = (T_r, T_l)`` (docs/model.md Section 4). Raises
         :class:`tt_mujoco.vehicle.reduced.SingularityError` at a jackknife, like ``dynamics``.
-        It carries ``params``, from which :meth:`VelocityController.steering_changed`
-        rebuilds it with a scheduler's gains.
+        It carries ``params`` and ``axle_slew_rate``, from which
+        :meth:`VelocityController.steering_changed` rebuilds it with a scheduler's gains.
     """
     # Imported here so that importing ``controllers`` stays free of tt_mujoco and numpy.
     from tt_mujoco.vehicle import train
-    from tt_mujoco.vehicle.reduced import dynamics_scalar
+    from tt_mujoco.vehicle.reduced import dynamics_scalar, phi_rate_of
+    from tt_mujoco.vehicle.steering import followed_gain_of
 
+    bounded = axle_slew_rate < _INF
     if getattr(params, "n_trailers", 1) > 1:
         # A train's model takes every hitch angle: ``phi`` is then the tuple phi_1..phi_N
         # (``Measurement.phis``), and the built-in laws pass it whole.
         def train_model(phi, v: float, omega: float):
-            return train.dynamics_scalar(phi, v, omega, params)
+            p = params
+            if bounded:
+                rates = train.trailer_rates(phi, v, omega, params)
+                etas = tuple(
+                    followed_gain_of(eta, rate[0], axle_slew_rate)
+                    for eta, rate in zip(params.etas, rates, strict=True)
+                )
+                p = params if etas == params.etas else params.with_etas(etas)
+            return train.dynamics_scalar(phi, v, omega, p)
 
-        train_model.builtin = True  # the compiled episode may run its closed form instead
-        train_model.params = params
-        return train_model
+        model = train_model
+    else:
 
-    def model(phi: float, v: float, omega: float):
-        return dynamics_scalar(phi, v, omega, params)
+        def model(phi: float, v: float, omega: float):
+            p = params
+            if bounded:
+                s_v, s_omega = phi_rate_of(phi, params.eta, params.L, params.L0)
+                eta = followed_gain_of(params.eta, s_v * v + s_omega * omega, axle_slew_rate)
+                p = params if eta == params.eta else params.with_etas((eta,))
+            return dynamics_scalar(phi, v, omega, p)
 
     model.builtin = True  # the compiled episode may run its closed form instead
     model.params = params
+    model.axle_slew_rate = axle_slew_rate
     return model
 
 
@@ -144,6 +165,10 @@ class ControllerSetup:
         The reference path (``pose_at(s)``, ``curvature(s)``, ``dense()``, ``length``).
     reverse : bool
         Whether the run drives the path backwards (``--reverse``: v_d <= 0, the trailer leads).
+    axle_slew_rate : float
+        How fast the trailers' axles turn at most (rad/s) where actuators steer them (the path
+        schedule, ``Params.axle_slew_rate``); infinite for a linkage. The built-in laws' model
+        takes the gains the axles can follow (:func:`reduced_model`).
     """
 
     params: Any
@@ -152,6 +177,7 @@ class ControllerSetup:
     control_dt: float = 0.001
     path: Any = None
     reverse: bool = False
+    axle_slew_rate: float = _INF
 
 
 class Reference:
@@ -509,6 +535,8 @@ class VelocityController(Controller):
         self.command = (0.0, 0.0)
         self.setup = None
         self._train = False  # a train's model takes every hitch angle (Measurement.phis)
+        #: how fast actuated axles turn at most (rad/s; inf: a linkage), from the setup
+        self.axle_slew_rate = _INF
         self.reset()
 
     @classmethod
@@ -516,6 +544,7 @@ class VelocityController(Controller):
         ctrl = cls(setup.model, torque_limit=setup.torque_limit, gains=gains)
         ctrl.setup = setup
         ctrl._train = getattr(setup.params, "n_trailers", 1) > 1
+        ctrl.axle_slew_rate = setup.axle_slew_rate
         return ctrl
 
     def compute(self, t: float, measurement, reference: Reference) -> tuple[float, float]:
@@ -549,10 +578,14 @@ class VelocityController(Controller):
 
     def steering_changed(self, etas) -> None:
         """The nominal model takes the plant's gains (the mechanism's ratio is known): with
-        a path schedule they range over [-3, 3], far from the scenario's constant eta."""
+        a path schedule they range over [-3, 3], far from the scenario's constant eta, and the
+        model takes of them what the axles' actuators can follow (:func:`reduced_model`)."""
         params = getattr(self.model, "params", None)  # a reduced_model's
-        if params is not None and params.etas != tuple(etas):
-            self.model = reduced_model(params.with_etas(etas))
+        if params is None:
+            return
+        bound = getattr(self.model, "axle_slew_rate", _INF)
+        if params.etas != tuple(etas) or bound != self.axle_slew_rate:
+            self.model = reduced_model(params.with_etas(etas), self.axle_slew_rate)
 
     def state(self) -> dict[str, float]:
         """Integrator values (and related internals) for logging."""

@@ -110,6 +110,47 @@ def linear_error(e0, kp, ki, kd, t, delta=None):
 
 
 # --- the adapter and the import boundary -----------------------------------------------------
+@pytest.mark.parametrize("n", [1, 3])
+def test_a_model_of_actuated_axles_takes_the_gains_they_can_follow(n):
+    # Under the path schedule the axles' actuators turn at most at axle_slew_rate: where the
+    # hitch swings fast enough that eta phi_dot exceeds it, the model takes eta scaled down to
+    # the rate (steering.followed_gain_of); elsewhere the scheduled gains whole.
+    from tt_mujoco.vehicle import reduced, train
+    from tt_mujoco.vehicle.steering import followed_gain_of
+
+    params = Params().with_trailers(n).with_etas((-3.0, 2.0, 1.5)[:n])
+    phis = (0.04, 0.3, -0.2)[:n]
+    phi = phis if n > 1 else phis[0]
+    model = reduced_model(params, axle_slew_rate=1.0)
+    whole = reduced_model(params)
+    slow = (0.05, 0.0)  # hitch rates far below 1 rad/s / |eta|: the gains whole
+    assert model(phi, *slow) == whole(phi, *slow)
+    fast = (0.8, -2.0)
+    if n > 1:
+        rates = [row[0] for row in train.trailer_rates(phis, *fast, params)]
+    else:
+        s_v, s_omega = reduced.phi_rate_of(phis[0], -3.0, params.L, params.L0)
+        rates = [s_v * fast[0] + s_omega * fast[1]]
+    followed = tuple(followed_gain_of(e, r, 1.0) for e, r in zip(params.etas, rates, strict=True))
+    assert abs(followed[0] * rates[0]) == pytest.approx(1.0)  # trailer 1 turns at the rate
+    assert model(phi, *fast) == reduced_model(params.with_etas(followed))(phi, *fast)
+    assert model(phi, *fast) != whole(phi, *fast)
+
+
+def test_a_gain_of_three_changes_the_models_yaw_response_by_a_factor():
+    # docs/model.md Section 13, "The gains the model takes": two trailers, hitches at 2.3 and
+    # 40 deg, V = (0.8, -0.6); g21 - g22 is 4.52 at eta_1 = 0, 0.44 at -3 and 0.70 at +3, and
+    # f2 -1.25, -7.83 and +3.09.
+    params = Params().with_trailers(2)
+    state = ((math.radians(2.3), math.radians(40.0)), 0.8, -0.6)
+    figures = {}
+    for eta in (0.0, -3.0, 3.0):
+        model = reduced_model(params.with_etas((eta, params.etas[1])))
+        _, f2, _, _, g21, g22 = model(*state)
+        figures[eta] = (round(g21 - g22, 2), round(f2, 2))
+    assert figures == {0.0: (4.52, -1.25), -3.0: (0.44, -7.83), 3.0: (0.7, 3.09)}
+
+
 def test_reduced_model_adapter_matches_dynamics():
     params = Params()
     model = reduced_model(params)

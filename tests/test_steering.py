@@ -302,3 +302,13 @@ def test_the_curvature_schedule_keeps_its_gains_where_no_axle_can_reach_the_path
                 exact_same_path_eta(20.0, 0.3, 0.4)
             else:
                 exact_train_same_path_etas(20.0, lengths)
+
+
+def test_an_axle_follows_its_gain_up_to_its_slew_rate():
+    from tt_mujoco.vehicle.steering import followed_gain_of
+
+    assert followed_gain_of(-3.0, 0.2, 1.0) == -3.0  # 0.6 rad/s asked: followed whole
+    assert followed_gain_of(-3.0, 0.5, 1.0) == pytest.approx(-2.0)  # 1.5 asked, 1 given
+    assert followed_gain_of(2.0, -4.0, 1.0) == pytest.approx(0.25)
+    assert followed_gain_of(0.5, 0.0, 1.0) == 0.5
+    assert followed_gain_of(0.5, 1e3, math.inf) == 0.5  # a linkage

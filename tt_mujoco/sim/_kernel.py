@@ -39,6 +39,7 @@ from tt_mujoco.sim import (
 )
 from tt_mujoco.sim.kernel_sources import LAWS, SHARED
 from tt_mujoco.vehicle import path_schedule, reduced, train
+from tt_mujoco.vehicle import steering as steering_math
 
 for _fn in SHARED:
     register_jitable(_fn)
@@ -480,6 +481,23 @@ def _steer(plant, law):
 
 
 @njit(cache=True)
+def _follow_train(law, etas, phis, phi_m, v_m, w_m) -> bool:
+    """The train model's gains set to those its actuated axles can follow at the hitch rates
+    the scheduled ``etas`` give (reduced_model's train model); False where those are singular."""
+    rows = law.steered_train.trailers
+    for k in range(etas.size):
+        rows[k, ETA_COLUMN] = etas[k]
+    phis[0] = phi_m  # what the law sees
+    if not train.trailer_rates_of(phis, v_m, w_m, law.steered_train, law.rates):
+        return False
+    for k in range(etas.size):
+        rows[k, ETA_COLUMN] = steering_math.followed_gain_of(
+            etas[k], law.rates[k][0], law.axle_slew_rate
+        )
+    return True
+
+
+@njit(cache=True)
 def _delayed(delay, k, me, rows, seen):
     """Stepper.sense's delay line: step ``k``'s measurement ``me``, its train ``rows`` and the
     ``seen = (phi, v, omega)`` stored, and those of the delay's steps ago returned (the first
@@ -579,6 +597,17 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         c, model_train = law.nominal, law.nominal_train
         if steered:
             c, model_train = reduced.with_eta_of(c, steering.etas[0]), law.steered_train
+            if law.axle_slew_rate < math.inf:  # reduced_model: the gains the axles can follow
+                if n == 1:
+                    s_v, s_w = reduced.phi_rate_of(phi_m, c.eta, c.L, c.L0)
+                    eta = steering_math.followed_gain_of(
+                        c.eta, s_v * v_m + s_w * w_m, law.axle_slew_rate
+                    )
+                    c = reduced.with_eta_of(c, eta)
+                elif not _follow_train(law, steering.etas, phis, phi_m, v_m, w_m):
+                    stop.law_status = NOMINAL_SINGULAR
+                    _first_singular(phis, model_train, stop)
+                    return LAW_FAILED, k
         if n == 1:
             if math.cos(c.eta * phi_m) < COS_BETA_MIN:
                 stop.law_status, stop.phi, stop.eta = NOMINAL_SINGULAR, phi_m, c.eta

@@ -261,6 +261,10 @@ def build(scenario: Scenario) -> Build:
         control_dt=dt,
         path=path,
         reverse=bool(scenario.reverse),
+        # the path schedule steers the axles by actuators (PathEtaScheduler)
+        axle_slew_rate=(
+            nominal.axle_slew_rate if scenario.eta_schedule_kind == "path" else math.inf
+        ),
     )
     cls = controller_class(scenario.controller)
     if scenario.reverse and not getattr(cls, "REVERSE", True):

@@ -118,6 +118,7 @@ SHARED = (
     steering.same_path_geometry_of,
     steering.exact_same_path_eta_of,
     steering.exact_train_same_path_etas_of,
+    steering.followed_gain_of,
     path_schedule.nearest_arc_length_of,
     path_schedule.bisect_right_of,
     path_schedule.hermite_of,

@@ -227,9 +227,13 @@ class LawRecord(NamedTuple):
     #: where the user's law writes its two torques
     torques: np.ndarray
     #: whether the law's model takes the scheduled gains (a built-in law's does), and a
-    #: train's nominal constants with those gains
+    #: train's nominal constants with those gains (scratch: with the gains the axles follow,
+    #: below, once the step's model is made)
     follows_steering: bool
     steered_train: TrainConstants
+    #: how fast actuated axles turn at most (rad/s; inf: a linkage): the model takes the
+    #: gains they can follow (:func:`tt_mujoco.controllers.base.reduced_model`)
+    axle_slew_rate: float
 
 
 class TargetRecord(NamedTuple):

@@ -43,6 +43,7 @@ from tt_mujoco.vehicle.params import (
 __all__ = [
     "exact_same_path_eta",
     "exact_train_same_path_etas",
+    "followed_gain_of",
     "same_path_eta_limit",
     "steady_articulation",
     "steady_offtrack",
@@ -259,6 +260,18 @@ def exact_train_same_path_etas_of(kappa: float, lengths, out) -> int:
         out[k] = beta / phi
         fx, fy, fth = px, py, thk
     return 0
+
+
+def followed_gain_of(eta: float, phi_rate: float, slew_rate: float) -> float:
+    """The gain an actuated axle follows at hitch rate ``phi_rate`` (rad/s): ``eta`` while the
+    steering it asks for turns no faster than the axle can, ``|eta phi_rate| <= slew_rate``;
+    else the share of it the axle gives, ``eta slew_rate / |eta phi_rate|`` (docs/model.md
+    Section 13: what the controllers' model takes under the path schedule). Plain numbers (the
+    compiled episode shares it)."""
+    need = abs(eta * phi_rate)
+    if need <= slew_rate:
+        return eta
+    return eta * (slew_rate / need)
 
 
 def wrap_angle(angle):
