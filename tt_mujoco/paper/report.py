@@ -302,14 +302,15 @@ def _summary_markdown(rows, records, steering, feedback, checks, info) -> str:
     md += ["### Passive steering: trailer off-tracking (m, rms over the run / on steady arcs)", ""]
     md += [
         "| path | plant | plain eta = 0 | half-difference -0.125 | same_path -1/7 | scheduled "
-        "| eta = -3 | eta = 3 forward | eta = 3 reverse |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| path schedule | eta = -3 | eta = 3 forward | eta = 3 reverse |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     names = (
         "plain (eta = 0)",
         "half-difference gain (-0.125)",
         "same_path (-1/7)",
         "scheduled eta(kappa)",
+        "path schedule eta(s)",
         "eta = -3",
         "paper eta = 3, forward",
         "paper eta = 3, reverse",
@@ -340,10 +341,12 @@ def _summary_markdown(rows, records, steering, feedback, checks, info) -> str:
 #: What the summary says of the two steering studies beyond the table (their figures are on
 #: their own pages, which their scripts write).
 BEYOND_THE_TABLES = (
-    "`--eta path` schedules every trailer's gain along the path from its geometry, eta_k(s),",
-    "looked up at the trailer's own arc length: it keeps every axle of a train on the circle and",
-    "the cycloid, and where a passive axle cannot follow (the S-curve's inflection) it is",
-    "bounded to |eta| <= 3: docs/model.md Section 13 and `docs/path_schedule_study.md`.",
+    "`--eta path` (the table's \"path schedule\" column) schedules every trailer's gain along",
+    "the path from its geometry, eta_k(s), looked up at the trailer's own arc length: it keeps",
+    "every axle of a train on the circle and the cycloid, and where a passive axle cannot follow",
+    "(the S-curve's inflection) it is bounded to |eta| <= 3. Per trailer, for trains of one to",
+    "three, with and without the paper's disturbance (and where the torque limit binds):",
+    "docs/model.md Section 13 and `docs/path_schedule_study.md`.",
     "",
     "`--reverse` backs the train up: the last trailer's axle tracks the path and a cascade on",
     "the hitch angles sets the tractor's yaw rate (`controllers/backing.py`;",

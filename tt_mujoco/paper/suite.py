@@ -196,6 +196,8 @@ STEERING_VARIANTS: dict[str, dict] = {
     "half-difference gain (-0.125)": {"eta": -0.125},
     "same_path (-1/7)": {"eta": "same_path"},
     "scheduled eta(kappa)": {"eta": "same_path", "eta_schedule": True},
+    # each trailer's gain along the path from its geometry (docs/model.md Section 13)
+    "path schedule eta(s)": {"eta": "same_path", "eta_schedule": "path"},
 }
 
 
