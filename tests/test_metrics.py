@@ -618,6 +618,32 @@ def test_reversing_the_follower_is_the_tractor():
     assert m["trailer_rmse_lateral"] == pytest.approx(0.0, abs=EXACT)
 
 
+def test_reversing_a_train_every_unit_follows_the_one_ahead_of_it():
+    # Backing up along y = 0 towards -x, trailer 3 leads; trailer 2 follows it 0.03 m to the
+    # side, trailer 1 0.02 m and the tractor 0.01 m: each unit against the path the unit ahead
+    # of it in the motion drove (the last trailer follows nothing).
+    n = 1200
+    x = np.linspace(0.0, -8.0, n)
+    sides = {"x": 0.01, "x0": 0.02, "x0_2": 0.03, "x0_3": 0.0}
+    columns = {}
+    for k, (name, side) in enumerate(sides.items()):
+        columns[name] = x - k * SPACING
+        columns["y" + name[1:]] = np.full(n, side)
+    for k in (2, 3):
+        columns[f"phi_{k}"] = np.zeros(n)
+    ts = make_series(n, x_ref=x, y_ref=np.zeros(n), **columns)
+    m = compute_metrics(ts, STRAIGHT_REFERENCE[::-1], TORQUE_LIMIT, reverse=True)
+    # the tractor 0.01 beside trailer 1's path, trailer 1 0.01 beside trailer 2's, trailer 2
+    # 0.03 beside trailer 3's
+    assert m["trailer_offtrack_max"] == pytest.approx(0.01, abs=EXACT)
+    assert m["trailer_1_offtrack_max"] == pytest.approx(0.01, abs=EXACT)
+    assert m["trailer_2_offtrack_max"] == pytest.approx(0.03, abs=EXACT)
+    assert math.isnan(m["trailer_3_offtrack_max"])
+    assert m["train_offtrack_max_worst"] == pytest.approx(0.03, abs=EXACT)
+    forward = compute_metrics(ts, STRAIGHT_REFERENCE, TORQUE_LIMIT)
+    assert "trailer_1_offtrack_max" not in forward
+
+
 def test_overshoot_past_the_end_is_along_track_not_cross_track():
     # The reference ends at x = 5; P runs on to x = 5.066 on the line (0.066 m of overshoot)
     # while the reference point waits at the end.

@@ -429,6 +429,23 @@ def test_the_study_table_is_what_its_command_prints(
     assert line in (docs / "path_schedule_study.md").read_text()
 
 
+@pytest.mark.parametrize(
+    ("path", "plant", "n", "disturbance", "steering"),
+    [
+        ("circle", "reduced", 2, "none", "path"),
+        ("s_curve", "mujoco", 1, "matched", "same_path"),
+        ("cycloid", "reduced", 3, "none", "plain"),
+    ],
+)
+def test_the_reverse_study_table_is_what_its_command_prints(path, plant, n, disturbance, steering):
+    docs = Path(__file__).parents[1] / "docs"
+    spec = importlib.util.spec_from_file_location("study", docs / "path_schedule_study.py")
+    study = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(study)
+    cells = study.row(path, plant, n, disturbance, steering, reverse=True)
+    assert "| " + " | ".join(cells) + " |" in (docs / "path_schedule_study.md").read_text()
+
+
 def test_s_curve_gain_swings_from_the_linkage_to_both_bounds_within_a_short_travel():
     # docs/model.md Section 13: at the S-curve's junction the ideal schedule's gain leaves its
     # steady -1/7 and swings to -3 and +3 within 0.3 m of the axle's travel (measured 0.25 m).

@@ -404,11 +404,14 @@ def train_metrics(ts, n: int, reference, first: Mapping, reverse: bool = False) 
     ``n`` samples; empty for one trailer.
 
     Trailer k's ``trailer_k_offtrack_rms``/``_max`` measure P_k against the path the tractor's
-    P drove (reversing: against the path the last trailer drove), like trailer 1's;
-    ``trailer_k_rmse_lateral``/``_max_lateral`` its cross-track over the same samples; and
-    ``trailer_k_phi_max_abs_deg`` its hitch angle. ``train_offtrack_rms_worst``,
-    ``train_offtrack_max_worst`` and ``train_phi_max_abs_deg`` take the worst trailer,
-    trailer 1 included (from ``first``, its own metrics).
+    P drove, like trailer 1's. Reversing, every unit is measured against the path the unit
+    ahead of it in the motion drove: the tractor against trailer 1's (``trailer_offtrack_*``,
+    ``offtrack_follower``), trailer k < N against trailer k + 1's (``trailer_k_offtrack_*``,
+    trailer 1's as ``trailer_1_offtrack_*``); the last trailer leads and has none (NaN).
+    ``trailer_k_rmse_lateral``/``_max_lateral`` is trailer k's cross-track over the same
+    samples and ``trailer_k_phi_max_abs_deg`` its hitch angle. ``train_offtrack_rms_worst``,
+    ``train_offtrack_max_worst`` and ``train_phi_max_abs_deg`` take the worst unit,
+    ``first`` (the run's own metrics) included.
     """
     count = trailer_count(ts)
     if count == 1:
@@ -417,21 +420,29 @@ def train_metrics(ts, n: int, reference, first: Mapping, reverse: bool = False) 
     for k in range(2, count + 1):
         for name in ("x0", "y0", "phi"):
             col[f"{name}_{k}"] = np.asarray(ts[f"{name}_{k}"], dtype=float)[:n]
-    last = np.column_stack([col[f"x0_{count}"], col[f"y0_{count}"]])
-    leader = last if reverse else np.column_stack([col["x"], col["y"]])
-    leader_path = None  # the leader's driven path, built once for every follower
+    axles = [np.column_stack([np.asarray(ts[f"{q}0"], dtype=float)[:n] for q in "xy"])]
+    axles += [np.column_stack([col[f"x0_{k}"], col[f"y0_{k}"]]) for k in range(2, count + 1)]
+    tractor = np.column_stack([col["x"], col["y"]])
+    tractor_path = None  # forward, every trailer follows it: built once
     out: dict = {}
     worst_rms = [first["trailer_offtrack_rms"]]
     worst_max = [first["trailer_offtrack_max"]]
     worst_phi = [first["phi_max_abs_deg"]]
+    if reverse:  # trailer 1 follows trailer 2 (forward its figures are ``first``'s)
+        offtrack = trailer_offtrack(axles[1], axles[0])
+        offtrack = offtrack[~np.isnan(offtrack)]
+        out["trailer_1_offtrack_rms"] = rmse(offtrack)
+        out["trailer_1_offtrack_max"] = max_abs(offtrack)
+        worst_rms.append(out["trailer_1_offtrack_rms"])
+        worst_max.append(out["trailer_1_offtrack_max"])
     for k in range(2, count + 1):
-        follower = np.column_stack([col[f"x0_{k}"], col[f"y0_{k}"]])
-        if (reverse and k == count) or not n:
-            offtrack = np.full(n, np.nan)  # the leading unit follows nothing
+        follower = axles[k - 1]
+        if reverse:  # the last trailer leads and follows nothing
+            offtrack = trailer_offtrack(axles[k], follower) if k < count else np.full(n, np.nan)
         else:
-            if leader_path is None and n >= 2 and np.any(leader != leader[0]):
-                leader_path = Polyline(leader)
-            offtrack = trailer_offtrack(leader, follower, path=leader_path)
+            if tractor_path is None:
+                tractor_path = _driven_path(tractor)
+            offtrack = trailer_offtrack(tractor, follower, path=tractor_path)
         cross = reference.project(follower, extend_ends=True).signed_distance
         counted = ~np.isnan(offtrack) if not reverse else np.ones(n, dtype=bool)
         out[f"trailer_{k}_offtrack_rms"] = rmse(offtrack[~np.isnan(offtrack)])
@@ -446,6 +457,13 @@ def train_metrics(ts, n: int, reference, first: Mapping, reverse: bool = False) 
     out["train_offtrack_max_worst"] = _worst(worst_max)
     out["train_phi_max_abs_deg"] = _worst(worst_phi)
     return out
+
+
+def _driven_path(leader) -> Polyline | None:
+    """The leader's driven path, or None where it never moved (nothing to follow)."""
+    if leader.shape[0] >= 2 and np.any(leader != leader[0]):
+        return Polyline(leader)
+    return None
 
 
 def _worst(values) -> float:
