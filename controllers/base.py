@@ -101,7 +101,7 @@ def reduced_model(params, axle_slew_rate: float = _INF) -> ModelFn:
     # Imported here so that importing ``controllers`` stays free of tt_mujoco and numpy.
     from tt_mujoco.vehicle import train
     from tt_mujoco.vehicle.reduced import dynamics_scalar, phi_rate_of
-    from tt_mujoco.vehicle.steering import followed_gain_of
+    from tt_mujoco.vehicle.steering import followed_gain_of, followed_gains_of
 
     bounded = axle_slew_rate < _INF
     if getattr(params, "n_trailers", 1) > 1:
@@ -111,10 +111,9 @@ def reduced_model(params, axle_slew_rate: float = _INF) -> ModelFn:
             p = params
             if bounded:
                 rates = train.trailer_rates(phi, v, omega, params)
-                etas = tuple(
-                    followed_gain_of(eta, rate[0], axle_slew_rate)
-                    for eta, rate in zip(params.etas, rates, strict=True)
-                )
+                followed = list(params.etas)
+                followed_gains_of(params.etas, rates, axle_slew_rate, followed)
+                etas = tuple(followed)
                 p = params if etas == params.etas else params.with_etas(etas)
             return train.dynamics_scalar(phi, v, omega, p)
 

@@ -312,3 +312,8 @@ def test_an_axle_follows_its_gain_up_to_its_slew_rate():
     assert followed_gain_of(2.0, -4.0, 1.0) == pytest.approx(0.25)
     assert followed_gain_of(0.5, 0.0, 1.0) == 0.5
     assert followed_gain_of(0.5, 1e3, math.inf) == 0.5  # a linkage
+    from tt_mujoco.vehicle.steering import followed_gains_of
+
+    out = [0.0, 0.0]
+    followed_gains_of((-3.0, 2.0), [(0.5, 0.8, 0.1), (0.1, 0.7, 0.0)], 1.0, out)
+    assert out == [pytest.approx(-2.0), 2.0]  # a train: each trailer at its own hitch rate

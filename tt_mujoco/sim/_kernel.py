@@ -490,10 +490,7 @@ def _follow_train(law, etas, phis, phi_m, v_m, w_m) -> bool:
     phis[0] = phi_m  # what the law sees
     if not train.trailer_rates_of(phis, v_m, w_m, law.steered_train, law.rates):
         return False
-    for k in range(etas.size):
-        rows[k, ETA_COLUMN] = steering_math.followed_gain_of(
-            etas[k], law.rates[k][0], law.axle_slew_rate
-        )
+    steering_math.followed_gains_of(etas, law.rates, law.axle_slew_rate, rows[:, ETA_COLUMN])
     return True
 
 

@@ -119,6 +119,7 @@ SHARED = (
     steering.exact_same_path_eta_of,
     steering.exact_train_same_path_etas_of,
     steering.followed_gain_of,
+    steering.followed_gains_of,
     path_schedule.nearest_arc_length_of,
     path_schedule.bisect_right_of,
     path_schedule.hermite_of,

@@ -44,6 +44,7 @@ __all__ = [
     "exact_same_path_eta",
     "exact_train_same_path_etas",
     "followed_gain_of",
+    "followed_gains_of",
     "same_path_eta_limit",
     "steady_articulation",
     "steady_offtrack",
@@ -272,6 +273,15 @@ def followed_gain_of(eta: float, phi_rate: float, slew_rate: float) -> float:
     if need <= slew_rate:
         return eta
     return eta * (slew_rate / need)
+
+
+def followed_gains_of(etas, rates, slew_rate: float, out) -> None:
+    """:func:`followed_gain_of` of every trailer of a train into ``out``: trailer k's gain
+    ``etas[k]`` at its hitch rate ``rates[k][0]`` (the rows of
+    :func:`~tt_mujoco.vehicle.train.trailer_rates_of`). Plain numbers (the compiled episode
+    shares it)."""
+    for k in range(len(etas)):
+        out[k] = followed_gain_of(etas[k], rates[k][0], slew_rate)
 
 
 def wrap_angle(angle):
