@@ -5,8 +5,9 @@ S-curve, ISMC-STA, dynamic target, the paper's disturbance, no video, 1 ms step)
 
 1. runs the closed loop on the MuJoCo plant, recording every ``mj_step`` input (ctrl,
    qfrc_applied, xfrc_applied) and the initial state;
-2. replays those inputs open-loop from that state: MuJoCo is deterministic, so the replay ends
-   in exactly the run's final state (checked), and its cost is the physics of that episode;
+2. replays those inputs open-loop from that state with MuJoCo's C rollout (``mujoco.rollout``,
+   one thread, no Python per step): MuJoCo is deterministic, so the replay ends in exactly the
+   run's final state (checked), and its cost is the physics of that episode;
 3. prints the closed loop's steps/s (the compiled loop of :mod:`tt_mujoco.sim.compiled`, and
    the Python loop beside it), the replay's, and their ratio (issue 13's goal: >= 0.8);
 4. runs the same scenario on the reduced plant and prints its steps/s against the MuJoCo loop
@@ -75,22 +76,39 @@ def closed_loop(scenario: Scenario, record: bool):
     return wall, stepper.steps, inputs, initial, final, plant, status
 
 
+#: What a replay's control vector holds per physics step: the actuators' ctrl, qfrc_applied and
+#: xfrc_applied, as the closed loop set them.
+CONTROL_SPEC = (
+    mujoco.mjtState.mjSTATE_CTRL
+    | mujoco.mjtState.mjSTATE_QFRC_APPLIED
+    | mujoco.mjtState.mjSTATE_XFRC_APPLIED
+)
+
+
 def replay(plant, inputs, initial) -> tuple[float, np.ndarray]:
-    """Wall seconds to replay ``inputs`` from ``initial`` on a fresh MjData, and final qpos."""
+    """Wall seconds of MuJoCo's C rollout (``mujoco.rollout``, one thread) of ``inputs`` from
+    ``initial`` on a fresh MjData, and the final qpos: the episode's physics floor."""
+    from mujoco import rollout
+
     m = plant.model
     d = mujoco.MjData(m)
     d.qpos[:], d.qvel[:], d.act[:] = initial[0], initial[1], initial[2]
     d.time = initial[3]
     mujoco.mj_forward(m, d)
-    ctrl, qfrc, xfrc = d.ctrl, d.qfrc_applied, d.xfrc_applied
-    step = mujoco.mj_step
+    full = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.empty(mujoco.mj_stateSize(m, full))
+    mujoco.mj_getState(m, d, state, full)
+    per_step = np.concatenate(
+        [np.concatenate([u, q, x.ravel()])[None].repeat(n, axis=0) for u, q, x, n in inputs]
+    )
+    warm = d.qacc_warmstart.copy()[None]
     start = time.perf_counter()
-    for u, q, x, substeps in inputs:
-        ctrl[:] = u
-        qfrc[:] = q
-        xfrc[:] = x
-        step(m, d, nstep=substeps)
-    return time.perf_counter() - start, d.qpos.copy()
+    states, _ = rollout.rollout(
+        m, d, state[None], per_step[None], control_spec=CONTROL_SPEC, initial_warmstart=warm
+    )
+    seconds = time.perf_counter() - start
+    mujoco.mj_setState(m, d, states[0, -1], full)
+    return seconds, d.qpos.copy()
 
 
 def compiled_replay(plant, inputs, initial) -> float:
@@ -186,7 +204,7 @@ def main() -> None:
     print(f"10 s S-curve, ISMC-STA, paper disturbance, {noise}: {steps} control steps")
     print(f"replay reproduces the run: final qpos difference {same:.1e}")
     print(f"compiled and Python loop agree: final qpos difference {same_python:.1e}")
-    print(f"  replay of its own inputs (physics floor) {steps / floor:10,.0f} steps/s")
+    print(f"  C rollout of its own inputs (the floor) {steps / floor:10,.0f} steps/s")
     print(f"  closed loop, MuJoCo plant, compiled      {steps / loop_compiled:10,.0f} steps/s")
     print(f"  closed loop, MuJoCo plant, Python loop   {steps / loop_python:10,.0f} steps/s")
     print(f"  closed loop, reduced plant, compiled     {steps / reduced:10,.0f} steps/s")

@@ -9,9 +9,10 @@ It prints:
 
 1. Where one episode's time goes, in this process (median of ``--profile`` episodes of the sweep
    itself): setup (target, MuJoCo model, controller), the control loop (compiled, see
-   :mod:`tt_mujoco.sim.compiled`) and the metrics, beside the episode's physics floor: the
-   replay of its own ``mj_step`` inputs (recorded with the Python loop, which gives the same
-   numbers; the replay's final state is checked against the run's). The same replays are then
+   :mod:`tt_mujoco.sim.compiled`) and the metrics, beside the episode's physics floor: MuJoCo's
+   C rollout (``mujoco.rollout``, one thread) of its own ``mj_step`` inputs (recorded with the
+   Python loop, which gives the same numbers; the rollout's final state is checked against the
+   run's). The same replays are then
    run on ``--workers`` forked processes at once, each replaying all of them: the floor of an
    episode when that many run side by side on the same cores, as the sweep's do.
 2. Scaling: the same ``--scaling-runs`` episodes through :func:`tt_mujoco.sweep.run_sweep` on 1
@@ -53,7 +54,7 @@ ITEMS = ["traj=s_curve", "duration=10", "noise_snr_db=20"]
 
 def episode_breakdown(spec, n: int) -> dict:
     """Median time per part of the sweep's first ``n`` episodes, in this process (seconds), and
-    their physics floor: the replay of each episode's own ``mj_step`` inputs."""
+    their physics floor: the C rollout of each episode's own ``mj_step`` inputs."""
     simulate(Scenario(duration=2.5))  # imports, caches and the compiled loop out of the way
     parts = {"episode": [], "setup": [], "loop": [], "metrics": [], "replay": []}
     recorded = []
@@ -162,7 +163,7 @@ def main() -> None:
         f"one 10 s episode ({b['steps']} control steps), median of {args.profile}, in-process:\n"
         f"  total {ms['episode']:.0f} ms = setup {ms['setup']:.0f} + control loop "
         f"{ms['loop']:.0f} + metrics {ms['metrics']:.0f}\n"
-        f"  the replay of its own mj_step inputs (the physics floor): {ms['replay']:.0f} ms; "
+        f"  the C rollout of its own mj_step inputs (the physics floor): {ms['replay']:.0f} ms; "
         f"control loop / floor {b['loop'] / b['replay']:.2f}, episode / floor "
         f"{b['episode'] / b['replay']:.2f}\n"
         f"  the same replays on {args.workers} workers at once: "
