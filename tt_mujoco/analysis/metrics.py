@@ -187,7 +187,7 @@ def _check_inputs(ts, torque_limit) -> tuple[dict[str, np.ndarray], int]:
 
 
 def error_signals(
-    c: Mapping[str, np.ndarray], reference_polyline, reverse: bool = False
+    c: Mapping[str, np.ndarray], reference_polyline, reverse: bool = False, driven=None
 ) -> dict[str, np.ndarray]:
     """The tracking errors of a run, sample by sample (docs/metrics.md defines each).
 
@@ -199,6 +199,9 @@ def error_signals(
     reference_polyline : array_like or Polyline
     reverse : bool
         The run drives the path backwards (the trailer leads).
+    driven : Polyline, optional
+        ``Polyline`` of the leading unit's positions (the tractor's driving forward, the
+        trailer's reversing), when the caller has it already (built here otherwise).
 
     Returns
     -------
@@ -229,7 +232,7 @@ def error_signals(
     else:
         out["along_track"] = np.full(n, np.nan)
     leader, follower = (trailer, tractor) if reverse else (tractor, trailer)
-    offtrack = trailer_offtrack(leader, follower) if n else np.zeros(0)
+    offtrack = trailer_offtrack(leader, follower, path=driven) if n else np.zeros(0)
     out["trailer_offtrack"] = offtrack
     trailer_cross = reference.project(trailer, extend_ends=True).signed_distance
     out["trailer_lateral"] = (
@@ -332,7 +335,9 @@ def compute_metrics(
     all_t = columns["t"][np.isfinite(columns["t"])]
     sample_period = float(np.median(np.diff(all_t))) if all_t.size >= 2 else math.nan
 
-    signals = error_signals(c, reference, reverse)
+    # Driving forward every trailer follows the tractor: its driven path is built once.
+    driven = None if reverse else _driven_path(np.column_stack([c["x"], c["y"]]))
+    signals = error_signals(c, reference, reverse, driven)
     metrics: dict[str, float | int] = {}
     metrics["rmse_v"] = rmse(signals["e_v"])
     metrics["max_abs_v"] = max_abs(signals["e_v"])
@@ -373,7 +378,7 @@ def compute_metrics(
         clipped = np.asarray(ts["dist_clipped"], dtype=float)[:n]
         metrics["disturbance_clipped_fraction"] = float(np.mean(clipped > 0)) if n else math.nan
 
-    metrics.update(train_metrics(ts, n, reference, metrics, reverse))
+    metrics.update(train_metrics(ts, n, reference, metrics, reverse, driven))
     # The unit that leads the motion: the tractor forward, the last trailer reversing.
     last = trailer_count(ts)
     if not reverse:
@@ -399,7 +404,9 @@ def trailer_count(ts: Mapping[str, np.ndarray]) -> int:
     return n
 
 
-def train_metrics(ts, n: int, reference, first: Mapping, reverse: bool = False) -> dict:
+def train_metrics(
+    ts, n: int, reference, first: Mapping, reverse: bool = False, driven=None
+) -> dict:
     """Metrics of trailers 2..N and the worst over the train (docs/metrics.md), over the first
     ``n`` samples; empty for one trailer.
 
@@ -411,7 +418,8 @@ def train_metrics(ts, n: int, reference, first: Mapping, reverse: bool = False) 
     ``trailer_k_rmse_lateral``/``_max_lateral`` is trailer k's cross-track over the same
     samples and ``trailer_k_phi_max_abs_deg`` its hitch angle. ``train_offtrack_rms_worst``,
     ``train_offtrack_max_worst`` and ``train_phi_max_abs_deg`` take the worst unit,
-    ``first`` (the run's own metrics) included.
+    ``first`` (the run's own metrics) included. ``driven`` is the tractor's driven path
+    driving forward, when the caller has built it.
     """
     count = trailer_count(ts)
     if count == 1:
@@ -423,7 +431,7 @@ def train_metrics(ts, n: int, reference, first: Mapping, reverse: bool = False) 
     axles = [np.column_stack([np.asarray(ts[f"{q}0"], dtype=float)[:n] for q in "xy"])]
     axles += [np.column_stack([col[f"x0_{k}"], col[f"y0_{k}"]]) for k in range(2, count + 1)]
     tractor = np.column_stack([col["x"], col["y"]])
-    tractor_path = None  # forward, every trailer follows it: built once
+    tractor_path = driven  # forward, every trailer follows it: built once
     out: dict = {}
     worst_rms = [first["trailer_offtrack_rms"]]
     worst_max = [first["trailer_offtrack_max"]]
