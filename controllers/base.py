@@ -100,8 +100,8 @@ def reduced_model(params, axle_slew_rate: float = _INF) -> ModelFn:
     """
     # Imported here so that importing ``controllers`` stays free of tt_mujoco and numpy.
     from tt_mujoco.vehicle import train
-    from tt_mujoco.vehicle.reduced import dynamics_scalar, phi_rate_of
-    from tt_mujoco.vehicle.steering import followed_gain_of, followed_gains_of
+    from tt_mujoco.vehicle.reduced import dynamics_scalar
+    from tt_mujoco.vehicle.steering import followed_gains_of, trailer_followed_gain_of
 
     bounded = axle_slew_rate < _INF
     if getattr(params, "n_trailers", 1) > 1:
@@ -123,8 +123,9 @@ def reduced_model(params, axle_slew_rate: float = _INF) -> ModelFn:
         def model(phi: float, v: float, omega: float):
             p = params
             if bounded:
-                s_v, s_omega = phi_rate_of(phi, params.eta, params.L, params.L0)
-                eta = followed_gain_of(params.eta, s_v * v + s_omega * omega, axle_slew_rate)
+                eta = trailer_followed_gain_of(
+                    phi, v, omega, params.eta, params.L, params.L0, axle_slew_rate
+                )
                 p = params if eta == params.eta else params.with_etas((eta,))
             return dynamics_scalar(phi, v, omega, p)
 
@@ -534,8 +535,6 @@ class VelocityController(Controller):
         self.command = (0.0, 0.0)
         self.setup = None
         self._train = False  # a train's model takes every hitch angle (Measurement.phis)
-        #: how fast actuated axles turn at most (rad/s; inf: a linkage), from the setup
-        self.axle_slew_rate = _INF
         self.reset()
 
     @classmethod
@@ -543,8 +542,13 @@ class VelocityController(Controller):
         ctrl = cls(setup.model, torque_limit=setup.torque_limit, gains=gains)
         ctrl.setup = setup
         ctrl._train = getattr(setup.params, "n_trailers", 1) > 1
-        ctrl.axle_slew_rate = setup.axle_slew_rate
         return ctrl
+
+    @property
+    def axle_slew_rate(self) -> float:
+        """How fast actuated axles turn at most (rad/s), the setup's; inf (a linkage) without
+        one."""
+        return _INF if self.setup is None else self.setup.axle_slew_rate
 
     def compute(self, t: float, measurement, reference: Reference) -> tuple[float, float]:
         """The protocol's step: :meth:`step` on the measured (phi, v, omega) and the target,

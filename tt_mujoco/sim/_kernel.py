@@ -596,9 +596,8 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
             c, model_train = reduced.with_eta_of(c, steering.etas[0]), law.steered_train
             if law.axle_slew_rate < math.inf:  # reduced_model: the gains the axles can follow
                 if n == 1:
-                    s_v, s_w = reduced.phi_rate_of(phi_m, c.eta, c.L, c.L0)
-                    eta = steering_math.followed_gain_of(
-                        c.eta, s_v * v_m + s_w * w_m, law.axle_slew_rate
+                    eta = steering_math.trailer_followed_gain_of(
+                        phi_m, v_m, w_m, c.eta, c.L, c.L0, law.axle_slew_rate
                     )
                     c = reduced.with_eta_of(c, eta)
                 elif not _follow_train(law, steering.etas, phis, phi_m, v_m, w_m):

@@ -120,6 +120,7 @@ SHARED = (
     steering.exact_train_same_path_etas_of,
     steering.followed_gain_of,
     steering.followed_gains_of,
+    steering.trailer_followed_gain_of,
     path_schedule.nearest_arc_length_of,
     path_schedule.bisect_right_of,
     path_schedule.hermite_of,

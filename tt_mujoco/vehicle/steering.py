@@ -39,6 +39,7 @@ from tt_mujoco.vehicle.params import (
     same_path_eta,
     train_same_path_etas_of,
 )
+from tt_mujoco.vehicle.reduced import phi_rate_of
 
 __all__ = [
     "exact_same_path_eta",
@@ -49,6 +50,7 @@ __all__ = [
     "steady_articulation",
     "steady_offtrack",
     "steady_train",
+    "trailer_followed_gain_of",
     "wrap_angle",
 ]
 
@@ -273,6 +275,17 @@ def followed_gain_of(eta: float, phi_rate: float, slew_rate: float) -> float:
     if need <= slew_rate:
         return eta
     return eta * (slew_rate / need)
+
+
+def trailer_followed_gain_of(
+    phi: float, v: float, omega: float, eta: float, L: float, L0: float, slew_rate: float
+) -> float:
+    """:func:`followed_gain_of` of one trailer (hitch ``phi``, gain ``eta``, lengths ``L``,
+    ``L0``) at its hitch rate with the tractor at ``(v, omega)`` (paper eq. 13,
+    :func:`~tt_mujoco.vehicle.reduced.phi_rate_of`). Plain numbers (the compiled episode
+    shares it)."""
+    s_v, s_omega = phi_rate_of(phi, eta, L, L0)
+    return followed_gain_of(eta, s_v * v + s_omega * omega, slew_rate)
 
 
 def followed_gains_of(etas, rates, slew_rate: float, out) -> None:
