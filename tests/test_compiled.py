@@ -338,12 +338,18 @@ def test_a_cache_a_background_compile_is_writing_is_not_set_aside(monkeypatch, t
 def test_a_kernel_that_fails_to_load_leaves_the_episode_to_the_python_loop(
     monkeypatch, tmp_path, capsys
 ):
-    class Broken:
-        no_user_law = None
+    class BrokenDispatcher:  # a cached kernel whose code fails to load (a truncated file)
+        @staticmethod
+        def typeof_pyval(value):
+            return None
 
         @staticmethod
-        def run_chunk(*args):
+        def compile(signature):
             raise EOFError("Ran out of input")
+
+    class Broken:
+        no_user_law = None
+        run_chunk = BrokenDispatcher
 
     monkeypatch.setenv("TT_MUJOCO_CACHE", str(tmp_path))
     scenario = Scenario(traj="circle", duration=3.0, noise_snr_db=25.0)

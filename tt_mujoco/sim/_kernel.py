@@ -82,6 +82,15 @@ def no_user_law(m, r, model, gains, state, out, dt, limit):  # the built-in laws
     pass
 
 
+#: The step's functions, which run every control step, compile without numba's reference
+#: counting: numba counts a reference to every array of every record argument when a function is
+#: entered and releases it on exit, pairs its pruning cannot remove where the function branches
+#: (a plant record alone holds some forty arrays). It is safe for these functions: every array
+#: they see belongs to a record that :func:`run_chunk`'s Python caller holds for the whole call,
+#: and none of them allocates (numba refuses to compile one that does here) or returns an array.
+_borrowing = njit(cache=True, _nrt=False)
+
+
 @intrinsic
 def _pointer(typingctx, array):
     """The address of a contiguous array's data (of float fields), as a C float pointer."""
@@ -211,7 +220,7 @@ def _hypot_of(x, y):
     return lambda x, y: _hypot(x, y)
 
 
-@njit(cache=True)
+@_borrowing
 def _sense(plant, n, rows):
     """The Measurement fields of the plant's state; trailers 2..N of ``n`` into ``rows``."""
     if plant.mujoco:
@@ -230,7 +239,7 @@ def _sense(plant, n, rows):
     return plant_reduced.reduced_measure_values(first, ode)
 
 
-@njit(cache=True)
+@_borrowing
 def _ode(plant):
     """The reduced plant's constants with trailer 1's gain in force."""
     if plant.steering.kind == 0:
@@ -238,7 +247,7 @@ def _ode(plant):
     return reduced.with_eta_of(plant.ode, plant.steering.etas[0])
 
 
-@njit(cache=True)
+@_borrowing
 def _first_singular(phis, c, stop):
     """The first trailer at cos(eta_k phi_k) < COS_BETA_MIN into ``stop`` (phi, eta)."""
     for k in range(len(c.trailers)):
@@ -248,7 +257,7 @@ def _first_singular(phis, c, stop):
             return
 
 
-@njit(cache=True)
+@_borrowing
 def _update_target(target, k, v_m, dt, pose):
     """The target's update at step ``k`` (StaticTarget / DynamicTarget / ReverseTarget.update,
     and PathFeedback.update at the measured ``pose``): ``(v_d, omega_d, v_d_dot,
@@ -296,7 +305,7 @@ def _update_target(target, k, v_m, dt, pose):
     return v_ref, omega_d, a_ref, omega_d_dot
 
 
-@njit(cache=True)
+@_borrowing
 def _cascade(target, me, rows, phis, v_m):
     """HitchCascade.update's ``(omega_d, omega_d_dot)`` at the measured hitch angles
     ``phis``; its state updated in place."""
@@ -314,7 +323,7 @@ def _cascade(target, me, rows, phis, v_m):
     return omega_d, 0.0
 
 
-@njit(cache=True)
+@_borrowing
 def _law(law, v_m, w_m, dt, limit):
     """The law's ``(status, T_r, T_l, u1, u2)`` at the reference and the nominal model in
     ``law``; its state updated in place."""
@@ -349,7 +358,7 @@ def _law(law, v_m, w_m, dt, limit):
     return status, T_r, T_l, u1, u2
 
 
-@njit(cache=True)
+@_borrowing
 def _blow(mj, wrench, gusts):
     """MujocoPlant.blow: the wind's ``gusts`` (``F_x, F_y, M_z``) on the tractor, then on the
     trailer, added to the tractor's chassis wrench when the disturbance is one."""
@@ -363,7 +372,7 @@ def _blow(mj, wrench, gusts):
     trailer[0], trailer[1], trailer[5] = gusts[3], gusts[4], gusts[5]
 
 
-@njit(cache=True)
+@_borrowing
 def _advance(plant, T_r, T_l, push, weather, stop):
     """Apply the torques, the disturbance ``push = (dist_r, dist_l, wrench?, fx, fy, mz)`` and
     the wind (``weather.wrenches`` of this step, when there is a wind) and advance the plant one
@@ -432,7 +441,7 @@ def advance_after_payload(plant, weather, stop_record):
     return _advance(plant, stop.T_r, stop.T_l, push, weather, stop)
 
 
-@njit(cache=True)
+@_borrowing
 def _nominal_mass(law, n, phi, phis, v_m, w_m):
     """The nominal model's mass matrix at the measured hitches (the disturbance's, when the
     law's model takes scheduled gains)."""
@@ -442,7 +451,7 @@ def _nominal_mass(law, n, phi, phis, v_m, w_m):
     return train.mass_and_bias_of(phis, v_m, w_m, law.nominal_train, law.rates)[1]
 
 
-@njit(cache=True)
+@_borrowing
 def _offer_path(steering, target, me, rows, n):
     """PathEtaScheduler.update: every axle projected onto the path and its gain there, into
     ``steering.offered``."""
@@ -480,7 +489,7 @@ def _steer(plant, law):
             law.steered_train.trailers[k, ETA_COLUMN] = etas[k]
 
 
-@njit(cache=True)
+@_borrowing
 def _follow_train(law, etas, phis, phi_m, v_m, w_m) -> bool:
     """The train model's gains set to those its actuated axles can follow at the hitch rates
     the scheduled ``etas`` give (reduced_model's train model); False where those are singular."""
@@ -511,7 +520,7 @@ def _delayed(delay, k, me, rows, seen):
     return delay.measurements[read], delay.rows[read], got[0], got[1], got[2]
 
 
-@njit(cache=True)
+@_borrowing
 def _ground(patches, target):
     """MujocoPlant.advance's friction patches: each wheel's friction set from where it stands
     (GroundPatches.frictions); the bit mask of the patches some wheel is on."""
@@ -525,7 +534,7 @@ def _ground(patches, target):
     return mask
 
 
-@njit(cache=True)
+@_borrowing
 def _gusts(weather, k, me):
     """Stepper._blow: the wind's wrenches on the tractor and the trailer over step ``k``, at the
     measured motion, into ``weather.wrenches``."""
@@ -547,6 +556,7 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
     steering = plant.steering
     steered = steering.kind != 0 and law.follows_steering
     delayed = loop.delay.seen.shape[0] > 1
+    fault, weather, patches = loop.faults, loop.wind, loop.ground  # read once, not every step
     row = 0
     while k <= k_end:
         t = k * dt
@@ -568,7 +578,7 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
             w_m = step.noisy(omega, lim.noise_w, noise, 2 * k + 1)
         else:
             v_m, w_m = v, omega
-        phi_m, fault = phi, loop.faults
+        phi_m = phi
         if fault.dropouts.shape[0]:  # FaultSchedule.sensor
             phi_m, v_m, w_m = faults.sensor_of(k, fault.dropouts, fault.held, phi, v_m, w_m)
         measured = log.measurement[row]
@@ -691,14 +701,14 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
         ):
             _steer(plant, law)
         push = (dist_r, dist_l, 1.0 if loop.wrench else 0.0, fx, fy, mz)
-        if loop.wind.speeds.size:
-            _gusts(loop.wind, k, me)
-        if loop.ground.geoms.size:  # logged for step k; a failed advance is not handed back
-            loop.ground.masks[k] = _ground(loop.ground, target)
+        if weather.speeds.size:
+            _gusts(weather, k, me)
+        if patches.geoms.size:  # logged for step k; a failed advance is not handed back
+            patches.masks[k] = _ground(patches, target)
         if pending:  # the caller changes the reduced plant's constants, then advances
             stop.T_r, stop.T_l, stop.dist_r, stop.dist_l = T_r, T_l, dist_r, dist_l
             return PAYLOAD, k
-        code = _advance(plant, T_r, T_l, push, loop.wind, stop)
+        code = _advance(plant, T_r, T_l, push, weather, stop)
         if code != RUNNING:
             return code, k
         k += 1

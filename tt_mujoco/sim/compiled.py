@@ -362,6 +362,13 @@ def _call_listed(entry, *args):
     return out
 
 
+def _compiled_for(dispatcher, args):
+    """The compiled entry point of ``dispatcher`` for ``args``' types, loaded from the cache or
+    compiled: calling it skips the dispatcher's typing of every argument (the records' some
+    hundred arrays), which it would otherwise redo at every chunk."""
+    return dispatcher.compile(tuple(dispatcher.typeof_pyval(a) for a in args))
+
+
 def set_aside_cache(err: BaseException) -> None:
     """A cache that fails to load (truncated, garbage, foreign): move it aside, so that a
     fresh one is compiled in the background, and say so in one line."""
@@ -417,7 +424,7 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
     stop = records.new_record(records.STOP_FIELDS)
     report_every = max(1, steps // 100)
     chunk = min(8192, report_every * max(1, 8192 // report_every))
-    k, status = 0, step.RUNNING
+    k, status, run_chunk = 0, step.RUNNING, None
     changes = [(0, tuple(plant.steering.etas.tolist()))]  # (first row, gains) of each change
     while status == step.RUNNING:
         k_end = min(steps, k + chunk - 1)
@@ -429,15 +436,16 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
             etas=np.empty((n if plant.steering.kind else 0, loop.n_trailers)),
         )
         args = (k, k_end, loop, plant, law, target, log, stop)
-        if k == 0:
+        if run_chunk is None:
             try:  # the first call loads the compiled code from the cache
-                status, k_next = k_mod.run_chunk(*args)
+                run_chunk = _compiled_for(k_mod.run_chunk, args)
+                status, k_next = run_chunk(*args)
             except Exception as err:  # damaged: nothing has run, the Python loop takes over
                 set_aside_cache(err)
                 return None
             _write_manifest(sum(k_mod.run_chunk.stats.cache_misses.values()) > 0)
         else:
-            status, k_next = k_mod.run_chunk(*args)
+            status, k_next = run_chunk(*args)
         # Rows k..k_next-1 are logged; a stop in the plant's advance, a payload step on the
         # reduced plant or the end logs k_next too.
         ends = (step.FINISHED, step.WARNING, step.SINGULAR, step.PAYLOAD)

@@ -68,6 +68,7 @@ SHARED = (
     reduced.trailer_speed_of,
     reduced.rk4_stage,
     reduced.rk4_combine,
+    reduced.rk4_update,
     reduced.with_eta_of,
     plant_reduced.reduced_measure_values,
     targets.yaw_rate_targets,

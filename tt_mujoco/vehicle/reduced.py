@@ -558,21 +558,28 @@ def rk4_step_of(y, T_r: float, T_l: float, a_v: float, a_w: float, c: ModelConst
     ok, k4 = derivative_of(stage, T_r, T_l, a_v, a_w, c)
     if not ok:
         return False, stage[3], k4
-    new = rk4_combine(y, k1, k2, k3, k4, dt / 6.0)
-    return True, y[3], (new[0], new[1], new[2], new[3], new[4], new[5], new[6], new[7])
+    return True, y[3], rk4_combine(y, k1, k2, k3, k4, dt / 6.0)
 
 
-def rk4_stage(y, k, c: float) -> list:
-    """``y + c k`` element by element: the state at which RK4 takes its next slope."""
-    out = [0.0] * len(y)
-    for i in range(len(y)):
-        out[i] = y[i] + c * k[i]
-    return out
+def rk4_stage(y, k, c: float) -> tuple:
+    """``y + c k`` over the 8 states: the state at which RK4 takes its next slope (a tuple: the
+    compiled step allocates nothing)."""
+    return (
+        y[0] + c * k[0], y[1] + c * k[1], y[2] + c * k[2], y[3] + c * k[3],
+        y[4] + c * k[4], y[5] + c * k[5], y[6] + c * k[6], y[7] + c * k[7],
+    )  # fmt: skip
 
 
-def rk4_combine(y, k1, k2, k3, k4, h: float) -> list:
-    """RK4's new state ``y + h (k1 + 2 k2 + 2 k3 + k4)`` with ``h = dt / 6``."""
-    out = [0.0] * len(y)
-    for i in range(len(y)):
-        out[i] = y[i] + h * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
-    return out
+def rk4_combine(y, k1, k2, k3, k4, h: float) -> tuple:
+    """RK4's new state ``y + h (k1 + 2 k2 + 2 k3 + k4)`` over the 8 states, ``h = dt / 6``."""
+    return (
+        rk4_update(y, k1, k2, k3, k4, h, 0), rk4_update(y, k1, k2, k3, k4, h, 1),
+        rk4_update(y, k1, k2, k3, k4, h, 2), rk4_update(y, k1, k2, k3, k4, h, 3),
+        rk4_update(y, k1, k2, k3, k4, h, 4), rk4_update(y, k1, k2, k3, k4, h, 5),
+        rk4_update(y, k1, k2, k3, k4, h, 6), rk4_update(y, k1, k2, k3, k4, h, 7),
+    )  # fmt: skip
+
+
+def rk4_update(y, k1, k2, k3, k4, h: float, i: int) -> float:
+    """State ``i`` of RK4's new state (:func:`rk4_combine`)."""
+    return y[i] + h * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
