@@ -469,7 +469,7 @@ def _offer_path(steering, target, me, rows, n):
         )
 
 
-@njit(cache=True)
+@_borrowing
 def _steer(plant, law):
     """EtaScheduler._offer: the offered gains applied when one moved by more than the
     tolerance, into the plant (a linkage's ratio, a reduced train's rows) and the law's
@@ -478,9 +478,9 @@ def _steer(plant, law):
     if not schedule.gains_moved(steering.offered, steering.etas, steering.tolerance):
         return
     etas = steering.etas
-    etas[:] = steering.offered
     steering.updates[0] += 1
     for k in range(etas.size):
+        etas[k] = steering.offered[k]  # not etas[:] = ...: a slice copy may allocate
         if plant.mujoco and not steering.actuated:
             steering.eq_data[steering.ids[k], 1] = -etas[k]
         if n > 1:
