@@ -4,7 +4,9 @@ Run: ``python benchmarks/bench_cli.py [--repeats N] [CASE ...]``. For each case 
 of ``python -m tt_mujoco.run``, with ``--no-video --no-plots``), in this one process:
 
 1. runs it once through :func:`tt_mujoco.run.main` to warm the process (the compiled code is
-   loaded once per process), then ``--repeats`` times more;
+   loaded once per process), then ``--repeats`` times ``--tries`` times more, each run
+   followed at once by its yardstick (below): each figure is the median of ``--tries`` such
+   pairs' ratios, so that a burst of load on a shared machine moves a pair, not the figure;
 2. takes the episode's inputs from its own ``timeseries.parquet`` (the wheel torques ``T_r,
    T_l`` and the matched disturbance ``dist_T_r, dist_T_l`` of every control step, held over its
    physics steps) and replays them from the run's initial state with ``mujoco.rollout`` on one
@@ -26,7 +28,9 @@ import argparse
 import contextlib
 import io
 import json
+import math
 import os
+import statistics
 import tempfile
 import time
 from pathlib import Path
@@ -115,10 +119,32 @@ def floor(argv: list[str], ts: dict) -> float:
     return seconds
 
 
+def _pair(case: str, argv: list[str], out: Path) -> tuple:
+    """One run of ``case`` and its yardstick: ``(loop s, main() s, steps, ratio, floor s)``,
+    the ratio the C rollout's time over the loop's (the Python loop's over the loop's for a
+    case no rollout replays; NaN for the reduced plant)."""
+    whole, loop, ts = cli_run(argv, out)
+    steps = len(ts["t"]) - 1
+    if case == "reduced":
+        return loop, whole, steps, math.nan, math.nan
+    if case in NO_ROLLOUT:
+        os.environ["TT_MUJOCO_COMPILED"] = "0"
+        try:
+            python_loop = cli_run(argv, out.with_name(out.name + "-python"))[1]
+        finally:
+            os.environ.pop("TT_MUJOCO_COMPILED")
+        return loop, whole, steps, python_loop / loop, math.nan
+    c_floor = floor(argv, ts)
+    return loop, whole, steps, c_floor / loop, c_floor
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("cases", nargs="*", metavar="CASE", help=f"of {list(CASES)} (default: all)")
-    p.add_argument("--repeats", type=int, default=2)
+    p.add_argument("--repeats", type=int, default=2, help="figures per case (default 2)")
+    p.add_argument(
+        "--tries", type=int, default=5, help="pairs (run, yardstick) a figure is the median of"
+    )
     args = p.parse_args()
     loops = {}
     with tempfile.TemporaryDirectory() as tmp:
@@ -128,28 +154,31 @@ def main() -> None:
             # the first run of a case in this process loads the kernel (a plain law compiles)
             print(f"{case:9s} first run in the process: main() {first:.3f} s", flush=True)
             for i in range(args.repeats):
-                whole, loop, ts = cli_run(argv, Path(tmp) / f"{case}-{i}")
-                steps = len(ts["t"]) - 1
+                # --tries pairs, each a run and right after it its yardstick (the rollout of its
+                # inputs, or the Python loop): the figure is the median of the pairs' ratios, so
+                # that a burst of load on a shared machine moves one pair, not the figure
+                pairs = [
+                    _pair(case, argv, Path(tmp) / f"{case}-{i}-{j}") for j in range(args.tries)
+                ]
+                loop = statistics.median(pair[0] for pair in pairs)
+                whole = statistics.median(pair[1] for pair in pairs)
+                steps = pairs[0][2]
                 loops.setdefault(case, []).append(steps / loop)
                 line = (
-                    f"{case:9s} run {i + 1}: {steps} steps, loop {loop:.3f} s "
-                    f"({steps / loop:,.0f} steps/s), main() {whole:.3f} s"
+                    f"{case:9s} run {i + 1}, median of {args.tries}: {steps} steps, "
+                    f"loop {loop:.3f} s ({steps / loop:,.0f} steps/s), main() {whole:.3f} s"
                 )
+                ratio = statistics.median(pair[3] for pair in pairs)
                 if case == "reduced":
                     if "main" in loops:
                         line += f"; {steps / loop / loops['main'][i]:.1f}x the MuJoCo loop"
                 elif case in NO_ROLLOUT:
-                    os.environ["TT_MUJOCO_COMPILED"] = "0"
-                    try:
-                        python_loop = cli_run(argv, Path(tmp) / f"{case}-{i}-python")[1]
-                    finally:
-                        os.environ.pop("TT_MUJOCO_COMPILED")
-                    line += f"; {python_loop / loop:.1f}x the Python loop"
+                    line += f"; {ratio:.1f}x the Python loop"
                     if "main" in loops:
                         line += f", at {steps / loop / loops['main'][i]:.2f} of the main case's"
                 else:
-                    c_floor = floor(argv, ts)
-                    line += f"; C rollout {c_floor:.3f} s; loop at {c_floor / loop:.2f} of it"
+                    c_floor = statistics.median(pair[4] for pair in pairs)
+                    line += f"; C rollout {c_floor:.3f} s; loop at {ratio:.2f} of it"
                 print(line, flush=True)
 
 
