@@ -5,9 +5,12 @@ It is imported from a copy of this file inside the compiled-code cache
 file's path and time stamp, stays valid for every checkout of the same sources.
 
 The step's plain-number functions (:data:`tt_mujoco.sim.kernel_sources.SHARED`) are registered
-with numba here, so the chunk loop below compiles them from their own source; the loop only
-sequences them as :class:`tt_mujoco.sim.stepper.Stepper` does (sense, noise, target, law,
-saturation, disturbance, log, advance), over the named records of :mod:`tt_mujoco.sim.records`.
+with numba here, so the chunk loop below compiles them from their own source. A step is
+:func:`_sense_step` (measure, check, noise, faults, delay, target, the law's reference and
+nominal model), the law, and :func:`_actuate_step` (saturation, faults, motors, disturbance,
+log, schedule, advance): the halves of :class:`tt_mujoco.sim.stepper.Stepper`'s ``sense`` and
+``actuate``, over the named records of :mod:`tt_mujoco.sim.records`, each taking the step, its
+row and the records, what the law saw and asked passed between them in ``law.reading``.
 """
 
 from __future__ import annotations
@@ -82,13 +85,18 @@ def no_user_law(m, r, model, gains, state, out, dt, limit):  # the built-in laws
     pass
 
 
-#: The step's functions, which run every control step, compile without numba's reference
-#: counting: numba counts a reference to every array of every record argument when a function is
-#: entered and releases it on exit, pairs its pruning cannot remove where the function branches
-#: (a plant record alone holds some forty arrays). It is safe for these functions: every array
-#: they see belongs to a record that :func:`run_chunk`'s Python caller holds for the whole call,
-#: and none of them allocates (numba refuses to compile one that does here) or returns an array.
+#: The step compiles without numba's reference counting: numba counts a reference to every array
+#: of every record argument when a function is entered and releases it on exit, pairs its
+#: pruning cannot remove where the function branches (a plant record alone holds some forty
+#: arrays). It is safe here: every array the step sees belongs to a record that
+#: :func:`run_chunk`'s Python caller holds for the whole call, and nothing in the step allocates
+#: (numba refuses to compile an allocation without the counting) or returns a new array. The
+#: functions below take it on as well where a counting caller, :func:`advance_after_payload`,
+#: calls them.
 _borrowing = njit(cache=True, _nrt=False)
+#: The step's two halves, :func:`_sense_step` and :func:`_actuate_step`, are inlined into the
+#: chunk loop: called, each would take every record by value, at every step.
+_step_half = njit(cache=True, _nrt=False, inline="always")
 
 
 @intrinsic
@@ -503,7 +511,7 @@ def _follow_train(law, etas, phis, phi_m, v_m, w_m) -> bool:
     return True
 
 
-@njit(cache=True)
+@_borrowing
 def _delayed(delay, k, me, rows, seen):
     """Stepper.sense's delay line: step ``k``'s measurement ``me``, its train ``rows`` and the
     ``seen = (phi, v, omega)`` stored, and those of the delay's steps ago returned (the first
@@ -513,7 +521,10 @@ def _delayed(delay, k, me, rows, seen):
     store = delay.measurements[slot]
     for i in range(store.size):
         store[i] = me[i]
-    delay.rows[slot][:, :] = rows
+    stored = delay.rows[slot]  # element by element: a slice copy may allocate
+    for i in range(rows.shape[0]):
+        for j in range(rows.shape[1]):
+            stored[i, j] = rows[i, j]
     delay.seen[slot, 0], delay.seen[slot, 1], delay.seen[slot, 2] = seen
     read = max(0, k - depth + 1) % depth
     got = delay.seen[read]
@@ -546,169 +557,199 @@ def _gusts(weather, k, me):
         weather.wrenches[i] = wrenches[i]
 
 
-@njit(cache=True, nogil=True)
-def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
-    """Control steps ``k..k_end``; returns ``(status, k)``: the step it stopped at, or
-    ``k_end + 1`` to go on. Rows go to ``log.measurement`` and ``log.loop`` (from row 0)."""
-    lim, dt, noise = loop.limits, loop.dt, loop.noise
-    stop, r, nm = stop_record[0], law.reference[0], law.model[0]
+@_step_half
+def _sense_step(k, row, loop, plant, law, target, log, stop):
+    """Stepper.sense at step ``k``: measure the plant into ``log``'s ``row``, check it, add the
+    noise and sensor faults, read the delay line, update the target and make the law's
+    reference and nominal model; what the law sees into ``law.reading``. RUNNING, or the
+    stop code (its details in ``stop``)."""
+    lim, dt, noise, fault = loop.limits, loop.dt, loop.noise, loop.faults
+    r, nm, seen_by_law = law.reference[0], law.model[0], law.reading[0]
     n, phis = loop.n_trailers, law.phis
     steering = plant.steering
-    steered = steering.kind != 0 and law.follows_steering
-    delayed = loop.delay.seen.shape[0] > 1
-    fault, weather, patches = loop.faults, loop.wind, loop.ground  # read once, not every step
-    row = 0
-    while k <= k_end:
-        t = k * dt
-        rows = log.train[row]
-        me = _sense(plant, n, rows)
-        x, y, phi, beta, v, omega = me[0], me[1], me[3], me[4], me[5], me[6]
-        code = step.stop_code(x, v, omega, phi, beta, lim)
-        if code != RUNNING:
-            stop.v, stop.phi, stop.beta, stop.x, stop.y, stop.hitch = v, phi, beta, x, y, 1.0
-            return code, k
-        if n > 1:
-            i = step.hitch_stop(rows, loop.hitch_limits, lim.jackknife_beta)
-            if i >= 0:
-                stop.v, stop.phi, stop.beta, stop.x, stop.y = v, rows[i][3], rows[i][4], x, y
-                stop.hitch, stop.eta = i + 2.0, law.nominal_train.trailers[i + 1][2]
-                return JACKKNIFE, k
-        if noise.size:
-            v_m = step.noisy(v, lim.noise_v, noise, 2 * k)
-            w_m = step.noisy(omega, lim.noise_w, noise, 2 * k + 1)
-        else:
-            v_m, w_m = v, omega
-        phi_m = phi
-        if fault.dropouts.shape[0]:  # FaultSchedule.sensor
-            phi_m, v_m, w_m = faults.sensor_of(k, fault.dropouts, fault.held, phi, v_m, w_m)
-        measured = log.measurement[row]
-        for i in range(measured.size):  # the Measurement tuple, in its field order
-            measured[i] = me[i]
-        # What the outer loops (sensed: no noise, no fault) and the law read: the readings of
-        # the sensor delay's steps ago, or this step's
-        sensed, sensed_rows = measured, rows
-        if delayed:
-            readings = (phi_m, v_m, w_m)
-            sensed, sensed_rows, phi_m, v_m, w_m = _delayed(loop.delay, k, me, rows, readings)
-        phis[0] = sensed[3]  # the hitch angles as sensed (trailers 2..N are never held)
-        for i in range(n - 1):
-            phis[i + 1] = sensed_rows[i][3]
-        pose = (sensed[0], sensed[1], sensed[2])
-        r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot = _update_target(target, k, v_m, dt, pose)
-        if target.cascade:  # HitchCascade.update: the hitches set the yaw rate
-            r.omega_d, r.omega_d_dot = _cascade(target, sensed, sensed_rows, phis, v_m)
-        state = target.state[0]
-        r.t, r.s, r.kappa = t, state.s, state.kappa
-        # The nominal model at the measurement, for the law and the matched disturbance (a
-        # built-in law's model takes the scheduled gains; the disturbance keeps the nominal's).
-        c, model_train = law.nominal, law.nominal_train
-        if steered:
-            c, model_train = reduced.with_eta_of(c, steering.etas[0]), law.steered_train
-            if law.axle_slew_rate < math.inf:  # reduced_model: the gains the axles can follow
-                if n == 1:
-                    eta = steering_math.trailer_followed_gain_of(
-                        phi_m, v_m, w_m, c.eta, c.L, c.L0, law.axle_slew_rate
-                    )
-                    c = reduced.with_eta_of(c, eta)
-                elif not _follow_train(law, steering.etas, phis, phi_m, v_m, w_m):
-                    stop.law_status = NOMINAL_SINGULAR
-                    _first_singular(phis, model_train, stop)
-                    return LAW_FAILED, k
-        if n == 1:
-            if math.cos(c.eta * phi_m) < COS_BETA_MIN:
-                stop.law_status, stop.phi, stop.eta = NOMINAL_SINGULAR, phi_m, c.eta
-                return LAW_FAILED, k
-            terms = reduced.inertia_terms_of(phi_m, c)
-            mass, bias = reduced.coriolis_of(terms, c.gamma, v_m, w_m)
-        else:
-            phis[0] = phi_m  # what the law sees
-            ok, mass, bias = train.mass_and_bias_of(phis, v_m, w_m, model_train, law.rates)
-            if not ok:
+    t = k * dt
+    rows = log.train[row]
+    me = _sense(plant, n, rows)
+    x, y, phi, beta, v, omega = me[0], me[1], me[3], me[4], me[5], me[6]
+    code = step.stop_code(x, v, omega, phi, beta, lim)
+    if code != RUNNING:
+        stop.v, stop.phi, stop.beta, stop.x, stop.y, stop.hitch = v, phi, beta, x, y, 1.0
+        return code
+    if n > 1:
+        i = step.hitch_stop(rows, loop.hitch_limits, lim.jackknife_beta)
+        if i >= 0:
+            stop.v, stop.phi, stop.beta, stop.x, stop.y = v, rows[i][3], rows[i][4], x, y
+            stop.hitch, stop.eta = i + 2.0, law.nominal_train.trailers[i + 1][2]
+            return JACKKNIFE
+    if noise.size:
+        v_m = step.noisy(v, lim.noise_v, noise, 2 * k)
+        w_m = step.noisy(omega, lim.noise_w, noise, 2 * k + 1)
+    else:
+        v_m, w_m = v, omega
+    phi_m = phi
+    if fault.dropouts.shape[0]:  # FaultSchedule.sensor
+        phi_m, v_m, w_m = faults.sensor_of(k, fault.dropouts, fault.held, phi, v_m, w_m)
+    measured = log.measurement[row]
+    for i in range(measured.size):  # the Measurement tuple, in its field order
+        measured[i] = me[i]
+    # What the outer loops (sensed: no noise, no fault) and the law read: the readings of the
+    # sensor delay's steps ago, or this step's
+    sensed, sensed_rows = measured, rows
+    if loop.delay.seen.shape[0] > 1:
+        readings = (phi_m, v_m, w_m)
+        sensed, sensed_rows, phi_m, v_m, w_m = _delayed(loop.delay, k, me, rows, readings)
+    phis[0] = sensed[3]  # the hitch angles as sensed (trailers 2..N are never held)
+    for i in range(n - 1):
+        phis[i + 1] = sensed_rows[i][3]
+    pose = (sensed[0], sensed[1], sensed[2])
+    r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot = _update_target(target, k, v_m, dt, pose)
+    if target.cascade:  # HitchCascade.update: the hitches set the yaw rate
+        r.omega_d, r.omega_d_dot = _cascade(target, sensed, sensed_rows, phis, v_m)
+    state = target.state[0]
+    r.t, r.s, r.kappa = t, state.s, state.kappa
+    # The nominal model at the measurement, for the law and the matched disturbance (a
+    # built-in law's model takes the scheduled gains; the disturbance keeps the nominal's).
+    c, model_train = law.nominal, law.nominal_train
+    if steering.kind != 0 and law.follows_steering:
+        c, model_train = reduced.with_eta_of(c, steering.etas[0]), law.steered_train
+        if law.axle_slew_rate < math.inf:  # reduced_model: the gains the axles can follow
+            if n == 1:
+                eta = steering_math.trailer_followed_gain_of(
+                    phi_m, v_m, w_m, c.eta, c.L, c.L0, law.axle_slew_rate
+                )
+                c = reduced.with_eta_of(c, eta)
+            elif not _follow_train(law, steering.etas, phis, phi_m, v_m, w_m):
                 stop.law_status = NOMINAL_SINGULAR
                 _first_singular(phis, model_train, stop)
-                return LAW_FAILED, k
-        nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22 = reduced.solve_dynamics_of(
-            mass, bias, c.r, c.d
-        )
-        if law.kind == USER:  # the user's law sees the measurement with its noise
-            for i in range(measured.size):
-                law.measurement_values[i] = sensed[i]
-            seen = law.measurement[0]
-            seen.phi, seen.v, seen.omega = phi_m, v_m, w_m
-            r.x_ref, r.y_ref, r.theta_ref = _pose_at(target, state.s)
-        status, T_r, T_l, u1, u2 = _law(law, v_m, w_m, dt, lim.torque_limit)
+                return LAW_FAILED
+    if n == 1:
+        if math.cos(c.eta * phi_m) < COS_BETA_MIN:
+            stop.law_status, stop.phi, stop.eta = NOMINAL_SINGULAR, phi_m, c.eta
+            return LAW_FAILED
+        terms = reduced.inertia_terms_of(phi_m, c)
+        mass, bias = reduced.coriolis_of(terms, c.gamma, v_m, w_m)
+    else:
+        phis[0] = phi_m  # what the law sees
+        ok, mass, bias = train.mass_and_bias_of(phis, v_m, w_m, model_train, law.rates)
+        if not ok:
+            stop.law_status = NOMINAL_SINGULAR
+            _first_singular(phis, model_train, stop)
+            return LAW_FAILED
+    nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22 = reduced.solve_dynamics_of(mass, bias, c.r, c.d)
+    if law.kind == USER:  # the user's law sees the measurement with its noise
+        for i in range(measured.size):
+            law.measurement_values[i] = sensed[i]
+        seen = law.measurement[0]
+        seen.phi, seen.v, seen.omega = phi_m, v_m, w_m
+        r.x_ref, r.y_ref, r.theta_ref = _pose_at(target, state.s)
+    seen_by_law.phi, seen_by_law.v, seen_by_law.omega = phi_m, v_m, w_m
+    seen_by_law.M11, seen_by_law.M12, seen_by_law.M22 = mass[0], mass[1], mass[2]
+    return RUNNING
+
+
+@_step_half
+def _actuate_step(k, row, loop, plant, law, target, log, stop):
+    """Stepper.actuate at step ``k``, the law's request in ``law.reading``: clip it, apply the
+    actuator faults, payloads and motors, add the disturbance, log ``row``, then (unless ``k``
+    is the last step) schedule the gains and advance the plant. RUNNING, FINISHED, PAYLOAD (the
+    caller changes the reduced plant's constants, then advances) or the advance's stop code."""
+    lim, dt, fault, c = loop.limits, loop.dt, loop.faults, law.nominal
+    r, got = law.reference[0], law.reading[0]
+    n, phis, steering, state = loop.n_trailers, law.phis, plant.steering, target.state[0]
+    t, v_m, w_m, phi_m = k * dt, got.v, got.omega, got.phi
+    me, rows = log.measurement[row], log.train[row]
+    T_r = step.clip(got.T_r, lim.torque_limit)
+    T_l = step.clip(got.T_l, lim.torque_limit)
+    dist_r = dist_l = clipped = fx = fy = mz = 0.0
+    if fault.actuators.shape[0]:  # FaultSchedule.torque
+        T_r, T_l = faults.fault_torque_of(k, fault.actuators, T_r, T_l)
+    pending = 0  # payload changes the caller makes to the reduced plant's constants
+    if fault.payloads.shape[0]:  # FaultSchedule.payloads
+        changes = fault.payload_changes
+        count = faults.payloads_of(k, state.s, fault.payloads, fault.payload_state, changes)
+        if plant.mujoco:
+            for i in range(count):
+                mj = plant.mj
+                body = mj.trailer_bodies[int(changes[i][0]) - 1]
+                plant_mujoco.scale_body_of(mj.body_mass, mj.body_inertia, body, changes[i][1])
+        else:
+            pending = count
+    if loop.dc_motor:  # what the motors deliver of the command, over this step
+        omegas = (me[WHEEL_RATES[0]], me[WHEEL_RATES[1]])
+        T_r, T_l = motors.deliver_of(loop.motor, loop.motor_torques, (T_r, T_l), omegas)
+    mass = (got.M11, got.M12, got.M22)
+    steered = steering.kind != 0 and law.follows_steering
+    delayed = loop.delay.seen.shape[0] > 1
+    phi = me[3]
+    if (steered or delayed or phi_m != phi) and (loop.disturbed or loop.wrench):
+        phis[0] = phi  # the disturbance acts at the true hitch angles
+        for i in range(n - 1):
+            phis[i + 1] = rows[i][3]
+        mass = _nominal_mass(law, n, phi, phis, v_m, w_m)
+    if loop.disturbed:
+        a_v, a_w = disturbances.paper_disturbance_of(t)
+        dist_r, dist_l = reduced.torque_for_force_of(mass, a_v, a_w, c.r, c.d)
+        dist_r, dist_l, clipped = step.clip_pair(dist_r, dist_l, lim.disturbance_bound)
+    elif loop.wrench:
+        a_v, a_w = disturbances.paper_disturbance_of(t)
+        force, torque = disturbances.wrench_of(mass, a_v, a_w)
+        fx, fy, mz = plant_mujoco.chassis_wrench_of(force, torque, me[2])
+    out = log.loop[row]
+    out.t, out.s, out.v_d, out.omega_d = t, state.s, r.v_d, state.omega_ref
+    out.v_d_dot, out.omega_d_dot, out.v_meas, out.omega_meas = (
+        r.v_d_dot,
+        r.omega_d_dot,
+        v_m,
+        w_m,
+    )
+    out.T_r, out.T_l, out.T_r_cmd, out.T_l_cmd = T_r, T_l, got.u1, got.u2
+    out.dist_T_r, out.dist_T_l, out.kappa_d = dist_r, dist_l, state.kappa
+    out.omega_d_tracked, out.dist_clipped = r.omega_d, clipped
+    if steering.kind != 0:
+        for i in range(n):
+            log.etas[row, i] = steering.etas[i]
+    stop.payloads = pending
+    if k == loop.steps:
+        return FINISHED
+    if steering.kind == PATH_SCHEDULE:
+        _offer_path(steering, target, me, rows, n)
+        _steer(plant, law)
+    elif steering.kind == CURVATURE_SCHEDULE and schedule.curvature_gains_of(
+        state.kappa, steering.lengths, steering.offered
+    ):
+        _steer(plant, law)
+    push = (dist_r, dist_l, 1.0 if loop.wrench else 0.0, fx, fy, mz)
+    if loop.wind.speeds.size:
+        _gusts(loop.wind, k, me)
+    if loop.ground.geoms.size:  # logged for step k; a failed advance is not handed back
+        loop.ground.masks[k] = _ground(loop.ground, target)
+    if pending:  # the caller changes the reduced plant's constants, then advances
+        stop.T_r, stop.T_l, stop.dist_r, stop.dist_l = T_r, T_l, dist_r, dist_l
+        return PAYLOAD
+    return _advance(plant, T_r, T_l, push, loop.wind, stop)
+
+
+@njit(cache=True, nogil=True, _nrt=False)  # without the counting: see _borrowing
+def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
+    """Control steps ``k..k_end``: :func:`_sense_step`, the law, :func:`_actuate_step`; returns
+    ``(status, k)``: the step it stopped at, or ``k_end + 1`` to go on. Rows go to
+    ``log.measurement`` and ``log.loop`` (from row 0)."""
+    dt, limit = loop.dt, loop.limits.torque_limit
+    stop, nm, got = stop_record[0], law.model[0], law.reading[0]
+    row = 0
+    while k <= k_end:
+        code = _sense_step(k, row, loop, plant, law, target, log, stop)
+        if code != RUNNING:
+            return code, k
+        status, T_r, T_l, u1, u2 = _law(law, got.v, got.omega, dt, limit)
         if status != LAW_OK:
             stop.law_status = status
             stop.g11, stop.g12, stop.g21, stop.g22 = nm.g11, nm.g12, nm.g21, nm.g22
             stop.u1, stop.u2 = u1, u2
             return LAW_FAILED, k
-        # Stepper.actuate
-        T_r_cmd, T_l_cmd = u1, u2
-        T_r = step.clip(T_r, lim.torque_limit)
-        T_l = step.clip(T_l, lim.torque_limit)
-        dist_r = dist_l = clipped = fx = fy = mz = 0.0
-        if fault.actuators.shape[0]:  # FaultSchedule.torque
-            T_r, T_l = faults.fault_torque_of(k, fault.actuators, T_r, T_l)
-        pending = 0  # payload changes the caller makes to the reduced plant's constants
-        if fault.payloads.shape[0]:  # FaultSchedule.payloads
-            changes = fault.payload_changes
-            count = faults.payloads_of(k, state.s, fault.payloads, fault.payload_state, changes)
-            if plant.mujoco:
-                for i in range(count):
-                    mj = plant.mj
-                    body = mj.trailer_bodies[int(changes[i][0]) - 1]
-                    plant_mujoco.scale_body_of(mj.body_mass, mj.body_inertia, body, changes[i][1])
-            else:
-                pending = count
-        if loop.dc_motor:  # what the motors deliver of the command, over this step
-            omegas = (me[WHEEL_RATES[0]], me[WHEEL_RATES[1]])
-            T_r, T_l = motors.deliver_of(loop.motor, loop.motor_torques, (T_r, T_l), omegas)
-        if (steered or delayed or phi_m != phi) and (loop.disturbed or loop.wrench):
-            phis[0] = phi  # the disturbance acts at the true hitch angles
-            for i in range(n - 1):
-                phis[i + 1] = rows[i][3]
-            mass = _nominal_mass(law, n, phi, phis, v_m, w_m)
-        if loop.disturbed:
-            a_v, a_w = disturbances.paper_disturbance_of(t)
-            dist_r, dist_l = reduced.torque_for_force_of(mass, a_v, a_w, c.r, c.d)
-            dist_r, dist_l, clipped = step.clip_pair(dist_r, dist_l, lim.disturbance_bound)
-        elif loop.wrench:
-            a_v, a_w = disturbances.paper_disturbance_of(t)
-            force, torque = disturbances.wrench_of(mass, a_v, a_w)
-            fx, fy, mz = plant_mujoco.chassis_wrench_of(force, torque, me[2])
-        out = log.loop[row]
-        out.t, out.s, out.v_d, out.omega_d = t, state.s, r.v_d, state.omega_ref
-        out.v_d_dot, out.omega_d_dot, out.v_meas, out.omega_meas = (
-            r.v_d_dot,
-            r.omega_d_dot,
-            v_m,
-            w_m,
-        )
-        out.T_r, out.T_l, out.T_r_cmd, out.T_l_cmd = T_r, T_l, T_r_cmd, T_l_cmd
-        out.dist_T_r, out.dist_T_l, out.kappa_d = dist_r, dist_l, state.kappa
-        out.omega_d_tracked, out.dist_clipped = r.omega_d, clipped
-        if steering.kind != 0:
-            log.etas[row, :] = steering.etas
+        got.T_r, got.T_l, got.u1, got.u2 = T_r, T_l, u1, u2
+        code = _actuate_step(k, row, loop, plant, law, target, log, stop)
         row += 1
-        stop.payloads = pending
-        if k == loop.steps:
-            return FINISHED, k
-        if steering.kind == PATH_SCHEDULE:
-            _offer_path(steering, target, me, rows, n)
-            _steer(plant, law)
-        elif steering.kind == CURVATURE_SCHEDULE and schedule.curvature_gains_of(
-            state.kappa, steering.lengths, steering.offered
-        ):
-            _steer(plant, law)
-        push = (dist_r, dist_l, 1.0 if loop.wrench else 0.0, fx, fy, mz)
-        if weather.speeds.size:
-            _gusts(weather, k, me)
-        if patches.geoms.size:  # logged for step k; a failed advance is not handed back
-            patches.masks[k] = _ground(patches, target)
-        if pending:  # the caller changes the reduced plant's constants, then advances
-            stop.T_r, stop.T_l, stop.dist_r, stop.dist_l = T_r, T_l, dist_r, dist_l
-            return PAYLOAD, k
-        code = _advance(plant, T_r, T_l, push, weather, stop)
         if code != RUNNING:
             return code, k
         k += 1

@@ -680,6 +680,7 @@ def _law_record(controller, nominal, user, steering):
         follows_steering=not isinstance(controller, PlainLawController),
         steered_train=_train_constants(nominal.with_etas(tuple(steering.etas.tolist()))),
         axle_slew_rate=float(getattr(controller, "axle_slew_rate", math.inf)),
+        reading=records.new_record(records.READING_FIELDS),
     )
 
 

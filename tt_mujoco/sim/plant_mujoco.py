@@ -25,7 +25,8 @@ def scale_body_of(body_mass, body_inertia, body: int, factor: float) -> None:
     """A payload step: ``body``'s mass and inertia times ``factor`` (the compiled episode
     shares it)."""
     body_mass[body] *= factor
-    body_inertia[body] *= factor
+    for axis in range(body_inertia.shape[1]):  # not the row at once: that allocates, compiled
+        body_inertia[body, axis] *= factor
 
 
 def aim_steering_of(eq_data, ids, hitches_q, etas, qpos, max_turn: float) -> None:

@@ -28,6 +28,7 @@ __all__ = [
     "LOG_DTYPE",
     "MEASUREMENT_DTYPE",
     "NOMINAL_FIELDS",
+    "READING_FIELDS",
     "REFERENCE_FIELDS",
     "STOP_FIELDS",
     "TARGET_FIELDS",
@@ -71,6 +72,11 @@ TARGET_FIELDS = (
 #: A built-in law's values beside its state vector: whether the last torques saturated and the
 #: two auxiliary outputs (the sliding variables of ISMC-STA).
 LAW_FLAGS = ("saturated", "aux1", "aux2")
+
+#: What the law sees of the measurement (noise, sensor faults and the delay included) and
+#: what it asks, from the step's sense half to its actuate half: the hitch angle, the speeds,
+#: the nominal mass matrix there (M11, M12, M22), the torques and the unsaturated request.
+READING_FIELDS = ("phi", "v", "omega", "M11", "M12", "M22", "T_r", "T_l", "u1", "u2")
 
 #: Why a stretch of steps stopped, with what the message names; at a payload step on the
 #: reduced plant, how many changes it made and the step's torques and disturbance, still to
@@ -234,6 +240,8 @@ class LawRecord(NamedTuple):
     #: how fast actuated axles turn at most (rad/s; inf: a linkage): the model takes the
     #: gains they can follow (:func:`tt_mujoco.controllers.base.reduced_model`)
     axle_slew_rate: float
+    #: :data:`READING_FIELDS`: what the law saw and asked this step (scratch)
+    reading: np.ndarray
 
 
 class TargetRecord(NamedTuple):
