@@ -1,16 +1,20 @@
 """The first run after an install against later ones: is the compile out of the user's way?
 
-Run: ``python benchmarks/bench_first_run.py``. It runs the main command without video
-(``python -m tt_mujoco.run --traj s_curve --no-video --no-plots``) three times with a new, empty
-compiled-code cache (``TT_MUJOCO_CACHE``), waiting after each for the background compile the
-first one starts, then once with the Python loop (``TT_MUJOCO_COMPILED=0``), then once from a copy
-of the package whose kernel source differs by a comment (another checkout, byte-compiled as an
-install leaves it, meeting a cache that holds only this checkout's kernel), and prints each wall
-time.
+Run: ``python benchmarks/bench_first_run.py [--tries N]``. Each try times, in new processes,
+the main command without video (``python -m tt_mujoco.run --traj s_curve --no-video
+--no-plots``): once with a new, empty compiled-code cache (``TT_MUJOCO_CACHE``), then, once the
+background compile that run started has filled it, once more (a warm run); then once with the
+Python loop (``TT_MUJOCO_COMPILED=0``), and once from a copy of the package whose kernel source
+differs by a comment (another checkout, byte-compiled as an install leaves it, meeting a cache
+that holds only this checkout's kernel). It prints each try's wall times and the medians, over
+the tries, of the empty-cache and the stale-cache run against the same try's warm run: the
+machine is shared, and a run's time moves by tenths of a second from one minute to the next.
 """
 
+import argparse
 import os
 import shutil
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -50,19 +54,34 @@ def wait_for_compiles(cache: Path) -> None:
 
 
 def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--tries", type=int, default=3, help="tries, each a new cache (default 3)")
+    args = p.parse_args()
+    cold, stale = [], []
     with tempfile.TemporaryDirectory() as tmp:
-        env = {**os.environ, "TT_MUJOCO_CACHE": str(Path(tmp) / "cache")}
-        env.pop("TT_MUJOCO_COMPILE_NOW", None)
-        for label in ("first run (empty cache)", "second run", "third run"):
-            print(f"{label:28s} {timed_run(env, Path(tmp) / label.split()[0]):.2f} s")
-            wait_for_compiles(Path(tmp) / "cache")  # the one the first run started
-        python = {**env, "TT_MUJOCO_COMPILED": "0"}
-        print(f"{'Python loop':28s} {timed_run(python, Path(tmp) / 'python'):.2f} s")
         checkout = other_checkout(Path(tmp))
-        other = {**env, "PYTHONPATH": str(checkout)}
-        wall = timed_run(other, Path(tmp) / "other", cwd=checkout)
-        print(f"{'another checkout, stale cache':28s} {wall:.2f} s")
-        wait_for_compiles(Path(tmp) / "cache")  # the one that run started, before cleaning up
+        for j in range(args.tries):
+            cache = Path(tmp) / f"cache-{j}"
+            env = {**os.environ, "TT_MUJOCO_CACHE": str(cache)}
+            env.pop("TT_MUJOCO_COMPILE_NOW", None)
+            first = timed_run(env, Path(tmp) / f"first-{j}")
+            wait_for_compiles(cache)  # the one the first run started
+            warm = timed_run(env, Path(tmp) / f"warm-{j}")
+            python = timed_run({**env, "TT_MUJOCO_COMPILED": "0"}, Path(tmp) / f"python-{j}")
+            other = {**env, "PYTHONPATH": str(checkout)}
+            other_wall = timed_run(other, Path(tmp) / f"other-{j}", cwd=checkout)
+            wait_for_compiles(cache)  # the one that run started
+            cold.append(first / warm)
+            stale.append(other_wall / warm)
+            print(
+                f"try {j + 1}: empty cache {first:.2f} s, warm {warm:.2f} s, Python loop "
+                f"{python:.2f} s, another checkout's stale cache {other_wall:.2f} s",
+                flush=True,
+            )
+    print(
+        f"median over {args.tries} tries, against the same try's warm run: empty cache "
+        f"{statistics.median(cold):.2f}x, stale cache {statistics.median(stale):.2f}x"
+    )
 
 
 if __name__ == "__main__":
