@@ -34,6 +34,7 @@ import statistics
 import tempfile
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 os.environ.setdefault("TT_MUJOCO_COMPILE_NOW", "1")  # compile here, not in the background
 
@@ -119,23 +120,34 @@ def floor(argv: list[str], ts: dict) -> float:
     return seconds
 
 
-def _pair(case: str, argv: list[str], out: Path) -> tuple:
-    """One run of ``case`` and its yardstick: ``(loop s, main() s, steps, ratio, floor s)``,
-    the ratio the C rollout's time over the loop's (the Python loop's over the loop's for a
-    case no rollout replays; NaN for the reduced plant)."""
+class Pair(NamedTuple):
+    """One run of a case and its yardstick."""
+
+    #: the run's loop and its whole ``main()`` call (s), and its control steps
+    loop: float
+    whole: float
+    steps: int
+    #: the C rollout's time over the loop's (the Python loop's over the loop's for a case no
+    #: rollout replays; NaN for the reduced plant), and the rollout's time (s; else NaN)
+    ratio: float
+    floor: float
+
+
+def _pair(case: str, argv: list[str], out: Path) -> Pair:
+    """A run of ``case`` and, right after it, its yardstick."""
     whole, loop, ts = cli_run(argv, out)
     steps = len(ts["t"]) - 1
     if case == "reduced":
-        return loop, whole, steps, math.nan, math.nan
+        return Pair(loop, whole, steps, math.nan, math.nan)
     if case in NO_ROLLOUT:
         os.environ["TT_MUJOCO_COMPILED"] = "0"
         try:
             python_loop = cli_run(argv, out.with_name(out.name + "-python"))[1]
         finally:
             os.environ.pop("TT_MUJOCO_COMPILED")
-        return loop, whole, steps, python_loop / loop, math.nan
+        return Pair(loop, whole, steps, python_loop / loop, math.nan)
     c_floor = floor(argv, ts)
-    return loop, whole, steps, c_floor / loop, c_floor
+    return Pair(loop, whole, steps, c_floor / loop, c_floor)
 
 
 def main() -> None:
@@ -160,15 +172,15 @@ def main() -> None:
                 pairs = [
                     _pair(case, argv, Path(tmp) / f"{case}-{i}-{j}") for j in range(args.tries)
                 ]
-                loop = statistics.median(pair[0] for pair in pairs)
-                whole = statistics.median(pair[1] for pair in pairs)
-                steps = pairs[0][2]
+                loop = statistics.median(pair.loop for pair in pairs)
+                whole = statistics.median(pair.whole for pair in pairs)
+                steps = pairs[0].steps
                 loops.setdefault(case, []).append(steps / loop)
                 line = (
                     f"{case:9s} run {i + 1}, median of {args.tries}: {steps} steps, "
                     f"loop {loop:.3f} s ({steps / loop:,.0f} steps/s), main() {whole:.3f} s"
                 )
-                ratio = statistics.median(pair[3] for pair in pairs)
+                ratio = statistics.median(pair.ratio for pair in pairs)
                 if case == "reduced":
                     if "main" in loops:
                         line += f"; {steps / loop / loops['main'][i]:.1f}x the MuJoCo loop"
@@ -177,7 +189,7 @@ def main() -> None:
                     if "main" in loops:
                         line += f", at {steps / loop / loops['main'][i]:.2f} of the main case's"
                 else:
-                    c_floor = statistics.median(pair[4] for pair in pairs)
+                    c_floor = statistics.median(pair.floor for pair in pairs)
                     line += f"; C rollout {c_floor:.3f} s; loop at {ratio:.2f} of it"
                 print(line, flush=True)
 

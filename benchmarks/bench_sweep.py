@@ -84,14 +84,19 @@ def episode_breakdown(spec, n: int) -> dict:
     return out, recorded
 
 
-def _replay_all(recorded, results) -> None:
-    """One worker of :func:`replay_on_workers`: every recorded episode replayed, checked."""
+def mean_replay(recorded) -> float:
+    """Every recorded episode replayed, checked against its final state: the mean replay (s)."""
     spent = []
     for plant, inputs, initial, final in recorded:
         replay_s, replay_final = replay(plant, inputs, initial)
         assert np.array_equal(replay_final, final)
         spent.append(replay_s)
-    results.put(statistics.mean(spent))
+    return statistics.mean(spent)
+
+
+def _replay_all(recorded, results) -> None:
+    """One worker of :func:`replay_on_workers`: :func:`mean_replay` of every recorded episode."""
+    results.put(mean_replay(recorded))
 
 
 def replay_on_workers(recorded, workers: int) -> float:
@@ -188,9 +193,7 @@ def main() -> None:
         results["big"] = r
         # The floor again after the sweep: a shared machine's speed drifts over minutes, so the
         # sweep is held against the mean of the floor taken before it and after it.
-        after = statistics.mean(
-            replay(plant, inputs, initial)[0] for plant, inputs, initial, _ in recorded
-        )
+        after = mean_replay(recorded)
         after_on_workers = replay_on_workers(recorded, args.workers)
         print(
             f"the replays again after the sweep: {1e3 * after:.0f} ms alone (before: "

@@ -94,8 +94,9 @@ def no_user_law(m, r, model, gains, state, out, dt, limit):  # the built-in laws
 #: functions below take it on as well where a counting caller, :func:`advance_after_payload`,
 #: calls them.
 _borrowing = njit(cache=True, _nrt=False)
-#: The step's two halves, :func:`_sense_step` and :func:`_actuate_step`, are inlined into the
-#: chunk loop: called, each would take every record by value, at every step.
+#: The step's two halves, :func:`_sense_step` and :func:`_actuate_step`, and the conditions
+#: both read are inlined into the chunk loop: called, each would take every record it is given
+#: by value, at every step.
 _step_half = njit(cache=True, _nrt=False, inline="always")
 
 
@@ -558,6 +559,18 @@ def _gusts(weather, k, me):
 
 
 @_step_half
+def _model_steered(plant, law) -> bool:
+    """Whether the law's nominal model takes the scheduled gains (a built-in law's does)."""
+    return plant.steering.kind != 0 and law.follows_steering
+
+
+@_step_half
+def _has_delay(loop) -> bool:
+    """Whether the sensors are delayed (the delay line holds more than this step's slot)."""
+    return loop.delay.seen.shape[0] > 1
+
+
+@_step_half
 def _sense_step(k, row, loop, plant, law, target, log, stop):
     """Stepper.sense at step ``k``: measure the plant into ``log``'s ``row``, check it, add the
     noise and sensor faults, read the delay line, update the target and make the law's
@@ -595,7 +608,7 @@ def _sense_step(k, row, loop, plant, law, target, log, stop):
     # What the outer loops (sensed: no noise, no fault) and the law read: the readings of the
     # sensor delay's steps ago, or this step's
     sensed, sensed_rows = measured, rows
-    if loop.delay.seen.shape[0] > 1:
+    if _has_delay(loop):
         readings = (phi_m, v_m, w_m)
         sensed, sensed_rows, phi_m, v_m, w_m = _delayed(loop.delay, k, me, rows, readings)
     phis[0] = sensed[3]  # the hitch angles as sensed (trailers 2..N are never held)
@@ -610,7 +623,7 @@ def _sense_step(k, row, loop, plant, law, target, log, stop):
     # The nominal model at the measurement, for the law and the matched disturbance (a
     # built-in law's model takes the scheduled gains; the disturbance keeps the nominal's).
     c, model_train = law.nominal, law.nominal_train
-    if steering.kind != 0 and law.follows_steering:
+    if _model_steered(plant, law):
         c, model_train = reduced.with_eta_of(c, steering.etas[0]), law.steered_train
         if law.axle_slew_rate < math.inf:  # reduced_model: the gains the axles can follow
             if n == 1:
@@ -678,10 +691,9 @@ def _actuate_step(k, row, loop, plant, law, target, log, stop):
         omegas = (me[WHEEL_RATES[0]], me[WHEEL_RATES[1]])
         T_r, T_l = motors.deliver_of(loop.motor, loop.motor_torques, (T_r, T_l), omegas)
     mass = (got.M11, got.M12, got.M22)
-    steered = steering.kind != 0 and law.follows_steering
-    delayed = loop.delay.seen.shape[0] > 1
     phi = me[3]
-    if (steered or delayed or phi_m != phi) and (loop.disturbed or loop.wrench):
+    moved = _model_steered(plant, law) or _has_delay(loop) or phi_m != phi
+    if moved and (loop.disturbed or loop.wrench):
         phis[0] = phi  # the disturbance acts at the true hitch angles
         for i in range(n - 1):
             phis[i + 1] = rows[i][3]
