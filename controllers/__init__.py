@@ -32,6 +32,7 @@ from tt_mujoco.controllers.lqr import LqrController
 from tt_mujoco.controllers.nmpc import NmpcController
 from tt_mujoco.controllers.pid import PidController
 from tt_mujoco.controllers.plain import PlainLawController, plain_law
+from tt_mujoco.controllers.smc import SmcController
 from tt_mujoco.controllers.stanley import StanleyController
 
 from tt_mujoco.defaults import TORQUE_LIMIT
@@ -49,9 +50,11 @@ __all__ = [
     "PidController",
     "PlainLawController",
     "Reference",
+    "SmcController",
     "StanleyController",
     "VelocityController",
     "build_controller",
+    "compiled_laws",
     "controller_class",
     "make_controller",
     "plain_law",
@@ -64,9 +67,25 @@ CONTROLLERS = Registry("controller")
 CONTROLLERS.register("ismc_sta", IsmcStaController)
 CONTROLLERS.register("pid", PidController)
 CONTROLLERS.register("fbl", FblController)
+CONTROLLERS.register("smc", SmcController)
 CONTROLLERS.register("stanley", StanleyController)
 CONTROLLERS.register("lqr", LqrController)
 CONTROLLERS.register("nmpc", NmpcController)
+
+
+def compiled_laws() -> dict[str, type[VelocityController]]:
+    """The built-in velocity laws, by registered name, in registration order: the registered
+    classes of this package whose :attr:`~VelocityController.LAW` is a plain-number function of
+    their own module. The compiled loop runs each (:mod:`tt_mujoco.sim.kernel_sources`); adding
+    one is its module and its line in :data:`CONTROLLERS`."""
+    return {
+        name: cls
+        for name, cls in ((name, CONTROLLERS[name]) for name in CONTROLLERS)
+        if isinstance(cls, type)
+        and issubclass(cls, VelocityController)
+        and cls.__module__.startswith("tt_mujoco.controllers.")
+        and getattr(getattr(cls, "LAW", None), "__module__", None) == cls.__module__
+    }
 
 
 def controller_class(spec: str) -> type[Controller]:
@@ -106,7 +125,8 @@ def make_controller(
     Parameters
     ----------
     name : str
-        ``"ismc_sta"``, ``"pid"`` or ``"fbl"`` (case and ``-``/``_`` are not significant).
+        A built-in velocity law's name (:func:`compiled_laws`: ``"ismc_sta"``, ``"pid"``,
+        ``"fbl"``, ...; case and ``-``/``_`` are not significant).
     model : callable
         Nominal model ``(phi, v, omega) -> (f1, f2, g11, g12, g21, g22)``, e.g.
         ``reduced_model(params)``.
@@ -123,7 +143,7 @@ def make_controller(
     -------
     VelocityController
     """
-    builtin = ("ismc_sta", "pid", "fbl")
+    builtin = tuple(compiled_laws())
     key = name.strip().lower().replace("-", "_") if isinstance(name, str) else None
     if key not in builtin:
         allowed = ", ".join(repr(k) for k in builtin)

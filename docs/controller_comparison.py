@@ -3,14 +3,14 @@
     python docs/controller_comparison.py [--plants mujoco reduced] [--cases ...] \
         > docs/controller_comparison.md
 
-Six controllers: the paper's ISMC-STA, PID and FBL (PID and FBL with the paper's gains,
+Seven controllers: the paper's ISMC-STA, PID and FBL (PID and FBL with the paper's gains,
 "paper_6_2"; ISMC-STA with Table 3's comparison set "paper_6_2" in Table 3's case and the
-paper's Section 6.1 set elsewhere), and the Stanley-type tracker, the gain-scheduled LQR and the
-NMPC (their default gains). Four cases:
+paper's Section 6.1 set elsewhere), the boundary-layer sliding mode SMC, and the Stanley-type
+tracker, the gain-scheduled LQR and the NMPC (their default gains). Four cases:
 Table 3's own (cycloid, the paper's disturbance), the S-curve and the circle without
 disturbance, and backing up the S-curve without disturbance (for the controllers that reverse;
-ISMC-STA, PID and FBL then drive the hitch cascade's yaw-rate target). One trailer, the same-path
-gain, dynamic target, seed 0, both plants.
+ISMC-STA, PID, FBL and SMC then drive the hitch cascade's yaw-rate target). One trailer, the
+same-path gain, dynamic target, seed 0, both plants.
 
 Columns: Table 3's four (rmse and max of e_v, e_omega), the tractor's cross-track rms and the
 position error rms (mm), how the run ended, and the cost of a control step: the median of the
@@ -38,6 +38,7 @@ CONTROLLERS = {
     "ISMC-STA": {"controller": "ismc_sta"},
     "PID": {"controller": "pid", "gains": "paper_6_2"},
     "FBL": {"controller": "fbl", "gains": "paper_6_2"},
+    "SMC": {"controller": "smc"},
     "Stanley": {"controller": "stanley"},
     "LQR": {"controller": "lqr"},
     "NMPC": {"controller": "nmpc"},

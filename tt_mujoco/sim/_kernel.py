@@ -25,12 +25,13 @@ from numba.extending import intrinsic, overload, register_jitable
 
 from tt_mujoco import exact
 from tt_mujoco.analysis import geometry
-from tt_mujoco.controllers import backing, base, fbl, ismc_sta, pid
+from tt_mujoco.controllers import backing, base
 from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
 from tt_mujoco.sim import (
     disturbances,
     faults,
     ground,
+    kernel_sources,
     measure,
     motors,
     plant_mujoco,
@@ -52,7 +53,6 @@ WARNING, LAW_FAILED, SINGULAR = step.WARNING, step.LAW_FAILED, step.SINGULAR
 PAYLOAD = step.PAYLOAD
 LAW_OK, LAW_SINGULAR = base.LAW_OK, base.LAW_SINGULAR
 COS_BETA_MIN = reduced.COS_BETA_MIN
-ISMC_STA, PID, FBL = (LAWS.index(fn) for fn in (ismc_sta.ismc_sta_law, pid.pid_law, fbl.fbl_law))
 #: ``law.kind`` of a user's plain-number law
 USER = len(LAWS)
 #: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
@@ -155,6 +155,20 @@ def _path_pose(target, s):
     """The path schedule's projection and the path feedback read the target record's path
     (:func:`_pose_at`)."""
     return lambda target, s: _pose_at(target, s)
+
+
+@overload(kernel_sources.run_law)
+def _run_law(kind, dt, tracking, model, state, gains, saturation):
+    """The built-in law of index ``kind``: a test of ``kind`` for each law of :data:`LAWS`,
+    written out here (numba cannot index a tuple of functions at run time)."""
+    args = "dt, tracking, model, state, gains, saturation"
+    lines = [f"def run_law(kind, {args}):"]
+    for i in range(len(LAWS) - 1):
+        lines += [f"    if kind == {i}:", f"        return LAW_{i}({args})"]
+    lines.append(f"    return LAW_{len(LAWS) - 1}({args})")
+    scope = {f"LAW_{i}": law for i, law in enumerate(LAWS)}
+    exec("\n".join(lines), scope)
+    return scope["run_law"]
 
 
 @overload(feedback.feedback_curvature)
@@ -352,12 +366,7 @@ def _law(law, v_m, w_m, dt, limit):
     tracking = base.Tracking(v_m, w_m, r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot)
     model = base.Nominal(nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22)
     saturation = base.Saturation(limit, flags.saturated != 0.0, law.anti_windup)
-    if law.kind == ISMC_STA:
-        out = ismc_sta.ismc_sta_law(dt, tracking, model, state, law.gains, saturation)
-    elif law.kind == PID:
-        out = pid.pid_law(dt, tracking, model, state, law.gains, saturation)
-    else:
-        out = fbl.fbl_law(dt, tracking, model, state, law.gains, saturation)
+    out = kernel_sources.run_law(law.kind, dt, tracking, model, state, law.gains, saturation)
     status, T_r, T_l, u1, u2, saturated, aux1, aux2, state = out
     flags.aux1, flags.aux2 = aux1, aux2
     for i in range(8):

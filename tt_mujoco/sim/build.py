@@ -15,7 +15,13 @@ from typing import Any
 import numpy as np
 
 from tt_mujoco.analysis.metrics import resolve_metrics
-from tt_mujoco.controllers import Controller, ControllerSetup, controller_class, reduced_model
+from tt_mujoco.controllers import (
+    CONTROLLERS,
+    Controller,
+    ControllerSetup,
+    controller_class,
+    reduced_model,
+)
 from tt_mujoco.controllers.backing import HitchCascade
 from tt_mujoco.defaults import MAX_DURATION, MAX_PHYSICS_STEPS, MAX_SPEED
 from tt_mujoco.reference.feedback import PathFeedback
@@ -268,9 +274,10 @@ def build(scenario: Scenario) -> Build:
     )
     cls = controller_class(scenario.controller)
     if scenario.reverse and not getattr(cls, "REVERSE", True):
+        backing = ", ".join(n for n in CONTROLLERS if getattr(CONTROLLERS[n], "REVERSE", True))
         raise ValueError(
             f"controller={scenario.controller!r} with reverse=True is not allowed: it tracks the "
-            "path driving forward only (use ismc_sta, pid or fbl to back up)"
+            f"path driving forward only (these back up: {backing})"
         )
     result = Build(
         scenario=scenario,

@@ -2,7 +2,7 @@
 
 :func:`tt_mujoco.sim.simulate.run_episode` hands an episode here when every part of it has a
 compiled form (:func:`unsupported` says why not otherwise): a built-in law
-(:data:`tt_mujoco.sim.kernel_sources.LAWS`: ISMC-STA, PID, FBL) or a user's plain-number law
+(:data:`tt_mujoco.sim.kernel_sources.LAWS`: ISMC-STA, PID, FBL, ...) or a user's plain-number law
 (:mod:`tt_mujoco.controllers.plain`, compiled once per process by :func:`compile_law`) on the
 built-in nominal model, a static or dynamic target on a closed-form path (the S-curve, the
 circle, the cycloid, a CSV spline) driven forwards or backing up (the reverse target, with the
@@ -291,17 +291,21 @@ def _cache_dir() -> Path:
 @functools.cache
 def source_digest() -> str:
     """A hash of what the compiled code depends on: the interpreter, the machine, numba's,
-    llvmlite's and MuJoCo's versions, and every file the kernel compiles
-    (:func:`tt_mujoco.sim.kernel_sources.source_files`, this file and the kernel's)."""
+    llvmlite's and MuJoCo's versions, every file the kernel compiles
+    (:func:`tt_mujoco.sim.kernel_sources.source_files`, that module's, this file and the
+    kernel's) and the built-in laws in their order (a law's index is its kind)."""
     import platform
     from importlib import metadata
 
-    from tt_mujoco.sim.kernel_sources import source_files
+    from tt_mujoco.sim import kernel_sources
 
     versions = [metadata.version(name) for name in ("numba", "llvmlite", "mujoco")]
+    laws = [f"{law.__module__}.{law.__qualname__}" for law in kernel_sources.LAWS]
     digest = hashlib.sha256(" ".join([sys.version, platform.machine(), *versions]).encode())
+    digest.update(" ".join(laws).encode())
     here = Path(__file__).parent
-    for name in (*source_files(), __file__, here / "_kernel.py"):
+    sources = (*kernel_sources.source_files(), kernel_sources.__file__, __file__)
+    for name in (*sources, here / "_kernel.py"):
         digest.update(Path(name).read_bytes())
     return digest.hexdigest()[:16]
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import inspect
 
 from tt_mujoco.analysis import geometry
-from tt_mujoco.controllers import backing, base, fbl, ismc_sta, pid
+from tt_mujoco.controllers import backing, base, compiled_laws
 from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
 from tt_mujoco.sim import (
     disturbances,
@@ -28,11 +28,19 @@ from tt_mujoco.sim import (
 )
 from tt_mujoco.vehicle import params, path_schedule, reduced, rolling, steering, train
 
-__all__ = ["LAWS", "RECORDS", "SHARED", "source_files"]
+__all__ = ["LAWS", "RECORDS", "SHARED", "run_law", "source_files"]
 
 #: The built-in laws the compiled loop runs, ``law(dt, tracking, model, state, gains,
-#: saturation) -> LawStep``; a law's index here is its ``kind`` in the kernel's law record.
-LAWS = (ismc_sta.ismc_sta_law, pid.pid_law, fbl.fbl_law)
+#: saturation) -> LawStep``, those of :func:`tt_mujoco.controllers.compiled_laws` in their
+#: registration order; a law's index here is its ``kind`` in the kernel's law record.
+LAWS = tuple(cls.LAW for cls in compiled_laws().values())
+
+
+def run_law(kind: int, dt, tracking, model, state, gains, saturation):
+    """One step of the built-in law ``LAWS[kind]`` (the kernel compiles a test of ``kind``
+    for each law in :data:`LAWS`: a tuple of functions cannot be indexed at run time)."""
+    return LAWS[kind](dt, tracking, model, state, gains, saturation)
+
 
 SHARED = (
     step.stop_code,
