@@ -152,6 +152,40 @@ def test_compiled_loop_equals_python_loop_bit_for_bit(monkeypatch, case):
     assert python.metrics.get("ground") == fast.metrics.get("ground")  # the patches' report
 
 
+def test_records_of_equal_type_keys_have_equal_numba_types(monkeypatch):
+    """A process finds its compiled entry point again by compiled.type_key of the records,
+    not by numba's typing: scenarios whose records have equal keys must have equal types (else
+    an entry would run on records of other types)."""
+    from numba import typeof
+
+    seen = []
+    compiled_for = compiled._compiled_for
+
+    def spied(dispatcher, args):
+        seen.append((tuple(compiled.type_key(a) for a in args), tuple(typeof(a) for a in args)))
+        return compiled_for(dispatcher, args)
+
+    monkeypatch.setattr(compiled, "_compiled_for", spied)
+    options = [
+        dict(seed=1, noise_snr_db=20.0),
+        dict(seed=2, noise_snr_db=20.0),
+        dict(),
+        dict(plant="reduced"),
+        dict(trailers=3, disturbance="none"),
+        dict(eta="path", trailers=2),
+        dict(controller="examples/kanayama.py:kanayama_law"),
+        dict(wind="6:90", ground=["rect:0:0:2:2:0.2"], sensor_delay=0.003),
+    ]
+    for extra in options:
+        assert simulate(Scenario(traj="s_curve", duration=2.0, **extra)).status == "ok"
+    assert len(seen) == len(options)
+    types_of = {}
+    for key, types in seen:
+        assert types_of.setdefault(key, types) == types
+    # and the key tells apart no more than the types do (each new key costs numba's typing)
+    assert len(types_of) == len({types for _, types in seen}) and seen[0][0] == seen[1][0]
+
+
 def test_a_payload_step_leaves_the_cache_as_its_manifest_lists():
     # The reduced plant's payload step calls a second compiled entry point
     # (advance_after_payload), which a warm-up does not compile. Its first compile adds files to

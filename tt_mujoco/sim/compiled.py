@@ -369,8 +369,36 @@ def _call_listed(entry, *args):
 def _compiled_for(dispatcher, args):
     """The compiled entry point of ``dispatcher`` for ``args``' types, loaded from the cache or
     compiled: calling it skips the dispatcher's typing of every argument (the records' some
-    hundred arrays), which it would otherwise redo at every chunk."""
-    return dispatcher.compile(tuple(dispatcher.typeof_pyval(a) for a in args))
+    hundred arrays), which it would otherwise redo at every chunk. Found again by
+    :func:`type_key`, which costs a tenth of numba's typing, at every later episode of the
+    process (a sweep's worker runs hundreds)."""
+    key = (dispatcher, tuple(type_key(a) for a in args))
+    entry = _ENTRIES.get(key)
+    if entry is None:
+        entry = dispatcher.compile(tuple(dispatcher.typeof_pyval(a) for a in args))
+        _ENTRIES[key] = entry
+    return entry
+
+
+#: Compiled entry points by (dispatcher, :func:`type_key` of their arguments).
+_ENTRIES: dict = {}
+
+
+def type_key(value):
+    """What numba's type of ``value`` depends on: an array's dtype, dimensions, layout,
+    writability and alignment; a tuple's (or named tuple's) class and items; a Python
+    number's class; numba's own type of anything else (the user law's compiled function)."""
+    if isinstance(value, np.ndarray):  # numba's layout: "C" if C-contiguous, else "F" or "A"
+        flags = value.flags
+        layout = "C" if flags.c_contiguous else ("F" if flags.f_contiguous else "A")
+        return value.dtype, value.ndim, layout, flags.writeable, flags.aligned
+    if isinstance(value, tuple):
+        return type(value), tuple(type_key(item) for item in value)
+    if type(value) in (bool, int, float):
+        return type(value)
+    from numba import typeof
+
+    return typeof(value)
 
 
 def set_aside_cache(err: BaseException) -> None:
