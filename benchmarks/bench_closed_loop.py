@@ -116,9 +116,10 @@ def compiled_replay(plant, inputs, initial) -> float:
     the compiled loop makes them: the physics share of a compiled control step."""
     from numba import njit
 
-    from tt_mujoco.sim import compiled
+    from tt_mujoco.sim import closed_loop, compiled
 
-    mj_step = compiled.kernel().mj_step
+    compiled.kernel()  # which compiles closed_loop.mj_step as a call of MuJoCo's symbol
+    mj_step = closed_loop.mj_step
 
     @njit
     def run(m, d, ctrl, qfrc, ctrls, qfrcs, substeps):

@@ -1,7 +1,7 @@
 """What calling the compiled step from Python costs per call: numba's unboxing of the records.
 
 Run: ``python benchmarks/bench_entry_call.py``. The Python loop could call the kernel's step
-halves (``_sense_step``, ``_actuate_step`` in :mod:`tt_mujoco.sim._kernel`) once each per step,
+halves (``sense_step``, ``actuate_step`` in :mod:`tt_mujoco.sim.closed_loop`) once each per step,
 around a controller class; what such a call costs before any of the step runs is numba turning
 its Python arguments into native ones. This builds the records of an S-curve episode as
 :func:`tt_mujoco.sim.compiled.run_compiled` does (one trailer, then three), compiles functions

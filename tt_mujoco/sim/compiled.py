@@ -50,7 +50,7 @@ from tt_mujoco.analysis import geometry
 from tt_mujoco.outputs import atomic_write
 from tt_mujoco.sim import step
 
-__all__ = ["kernel", "ready", "run_compiled", "source_digest", "unsupported"]
+__all__ = ["episode_records", "kernel", "ready", "run_compiled", "source_digest", "unsupported"]
 
 #: Shortest episode handed to the compiled loop (loading the compiled code is paid once per
 #: process: a short episode gains less than that).
@@ -449,11 +449,7 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
     from tt_mujoco.sim.measure import TRAIN_FIELDS
 
     steps = stepper.steps
-    loop = stepper.loop_record()
-    plant = _plant_record(stepper, stepper.built.nominal)
-    law = _law_record(controller, stepper.built.nominal, user, plant.steering)
-    target = _target_record(stepper.built, steps)
-    stop = records.new_record(records.STOP_FIELDS)
+    loop, plant, law, target, stop = episode_records(stepper, controller, user)
     report_every = max(1, steps // 100)
     chunk = min(8192, report_every * max(1, 8192 // report_every))
     k, status, run_chunk = 0, step.RUNNING, None
@@ -528,6 +524,22 @@ def _carry_payloads(stepper, plant, faults, stop):
     if params.n_trailers > 1:  # a schedule's gains in force, not the parameters' own
         train.trailers[:, eta] = plant.train.trailers[:, eta]
     return plant._replace(ode=reduced.model_constants(params), train=train)
+
+
+def episode_records(stepper, controller, user) -> tuple:
+    """The records of the (reset) ``stepper``'s episode as the step reads them
+    (:mod:`tt_mujoco.sim.closed_loop`): ``(loop, plant, law, target, stop)``, with ``user`` the
+    compiled form of a plain-number law (any placeholder for a built-in one)."""
+    from tt_mujoco.sim import records
+
+    plant = _plant_record(stepper, stepper.built.nominal)
+    return (
+        stepper.loop_record(),
+        plant,
+        _law_record(controller, stepper.built.nominal, user, plant.steering),
+        _target_record(stepper.built, stepper.steps),
+        records.new_record(records.STOP_FIELDS),
+    )
 
 
 def _user_law(k_mod, controller):

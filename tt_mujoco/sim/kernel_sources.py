@@ -1,6 +1,7 @@
-"""The plain-number functions that both loops run: the one list the compiled kernel compiles.
+"""What the compiled kernel compiles: the closed loop's step and the plain-number functions it
+calls, the one list of them.
 
-:mod:`tt_mujoco.sim._kernel` registers each of :data:`SHARED` with numba, and
+:mod:`tt_mujoco.sim._kernel` registers each of :data:`SHARED` and :data:`STEP` with numba, and
 :func:`tt_mujoco.sim.compiled.source_digest` keys the compiled-code cache by the files they are
 defined in: a function added here is compiled and watched with no second list to keep.
 Importing this module imports no numba.
@@ -11,9 +12,10 @@ from __future__ import annotations
 import inspect
 
 from tt_mujoco.analysis import geometry
-from tt_mujoco.controllers import backing, base, compiled_laws
+from tt_mujoco.controllers import backing, base
 from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
 from tt_mujoco.sim import (
+    closed_loop,
     disturbances,
     faults,
     ground,
@@ -28,19 +30,14 @@ from tt_mujoco.sim import (
 )
 from tt_mujoco.vehicle import params, path_schedule, reduced, rolling, steering, train
 
-__all__ = ["LAWS", "RECORDS", "SHARED", "run_law", "source_files"]
+__all__ = ["LAWS", "RECORDS", "SHARED", "STEP", "source_files"]
 
-#: The built-in laws the compiled loop runs, ``law(dt, tracking, model, state, gains,
-#: saturation) -> LawStep``, those of :func:`tt_mujoco.controllers.compiled_laws` in their
-#: registration order; a law's index here is its ``kind`` in the kernel's law record.
-LAWS = tuple(cls.LAW for cls in compiled_laws().values())
+#: The built-in laws (:data:`tt_mujoco.sim.closed_loop.LAWS`).
+LAWS = closed_loop.LAWS
 
-
-def run_law(kind: int, dt, tracking, model, state, gains, saturation):
-    """One step of the built-in law ``LAWS[kind]`` (the kernel compiles a test of ``kind``
-    for each law in :data:`LAWS`: a tuple of functions cannot be indexed at run time)."""
-    return LAWS[kind](dt, tracking, model, state, gains, saturation)
-
+#: The closed loop's step (:mod:`tt_mujoco.sim.closed_loop`), which the kernel registers with
+#: its own options.
+STEP = (*closed_loop.BORROWING, *closed_loop.HALVES)
 
 SHARED = (
     step.stop_code,
@@ -178,5 +175,6 @@ def source_files() -> list[str]:
     """The files the shared functions and the record types are defined in, each once, in the
     order of their modules' names (so the same sources in another folder list alike); numba
     compiles the functions with their module's constants, so the whole file counts."""
-    files = {obj.__module__: inspect.getsourcefile(obj) for obj in (*SHARED, *RECORDS)}
+    objects = (*SHARED, *STEP, *RECORDS)
+    files = {obj.__module__: inspect.getsourcefile(obj) for obj in objects}
     return [files[module] for module in sorted(files)]

@@ -9,6 +9,7 @@ state, the log row and why a run stopped. The Python loop
 
 from __future__ import annotations
 
+import functools
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -44,6 +45,7 @@ __all__ = [
     "SteeringRecord",
     "TargetRecord",
     "WindRecord",
+    "interpreted",
     "new_record",
     "record_dtype",
 ]
@@ -94,6 +96,32 @@ def new_record(fields, **values) -> np.ndarray:
     record = np.zeros(1, dtype=record_dtype(fields))
     for name, value in values.items():
         record[0][name] = value
+    return record
+
+
+@functools.cache
+def _fields_class(names: tuple[str, ...]) -> type:
+    """A class of plain attributes ``names`` (slots): what CPython reads and writes fast."""
+    return type("Fields", (), {"__slots__": names})
+
+
+def interpreted(record):
+    """``record`` (a named tuple of the records here, or one of them) as CPython runs the step
+    on it: each structured array becomes a list of objects with the same fields as plain
+    attributes (a NumPy record's field costs a microsecond or more to reach from Python, an
+    attribute some tens of nanoseconds); other arrays, and numbers, are the same objects."""
+    if isinstance(record, np.ndarray) and record.dtype.names:
+        cls, names = _fields_class(record.dtype.names), record.dtype.names
+        out = []
+        for values in record.tolist():
+            element = cls()
+            for name, value in zip(names, values, strict=True):
+                setattr(element, name, value)
+            out.append(element)
+        return out
+    if isinstance(record, tuple):
+        items = [interpreted(item) for item in record]
+        return type(record)(*items) if hasattr(record, "_fields") else tuple(items)
     return record
 
 
@@ -275,6 +303,20 @@ class TargetRecord(NamedTuple):
     cascade_constants: CascadeConstants
     wanted: np.ndarray
     rates: np.ndarray
+
+    # What a path offers the path feedback and the path schedule, run by CPython (the kernel
+    # overloads the functions that call these).
+    def pose_at(self, s: float) -> tuple[float, float, float]:
+        """The path's pose at ``s`` (:func:`tt_mujoco.sim.closed_loop.pose_at`)."""
+        from tt_mujoco.sim.closed_loop import pose_at
+
+        return pose_at(self, s)
+
+    def curvature_and_rate(self, s: float) -> tuple[float, float]:
+        """``(kappa, dkappa/ds)`` at ``s`` (:func:`tt_mujoco.sim.closed_loop.path_at`)."""
+        from tt_mujoco.sim.closed_loop import path_at
+
+        return path_at(self, s)
 
 
 class FaultRecord(NamedTuple):

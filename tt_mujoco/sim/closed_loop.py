@@ -1,0 +1,654 @@
+"""The closed loop's step over the named records: one source, compiled and interpreted.
+
+A control step is :func:`sense_step` (measure, check, noise, faults, delay, target, the law's
+reference and nominal model), the law (:func:`law_step` runs a compiled one) and
+:func:`actuate_step` (saturation, faults, motors, disturbance, log, schedule, advance), over the
+records of :mod:`tt_mujoco.sim.records`, each taking the step, its row and the records; what
+the law saw and asked passes between them in ``law.reading``. The kernel's chunk loop
+(:func:`tt_mujoco.sim._kernel.run_chunk`) sequences them over a stretch of steps.
+
+These are plain functions: the compiled kernel (:mod:`tt_mujoco.sim._kernel`) compiles them
+from this source (:data:`BORROWING` and :data:`HALVES` say how), and CPython runs the same
+source. Two calls reach what only one of them has: :func:`mj_step` (MuJoCo's C step, by the
+addresses of the model and data) and :func:`pointer` (an array's address, for a compiled
+plain-number law); the kernel gives each its compiled form. Importing this module imports no
+numba.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+import math
+import os
+
+from tt_mujoco.controllers import backing, base, compiled_laws
+from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
+from tt_mujoco.sim import (
+    disturbances,
+    faults,
+    ground,
+    measure,
+    motors,
+    plant_mujoco,
+    plant_reduced,
+    records,
+    schedule,
+    step,
+    wind,
+)
+from tt_mujoco.vehicle import path_schedule, reduced, train
+from tt_mujoco.vehicle import steering as steering_math
+
+__all__ = [
+    "BORROWING",
+    "HALVES",
+    "LAWS",
+    "actuate_step",
+    "advance_after_payload",
+    "law_step",
+    "mj_step",
+    "path_at",
+    "pointer",
+    "pose_at",
+    "run_law",
+    "sense_step",
+]
+
+#: The built-in laws the loop runs, ``law(dt, tracking, model, state, gains, saturation) ->
+#: LawStep``, those of :func:`tt_mujoco.controllers.compiled_laws` in their registration
+#: order; a law's index here is its ``kind`` in the law record.
+LAWS = tuple(cls.LAW for cls in compiled_laws().values())
+
+RUNNING, FINISHED, BLEW_UP, JACKKNIFE = step.RUNNING, step.FINISHED, step.BLEW_UP, step.JACKKNIFE
+WARNING, LAW_FAILED, SINGULAR = step.WARNING, step.LAW_FAILED, step.SINGULAR
+PAYLOAD = step.PAYLOAD
+LAW_OK, LAW_SINGULAR = base.LAW_OK, base.LAW_SINGULAR
+COS_BETA_MIN = reduced.COS_BETA_MIN
+#: ``law.kind`` of a user's plain-number law
+USER = len(LAWS)
+#: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
+NOMINAL_SINGULAR = -1.0
+PATH_SCHEDULE, CURVATURE_SCHEDULE = records.PATH_SCHEDULE, records.CURVATURE_SCHEDULE
+#: where trailer 1's axle and the bodies' motion are in the measurement, and a trailer's gain
+#: in a train's row
+X0, Y0, THETA0, V0, V, THETA, BETA = (
+    measure.Measurement._fields.index(name)
+    for name in ("x0", "y0", "theta0", "v0", "v", "theta", "beta")
+)
+WHEEL_RATES = tuple(measure.Measurement._fields.index(f"theta_{w}_dot") for w in ("r", "l"))
+ETA_COLUMN = train.TRAILER_ROW.index("eta")
+
+
+def run_law(kind: int, dt, tracking, model, state, gains, saturation):
+    """One step of the built-in law ``LAWS[kind]`` (the kernel compiles a test of ``kind``
+    for each law in :data:`LAWS`: a tuple of functions cannot be indexed at run time)."""
+    return LAWS[kind](dt, tracking, model, state, gains, saturation)
+
+
+def mujoco_library() -> str:
+    """The path of MuJoCo's shared library, which its Python bindings load."""
+    import mujoco
+
+    folder = os.path.dirname(mujoco.__file__)
+    return os.path.join(folder, next(f for f in os.listdir(folder) if f.startswith("libmujoco.so")))
+
+
+@functools.cache
+def _c_mj_step():
+    function = ctypes.CDLL(mujoco_library()).mj_step
+    function.argtypes, function.restype = (ctypes.c_void_p, ctypes.c_void_p), None
+    return function
+
+
+def mj_step(model_address, data_address) -> None:
+    """MuJoCo's ``mj_step`` on the model and data at these addresses (the plant record's
+    ``pointers``); the kernel calls the library's symbol."""
+    _c_mj_step()(int(model_address), int(data_address))
+
+
+def pointer(array):
+    """The address of a contiguous float array's data, as a C double pointer."""
+    return array.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+
+
+def path_at(target, s):
+    """``(kappa, dkappa/ds)`` of the target's closed-form path at ``s``."""
+    if target.path_kind == 0:
+        return paths.arcs_curvature_of(s, target.bounds, target.kappas)
+    if target.path_kind == 2:
+        bounds, cells = target.bounds, target.cells
+        return spline.spline_curvature_of(s, target.length, target.kappa_ends, bounds, cells)
+    return paths.cycloid_curvature_and_rate(s)
+
+
+def pose_at(target, s):
+    """The path's pose at ``s`` (ReferencePath.pose_at)."""
+    bounds = target.bounds
+    clipped = min(max(s, 0.0), target.length)
+    if target.path_kind == 0:
+        x, y, heading = paths.arcs_pose_of(clipped, bounds, target.kappas, target.starts)
+    elif target.path_kind == 2:
+        x, y, heading = spline.spline_pose_of(clipped, bounds, target.pose_cells)
+    else:
+        x, y, heading = paths.cycloid_pose_of(clipped)
+    return path_base.continued_pose(s, clipped, x, y, heading)
+
+
+def _sense(plant, n, rows):
+    """The Measurement fields of the plant's state; trailers 2..N of ``n`` into ``rows``."""
+    if plant.mujoco:
+        mj = plant.mj
+        me = measure.measure_values(mj.qpos, mj.qvel, mj.addresses, mj.lengths)
+        if n > 1:
+            measure.train_rows_of(
+                mj.qpos, mj.qvel, mj.addresses, mj.lengths, me, plant.train_joints, rows
+            )
+        return me
+    y, ode = plant.ode_state, _ode(plant)
+    if n == 1:
+        return plant_reduced.reduced_measure_values(y, ode)
+    first = (y[0], y[1], y[2], y[3], y[3 + n], y[4 + n], y[5 + n], y[6 + n])
+    plant_reduced.reduced_train_rows_of(y, plant.train, plant.places, plant.speeds, rows)
+    return plant_reduced.reduced_measure_values(first, ode)
+
+
+def _ode(plant):
+    """The reduced plant's constants with trailer 1's gain in force."""
+    if plant.steering.kind == 0:
+        return plant.ode
+    return reduced.with_eta_of(plant.ode, plant.steering.etas[0])
+
+
+def _first_singular(phis, c, stop):
+    """The first trailer at cos(eta_k phi_k) < COS_BETA_MIN into ``stop`` (phi, eta)."""
+    for k in range(len(c.trailers)):
+        eta = c.trailers[k][2]
+        if math.cos(eta * phis[k]) < COS_BETA_MIN:
+            stop.phi, stop.eta = phis[k], eta
+            return
+
+
+def _update_target(target, k, v_m, dt, pose):
+    """The target's update at step ``k`` (StaticTarget / DynamicTarget / ReverseTarget.update,
+    and PathFeedback.update at the measured ``pose``): ``(v_d, omega_d, v_d_dot,
+    omega_d_dot)``, its state updated in place."""
+    state = target.state[0]
+    s_ref, v_ref, a_ref = target.profile[k, 0], target.profile[k, 1], target.profile[k, 2]
+    if target.reverse:
+        v = -v_ref
+        if target.dynamic:
+            v = v_m
+            if not math.isnan(state.v_prev):
+                state.s = targets.travelled(state.s, state.v_prev, v, dt)
+            state.v_prev = v
+        else:
+            state.s = target.s_end - s_ref
+        kappa, rate = path_at(target, state.s)
+        v_ref, omega_d, a_ref, omega_d_dot = reverse.reverse_targets_of(
+            kappa, rate, v, v_ref, a_ref
+        )
+    elif target.dynamic:
+        if not math.isnan(state.v_prev):
+            state.s = targets.travelled(state.s, state.v_prev, v_m, dt)
+        state.v_prev = v_m
+        kappa, rate = path_at(target, state.s)
+        omega_d, omega_d_dot = targets.yaw_rate_targets(kappa, rate, v_m, a_ref)
+    else:
+        kappa, rate = path_at(target, s_ref)
+        state.s = s_ref
+        omega_d, omega_d_dot = targets.yaw_rate_targets(kappa, rate, v_ref, a_ref)
+    state.kappa = kappa
+    state.omega_ref = omega_d
+    if target.feedback:
+        s_near, e_y, e_psi = feedback.path_errors_of(
+            target, state.s_near, pose[0], pose[1], pose[2]
+        )
+        state.s_near, state.e_y, state.e_psi = s_near, e_y, e_psi
+        state.kappa_near = path_at(target, s_near)[0]
+        omega_d, omega_d_dot = feedback.feedback_of(
+            target.feedback_gains,
+            (omega_d, a_ref, omega_d_dot),
+            v_m,
+            (e_y, e_psi),
+            state.kappa_near,
+        )
+    return v_ref, omega_d, a_ref, omega_d_dot
+
+
+def _cascade(target, me, rows, phis, v_m):
+    """HitchCascade.update's ``(omega_d, omega_d_dot)`` at the measured hitch angles
+    ``phis``; its state updated in place."""
+    n = phis.size
+    if n == 1:
+        lead = (me[X0], me[Y0], me[THETA0])
+    else:
+        lead = (rows[n - 2][0], rows[n - 2][1], rows[n - 2][2])
+    state = target.state[0]
+    s, e_y, e_psi, omega_d = backing.cascade_of(
+        target.cascade_constants, target, phis, lead, (v_m, me[6]), state.s_lead,
+        target.wanted, target.rates,
+    )  # fmt: skip
+    state.s_lead, state.e_y, state.e_psi = s, e_y, e_psi
+    return omega_d, 0.0
+
+
+def law_step(law, v_m, w_m, dt, limit):
+    """The law's ``(status, T_r, T_l, u1, u2)`` at the reference and the nominal model in
+    ``law``; its state updated in place."""
+    r, nm, flags = law.reference[0], law.model[0], law.flags[0]
+    if law.kind == USER:
+        out = law.torques
+        law.user(
+            pointer(law.measurement_values), pointer(law.reference), pointer(law.model),
+            pointer(law.user_gains), pointer(law.user_state), pointer(out), dt, limit,
+        )  # fmt: skip
+        T_r, T_l = out[0], out[1]
+        if not (math.isfinite(T_r) and math.isfinite(T_l)):
+            return base.LAW_NOT_FINITE, T_r, T_l, T_r, T_l
+        return LAW_OK, T_r, T_l, T_r, T_l
+    s = law.state
+    state = (s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7])
+    tracking = base.Tracking(v_m, w_m, r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot)
+    model = base.Nominal(nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22)
+    saturation = base.Saturation(limit, flags.saturated != 0.0, law.anti_windup)
+    out = run_law(law.kind, dt, tracking, model, state, law.gains, saturation)
+    status, T_r, T_l, u1, u2, saturated, aux1, aux2, state = out
+    flags.aux1, flags.aux2 = aux1, aux2
+    for i in range(8):
+        s[i] = state[i]
+    if status == LAW_OK:
+        flags.saturated = 1.0 if saturated else 0.0
+    return status, T_r, T_l, u1, u2
+
+
+def _blow(mj, wrench, gusts):
+    """MujocoPlant.blow: the wind's ``gusts`` (``F_x, F_y, M_z``) on the tractor, then on the
+    trailer, added to the tractor's chassis wrench when the disturbance is one."""
+    tractor, trailer = mj.xfrc_applied[mj.tractor_body], mj.xfrc_applied[mj.trailer_bodies[0]]
+    if wrench:
+        tractor[0] += gusts[0]
+        tractor[1] += gusts[1]
+        tractor[5] += gusts[2]
+    else:
+        tractor[0], tractor[1], tractor[5] = gusts[0], gusts[1], gusts[2]
+    trailer[0], trailer[1], trailer[5] = gusts[3], gusts[4], gusts[5]
+
+
+def _advance(plant, T_r, T_l, push, weather, stop):
+    """Apply the torques, the disturbance ``push = (dist_r, dist_l, wrench?, fx, fy, mz)`` and
+    the wind (``weather.wrenches`` of this step, when there is a wind) and advance the plant one
+    control period; the stop code."""
+    dist_r, dist_l = push[0], push[1]
+    if plant.mujoco:
+        mj = plant.mj
+        a = mj.addresses
+        mj.ctrl[a.act_right] = T_r
+        mj.ctrl[a.act_left] = T_l
+        if push[2] != 0.0:
+            xfrc = mj.xfrc_applied[mj.tractor_body]
+            xfrc[0], xfrc[1], xfrc[5] = push[3], push[4], push[5]
+        else:
+            mj.qfrc_applied[a.wheel_right_v] = dist_r
+            mj.qfrc_applied[a.wheel_left_v] = dist_l
+        if weather.speeds.size:
+            _blow(mj, push[2] != 0.0, weather.wrenches)
+        steering = plant.steering
+        for _ in range(plant.substeps):
+            if steering.actuated:  # the axles' targets follow the hitches every physics step
+                plant_mujoco.aim_steering_of(
+                    steering.eq_data,
+                    steering.ids,
+                    steering.hitches_q,
+                    steering.etas,
+                    mj.qpos,
+                    steering.max_turn,
+                )
+            mj_step(mj.pointers[0], mj.pointers[1])
+        for i in range(mj.warnings.size):
+            if mj.warnings[i] != 0:
+                stop.warning = i
+                return WARNING
+        return RUNNING
+    y = plant.ode_state
+    n = len(plant.train.trailers)
+    if n > 1:
+        inputs = (T_r + dist_r, T_l + dist_l, 0.0, 0.0)
+        for _ in range(plant.substeps):
+            if not train.train_rk4_step_of(
+                y, inputs, plant.train, plant.timestep, plant.speeds, plant.slopes
+            ):
+                _first_singular(plant.slopes[4][3 : 3 + n], plant.train, stop)
+                return SINGULAR
+        return RUNNING
+    ode = _ode(plant)
+    for _ in range(plant.substeps):
+        ok, phi, new = reduced.rk4_step_of(
+            y, T_r + dist_r, T_l + dist_l, 0.0, 0.0, ode, plant.timestep
+        )
+        if not ok:
+            stop.phi, stop.eta = phi, ode.eta
+            return SINGULAR
+        for i in range(8):
+            y[i] = new[i]
+    return RUNNING
+
+
+def advance_after_payload(plant, weather, stop_record):
+    """The step a payload on the reduced plant interrupted (:data:`PAYLOAD`), advanced on the
+    plant's new constants with the torques and disturbance in ``stop_record``; the stop code."""
+    stop = stop_record[0]
+    push = (stop.dist_r, stop.dist_l, 0.0, 0.0, 0.0, 0.0)
+    return _advance(plant, stop.T_r, stop.T_l, push, weather, stop)
+
+
+def _nominal_mass(law, n, phi, phis, v_m, w_m):
+    """The nominal model's mass matrix at the measured hitches (the disturbance's, when the
+    law's model takes scheduled gains)."""
+    if n == 1:
+        c = law.nominal
+        return reduced.coriolis_of(reduced.inertia_terms_of(phi, c), c.gamma, v_m, w_m)[0]
+    return train.mass_and_bias_of(phis, v_m, w_m, law.nominal_train, law.rates)[1]
+
+
+def _offer_path(steering, target, me, rows, n):
+    """PathEtaScheduler.update: every axle projected onto the path and its gain there, into
+    ``steering.offered``."""
+    offered, arcs, driven = steering.offered, steering.arcs, steering.driven
+    if driven.gain != 0.0:
+        path_schedule.record_driven_of(target, driven, me[0], me[1])
+    for k in range(n):
+        if k == 0:
+            x, y, heading, phi = me[X0], me[Y0], me[THETA0], me[3]
+        else:
+            row = rows[k - 1]
+            x, y, heading, phi = row[0], row[1], row[2], row[3]
+        arcs[k], offered[k] = path_schedule.axle_gain_of(
+            target, arcs[k], (x, y), heading, phi, steering.tables[k], steering.bounds, driven
+        )
+
+
+def _steer(plant, law):
+    """EtaScheduler._offer: the offered gains applied when one moved by more than the
+    tolerance, into the plant (a linkage's ratio, a reduced train's rows) and the law's
+    train model."""
+    steering, n = plant.steering, len(plant.train.trailers)
+    if not schedule.gains_moved(steering.offered, steering.etas, steering.tolerance):
+        return
+    etas = steering.etas
+    steering.updates[0] += 1
+    for k in range(etas.size):
+        etas[k] = steering.offered[k]  # not etas[:] = ...: a slice copy may allocate
+        if plant.mujoco and not steering.actuated:
+            steering.eq_data[steering.ids[k], 1] = -etas[k]
+        if n > 1:
+            plant.train.trailers[k, ETA_COLUMN] = etas[k]
+        if law.steered_train.trailers.shape[0] > 1:
+            law.steered_train.trailers[k, ETA_COLUMN] = etas[k]
+
+
+def _follow_train(law, etas, phis, phi_m, v_m, w_m) -> bool:
+    """The train model's gains set to those its actuated axles can follow at the hitch rates
+    the scheduled ``etas`` give (reduced_model's train model); False where those are singular."""
+    rows = law.steered_train.trailers
+    for k in range(etas.size):
+        rows[k, ETA_COLUMN] = etas[k]
+    phis[0] = phi_m  # what the law sees
+    if not train.trailer_rates_of(phis, v_m, w_m, law.steered_train, law.rates):
+        return False
+    steering_math.followed_gains_of(etas, law.rates, law.axle_slew_rate, rows[:, ETA_COLUMN])
+    return True
+
+
+def _delayed(delay, k, me, rows, seen):
+    """Stepper.sense's delay line: step ``k``'s measurement ``me``, its train ``rows`` and the
+    ``seen = (phi, v, omega)`` stored, and those of the delay's steps ago returned (the first
+    step's until there are that many): ``(measurement, rows, phi, v, omega)``."""
+    depth = delay.seen.shape[0]
+    slot = k % depth
+    store = delay.measurements[slot]
+    for i in range(store.size):
+        store[i] = me[i]
+    stored = delay.rows[slot]  # element by element: a slice copy may allocate
+    for i in range(rows.shape[0]):
+        for j in range(rows.shape[1]):
+            stored[i, j] = rows[i, j]
+    delay.seen[slot, 0], delay.seen[slot, 1], delay.seen[slot, 2] = seen
+    read = max(0, k - depth + 1) % depth
+    got = delay.seen[read]
+    return delay.measurements[read], delay.rows[read], got[0], got[1], got[2]
+
+
+def _ground(patches, target):
+    """MujocoPlant.advance's friction patches: each wheel's friction set from where it stands
+    (GroundPatches.frictions); the bit mask of the patches some wheel is on."""
+    points, xpos = patches.points, patches.geom_xpos
+    for i in range(patches.geoms.size):
+        points[i, 0], points[i, 1] = xpos[patches.geoms[i], 0], xpos[patches.geoms[i], 1]
+    table = (patches.kinds, patches.bounds, patches.mus, patches.base_mu)
+    mask = ground.wheel_frictions_of(target, points, patches.arcs, table, patches.frictions)
+    for i in range(patches.geoms.size):
+        patches.geom_friction[patches.geoms[i], 0] = patches.frictions[i]
+    return mask
+
+
+def _gusts(weather, k, me):
+    """Stepper._blow: the wind's wrenches on the tractor and the trailer over step ``k``, at the
+    measured motion, into ``weather.wrenches``."""
+    speed = weather.speeds[k]
+    air = (speed * weather.direction[0], speed * weather.direction[1])
+    motion = (me[V], me[THETA], me[V0], me[THETA0], me[BETA])
+    wrenches = wind.wind_wrenches_of(air, motion, weather.drag)
+    for i in range(6):
+        weather.wrenches[i] = wrenches[i]
+
+
+def _model_steered(steering_kind: int, follows_steering: bool) -> bool:
+    """Whether the law's nominal model takes the scheduled gains: the plant's steering is
+    scheduled (``plant.steering.kind``) and the law follows it (a built-in law's model does)."""
+    return steering_kind != 0 and follows_steering
+
+
+def _has_delay(depth: int) -> bool:
+    """Whether the sensors are delayed: the delay line (``loop.delay``, ``depth`` slots) holds
+    more than this step's slot."""
+    return depth > 1
+
+
+def sense_step(k, row, loop, plant, law, target, log, stop):
+    """Stepper.sense at step ``k``: measure the plant into ``log``'s ``row``, check it, add the
+    noise and sensor faults, read the delay line, update the target and make the law's
+    reference and nominal model; what the law sees into ``law.reading``. RUNNING, or the
+    stop code (its details in ``stop``)."""
+    lim, dt, noise, fault = loop.limits, loop.dt, loop.noise, loop.faults
+    r, nm, seen_by_law = law.reference[0], law.model[0], law.reading[0]
+    n, phis = loop.n_trailers, law.phis
+    steering = plant.steering
+    t = k * dt
+    rows = log.train[row]
+    me = _sense(plant, n, rows)
+    x, y, phi, beta, v, omega = me[0], me[1], me[3], me[4], me[5], me[6]
+    code = step.stop_code(x, v, omega, phi, beta, lim)
+    if code != RUNNING:
+        stop.v, stop.phi, stop.beta, stop.x, stop.y, stop.hitch = v, phi, beta, x, y, 1.0
+        return code
+    if n > 1:
+        i = step.hitch_stop(rows, loop.hitch_limits, lim.jackknife_beta)
+        if i >= 0:
+            stop.v, stop.phi, stop.beta, stop.x, stop.y = v, rows[i][3], rows[i][4], x, y
+            stop.hitch, stop.eta = i + 2.0, law.nominal_train.trailers[i + 1][2]
+            return JACKKNIFE
+    if noise.size:
+        v_m = step.noisy(v, lim.noise_v, noise, 2 * k)
+        w_m = step.noisy(omega, lim.noise_w, noise, 2 * k + 1)
+    else:
+        v_m, w_m = v, omega
+    phi_m = phi
+    if fault.dropouts.shape[0]:  # FaultSchedule.sensor
+        phi_m, v_m, w_m = faults.sensor_of(k, fault.dropouts, fault.held, phi, v_m, w_m)
+    measured = log.measurement[row]
+    for i in range(measured.size):  # the Measurement tuple, in its field order
+        measured[i] = me[i]
+    # What the outer loops (sensed: no noise, no fault) and the law read: the readings of the
+    # sensor delay's steps ago, or this step's
+    sensed, sensed_rows = measured, rows
+    if _has_delay(loop.delay.seen.shape[0]):
+        readings = (phi_m, v_m, w_m)
+        sensed, sensed_rows, phi_m, v_m, w_m = _delayed(loop.delay, k, me, rows, readings)
+    phis[0] = sensed[3]  # the hitch angles as sensed (trailers 2..N are never held)
+    for i in range(n - 1):
+        phis[i + 1] = sensed_rows[i][3]
+    pose = (sensed[0], sensed[1], sensed[2])
+    r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot = _update_target(target, k, v_m, dt, pose)
+    if target.cascade:  # HitchCascade.update: the hitches set the yaw rate
+        r.omega_d, r.omega_d_dot = _cascade(target, sensed, sensed_rows, phis, v_m)
+    state = target.state[0]
+    r.t, r.s, r.kappa = t, state.s, state.kappa
+    # The nominal model at the measurement, for the law and the matched disturbance (a
+    # built-in law's model takes the scheduled gains; the disturbance keeps the nominal's).
+    c, model_train = law.nominal, law.nominal_train
+    if _model_steered(steering.kind, law.follows_steering):
+        c, model_train = reduced.with_eta_of(c, steering.etas[0]), law.steered_train
+        if law.axle_slew_rate < math.inf:  # reduced_model: the gains the axles can follow
+            if n == 1:
+                eta = steering_math.trailer_followed_gain_of(
+                    phi_m, v_m, w_m, c.eta, c.L, c.L0, law.axle_slew_rate
+                )
+                c = reduced.with_eta_of(c, eta)
+            elif not _follow_train(law, steering.etas, phis, phi_m, v_m, w_m):
+                stop.law_status = NOMINAL_SINGULAR
+                _first_singular(phis, model_train, stop)
+                return LAW_FAILED
+    if n == 1:
+        if math.cos(c.eta * phi_m) < COS_BETA_MIN:
+            stop.law_status, stop.phi, stop.eta = NOMINAL_SINGULAR, phi_m, c.eta
+            return LAW_FAILED
+        terms = reduced.inertia_terms_of(phi_m, c)
+        mass, bias = reduced.coriolis_of(terms, c.gamma, v_m, w_m)
+    else:
+        phis[0] = phi_m  # what the law sees
+        ok, mass, bias = train.mass_and_bias_of(phis, v_m, w_m, model_train, law.rates)
+        if not ok:
+            stop.law_status = NOMINAL_SINGULAR
+            _first_singular(phis, model_train, stop)
+            return LAW_FAILED
+    nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22 = reduced.solve_dynamics_of(mass, bias, c.r, c.d)
+    if law.kind == USER:  # the user's law sees the measurement with its noise
+        for i in range(measured.size):
+            law.measurement_values[i] = sensed[i]
+        seen = law.measurement[0]
+        seen.phi, seen.v, seen.omega = phi_m, v_m, w_m
+        r.x_ref, r.y_ref, r.theta_ref = pose_at(target, state.s)
+    seen_by_law.phi, seen_by_law.v, seen_by_law.omega = phi_m, v_m, w_m
+    seen_by_law.M11, seen_by_law.M12, seen_by_law.M22 = mass[0], mass[1], mass[2]
+    return RUNNING
+
+
+def actuate_step(k, row, loop, plant, law, target, log, stop):
+    """Stepper.actuate at step ``k``, the law's request in ``law.reading``: clip it, apply the
+    actuator faults, payloads and motors, add the disturbance, log ``row``, then (unless ``k``
+    is the last step) schedule the gains and advance the plant. RUNNING, FINISHED, PAYLOAD (the
+    caller changes the reduced plant's constants, then advances) or the advance's stop code."""
+    lim, dt, fault, c = loop.limits, loop.dt, loop.faults, law.nominal
+    r, got = law.reference[0], law.reading[0]
+    n, phis, steering, state = loop.n_trailers, law.phis, plant.steering, target.state[0]
+    t, v_m, w_m, phi_m = k * dt, got.v, got.omega, got.phi
+    me, rows = log.measurement[row], log.train[row]
+    T_r = step.clip(got.T_r, lim.torque_limit)
+    T_l = step.clip(got.T_l, lim.torque_limit)
+    dist_r = dist_l = clipped = fx = fy = mz = 0.0
+    if fault.actuators.shape[0]:  # FaultSchedule.torque
+        T_r, T_l = faults.fault_torque_of(k, fault.actuators, T_r, T_l)
+    pending = 0  # payload changes the caller makes to the reduced plant's constants
+    if fault.payloads.shape[0]:  # FaultSchedule.payloads
+        changes = fault.payload_changes
+        count = faults.payloads_of(k, state.s, fault.payloads, fault.payload_state, changes)
+        if plant.mujoco:
+            for i in range(count):
+                mj = plant.mj
+                body = mj.trailer_bodies[int(changes[i][0]) - 1]
+                plant_mujoco.scale_body_of(mj.body_mass, mj.body_inertia, body, changes[i][1])
+        else:
+            pending = count
+    if loop.dc_motor:  # what the motors deliver of the command, over this step
+        omegas = (me[WHEEL_RATES[0]], me[WHEEL_RATES[1]])
+        T_r, T_l = motors.deliver_of(loop.motor, loop.motor_torques, (T_r, T_l), omegas)
+    mass = (got.M11, got.M12, got.M22)
+    phi = me[3]
+    depth = loop.delay.seen.shape[0]
+    moved = _model_steered(steering.kind, law.follows_steering) or _has_delay(depth) or phi_m != phi
+    if moved and (loop.disturbed or loop.wrench):
+        phis[0] = phi  # the disturbance acts at the true hitch angles
+        for i in range(n - 1):
+            phis[i + 1] = rows[i][3]
+        mass = _nominal_mass(law, n, phi, phis, v_m, w_m)
+    if loop.disturbed:
+        a_v, a_w = disturbances.paper_disturbance_of(t)
+        dist_r, dist_l = reduced.torque_for_force_of(mass, a_v, a_w, c.r, c.d)
+        dist_r, dist_l, clipped = step.clip_pair(dist_r, dist_l, lim.disturbance_bound)
+    elif loop.wrench:
+        a_v, a_w = disturbances.paper_disturbance_of(t)
+        force, torque = disturbances.wrench_of(mass, a_v, a_w)
+        fx, fy, mz = plant_mujoco.chassis_wrench_of(force, torque, me[2])
+    out = log.loop[row]
+    out.t, out.s, out.v_d, out.omega_d = t, state.s, r.v_d, state.omega_ref
+    out.v_d_dot, out.omega_d_dot, out.v_meas, out.omega_meas = (
+        r.v_d_dot,
+        r.omega_d_dot,
+        v_m,
+        w_m,
+    )
+    out.T_r, out.T_l, out.T_r_cmd, out.T_l_cmd = T_r, T_l, got.u1, got.u2
+    out.dist_T_r, out.dist_T_l, out.kappa_d = dist_r, dist_l, state.kappa
+    out.omega_d_tracked, out.dist_clipped = r.omega_d, clipped
+    if steering.kind != 0:
+        for i in range(n):
+            log.etas[row, i] = steering.etas[i]
+    stop.payloads = pending
+    if k == loop.steps:
+        return FINISHED
+    if steering.kind == PATH_SCHEDULE:
+        _offer_path(steering, target, me, rows, n)
+        _steer(plant, law)
+    elif steering.kind == CURVATURE_SCHEDULE and schedule.curvature_gains_of(
+        state.kappa, steering.lengths, steering.offered
+    ):
+        _steer(plant, law)
+    push = (dist_r, dist_l, 1.0 if loop.wrench else 0.0, fx, fy, mz)
+    if loop.wind.speeds.size:
+        _gusts(loop.wind, k, me)
+    if loop.ground.geoms.size:  # logged for step k; a failed advance is not handed back
+        loop.ground.masks[k] = _ground(loop.ground, target)
+    if pending:  # the caller changes the reduced plant's constants, then advances
+        stop.T_r, stop.T_l, stop.dist_r, stop.dist_l = T_r, T_l, dist_r, dist_l
+        return PAYLOAD
+    return _advance(plant, T_r, T_l, push, loop.wind, stop)
+
+
+#: The step's functions that the kernel compiles without numba's reference counting (see
+#: :mod:`tt_mujoco.sim._kernel`), called as functions.
+BORROWING = (
+    advance_after_payload,
+    path_at,
+    pose_at,
+    _sense,
+    _ode,
+    _first_singular,
+    _update_target,
+    _cascade,
+    law_step,
+    _blow,
+    _advance,
+    _nominal_mass,
+    _offer_path,
+    _steer,
+    _follow_train,
+    _delayed,
+    _ground,
+    _gusts,
+    _model_steered,
+    _has_delay,
+)
+#: The step's halves, which the kernel inlines into its chunk loop: called, each would take
+#: every record it is given by value, at every step.
+HALVES = (sense_step, actuate_step)
