@@ -60,19 +60,14 @@ def main() -> None:
         stepper = Stepper(built)
         stepper.reset(np.random.default_rng(0))
         controller = built.new_controller()
-        loop = stepper.loop_record()
-        plant = compiled._plant_record(stepper, built.nominal)
-        law = compiled._law_record(
-            controller, built.nominal, compiled._user_law(k_mod, controller), plant.steering
-        )
-        target = compiled._target_record(built, stepper.steps)
+        user = compiled._user_law(k_mod, controller)
+        loop, plant, law, target, stop = compiled.episode_records(stepper, controller, user)
         log = records.LogRecord(
             measurement=np.empty((1, len(records.MEASUREMENT_DTYPE))),
             loop=np.empty(1, dtype=records.LOG_DTYPE),
             train=np.empty((1, trailers - 1, len(TRAIN_FIELDS))),
             etas=np.empty((0, trailers)),
         )
-        stop = records.new_record(records.STOP_FIELDS)
         step_args = (0, 0, loop, plant, law, target, log, stop)
         print(
             f"{trailers} trailer(s): a call with every record of the step "

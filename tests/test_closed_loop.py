@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from tt_mujoco.controllers.plain import PlainLawController
 
 from tt_mujoco.sim import Scenario, build, closed_loop, compiled, records
 from tt_mujoco.sim.measure import TRAIN_FIELDS
@@ -27,6 +28,14 @@ CASES = [
     ),
     dict(traj="s_curve", reverse=True, controller="pid", faults=["payload:t=0.5,factor=2"]),
     dict(traj="cycloid", eta="scheduled", controller="smc", plant="reduced", trailers=2),
+    # a user's compiled plain-number law: it reads the records through their addresses
+    dict(
+        traj="s_curve",
+        controller="examples/kanayama.py:kanayama_law",
+        noise_snr_db=20.0,
+        sensor_delay=0.003,
+        faults=["dropout:t=0.5,duration=0.2"],
+    ),
 ]
 
 
@@ -37,7 +46,8 @@ def _records(options) -> tuple:
     stepper.reset(np.random.default_rng(built.scenario.seed))
     controller = built.new_controller()
     controller.reset()
-    user = compiled.kernel().no_user_law
+    plain = isinstance(controller, PlainLawController)
+    user = compiled.compile_law(type(controller)) if plain else compiled.kernel().no_user_law
     loop, plant, law, target, stop = compiled.episode_records(stepper, controller, user)
     log = records.LogRecord(
         measurement=np.empty((STEPS, len(records.MEASUREMENT_DTYPE))),

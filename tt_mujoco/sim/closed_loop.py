@@ -22,6 +22,8 @@ import functools
 import math
 import os
 
+import numpy as np
+
 from tt_mujoco.controllers import backing, base, compiled_laws
 from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
 from tt_mujoco.sim import (
@@ -72,9 +74,9 @@ NOMINAL_SINGULAR = -1.0
 PATH_SCHEDULE, CURVATURE_SCHEDULE = records.PATH_SCHEDULE, records.CURVATURE_SCHEDULE
 #: where trailer 1's axle and the bodies' motion are in the measurement, and a trailer's gain
 #: in a train's row
-X0, Y0, THETA0, V0, V, THETA, BETA = (
+X0, Y0, THETA0, V0, V, THETA, BETA, PHI, OMEGA = (
     measure.Measurement._fields.index(name)
-    for name in ("x0", "y0", "theta0", "v0", "v", "theta", "beta")
+    for name in ("x0", "y0", "theta0", "v0", "v", "theta", "beta", "phi", "omega")
 )
 WHEEL_RATES = tuple(measure.Measurement._fields.index(f"theta_{w}_dot") for w in ("r", "l"))
 ETA_COLUMN = train.TRAILER_ROW.index("eta")
@@ -108,7 +110,12 @@ def mj_step(model_address, data_address) -> None:
 
 
 def pointer(array):
-    """The address of a contiguous float array's data, as a C double pointer."""
+    """The address of a contiguous float array's data, as a C double pointer. A record as
+    CPython reads it (:func:`tt_mujoco.sim.records.interpreted`) is passed as a copy of its
+    fields: the law it goes to only reads it."""
+    if isinstance(array, list):
+        element = array[0]
+        array = np.array([getattr(element, name) for name in element.__slots__], dtype=float)
     return array.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
 
 
@@ -226,7 +233,7 @@ def _cascade(target, me, rows, phis, v_m):
         lead = (rows[n - 2][0], rows[n - 2][1], rows[n - 2][2])
     state = target.state[0]
     s, e_y, e_psi, omega_d = backing.cascade_of(
-        target.cascade_constants, target, phis, lead, (v_m, me[6]), state.s_lead,
+        target.cascade_constants, target, phis, lead, (v_m, me[OMEGA]), state.s_lead,
         target.wanted, target.rates,
     )  # fmt: skip
     state.s_lead, state.e_y, state.e_psi = s, e_y, e_psi
@@ -534,10 +541,10 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
             return LAW_FAILED
     nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22 = reduced.solve_dynamics_of(mass, bias, c.r, c.d)
     if law.kind == USER:  # the user's law sees the measurement with its noise
+        seen = law.measurement_values
         for i in range(measured.size):
-            law.measurement_values[i] = sensed[i]
-        seen = law.measurement[0]
-        seen.phi, seen.v, seen.omega = phi_m, v_m, w_m
+            seen[i] = sensed[i]
+        seen[PHI], seen[V], seen[OMEGA] = phi_m, v_m, w_m
         r.x_ref, r.y_ref, r.theta_ref = pose_at(target, state.s)
     seen_by_law.phi, seen_by_law.v, seen_by_law.omega = phi_m, v_m, w_m
     seen_by_law.M11, seen_by_law.M12, seen_by_law.M22 = mass[0], mass[1], mass[2]

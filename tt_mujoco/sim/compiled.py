@@ -700,7 +700,6 @@ def _law_record(controller, nominal, user, steering):
         flags = (float(controller.saturated), 0.0, 0.0)
         user_gains, user_state = np.zeros(0), np.zeros(0)
         anti_windup = bool(controller.anti_windup)
-    measurement = records.new_record(records.MEASUREMENT_DTYPE.names)
     return records.LawRecord(
         kind=kind,
         gains=gains,
@@ -718,8 +717,7 @@ def _law_record(controller, nominal, user, steering):
         user_state=user_state if user_state.size else np.zeros(1),
         reference=records.new_record(records.REFERENCE_FIELDS),
         model=records.new_record(records.NOMINAL_FIELDS),
-        measurement=measurement,
-        measurement_values=measurement.view(np.float64),
+        measurement_values=np.zeros(len(records.MEASUREMENT_DTYPE)),
         torques=np.zeros(2),
         follows_steering=not isinstance(controller, PlainLawController),
         steered_train=_train_constants(nominal.with_etas(tuple(steering.etas.tolist()))),

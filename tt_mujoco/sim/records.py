@@ -253,10 +253,9 @@ class LawRecord(NamedTuple):
     user_state: np.ndarray
     #: what the law sees: the :data:`REFERENCE_FIELDS` record, the nominal model
     #: (:data:`NOMINAL_FIELDS`) at the measurement, and the measurement as seen (noise
-    #: included; ``measurement_values`` is the same memory as plain floats)
+    #: included), in :data:`MEASUREMENT_DTYPE`'s field order
     reference: np.ndarray
     model: np.ndarray
-    measurement: np.ndarray
     measurement_values: np.ndarray
     #: where the user's law writes its two torques
     torques: np.ndarray
