@@ -18,7 +18,7 @@ os.environ.setdefault("TT_MUJOCO_COMPILE_NOW", "1")  # compile here, not in the 
 import numpy as np
 from numba import njit
 
-from tt_mujoco.sim import Scenario, compiled, records
+from tt_mujoco.sim import Scenario, compiled, episode, records
 from tt_mujoco.sim.build import build
 from tt_mujoco.sim.measure import TRAIN_FIELDS
 from tt_mujoco.sim.stepper import Stepper
@@ -61,7 +61,7 @@ def main() -> None:
         stepper.reset(np.random.default_rng(0))
         controller = built.new_controller()
         user = compiled._user_law(k_mod, controller)
-        loop, plant, law, target, stop = compiled.episode_records(stepper, controller, user)
+        loop, plant, law, target, stop = episode.episode_records(stepper, controller, user)
         log = records.LogRecord(
             measurement=np.empty((1, len(records.MEASUREMENT_DTYPE))),
             loop=np.empty(1, dtype=records.LOG_DTYPE),

@@ -3,11 +3,14 @@ records, the kernel compiles it, and both give the same numbers bit for bit."""
 
 from __future__ import annotations
 
+import math
+import textwrap
+
 import numpy as np
 import pytest
 from tt_mujoco.controllers.plain import PlainLawController
 
-from tt_mujoco.sim import Scenario, build, closed_loop, compiled, records
+from tt_mujoco.sim import Scenario, build, closed_loop, compiled, episode, records
 from tt_mujoco.sim.measure import TRAIN_FIELDS
 from tt_mujoco.sim.stepper import Stepper
 
@@ -48,7 +51,7 @@ def _records(options) -> tuple:
     controller.reset()
     plain = isinstance(controller, PlainLawController)
     user = compiled.compile_law(type(controller)) if plain else compiled.kernel().no_user_law
-    loop, plant, law, target, stop = compiled.episode_records(stepper, controller, user)
+    loop, plant, law, target, stop = episode.episode_records(stepper, controller, user)
     log = records.LogRecord(
         measurement=np.empty((STEPS, len(records.MEASUREMENT_DTYPE))),
         loop=np.empty(STEPS, dtype=records.LOG_DTYPE),
@@ -56,23 +59,6 @@ def _records(options) -> tuple:
         etas=np.empty((STEPS if plant.steering.kind else 0, loop.n_trailers)),
     )
     return stepper, (loop, plant, law, target, log, stop)
-
-
-def _interpreted_steps(loop, plant, law, target, log, stop_record) -> tuple[int, int]:
-    """Steps 0 .. STEPS - 1 in CPython, the halves around the built-in law, as the kernel's
-    chunk loop runs them: ``(status, k)``."""
-    stop, got = stop_record[0], law.reading[0]
-    for k in range(STEPS):
-        code = closed_loop.sense_step(k, k, loop, plant, law, target, log, stop)
-        if code != closed_loop.RUNNING:
-            return code, k
-        out = closed_loop.law_step(law, got.v, got.omega, loop.dt, loop.limits.torque_limit)
-        assert out[0] == closed_loop.LAW_OK
-        got.T_r, got.T_l, got.u1, got.u2 = out[1:]
-        code = closed_loop.actuate_step(k, k, loop, plant, law, target, log, stop)
-        if code != closed_loop.RUNNING:
-            return code, k
-    return closed_loop.RUNNING, STEPS
 
 
 def _values(elements, fields) -> np.ndarray:
@@ -104,7 +90,7 @@ def test_cpython_runs_the_compiled_step_bit_for_bit(monkeypatch, options):
 
     stepper, args = _records(options)
     args = records.interpreted(args)
-    assert _interpreted_steps(*args) == stopped
+    assert closed_loop.run_steps(0, STEPS - 1, *args) == stopped
     slow = _state(stepper, *args[1:5])
     rows = stopped[1]  # the rows logged before a stop (the log's others are not written)
     for name in ("measurement", "loop", "train", "etas"):
@@ -122,3 +108,85 @@ def test_records_read_by_cpython_hold_the_same_fields():
     assert element.phi == 1.0 and record[0]["phi"] == 0.0
     limits = records.Limits(1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0)
     assert records.interpreted(limits) == limits
+
+
+# What only CPython's step runs, wired through the step's hooks: each written here as a user's
+# path, disturbance and controller class that compute what a built-in one does, so that a run
+# with the hook must equal the built-in run to the last bit.
+USER_PARTS = textwrap.dedent(
+    """
+    import math
+
+    from tt_mujoco.controllers.ismc_sta import IsmcStaController
+    from tt_mujoco.reference.paths import ArcsPath
+    from tt_mujoco.sim.disturbances import paper_disturbance_of
+
+
+    class UsersArcs(ArcsPath):
+        \"\"\"The S-curve as a user's path class: no closed form for the kernel.\"\"\"
+
+
+    def users_s_curve():
+        R = 1.5
+        return UsersArcs("s_curve", (0.0, 0.0, 0.0), [(math.pi * R, 1 / R), (math.pi * R, -1 / R)])
+
+
+    def users_paper(t):
+        return paper_disturbance_of(t)
+
+
+    class UsersIsmc(IsmcStaController):
+        \"\"\"ISMC-STA as a user's class: the loop calls its Python compute.\"\"\"
+    """
+)
+
+HOOKED = [
+    # a path without closed form, under path feedback and the path schedule
+    (
+        dict(traj="s_curve", path_feedback={}, eta="path", noise_snr_db=20.0),
+        dict(traj="{parts}:users_s_curve"),
+    ),
+    # a user's disturbance, matched and as a wrench
+    (dict(traj="s_curve", trailers=2), dict(disturbance_model="{parts}:users_paper")),
+    (
+        dict(traj="s_curve", disturbance="wrench"),
+        dict(disturbance_model="{parts}:users_paper"),
+    ),
+    # a controller class, on a scheduled train seen through noise, a delay and a dropout
+    (
+        dict(
+            traj="s_curve",
+            trailers=2,
+            eta="path",
+            noise_snr_db=20.0,
+            sensor_delay=0.003,
+            faults=["dropout:t=0.5,duration=0.2"],
+        ),
+        dict(controller="{parts}:UsersIsmc"),
+    ),
+]
+
+
+@pytest.mark.parametrize("options, hooked", HOOKED, ids=["path", "matched", "wrench", "class"])
+def test_a_hooked_part_runs_the_step_as_the_built_in_one(tmp_path, monkeypatch, options, hooked):
+    from tt_mujoco.sim import simulate
+    from tt_mujoco.sim.stepper import Stepper
+
+    monkeypatch.setenv("TT_MUJOCO_COMPILED", "0")  # the built-in runs on CPython's step too
+    parts = tmp_path / "parts.py"
+    parts.write_text(USER_PARTS)
+    hooked = {key: value.format(parts=parts) for key, value in hooked.items()}
+    scenario = Scenario(duration=2.5, **options)
+    built = build(Scenario(duration=2.5, **{**options, **hooked}))
+    stepper = Stepper(built)
+    stepper.reset(np.random.default_rng(built.scenario.seed))
+    loop, _, law, target, _ = stepper.begin(built.new_controller())
+    hooks = (law.kind == closed_loop.PYTHON, target.path_kind == closed_loop.HOOKED_PATH)
+    hooks += (loop.disturbance_hook is not None,)
+    assert sum(hooks) == 1  # the hook under test, and only it, is in the step's records
+    built_in, user = simulate(scenario), simulate(built)
+    assert (user.status, user.message) == (built_in.status, built_in.message)
+    assert built_in.timeseries.keys() == user.timeseries.keys()
+    for name, column in built_in.timeseries.items():
+        np.testing.assert_array_equal(user.timeseries[name], column, err_msg=name)
+    assert len(user.timeseries["t"]) > 400 and math.isfinite(user.metrics["cross_track_rms"])

@@ -14,6 +14,7 @@ them by overloads.
 from __future__ import annotations
 
 import math
+import types as pytypes
 
 from llvmlite import binding
 from numba import cfunc, njit, types
@@ -22,7 +23,7 @@ from numba.extending import intrinsic, overload, register_jitable
 from tt_mujoco import exact
 from tt_mujoco.analysis import geometry
 from tt_mujoco.reference import feedback
-from tt_mujoco.sim import closed_loop
+from tt_mujoco.sim import closed_loop, disturbances
 from tt_mujoco.sim.closed_loop import LAWS
 from tt_mujoco.sim.kernel_sources import SHARED
 from tt_mujoco.vehicle import path_schedule
@@ -30,7 +31,7 @@ from tt_mujoco.vehicle import path_schedule
 for _fn in SHARED:
     register_jitable(_fn)
 
-RUNNING, LAW_OK, LAW_FAILED = closed_loop.RUNNING, closed_loop.LAW_OK, closed_loop.LAW_FAILED
+LAW_OK = closed_loop.LAW_OK
 
 #: The step compiles without numba's reference counting: numba counts a reference to every array
 #: of every record argument when a function is entered and releases it on exit, pairs its
@@ -55,6 +56,11 @@ _mj_step = types.ExternalFunction("mj_step", types.void(types.voidptr, types.voi
 @overload(closed_loop.mj_step)
 def _mj_step_by_symbol(model_address, data_address):
     return lambda model_address, data_address: _mj_step(model_address, data_address)
+
+
+@overload(closed_loop.floats)
+def _floats(array):
+    return lambda array: array
 
 
 _P = types.CPointer(types.float64)
@@ -104,6 +110,28 @@ def _path_pose(target, s):
     """The path schedule's projection and the path feedback read the target record's path
     (:func:`~tt_mujoco.sim.closed_loop.pose_at`)."""
     return lambda target, s: closed_loop.pose_at(target, s)
+
+
+# What only CPython's step runs: a path without closed form, a user's disturbance, a law that
+# Python computes. The kernel never meets them (compiled.unsupported); these give the types.
+@overload(closed_loop.hooked_curvature)
+def _hooked_curvature(target, s):
+    return lambda target, s: (math.nan, math.nan)
+
+
+@overload(closed_loop.hooked_pose)
+def _hooked_pose(target, s):
+    return lambda target, s: (math.nan, math.nan, math.nan)
+
+
+@overload(closed_loop.disturbance_at)
+def _disturbance_at(loop, t):
+    return lambda loop, t: disturbances.paper_disturbance_of(t)
+
+
+@overload(closed_loop.python_law)
+def _python_law(law, v_m, w_m, dt, limit):
+    return lambda law, v_m, w_m, dt, limit: (LAW_OK, math.nan, math.nan, math.nan, math.nan)
 
 
 @overload(closed_loop.run_law)
@@ -193,32 +221,21 @@ def _hypot_of(x, y):
     return lambda x, y: _hypot(x, y)
 
 
+def _with_halves(fn):
+    """``fn`` (:func:`~tt_mujoco.sim.closed_loop.run_steps`) reading the inlined halves where
+    its source names the plain ones."""
+    names = {**fn.__globals__, "sense_step": _sense_step, "actuate_step": _actuate_step}
+    return pytypes.FunctionType(fn.__code__, names, fn.__name__, fn.__defaults__)
+
+
+_run_steps = njit(_nrt=False, inline="always")(_with_halves(closed_loop.run_steps))
+
+
 @njit(cache=True, nogil=True, _nrt=False)  # without the counting: see closed_loop.BORROWING
 def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
-    """Control steps ``k..k_end``: :func:`~tt_mujoco.sim.closed_loop.sense_step`, the law,
-    :func:`~tt_mujoco.sim.closed_loop.actuate_step`; returns ``(status, k)``: the step it
-    stopped at, or ``k_end + 1`` to go on. Rows go to ``log.measurement`` and ``log.loop``
-    (from row 0)."""
-    dt, limit = loop.dt, loop.limits.torque_limit
-    stop, nm, got = stop_record[0], law.model[0], law.reading[0]
-    row = 0
-    while k <= k_end:
-        code = _sense_step(k, row, loop, plant, law, target, log, stop)
-        if code != RUNNING:
-            return code, k
-        status, T_r, T_l, u1, u2 = closed_loop.law_step(law, got.v, got.omega, dt, limit)
-        if status != LAW_OK:
-            stop.law_status = status
-            stop.g11, stop.g12, stop.g21, stop.g22 = nm.g11, nm.g12, nm.g21, nm.g22
-            stop.u1, stop.u2 = u1, u2
-            return LAW_FAILED, k
-        got.T_r, got.T_l, got.u1, got.u2 = T_r, T_l, u1, u2
-        code = _actuate_step(k, row, loop, plant, law, target, log, stop)
-        row += 1
-        if code != RUNNING:
-            return code, k
-        k += 1
-    return RUNNING, k
+    """:func:`tt_mujoco.sim.closed_loop.run_steps`, compiled: control steps ``k..k_end``;
+    ``(status, k)``."""
+    return _run_steps(k, k_end, loop, plant, law, target, log, stop_record)
 
 
 @njit(cache=True)

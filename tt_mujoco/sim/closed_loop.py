@@ -48,12 +48,14 @@ __all__ = [
     "LAWS",
     "actuate_step",
     "advance_after_payload",
+    "floats",
     "law_step",
     "mj_step",
     "path_at",
     "pointer",
     "pose_at",
     "run_law",
+    "run_steps",
     "sense_step",
 ]
 
@@ -67,8 +69,12 @@ WARNING, LAW_FAILED, SINGULAR = step.WARNING, step.LAW_FAILED, step.SINGULAR
 PAYLOAD = step.PAYLOAD
 LAW_OK, LAW_SINGULAR = base.LAW_OK, base.LAW_SINGULAR
 COS_BETA_MIN = reduced.COS_BETA_MIN
-#: ``law.kind`` of a user's plain-number law
+#: ``law.kind`` of a user's plain-number law, and of a law that Python computes between the
+#: halves (a controller class, or a plain-number law when CPython runs the step)
 USER = len(LAWS)
+PYTHON = USER + 1
+#: ``target.path_kind`` of a path without a closed form, which only CPython's step reads
+HOOKED_PATH = 3
 #: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
 NOMINAL_SINGULAR = -1.0
 PATH_SCHEDULE, CURVATURE_SCHEDULE = records.PATH_SCHEDULE, records.CURVATURE_SCHEDULE
@@ -109,6 +115,12 @@ def mj_step(model_address, data_address) -> None:
     _c_mj_step()(int(model_address), int(data_address))
 
 
+def floats(array):
+    """A float array to read from: CPython reads a list of its values (a NumPy element is a
+    NumPy scalar, whose arithmetic is slower than a float's); the kernel, the array itself."""
+    return array.tolist()
+
+
 def pointer(array):
     """The address of a contiguous float array's data, as a C double pointer. A record as
     CPython reads it (:func:`tt_mujoco.sim.records.interpreted`) is passed as a copy of its
@@ -119,18 +131,47 @@ def pointer(array):
     return array.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
 
 
+def hooked_curvature(target, s):
+    """``(kappa, dkappa/ds)`` of a path without closed form (:data:`HOOKED_PATH`), from the
+    path object itself (CPython only; the kernel never runs such a path)."""
+    return target.path_hook.curvature_and_rate(s)
+
+
+def hooked_pose(target, s):
+    """The pose of a path without closed form at ``s`` (ReferencePath.pose_at)."""
+    return target.path_hook.pose_at(s)
+
+
+def disturbance_at(loop, t):
+    """``(a_v, a_w)`` of the disturbance at ``t``: the paper's, or the hook's (a user's
+    disturbance, with its checks: CPython only)."""
+    if loop.disturbance_hook is None:
+        return disturbances.paper_disturbance_of(t)
+    return loop.disturbance_hook(t)
+
+
+def python_law(law, v_m, w_m, dt, limit):
+    """The law Python computes between the halves (:data:`PYTHON`): ``law.user``, called with
+    the law record (CPython only); ``(status, T_r, T_l, u1, u2)``."""
+    return law.user(law)
+
+
 def path_at(target, s):
-    """``(kappa, dkappa/ds)`` of the target's closed-form path at ``s``."""
+    """``(kappa, dkappa/ds)`` of the target's path at ``s``."""
     if target.path_kind == 0:
         return paths.arcs_curvature_of(s, target.bounds, target.kappas)
     if target.path_kind == 2:
         bounds, cells = target.bounds, target.cells
         return spline.spline_curvature_of(s, target.length, target.kappa_ends, bounds, cells)
+    if target.path_kind == HOOKED_PATH:
+        return hooked_curvature(target, s)
     return paths.cycloid_curvature_and_rate(s)
 
 
 def pose_at(target, s):
     """The path's pose at ``s`` (ReferencePath.pose_at)."""
+    if target.path_kind == HOOKED_PATH:
+        return hooked_pose(target, s)
     bounds = target.bounds
     clipped = min(max(s, 0.0), target.length)
     if target.path_kind == 0:
@@ -146,13 +187,14 @@ def _sense(plant, n, rows):
     """The Measurement fields of the plant's state; trailers 2..N of ``n`` into ``rows``."""
     if plant.mujoco:
         mj = plant.mj
-        me = measure.measure_values(mj.qpos, mj.qvel, mj.addresses, mj.lengths)
+        qpos, qvel = floats(mj.qpos), floats(mj.qvel)
+        me = measure.measure_values(qpos, qvel, mj.addresses, mj.lengths)
         if n > 1:
             measure.train_rows_of(
-                mj.qpos, mj.qvel, mj.addresses, mj.lengths, me, plant.train_joints, rows
+                qpos, qvel, mj.addresses, mj.lengths, me, plant.train_joints, rows
             )
         return me
-    y, ode = plant.ode_state, _ode(plant)
+    y, ode = floats(plant.ode_state), _ode(plant)
     if n == 1:
         return plant_reduced.reduced_measure_values(y, ode)
     first = (y[0], y[1], y[2], y[3], y[3 + n], y[4 + n], y[5 + n], y[6 + n])
@@ -181,7 +223,8 @@ def _update_target(target, k, v_m, dt, pose):
     and PathFeedback.update at the measured ``pose``): ``(v_d, omega_d, v_d_dot,
     omega_d_dot)``, its state updated in place."""
     state = target.state[0]
-    s_ref, v_ref, a_ref = target.profile[k, 0], target.profile[k, 1], target.profile[k, 2]
+    row = target.profile[k]
+    s_ref, v_ref, a_ref = row[0], row[1], row[2]
     if target.reverse:
         v = -v_ref
         if target.dynamic:
@@ -243,6 +286,8 @@ def _cascade(target, me, rows, phis, v_m):
 def law_step(law, v_m, w_m, dt, limit):
     """The law's ``(status, T_r, T_l, u1, u2)`` at the reference and the nominal model in
     ``law``; its state updated in place."""
+    if law.kind == PYTHON:
+        return python_law(law, v_m, w_m, dt, limit)
     r, nm, flags = law.reference[0], law.model[0], law.flags[0]
     if law.kind == USER:
         out = law.torques
@@ -270,7 +315,7 @@ def law_step(law, v_m, w_m, dt, limit):
 
 
 def _blow(mj, wrench, gusts):
-    """MujocoPlant.blow: the wind's ``gusts`` (``F_x, F_y, M_z``) on the tractor, then on the
+    """The wind's ``gusts`` (``F_x, F_y, M_z``) on the tractor, then on the
     trailer, added to the tractor's chassis wrench when the disturbance is one."""
     tractor, trailer = mj.xfrc_applied[mj.tractor_body], mj.xfrc_applied[mj.trailer_bodies[0]]
     if wrench:
@@ -298,7 +343,7 @@ def _advance(plant, T_r, T_l, push, weather, stop):
         else:
             mj.qfrc_applied[a.wheel_right_v] = dist_r
             mj.qfrc_applied[a.wheel_left_v] = dist_l
-        if weather.speeds.size:
+        if len(weather.speeds):
             _blow(mj, push[2] != 0.0, weather.wrenches)
         steering = plant.steering
         for _ in range(plant.substeps):
@@ -408,7 +453,7 @@ def _follow_train(law, etas, phis, phi_m, v_m, w_m) -> bool:
 
 
 def _delayed(delay, k, me, rows, seen):
-    """Stepper.sense's delay line: step ``k``'s measurement ``me``, its train ``rows`` and the
+    """The sensor delay's line: step ``k``'s measurement ``me``, its train ``rows`` and the
     ``seen = (phi, v, omega)`` stored, and those of the delay's steps ago returned (the first
     step's until there are that many): ``(measurement, rows, phi, v, omega)``."""
     depth = delay.seen.shape[0]
@@ -427,7 +472,7 @@ def _delayed(delay, k, me, rows, seen):
 
 
 def _ground(patches, target):
-    """MujocoPlant.advance's friction patches: each wheel's friction set from where it stands
+    """The friction patches: each wheel's friction set from where it stands
     (GroundPatches.frictions); the bit mask of the patches some wheel is on."""
     points, xpos = patches.points, patches.geom_xpos
     for i in range(patches.geoms.size):
@@ -440,7 +485,7 @@ def _ground(patches, target):
 
 
 def _gusts(weather, k, me):
-    """Stepper._blow: the wind's wrenches on the tractor and the trailer over step ``k``, at the
+    """The wind's wrenches on the tractor and the trailer over step ``k``, at the
     measured motion, into ``weather.wrenches``."""
     speed = weather.speeds[k]
     air = (speed * weather.direction[0], speed * weather.direction[1])
@@ -463,9 +508,9 @@ def _has_delay(depth: int) -> bool:
 
 
 def sense_step(k, row, loop, plant, law, target, log, stop):
-    """Stepper.sense at step ``k``: measure the plant into ``log``'s ``row``, check it, add the
-    noise and sensor faults, read the delay line, update the target and make the law's
-    reference and nominal model; what the law sees into ``law.reading``. RUNNING, or the
+    """The step's first half at step ``k``: measure the plant into ``log``'s ``row``, check
+    it, add the noise and sensor faults, read the delay line, update the target and make the
+    law's reference and nominal model; what the law sees into ``law.reading``. RUNNING, or the
     stop code (its details in ``stop``)."""
     lim, dt, noise, fault = loop.limits, loop.dt, loop.noise, loop.faults
     r, nm, seen_by_law = law.reference[0], law.model[0], law.reading[0]
@@ -485,7 +530,7 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
             stop.v, stop.phi, stop.beta, stop.x, stop.y = v, rows[i][3], rows[i][4], x, y
             stop.hitch, stop.eta = i + 2.0, law.nominal_train.trailers[i + 1][2]
             return JACKKNIFE
-    if noise.size:
+    if len(noise):
         v_m = step.noisy(v, lim.noise_v, noise, 2 * k)
         w_m = step.noisy(omega, lim.noise_w, noise, 2 * k + 1)
     else:
@@ -540,22 +585,29 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
             _first_singular(phis, model_train, stop)
             return LAW_FAILED
     nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22 = reduced.solve_dynamics_of(mass, bias, c.r, c.d)
-    if law.kind == USER:  # the user's law sees the measurement with its noise
+    if law.kind >= USER:  # a user's law sees the measurement with its noise
         seen = law.measurement_values
         for i in range(measured.size):
             seen[i] = sensed[i]
         seen[PHI], seen[V], seen[OMEGA] = phi_m, v_m, w_m
-        r.x_ref, r.y_ref, r.theta_ref = pose_at(target, state.s)
+        if law.kind == USER:
+            r.x_ref, r.y_ref, r.theta_ref = pose_at(target, state.s)
+        else:  # and a Python law, trailers 2..N too
+            seen_rows = law.measurement_rows
+            for i in range(n - 1):
+                for j in range(seen_rows.shape[1]):
+                    seen_rows[i, j] = sensed_rows[i][j]
     seen_by_law.phi, seen_by_law.v, seen_by_law.omega = phi_m, v_m, w_m
     seen_by_law.M11, seen_by_law.M12, seen_by_law.M22 = mass[0], mass[1], mass[2]
     return RUNNING
 
 
 def actuate_step(k, row, loop, plant, law, target, log, stop):
-    """Stepper.actuate at step ``k``, the law's request in ``law.reading``: clip it, apply the
-    actuator faults, payloads and motors, add the disturbance, log ``row``, then (unless ``k``
-    is the last step) schedule the gains and advance the plant. RUNNING, FINISHED, PAYLOAD (the
-    caller changes the reduced plant's constants, then advances) or the advance's stop code."""
+    """The step's second half at step ``k``, the law's request in ``law.reading``: clip it,
+    apply the actuator faults, payloads and motors, add the disturbance, log ``row``, then
+    (unless ``k`` is the last step) schedule the gains and advance the plant. RUNNING,
+    FINISHED, PAYLOAD (the caller changes the reduced plant's constants, then advances) or the
+    advance's stop code."""
     lim, dt, fault, c = loop.limits, loop.dt, loop.faults, law.nominal
     r, got = law.reference[0], law.reading[0]
     n, phis, steering, state = loop.n_trailers, law.phis, plant.steering, target.state[0]
@@ -590,15 +642,17 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
             phis[i + 1] = rows[i][3]
         mass = _nominal_mass(law, n, phi, phis, v_m, w_m)
     if loop.disturbed:
-        a_v, a_w = disturbances.paper_disturbance_of(t)
+        a_v, a_w = disturbance_at(loop, t)
         dist_r, dist_l = reduced.torque_for_force_of(mass, a_v, a_w, c.r, c.d)
+        # What a disturbance of motor size can apply, per wheel: beyond it the paper's
+        # g^-1 Delta (unbounded as g nears singular) would itself drive a jackknife.
         dist_r, dist_l, clipped = step.clip_pair(dist_r, dist_l, lim.disturbance_bound)
     elif loop.wrench:
-        a_v, a_w = disturbances.paper_disturbance_of(t)
+        a_v, a_w = disturbance_at(loop, t)
         force, torque = disturbances.wrench_of(mass, a_v, a_w)
         fx, fy, mz = plant_mujoco.chassis_wrench_of(force, torque, me[2])
     out = log.loop[row]
-    out.t, out.s, out.v_d, out.omega_d = t, state.s, r.v_d, state.omega_ref
+    out.s, out.v_d, out.omega_d = state.s, r.v_d, state.omega_ref
     out.v_d_dot, out.omega_d_dot, out.v_meas, out.omega_meas = (
         r.v_d_dot,
         r.omega_d_dot,
@@ -611,6 +665,7 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
     if steering.kind != 0:
         for i in range(n):
             log.etas[row, i] = steering.etas[i]
+    out.t = t  # last: a row whose time is logged is whole (an interrupted CPython step's is not)
     stop.payloads = pending
     if k == loop.steps:
         return FINISHED
@@ -622,7 +677,7 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
     ):
         _steer(plant, law)
     push = (dist_r, dist_l, 1.0 if loop.wrench else 0.0, fx, fy, mz)
-    if loop.wind.speeds.size:
+    if len(loop.wind.speeds):
         _gusts(loop.wind, k, me)
     if loop.ground.geoms.size:  # logged for step k; a failed advance is not handed back
         loop.ground.masks[k] = _ground(loop.ground, target)
@@ -630,6 +685,33 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
         stop.T_r, stop.T_l, stop.dist_r, stop.dist_l = T_r, T_l, dist_r, dist_l
         return PAYLOAD
     return _advance(plant, T_r, T_l, push, loop.wind, stop)
+
+
+def run_steps(k, k_end, loop, plant, law, target, log, stop_record):
+    """Control steps ``k..k_end``: :func:`sense_step`, the law (:func:`law_step`),
+    :func:`actuate_step`; ``(status, k)``: the step it stopped at, or ``k_end + 1`` to go on.
+    Rows go to ``log`` from its row 0. The one loop of every episode: the kernel's chunk
+    (:func:`tt_mujoco.sim._kernel.run_chunk`) is this, compiled."""
+    dt, limit = loop.dt, loop.limits.torque_limit
+    stop, nm, got = stop_record[0], law.model[0], law.reading[0]
+    row = 0
+    while k <= k_end:
+        code = sense_step(k, row, loop, plant, law, target, log, stop)
+        if code != RUNNING:
+            return code, k
+        status, T_r, T_l, u1, u2 = law_step(law, got.v, got.omega, dt, limit)
+        if status != LAW_OK:
+            stop.law_status = status
+            stop.g11, stop.g12, stop.g21, stop.g22 = nm.g11, nm.g12, nm.g21, nm.g22
+            stop.u1, stop.u2 = u1, u2
+            return LAW_FAILED, k
+        got.T_r, got.T_l, got.u1, got.u2 = T_r, T_l, u1, u2
+        code = actuate_step(k, row, loop, plant, law, target, log, stop)
+        row += 1
+        if code != RUNNING:
+            return code, k
+        k += 1
+    return RUNNING, k
 
 
 #: The step's functions that the kernel compiles without numba's reference counting (see
@@ -656,6 +738,6 @@ BORROWING = (
     _model_steered,
     _has_delay,
 )
-#: The step's halves, which the kernel inlines into its chunk loop: called, each would take
-#: every record it is given by value, at every step.
+#: The step's halves, which the kernel inlines into its chunk loop (:func:`run_steps`):
+#: called, each would take every record it is given by value, at every step.
 HALVES = (sense_step, actuate_step)

@@ -15,12 +15,12 @@ on). The loop then runs in numba, chunk by chunk, calling ``mj_step`` through
 MuJoCo's C library or stepping the reduced ODE, over the named records of
 :mod:`tt_mujoco.sim.records`.
 
-Every rule and formula it runs is the Python one: the step's checks and clips
-(:mod:`tt_mujoco.sim.step`) and the functions marked "the compiled episode shares it"
-(measurement, reduced model and its RK4, law, path curvature and pose, target, disturbance)
-are compiled from their own source with ``numba.extending.register_jitable``, so the compiled
-and the Python loop compute the same numbers bit for bit (``tests/test_compiled.py``,
-``tests/test_plain.py``). ``TT_MUJOCO_COMPILED=0`` turns it off.
+The loop it runs is :func:`tt_mujoco.sim.closed_loop.run_steps`, compiled from its source with
+every function it calls (:mod:`tt_mujoco.sim._kernel`), the one CPython runs for every other
+episode (the Python loop): both compute the same numbers bit for bit
+(``tests/test_compiled.py``, ``tests/test_plain.py``, ``tests/test_closed_loop.py``).
+:class:`~tt_mujoco.sim.stepper.Stepper` makes the records and runs the chunks either way.
+``TT_MUJOCO_COMPILED=0`` turns it off.
 
 Compiled code is cached on disk under ``$TT_MUJOCO_CACHE`` or ``~/.cache/tt_mujoco``, in a
 folder keyed by :func:`source_digest` (the interpreter, numba, llvmlite and MuJoCo versions and
@@ -38,9 +38,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import math
 import os
-import pickle
 import sys
 from pathlib import Path
 
@@ -48,9 +46,8 @@ import numpy as np
 
 from tt_mujoco.analysis import geometry
 from tt_mujoco.outputs import atomic_write
-from tt_mujoco.sim import step
 
-__all__ = ["episode_records", "kernel", "ready", "run_compiled", "source_digest", "unsupported"]
+__all__ = ["kernel", "ready", "run_compiled", "source_digest", "unsupported"]
 
 #: Shortest episode handed to the compiled loop (loading the compiled code is paid once per
 #: process: a short episode gains less than that).
@@ -68,25 +65,19 @@ def unsupported(built, controller, on_step=None) -> str | None:
     """Why the episode has no compiled form (None when it has one); only a query."""
     from tt_mujoco.controllers.plain import PlainLawController
     from tt_mujoco.reference.paths import ArcsPath, CycloidPath
-    from tt_mujoco.reference.reverse import ReverseTarget
     from tt_mujoco.reference.spline import SplinePath
-    from tt_mujoco.reference.targets import DynamicTarget, StaticTarget
     from tt_mujoco.sim.disturbances import PaperDisturbance
-    from tt_mujoco.sim.kernel_sources import LAWS
+    from tt_mujoco.sim.episode import is_law_class, model_of
 
     reasons = [
         (not _enabled(), "TT_MUJOCO_COMPILED=0"),
         (built.steps < MIN_STEPS, f"fewer than {MIN_STEPS} steps"),
         (on_step is not None, "a per-step callback"),
         (
-            not (_built_in(type(controller), LAWS) or isinstance(controller, PlainLawController)),
+            not (is_law_class(controller) or isinstance(controller, PlainLawController)),
             "a Python controller class",
         ),
-        (not getattr(_model_of(controller), "builtin", False), "a custom model"),
-        (
-            type(_inner(built.target)) not in (StaticTarget, DynamicTarget, ReverseTarget),
-            "this target",
-        ),
+        (not getattr(model_of(controller), "builtin", False), "a custom model"),
         (type(built.path) not in (ArcsPath, CycloidPath, SplinePath), "a path without closed form"),
         (
             built.disturbance is not None and type(built.disturbance) is not PaperDisturbance,
@@ -101,28 +92,6 @@ def unsupported(built, controller, on_step=None) -> str | None:
     if find_spec("numba") is None:  # not imported: a run that takes the Python loop never needs it
         return "numba is not installed"
     return None
-
-
-def _inner(target):
-    """The tracking target itself (inside path feedback or the hitch cascade, if any)."""
-    from tt_mujoco.controllers.backing import HitchCascade
-    from tt_mujoco.reference.feedback import PathFeedback
-
-    return target.target if type(target) in (PathFeedback, HitchCascade) else target
-
-
-def _built_in(cls, laws) -> bool:
-    """Whether ``cls`` is a compiled law's own class (a subclass may change what it runs)."""
-    law = getattr(cls, "LAW", None)
-    return law in laws and cls.__module__ == law.__module__
-
-
-def _model_of(controller):
-    """The nominal model a controller runs (a built-in law's own, or its setup's)."""
-    model = getattr(controller, "model", None)
-    if model is None:
-        model = getattr(getattr(controller, "setup", None), "model", None)
-    return model
 
 
 def ready() -> bool:
@@ -422,6 +391,10 @@ def set_aside_cache(err: BaseException) -> None:
     )
 
 
+class _DamagedCacheError(Exception):
+    """The cached kernel failed to load or to run its first chunk: nothing has run."""
+
+
 def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
     """Run the (reset) ``stepper``'s episode with ``controller`` compiled; ``(status,
     message)`` as :func:`tt_mujoco.sim.simulate.run_episode`, or None when the compiled code
@@ -445,101 +418,29 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
             file=sys.stderr,
         )
         return None
-    from tt_mujoco.sim import records
-    from tt_mujoco.sim.measure import TRAIN_FIELDS
+    stepper.begin(controller, user, compiled=True)
+    entry = None
 
-    steps = stepper.steps
-    loop, plant, law, target, stop = episode_records(stepper, controller, user)
-    report_every = max(1, steps // 100)
-    chunk = min(8192, report_every * max(1, 8192 // report_every))
-    k, status, run_chunk = 0, step.RUNNING, None
-    changes = [(0, tuple(plant.steering.etas.tolist()))]  # (first row, gains) of each change
-    while status == step.RUNNING:
-        k_end = min(steps, k + chunk - 1)
-        n = k_end - k + 1
-        log = records.LogRecord(
-            measurement=np.empty((n, len(records.MEASUREMENT_DTYPE))),
-            loop=np.empty(n, dtype=records.LOG_DTYPE),
-            train=np.empty((n, loop.n_trailers - 1, len(TRAIN_FIELDS))),
-            etas=np.empty((n if plant.steering.kind else 0, loop.n_trailers)),
-        )
-        args = (k, k_end, loop, plant, law, target, log, stop)
-        if run_chunk is None:
-            try:  # the first call loads the compiled code from the cache
-                run_chunk = _compiled_for(k_mod.run_chunk, args)
-                status, k_next = run_chunk(*args)
-            except Exception as err:  # damaged: nothing has run, the Python loop takes over
-                set_aside_cache(err)
-                return None
-            _write_manifest(sum(k_mod.run_chunk.stats.cache_misses.values()) > 0)
-        else:
-            status, k_next = run_chunk(*args)
-        # Rows k..k_next-1 are logged; a stop in the plant's advance, a payload step on the
-        # reduced plant or the end logs k_next too.
-        ends = (step.FINISHED, step.WARNING, step.SINGULAR, step.PAYLOAD)
-        logged = k_next - k + (1 if status in ends else 0)
-        columns = log.loop.view(np.float64).reshape(n, -1)
-        trains = log.train.reshape(n, -1)
-        stepper.add_block(log.measurement[:logged], columns[:logged], trains[:logged])
-        if plant.steering.kind:
-            changes.extend(_changes(log.etas[:logged], changes, stepper.samples - logged))
-        if stop[0]["payloads"]:  # the reduced plant's constants change, then step k_next goes on
-            plant = _carry_payloads(stepper, plant, loop.faults, stop[0])
-            if status == step.PAYLOAD:
-                # not compiled by the warm-up: its first call here may add to the cache
-                status = _call_listed(k_mod.advance_after_payload, plant, loop.wind, stop)
-                k_next += 1 if status == step.RUNNING else 0
-        if progress is not None:
-            progress(k_next, steps)
-        k = k_next
-    _hand_back(stepper, controller, status, k, plant, law, target)
-    faults = stepper.faults
-    if faults is not None:  # what a dropout holds, where the payloads acted
-        faults.held[:] = loop.faults.held.tolist()
-        faults.payload_rows[:] = loop.faults.payloads.tolist()
-        faults.payload_state[:] = loop.faults.payload_state.tolist()
-    if stepper.motors is not None:
-        stepper.motors.torques[:] = loop.motor_torques.tolist()
-    if loop.ground.geoms.size:  # one mask per advance: k of them
-        stepper.log_ground(loop.ground.masks[:k], loop.ground.arcs)
-    if plant.steering.kind:
-        _hand_back_steering(stepper, controller, plant.steering, changes)
-    return _outcome(status, stop[0], stepper, controller, k)
+    def run_chunk(*args):
+        nonlocal entry
+        if entry is not None:
+            return entry(*args)
+        try:  # the first call loads the compiled code from the cache
+            entry = _compiled_for(k_mod.run_chunk, args)
+            out = entry(*args)
+        except Exception as err:  # damaged: nothing has run, the Python loop takes over
+            raise _DamagedCacheError() from err
+        _write_manifest(sum(k_mod.run_chunk.stats.cache_misses.values()) > 0)
+        return out
 
+    def advance(*args):  # not compiled by the warm-up: its first call may add to the cache
+        return _call_listed(k_mod.advance_after_payload, *args)
 
-def _carry_payloads(stepper, plant, faults, stop):
-    """The payload changes of a step on the reduced plant: made to the plant (its parameters,
-    in the order made), and the plant record rebuilt on its new constants (the gains in force
-    kept); ``stop.payloads`` cleared."""
-    from tt_mujoco.vehicle import reduced
-    from tt_mujoco.vehicle.train import TRAILER_ROW
-
-    count = int(stop["payloads"])
-    for trailer, factor in faults.payload_changes[:count].tolist():
-        stepper.plant.scale_trailer_mass(factor, int(trailer))
-    stop["payloads"] = 0.0
-    params = stepper.plant.params
-    train = _train_constants(params)
-    eta = TRAILER_ROW.index("eta")
-    if params.n_trailers > 1:  # a schedule's gains in force, not the parameters' own
-        train.trailers[:, eta] = plant.train.trailers[:, eta]
-    return plant._replace(ode=reduced.model_constants(params), train=train)
-
-
-def episode_records(stepper, controller, user) -> tuple:
-    """The records of the (reset) ``stepper``'s episode as the step reads them
-    (:mod:`tt_mujoco.sim.closed_loop`): ``(loop, plant, law, target, stop)``, with ``user`` the
-    compiled form of a plain-number law (any placeholder for a built-in one)."""
-    from tt_mujoco.sim import records
-
-    plant = _plant_record(stepper, stepper.built.nominal)
-    return (
-        stepper.loop_record(),
-        plant,
-        _law_record(controller, stepper.built.nominal, user, plant.steering),
-        _target_record(stepper.built, stepper.steps),
-        records.new_record(records.STOP_FIELDS),
-    )
+    try:
+        return stepper.run(run_chunk, advance, progress)
+    except _DamagedCacheError as damaged:
+        set_aside_cache(damaged.__cause__)
+        return None
 
 
 def _user_law(k_mod, controller):
@@ -549,337 +450,6 @@ def _user_law(k_mod, controller):
     if isinstance(controller, PlainLawController):
         return compile_law(type(controller))
     return k_mod.no_user_law
-
-
-def _changes(etas: np.ndarray, changes: list, first_row: int) -> list:
-    """``(row, gains)`` of each logged row whose gains differ from the row before it."""
-    out, last = [], changes[-1][1]
-    for i, row in enumerate(map(tuple, etas.tolist())):
-        if row != last:
-            out.append((first_row + i, row))
-            last = row
-    return out
-
-
-def _hand_back_steering(stepper, controller, steering, changes) -> None:
-    """The schedule's state after a compiled episode: to the scheduler (its gains, arc
-    lengths and change log), the plant and a built-in law's model."""
-    from tt_mujoco.sim import records
-
-    etas, seen = tuple(steering.etas.tolist()), changes[-1][1]  # the last row's: the law's
-    if etas != seen:  # applied after the last logged row
-        changes.append((stepper.samples, etas))
-    scheduler = stepper.scheduler
-    if steering.kind == records.PATH_SCHEDULE:  # the path schedule's axles
-        scheduler.arc_lengths = steering.arcs.tolist()
-    logged = [(row, gains[0]) for row, gains in changes[1:]]
-    scheduler.restore(etas, logged, int(steering.updates[0]))
-    steering_changed = getattr(controller, "steering_changed", None)
-    if steering_changed is not None:
-        steering_changed(seen)
-
-
-def _steering_record(stepper, mujoco_plant: bool):
-    """The scheduler's gains and tables, and where the plant's couplings are."""
-    from tt_mujoco.sim import records
-    from tt_mujoco.sim.schedule import EtaScheduler, PathEtaScheduler
-    from tt_mujoco.vehicle.path_schedule import BLEND_PHI, driven_path
-
-    scheduler, n = stepper.scheduler, stepper.built.plant_params.n_trailers
-    if mujoco_plant:
-        eq_data, ids, hitches_q, actuated, max_turn = stepper.plant.steering
-    else:
-        eq_data, ids, hitches_q, actuated, max_turn = np.zeros((1, 1)), [0] * n, [0] * n, False, 0.0
-    kind, tables, arcs, bounds = 0, np.zeros((n, 5, 1)), np.zeros(n), (0.0, 0.0)
-    etas, tolerance, driven = stepper.plant_etas, 0.0, driven_path(0, 0.0, 0.0)
-    if isinstance(scheduler, PathEtaScheduler):
-        kind, tolerance = records.PATH_SCHEDULE, scheduler.tolerance
-        tables = np.array(scheduler.schedule.tables, dtype=float)
-        arcs = np.array(scheduler.arc_lengths, dtype=float)
-        bounds = (BLEND_PHI, scheduler.schedule.eta_max)
-        driven = scheduler.driven  # its arrays: the compiled steps log into them
-    elif isinstance(scheduler, EtaScheduler):
-        kind, tolerance = records.CURVATURE_SCHEDULE, scheduler.tolerance
-    return records.SteeringRecord(
-        kind=kind,
-        etas=np.array(etas, dtype=float),
-        offered=np.zeros(n),
-        tolerance=tolerance,
-        lengths=np.array([(t.L, t.L0) for t in stepper.built.plant_params.trailers]),
-        arcs=arcs,
-        tables=tables,
-        bounds=bounds,
-        driven=driven,
-        eq_data=eq_data,
-        ids=np.array(ids, dtype=np.int64),
-        hitches_q=np.array(hitches_q, dtype=np.int64),
-        actuated=actuated,
-        max_turn=max_turn,
-        updates=np.zeros(1, dtype=np.int64),
-    )
-
-
-def _plant_record(stepper, nominal):
-    from tt_mujoco.sim import records
-    from tt_mujoco.sim.measure import Addresses, Lengths
-    from tt_mujoco.sim.plant_mujoco import MujocoPlant
-    from tt_mujoco.vehicle import reduced
-
-    plant, substeps = stepper.plant, stepper.built.substeps
-
-    if isinstance(plant, MujocoPlant):
-        d, lay = plant.data, plant.layout
-        mj = records.MujocoRecord(
-            pointers=np.array([plant.model._address, d._address], dtype=np.int64),
-            qpos=d.qpos,
-            qvel=d.qvel,
-            ctrl=d.ctrl,
-            qfrc_applied=d.qfrc_applied,
-            warnings=d.warning.number,
-            xfrc_applied=d.xfrc_applied,
-            tractor_body=plant.tractor_body,
-            addresses=lay.addresses,
-            lengths=lay.lengths,
-            body_mass=plant.model.body_mass,
-            body_inertia=plant.model.body_inertia,
-            trailer_bodies=np.array(plant.trailer_bodies, dtype=np.int64),
-        )
-        ode_state, ode, timestep = np.zeros(8), reduced.model_constants(nominal), 0.0
-        params, joints = nominal, np.array(lay.train, dtype=float).reshape(-1, 5)
-    else:
-        one, none = np.zeros(1), np.zeros(0, dtype=np.int64)
-        mj = records.MujocoRecord(
-            none, one, one, one, one, np.zeros(1, dtype=np.int32), np.zeros((1, 6)), 0,
-            Addresses(*[0] * len(Addresses._fields)), Lengths(0.0, 0.0, 0.0, 0.0),
-            np.zeros(1), np.zeros((1, 3)), np.zeros(1, dtype=np.int64),
-        )  # fmt: skip
-        ode_state = np.array(plant.ode.state, dtype=float)
-        ode, timestep = reduced.model_constants(plant.params), plant.timestep
-        params, joints = plant.params, np.zeros((0, 5))
-    n = params.n_trailers
-    return records.PlantRecord(
-        mujoco=isinstance(plant, MujocoPlant),
-        substeps=substeps,
-        mj=mj,
-        ode_state=ode_state,
-        ode=ode,
-        timestep=timestep,
-        train=_train_constants(params),
-        train_joints=joints,
-        places=np.zeros((n, 5)),
-        speeds=np.zeros((n, 3)),
-        slopes=np.zeros((5, len(ode_state))),
-        steering=_steering_record(stepper, isinstance(plant, MujocoPlant)),
-    )
-
-
-def _train_constants(params):
-    """A train's constants with the trailers as a float array (no rows for one trailer)."""
-    from tt_mujoco.vehicle.train import TRAILER_ROW, train_constants
-
-    c = train_constants(params)
-    rows = np.array(c.trailers, dtype=float) if params.n_trailers > 1 else np.zeros(0)
-    return c._replace(trailers=rows.reshape(-1, len(TRAILER_ROW)))
-
-
-def _law_record(controller, nominal, user, steering):
-    from tt_mujoco.controllers.plain import PlainLawController
-    from tt_mujoco.sim import records
-    from tt_mujoco.sim.kernel_sources import LAWS
-    from tt_mujoco.vehicle import reduced
-
-    if isinstance(controller, PlainLawController):
-        kind, gains, state, flags = len(LAWS), np.zeros(0), np.zeros(8), (0.0, 0.0, 0.0)
-        user_gains = np.array(list(controller.gain_record), dtype=float)
-        user_state = np.array([getattr(controller.law_state, f) for f in controller.STATE])
-        anti_windup = False
-    else:
-        kind = LAWS.index(type(controller).LAW)
-        gains = np.array(controller.law_gains, dtype=float)
-        state = np.array(controller.law_state(), dtype=float)
-        flags = (float(controller.saturated), 0.0, 0.0)
-        user_gains, user_state = np.zeros(0), np.zeros(0)
-        anti_windup = bool(controller.anti_windup)
-    return records.LawRecord(
-        kind=kind,
-        gains=gains,
-        state=state,
-        flags=records.new_record(
-            records.LAW_FLAGS, **dict(zip(records.LAW_FLAGS, flags, strict=True))
-        ),
-        nominal=reduced.model_constants(nominal),
-        nominal_train=_train_constants(nominal),
-        phis=np.zeros(nominal.n_trailers),
-        rates=np.zeros((nominal.n_trailers, 3)),
-        anti_windup=anti_windup,
-        user=user,
-        user_gains=user_gains if user_gains.size else np.zeros(1),
-        user_state=user_state if user_state.size else np.zeros(1),
-        reference=records.new_record(records.REFERENCE_FIELDS),
-        model=records.new_record(records.NOMINAL_FIELDS),
-        measurement_values=np.zeros(len(records.MEASUREMENT_DTYPE)),
-        torques=np.zeros(2),
-        follows_steering=not isinstance(controller, PlainLawController),
-        steered_train=_train_constants(nominal.with_etas(tuple(steering.etas.tolist()))),
-        axle_slew_rate=float(getattr(controller, "axle_slew_rate", math.inf)),
-        reading=records.new_record(records.READING_FIELDS),
-    )
-
-
-def _target_record(built, steps: int):
-    from tt_mujoco.controllers.backing import CascadeConstants, HitchCascade
-    from tt_mujoco.reference.feedback import PathFeedback
-    from tt_mujoco.reference.paths import ArcsPath
-    from tt_mujoco.reference.reverse import ReverseTarget
-    from tt_mujoco.reference.spline import SplinePath
-    from tt_mujoco.sim import records
-
-    target, path, outer = _inner(built.target), built.path, built.target
-    fed, cascade = type(outer) is PathFeedback, type(outer) is HitchCascade
-    n = built.plant_params.n_trailers
-    constants = CascadeConstants(
-        (0.0, 0.0, 0.0, 0.0), 0.0, np.zeros((n, 2)), np.zeros(n), np.zeros((n, 2))
-    )
-    if cascade:
-        c = outer.constants
-        constants = CascadeConstants(
-            c.gains, c.preview, *(np.array(x, dtype=float) for x in (c.lengths, c.etas, c.ends))
-        )
-    kappas, starts = np.zeros(0), np.zeros((0, 3))
-    cells, pose_cells, kappa_ends = np.zeros((0, 5)), np.zeros((0, 10)), np.zeros(2)
-    if isinstance(path, ArcsPath):
-        kind, (bounds, kappas, starts) = 0, path.closed_form
-    elif isinstance(path, SplinePath):
-        kind, (bounds, cells, pose_cells, kappa_ends) = 2, path.closed_form
-    else:
-        kind, bounds = 1, np.zeros(0)
-    return records.TargetRecord(
-        dynamic=target.kind == "dynamic",
-        profile=_profile_table(target, built.control_dt, steps),
-        path_kind=kind,
-        length=float(path.length),
-        bounds=bounds,
-        kappas=kappas,
-        starts=starts,
-        cells=cells,
-        pose_cells=pose_cells,
-        kappa_ends=kappa_ends,
-        state=records.new_record(
-            records.TARGET_FIELDS,
-            v_prev=math.nan,
-            kappa=target.curvature,
-            s=target.arc_length,
-            s_near=outer.path_arc_length if fed else 0.0,
-            s_lead=outer.leading_arc_length if cascade else 0.0,
-        ),
-        feedback=fed,
-        feedback_gains=outer.gains if fed else (0.0, 0.0, 0.0),
-        reverse=isinstance(target, ReverseTarget),
-        s_end=float(getattr(target, "s_end", 0.0)),
-        cascade=cascade,
-        cascade_constants=constants,
-        wanted=np.array(outer.hitch_targets if cascade else [0.0] * n, dtype=float),
-        rates=np.zeros((n, 3)),
-    )
-
-
-def _hand_back(stepper, controller, status, k, plant, law, target) -> None:
-    """Give the state back: the stepper, the target, the controller and the reduced ODE."""
-    from tt_mujoco.controllers.plain import PlainLawController
-
-    stepper.k = k
-    stepper.finished = status == step.FINISHED
-    state = target.state[0]
-    _inner(stepper.built.target).set_state(
-        float(state["s"]), float(state["v_prev"]), float(state["kappa"])
-    )
-    errors, omega_ref = (float(state["e_y"]), float(state["e_psi"])), float(state["omega_ref"])
-    if target.feedback:
-        stepper.built.target.set_state(float(state["s_near"]), errors, omega_ref)
-    elif target.cascade:
-        wanted = target.wanted.tolist()
-        stepper.built.target.set_state(float(state["s_lead"]), errors, wanted, omega_ref)
-    if isinstance(controller, PlainLawController):
-        for name, value in zip(controller.STATE, law.user_state.tolist(), strict=False):
-            setattr(controller.law_state, name, value)
-    else:
-        flags = law.flags[0]
-        aux1, aux2 = float(flags["aux1"]), float(flags["aux2"])
-        controller.set_law_state(tuple(law.state.tolist()), aux1, aux2)
-        controller.saturated = bool(flags["saturated"])
-    if not plant.mujoco:
-        stepper.plant.ode.state = plant.ode_state.copy()
-        stepper.plant.ode.time = k * stepper.dt
-
-
-#: Speed-profile tables by (pickled profile, dt, steps): a sweep's episodes share their profile.
-_PROFILES: dict = {}
-
-
-def _profile_table(target, dt: float, steps: int) -> np.ndarray:
-    """``(s_ref, v_ref, a_ref)`` of the target's speed profile at every control step, from
-    the profile's own scalar ``state`` at the stepper's times ``k dt``."""
-    key = (pickle.dumps(target.profile), dt, steps)
-    table = _PROFILES.get(key)
-    if table is None:
-        times = [k * dt for k in range(steps + 1)]
-        table = np.array([target.profile.state(t) for t in times], dtype=float)
-        if len(_PROFILES) >= 8:
-            _PROFILES.pop(next(iter(_PROFILES)))
-        _PROFILES[key] = table
-    return table
-
-
-def _outcome(status, stop, stepper, controller, k) -> tuple[str, str]:
-    """``(status, message)`` from the ``stop`` record, worded as the Python loop words them."""
-    from tt_mujoco.controllers.base import LAW_NOT_FINITE, LAW_SINGULAR
-    from tt_mujoco.controllers.plain import PlainLawController
-    from tt_mujoco.sim import usercode
-    from tt_mujoco.sim.plant import StopRun
-    from tt_mujoco.sim.stepper import blew_up_message, jackknife_message
-    from tt_mujoco.vehicle.reduced import SingularityError
-
-    t = k * stepper.dt
-    value = {name: float(stop[name]) for name in stop.dtype.names}
-    if status == step.FINISHED:
-        return "ok", f"completed {stepper.built.duration:.3f} s"
-    if status == step.BLEW_UP:
-        return "diverged", blew_up_message(t, value["v"])
-    if status == step.JACKKNIFE:
-        phi, beta, x, y, v = (value[name] for name in ("phi", "beta", "x", "y", "v"))
-        hitch = int(value["hitch"])
-        eta = stepper.eta if hitch == 1 else value["eta"]
-        return "jackknife", jackknife_message(t, phi, beta, eta, x, y, v, hitch=hitch)
-    if status == step.WARNING:
-        import mujoco
-
-        from tt_mujoco.sim.plant_mujoco import warning_message
-
-        return "diverged", warning_message(mujoco.mjtWarning(int(value["warning"])).name, t)
-    if status == step.SINGULAR:
-        err = SingularityError(value["phi"], value["eta"])
-        return "jackknife", f"jackknife at t={t + stepper.dt:.3f} s: {err}"
-    # LAW_FAILED: the nominal model's singularity, or the law's own failure
-    law_status = int(value["law_status"])
-    u1, u2 = value["u1"], value["u2"]
-    if isinstance(controller, PlainLawController):  # the user's law returned no torques
-        try:
-            usercode.checked_torques((u1, u2), usercode.controller_label(stepper.built), t)
-        except StopRun as stop_run:
-            if law_status == LAW_NOT_FINITE:
-                return stop_run.status, stop_run.message
-    try:
-        if law_status == NOMINAL_SINGULAR:
-            raise SingularityError(value["phi"], value["eta"])
-        g = tuple(value[name] for name in ("g11", "g12", "g21", "g22"))
-        controller.raise_for(law_status, g if law_status == LAW_SINGULAR else (), u1, u2)
-    except FloatingPointError as err:
-        return "diverged", f"controller failed at t={t:.3f} s: {err}"
-    raise AssertionError(f"unknown status {status}")  # pragma: no cover
-
-
-#: ``stop.law_status`` of the nominal model's own singularity (the kernel's NOMINAL_SINGULAR)
-NOMINAL_SINGULAR = -1
 
 
 def compile_law(cls):

@@ -14,14 +14,12 @@ import math
 from abc import ABC, abstractmethod
 
 from tt_mujoco.registry import Registry
-from tt_mujoco.vehicle import reduced, train
 
 __all__ = [
     "DISTURBANCES",
     "Disturbance",
     "PaperDisturbance",
     "disturbance",
-    "injected",
     "make_disturbance",
 ]
 
@@ -76,20 +74,3 @@ def wrench_of(mass, a_v: float, a_w: float) -> tuple[float, float]:
     shares it)."""
     M11, M12, M22 = mass
     return M11 * a_v + M12 * a_w, M12 * a_v + M22 * a_w
-
-
-def injected(mode: str, a_v: float, a_w: float, phi, nominal) -> tuple[float, ...]:
-    """What the plant receives for Delta = (a_v, a_w): ``(dist_r, dist_l, force, torque)``.
-
-    "matched": wheel torques ``g(phi)^-1 Delta`` of the nominal model; "wrench": the
-    generalised force ``Mbar Delta`` as a force along the heading at P and a yaw moment (the same
-    effect on (v, omega), but through the tyres).
-    """
-    if isinstance(phi, tuple):  # a train: every hitch angle (Measurement.phis)
-        mass = train.mass_and_bias(phi, 0.0, 0.0, nominal)[0]
-    else:
-        mass = reduced.mass_terms(phi, nominal)
-    if mode == "wrench":
-        return (0.0, 0.0, *wrench_of(mass, a_v, a_w))
-    dist_r, dist_l = reduced.torque_for_force(mass, a_v, a_w, nominal)
-    return dist_r, dist_l, 0.0, 0.0

@@ -58,12 +58,6 @@ class Plant(ABC):
         actuator faults), matched disturbance torques, and the chassis wrench (force along the
         heading ``theta`` and yaw moment) in wrench mode."""
 
-    def blow(self, tractor, trailer) -> None:
-        """Horizontal forces and yaw moments ``(F_x, F_y, M_z)`` (N, N m) on the tractor's and
-        the trailer's bodies, at their centres of mass, for the next :meth:`advance` (the wind,
-        :mod:`tt_mujoco.sim.wind`); a plant without bodies to push refuses."""
-        raise NotImplementedError(f"{type(self).__name__} has no aerodynamics")
-
     @abstractmethod
     def advance(self, substeps: int) -> None:
         """Advance ``substeps`` physics steps; raise :class:`StopRun` on a numerical failure."""

@@ -206,19 +206,6 @@ class MujocoPlant(Plant):
             return None
         return self._ground, self._contact_geoms, self.data.geom_xpos, self.model.geom_friction
 
-    def blow(self, tractor, trailer) -> None:
-        """Horizontal forces and yaw moments (N, N m) on the tractor's and the trailer's
-        bodies for this step, the wind's (on top of the chassis wrench of the "wrench"
-        disturbance, if any)."""
-        for body, (fx, fy, mz) in ((self._tractor, tractor), (self._trailer, trailer)):
-            xfrc = self._xfrc[body]
-            if self._wrench and body == self._tractor:
-                xfrc[0] += fx
-                xfrc[1] += fy
-                xfrc[5] += mz
-            else:
-                xfrc[0], xfrc[1], xfrc[5] = fx, fy, mz
-
     def advance(self, substeps: int) -> None:
         if self._ground is not None:
             ids = self._contact_geoms

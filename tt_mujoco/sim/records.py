@@ -3,8 +3,8 @@
 Every bundle the compiled chunk loop (:mod:`tt_mujoco.sim._kernel`) takes is a
 :class:`~typing.NamedTuple` or a NumPy structured array defined here, so a field is read by
 its name, never by a bare index: the limits, the plant's arrays, the law's state, the target's
-state, the log row and why a run stopped. The Python loop
-(:class:`tt_mujoco.sim.stepper.Stepper`) holds the same :class:`Limits`.
+state, the log row and why a run stopped. CPython runs the same step on them as plain objects
+(:func:`interpreted`).
 """
 
 from __future__ import annotations
@@ -48,6 +48,8 @@ __all__ = [
     "interpreted",
     "new_record",
     "record_dtype",
+    "set_value",
+    "values_of",
 ]
 
 
@@ -101,8 +103,12 @@ def new_record(fields, **values) -> np.ndarray:
 
 @functools.cache
 def _fields_class(names: tuple[str, ...]) -> type:
-    """A class of plain attributes ``names`` (slots): what CPython reads and writes fast."""
-    return type("Fields", (), {"__slots__": names})
+    """A class of plain attributes ``names`` (slots), made from their values in order: what
+    CPython reads and writes fast."""
+    body = "\n".join(f"    self.{name} = {name}" for name in names)
+    scope: dict = {}
+    exec(f"def __init__(self, {', '.join(names)}):\n{body}", scope)
+    return type("Fields", (), {"__slots__": names, "__init__": scope["__init__"]})
 
 
 def interpreted(record):
@@ -111,18 +117,29 @@ def interpreted(record):
     attributes (a NumPy record's field costs a microsecond or more to reach from Python, an
     attribute some tens of nanoseconds); other arrays, and numbers, are the same objects."""
     if isinstance(record, np.ndarray) and record.dtype.names:
-        cls, names = _fields_class(record.dtype.names), record.dtype.names
-        out = []
-        for values in record.tolist():
-            element = cls()
-            for name, value in zip(names, values, strict=True):
-                setattr(element, name, value)
-            out.append(element)
-        return out
+        cls = _fields_class(record.dtype.names)
+        return [cls(*values) for values in record.tolist()]
     if isinstance(record, tuple):
         items = [interpreted(item) for item in record]
         return type(record)(*items) if hasattr(record, "_fields") else tuple(items)
     return record
+
+
+def values_of(record) -> dict:
+    """The fields of a one-element record (:func:`new_record`, or its :func:`interpreted`
+    twin) by name, as Python floats."""
+    element = record[0]
+    if isinstance(record, np.ndarray):
+        return dict(zip(record.dtype.names, element.tolist(), strict=True))
+    return {name: getattr(element, name) for name in element.__slots__}
+
+
+def set_value(record, name: str, value: float) -> None:
+    """Set field ``name`` of a one-element record (:func:`new_record`, or its twin)."""
+    if isinstance(record, np.ndarray):
+        record[0][name] = value
+    else:
+        setattr(record[0], name, value)
 
 
 class Limits(NamedTuple):
@@ -269,6 +286,9 @@ class LawRecord(NamedTuple):
     axle_slew_rate: float
     #: :data:`READING_FIELDS`: what the law saw and asked this step (scratch)
     reading: np.ndarray
+    #: trailers 2..N as a Python law sees them (the delay included), in
+    #: :data:`~tt_mujoco.sim.measure.TRAIN_FIELDS` order
+    measurement_rows: np.ndarray
 
 
 class TargetRecord(NamedTuple):
@@ -278,7 +298,8 @@ class TargetRecord(NamedTuple):
     #: per control step, the speed profile's (s_ref, v_ref, a_ref)
     profile: np.ndarray
     #: 0 arcs of constant curvature (``bounds``, ``kappas``, ``starts``), 1 the cycloid, 2 a
-    #: spline (``bounds`` of its fine cells, their ``cells``, ``pose_cells`` and ``kappa_ends``)
+    #: spline (``bounds`` of its fine cells, their ``cells``, ``pose_cells`` and ``kappa_ends``),
+    #: 3 a path without closed form (``path_hook``)
     path_kind: int
     length: float
     bounds: np.ndarray
@@ -302,6 +323,8 @@ class TargetRecord(NamedTuple):
     cascade_constants: CascadeConstants
     wanted: np.ndarray
     rates: np.ndarray
+    #: the path object of a path without closed form (``path_kind`` 3: CPython only), else None
+    path_hook: Any
 
     # What a path offers the path feedback and the path schedule, run by CPython (the kernel
     # overloads the functions that call these).
@@ -346,7 +369,7 @@ class WindRecord(NamedTuple):
 
 
 class DelayRecord(NamedTuple):
-    """The sensor delay's line (:class:`~tt_mujoco.sim.stepper.Stepper`): the readings of the
+    """The sensor delay's line: the readings of the
     last ``depth = delay steps + 1`` steps, step ``j`` in slot ``j % depth`` (one unused slot
     without a delay)."""
 
@@ -390,7 +413,7 @@ class LoopRecord(NamedTuple):
     steps: int
     #: the episode's standard normal draws (empty without noise)
     noise: np.ndarray
-    #: whether the paper's disturbance enters as matched torques, or as a chassis wrench
+    #: whether the disturbance enters as matched torques, or as a chassis wrench
     disturbed: bool
     wrench: bool
     n_trailers: int
@@ -405,6 +428,9 @@ class LoopRecord(NamedTuple):
     wind: WindRecord
     delay: DelayRecord
     ground: GroundRecord
+    #: a user's disturbance, ``t -> (a_v, a_w)`` with its checks (CPython only), else None:
+    #: the paper's
+    disturbance_hook: Any
 
 
 class LogRecord(NamedTuple):

@@ -16,11 +16,10 @@ from tt_mujoco.analysis.metrics import compute_metrics
 from tt_mujoco.defaults import MAX_SPEED
 from tt_mujoco.registry import describe_failure as usercode_failure
 from tt_mujoco.registry import shown
-from tt_mujoco.sim import compiled, usercode
+from tt_mujoco.sim import compiled
 from tt_mujoco.sim import faults as faults_mod
 from tt_mujoco.sim.build import Build, build, drawn_polyline
 from tt_mujoco.sim.ground import ground_report, parse_patches
-from tt_mujoco.sim.plant import StopRun
 from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sim.relief import RampRelief
 from tt_mujoco.sim.scenario import Scenario
@@ -96,41 +95,8 @@ def run_episode(stepper: Stepper, controller, progress=None, on_step=None) -> tu
         outcome = compiled.run_compiled(stepper, controller, progress)
         if outcome is not None:
             return outcome
-    n = stepper.steps
-    report_every = max(1, n // 100)
-    sense, actuate, compute = stepper.sense, stepper.actuate, controller.compute
-    who = usercode.controller_label(stepper.built)
-    scheduler = stepper.scheduler
-    steering_changed = getattr(controller, "steering_changed", None)
-    etas = None
-    try:
-        while True:
-            if scheduler is not None and steering_changed and scheduler.etas is not etas:
-                etas = scheduler.etas
-                steering_changed(etas)
-            me, ref = sense()
-            try:
-                out = compute(ref.t, me, ref)
-            except FloatingPointError as err:  # a built-in law's own failure
-                msg = f"controller failed at t={ref.t:.3f} s: {err}"
-                raise StopRun("diverged", msg) from None
-            except (Exception, SystemExit) as err:
-                raise usercode.failure(who, ref.t, err) from None
-            T_r, T_l = usercode.checked_torques(out, who, ref.t)
-            signals = controller.take_signals()
-            if signals:
-                stepper.record_signals(usercode.checked_signals(signals, who, ref.t))
-            if not actuate(T_r, T_l, controller.command):
-                break
-            if on_step is not None:
-                on_step(stepper.t, stepper.plant)
-            k = stepper.k - 1
-            if progress is not None and k % report_every == 0:
-                progress(k, n)
-    except StopRun as stop:
-        stepper.stop_details = stop.details
-        return stop.status, stop.message
-    return "ok", f"completed {stepper.built.duration:.3f} s"
+    stepper.begin(controller)
+    return stepper.run(progress=progress, on_step=on_step)
 
 
 def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint=None) -> Result:

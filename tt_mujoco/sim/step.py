@@ -1,9 +1,8 @@
 """The closed-loop step's own arithmetic, written once for both loops.
 
-:class:`tt_mujoco.sim.stepper.Stepper` (the Python loop, with its hooks) and the compiled
-chunk loop (:mod:`tt_mujoco.sim._kernel`) sequence the same step, sense, noise, target, law,
-saturation, disturbance, log, advance, and call these plain-number functions for every check
-and clip in it, so that no rule of the step stands twice. They take and return plain floats
+The closed loop's step (:mod:`tt_mujoco.sim.closed_loop`: sense, noise, target, law,
+saturation, disturbance, log, advance), which CPython runs and numba compiles, calls these
+plain-number functions for every check and clip in it. They take and return plain floats
 (numba compiles them from this source, :mod:`tt_mujoco.sim.kernel_sources`).
 """
 

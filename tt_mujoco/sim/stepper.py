@@ -1,32 +1,39 @@
-"""The closed loop's one step, shared by every route that drives a plant.
+"""One episode of a built scenario: its objects, its records, its loop and its logged rows.
 
 :func:`tt_mujoco.sim.simulate.simulate`, the Gymnasium environment and the live viewer all use
-:class:`Stepper`; only who computes the torques differs (a controller, an agent). A control step
-``k`` (time ``t = k dt``) is:
+:class:`Stepper`; only who computes the torques differs (a built-in law, a user's law or
+controller, an agent). Its step is :mod:`tt_mujoco.sim.closed_loop`'s, the only one, over the
+episode's records (:mod:`tt_mujoco.sim.episode`):
 
-1. :meth:`Stepper.sense`: measure the plant, stop on a blow-up or jackknife, add measurement
-   noise, apply sensor faults, update the target (or the path feedback around it); return the
-   measurement as the controller sees it and the :class:`~tt_mujoco.controllers.Reference`;
-2. :meth:`Stepper.actuate`: clip the torques at the limit, apply actuator faults and payload
-   steps, add the disturbance, log the row, then (unless ``k`` is the last step) update the
-   scheduled eta and advance the plant one control period.
+- :meth:`Stepper.run` runs the episode to its end chunk by chunk, with the kernel's compiled
+  loop (:mod:`tt_mujoco.sim.compiled`) or CPython's over the same source
+  (:func:`tt_mujoco.sim.closed_loop.run_steps`), a controller's Python ``compute`` called
+  between the halves of every step;
+- :meth:`Stepper.sense` and :meth:`Stepper.actuate` run one step's halves
+  (:func:`~tt_mujoco.sim.closed_loop.sense_step`, :func:`~tt_mujoco.sim.closed_loop.
+  actuate_step`) for an agent that computes the torques in between.
+
+A control step ``k`` (time ``t = k dt``) measures the plant, stops on a blow-up or jackknife,
+adds measurement noise and sensor faults, updates the target; the law's torques are clipped at
+the limit, actuator faults, payloads and the disturbance applied, the row logged, and (unless
+``k`` is the last step) the scheduled eta updated and the plant advanced one control period.
 """
 
 from __future__ import annotations
 
-import collections
 import math
+import operator
 
 import numpy as np
 
 from tt_mujoco.controllers import Reference
 from tt_mujoco.defaults import JACKKNIFE_DEG, MAX_SPEED
-from tt_mujoco.sim import usercode
+from tt_mujoco.sim import closed_loop, episode, records, usercode
 from tt_mujoco.sim.build import Build
 from tt_mujoco.sim.checkpoint import Checkpoint
-from tt_mujoco.sim.disturbances import injected
+from tt_mujoco.sim.disturbances import PaperDisturbance
 from tt_mujoco.sim.faults import HELD, PAYLOAD_ROW
-from tt_mujoco.sim.measure import TRAIN_FIELDS, Measurement
+from tt_mujoco.sim.measure import TRAIN_FIELDS, Measurement, TrainMeasurement
 from tt_mujoco.sim.motors import DcMotors, MotorConstants
 from tt_mujoco.sim.plant import StopRun
 from tt_mujoco.sim.records import (
@@ -34,31 +41,25 @@ from tt_mujoco.sim.records import (
     FaultRecord,
     GroundRecord,
     Limits,
+    LogRecord,
     LoopRecord,
     WindRecord,
 )
 from tt_mujoco.sim.scenario import jackknife_phi_deg
-from tt_mujoco.sim.step import (
-    BLEW_UP,
-    JACKKNIFE,
-    clip,
-    clip_pair,
-    hitch_stop,
-    noisy,
-    stop_code,
-)
+from tt_mujoco.sim.step import FINISHED, PAYLOAD, RUNNING, SINGULAR, WARNING
 from tt_mujoco.sim.timeseries import LOOP_COLUMNS, assemble_columns, train_columns
-from tt_mujoco.sim.wind import DragConstants, parse_wind, wind_wrenches_of
-from tt_mujoco.vehicle.reduced import SingularityError
+from tt_mujoco.sim.wind import DragConstants, parse_wind
 
 __all__ = ["CHECKPOINT_COLUMNS", "Stepper"]
 
 #: Columns of a checkpoint file: the measurement and the loop's own values, as logged.
 CHECKPOINT_COLUMNS = (*Measurement._fields, *LOOP_COLUMNS)
 
-#: Rows kept as Python tuples before they are folded into float arrays: a long run's log then
-#: costs 8 bytes a value (about 290 bytes a row) instead of a tuple's ~1.3 kB.
-_LOG_BLOCK = 8192
+#: Rows of a chunk of steps, logged together and then kept as one block of float arrays.
+CHUNK = 8192
+#: The stops that log their step's row (a stop in the advance, a payload step, the end).
+LOGGING_STOPS = (FINISHED, WARNING, SINGULAR, PAYLOAD)
+_LOOP_VALUES = operator.attrgetter(*LOOP_COLUMNS)
 
 
 def blew_up_message(t: float, v: float) -> str:
@@ -89,8 +90,73 @@ def jackknife_message(t, phi, beta, eta, x, y, v, hitch: int = 1) -> str:
     )
 
 
+def seen_measurement(law) -> Measurement:
+    """The measurement as a Python law sees it at this step (``law.measurement_values``,
+    ``law.measurement_rows``: noise, faults and the delay included)."""
+    values = law.measurement_values.tolist()
+    if not law.measurement_rows.shape[0]:
+        return Measurement._make(values)
+    out = TrainMeasurement._make(values)
+    out.train = tuple(tuple(row) for row in law.measurement_rows.tolist())
+    return out
+
+
+def reference_of(law, path) -> Reference:
+    """The target at this step as a Python law sees it (``law.reference``) on ``path``."""
+    r = law.reference[0]
+    return Reference(r.t, r.s, r.kappa, r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot, path)
+
+
+def _listed(made: tuple) -> tuple:
+    """The interpreted records with the arrays the step reads element by element every step as
+    lists of floats (a NumPy element is a NumPy scalar, whose arithmetic is slower)."""
+    loop, plant, law, target, stop = made
+    loop = loop._replace(
+        noise=loop.noise.tolist(), wind=loop.wind._replace(speeds=loop.wind.speeds.tolist())
+    )
+    law = law._replace(state=law.state.tolist(), gains=law.gains.tolist())
+    return loop, plant, law, target._replace(profile=target.profile.tolist()), stop
+
+
+class _PythonLaw:
+    """A controller's Python ``compute`` as the step's law (:data:`~tt_mujoco.sim.closed_loop.
+    PYTHON`), with the checks of user code: called by CPython's step with the law record,
+    it returns ``(status, T_r, T_l, u1, u2)`` or raises :class:`~tt_mujoco.sim.plant.StopRun`.
+    """
+
+    def __init__(self, stepper, controller):
+        self.stepper, self.controller = stepper, controller
+        self.who = usercode.controller_label(stepper.built)
+        self.path, self.dt = stepper.built.path, stepper.dt
+        self.steering = None  # the plant record's (Stepper.begin)
+        self.told = -1  # the schedule's updates the controller has been told of
+        self.steering_changed = getattr(controller, "steering_changed", None)
+
+    def __call__(self, law):
+        controller, who, steering = self.controller, self.who, self.steering
+        if self.steering_changed is not None and steering.kind and steering.updates[0] != self.told:
+            self.told = int(steering.updates[0])
+            self.steering_changed(tuple(steering.etas.tolist()))
+        seen, ref = seen_measurement(law), reference_of(law, self.path)
+        t = ref.t
+        try:
+            out = controller.compute(t, seen, ref)
+        except FloatingPointError as err:  # a built-in law's own failure
+            raise StopRun("diverged", f"controller failed at t={t:.3f} s: {err}") from None
+        except (Exception, SystemExit) as err:
+            raise usercode.failure(who, t, err) from None
+        T_r, T_l = usercode.checked_torques(out, who, t)
+        signals = controller.take_signals()
+        if signals:
+            k = round(t / self.dt)
+            self.stepper.record_signals(usercode.checked_signals(signals, who, t), k)
+        command = controller.command
+        u1, u2 = (T_r, T_l) if command is None else command
+        return closed_loop.LAW_OK, T_r, T_l, u1, u2
+
+
 class Stepper:
-    """One episode of a built scenario, step by step.
+    """One episode of a built scenario.
 
     Parameters
     ----------
@@ -100,7 +166,6 @@ class Stepper:
 
     def __init__(self, built: Build):
         self.built = built
-        s = built.scenario
         self.dt = built.control_dt
         self.steps = built.steps
         self.eta = built.nominal.eta
@@ -114,10 +179,6 @@ class Stepper:
             noise_v=built.noise_std[0],
             noise_w=built.noise_std[1],
         )
-        self._mode = s.disturbance
-        self._feedback = s.path_feedback is not None
-        self._measured_target = getattr(built.target, "uses_measurement", False)
-        self._dist_label = usercode.disturbance_label(built)
         # Trailers 2..N: their hitch limits, and their logged columns after the usual ones.
         etas = built.plant_params.etas
         self._train_limits = [math.radians(jackknife_phi_deg(e)) for e in etas[1:]]
@@ -125,6 +186,8 @@ class Stepper:
         self.checkpoint_columns = (*CHECKPOINT_COLUMNS, *self.train_columns)
         self.plant = None
         self._checkpoint = None
+        self._episode = None
+        self._log = None
 
     def reset(
         self, rng: np.random.Generator, phi0_deg: float | None = None, checkpoint=None
@@ -133,10 +196,10 @@ class Stepper:
         the noise of the whole episode drawn from ``rng`` (v_k, omega_k, ... in step order, the
         same numbers as drawing them step by step).
 
-        ``checkpoint``, a file path, receives every block of logged rows as it is folded (an
+        ``checkpoint``, a file path, receives every block of logged rows as it is kept (an
         Arrow IPC stream of the raw logged columns, :class:`~tt_mujoco.sim.checkpoint.
         Checkpoint`): a run killed after an hour keeps what it computed there. :meth:`close`
-        writes the rows not yet folded.
+        writes the rows not yet kept.
         """
         b = self.built
         self.close()  # a previous episode's checkpoint
@@ -149,9 +212,6 @@ class Stepper:
             DcMotors(b.plant_params, b.control_dt) if b.scenario.actuator == "dc_motor" else None
         )
         self._ground_masks = [] if b.scenario.ground else None  # the patches under the wheels
-        steps = b.delay_steps
-        # until `steps` readings exist, the first one is what the sensors have given
-        self._delayed = None if not steps else collections.deque(maxlen=steps + 1)
         self.scheduler = b.new_scheduler(self.plant)
         b.target.reset()
         self.k = 0
@@ -159,25 +219,22 @@ class Stepper:
         self.stop_details = None  # the traceback of user code that stopped the episode
         self._signals: dict[str, np.ndarray] = {}  # what the controller logged, by name
         noise_v, noise_w = b.noise_std
-        self._noise = (
-            rng.standard_normal(2 * (self.steps + 1)).tolist() if noise_v or noise_w else None
-        )
+        self._noise = rng.standard_normal(2 * (self.steps + 1)) if noise_v or noise_w else None
         wind = parse_wind(b.scenario.wind)
         # the gusts are drawn after the noise, so that a wind leaves the noise as it was
-        self._wind = None if wind.calm else wind.speeds(rng, self.steps, self.dt).tolist()
+        self._wind = None if wind.calm else wind.speeds(rng, self.steps, self.dt)
         direction = math.radians(wind.direction_deg)
         self._wind_direction = (math.cos(direction), math.sin(direction))
         self._drag = DragConstants(*(getattr(b.plant_params, f) for f in DragConstants._fields))
-        self._measured: list = []
-        self._logged: list = []
-        self._train_logged: list = []
         self._blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-        self.measurement = None
+        self._episode = None  # the records: begin()
+        self._log = None  # the log of the rows being computed, from step _log_k; _taken kept
 
+    # --- the records ---------------------------------------------------------------------
     def loop_record(self) -> LoopRecord:
-        """The episode's constants and noise as the compiled loop reads them (after
-        :meth:`reset`)."""
+        """The episode's constants and noise as the step reads them (after :meth:`reset`)."""
         dist = self.built.disturbance is not None
+        mode = self.built.scenario.disturbance
         noise, faults = self._noise, self.faults
         rows = faults.payload_rows if faults else []
         motors = self.motors
@@ -186,9 +243,9 @@ class Stepper:
             limits=self.limits,
             dt=self.dt,
             steps=self.steps,
-            noise=np.zeros(0) if noise is None else np.array(noise),
-            disturbed=dist and self._mode == "matched",
-            wrench=dist and self._mode == "wrench",
+            noise=np.zeros(0) if noise is None else noise,
+            disturbed=dist and mode == "matched",
+            wrench=dist and mode == "wrench",
             n_trailers=self.built.plant_params.n_trailers,
             hitch_limits=np.array(self._train_limits, dtype=float),
             faults=FaultRecord(
@@ -203,7 +260,7 @@ class Stepper:
             motor=motors.constants if motors else MotorConstants(*[0.0] * 6),
             motor_torques=np.array(motors.torques if motors else [0.0, 0.0]),
             wind=WindRecord(
-                np.array(self._wind or [], dtype=float),
+                np.zeros(0) if self._wind is None else self._wind,
                 self._wind_direction,
                 self._drag,
                 np.zeros(6),
@@ -214,10 +271,28 @@ class Stepper:
                 seen=np.zeros((depth, 3)),
             ),
             ground=self._ground_record(),
+            disturbance_hook=self._disturbance_hook(),
         )
 
+    def _disturbance_hook(self):
+        """A user's disturbance with its checks, as CPython's step calls it (None: none, or
+        the paper's, which the step computes itself)."""
+        dist = self.built.disturbance
+        if dist is None or type(dist) is PaperDisturbance:
+            return None
+        who = usercode.disturbance_label(self.built)
+
+        def disturbance(t: float) -> tuple[float, float]:
+            try:
+                out = dist(t)
+            except (Exception, SystemExit) as err:
+                raise usercode.failure(who, t, err) from None
+            return usercode.checked_disturbance(out, who, t)
+
+        return disturbance
+
     def _ground_record(self) -> GroundRecord:
-        """The friction patches under the wheels, as the compiled loop reads them."""
+        """The friction patches under the wheels, as the step reads them."""
         ground = getattr(self.plant, "ground", None)
         if ground is None:
             none, no_ints = np.zeros(0), np.zeros(0, dtype=np.int64)
@@ -241,110 +316,207 @@ class Stepper:
             masks=np.zeros(self.steps + 1, dtype=np.int64),
         )
 
-    def log_ground(self, masks, arc_lengths) -> None:
-        """A compiled episode's patch masks (one per advance) and the wheels' last arc lengths
-        (see :attr:`ground_masks`)."""
-        self._ground_masks.extend(int(m) for m in masks)
-        patches = self.plant.ground[0]
-        if len(arc_lengths):
-            patches.arc_lengths = [float(s) for s in arc_lengths]
+    def begin(self, controller=None, compiled_law=None, compiled: bool = False) -> tuple:
+        """Make the (reset) episode's records for ``controller``: ``(loop, plant, law, target,
+        stop)`` (:func:`tt_mujoco.sim.episode.episode_records`).
 
-    @property
-    def plant_etas(self) -> tuple:
-        """The trailers' steering gains eta_1..eta_N in force (a scheduler's, else the plant's
-        constant ones)."""
-        if self.scheduler is not None:
-            return self.scheduler.etas
-        return self.built.plant_params.etas
+        ``compiled``: the records are NumPy's, for the kernel's loop, with ``compiled_law`` a
+        plain-number law compiled for it (its placeholder for a built-in law). Otherwise
+        CPython runs the step on the records as plain objects (:func:`tt_mujoco.sim.records.
+        interpreted`): a built-in law's own function, or any other controller's Python
+        ``compute`` between the halves (None: an agent's torques, :meth:`sense` and
+        :meth:`actuate`).
+        """
+        if compiled:
+            made = episode.episode_records(self, controller, compiled_law)
+        else:
+            python = None
+            if controller is None or not episode.runs_built_in(controller):
+                python = _PythonLaw(self, controller)
+            made = _listed(
+                records.interpreted(episode.episode_records(self, controller, None, python))
+            )
+            if python is not None:
+                python.steering = made[1].steering
+        self._episode, self._log = made, None
+        self._controller = controller
+        self._interpreted = not compiled
+        self._changes = [(0, tuple(made[1].steering.etas.tolist()))]  # (first row, gains)
+        if self.motors is not None:  # the motors' torques as the step delivers them
+            self.motors.torques = made[0].motor_torques
+        return made
 
+    # --- the episode, run to its end ------------------------------------------------------
+    def run(self, run_chunk=None, advance=None, progress=None, on_step=None) -> tuple[str, str]:
+        """Run the begun episode (:meth:`begin`) from step :attr:`k` to its end or a stop;
+        ``(status, message)`` (:func:`tt_mujoco.sim.simulate.run_episode`).
+
+        Parameters
+        ----------
+        run_chunk, advance : callable, optional
+            The kernel's chunk loop and payload advance (:mod:`tt_mujoco.sim.compiled`);
+            default: CPython's, :func:`~tt_mujoco.sim.closed_loop.run_steps` and
+            :func:`~tt_mujoco.sim.closed_loop.advance_after_payload`.
+        progress, on_step : callable, optional
+            As for :func:`tt_mujoco.sim.simulate.simulate`.
+        """
+        if run_chunk is None:
+            run_chunk, advance = closed_loop.run_steps, closed_loop.advance_after_payload
+        steps, k, status = self.steps, self.k, RUNNING
+        report_every = max(1, steps // 100)
+        size = 1 if on_step is not None else report_every * max(1, CHUNK // report_every)
+        size = min(size, CHUNK, steps - k + 1)
+        try:
+            while status == RUNNING:
+                self._start_log(k, size)
+                loop, plant, law, target, stop = self._episode
+                k_end = min(steps, k + size - 1)
+                status, k_next = run_chunk(k, k_end, loop, plant, law, target, self._log, stop)
+                self._take(k_next - k + (1 if status in LOGGING_STOPS else 0))
+                status, k_next = self._after_payloads(status, k_next, advance)
+                if on_step is not None and status == RUNNING:
+                    self._sync_plant(k_next)
+                    on_step(k_next * self.dt, self.plant)
+                if progress is not None and (size > 1 or k_next % report_every == 0):
+                    progress(k_next, steps)
+                k = k_next
+        except StopRun as stop_run:  # a Python law's failure, a user's disturbance's
+            self.stop_details = stop_run.details
+            self._end(None, self._fold())
+            return stop_run.status, stop_run.message
+        except BaseException:  # the time limit, an interrupt, a viewer closed: rows kept
+            self._end(None, self._fold())
+            raise
+        self._end(status, k)
+        return episode.outcome(status, self._episode[4], self, self._controller, k)
+
+    def _after_payloads(self, status, k, advance) -> tuple[int, int]:
+        """The payload changes a step made to the reduced plant's constants, and the step
+        they interrupted (:data:`~tt_mujoco.sim.step.PAYLOAD`) advanced: ``(status, k)``."""
+        loop, plant, law, target, stop = self._episode
+        if not records.values_of(stop)["payloads"]:
+            return status, k
+        plant = episode.carry_payloads(self, plant, loop.faults, stop)
+        self._episode = (loop, plant, law, target, stop)
+        if status == PAYLOAD:
+            status = advance(plant, loop.wind, stop)
+            k += 1 if status == RUNNING else 0
+        return status, k
+
+    def _end(self, status, k: int) -> None:
+        """The episode's state at step ``k`` back to its objects (``status``: FINISHED, or
+        not)."""
+        episode.hand_back(self, self._controller, status, k, self._episode, self._changes)
+
+    def _sync_plant(self, k: int) -> None:
+        """The reduced plant's ODE state at step ``k``, for an ``on_step`` hook to read."""
+        plant = self._episode[1]
+        if not plant.mujoco:
+            self.plant.ode.state = plant.ode_state.copy()
+            self.plant.ode.time = k * self.dt
+
+    # --- the log -------------------------------------------------------------------------
+    def _start_log(self, k: int, size: int) -> None:
+        """Log the rows from step ``k`` in a log of ``size`` rows (CPython's is reused)."""
+        log = self._log
+        if log is None or not self._interpreted or len(log.loop) != size:
+            n, n_trailers = size, self.built.plant_params.n_trailers
+            scheduled = self._episode[1].steering.kind != 0
+            log = LogRecord(
+                measurement=np.empty((n, len(records.MEASUREMENT_DTYPE))),
+                loop=np.empty(n, dtype=records.LOG_DTYPE),
+                train=np.empty((n, n_trailers - 1, len(TRAIN_FIELDS))),
+                etas=np.empty((n if scheduled else 0, n_trailers)),
+            )
+            log.loop["t"] = math.nan  # a row is whole once its time is logged
+            log = records.interpreted(log) if self._interpreted else log
+        self._log, self._log_k, self._taken = log, k, 0
+
+    def _whole_rows(self) -> int:
+        """How many rows of the log are whole: those whose time is logged."""
+        log, k, dt, i = self._log, self._log_k, self.dt, self._taken
+        if self._interpreted:
+            rows = log.loop
+            while i < len(rows) and rows[i].t == (k + i) * dt:
+                i += 1
+            return i
+        times = log.loop["t"]
+        while i < len(times) and times[i] == (k + i) * dt:
+            i += 1
+        return i
+
+    def _take(self, rows: int) -> None:
+        """Keep the log's rows ``_taken..rows - 1`` as a block (:meth:`add_block`)."""
+        first, log = self._taken, self._log
+        if rows <= first:
+            return
+        self._taken = rows
+        if self._interpreted:
+            loop = np.array([_LOOP_VALUES(row) for row in log.loop[first:rows]], dtype=float)
+            measured = log.measurement[first:rows].copy()
+            trains = log.train[first:rows].reshape(rows - first, -1).copy()
+        else:
+            loop = log.loop[first:rows].view(np.float64).reshape(rows - first, -1)
+            measured = log.measurement[first:rows]
+            trains = log.train[first:rows].reshape(rows - first, -1)
+        self.add_block(measured, loop, trains)
+        if self._episode[1].steering.kind:
+            new = episode.changes_of(
+                log.etas[first:rows], self._changes, self.samples - rows + first
+            )
+            self._changes.extend(new)
+
+    def _fold(self) -> int:
+        """Keep the whole rows of the log; the step of the first row not whole."""
+        if self._log is None:
+            return self.k
+        rows = self._whole_rows()
+        self._take(rows)
+        return self._log_k + rows
+
+    # --- one step at a time, for an agent -------------------------------------------------
     @property
     def t(self) -> float:
         return self.k * self.dt
 
     def sense(self) -> tuple[Measurement, Reference]:
-        """The measurement as the controller sees it and the target, at the current step.
+        """The measurement as the law sees it (noise, faults and the delay included) and the
+        target, at the current step (:func:`~tt_mujoco.sim.closed_loop.sense_step`).
 
         Raises
         ------
         StopRun
             The state blew up or jackknifed.
         """
-        k, t = self.k, self.k * self.dt
-        me = self.plant.measure()
-        stop = stop_code(me.x, me.v, me.omega, me.phi, me.beta, self.limits)
-        if stop == BLEW_UP:
-            raise StopRun("diverged", blew_up_message(t, me.v))
-        if stop == JACKKNIFE:
-            raise StopRun(
-                "jackknife", jackknife_message(t, me.phi, me.beta, self.eta, me.x, me.y, me.v)
-            )
-        if self._train_limits:
-            self._check_train(me, t)
-        noise = self._noise
-        if noise is not None:
-            lim = self.limits
-            v_m = noisy(me.v, lim.noise_v, noise, 2 * k)
-            w_m = noisy(me.omega, lim.noise_w, noise, 2 * k + 1)
-        else:
-            v_m, w_m = me.v, me.omega
-        phi_m = me.phi
-        if self.faults is not None:
-            phi_m, v_m, w_m = self.faults.sensor(k, phi_m, v_m, w_m)
-        seen = (
-            me
-            if (phi_m, v_m, w_m) == (me.phi, me.v, me.omega)
-            else me._replace(phi=phi_m, v=v_m, omega=w_m)
+        if self._episode is None:
+            self.begin(None)
+        k = self.k
+        if self._log is None or k - self._log_k >= len(self._log.measurement):
+            self._fold()
+            self._start_log(k, min(CHUNK, self.steps - k + 1))
+        loop, plant, law, target, stop = self._episode
+        code = closed_loop.sense_step(
+            k, k - self._log_k, loop, plant, law, target, self._log, stop[0]
         )
-        sensed = me  # what the outer loops (path feedback, the hitch cascade) read
-        delayed = self._delayed
-        if delayed is not None:  # the loops see the readings of `delay` steps ago
-            delayed.append((me, seen))
-            sensed, seen = delayed[0]
-            v_m, w_m = seen.v, seen.omega
-        target = self.built.target
-        if self._measured_target:
-            v_d, w_d, v_d_dot, w_d_dot = target.update(t, self.dt, v_m, sensed)
-            self._omega_ref = target.reference_omega_d
-        elif self._feedback:
-            x, y, theta = sensed.x, sensed.y, sensed.theta
-            v_d, w_d, v_d_dot, w_d_dot = target.update(t, self.dt, v_m, x, y, theta)
-            self._omega_ref = target.reference_omega_d
-        else:
-            v_d, w_d, v_d_dot, w_d_dot = target.update(t, self.dt, v_m)
-            self._omega_ref = w_d
-        self.measurement = me
-        self._seen = (v_m, w_m)
-        ref = Reference(
-            t, target.arc_length, target.curvature, v_d, w_d, v_d_dot, w_d_dot, self.built.path
-        )
-        self._ref = ref
-        return seen, ref
+        if code != RUNNING:
+            self._stop(code, k)
+        return seen_measurement(law), reference_of(law, self.built.path)
 
     @property
-    def ground_masks(self) -> list[int]:
-        """Per step, the bit mask of the friction patches some wheel stood on."""
-        return self._ground_masks or []
-
-    def _blow(self, k: int, me) -> None:
-        """The wind's drag on the tractor and the trailer over step ``k`` (sim/wind.py)."""
-        speed = self._wind[k]
-        wind = (speed * self._wind_direction[0], speed * self._wind_direction[1])
-        motion = (me.v, me.theta, me.v0, me.theta0, me.beta)
-        wrenches = wind_wrenches_of(wind, motion, self._drag)
-        self.plant.blow(wrenches[:3], wrenches[3:])
-
-    def _check_train(self, me, t: float) -> None:
-        """Stop when any hitch behind the first jackknifes."""
-        i = hitch_stop(me.train, self._train_limits, self.limits.jackknife_beta)
-        if i >= 0:
-            phi, beta = me.train[i][3], me.train[i][4]
-            eta = self.built.nominal.etas[i + 1]
-            raise StopRun(
-                "jackknife", jackknife_message(t, phi, beta, eta, me.x, me.y, me.v, hitch=i + 2)
-            )
+    def measurement(self) -> Measurement:
+        """The plant's measurement at the current step (no noise, no fault: what the metrics
+        read), after :meth:`sense`."""
+        row = self.k - self._log_k
+        values = self._log.measurement[row].tolist()
+        if len(self._train_limits) == 0:
+            return Measurement._make(values)
+        out = TrainMeasurement._make(values)
+        out.train = tuple(tuple(r) for r in self._log.train[row].tolist())
+        return out
 
     def actuate(self, T_r: float, T_l: float, command: tuple[float, float] | None = None) -> bool:
-        """Apply the torques of the current step and advance; False when the episode is over.
+        """Apply the torques of the current step and advance; False when the episode is over
+        (:func:`~tt_mujoco.sim.closed_loop.actuate_step`).
 
         Parameters
         ----------
@@ -353,107 +525,67 @@ class Stepper:
         command : (float, float), optional
             The unsaturated request, for the log (default: the torques given).
         """
-        k, t, me, ref = self.k, self.k * self.dt, self.measurement, self._ref
-        T_r_cmd, T_l_cmd = (T_r, T_l) if command is None else command
-        limits = self.limits
-        T_r = clip(T_r, limits.torque_limit)
-        T_l = clip(T_l, limits.torque_limit)
-        faults = self.faults
-        if faults is not None:
-            T_r, T_l = faults.torque(k, T_r, T_l)
-            for trailer, factor in faults.payloads(k, ref.s):
-                self.plant.scale_trailer_mass(factor, trailer)
-        if self.motors is not None:  # what the motors deliver of the command, over this step
-            T_r, T_l = self.motors.deliver(T_r, T_l, me.theta_r_dot, me.theta_l_dot)
-        dist_r = dist_l = force = torque = 0.0
-        clipped = 0.0
-        dist = self.built.disturbance
-        if dist is not None:
-            try:
-                out = dist(t)
-            except (Exception, SystemExit) as err:
-                raise usercode.failure(self._dist_label, t, err) from None
-            a_v, a_w = usercode.checked_disturbance(out, self._dist_label, t)
-            phi = me.phis if self._train_limits else me.phi
-            dist_r, dist_l, force, torque = injected(self._mode, a_v, a_w, phi, self.built.nominal)
-            # What a disturbance of motor size can apply, per wheel: beyond it the paper's
-            # g^-1 Delta (unbounded as g nears singular) would itself drive a jackknife.
-            dist_r, dist_l, clipped = clip_pair(dist_r, dist_l, limits.disturbance_bound)
-        # Log the measurement tuple as it is and the loop's own values beside it, in the order
-        # of LOOP_COLUMNS (records.LOG_DTYPE): columns are assembled once after the episode.
-        self._measured.append(me)
-        if self._train_limits:
-            self._train_logged.append([value for row in me.train for value in row])
-        v_m, w_m = self._seen
-        self._logged.append(
-            (
-                t,
-                ref.s,
-                ref.v_d,
-                self._omega_ref,
-                ref.v_d_dot,
-                ref.omega_d_dot,
-                v_m,
-                w_m,
-                T_r,
-                T_l,
-                T_r_cmd,
-                T_l_cmd,
-                dist_r,
-                dist_l,
-                ref.kappa,
-                ref.omega_d,
-                clipped,
-            )
-        )
-        if len(self._logged) >= _LOG_BLOCK:
+        loop, plant, law, target, stop = self._episode
+        got, k = law.reading[0], self.k
+        got.T_r, got.T_l = T_r, T_l
+        got.u1, got.u2 = (T_r, T_l) if command is None else command
+        row = k - self._log_k
+        code = closed_loop.actuate_step(k, row, loop, plant, law, target, self._log, stop[0])
+        advance = closed_loop.advance_after_payload
+        code, k_next = self._after_payloads(code, k + 1 if code == RUNNING else k, advance)
+        if code == FINISHED:
             self._fold()
-        if k == self.steps:
-            self.finished = True
+            self._end(FINISHED, k)
             return False
-        if self.scheduler is not None:
-            self.scheduler.update(ref.kappa, k, me)
-        self.plant.apply(T_r, T_l, dist_r, dist_l, force, torque, me.theta)
-        if self._wind is not None:
-            self._blow(k, me)
-        try:
-            self.plant.advance(self.built.substeps)
-            if self._ground_masks is not None:
-                self._ground_masks.append(self.plant.ground_mask)
-        except SingularityError as err:
-            raise StopRun("jackknife", f"jackknife at t={t + self.dt:.3f} s: {err}") from None
-        self.k = k + 1
+        if code != RUNNING:
+            self._stop(code, k)
+        self.k = k_next
         return True
 
-    def record_signals(self, signals: dict[str, float]) -> None:
-        """The controller's logged signals at the current step (columns ``ctrl_<name>`` of
-        the time series, NaN where a step logged none)."""
-        k = self.k
+    def _stop(self, code: int, k: int) -> None:
+        """End the episode at step ``k`` with the stop ``code``: raise its StopRun."""
+        self._fold()
+        self._end(code, k)
+        status, message = episode.outcome(code, self._episode[4], self, self._controller, k)
+        raise StopRun(status, message)
+
+    # --- what the episode logged -----------------------------------------------------------
+    @property
+    def plant_etas(self) -> tuple:
+        """The trailers' steering gains eta_1..eta_N in force (a scheduler's, else the plant's
+        constant ones)."""
+        if self._episode is not None and self._episode[1].steering.kind:
+            return tuple(self._episode[1].steering.etas.tolist())
+        if self.scheduler is not None:
+            return self.scheduler.etas
+        return self.built.plant_params.etas
+
+    @property
+    def ground_masks(self) -> list[int]:
+        """Per step, the bit mask of the friction patches some wheel stood on."""
+        return self._ground_masks or []
+
+    def log_ground(self, masks, arc_lengths) -> None:
+        """An episode's patch masks (one per advance) and the wheels' last arc lengths (see
+        :attr:`ground_masks`)."""
+        self._ground_masks[:] = (int(m) for m in masks)
+        patches = self.plant.ground[0]
+        if len(arc_lengths):
+            patches.arc_lengths = [float(s) for s in arc_lengths]
+
+    def record_signals(self, signals: dict[str, float], k: int | None = None) -> None:
+        """The controller's logged signals at step ``k`` (default: the current one), columns
+        ``ctrl_<name>`` of the time series, NaN where a step logged none."""
+        k = self.k if k is None else k
         for name, value in signals.items():
             column = self._signals.get(name)
             if column is None:
                 column = self._signals[name] = np.full(self.steps + 1, np.nan)
             column[k] = value
 
-    def _fold(self) -> None:
-        """Move the rows logged as tuples into one block of float arrays.
-
-        A row is complete once its loop values are logged (the last of its parts): an
-        interruption between its parts leaves it out."""
-        n = len(self._logged)
-        if n:
-            meas = np.array(self._measured[:n], dtype=float).reshape(n, len(Measurement._fields))
-            loop = np.array(self._logged, dtype=float).reshape(n, -1)
-            trains = np.array(self._train_logged[:n], dtype=float)
-            trains = trains.reshape(n, len(self.train_columns))
-            self.add_block(meas, loop, trains)
-            self._measured.clear()
-            self._logged.clear()
-            self._train_logged.clear()
-
     def add_block(self, meas: np.ndarray, loop: np.ndarray, trains: np.ndarray) -> None:
         """Append logged rows as float arrays (measurement, loop values, trailers 2..N), and
-        to the checkpoint file if there is one; the compiled episode logs this way."""
+        to the checkpoint file if there is one."""
         self._blocks.append((meas, loop, trains))
         if self._checkpoint is not None:
             self._checkpoint.append(meas, loop, trains)
@@ -470,7 +602,7 @@ class Stepper:
     @property
     def samples(self) -> int:
         """Rows logged so far."""
-        return len(self._logged) + sum(len(b[0]) for b in self._blocks)
+        return sum(len(b[0]) for b in self._blocks)
 
     def timeseries(self, release: bool = False) -> dict[str, np.ndarray]:
         """The episode's time series so far, in :data:`tt_mujoco.sim.timeseries.COLUMNS` order.
@@ -478,7 +610,8 @@ class Stepper:
         ``release``: the episode is over and the caller takes the rows; the logged blocks are
         dropped as they are gathered, so that a long run's rows are held about once, not
         three times (blocks, their concatenation, the columns)."""
-        self._fold()
+        if self._log is not None:
+            self._fold()
         if self._blocks:
             blocks = self._blocks
             if release:

@@ -1,0 +1,461 @@
+"""An episode's records, made from the run's Python objects and handed back to them.
+
+The closed loop's step (:mod:`tt_mujoco.sim.closed_loop`) reads and writes the named records of
+:mod:`tt_mujoco.sim.records`; :func:`episode_records` makes them from a reset
+:class:`~tt_mujoco.sim.stepper.Stepper` (the plant, the target, the faults, the schedule) and
+the controller, and :func:`hand_back` gives their state back to those objects when the episode
+ends, whichever loop ran it (the kernel's, or CPython's over the same source).
+:func:`outcome` words why it ended, as :func:`tt_mujoco.sim.simulate.run_episode` reports it.
+"""
+
+from __future__ import annotations
+
+import math
+import pickle
+
+import numpy as np
+
+from tt_mujoco.sim import closed_loop, step
+
+USER = closed_loop.USER
+
+__all__ = [
+    "carry_payloads",
+    "changes_of",
+    "episode_records",
+    "hand_back",
+    "inner_target",
+    "is_law_class",
+    "model_of",
+    "outcome",
+    "runs_built_in",
+]
+
+
+def inner_target(target):
+    """The tracking target itself (inside path feedback or the hitch cascade, if any)."""
+    from tt_mujoco.controllers.backing import HitchCascade
+    from tt_mujoco.reference.feedback import PathFeedback
+
+    return target.target if type(target) in (PathFeedback, HitchCascade) else target
+
+
+def model_of(controller):
+    """The nominal model a controller runs (a built-in law's own, or its setup's)."""
+    model = getattr(controller, "model", None)
+    if model is None:
+        model = getattr(getattr(controller, "setup", None), "model", None)
+    return model
+
+
+def is_law_class(controller) -> bool:
+    """Whether ``controller`` is of a built-in law's own class (:data:`tt_mujoco.sim.
+    closed_loop.LAWS`; a subclass may change what it runs)."""
+    law = getattr(type(controller), "LAW", None)
+    return law in closed_loop.LAWS and type(controller).__module__ == law.__module__
+
+
+def runs_built_in(controller) -> bool:
+    """Whether the step runs ``controller``'s law itself, not its Python ``compute``: a built-in
+    law's own class on the built-in nominal model."""
+    return is_law_class(controller) and bool(getattr(model_of(controller), "builtin", False))
+
+
+def carry_payloads(stepper, plant, faults, stop_record):
+    """The payload changes of a step on the reduced plant: made to the plant (its parameters,
+    in the order made), and the plant record rebuilt on its new constants (the gains in force
+    kept); ``stop.payloads`` cleared."""
+    from tt_mujoco.sim import records
+    from tt_mujoco.vehicle import reduced
+    from tt_mujoco.vehicle.train import TRAILER_ROW
+
+    count = int(records.values_of(stop_record)["payloads"])
+    for trailer, factor in faults.payload_changes[:count].tolist():
+        stepper.plant.scale_trailer_mass(factor, int(trailer))
+    records.set_value(stop_record, "payloads", 0.0)
+    params = stepper.plant.params
+    train = _train_constants(params)
+    eta = TRAILER_ROW.index("eta")
+    if params.n_trailers > 1:  # a schedule's gains in force, not the parameters' own
+        train.trailers[:, eta] = plant.train.trailers[:, eta]
+    return plant._replace(ode=reduced.model_constants(params), train=train)
+
+
+def episode_records(stepper, controller, user, python=None) -> tuple:
+    """The records of the (reset) ``stepper``'s episode as the step reads them
+    (:mod:`tt_mujoco.sim.closed_loop`): ``(loop, plant, law, target, stop)``, with ``user`` the
+    compiled form of a plain-number law (any placeholder for a built-in one), or ``python``,
+    the law that Python computes between the halves (:data:`~tt_mujoco.sim.closed_loop.
+    PYTHON`: a controller's :meth:`compute`, or an agent's torques)."""
+    from tt_mujoco.sim import records
+
+    plant = _plant_record(stepper, stepper.built.nominal)
+    law = _law_record(controller, stepper.built.nominal, user, plant.steering, python)
+    return (
+        stepper.loop_record(),
+        plant,
+        law,
+        _target_record(stepper.built, stepper.steps),
+        records.new_record(records.STOP_FIELDS),
+    )
+
+
+def changes_of(etas: np.ndarray, changes: list, first_row: int) -> list:
+    """``(row, gains)`` of each logged row whose gains differ from the row before it."""
+    out, last = [], changes[-1][1]
+    for i, row in enumerate(map(tuple, etas.tolist())):
+        if row != last:
+            out.append((first_row + i, row))
+            last = row
+    return out
+
+
+def _hand_back_steering(stepper, controller, steering, changes) -> None:
+    """The schedule's state after an episode: to the scheduler (its gains, arc lengths and
+    change log) and to ``controller``'s model (None: none to tell)."""
+    from tt_mujoco.sim import records
+
+    etas, seen = tuple(steering.etas.tolist()), changes[-1][1]  # the last row's: the law's
+    if etas != seen:  # applied after the last logged row
+        changes.append((stepper.samples, etas))
+    scheduler = stepper.scheduler
+    if steering.kind == records.PATH_SCHEDULE:  # the path schedule's axles
+        scheduler.arc_lengths = steering.arcs.tolist()
+    logged = [(row, gains[0]) for row, gains in changes[1:]]
+    scheduler.restore(etas, logged, int(steering.updates[0]))
+    steering_changed = getattr(controller, "steering_changed", None)
+    if steering_changed is not None:
+        steering_changed(seen)
+
+
+def _steering_record(stepper, mujoco_plant: bool):
+    """The scheduler's gains and tables, and where the plant's couplings are."""
+    from tt_mujoco.sim import records
+    from tt_mujoco.sim.schedule import EtaScheduler, PathEtaScheduler
+    from tt_mujoco.vehicle.path_schedule import BLEND_PHI, driven_path
+
+    scheduler, n = stepper.scheduler, stepper.built.plant_params.n_trailers
+    if mujoco_plant:
+        eq_data, ids, hitches_q, actuated, max_turn = stepper.plant.steering
+    else:
+        eq_data, ids, hitches_q, actuated, max_turn = np.zeros((1, 1)), [0] * n, [0] * n, False, 0.0
+    kind, tables, arcs, bounds = 0, np.zeros((n, 5, 1)), np.zeros(n), (0.0, 0.0)
+    etas, tolerance, driven = stepper.plant_etas, 0.0, driven_path(0, 0.0, 0.0)
+    if isinstance(scheduler, PathEtaScheduler):
+        kind, tolerance = records.PATH_SCHEDULE, scheduler.tolerance
+        tables = np.array(scheduler.schedule.tables, dtype=float)
+        arcs = np.array(scheduler.arc_lengths, dtype=float)
+        bounds = (BLEND_PHI, scheduler.schedule.eta_max)
+        driven = scheduler.driven  # its arrays: the compiled steps log into them
+    elif isinstance(scheduler, EtaScheduler):
+        kind, tolerance = records.CURVATURE_SCHEDULE, scheduler.tolerance
+    return records.SteeringRecord(
+        kind=kind,
+        etas=np.array(etas, dtype=float),
+        offered=np.zeros(n),
+        tolerance=tolerance,
+        lengths=np.array([(t.L, t.L0) for t in stepper.built.plant_params.trailers]),
+        arcs=arcs,
+        tables=tables,
+        bounds=bounds,
+        driven=driven,
+        eq_data=eq_data,
+        ids=np.array(ids, dtype=np.int64),
+        hitches_q=np.array(hitches_q, dtype=np.int64),
+        actuated=actuated,
+        max_turn=max_turn,
+        updates=np.zeros(1, dtype=np.int64),
+    )
+
+
+def _plant_record(stepper, nominal):
+    from tt_mujoco.sim import records
+    from tt_mujoco.sim.measure import Addresses, Lengths
+    from tt_mujoco.sim.plant_mujoco import MujocoPlant
+    from tt_mujoco.vehicle import reduced
+
+    plant, substeps = stepper.plant, stepper.built.substeps
+
+    if isinstance(plant, MujocoPlant):
+        d, lay = plant.data, plant.layout
+        mj = records.MujocoRecord(
+            pointers=np.array([plant.model._address, d._address], dtype=np.int64),
+            qpos=d.qpos,
+            qvel=d.qvel,
+            ctrl=d.ctrl,
+            qfrc_applied=d.qfrc_applied,
+            warnings=d.warning.number,
+            xfrc_applied=d.xfrc_applied,
+            tractor_body=plant.tractor_body,
+            addresses=lay.addresses,
+            lengths=lay.lengths,
+            body_mass=plant.model.body_mass,
+            body_inertia=plant.model.body_inertia,
+            trailer_bodies=np.array(plant.trailer_bodies, dtype=np.int64),
+        )
+        ode_state, ode, timestep = np.zeros(8), reduced.model_constants(nominal), 0.0
+        params, joints = nominal, np.array(lay.train, dtype=float).reshape(-1, 5)
+    else:
+        one, none = np.zeros(1), np.zeros(0, dtype=np.int64)
+        mj = records.MujocoRecord(
+            none, one, one, one, one, np.zeros(1, dtype=np.int32), np.zeros((1, 6)), 0,
+            Addresses(*[0] * len(Addresses._fields)), Lengths(0.0, 0.0, 0.0, 0.0),
+            np.zeros(1), np.zeros((1, 3)), np.zeros(1, dtype=np.int64),
+        )  # fmt: skip
+        ode_state = np.array(plant.ode.state, dtype=float)
+        ode, timestep = reduced.model_constants(plant.params), plant.timestep
+        params, joints = plant.params, np.zeros((0, 5))
+    n = params.n_trailers
+    return records.PlantRecord(
+        mujoco=isinstance(plant, MujocoPlant),
+        substeps=substeps,
+        mj=mj,
+        ode_state=ode_state,
+        ode=ode,
+        timestep=timestep,
+        train=_train_constants(params),
+        train_joints=joints,
+        places=np.zeros((n, 5)),
+        speeds=np.zeros((n, 3)),
+        slopes=np.zeros((5, len(ode_state))),
+        steering=_steering_record(stepper, isinstance(plant, MujocoPlant)),
+    )
+
+
+def _train_constants(params):
+    """A train's constants with the trailers as a float array (no rows for one trailer)."""
+    from tt_mujoco.vehicle.train import TRAILER_ROW, train_constants
+
+    c = train_constants(params)
+    rows = np.array(c.trailers, dtype=float) if params.n_trailers > 1 else np.zeros(0)
+    return c._replace(trailers=rows.reshape(-1, len(TRAILER_ROW)))
+
+
+def _law_record(controller, nominal, user, steering, python):
+    from tt_mujoco.controllers.plain import PlainLawController
+    from tt_mujoco.sim import records
+    from tt_mujoco.sim.closed_loop import LAWS, PYTHON
+    from tt_mujoco.sim.measure import TRAIN_FIELDS
+    from tt_mujoco.vehicle import reduced
+
+    python_law = python is not None
+    if python_law or isinstance(controller, PlainLawController):
+        kind, gains, state, flags = len(LAWS), np.zeros(0), np.zeros(8), (0.0, 0.0, 0.0)
+        user_gains, user_state = np.zeros(0), np.zeros(0)
+        if python_law:
+            kind, user = PYTHON, python
+        else:
+            user_gains = np.array(list(controller.gain_record), dtype=float)
+            user_state = np.array([getattr(controller.law_state, f) for f in controller.STATE])
+        anti_windup = False
+    else:
+        kind = LAWS.index(type(controller).LAW)
+        gains = np.array(controller.law_gains, dtype=float)
+        state = np.array(controller.law_state(), dtype=float)
+        flags = (float(controller.saturated), 0.0, 0.0)
+        user_gains, user_state = np.zeros(0), np.zeros(0)
+        anti_windup = bool(controller.anti_windup)
+    return records.LawRecord(
+        kind=kind,
+        gains=gains,
+        state=state,
+        flags=records.new_record(
+            records.LAW_FLAGS, **dict(zip(records.LAW_FLAGS, flags, strict=True))
+        ),
+        nominal=reduced.model_constants(nominal),
+        nominal_train=_train_constants(nominal),
+        phis=np.zeros(nominal.n_trailers),
+        rates=np.zeros((nominal.n_trailers, 3)),
+        anti_windup=anti_windup,
+        user=user,
+        user_gains=user_gains if user_gains.size else np.zeros(1),
+        user_state=user_state if user_state.size else np.zeros(1),
+        reference=records.new_record(records.REFERENCE_FIELDS),
+        model=records.new_record(records.NOMINAL_FIELDS),
+        measurement_values=np.zeros(len(records.MEASUREMENT_DTYPE)),
+        torques=np.zeros(2),
+        follows_steering=kind < len(LAWS),
+        steered_train=_train_constants(nominal.with_etas(tuple(steering.etas.tolist()))),
+        axle_slew_rate=float(getattr(controller, "axle_slew_rate", math.inf)),
+        reading=records.new_record(records.READING_FIELDS),
+        measurement_rows=np.zeros((nominal.n_trailers - 1, len(TRAIN_FIELDS))),
+    )
+
+
+def _target_record(built, steps: int):
+    from tt_mujoco.controllers.backing import CascadeConstants, HitchCascade
+    from tt_mujoco.reference.feedback import PathFeedback
+    from tt_mujoco.reference.paths import ArcsPath, CycloidPath
+    from tt_mujoco.reference.reverse import ReverseTarget
+    from tt_mujoco.reference.spline import SplinePath
+    from tt_mujoco.reference.targets import DynamicTarget, StaticTarget
+    from tt_mujoco.sim import records
+    from tt_mujoco.sim.closed_loop import HOOKED_PATH
+
+    target, path, outer = inner_target(built.target), built.path, built.target
+    if type(target) not in (StaticTarget, DynamicTarget, ReverseTarget):
+        raise TypeError(f"the step has no record of the target {type(target).__name__}")
+    fed, cascade = type(outer) is PathFeedback, type(outer) is HitchCascade
+    n = built.plant_params.n_trailers
+    constants = CascadeConstants(
+        (0.0, 0.0, 0.0, 0.0), 0.0, np.zeros((n, 2)), np.zeros(n), np.zeros((n, 2))
+    )
+    if cascade:
+        c = outer.constants
+        constants = CascadeConstants(
+            c.gains, c.preview, *(np.array(x, dtype=float) for x in (c.lengths, c.etas, c.ends))
+        )
+    kappas, starts = np.zeros(0), np.zeros((0, 3))
+    cells, pose_cells, kappa_ends = np.zeros((0, 5)), np.zeros((0, 10)), np.zeros(2)
+    bounds, hook = np.zeros(0), None
+    if type(path) is ArcsPath:
+        kind, (bounds, kappas, starts) = 0, path.closed_form
+    elif type(path) is SplinePath:
+        kind, (bounds, cells, pose_cells, kappa_ends) = 2, path.closed_form
+    elif type(path) is CycloidPath:
+        kind = 1
+    else:  # a user's path: CPython's step calls it
+        kind, hook = HOOKED_PATH, path
+    return records.TargetRecord(
+        dynamic=target.kind == "dynamic",
+        profile=_profile_table(target, built.control_dt, steps),
+        path_kind=kind,
+        length=float(path.length),
+        bounds=bounds,
+        kappas=kappas,
+        starts=starts,
+        cells=cells,
+        pose_cells=pose_cells,
+        kappa_ends=kappa_ends,
+        state=records.new_record(
+            records.TARGET_FIELDS,
+            v_prev=math.nan,
+            kappa=target.curvature,
+            s=target.arc_length,
+            s_near=outer.path_arc_length if fed else 0.0,
+            s_lead=outer.leading_arc_length if cascade else 0.0,
+        ),
+        feedback=fed,
+        feedback_gains=outer.gains if fed else (0.0, 0.0, 0.0),
+        reverse=isinstance(target, ReverseTarget),
+        s_end=float(getattr(target, "s_end", 0.0)),
+        cascade=cascade,
+        cascade_constants=constants,
+        wanted=np.array(outer.hitch_targets if cascade else [0.0] * n, dtype=float),
+        rates=np.zeros((n, 3)),
+        path_hook=hook,
+    )
+
+
+def hand_back(stepper, controller, status, k, episode_records, changes) -> None:
+    """Give the state at step ``k`` back: to the stepper, the target, the controller, the
+    reduced ODE, the faults, the motors, the friction patches and the schedule (``changes``:
+    ``(first row, gains)`` of each change of the scheduled gains)."""
+    from tt_mujoco.sim import records
+
+    loop, plant, law, target, _ = episode_records
+    stepper.k = k
+    stepper.finished = status == step.FINISHED
+    state = records.values_of(target.state)
+    inner_target(stepper.built.target).set_state(state["s"], state["v_prev"], state["kappa"])
+    errors, omega_ref = (state["e_y"], state["e_psi"]), state["omega_ref"]
+    if target.feedback:
+        stepper.built.target.set_state(state["s_near"], errors, omega_ref)
+    elif target.cascade:
+        wanted = target.wanted.tolist()
+        stepper.built.target.set_state(state["s_lead"], errors, wanted, omega_ref)
+    if law.kind == USER:
+        for name, value in zip(controller.STATE, law.user_state.tolist(), strict=False):
+            setattr(controller.law_state, name, value)
+    elif law.kind < USER:
+        flags = records.values_of(law.flags)
+        controller.set_law_state(
+            tuple(np.asarray(law.state).tolist()), flags["aux1"], flags["aux2"]
+        )
+        controller.saturated = bool(flags["saturated"])
+    if not plant.mujoco:
+        stepper.plant.ode.state = plant.ode_state.copy()
+        stepper.plant.ode.time = k * stepper.dt
+    faults = stepper.faults
+    if faults is not None:  # what a dropout holds, where the payloads acted
+        faults.held[:] = loop.faults.held.tolist()
+        faults.payload_rows[:] = loop.faults.payloads.tolist()
+        faults.payload_state[:] = loop.faults.payload_state.tolist()
+    if stepper.motors is not None:
+        stepper.motors.torques[:] = loop.motor_torques.tolist()
+    if loop.ground.geoms.size:  # one mask per advance: k of them
+        stepper.log_ground(loop.ground.masks[:k], loop.ground.arcs)
+    if plant.steering.kind:  # a Python law has been told of every change as it came
+        told = None if law.kind == closed_loop.PYTHON else controller
+        _hand_back_steering(stepper, told, plant.steering, changes)
+
+
+#: Speed-profile tables by (pickled profile, dt, steps): a sweep's episodes share their profile.
+_PROFILES: dict = {}
+
+
+def _profile_table(target, dt: float, steps: int) -> np.ndarray:
+    """``(s_ref, v_ref, a_ref)`` of the target's speed profile at every control step, from
+    the profile's own scalar ``state`` at the stepper's times ``k dt``."""
+    key = (pickle.dumps(target.profile), dt, steps)
+    table = _PROFILES.get(key)
+    if table is None:
+        times = [k * dt for k in range(steps + 1)]
+        table = np.array([target.profile.state(t) for t in times], dtype=float)
+        if len(_PROFILES) >= 8:
+            _PROFILES.pop(next(iter(_PROFILES)))
+        _PROFILES[key] = table
+    return table
+
+
+def outcome(status, stop_record, stepper, controller, k) -> tuple[str, str]:
+    """``(status, message)`` of an episode that ended at step ``k`` with ``status`` (a stop
+    code of :mod:`tt_mujoco.sim.step`), from the ``stop`` record."""
+    from tt_mujoco.controllers.base import LAW_NOT_FINITE, LAW_SINGULAR
+    from tt_mujoco.controllers.plain import PlainLawController
+    from tt_mujoco.sim import records, usercode
+    from tt_mujoco.sim.plant import StopRun
+    from tt_mujoco.sim.stepper import blew_up_message, jackknife_message
+    from tt_mujoco.vehicle.reduced import SingularityError
+
+    t = k * stepper.dt
+    value = records.values_of(stop_record)
+    if status == step.FINISHED:
+        return "ok", f"completed {stepper.built.duration:.3f} s"
+    if status == step.BLEW_UP:
+        return "diverged", blew_up_message(t, value["v"])
+    if status == step.JACKKNIFE:
+        phi, beta, x, y, v = (value[name] for name in ("phi", "beta", "x", "y", "v"))
+        hitch = int(value["hitch"])
+        eta = stepper.eta if hitch == 1 else value["eta"]
+        return "jackknife", jackknife_message(t, phi, beta, eta, x, y, v, hitch=hitch)
+    if status == step.WARNING:
+        import mujoco
+
+        from tt_mujoco.sim.plant_mujoco import warning_message
+
+        return "diverged", warning_message(mujoco.mjtWarning(int(value["warning"])).name, t)
+    if status == step.SINGULAR:
+        err = SingularityError(value["phi"], value["eta"])
+        return "jackknife", f"jackknife at t={t + stepper.dt:.3f} s: {err}"
+    # LAW_FAILED: the nominal model's singularity, or the law's own failure
+    law_status = int(value["law_status"])
+    u1, u2 = value["u1"], value["u2"]
+    if isinstance(controller, PlainLawController):  # the user's law returned no torques
+        try:
+            usercode.checked_torques((u1, u2), usercode.controller_label(stepper.built), t)
+        except StopRun as stop_run:
+            if law_status == LAW_NOT_FINITE:
+                return stop_run.status, stop_run.message
+    try:
+        if law_status == NOMINAL_SINGULAR:
+            raise SingularityError(value["phi"], value["eta"])
+        g = tuple(value[name] for name in ("g11", "g12", "g21", "g22"))
+        controller.raise_for(law_status, g if law_status == LAW_SINGULAR else (), u1, u2)
+    except FloatingPointError as err:
+        return "diverged", f"controller failed at t={t:.3f} s: {err}"
+    raise AssertionError(f"unknown status {status}")  # pragma: no cover
+
+
+#: ``stop.law_status`` of the nominal model's own singularity
+NOMINAL_SINGULAR = int(closed_loop.NOMINAL_SINGULAR)
