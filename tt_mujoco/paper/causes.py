@@ -6,33 +6,11 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
-import numpy as np
-
 from tt_mujoco.paper.suite import CELLS, FACTOR, PLANT_LABEL, PLANTS, TABLE_RUNS, Cell
+from tt_mujoco.paper.values import fmt, metric_of
 
 
 # --- the report ---------------------------------------------------------------------------------
-def metric_of(records, key: str, metric: str) -> float:
-    rec = records.get(key)
-    if not rec or rec.get("status") == "error":
-        return math.nan
-    value = rec.get("metrics", {}).get(metric)
-    return math.nan if value is None else float(value)
-
-
-def fmt(value, digits: int = 4) -> str:
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "—"
-    if isinstance(value, int | np.integer):
-        return str(int(value))
-    value = float(value)
-    if value == 0.0:
-        return "0"
-    if abs(value) >= 1e4:
-        return f"{value:.{digits - 1}e}"
-    return f"{value:.{digits}g}"
-
-
 def _ratio(ours: float, paper: float) -> float:
     return ours / paper if (math.isfinite(ours) and paper) else math.nan
 

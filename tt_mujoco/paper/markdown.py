@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 
 from tt_mujoco.outputs import json_safe
-from tt_mujoco.paper.causes import fmt, metric_of
 from tt_mujoco.paper.studies import row_pair
 from tt_mujoco.paper.suite import (
     FEEDBACK_CASES,
@@ -16,6 +15,7 @@ from tt_mujoco.paper.suite import (
     TABLE_3_CONTROLLERS,
     TABLE_TITLES,
 )
+from tt_mujoco.paper.values import fmt, metric_of
 from tt_mujoco.sim import Scenario
 
 

@@ -9,7 +9,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from tt_mujoco.outputs import atomic_write, json_safe
-from tt_mujoco.paper.causes import CAUSES, explain_cells, fmt, metric_of, unique_cells
+from tt_mujoco.paper.causes import CAUSES, explain_cells, unique_cells
 from tt_mujoco.paper.figures import draw_figures
 from tt_mujoco.paper.markdown import (
     baselines_markdown,
@@ -39,6 +39,7 @@ from tt_mujoco.paper.suite import (
     SUITE_SEED,
     V_MIN,
 )
+from tt_mujoco.paper.values import fmt, metric_of
 
 
 def build_report(

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 
-from tt_mujoco.paper.causes import fmt, metric_of
+from tt_mujoco.paper.values import fmt, metric_of
 from tt_mujoco.reference.paths import get_path
 from tt_mujoco.sim.terrain import GRAVITY
 

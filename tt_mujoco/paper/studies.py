@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import math
 
-from tt_mujoco.paper.causes import fmt, metric_of, split_of
+from tt_mujoco.paper.causes import split_of
 from tt_mujoco.paper.suite import PLANTS
+from tt_mujoco.paper.values import fmt, metric_of
 
 
 def curvature_rows(records) -> list[dict]:

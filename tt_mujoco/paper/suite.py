@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from tt_mujoco.paper import robustness
 from tt_mujoco.sim import Scenario
 
 #: Seed of every run (measurement noise); fixed so that the report is reproducible.
@@ -285,8 +286,6 @@ def suite(quick: bool = False) -> list[RunSpec]:
     for base, kw in BASELINE_RUNS.items():
         for plant in PLANTS:
             specs.append(RunSpec(f"{base}@{plant}", "baselines", _scenario(plant, **kw)))
-    from tt_mujoco.paper import robustness  # imports causes, which imports this module
-
     for path in robustness.PATHS:
         for case, fields in robustness.cases(path).items():
             for name, controller in robustness.CONTROLLERS.items():

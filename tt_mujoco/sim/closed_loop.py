@@ -34,7 +34,6 @@ from tt_mujoco.sim import (
     motors,
     plant_mujoco,
     plant_reduced,
-    records,
     schedule,
     step,
     wind,
@@ -77,7 +76,7 @@ PYTHON = USER + 1
 HOOKED_PATH = 3
 #: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
 NOMINAL_SINGULAR = -1.0
-PATH_SCHEDULE, CURVATURE_SCHEDULE = records.PATH_SCHEDULE, records.CURVATURE_SCHEDULE
+PATH_SCHEDULE, CURVATURE_SCHEDULE = schedule.PATH_SCHEDULE, schedule.CURVATURE_SCHEDULE
 #: where trailer 1's axle and the bodies' motion are in the measurement, and a trailer's gain
 #: in a train's row
 X0, Y0, THETA0, V0, V, THETA, BETA, PHI, OMEGA = (

@@ -15,21 +15,53 @@ import pickle
 
 import numpy as np
 
-from tt_mujoco.sim import closed_loop, step
+from tt_mujoco.defaults import JACKKNIFE_DEG
+from tt_mujoco.sim import closed_loop, schedule, step
+from tt_mujoco.sim.scenario import jackknife_phi_deg
 
 USER = closed_loop.USER
 
 __all__ = [
+    "blew_up_message",
     "carry_payloads",
     "changes_of",
     "episode_records",
     "hand_back",
     "inner_target",
     "is_law_class",
+    "jackknife_message",
     "model_of",
     "outcome",
     "runs_built_in",
 ]
+
+
+def blew_up_message(t: float, v: float) -> str:
+    return f"state blew up at t={t:.3f} s: v={v!r}"
+
+
+def jackknife_message(t, phi, beta, eta, x, y, v, hitch: int = 1) -> str:
+    """Which limit the hitch reached, and why it is one."""
+    phi_deg, beta_deg = math.degrees(phi), math.degrees(beta)
+    if abs(beta_deg) >= JACKKNIFE_DEG:
+        why = (
+            f"|beta| = {abs(beta_deg):.1f} deg reached {JACKKNIFE_DEG:g} deg: the steered axle "
+            f"nears 90 deg, where it would roll across the trailer (phi={phi_deg:.1f} deg)"
+        )
+    else:
+        limit = jackknife_phi_deg(eta)
+        reason = (
+            "the trailer stands across the tractor"
+            if limit >= 90.0
+            else f"with eta={eta:g} the axle's beta = eta phi would reach {JACKKNIFE_DEG:g} deg"
+        )
+        why = (
+            f"|phi| = {abs(phi_deg):.1f} deg reached {limit:.4g} deg: {reason} "
+            f"(beta={beta_deg:.1f} deg)"
+        )
+    return (
+        f"jackknife at t={t:.3f} s, hitch {hitch}: {why}; x={x:.3f} m, y={y:.3f} m, v={v:.3f} m/s"
+    )
 
 
 def inner_target(target):
@@ -113,13 +145,12 @@ def changes_of(etas: np.ndarray, changes: list, first_row: int) -> list:
 def _hand_back_steering(stepper, controller, steering, changes) -> None:
     """The schedule's state after an episode: to the scheduler (its gains, arc lengths and
     change log) and to ``controller``'s model (None: none to tell)."""
-    from tt_mujoco.sim import records
 
     etas, seen = tuple(steering.etas.tolist()), changes[-1][1]  # the last row's: the law's
     if etas != seen:  # applied after the last logged row
         changes.append((stepper.samples, etas))
     scheduler = stepper.scheduler
-    if steering.kind == records.PATH_SCHEDULE:  # the path schedule's axles
+    if steering.kind == schedule.PATH_SCHEDULE:  # the path schedule's axles
         scheduler.arc_lengths = steering.arcs.tolist()
     logged = [(row, gains[0]) for row, gains in changes[1:]]
     scheduler.restore(etas, logged, int(steering.updates[0]))
@@ -142,13 +173,13 @@ def _steering_record(stepper, mujoco_plant: bool):
     kind, tables, arcs, bounds = 0, np.zeros((n, 5, 1)), np.zeros(n), (0.0, 0.0)
     etas, tolerance, driven = stepper.plant_etas, 0.0, driven_path(0, 0.0, 0.0)
     if isinstance(scheduler, PathEtaScheduler):
-        kind, tolerance = records.PATH_SCHEDULE, scheduler.tolerance
+        kind, tolerance = schedule.PATH_SCHEDULE, scheduler.tolerance
         tables = np.array(scheduler.schedule.tables, dtype=float)
         arcs = np.array(scheduler.arc_lengths, dtype=float)
         bounds = (BLEND_PHI, scheduler.schedule.eta_max)
         driven = scheduler.driven  # its arrays: the compiled steps log into them
     elif isinstance(scheduler, EtaScheduler):
-        kind, tolerance = records.CURVATURE_SCHEDULE, scheduler.tolerance
+        kind, tolerance = schedule.CURVATURE_SCHEDULE, scheduler.tolerance
     return records.SteeringRecord(
         kind=kind,
         etas=np.array(etas, dtype=float),
@@ -415,7 +446,6 @@ def outcome(status, stop_record, stepper, controller, k) -> tuple[str, str]:
     from tt_mujoco.controllers.plain import PlainLawController
     from tt_mujoco.sim import records, usercode
     from tt_mujoco.sim.plant import StopRun
-    from tt_mujoco.sim.stepper import blew_up_message, jackknife_message
     from tt_mujoco.vehicle.reduced import SingularityError
 
     t = k * stepper.dt

@@ -182,16 +182,11 @@ class MujocoRecord(NamedTuple):
     trailer_bodies: np.ndarray
 
 
-#: ``SteeringRecord.kind`` of the path schedule and of the curvature schedule (0: constant)
-PATH_SCHEDULE, CURVATURE_SCHEDULE = 1, 2
-
-
 class SteeringRecord(NamedTuple):
     """The trailers' steering gains and how the compiled loop schedules them."""
 
-    #: 0 constant gains, :data:`PATH_SCHEDULE` (:class:`~tt_mujoco.sim.schedule.
-    #: PathEtaScheduler`) or :data:`CURVATURE_SCHEDULE` (:class:`~tt_mujoco.sim.schedule.
-    #: EtaScheduler`)
+    #: 0 constant gains, or :data:`~tt_mujoco.sim.schedule.PATH_SCHEDULE` or
+    #: :data:`~tt_mujoco.sim.schedule.CURVATURE_SCHEDULE`
     kind: int
     #: the gains eta_1..eta_N in force: the plant's, and a built-in law's model's
     etas: np.ndarray

@@ -21,7 +21,18 @@ from tt_mujoco.vehicle.steering import (
     exact_train_same_path_etas_of,
 )
 
-__all__ = ["EtaScheduler", "PathEtaScheduler", "curvature_gains_of", "gains_moved"]
+__all__ = [
+    "CURVATURE_SCHEDULE",
+    "PATH_SCHEDULE",
+    "EtaScheduler",
+    "PathEtaScheduler",
+    "curvature_gains_of",
+    "gains_moved",
+]
+
+#: How the step schedules the gains (its steering record's ``kind``; 0: constant gains): the
+#: path schedule (:class:`PathEtaScheduler`) and the curvature schedule (:class:`EtaScheduler`)
+PATH_SCHEDULE, CURVATURE_SCHEDULE = 1, 2
 
 
 class EtaScheduler:

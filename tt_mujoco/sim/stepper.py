@@ -62,34 +62,6 @@ LOGGING_STOPS = (FINISHED, WARNING, SINGULAR, PAYLOAD)
 _LOOP_VALUES = operator.attrgetter(*LOOP_COLUMNS)
 
 
-def blew_up_message(t: float, v: float) -> str:
-    return f"state blew up at t={t:.3f} s: v={v!r}"
-
-
-def jackknife_message(t, phi, beta, eta, x, y, v, hitch: int = 1) -> str:
-    """Which limit the hitch reached, and why it is one."""
-    phi_deg, beta_deg = math.degrees(phi), math.degrees(beta)
-    if abs(beta_deg) >= JACKKNIFE_DEG:
-        why = (
-            f"|beta| = {abs(beta_deg):.1f} deg reached {JACKKNIFE_DEG:g} deg: the steered axle "
-            f"nears 90 deg, where it would roll across the trailer (phi={phi_deg:.1f} deg)"
-        )
-    else:
-        limit = jackknife_phi_deg(eta)
-        reason = (
-            "the trailer stands across the tractor"
-            if limit >= 90.0
-            else f"with eta={eta:g} the axle's beta = eta phi would reach {JACKKNIFE_DEG:g} deg"
-        )
-        why = (
-            f"|phi| = {abs(phi_deg):.1f} deg reached {limit:.4g} deg: {reason} "
-            f"(beta={beta_deg:.1f} deg)"
-        )
-    return (
-        f"jackknife at t={t:.3f} s, hitch {hitch}: {why}; x={x:.3f} m, y={y:.3f} m, v={v:.3f} m/s"
-    )
-
-
 def seen_measurement(law) -> Measurement:
     """The measurement as a Python law sees it at this step (``law.measurement_values``,
     ``law.measurement_rows``: noise, faults and the delay included)."""
