@@ -30,6 +30,7 @@ import mujoco
 import numpy as np
 
 from tt_mujoco.sim import Scenario, Stepper, build
+from tt_mujoco.sim import closed_loop as closed_loop_module
 from tt_mujoco.sim.simulate import run_episode
 
 
@@ -47,11 +48,28 @@ def python_loop():
             os.environ["TT_MUJOCO_COMPILED"] = before
 
 
+@contextlib.contextmanager
+def recording_mj_step(data, inputs: list):
+    """Record ``data``'s ctrl, qfrc_applied and xfrc_applied before every ``mj_step`` that
+    CPython's step makes (:func:`tt_mujoco.sim.closed_loop.mj_step`; the compiled loop gives
+    the same numbers bit for bit): ``(ctrl, qfrc, xfrc, 1)`` per physics step."""
+    step = closed_loop_module.mj_step
+
+    def recording(model_address, data_address):
+        inputs.append((data.ctrl.copy(), data.qfrc_applied.copy(), data.xfrc_applied.copy(), 1))
+        step(model_address, data_address)
+
+    closed_loop_module.mj_step = recording
+    try:
+        yield
+    finally:
+        closed_loop_module.mj_step = step
+
+
 def closed_loop(scenario: Scenario, record: bool):
     """(wall seconds of the control loop, steps, recorded inputs, initial state, final qpos).
 
-    Recording wraps the plant's ``advance``, which only the Python loop calls: record under
-    :func:`python_loop` (the compiled loop gives the same numbers bit for bit)."""
+    Record under :func:`python_loop`: the recording wraps CPython's ``mj_step``."""
     built = build(scenario)
     stepper = Stepper(built)
     stepper.reset(np.random.default_rng(scenario.seed))
@@ -59,19 +77,15 @@ def closed_loop(scenario: Scenario, record: bool):
     ctrl.reset()
     inputs, initial = [], None
     plant = stepper.plant
+    recorder = contextlib.nullcontext()
     if record:
         d = plant.data
         initial = (d.qpos.copy(), d.qvel.copy(), d.act.copy(), d.time)
-        advance = plant.advance
-
-        def recording_advance(substeps):
-            inputs.append((d.ctrl.copy(), d.qfrc_applied.copy(), d.xfrc_applied.copy(), substeps))
-            advance(substeps)
-
-        plant.advance = recording_advance
-    start = time.perf_counter()
-    status, _ = run_episode(stepper, ctrl)
-    wall = time.perf_counter() - start
+        recorder = recording_mj_step(d, inputs)
+    with recorder:
+        start = time.perf_counter()
+        status, _ = run_episode(stepper, ctrl)
+        wall = time.perf_counter() - start
     final = plant.data.qpos.copy() if hasattr(plant, "data") else None
     return wall, stepper.steps, inputs, initial, final, plant, status
 
@@ -145,35 +159,43 @@ def compiled_replay(plant, inputs, initial) -> float:
 
 
 def parts(scenario: Scenario) -> dict[str, float]:
-    """Microseconds per control step spent in each part of a closed-loop run."""
+    """Microseconds per control step spent in each part of a run of CPython's step
+    (:mod:`tt_mujoco.sim.closed_loop`)."""
     built = build(scenario)
     stepper = Stepper(built)
     stepper.reset(np.random.default_rng(scenario.seed))
     ctrl = built.new_controller()
     ctrl.reset()
     spent = defaultdict(float)
+    names = {
+        "sense_step": "sense (total)",
+        "_sense": "  the measurement",
+        "_update_target": "  the target",
+        "law_step": "law",
+        "actuate_step": "actuate (total)",
+        "mj_step": "  mj_step",
+    }
+    originals = {name: getattr(closed_loop_module, name) for name in names}
 
-    def timed(name, fn):
-        def wrapper(*args, **kwargs):
+    def timed(label, fn):
+        def wrapper(*args):
             t0 = time.perf_counter()
             try:
-                return fn(*args, **kwargs)
+                return fn(*args)
             finally:
-                spent[name] += time.perf_counter() - t0
+                spent[label] += time.perf_counter() - t0
 
         return wrapper
 
-    plant = stepper.plant
-    plant.measure = timed("measure", plant.measure)
-    plant.advance = timed("mj_step (plant.advance)", plant.advance)
-    target = built.target
-    target.update = timed("target", target.update)
-    ctrl.compute = timed("controller", ctrl.compute)
-    stepper.sense = timed("sense (total)", stepper.sense)
-    stepper.actuate = timed("actuate (total)", stepper.actuate)
-    t0 = time.perf_counter()
-    run_episode(stepper, ctrl)
-    spent["whole control step"] = time.perf_counter() - t0
+    for name, label in names.items():
+        setattr(closed_loop_module, name, timed(label, originals[name]))
+    try:
+        t0 = time.perf_counter()
+        run_episode(stepper, ctrl)
+        spent["whole control step"] = time.perf_counter() - t0
+    finally:
+        for name, fn in originals.items():
+            setattr(closed_loop_module, name, fn)
     n = stepper.steps
     return {k: 1e6 * v / n for k, v in spent.items()}
 

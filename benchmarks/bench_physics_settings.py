@@ -71,8 +71,9 @@ def model_options(options: dict):
 
 def recorded_inputs():
     """The noisy main run's mj_step inputs and initial state (its own settings), recorded
-    around the plant's ``advance``, which only the Python loop calls (the compiled loop gives
-    the same numbers)."""
+    before every ``mj_step`` of CPython's step (the compiled loop gives the same numbers)."""
+    from bench_closed_loop import recording_mj_step
+
     os.environ["TT_MUJOCO_COMPILED"] = "0"
     scenario = Scenario(traj="s_curve", duration=10.0, noise_snr_db=20.0)
     built = build(scenario)
@@ -81,17 +82,11 @@ def recorded_inputs():
     plant, d = stepper.plant, stepper.plant.data
     initial = (d.qpos.copy(), d.qvel.copy())
     inputs = []
-    advance = plant.advance
-
-    def recording(substeps):
-        inputs.append((d.ctrl.copy(), d.qfrc_applied.copy()))
-        advance(substeps)
-
-    plant.advance = recording
     ctrl = built.new_controller()
     ctrl.reset()
-    run_episode(stepper, ctrl)
-    return plant.model, initial, inputs
+    with recording_mj_step(d, inputs):
+        run_episode(stepper, ctrl)
+    return plant.model, initial, [(ctrl_, qfrc) for ctrl_, qfrc, _, _ in inputs]
 
 
 def replay_cost(model, initial, inputs, options: dict) -> tuple[float, float, float]:

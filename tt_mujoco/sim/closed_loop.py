@@ -117,7 +117,7 @@ def mj_step(model_address, data_address) -> None:
 def floats(array):
     """A float array to read from: CPython reads a list of its values (a NumPy element is a
     NumPy scalar, whose arithmetic is slower than a float's); the kernel, the array itself."""
-    return array.tolist()
+    return array.tolist() if isinstance(array, np.ndarray) else array
 
 
 def pointer(array):
@@ -268,7 +268,7 @@ def _update_target(target, k, v_m, dt, pose):
 def _cascade(target, me, rows, phis, v_m):
     """HitchCascade.update's ``(omega_d, omega_d_dot)`` at the measured hitch angles
     ``phis``; its state updated in place."""
-    n = phis.size
+    n = len(phis)
     if n == 1:
         lead = (me[X0], me[Y0], me[THETA0])
     else:
@@ -433,7 +433,7 @@ def _steer(plant, law):
         if plant.mujoco and not steering.actuated:
             steering.eq_data[steering.ids[k], 1] = -etas[k]
         if n > 1:
-            plant.train.trailers[k, ETA_COLUMN] = etas[k]
+            plant.train.trailers[k][ETA_COLUMN] = etas[k]
         if law.steered_train.trailers.shape[0] > 1:
             law.steered_train.trailers[k, ETA_COLUMN] = etas[k]
 

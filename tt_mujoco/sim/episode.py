@@ -108,8 +108,10 @@ def carry_payloads(stepper, plant, faults, stop_record):
     params = stepper.plant.params
     train = _train_constants(params)
     eta = TRAILER_ROW.index("eta")
-    if params.n_trailers > 1:  # a schedule's gains in force, not the parameters' own
-        train.trailers[:, eta] = plant.train.trailers[:, eta]
+    for k in range(len(train.trailers)):  # a schedule's gains in force, not the parameters'
+        train.trailers[k, eta] = plant.train.trailers[k][eta]
+    if isinstance(plant.train.trailers, list):  # as CPython's step reads them
+        train = train._replace(trailers=train.trailers.tolist())
     return plant._replace(ode=reduced.model_constants(params), train=train)
 
 

@@ -86,8 +86,23 @@ def _listed(made: tuple) -> tuple:
     loop = loop._replace(
         noise=loop.noise.tolist(), wind=loop.wind._replace(speeds=loop.wind.speeds.tolist())
     )
-    law = law._replace(state=law.state.tolist(), gains=law.gains.tolist())
+    law = law._replace(
+        state=law.state.tolist(),
+        gains=law.gains.tolist(),
+        phis=law.phis.tolist(),
+        rates=law.rates.tolist(),
+        nominal_train=_listed_train(law.nominal_train),
+    )
+    plant = plant._replace(train=_listed_train(plant.train))
+    if not plant.mujoco:  # the reduced ODE's state and its scratch rows
+        lists = {name: getattr(plant, name).tolist() for name in ("places", "speeds", "slopes")}
+        plant = plant._replace(ode_state=plant.ode_state.tolist(), **lists)
     return loop, plant, law, target._replace(profile=target.profile.tolist()), stop
+
+
+def _listed_train(constants):
+    """A train's constants with its trailers' rows as lists of floats."""
+    return constants._replace(trailers=constants.trailers.tolist())
 
 
 class _PythonLaw:
