@@ -455,16 +455,18 @@ def _delayed(delay, k, me, rows, seen):
     """The sensor delay's line: step ``k``'s measurement ``me``, its train ``rows`` and the
     ``seen = (phi, v, omega)`` stored, and those of the delay's steps ago returned (the first
     step's until there are that many): ``(measurement, rows, phi, v, omega)``."""
-    depth = delay.seen.shape[0]
+    depth = len(delay.seen)
     slot = k % depth
     store = delay.measurements[slot]
-    for i in range(store.size):
+    for i in range(len(store)):
         store[i] = me[i]
     stored = delay.rows[slot]  # element by element: a slice copy may allocate
-    for i in range(rows.shape[0]):
-        for j in range(rows.shape[1]):
-            stored[i, j] = rows[i, j]
-    delay.seen[slot, 0], delay.seen[slot, 1], delay.seen[slot, 2] = seen
+    for i in range(len(rows)):
+        row, stored_row = rows[i], stored[i]
+        for j in range(len(row)):
+            stored_row[j] = row[j]
+    slot_seen = delay.seen[slot]
+    slot_seen[0], slot_seen[1], slot_seen[2] = seen
     read = max(0, k - depth + 1) % depth
     got = delay.seen[read]
     return delay.measurements[read], delay.rows[read], got[0], got[1], got[2]
@@ -535,15 +537,15 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
     else:
         v_m, w_m = v, omega
     phi_m = phi
-    if fault.dropouts.shape[0]:  # FaultSchedule.sensor
+    if len(fault.dropouts):  # FaultSchedule.sensor
         phi_m, v_m, w_m = faults.sensor_of(k, fault.dropouts, fault.held, phi, v_m, w_m)
     measured = log.measurement[row]
-    for i in range(measured.size):  # the Measurement tuple, in its field order
+    for i in range(len(measured)):  # the Measurement tuple, in its field order
         measured[i] = me[i]
     # What the outer loops (sensed: no noise, no fault) and the law read: the readings of the
     # sensor delay's steps ago, or this step's
     sensed, sensed_rows = measured, rows
-    if _has_delay(loop.delay.seen.shape[0]):
+    if _has_delay(len(loop.delay.seen)):
         readings = (phi_m, v_m, w_m)
         sensed, sensed_rows, phi_m, v_m, w_m = _delayed(loop.delay, k, me, rows, readings)
     phis[0] = sensed[3]  # the hitch angles as sensed (trailers 2..N are never held)
@@ -586,7 +588,7 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
     nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22 = reduced.solve_dynamics_of(mass, bias, c.r, c.d)
     if law.kind >= USER:  # a user's law sees the measurement with its noise
         seen = law.measurement_values
-        for i in range(measured.size):
+        for i in range(len(measured)):
             seen[i] = sensed[i]
         seen[PHI], seen[V], seen[OMEGA] = phi_m, v_m, w_m
         if law.kind == USER:
@@ -615,10 +617,10 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
     T_r = step.clip(got.T_r, lim.torque_limit)
     T_l = step.clip(got.T_l, lim.torque_limit)
     dist_r = dist_l = clipped = fx = fy = mz = 0.0
-    if fault.actuators.shape[0]:  # FaultSchedule.torque
+    if len(fault.actuators):  # FaultSchedule.torque
         T_r, T_l = faults.fault_torque_of(k, fault.actuators, T_r, T_l)
     pending = 0  # payload changes the caller makes to the reduced plant's constants
-    if fault.payloads.shape[0]:  # FaultSchedule.payloads
+    if len(fault.payloads):  # FaultSchedule.payloads
         changes = fault.payload_changes
         count = faults.payloads_of(k, state.s, fault.payloads, fault.payload_state, changes)
         if plant.mujoco:
@@ -633,7 +635,7 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
         T_r, T_l = motors.deliver_of(loop.motor, loop.motor_torques, (T_r, T_l), omegas)
     mass = (got.M11, got.M12, got.M22)
     phi = me[3]
-    depth = loop.delay.seen.shape[0]
+    depth = len(loop.delay.seen)
     moved = _model_steered(steering.kind, law.follows_steering) or _has_delay(depth) or phi_m != phi
     if moved and (loop.disturbed or loop.wrench):
         phis[0] = phi  # the disturbance acts at the true hitch angles
@@ -663,7 +665,7 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
     out.omega_d_tracked, out.dist_clipped = r.omega_d, clipped
     if steering.kind != 0:
         for i in range(n):
-            log.etas[row, i] = steering.etas[i]
+            log.etas[row][i] = steering.etas[i]
     out.t = t  # last: a row whose time is logged is whole (an interrupted CPython step's is not)
     stop.payloads = pending
     if k == loop.steps:

@@ -102,7 +102,7 @@ def carry_payloads(stepper, plant, faults, stop_record):
     from tt_mujoco.vehicle.train import TRAILER_ROW
 
     count = int(records.values_of(stop_record)["payloads"])
-    for trailer, factor in faults.payload_changes[:count].tolist():
+    for trailer, factor in np.asarray(faults.payload_changes[:count]).tolist():
         stepper.plant.scale_trailer_mass(factor, int(trailer))
     records.set_value(stop_record, "payloads", 0.0)
     params = stepper.plant.params
@@ -395,7 +395,7 @@ def hand_back(stepper, controller, status, k, episode_records, changes) -> None:
     if target.feedback:
         stepper.built.target.set_state(state["s_near"], errors, omega_ref)
     elif target.cascade:
-        wanted = target.wanted.tolist()
+        wanted = [float(goal) for goal in target.wanted]
         stepper.built.target.set_state(state["s_lead"], errors, wanted, omega_ref)
     if law.kind == USER:
         for name, value in zip(controller.STATE, law.user_state.tolist(), strict=False):
@@ -411,11 +411,11 @@ def hand_back(stepper, controller, status, k, episode_records, changes) -> None:
         stepper.plant.ode.time = k * stepper.dt
     faults = stepper.faults
     if faults is not None:  # what a dropout holds, where the payloads acted
-        faults.held[:] = loop.faults.held.tolist()
-        faults.payload_rows[:] = loop.faults.payloads.tolist()
-        faults.payload_state[:] = loop.faults.payload_state.tolist()
+        faults.held[:] = np.asarray(loop.faults.held).tolist()
+        faults.payload_rows[:] = np.asarray(loop.faults.payloads).tolist()
+        faults.payload_state[:] = np.asarray(loop.faults.payload_state).tolist()
     if stepper.motors is not None:
-        stepper.motors.torques[:] = loop.motor_torques.tolist()
+        stepper.motors.torques[:] = np.asarray(loop.motor_torques).tolist()
     if loop.ground.geoms.size:  # one mask per advance: k of them
         stepper.log_ground(loop.ground.masks[:k], loop.ground.arcs)
     if plant.steering.kind:  # a Python law has been told of every change as it came

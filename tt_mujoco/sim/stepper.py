@@ -83,8 +83,13 @@ def _listed(made: tuple) -> tuple:
     """The interpreted records with the arrays the step reads element by element every step as
     lists of floats (a NumPy element is a NumPy scalar, whose arithmetic is slower)."""
     loop, plant, law, target, stop = made
+    delay, faults = loop.delay, loop.faults
     loop = loop._replace(
-        noise=loop.noise.tolist(), wind=loop.wind._replace(speeds=loop.wind.speeds.tolist())
+        noise=loop.noise.tolist(),
+        wind=loop.wind._replace(speeds=loop.wind.speeds.tolist()),
+        delay=delay._replace(**{name: getattr(delay, name).tolist() for name in delay._fields}),
+        faults=faults._replace(**{name: getattr(faults, name).tolist() for name in faults._fields}),
+        motor_torques=loop.motor_torques.tolist(),
     )
     law = law._replace(
         state=law.state.tolist(),
@@ -93,11 +98,23 @@ def _listed(made: tuple) -> tuple:
         rates=law.rates.tolist(),
         nominal_train=_listed_train(law.nominal_train),
     )
-    plant = plant._replace(train=_listed_train(plant.train))
+    plant = plant._replace(
+        train=_listed_train(plant.train), train_joints=plant.train_joints.tolist()
+    )
     if not plant.mujoco:  # the reduced ODE's state and its scratch rows
         lists = {name: getattr(plant, name).tolist() for name in ("places", "speeds", "slopes")}
         plant = plant._replace(ode_state=plant.ode_state.tolist(), **lists)
-    return loop, plant, law, target._replace(profile=target.profile.tolist()), stop
+    tables = ("profile", "bounds", "kappas", "starts", "cells", "pose_cells", "kappa_ends")
+    target = target._replace(
+        **{name: getattr(target, name).tolist() for name in (*tables, "wanted", "rates")},
+        cascade_constants=target.cascade_constants._replace(
+            **{
+                name: getattr(target.cascade_constants, name).tolist()
+                for name in ("lengths", "etas", "ends")
+            }
+        ),
+    )
+    return loop, plant, law, target, stop
 
 
 def _listed_train(constants):
@@ -416,7 +433,10 @@ class Stepper:
                 etas=np.empty((n if scheduled else 0, n_trailers)),
             )
             log.loop["t"] = math.nan  # a row is whole once its time is logged
-            log = records.interpreted(log) if self._interpreted else log
+            if self._interpreted:  # rows of floats (read back every step), not of NumPy's
+                log = records.interpreted(log)
+                lists = {name: getattr(log, name).tolist() for name in ("measurement", "train")}
+                log = log._replace(etas=log.etas.tolist(), **lists)
         self._log, self._log_k, self._taken = log, k, 0
 
     def _whole_rows(self) -> int:
@@ -438,19 +458,19 @@ class Stepper:
         if rows <= first:
             return
         self._taken = rows
+        etas = log.etas[first:rows]
         if self._interpreted:
             loop = np.array([_LOOP_VALUES(row) for row in log.loop[first:rows]], dtype=float)
-            measured = log.measurement[first:rows].copy()
-            trains = log.train[first:rows].reshape(rows - first, -1).copy()
+            measured = np.array(log.measurement[first:rows], dtype=float)
+            trains = np.array(log.train[first:rows], dtype=float).reshape(rows - first, -1)
+            etas = np.array(etas, dtype=float).reshape(rows - first, -1)
         else:
             loop = log.loop[first:rows].view(np.float64).reshape(rows - first, -1)
             measured = log.measurement[first:rows]
             trains = log.train[first:rows].reshape(rows - first, -1)
         self.add_block(measured, loop, trains)
         if self._episode[1].steering.kind:
-            new = episode.changes_of(
-                log.etas[first:rows], self._changes, self.samples - rows + first
-            )
+            new = episode.changes_of(etas, self._changes, self.samples - rows + first)
             self._changes.extend(new)
 
     def _fold(self) -> int:
@@ -494,11 +514,11 @@ class Stepper:
         """The plant's measurement at the current step (no noise, no fault: what the metrics
         read), after :meth:`sense`."""
         row = self.k - self._log_k
-        values = self._log.measurement[row].tolist()
+        values = [float(value) for value in self._log.measurement[row]]
         if len(self._train_limits) == 0:
             return Measurement._make(values)
         out = TrainMeasurement._make(values)
-        out.train = tuple(tuple(r) for r in self._log.train[row].tolist())
+        out.train = tuple(tuple(float(value) for value in r) for r in self._log.train[row])
         return out
 
     def actuate(self, T_r: float, T_l: float, command: tuple[float, float] | None = None) -> bool:
