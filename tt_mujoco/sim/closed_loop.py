@@ -557,6 +557,22 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
         r.omega_d, r.omega_d_dot = _cascade(target, sensed, sensed_rows, phis, v_m)
     state = target.state[0]
     r.t, r.s, r.kappa = t, state.s, state.kappa
+    seen_by_law.phi, seen_by_law.v, seen_by_law.omega = phi_m, v_m, w_m
+    if law.kind >= USER:  # a user's law sees the measurement with its noise
+        seen = law.measurement_values
+        for i in range(len(measured)):
+            seen[i] = sensed[i]
+        seen[PHI], seen[V], seen[OMEGA] = phi_m, v_m, w_m
+        if law.kind == PYTHON:
+            # and trailers 2..N; it makes its own model (the disturbance takes the nominal's
+            # at the true hitch angles: actuate_step)
+            seen_rows = law.measurement_rows
+            for i in range(n - 1):
+                seen_row, sensed_row = seen_rows[i], sensed_rows[i]
+                for j in range(len(seen_row)):
+                    seen_row[j] = sensed_row[j]
+            return RUNNING
+        r.x_ref, r.y_ref, r.theta_ref = pose_at(target, state.s)
     # The nominal model at the measurement, for the law and the matched disturbance (a
     # built-in law's model takes the scheduled gains; the disturbance keeps the nominal's).
     c, model_train = law.nominal, law.nominal_train
@@ -586,19 +602,6 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
             _first_singular(phis, model_train, stop)
             return LAW_FAILED
     nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22 = reduced.solve_dynamics_of(mass, bias, c.r, c.d)
-    if law.kind >= USER:  # a user's law sees the measurement with its noise
-        seen = law.measurement_values
-        for i in range(len(measured)):
-            seen[i] = sensed[i]
-        seen[PHI], seen[V], seen[OMEGA] = phi_m, v_m, w_m
-        if law.kind == USER:
-            r.x_ref, r.y_ref, r.theta_ref = pose_at(target, state.s)
-        else:  # and a Python law, trailers 2..N too
-            seen_rows = law.measurement_rows
-            for i in range(n - 1):
-                for j in range(seen_rows.shape[1]):
-                    seen_rows[i, j] = sensed_rows[i][j]
-    seen_by_law.phi, seen_by_law.v, seen_by_law.omega = phi_m, v_m, w_m
     seen_by_law.M11, seen_by_law.M12, seen_by_law.M22 = mass[0], mass[1], mass[2]
     return RUNNING
 
@@ -636,7 +639,8 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
     mass = (got.M11, got.M12, got.M22)
     phi = me[3]
     depth = len(loop.delay.seen)
-    moved = _model_steered(steering.kind, law.follows_steering) or _has_delay(depth) or phi_m != phi
+    moved = law.kind == PYTHON or _model_steered(steering.kind, law.follows_steering)
+    moved = moved or _has_delay(depth) or phi_m != phi
     if moved and (loop.disturbed or loop.wrench):
         phis[0] = phi  # the disturbance acts at the true hitch angles
         for i in range(n - 1):

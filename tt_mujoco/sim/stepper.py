@@ -65,11 +65,11 @@ _LOOP_VALUES = operator.attrgetter(*LOOP_COLUMNS)
 def seen_measurement(law) -> Measurement:
     """The measurement as a Python law sees it at this step (``law.measurement_values``,
     ``law.measurement_rows``: noise, faults and the delay included)."""
-    values = law.measurement_values.tolist()
-    if not law.measurement_rows.shape[0]:
+    values = law.measurement_values
+    if not len(law.measurement_rows):
         return Measurement._make(values)
     out = TrainMeasurement._make(values)
-    out.train = tuple(tuple(row) for row in law.measurement_rows.tolist())
+    out.train = tuple(tuple(row) for row in law.measurement_rows)
     return out
 
 
@@ -92,6 +92,8 @@ def _listed(made: tuple) -> tuple:
         motor_torques=loop.motor_torques.tolist(),
     )
     law = law._replace(
+        measurement_values=law.measurement_values.tolist(),
+        measurement_rows=law.measurement_rows.tolist(),
         state=law.state.tolist(),
         gains=law.gains.tolist(),
         phis=law.phis.tolist(),
