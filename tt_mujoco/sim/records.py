@@ -242,9 +242,12 @@ class PlantRecord(NamedTuple):
 
 
 class LawRecord(NamedTuple):
-    """The law the compiled loop runs on the controller's nominal model."""
+    """The law the step runs on the controller's nominal model."""
 
-    #: 0 ISMC-STA, 1 PID, 2 FBL, 3 a user's plain-number law (:mod:`tt_mujoco.controllers.plain`)
+    #: a built-in law's index in :data:`tt_mujoco.sim.closed_loop.LAWS`, then
+    #: :data:`~tt_mujoco.sim.closed_loop.USER` (a user's plain-number law, compiled:
+    #: :mod:`tt_mujoco.controllers.plain`) or :data:`~tt_mujoco.sim.closed_loop.PYTHON` (a law
+    #: that Python computes between the halves, ``user``)
     kind: int
     gains: np.ndarray
     #: a built-in law's state vector
@@ -258,7 +261,7 @@ class LawRecord(NamedTuple):
     phis: np.ndarray
     rates: np.ndarray
     anti_windup: bool
-    #: the user's law, compiled (a placeholder for the built-in ones)
+    #: the user's law, compiled (a placeholder for the built-in ones), or a Python law's hook
     user: Any
     #: the user law's gains and state records
     user_gains: np.ndarray
