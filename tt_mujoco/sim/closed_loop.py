@@ -428,7 +428,7 @@ def _steer(plant, law):
         return
     etas = steering.etas
     steering.updates[0] += 1
-    for k in range(etas.size):
+    for k in range(len(etas)):
         etas[k] = steering.offered[k]  # not etas[:] = ...: a slice copy may allocate
         if plant.mujoco and not steering.actuated:
             steering.eq_data[steering.ids[k], 1] = -etas[k]
@@ -442,7 +442,7 @@ def _follow_train(law, etas, phis, phi_m, v_m, w_m) -> bool:
     """The train model's gains set to those its actuated axles can follow at the hitch rates
     the scheduled ``etas`` give (reduced_model's train model); False where those are singular."""
     rows = law.steered_train.trailers
-    for k in range(etas.size):
+    for k in range(len(etas)):
         rows[k, ETA_COLUMN] = etas[k]
     phis[0] = phi_m  # what the law sees
     if not train.trailer_rates_of(phis, v_m, w_m, law.steered_train, law.rates):

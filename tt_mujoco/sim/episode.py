@@ -148,12 +148,15 @@ def _hand_back_steering(stepper, controller, steering, changes) -> None:
     """The schedule's state after an episode: to the scheduler (its gains, arc lengths and
     change log) and to ``controller``'s model (None: none to tell)."""
 
-    etas, seen = tuple(steering.etas.tolist()), changes[-1][1]  # the last row's: the law's
+    etas, seen = (
+        tuple(np.asarray(steering.etas).tolist()),
+        changes[-1][1],
+    )  # the last row's: the law's
     if etas != seen:  # applied after the last logged row
         changes.append((stepper.samples, etas))
     scheduler = stepper.scheduler
     if steering.kind == schedule.PATH_SCHEDULE:  # the path schedule's axles
-        scheduler.arc_lengths = steering.arcs.tolist()
+        scheduler.arc_lengths = np.asarray(steering.arcs).tolist()
     logged = [(row, gains[0]) for row, gains in changes[1:]]
     scheduler.restore(etas, logged, int(steering.updates[0]))
     steering_changed = getattr(controller, "steering_changed", None)

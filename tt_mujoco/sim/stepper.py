@@ -100,8 +100,14 @@ def _listed(made: tuple) -> tuple:
         rates=law.rates.tolist(),
         nominal_train=_listed_train(law.nominal_train),
     )
+    steering = plant.steering
+    scheduled = ("etas", "offered", "lengths", "arcs", "tables")
     plant = plant._replace(
-        train=_listed_train(plant.train), train_joints=plant.train_joints.tolist()
+        train=_listed_train(plant.train),
+        train_joints=plant.train_joints.tolist(),
+        steering=steering._replace(
+            **{name: getattr(steering, name).tolist() for name in scheduled}
+        ),
     )
     if not plant.mujoco:  # the reduced ODE's state and its scratch rows
         lists = {name: getattr(plant, name).tolist() for name in ("places", "speeds", "slopes")}
@@ -142,7 +148,7 @@ class _PythonLaw:
         controller, who, steering = self.controller, self.who, self.steering
         if self.steering_changed is not None and steering.kind and steering.updates[0] != self.told:
             self.told = int(steering.updates[0])
-            self.steering_changed(tuple(steering.etas.tolist()))
+            self.steering_changed(tuple(steering.etas))
         seen, ref = seen_measurement(law), reference_of(law, self.path)
         t = ref.t
         try:
@@ -347,7 +353,8 @@ class Stepper:
         self._episode, self._log = made, None
         self._controller = controller
         self._interpreted = not compiled
-        self._changes = [(0, tuple(made[1].steering.etas.tolist()))]  # (first row, gains)
+        etas = tuple(np.asarray(made[1].steering.etas).tolist())
+        self._changes = [(0, etas)]  # (first row, gains) of each change
         if self.motors is not None:  # the motors' torques as the step delivers them
             self.motors.torques = made[0].motor_torques
         return made
@@ -564,7 +571,7 @@ class Stepper:
         """The trailers' steering gains eta_1..eta_N in force (a scheduler's, else the plant's
         constant ones)."""
         if self._episode is not None and self._episode[1].steering.kind:
-            return tuple(self._episode[1].steering.etas.tolist())
+            return tuple(np.asarray(self._episode[1].steering.etas).tolist())
         if self.scheduler is not None:
             return self.scheduler.etas
         return self.built.plant_params.etas
