@@ -149,7 +149,7 @@ def disturbance_at(loop, t):
     return loop.disturbance_hook(t)
 
 
-def python_law(law, v_m, w_m, dt, limit):
+def python_law(law):
     """The law Python computes between the halves (:data:`PYTHON`): ``law.user``, called with
     the law record (CPython only); ``(status, T_r, T_l, u1, u2)``."""
     return law.user(law)
@@ -286,7 +286,7 @@ def law_step(law, v_m, w_m, dt, limit):
     """The law's ``(status, T_r, T_l, u1, u2)`` at the reference and the nominal model in
     ``law``; its state updated in place."""
     if law.kind == PYTHON:
-        return python_law(law, v_m, w_m, dt, limit)
+        return python_law(law)
     r, nm, flags = law.reference[0], law.model[0], law.flags[0]
     if law.kind == USER:
         out = law.torques

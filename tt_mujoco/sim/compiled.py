@@ -64,10 +64,7 @@ def _enabled() -> bool:
 def unsupported(built, controller, on_step=None) -> str | None:
     """Why the episode has no compiled form (None when it has one); only a query."""
     from tt_mujoco.controllers.plain import PlainLawController
-    from tt_mujoco.reference.paths import ArcsPath, CycloidPath
-    from tt_mujoco.reference.spline import SplinePath
-    from tt_mujoco.sim.disturbances import PaperDisturbance
-    from tt_mujoco.sim.episode import is_law_class, model_of
+    from tt_mujoco.sim.episode import has_closed_form, is_law_class, model_of, users_disturbance
 
     reasons = [
         (not _enabled(), "TT_MUJOCO_COMPILED=0"),
@@ -78,11 +75,8 @@ def unsupported(built, controller, on_step=None) -> str | None:
             "a Python controller class",
         ),
         (not getattr(model_of(controller), "builtin", False), "a custom model"),
-        (type(built.path) not in (ArcsPath, CycloidPath, SplinePath), "a path without closed form"),
-        (
-            built.disturbance is not None and type(built.disturbance) is not PaperDisturbance,
-            "a custom disturbance",
-        ),
+        (not has_closed_form(built.path), "a path without closed form"),
+        (users_disturbance(built), "a custom disturbance"),
     ]
     for failed, reason in reasons:
         if failed:

@@ -80,6 +80,24 @@ def model_of(controller):
     return model
 
 
+def has_closed_form(path) -> bool:
+    """Whether the step reads ``path`` from its own tables (the arcs, the cycloid, a spline),
+    not by calling it (:data:`~tt_mujoco.sim.closed_loop.HOOKED_PATH`; a subclass may change
+    what it computes)."""
+    from tt_mujoco.reference.paths import ArcsPath, CycloidPath
+    from tt_mujoco.reference.spline import SplinePath
+
+    return type(path) in (ArcsPath, CycloidPath, SplinePath)
+
+
+def users_disturbance(built) -> bool:
+    """Whether the run's disturbance is a user's, which the step calls, rather than none or the
+    paper's, which it computes itself."""
+    from tt_mujoco.sim.disturbances import PaperDisturbance
+
+    return built.disturbance is not None and type(built.disturbance) is not PaperDisturbance
+
+
 def is_law_class(controller) -> bool:
     """Whether ``controller`` is of a built-in law's own class (:data:`tt_mujoco.sim.
     closed_loop.LAWS`; a subclass may change what it runs)."""
@@ -101,7 +119,7 @@ def carry_payloads(stepper, plant, faults, stop_record):
     from tt_mujoco.vehicle import reduced
     from tt_mujoco.vehicle.train import TRAILER_ROW
 
-    count = int(records.values_of(stop_record)["payloads"])
+    count = int(records.value_of(stop_record, "payloads"))
     for trailer, factor in np.asarray(faults.payload_changes[:count]).tolist():
         stepper.plant.scale_trailer_mass(factor, int(trailer))
     records.set_value(stop_record, "payloads", 0.0)
@@ -321,7 +339,7 @@ def _law_record(controller, nominal, user, steering, python):
 def _target_record(built, steps: int):
     from tt_mujoco.controllers.backing import CascadeConstants, HitchCascade
     from tt_mujoco.reference.feedback import PathFeedback
-    from tt_mujoco.reference.paths import ArcsPath, CycloidPath
+    from tt_mujoco.reference.paths import ArcsPath
     from tt_mujoco.reference.reverse import ReverseTarget
     from tt_mujoco.reference.spline import SplinePath
     from tt_mujoco.reference.targets import DynamicTarget, StaticTarget
@@ -344,14 +362,14 @@ def _target_record(built, steps: int):
     kappas, starts = np.zeros(0), np.zeros((0, 3))
     cells, pose_cells, kappa_ends = np.zeros((0, 5)), np.zeros((0, 10)), np.zeros(2)
     bounds, hook = np.zeros(0), None
-    if type(path) is ArcsPath:
+    if not has_closed_form(path):  # a user's path: CPython's step calls it
+        kind, hook = HOOKED_PATH, path
+    elif type(path) is ArcsPath:
         kind, (bounds, kappas, starts) = 0, path.closed_form
     elif type(path) is SplinePath:
         kind, (bounds, cells, pose_cells, kappa_ends) = 2, path.closed_form
-    elif type(path) is CycloidPath:
+    else:
         kind = 1
-    else:  # a user's path: CPython's step calls it
-        kind, hook = HOOKED_PATH, path
     return records.TargetRecord(
         dynamic=target.kind == "dynamic",
         profile=_profile_table(target, built.control_dt, steps),
@@ -385,8 +403,9 @@ def _target_record(built, steps: int):
 
 def hand_back(stepper, controller, status, k, episode_records, changes) -> None:
     """Give the state at step ``k`` back: to the stepper, the target, the controller, the
-    reduced ODE, the faults, the motors, the friction patches and the schedule (``changes``:
-    ``(first row, gains)`` of each change of the scheduled gains)."""
+    faults, the friction patches and the schedule (``changes``: ``(first row, gains)`` of each
+    change of the scheduled gains). The motors' torques are the record's own
+    (:meth:`~tt_mujoco.sim.stepper.Stepper.begin`); the stepper syncs the reduced ODE."""
     from tt_mujoco.sim import records
 
     loop, plant, law, target, _ = episode_records
@@ -409,16 +428,11 @@ def hand_back(stepper, controller, status, k, episode_records, changes) -> None:
             tuple(np.asarray(law.state).tolist()), flags["aux1"], flags["aux2"]
         )
         controller.saturated = bool(flags["saturated"])
-    if not plant.mujoco:
-        stepper.plant.ode.state = plant.ode_state.copy()
-        stepper.plant.ode.time = k * stepper.dt
     faults = stepper.faults
     if faults is not None:  # what a dropout holds, where the payloads acted
         faults.held[:] = np.asarray(loop.faults.held).tolist()
         faults.payload_rows[:] = np.asarray(loop.faults.payloads).tolist()
         faults.payload_state[:] = np.asarray(loop.faults.payload_state).tolist()
-    if stepper.motors is not None:
-        stepper.motors.torques[:] = np.asarray(loop.motor_torques).tolist()
     if loop.ground.geoms.size:  # one mask per advance: k of them
         stepper.log_ground(loop.ground.masks[:k], loop.ground.arcs)
     if plant.steering.kind:  # a Python law has been told of every change as it came

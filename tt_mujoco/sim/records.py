@@ -49,6 +49,7 @@ __all__ = [
     "new_record",
     "record_dtype",
     "set_value",
+    "value_of",
     "values_of",
 ]
 
@@ -132,6 +133,13 @@ def values_of(record) -> dict:
     if isinstance(record, np.ndarray):
         return dict(zip(record.dtype.names, element.tolist(), strict=True))
     return {name: getattr(element, name) for name in element.__slots__}
+
+
+def value_of(record, name: str) -> float:
+    """Field ``name`` of a one-element record (:func:`new_record`, or its twin)."""
+    if isinstance(record, np.ndarray):
+        return float(record[0][name])
+    return getattr(record[0], name)
 
 
 def set_value(record, name: str, value: float) -> None:

@@ -31,7 +31,6 @@ from tt_mujoco.defaults import JACKKNIFE_DEG, MAX_SPEED
 from tt_mujoco.sim import closed_loop, episode, records, usercode
 from tt_mujoco.sim.build import Build
 from tt_mujoco.sim.checkpoint import Checkpoint
-from tt_mujoco.sim.disturbances import PaperDisturbance
 from tt_mujoco.sim.faults import HELD, PAYLOAD_ROW
 from tt_mujoco.sim.measure import TRAIN_FIELDS, Measurement, TrainMeasurement
 from tt_mujoco.sim.motors import DcMotors, MotorConstants
@@ -289,9 +288,9 @@ class Stepper:
     def _disturbance_hook(self):
         """A user's disturbance with its checks, as CPython's step calls it (None: none, or
         the paper's, which the step computes itself)."""
-        dist = self.built.disturbance
-        if dist is None or type(dist) is PaperDisturbance:
+        if not episode.users_disturbance(self.built):
             return None
+        dist = self.built.disturbance
         who = usercode.disturbance_label(self.built)
 
         def disturbance(t: float) -> tuple[float, float]:
@@ -407,7 +406,7 @@ class Stepper:
         """The payload changes a step made to the reduced plant's constants, and the step
         they interrupted (:data:`~tt_mujoco.sim.step.PAYLOAD`) advanced: ``(status, k)``."""
         loop, plant, law, target, stop = self._episode
-        if not records.values_of(stop)["payloads"]:
+        if not records.value_of(stop, "payloads"):
             return status, k
         plant = episode.carry_payloads(self, plant, loop.faults, stop)
         self._episode = (loop, plant, law, target, stop)
@@ -419,10 +418,11 @@ class Stepper:
     def _end(self, status, k: int) -> None:
         """The episode's state at step ``k`` back to its objects (``status``: FINISHED, or
         not)."""
+        self._sync_plant(k)
         episode.hand_back(self, self._controller, status, k, self._episode, self._changes)
 
     def _sync_plant(self, k: int) -> None:
-        """The reduced plant's ODE state at step ``k``, for an ``on_step`` hook to read."""
+        """The reduced plant's ODE state at step ``k``, for an ``on_step`` hook or the end."""
         plant = self._episode[1]
         if not plant.mujoco:
             self.plant.ode.state = plant.ode_state.copy()
@@ -589,10 +589,9 @@ class Stepper:
         if len(arc_lengths):
             patches.arc_lengths = [float(s) for s in arc_lengths]
 
-    def record_signals(self, signals: dict[str, float], k: int | None = None) -> None:
-        """The controller's logged signals at step ``k`` (default: the current one), columns
-        ``ctrl_<name>`` of the time series, NaN where a step logged none."""
-        k = self.k if k is None else k
+    def record_signals(self, signals: dict[str, float], k: int) -> None:
+        """The controller's logged signals at step ``k``, columns ``ctrl_<name>`` of the time
+        series, NaN where a step logged none."""
         for name, value in signals.items():
             column = self._signals.get(name)
             if column is None:
