@@ -729,6 +729,13 @@ def test_the_compiled_search_finds_the_vectorised_search_s_nearest_points(compil
     on_line = line[rng.integers(0, 200, 300)]
     beside = on_line + np.column_stack([rng.normal(0, 1e-3, 300), rng.normal(0, 1e-9, 300)])
     cases.append((line, np.vstack([on_line, beside, line[::16]]), {}))
+    # A time series beside a figure eight, a few samples a segment: the compiled search
+    # certifies most samples by an earlier one's search (nearest_segments_of).
+    angle = np.linspace(0.0, 2.0 * np.pi, 900)
+    eight = np.column_stack([np.sin(angle), np.sin(angle) * np.cos(angle)])
+    t = np.linspace(0.0, 1.0, 4000) * (len(eight) - 1)
+    on_path = np.column_stack([np.interp(t, np.arange(len(eight)), c) for c in eight.T])
+    cases.append((eight, on_path + rng.normal(0, 5e-4, on_path.shape), {}))
     for vertices, points, options in cases:
         line = Polyline(vertices)
         for extend_ends in (False, True):
@@ -765,6 +772,7 @@ def test_every_point_of_a_chunk_lies_within_its_chord_reach():
 
 
 def test_nearest_segment_of_is_the_brute_force_nearest_in_plain_python():
+    from tt_mujoco.analysis import geometry
     from tt_mujoco.analysis.geometry import nearest_segment_of
 
     rng = np.random.default_rng(3)
@@ -773,10 +781,64 @@ def test_nearest_segment_of_is_the_brute_force_nearest_in_plain_python():
     for point in rng.normal(0, 5, (60, 2)):
         lo, hi = sorted(rng.integers(0, line.n_segments + 1, 2))
         hi = max(hi, lo + 1)
-        d2, seg, _ = nearest_segment_of(point[0], point[1], lo, hi, False, line.table, lo)
+        kept = np.empty(line.table.chord_x.size, np.int64)
+        d2, seg, _, n_kept, lower = nearest_segment_of(
+            point[0], point[1], lo, hi, False, line.table, lo, kept
+        )
         expected = brute_force_distance(point[None], line.vertices[lo : hi + 1])[0]
         assert math.sqrt(d2) == pytest.approx(expected, rel=1e-12, abs=1e-14)
         assert lo <= seg < hi
+        # every segment of the window outside the chunks it kept lies at least lower away
+        outside = [
+            s for s in range(lo, hi) if s // geometry._CHUNK not in set(kept[:n_kept].tolist())
+        ]
+        if outside:
+            nearest_outside = min(
+                brute_force_distance(point[None], line.vertices[s : s + 2])[0] for s in outside
+            )
+            assert lower <= nearest_outside * (1 + 1e-12)
+        else:
+            assert lower == math.inf
+
+
+def test_a_time_series_is_searched_from_the_last_search_as_each_point_alone():
+    """nearest_segments_of searches again only when a point has left what the last search
+    certified: every point's nearest segment, d2 and t are those of a search of its own, bit
+    for bit, on a path that passes near itself, with and without the end rays."""
+    from tt_mujoco.analysis import geometry
+
+    angle = np.linspace(0.0, 2.0 * np.pi, 900)
+    eight = np.column_stack([np.sin(angle), np.sin(angle) * np.cos(angle)])  # crosses itself
+    rng = np.random.default_rng(29)
+    # a vehicle's samples: a few per segment, beside the path by a little noise
+    t = np.linspace(0.02, 0.98, 4000) * (len(eight) - 1)
+    on_path = np.column_stack([np.interp(t, np.arange(len(eight)), c) for c in eight.T])
+    points = on_path + rng.normal(0, 5e-4, on_path.shape)
+    line = Polyline(eight)
+    n = len(points)
+    full = []
+    searched = geometry.nearest_segment_of
+
+    def counted(*args):
+        full.append(args)
+        return searched(*args)
+
+    for extend in (False, True):
+        out = (np.empty(n), np.empty(n, np.int64), np.empty(n))
+        window = (np.zeros(n, np.int64), np.full(n, line.n_segments, np.int64))
+        full.clear()
+        geometry.nearest_segment_of = counted
+        try:
+            geometry.nearest_segments_of(
+                (points[:, 0], points[:, 1]), window, extend, line.table, out
+            )
+        finally:
+            geometry.nearest_segment_of = searched
+        assert 0 < len(full) < n / 4  # most points were certified by an earlier search
+        kept = np.empty(line.table.chord_x.size, np.int64)
+        for i, (x, y) in enumerate(points):
+            alone = searched(x, y, 0, line.n_segments, extend, line.table, 0, kept)[:3]
+            assert (out[0][i], out[1][i], out[2][i]) == alone
 
 
 def test_lateral_error_from_the_cross_track_projection_is_the_projection_itself():

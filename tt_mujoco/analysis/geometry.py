@@ -21,6 +21,7 @@ __all__ = [
     "SegmentTable",
     "distance_to_polyline",
     "nearest_segment_of",
+    "nearest_segments_of",
     "segment_distance2_of",
     "signed_lateral_error",
     "trailer_offtrack",
@@ -36,8 +37,9 @@ __all__ = [
 _CANDIDATE_ROUNDS = (8, 32)
 # Consecutive pieces per tree entry: a coarser tree certifies farther points with the same k.
 _GROUP_PIECES = 4
-# Segments per chunk in the fallback search.
-_CHUNK = 16
+# Segments per chunk, and chunks per group, of both searches: a time series' search mostly
+# searches again the one or two chunks an earlier search kept, the fewer segments the better.
+_CHUNK = 8
 # Point-segment pairs evaluated at once: 256 kB per work array stays in cache and in the
 # allocator's pool (measured: whole 20,000 x 16 arrays were 3-4x slower than blocks).
 _WORK_BLOCK = 1 << 15
@@ -92,80 +94,148 @@ def _better(d2, seg, best_d2, best_seg) -> bool:
     return d2 < best_d2 or (d2 == best_d2 and seg < best_seg)
 
 
-def _beyond(px, py, cx, cy, r, best_distance) -> bool:
-    """Whether the circle ``(cx, cy, r)`` lies wholly farther than ``best_distance``."""
+def _beyond(distance2, r, best_distance) -> bool:
+    """Whether everything within ``r`` of a centre ``sqrt(distance2)`` away lies farther than
+    ``best_distance``."""
     reach = r + best_distance
-    return (px - cx) ** 2 + (py - cy) ** 2 > reach * reach * (1.0 + 1e-9)
+    return distance2 > reach * reach * (1.0 + 1e-9)
 
 
-def _chunk_beyond(px, py, table, c, best_distance) -> bool:
-    """Whether chunk ``c`` lies wholly farther than ``best_distance``: its chord is farther
-    than that by more than the chunk strays from it. Tighter than a circle around the chunk
-    for a point beside a smooth path, whose neighbouring chunks a circle would keep."""
+def _chord_distance2(px, py, table, c):
+    """Squared distance to chunk ``c``'s chord, which the chunk strays from by at most
+    ``chord_reach[c]``: a bound tighter than a circle around the chunk for a point beside a
+    smooth path, whose neighbouring chunks a circle would keep."""
     rx, ry = px - table.chord_x[c], py - table.chord_y[c]
     dx, dy = table.chord_dx[c], table.chord_dy[c]
     t = min(max((rx * dx + ry * dy) * table.chord_inv_len2[c], 0.0), 1.0)
     rx -= t * dx
     ry -= t * dy
-    reach = best_distance + table.chord_reach[c]
-    return rx * rx + ry * ry > reach * reach * (1.0 + 1e-9)
+    return rx * rx + ry * ry
 
 
 def _scan(px, py, a, b, extend, table, best):
-    """Segments ``a`` to ``b - 1`` against the best ``(d2, segment, t)`` so far."""
-    n_seg = table.sx.shape[0]
+    """Segments ``a`` to ``b - 1`` against the best ``(d2, segment, t)`` so far; with
+    ``extend`` the end segments are rays, which :func:`_rays` tries."""
+    if extend:
+        a, b = max(a, 1), min(b, table.sx.shape[0] - 1)
     best_d2, best_seg, best_t = best
     for s in range(a, b):
-        low = -np.inf if extend and s == 0 else 0.0
-        high = np.inf if extend and s == n_seg - 1 else 1.0
-        d2, t = segment_distance2_of(px, py, table, s, low, high)
+        d2, t = segment_distance2_of(px, py, table, s, 0.0, 1.0)
         if _better(d2, s, best_d2, best_seg):
             best_d2, best_seg, best_t = d2, s, t
     return best_d2, best_seg, best_t
 
 
-def nearest_segment_of(px, py, lo, hi, extend, table, warm):
-    """The nearest of segments ``lo`` to ``hi - 1`` to one point: ``(d2, segment, t)``.
-
-    Exact: it starts from the chunk of segment ``warm`` (the previous sample's nearest, for a
-    time series), then searches every other group whose circle is not beyond the best so far,
-    and in it every chunk whose chord bound (:func:`_chunk_beyond`) is not. ``extend``
-    continues the polyline's first and last segments as rays, which no bound covers, so those
-    are tried first. Ties go to the lower segment index.
-    """
+def _rays(px, py, lo, hi, extend, table):
+    """The best ``(d2, segment, t)`` of the end segments in segments ``lo`` to ``hi - 1``,
+    continued as rays (none unless ``extend``), which no chunk's bound covers."""
     n_seg = table.sx.shape[0]
     best = (np.inf, -1, 0.0)
     if extend:
         for s in (0, n_seg - 1):
             if lo <= s < hi:
-                best = _scan(px, py, s, s + 1, extend, table, best)
+                low = -np.inf if s == 0 else 0.0
+                high = np.inf if s == n_seg - 1 else 1.0
+                d2, t = segment_distance2_of(px, py, table, s, low, high)
+                if _better(d2, s, best[0], best[1]):
+                    best = (d2, s, t)
+    return best
+
+
+def nearest_segment_of(px, py, lo, hi, extend, table, warm, kept):
+    """The nearest of segments ``lo`` to ``hi - 1`` to one point.
+
+    Exact: it starts from the chunk of segment ``warm`` (the previous sample's nearest, for a
+    time series), then searches every other group whose circle is not beyond the best so far,
+    and in it every chunk whose chord bound (:func:`_chord_distance2`) is not. ``extend``
+    continues the polyline's first and last segments as rays, which no bound covers, so those
+    are tried first. Ties go to the lower segment index.
+
+    Returns ``(d2, segment, t, n_kept, lower)``: the chunks it searched are ``kept[:n_kept]``,
+    and every other segment of the window (the rays aside) lies at least ``lower`` away (inf
+    when it set none aside).
+    """
+    best = _rays(px, py, lo, hi, extend, table)
     first_chunk = warm // _CHUNK
     a, b = max(lo, first_chunk * _CHUNK), min(hi, first_chunk * _CHUNK + _CHUNK)
     best = _scan(px, py, a, b, extend, table, best)
+    kept[0], n_kept = first_chunk, 1
+    lower = np.inf
     reach = np.sqrt(best[0])
     c_lo, c_hi = lo // _CHUNK, (hi - 1) // _CHUNK + 1
     for g in range(c_lo // _CHUNK, (c_hi - 1) // _CHUNK + 1):
-        if _beyond(px, py, table.group_cx[g], table.group_cy[g], table.group_r[g], reach):
+        gx, gy = px - table.group_cx[g], py - table.group_cy[g]
+        distance2 = gx * gx + gy * gy
+        if _beyond(distance2, table.group_r[g], reach):
+            lower = min(lower, np.sqrt(distance2) - table.group_r[g])
             continue
         for c in range(max(c_lo, g * _CHUNK), min(c_hi, g * _CHUNK + _CHUNK)):
             if c == first_chunk:
                 continue
-            if _chunk_beyond(px, py, table, c, reach):
+            distance2 = _chord_distance2(px, py, table, c)
+            if _beyond(distance2, table.chord_reach[c], reach):
+                lower = min(lower, np.sqrt(distance2) - table.chord_reach[c])
                 continue
             a, b = max(lo, c * _CHUNK), min(hi, c * _CHUNK + _CHUNK)
             best = _scan(px, py, a, b, extend, table, best)
+            kept[n_kept] = c
+            n_kept += 1
             reach = np.sqrt(best[0])
-    return best
+    return best[0], best[1], best[2], n_kept, lower
 
 
-#: The compiled loop over :func:`nearest_segment_of`, once :mod:`tt_mujoco.sim.compiled` has
+def nearest_segments_of(points, window, extend, table, out):
+    """Every point's nearest segment (:func:`nearest_segment_of`) into ``out = (d2, seg, t)``,
+    for ``points = (px, py)`` and ``window = (lo, hi)``, arrays over the points: a time series,
+    searched the way it moves.
+
+    Each search starts from the previous point's nearest segment, and certifies the points that
+    follow while they stay near where it was made: the segments it set aside lay at least
+    ``lower`` from there and its nearest ``reach``, so a point ``moved`` away is at most ``reach
+    + moved`` from that nearest segment and at least ``lower - moved`` from those set aside.
+    While ``2 moved < lower - reach`` (less a rounding margin of 1e-9 of the coordinates and
+    distances), and the window keeps that nearest segment, loses none below and gains at most a
+    chunk's worth above (a window that slides forward, as the off-tracking's does), the chunks
+    the search kept and what the window gained since hold the point's nearest segment: the same
+    segment, found the same way, as a search of its own would find.
+    """
+    (px, py), (lo, hi), (d2, seg, t) = points, window, out
+    kept = np.empty(table.chord_x.shape[0], np.int64)
+    n_kept, slack, margin = 0, -np.inf, 0.0
+    at_x, at_y, searched_lo, searched_hi, nearest = 0.0, 0.0, 0, 0, -1
+    warm = lo[0] if px.shape[0] else 0
+    for i in range(px.shape[0]):
+        x, y, a, b = px[i], py[i], lo[i], hi[i]
+        moved = np.hypot(x - at_x, y - at_y)
+        gained = b - searched_hi
+        certified = 0 <= gained <= _CHUNK and searched_lo <= a <= nearest < b
+        if certified and 2.0 * moved + margin < slack:
+            # the rays, the chunks it kept, and what the window gained since (some of it in a
+            # kept chunk: scanned twice, it finds the same)
+            best = _rays(x, y, a, b, extend, table)
+            for j in range(n_kept):
+                first, end = kept[j] * _CHUNK, kept[j] * _CHUNK + _CHUNK
+                best = _scan(x, y, max(a, first), min(b, end), extend, table, best)
+            d2[i], seg[i], t[i] = _scan(x, y, searched_hi, b, extend, table, best)
+        else:
+            d2[i], seg[i], t[i], n_kept, lower = nearest_segment_of(
+                x, y, a, b, extend, table, max(warm, a), kept
+            )
+            reach = np.sqrt(d2[i])
+            slack = lower - reach
+            margin = 1e-9 * (abs(x) + abs(y) + reach + (lower if lower < np.inf else 0.0))
+            at_x, at_y, searched_lo, searched_hi, nearest = x, y, a, b, seg[i]
+        warm = seg[i]
+
+
+#: The compiled :func:`nearest_segments_of`, once :mod:`tt_mujoco.sim.compiled` has
 #: loaded its kernel in this process (None: the vectorised search below serves alone).
 _COMPILED = None
 
 
 def use_compiled_projection(project_points) -> None:
     """Let :meth:`Polyline.project` run ``project_points((px, py), (lo, hi), extend, table,
-    (d2, seg, t))``, the compiled loop over :func:`nearest_segment_of` (same numbers); it returns
+    (d2, seg, t))``, the compiled :func:`nearest_segments_of` (same numbers); it returns
     False when it could not run, and the vectorised search serves instead. None: none."""
     global _COMPILED
     _COMPILED = project_points
@@ -178,6 +248,9 @@ class _Best:
         self.d2 = np.full(n, np.inf)
         self.seg = np.full(n, -1, dtype=np.int64)
         self.t = np.zeros(n)
+
+    def __iter__(self):
+        return iter((self.d2, self.seg, self.t))
 
 
 class PolylineProjection(NamedTuple):
@@ -231,13 +304,15 @@ class Polyline:
                 f"polyline vertices must be finite, got {given[bad].tolist()} at row {bad}"
             )
         keep = np.ones(given.shape[0], dtype=bool)
-        keep[1:] = np.any(given[1:] != given[:-1], axis=1)
-        if keep.sum() < 2:
+        x, y = given[:, 0], given[:, 1]
+        keep[1:] = (x[1:] != x[:-1]) | (y[1:] != y[:-1])
+        kept = int(np.count_nonzero(keep))
+        if kept < 2:
             raise ValueError(
                 f"polyline must contain at least two distinct points, got {given.shape[0]} "
                 f"copies of {given[0].tolist()}"
             )
-        self.vertices = given[keep]
+        self.vertices = given.copy() if kept == given.shape[0] else given[keep]
         self.vertex_index = np.cumsum(keep) - 1
         starts = self.vertices[:-1]
         self._starts = starts
@@ -247,10 +322,11 @@ class Polyline:
         self._sx, self._sy = starts[:, 0].copy(), starts[:, 1].copy()
         self._dx, self._dy = self._deltas[:, 0].copy(), self._deltas[:, 1].copy()
         self._inv_len2 = 1.0 / (seg_lengths * seg_lengths)
-        self._seg_tangents = self._deltas / seg_lengths[:, None]
+        # Unit tangents as x and y arrays: the projection gathers them per point.
+        self._tx, self._ty = self._dx / seg_lengths, self._dy / seg_lengths
         self.arc_length = np.concatenate(([0.0], np.cumsum(seg_lengths)))
         self.length = float(self.arc_length[-1])
-        self._vertex_tangents = self._make_vertex_tangents()
+        self._vertex_tx, self._vertex_ty = self._make_vertex_tangents()
         self._build_search()
 
     def _make_trees(self) -> None:
@@ -295,21 +371,23 @@ class Polyline:
         self._chunk_tree = cKDTree(self._chunk_centre)
         self._tree = cKDTree(centre)
 
-    def _chunk_chords(self, chunk_vertices: np.ndarray) -> tuple[np.ndarray, ...]:
+    def _chunk_chords(self, xs: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, ...]:
         """Each chunk's chord (its first vertex to its last: start, direction, 1 / length^2, 0
         for a closed chunk) and how far its vertices, hence its segments, stray from it (a
         segment lies in the convex hull of its ends, and the distance to the chord is convex),
-        widened by 1e-12 of the path's extent against rounding in the bound."""
-        start, end = chunk_vertices[:, 0], chunk_vertices[:, -1]
-        chord = end - start
-        length2 = np.einsum("ij,ij->i", chord, chord)
+        widened by 1e-12 of the path's extent against rounding in the bound. ``xs``, ``ys``:
+        the chunks' vertices, one chunk a row."""
+        start_x, start_y = xs[:, 0], ys[:, 0]
+        chord_x, chord_y = xs[:, -1] - start_x, ys[:, -1] - start_y
+        length2 = chord_x * chord_x + chord_y * chord_y
         inv_length2 = np.divide(1.0, length2, out=np.zeros_like(length2), where=length2 > 0.0)
-        rel = chunk_vertices - start[:, None, :]
-        t = np.clip(np.einsum("ijk,ik->ij", rel, chord) * inv_length2[:, None], 0.0, 1.0)
-        off = rel - t[..., None] * chord[:, None, :]
-        stray = np.sqrt(np.max(np.einsum("ijk,ijk->ij", off, off), axis=1))
+        rel_x, rel_y = xs - start_x[:, None], ys - start_y[:, None]
+        t = (rel_x * chord_x[:, None] + rel_y * chord_y[:, None]) * inv_length2[:, None]
+        t = np.clip(t, 0.0, 1.0)
+        off_x, off_y = rel_x - t * chord_x[:, None], rel_y - t * chord_y[:, None]
+        stray = np.sqrt(np.max(off_x * off_x + off_y * off_y, axis=1))
         slack = 1e-12 * float(np.max(np.abs(self.vertices)))
-        columns = (start[:, 0], start[:, 1], chord[:, 0], chord[:, 1], inv_length2)
+        columns = (start_x, start_y, chord_x, chord_y, inv_length2)
         return (*(np.ascontiguousarray(c) for c in columns), stray * (1.0 + 1e-9) + slack)
 
     @property
@@ -317,8 +395,8 @@ class Polyline:
         """Number of segments (``len(vertices) - 1``)."""
         return self._starts.shape[0]
 
-    def _make_vertex_tangents(self) -> np.ndarray:
-        """Direction used for the side of points whose foot is a vertex.
+    def _make_vertex_tangents(self) -> tuple[np.ndarray, np.ndarray]:
+        """Direction (x and y arrays) used for the side of points whose foot is a vertex.
 
         At an interior vertex it is the sum of the two adjacent unit tangents: for any point whose
         nearest path point is that vertex, the cross product with this sum is negative on the
@@ -326,17 +404,15 @@ class Polyline:
         right turn), so the sign is right even beyond a hairpin, where the two adjacent segments
         alone disagree. A complete reversal (sum 0) falls back to the incoming tangent.
         """
-        t = self._seg_tangents
-        tangents = np.empty((t.shape[0] + 1, 2))
-        tangents[0] = t[0]
-        tangents[-1] = t[-1]
-        summed = t[:-1] + t[1:]
-        norm = np.hypot(summed[:, 0], summed[:, 1])
+        tangents = []
+        summed_x, summed_y = self._tx[:-1] + self._tx[1:], self._ty[:-1] + self._ty[1:]
+        norm = np.hypot(summed_x, summed_y)
         reversal = norm < 1e-12
-        tangents[1:-1] = np.where(
-            reversal[:, None], t[:-1], summed / np.where(reversal, 1.0, norm)[:, None]
-        )
-        return tangents
+        norm = np.where(reversal, 1.0, norm)
+        for t, summed in ((self._tx, summed_x), (self._ty, summed_y)):
+            inner = np.where(reversal, t[:-1], summed / norm)
+            tangents.append(np.concatenate((t[:1], inner, t[-1:])))
+        return tangents[0], tangents[1]
 
     def _build_search(self) -> None:
         """Chunk circles: runs of ``_CHUNK`` consecutive segments, each inside a circle around
@@ -351,11 +427,13 @@ class Polyline:
         vertex_of = np.minimum(
             self._chunk_first[:, None] + np.arange(_CHUNK + 1), self.vertices.shape[0] - 1
         )
-        chunk_vertices = self.vertices[vertex_of]  # (n_chunks, _CHUNK + 1, 2)
-        centre = 0.5 * (chunk_vertices.min(axis=1) + chunk_vertices.max(axis=1))
-        offset = chunk_vertices - centre[:, None, :]
-        self._chunk_centre = centre
-        self._chunk_radius = np.sqrt(np.max(np.einsum("ijk,ijk->ij", offset, offset), axis=1))
+        # The chunks' vertices, one chunk a row: x and y apart, each reduced along its rows.
+        xs, ys = self.vertices[:, 0][vertex_of], self.vertices[:, 1][vertex_of]
+        centre_x = 0.5 * (xs.min(axis=1) + xs.max(axis=1))
+        centre_y = 0.5 * (ys.min(axis=1) + ys.max(axis=1))
+        off_x, off_y = xs - centre_x[:, None], ys - centre_y[:, None]
+        self._chunk_centre = centre = np.column_stack((centre_x, centre_y))
+        self._chunk_radius = np.sqrt(np.max(off_x * off_x + off_y * off_y, axis=1))
         self._chunk_radius_max = float(self._chunk_radius.max())
         self._tree = self._chunk_tree = None  # made by _make_trees when the vectorised search runs
         # Groups of _CHUNK chunks, each inside a circle around its chunks' circles.
@@ -377,7 +455,7 @@ class Polyline:
             self._dx,
             self._dy,
             self._inv_len2,
-            *self._chunk_chords(chunk_vertices),
+            *self._chunk_chords(xs, ys),
             np.ascontiguousarray(group_centre[:, 0]),
             np.ascontiguousarray(group_centre[:, 1]),
             group_radius,
@@ -455,14 +533,18 @@ class Polyline:
 
         pending = np.flatnonzero(finite & (limit > 0))
         if _COMPILED is not None and pending.size:
-            px = np.ascontiguousarray(pts[pending, 0])
-            py = np.ascontiguousarray(pts[pending, 1])
-            n_pending = pending.size
-            d2, seg, t = np.empty(n_pending), np.empty(n_pending, np.int64), np.empty(n_pending)
-            window = (first[pending], limit[pending])
-            if _COMPILED((px, py), window, extend_ends, self.table, (d2, seg, t)):
-                best.d2[pending], best.seg[pending], best.t[pending] = d2, seg, t
+            # Every point searched (the usual time series): no gathers, the results in place.
+            every = pending.size == n
+            at = slice(None) if every else pending
+            px, py = np.ascontiguousarray(pts[at, 0]), np.ascontiguousarray(pts[at, 1])
+            found = _Best(pending.size) if not every else best
+            window = (first[at], limit[at])
+            if _COMPILED((px, py), window, extend_ends, self.table, tuple(found)):
+                if not every:
+                    best.d2[pending], best.seg[pending], best.t[pending] = found
                 pending = pending[:0]
+            elif every:
+                best = _Best(n)  # what the failed call may have written
         if pending.size:
             self._make_trees()
         if segment_first is not None and pending.size:
@@ -693,35 +775,36 @@ class Polyline:
         single: bool,
     ) -> PolylineProjection:
         n = pts.shape[0]
-        distance = np.full(n, np.nan)
-        signed = np.full(n, np.nan)
-        arc = np.full(n, np.nan)
-        foot = np.full((n, 2), np.nan)
-        seg = np.where(finite, best.seg, -1)
-        f = np.flatnonzero(finite)
-        if f.size:
-            s = best.seg[f]
-            t = best.t[f]
-            foot_f = self._starts[s] + t[:, None] * self._deltas[s]
-            # The side is judged against the segment's direction, or the vertex tangent when the
-            # foot is a vertex (see _make_vertex_tangents).
-            tangent = self._seg_tangents[s].copy()
-            at_start = t <= 0.0
-            at_end = t >= 1.0
-            # On an extended end ray the segment's own direction is the right one.
-            at_start &= ~((s == 0) & (t < 0.0))
-            at_end &= ~((s == self.n_segments - 1) & (t > 1.0))
-            tangent[at_start] = self._vertex_tangents[s[at_start]]
-            tangent[at_end] = self._vertex_tangents[s[at_end] + 1]
-            rel = pts[f] - foot_f
-            cross = tangent[:, 0] * rel[:, 1] - tangent[:, 1] * rel[:, 0]
-            dist_f = np.sqrt(best.d2[f])
-            distance[f] = dist_f
-            # A zero cross product (on the path, or on the line through an end segment beyond
-            # that end) counts as left.
-            signed[f] = np.where(cross < 0.0, -dist_f, dist_f)
-            arc[f] = self.arc_length[s] + t * self._seg_lengths[s]
-            foot[f] = foot_f
+        every = bool(finite.all())
+        f = slice(None) if every else np.flatnonzero(finite)
+        s, t = best.seg[f], best.t[f]
+        px, py = pts[f, 0], pts[f, 1]
+        foot_x = self._sx[s] + t * self._dx[s]
+        foot_y = self._sy[s] + t * self._dy[s]
+        # The side is judged against the segment's direction, or the vertex tangent when the
+        # foot is a vertex (see _make_vertex_tangents); on an extended end ray the segment's
+        # own direction is the right one.
+        tx, ty = self._tx[s], self._ty[s]
+        at_start = (t <= 0.0) & ~((s == 0) & (t < 0.0))
+        at_end = (t >= 1.0) & ~((s == self.n_segments - 1) & (t > 1.0))
+        for at, vertex in ((at_start, s), (at_end, s + 1)):
+            if at.any():
+                tx[at], ty[at] = self._vertex_tx[vertex[at]], self._vertex_ty[vertex[at]]
+        cross = tx * (py - foot_y) - ty * (px - foot_x)
+        dist_f = np.sqrt(best.d2[f])
+        # A zero cross product (on the path, or on the line through an end segment beyond
+        # that end) counts as left.
+        signed_f = np.where(cross < 0.0, -dist_f, dist_f)
+        arc_f = self.arc_length[s] + t * self._seg_lengths[s]
+        if every:
+            distance, signed, arc, seg = dist_f, signed_f, arc_f, best.seg
+            foot = np.column_stack((foot_x, foot_y))
+        else:
+            distance, signed, arc = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
+            foot = np.full((n, 2), np.nan)
+            distance[f], signed[f], arc[f] = dist_f, signed_f, arc_f
+            foot[f, 0], foot[f, 1] = foot_x, foot_y
+            seg = np.where(finite, best.seg, -1)
         if single:
             return PolylineProjection(distance[0], signed[0], arc[0], foot[0], seg[0])
         return PolylineProjection(distance, signed, arc, foot, seg)

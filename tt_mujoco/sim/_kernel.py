@@ -93,16 +93,10 @@ def _pointer_of(array):
 
 @njit(cache=True)
 def project_points(points, window, extend, table, out):
-    """Every point of ``points = (px, py)``'s nearest segment between ``window = (lo, hi)``
-    (:func:`tt_mujoco.analysis.geometry.nearest_segment_of`) into ``out = (d2, seg, t)``, each
-    search started from the previous point's: a time series moves little a sample."""
-    (px, py), (lo, hi), (d2, seg, t) = points, window, out
-    warm = lo[0] if px.shape[0] else 0
-    for i in range(px.shape[0]):
-        d2[i], seg[i], t[i] = geometry.nearest_segment_of(
-            px[i], py[i], lo[i], hi[i], extend, table, max(warm, lo[i])
-        )
-        warm = seg[i]
+    """:func:`tt_mujoco.analysis.geometry.nearest_segments_of`, compiled: every point of
+    ``points = (px, py)``'s nearest segment in ``window = (lo, hi)`` into ``out = (d2, seg,
+    t)``."""
+    geometry.nearest_segments_of(points, window, extend, table, out)
 
 
 @overload(path_schedule.path_pose)

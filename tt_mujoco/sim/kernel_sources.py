@@ -141,9 +141,11 @@ SHARED = (
     geometry.segment_distance2_of,
     geometry._better,
     geometry._beyond,
-    geometry._chunk_beyond,
+    geometry._chord_distance2,
     geometry._scan,
+    geometry._rays,
     geometry.nearest_segment_of,
+    geometry.nearest_segments_of,
 )
 
 

@@ -106,10 +106,11 @@ def assemble_columns(measured: list, logged: list, eta: float) -> dict[str, np.n
     """The time series in :data:`COLUMNS` order from the per-step measurement rows and the
     loop's own values (``x_ref``, ``y_ref``, ``theta_ref`` are left NaN for the caller to fill)."""
     n = len(logged)
-    meas = np.array(measured, dtype=float).reshape(n, len(Measurement._fields))
-    loop = np.array(logged, dtype=float).reshape(n, len(LOOP_COLUMNS))
-    cols = {name: meas[:, i] for i, name in enumerate(Measurement._fields)}
-    cols.update({name: loop[:, i] for i, name in enumerate(LOOP_COLUMNS)})
+    # Transposed once, so that every column is a contiguous row (not a strided copy each).
+    meas = np.asarray(measured, dtype=float).reshape(n, len(Measurement._fields)).T.copy()
+    loop = np.asarray(logged, dtype=float).reshape(n, len(LOOP_COLUMNS)).T.copy()
+    cols = dict(zip(Measurement._fields, meas, strict=True))
+    cols.update(zip(LOOP_COLUMNS, loop, strict=True))
     cols["eq_violation"] = cols["beta"] - eta * cols["phi"]
     cols["x_ref"] = np.full(n, np.nan)
     cols["y_ref"] = np.full(n, np.nan)
