@@ -24,7 +24,9 @@ It prints:
    each replay alone, and with the replays on the workers at once (issue "one step"'s goals:
    <= 1.1 for one trailer, <= 1.25 for a train). The replays are timed before the sweep and
    again after it, and the floor is the mean of the two: a shared machine's speed drifts over
-   the minutes a sweep takes.
+   the minutes a sweep takes. A figure the drift moves less is printed beside it: the sweep's
+   wall time against the sum of its own episodes' control loops over the workers (timed in the
+   same minutes), times the loop's ratio to its rollout timed in pairs in part 1.
 
 Numbers depend on what else runs on the machine; the load average is printed with them.
 """
@@ -134,6 +136,7 @@ def sweep_rate(n_runs: int, workers: int, scheduler: str | None = None) -> dict:
         "failed": result.summary["failed"],
         "episode_median_s": statistics.median(run_wall),
         "loop_median_s": statistics.median(loop) if loop else float("nan"),
+        "loop_sum_s": sum(loop),
         "executor_overhead_per_run_s": (wall * workers - sum(run_wall)) / n_runs,
     }
 
@@ -218,6 +221,15 @@ def main() -> None:
             f"physics floor on {args.workers} workers (the same replays run on {args.workers} "
             f"workers at once): {floor_on_workers:.1f} s; ratio to it "
             f"{r['ratio_to_floor_on_workers']:.3f}"
+        )
+        # Timed in the same minutes, the sweep against its own episodes' loops drifts with
+        # them; the loop against its rollout is timed in pairs, one episode after the other.
+        r["ratio_to_own_loops"] = r["wall_s"] / (r["loop_sum_s"] / args.workers)
+        r["ratio_paired"] = r["ratio_to_own_loops"] * b["loop"] / b["replay"]
+        print(
+            f"the sweep against its own episodes' control loops (the same minutes): "
+            f"{r['ratio_to_own_loops']:.3f}; times the loop against its rollout in this "
+            f"process ({b['loop'] / b['replay']:.3f}): {r['ratio_paired']:.3f} of the floor"
         )
     results["load_end"] = os.getloadavg()[0]
     print(f"load average now {results['load_end']:.2f}")
