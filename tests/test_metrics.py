@@ -749,7 +749,7 @@ def test_the_compiled_search_finds_the_vectorised_search_s_nearest_points(compil
 
 
 def test_every_point_of_a_chunk_lies_within_its_chord_reach():
-    from tt_mujoco.analysis import geometry
+    from tt_mujoco.analysis import nearest
 
     rng = np.random.default_rng(11)
     for vertices in random_polylines(rng):
@@ -758,7 +758,7 @@ def test_every_point_of_a_chunk_lies_within_its_chord_reach():
         start = np.column_stack([table.chord_x, table.chord_y])
         chord = np.column_stack([table.chord_dx, table.chord_dy])
         for c in range(start.shape[0]):
-            segments = np.arange(c * geometry._CHUNK, min(n_seg, (c + 1) * geometry._CHUNK))
+            segments = np.arange(c * nearest.CHUNK, min(n_seg, (c + 1) * nearest.CHUNK))
             s = np.linspace(0.0, 1.0, 9)[:, None, None]
             points = line.vertices[segments] + s * (
                 line.vertices[segments + 1] - line.vertices[segments]
@@ -772,8 +772,8 @@ def test_every_point_of_a_chunk_lies_within_its_chord_reach():
 
 
 def test_nearest_segment_of_is_the_brute_force_nearest_in_plain_python():
-    from tt_mujoco.analysis import geometry
-    from tt_mujoco.analysis.geometry import nearest_segment_of
+    from tt_mujoco.analysis import nearest
+    from tt_mujoco.analysis.nearest import nearest_segment_of
 
     rng = np.random.default_rng(3)
     vertices = np.cumsum(rng.normal(size=(80, 2)), axis=0)
@@ -790,7 +790,7 @@ def test_nearest_segment_of_is_the_brute_force_nearest_in_plain_python():
         assert lo <= seg < hi
         # every segment of the window outside the chunks it kept lies at least lower away
         outside = [
-            s for s in range(lo, hi) if s // geometry._CHUNK not in set(kept[:n_kept].tolist())
+            s for s in range(lo, hi) if s // nearest.CHUNK not in set(kept[:n_kept].tolist())
         ]
         if outside:
             nearest_outside = min(
@@ -805,7 +805,7 @@ def test_a_time_series_is_searched_from_the_last_search_as_each_point_alone():
     """nearest_segments_of searches again only when a point has left what the last search
     certified: every point's nearest segment, d2 and t are those of a search of its own, bit
     for bit, on a path that passes near itself, with and without the end rays."""
-    from tt_mujoco.analysis import geometry
+    from tt_mujoco.analysis import nearest
 
     angle = np.linspace(0.0, 2.0 * np.pi, 900)
     eight = np.column_stack([np.sin(angle), np.sin(angle) * np.cos(angle)])  # crosses itself
@@ -817,7 +817,7 @@ def test_a_time_series_is_searched_from_the_last_search_as_each_point_alone():
     line = Polyline(eight)
     n = len(points)
     full = []
-    searched = geometry.nearest_segment_of
+    searched = nearest.nearest_segment_of
 
     def counted(*args):
         full.append(args)
@@ -827,13 +827,13 @@ def test_a_time_series_is_searched_from_the_last_search_as_each_point_alone():
         out = (np.empty(n), np.empty(n, np.int64), np.empty(n))
         window = (np.zeros(n, np.int64), np.full(n, line.n_segments, np.int64))
         full.clear()
-        geometry.nearest_segment_of = counted
+        nearest.nearest_segment_of = counted
         try:
-            geometry.nearest_segments_of(
+            nearest.nearest_segments_of(
                 (points[:, 0], points[:, 1]), window, extend, line.table, out
             )
         finally:
-            geometry.nearest_segment_of = searched
+            nearest.nearest_segment_of = searched
         assert 0 < len(full) < n / 4  # most points were certified by an earlier search
         kept = np.empty(line.table.chord_x.size, np.int64)
         for i, (x, y) in enumerate(points):

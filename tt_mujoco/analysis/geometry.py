@@ -15,14 +15,12 @@ from typing import NamedTuple
 
 import numpy as np
 
+from tt_mujoco.analysis.nearest import CHUNK, SegmentTable, segment_distance2_of
+
 __all__ = [
     "Polyline",
     "PolylineProjection",
-    "SegmentTable",
     "distance_to_polyline",
-    "nearest_segment_of",
-    "nearest_segments_of",
-    "segment_distance2_of",
     "signed_lateral_error",
     "trailer_offtrack",
     "use_compiled_projection",
@@ -37,9 +35,6 @@ __all__ = [
 _CANDIDATE_ROUNDS = (8, 32)
 # Consecutive pieces per tree entry: a coarser tree certifies farther points with the same k.
 _GROUP_PIECES = 4
-# Segments per chunk, and chunks per group, of both searches: a time series' search mostly
-# searches again the one or two chunks an earlier search kept, the fewer segments the better.
-_CHUNK = 8
 # Point-segment pairs evaluated at once: 256 kB per work array stays in cache and in the
 # allocator's pool (measured: whole 20,000 x 16 arrays were 3-4x slower than blocks).
 _WORK_BLOCK = 1 << 15
@@ -51,192 +46,17 @@ _POINT_BLOCK = 1 << 14
 _WINDOW_CHUNKS = 512
 
 
-class SegmentTable(NamedTuple):
-    """A polyline's segments and their bounds as plain arrays: what the compiled projection
-    reads. Segment ``k`` starts at ``(sx, sy)[k]`` and runs ``(dx, dy)[k]``; chunk ``c`` holds
-    segments ``c * _CHUNK`` to ``c * _CHUNK + _CHUNK - 1``, all within ``chord_reach[c]`` of its
-    chord, the segment from ``(chord_x, chord_y)[c]`` along ``(chord_dx, chord_dy)[c]`` (its
-    first vertex to its last); group ``g`` holds chunks ``g * _CHUNK`` to ``g * _CHUNK + _CHUNK
-    - 1`` inside the circle ``(group_cx, group_cy, group_r)[g]``."""
-
-    sx: np.ndarray
-    sy: np.ndarray
-    dx: np.ndarray
-    dy: np.ndarray
-    inv_len2: np.ndarray
-    chord_x: np.ndarray
-    chord_y: np.ndarray
-    chord_dx: np.ndarray
-    chord_dy: np.ndarray
-    chord_inv_len2: np.ndarray
-    chord_reach: np.ndarray
-    group_cx: np.ndarray
-    group_cy: np.ndarray
-    group_r: np.ndarray
-
-
-def segment_distance2_of(px, py, table, segments, lower, upper):
-    """Squared distance from ``(px, py)`` to segment ``segments`` of ``table`` (the segment from
-    ``(sx, sy)`` along ``(dx, dy)``), and the foot's parameter ``t``, clamped to ``[lower,
-    upper]`` (``[0, 1]``; an end ray takes an infinite bound). One index or an index array
-    alike: the one formula of every projection here."""
-    dx, dy = table.dx[segments], table.dy[segments]
-    rx = px - table.sx[segments]
-    ry = py - table.sy[segments]
-    t = np.minimum(np.maximum((rx * dx + ry * dy) * table.inv_len2[segments], lower), upper)
-    rx = rx - t * dx
-    ry = ry - t * dy
-    return rx * rx + ry * ry, t
-
-
-def _better(d2, seg, best_d2, best_seg) -> bool:
-    """Nearer, or as near with a lower segment index: one nearest point however it is found."""
-    return d2 < best_d2 or (d2 == best_d2 and seg < best_seg)
-
-
-def _beyond(distance2, r, best_distance) -> bool:
-    """Whether everything within ``r`` of a centre ``sqrt(distance2)`` away lies farther than
-    ``best_distance``."""
-    reach = r + best_distance
-    return distance2 > reach * reach * (1.0 + 1e-9)
-
-
-def _chord_distance2(px, py, table, c):
-    """Squared distance to chunk ``c``'s chord, which the chunk strays from by at most
-    ``chord_reach[c]``: a bound tighter than a circle around the chunk for a point beside a
-    smooth path, whose neighbouring chunks a circle would keep."""
-    rx, ry = px - table.chord_x[c], py - table.chord_y[c]
-    dx, dy = table.chord_dx[c], table.chord_dy[c]
-    t = min(max((rx * dx + ry * dy) * table.chord_inv_len2[c], 0.0), 1.0)
-    rx -= t * dx
-    ry -= t * dy
-    return rx * rx + ry * ry
-
-
-def _scan(px, py, a, b, extend, table, best):
-    """Segments ``a`` to ``b - 1`` against the best ``(d2, segment, t)`` so far; with
-    ``extend`` the end segments are rays, which :func:`_rays` tries."""
-    if extend:
-        a, b = max(a, 1), min(b, table.sx.shape[0] - 1)
-    best_d2, best_seg, best_t = best
-    for s in range(a, b):
-        d2, t = segment_distance2_of(px, py, table, s, 0.0, 1.0)
-        if _better(d2, s, best_d2, best_seg):
-            best_d2, best_seg, best_t = d2, s, t
-    return best_d2, best_seg, best_t
-
-
-def _rays(px, py, lo, hi, extend, table):
-    """The best ``(d2, segment, t)`` of the end segments in segments ``lo`` to ``hi - 1``,
-    continued as rays (none unless ``extend``), which no chunk's bound covers."""
-    n_seg = table.sx.shape[0]
-    best = (np.inf, -1, 0.0)
-    if extend:
-        for s in (0, n_seg - 1):
-            if lo <= s < hi:
-                low = -np.inf if s == 0 else 0.0
-                high = np.inf if s == n_seg - 1 else 1.0
-                d2, t = segment_distance2_of(px, py, table, s, low, high)
-                if _better(d2, s, best[0], best[1]):
-                    best = (d2, s, t)
-    return best
-
-
-def nearest_segment_of(px, py, lo, hi, extend, table, warm, kept):
-    """The nearest of segments ``lo`` to ``hi - 1`` to one point.
-
-    Exact: it starts from the chunk of segment ``warm`` (the previous sample's nearest, for a
-    time series), then searches every other group whose circle is not beyond the best so far,
-    and in it every chunk whose chord bound (:func:`_chord_distance2`) is not. ``extend``
-    continues the polyline's first and last segments as rays, which no bound covers, so those
-    are tried first. Ties go to the lower segment index.
-
-    Returns ``(d2, segment, t, n_kept, lower)``: the chunks it searched are ``kept[:n_kept]``,
-    and every other segment of the window (the rays aside) lies at least ``lower`` away (inf
-    when it set none aside).
-    """
-    best = _rays(px, py, lo, hi, extend, table)
-    first_chunk = warm // _CHUNK
-    a, b = max(lo, first_chunk * _CHUNK), min(hi, first_chunk * _CHUNK + _CHUNK)
-    best = _scan(px, py, a, b, extend, table, best)
-    kept[0], n_kept = first_chunk, 1
-    lower = np.inf
-    reach = np.sqrt(best[0])
-    c_lo, c_hi = lo // _CHUNK, (hi - 1) // _CHUNK + 1
-    for g in range(c_lo // _CHUNK, (c_hi - 1) // _CHUNK + 1):
-        gx, gy = px - table.group_cx[g], py - table.group_cy[g]
-        distance2 = gx * gx + gy * gy
-        if _beyond(distance2, table.group_r[g], reach):
-            lower = min(lower, np.sqrt(distance2) - table.group_r[g])
-            continue
-        for c in range(max(c_lo, g * _CHUNK), min(c_hi, g * _CHUNK + _CHUNK)):
-            if c == first_chunk:
-                continue
-            distance2 = _chord_distance2(px, py, table, c)
-            if _beyond(distance2, table.chord_reach[c], reach):
-                lower = min(lower, np.sqrt(distance2) - table.chord_reach[c])
-                continue
-            a, b = max(lo, c * _CHUNK), min(hi, c * _CHUNK + _CHUNK)
-            best = _scan(px, py, a, b, extend, table, best)
-            kept[n_kept] = c
-            n_kept += 1
-            reach = np.sqrt(best[0])
-    return best[0], best[1], best[2], n_kept, lower
-
-
-def nearest_segments_of(points, window, extend, table, out):
-    """Every point's nearest segment (:func:`nearest_segment_of`) into ``out = (d2, seg, t)``,
-    for ``points = (px, py)`` and ``window = (lo, hi)``, arrays over the points: a time series,
-    searched the way it moves.
-
-    Each search starts from the previous point's nearest segment, and certifies the points that
-    follow while they stay near where it was made: the segments it set aside lay at least
-    ``lower`` from there and its nearest ``reach``, so a point ``moved`` away is at most ``reach
-    + moved`` from that nearest segment and at least ``lower - moved`` from those set aside.
-    While ``2 moved < lower - reach`` (less a rounding margin of 1e-9 of the coordinates and
-    distances), and the window keeps that nearest segment, loses none below and gains at most a
-    chunk's worth above (a window that slides forward, as the off-tracking's does), the chunks
-    the search kept and what the window gained since hold the point's nearest segment: the same
-    segment, found the same way, as a search of its own would find.
-    """
-    (px, py), (lo, hi), (d2, seg, t) = points, window, out
-    kept = np.empty(table.chord_x.shape[0], np.int64)
-    n_kept, slack, margin = 0, -np.inf, 0.0
-    at_x, at_y, searched_lo, searched_hi, nearest = 0.0, 0.0, 0, 0, -1
-    warm = lo[0] if px.shape[0] else 0
-    for i in range(px.shape[0]):
-        x, y, a, b = px[i], py[i], lo[i], hi[i]
-        moved = np.hypot(x - at_x, y - at_y)
-        gained = b - searched_hi
-        certified = 0 <= gained <= _CHUNK and searched_lo <= a <= nearest < b
-        if certified and 2.0 * moved + margin < slack:
-            # the rays, the chunks it kept, and what the window gained since (some of it in a
-            # kept chunk: scanned twice, it finds the same)
-            best = _rays(x, y, a, b, extend, table)
-            for j in range(n_kept):
-                first, end = kept[j] * _CHUNK, kept[j] * _CHUNK + _CHUNK
-                best = _scan(x, y, max(a, first), min(b, end), extend, table, best)
-            d2[i], seg[i], t[i] = _scan(x, y, searched_hi, b, extend, table, best)
-        else:
-            d2[i], seg[i], t[i], n_kept, lower = nearest_segment_of(
-                x, y, a, b, extend, table, max(warm, a), kept
-            )
-            reach = np.sqrt(d2[i])
-            slack = lower - reach
-            margin = 1e-9 * (abs(x) + abs(y) + reach + (lower if lower < np.inf else 0.0))
-            at_x, at_y, searched_lo, searched_hi, nearest = x, y, a, b, seg[i]
-        warm = seg[i]
-
-
-#: The compiled :func:`nearest_segments_of`, once :mod:`tt_mujoco.sim.compiled` has
-#: loaded its kernel in this process (None: the vectorised search below serves alone).
+#: The compiled :func:`tt_mujoco.analysis.nearest.nearest_segments_of`, once
+#: :mod:`tt_mujoco.sim.compiled` has loaded its kernel in this process (None: the vectorised
+#: search below serves alone).
 _COMPILED = None
 
 
 def use_compiled_projection(project_points) -> None:
     """Let :meth:`Polyline.project` run ``project_points((px, py), (lo, hi), extend, table,
-    (d2, seg, t))``, the compiled :func:`nearest_segments_of` (same numbers); it returns
-    False when it could not run, and the vectorised search serves instead. None: none."""
+    (d2, seg, t))``, the compiled :func:`~tt_mujoco.analysis.nearest.nearest_segments_of` (same
+    numbers); it returns False when it could not run, and the vectorised search serves instead.
+    None: none."""
     global _COMPILED
     _COMPILED = project_points
 
@@ -415,17 +235,17 @@ class Polyline:
         return tangents[0], tangents[1]
 
     def _build_search(self) -> None:
-        """Chunk circles: runs of ``_CHUNK`` consecutive segments, each inside a circle around
+        """Chunk circles: runs of ``CHUNK`` consecutive segments, each inside a circle around
         its vertices' bounding box (a segment lies in the convex hull of its end points), and
-        groups of ``_CHUNK`` chunks inside circles around theirs. A chunk or group whose circle
+        groups of ``CHUNK`` chunks inside circles around theirs. A chunk or group whose circle
         is farther than a known distance cannot hold the nearest point: the compiled search
         walks these, and the vectorised one prunes its exact search with the chunks'.
         """
         n_seg = self.n_segments
-        n_chunks = -(-n_seg // _CHUNK)
-        self._chunk_first = np.arange(n_chunks) * _CHUNK
+        n_chunks = -(-n_seg // CHUNK)
+        self._chunk_first = np.arange(n_chunks) * CHUNK
         vertex_of = np.minimum(
-            self._chunk_first[:, None] + np.arange(_CHUNK + 1), self.vertices.shape[0] - 1
+            self._chunk_first[:, None] + np.arange(CHUNK + 1), self.vertices.shape[0] - 1
         )
         # The chunks' vertices, one chunk a row: x and y apart, each reduced along its rows.
         xs, ys = self.vertices[:, 0][vertex_of], self.vertices[:, 1][vertex_of]
@@ -436,11 +256,9 @@ class Polyline:
         self._chunk_radius = np.sqrt(np.max(off_x * off_x + off_y * off_y, axis=1))
         self._chunk_radius_max = float(self._chunk_radius.max())
         self._tree = self._chunk_tree = None  # made by _make_trees when the vectorised search runs
-        # Groups of _CHUNK chunks, each inside a circle around its chunks' circles.
-        n_groups = -(-n_chunks // _CHUNK)
-        chunk_of = np.minimum(
-            np.arange(n_groups)[:, None] * _CHUNK + np.arange(_CHUNK), n_chunks - 1
-        )
+        # Groups of CHUNK chunks, each inside a circle around its chunks' circles.
+        n_groups = -(-n_chunks // CHUNK)
+        chunk_of = np.minimum(np.arange(n_groups)[:, None] * CHUNK + np.arange(CHUNK), n_chunks - 1)
         reach_lo = (centre - self._chunk_radius[:, None])[chunk_of].min(axis=1)
         reach_hi = (centre + self._chunk_radius[:, None])[chunk_of].max(axis=1)
         group_centre = 0.5 * (reach_lo + reach_hi)
@@ -670,8 +488,8 @@ class Polyline:
         point asks the chunk tree for the circles within its distance so far (one without,
         whose window held no tree candidate, takes the nearest of its window's chunk starts).
         """
-        offsets = np.arange(_CHUNK)
-        budget = max(1, _SEARCH_BLOCK // _CHUNK)
+        offsets = np.arange(CHUNK)
+        budget = max(1, _SEARCH_BLOCK // CHUNK)
         for lo in range(0, pending.size, _POINT_BLOCK):
             idx = pending[lo : lo + _POINT_BLOCK]
             pair_point, pair_chunk = self._chunk_pairs(
@@ -704,7 +522,7 @@ class Polyline:
 
     def _window_chunks(self, limit, first) -> tuple[np.ndarray, np.ndarray]:
         """The chunks ``[lo, hi)`` that hold segments ``first`` to ``limit - 1``."""
-        return first // _CHUNK, np.minimum((limit - 1) // _CHUNK, self._chunk_first.size - 1) + 1
+        return first // CHUNK, np.minimum((limit - 1) // CHUNK, self._chunk_first.size - 1) + 1
 
     def _chunk_pairs(self, p, limit, first, d2) -> tuple[np.ndarray, np.ndarray]:
         """``(point, chunk)`` pairs, point-major with chunks ascending, of the chunks that may

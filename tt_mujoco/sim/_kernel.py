@@ -21,7 +21,7 @@ from numba import cfunc, njit, types
 from numba.extending import intrinsic, overload, register_jitable
 
 from tt_mujoco import exact
-from tt_mujoco.analysis import geometry
+from tt_mujoco.analysis import nearest
 from tt_mujoco.reference import feedback
 from tt_mujoco.sim import closed_loop, disturbances
 from tt_mujoco.sim.closed_loop import LAWS
@@ -93,10 +93,10 @@ def _pointer_of(array):
 
 @njit(cache=True)
 def project_points(points, window, extend, table, out):
-    """:func:`tt_mujoco.analysis.geometry.nearest_segments_of`, compiled: every point of
+    """:func:`tt_mujoco.analysis.nearest.nearest_segments_of`, compiled: every point of
     ``points = (px, py)``'s nearest segment in ``window = (lo, hi)`` into ``out = (d2, seg,
     t)``."""
-    geometry.nearest_segments_of(points, window, extend, table, out)
+    nearest.nearest_segments_of(points, window, extend, table, out)
 
 
 @overload(path_schedule.path_pose)

@@ -307,8 +307,8 @@ def kernel():
 
 
 def _projection(*args) -> bool:
-    """The metrics' compiled projection (:func:`tt_mujoco.analysis.geometry.nearest_segment_of`
-    in a loop); the cache's manifest is rewritten once this process has compiled it. False
+    """The metrics' compiled projection (:func:`tt_mujoco.analysis.nearest.nearest_segments_of`);
+    the cache's manifest is rewritten once this process has compiled it. False
     (and the cache set aside) when its compiled code fails to load."""
     try:
         _call_listed(_KERNEL.project_points, *args)

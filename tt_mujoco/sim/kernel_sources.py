@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import inspect
 
-from tt_mujoco.analysis import geometry
+from tt_mujoco.analysis import nearest
 from tt_mujoco.controllers import backing, base
 from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
 from tt_mujoco.sim import (
@@ -138,14 +138,14 @@ SHARED = (
     path_schedule.driven_offset_of,
     path_schedule.driven_steering_of,
     path_schedule.axle_gain_of,
-    geometry.segment_distance2_of,
-    geometry._better,
-    geometry._beyond,
-    geometry._chord_distance2,
-    geometry._scan,
-    geometry._rays,
-    geometry.nearest_segment_of,
-    geometry.nearest_segments_of,
+    nearest.segment_distance2_of,
+    nearest._better,
+    nearest._beyond,
+    nearest._chord_distance2,
+    nearest._scan,
+    nearest._rays,
+    nearest.nearest_segment_of,
+    nearest.nearest_segments_of,
 )
 
 
