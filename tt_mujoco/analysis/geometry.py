@@ -196,16 +196,15 @@ class Polyline:
         for a closed chunk) and how far its vertices, hence its segments, stray from it (a
         segment lies in the convex hull of its ends, and the distance to the chord is convex),
         widened by 1e-12 of the path's extent against rounding in the bound. ``xs``, ``ys``:
-        the chunks' vertices, one chunk a row."""
-        start_x, start_y = xs[:, 0], ys[:, 0]
-        chord_x, chord_y = xs[:, -1] - start_x, ys[:, -1] - start_y
+        the chunks' vertices, one chunk a column."""
+        start_x, start_y = xs[0], ys[0]
+        chord_x, chord_y = xs[-1] - start_x, ys[-1] - start_y
         length2 = chord_x * chord_x + chord_y * chord_y
         inv_length2 = np.divide(1.0, length2, out=np.zeros_like(length2), where=length2 > 0.0)
-        rel_x, rel_y = xs - start_x[:, None], ys - start_y[:, None]
-        t = (rel_x * chord_x[:, None] + rel_y * chord_y[:, None]) * inv_length2[:, None]
-        t = np.clip(t, 0.0, 1.0)
-        off_x, off_y = rel_x - t * chord_x[:, None], rel_y - t * chord_y[:, None]
-        stray = np.sqrt(np.max(off_x * off_x + off_y * off_y, axis=1))
+        rel_x, rel_y = xs - start_x, ys - start_y
+        t = np.clip((rel_x * chord_x + rel_y * chord_y) * inv_length2, 0.0, 1.0)
+        off_x, off_y = rel_x - t * chord_x, rel_y - t * chord_y
+        stray = np.sqrt(np.max(off_x * off_x + off_y * off_y, axis=0))
         slack = 1e-12 * float(np.max(np.abs(self.vertices)))
         columns = (start_x, start_y, chord_x, chord_y, inv_length2)
         return (*(np.ascontiguousarray(c) for c in columns), stray * (1.0 + 1e-9) + slack)
@@ -245,15 +244,16 @@ class Polyline:
         n_chunks = -(-n_seg // CHUNK)
         self._chunk_first = np.arange(n_chunks) * CHUNK
         vertex_of = np.minimum(
-            self._chunk_first[:, None] + np.arange(CHUNK + 1), self.vertices.shape[0] - 1
+            np.arange(CHUNK + 1)[:, None] + self._chunk_first, self.vertices.shape[0] - 1
         )
-        # The chunks' vertices, one chunk a row: x and y apart, each reduced along its rows.
+        # The chunks' vertices, one chunk a column, x and y apart: reduced across the few rows,
+        # each reduction runs along the chunks.
         xs, ys = self.vertices[:, 0][vertex_of], self.vertices[:, 1][vertex_of]
-        centre_x = 0.5 * (xs.min(axis=1) + xs.max(axis=1))
-        centre_y = 0.5 * (ys.min(axis=1) + ys.max(axis=1))
-        off_x, off_y = xs - centre_x[:, None], ys - centre_y[:, None]
+        centre_x = 0.5 * (xs.min(axis=0) + xs.max(axis=0))
+        centre_y = 0.5 * (ys.min(axis=0) + ys.max(axis=0))
+        off_x, off_y = xs - centre_x, ys - centre_y
         self._chunk_centre = centre = np.column_stack((centre_x, centre_y))
-        self._chunk_radius = np.sqrt(np.max(off_x * off_x + off_y * off_y, axis=1))
+        self._chunk_radius = np.sqrt(np.max(off_x * off_x + off_y * off_y, axis=0))
         self._chunk_radius_max = float(self._chunk_radius.max())
         self._tree = self._chunk_tree = None  # made by _make_trees when the vectorised search runs
         # Groups of CHUNK chunks, each inside a circle around its chunks' circles.
