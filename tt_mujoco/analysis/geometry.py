@@ -69,9 +69,6 @@ class _Best:
         self.seg = np.full(n, -1, dtype=np.int64)
         self.t = np.zeros(n)
 
-    def __iter__(self):
-        return iter((self.d2, self.seg, self.t))
-
 
 class PolylineProjection(NamedTuple):
     """Nearest points of a set of query points on a polyline (arrays over the query points).
@@ -351,18 +348,19 @@ class Polyline:
 
         pending = np.flatnonzero(finite & (limit > 0))
         if _COMPILED is not None and pending.size:
-            # Every point searched (the usual time series): no gathers, the results in place.
+            # Every point searched (the usual time series): no gathers, no scatter.
             every = pending.size == n
             at = slice(None) if every else pending
             px, py = np.ascontiguousarray(pts[at, 0]), np.ascontiguousarray(pts[at, 1])
-            found = _Best(pending.size) if not every else best
+            m = pending.size
+            d2, seg, t = np.empty(m), np.empty(m, np.int64), np.empty(m)
             window = (first[at], limit[at])
-            if _COMPILED((px, py), window, extend_ends, self.table, tuple(found)):
-                if not every:
-                    best.d2[pending], best.seg[pending], best.t[pending] = found
+            if _COMPILED((px, py), window, extend_ends, self.table, (d2, seg, t)):
+                if every:
+                    best.d2, best.seg, best.t = d2, seg, t
+                else:
+                    best.d2[pending], best.seg[pending], best.t[pending] = d2, seg, t
                 pending = pending[:0]
-            elif every:
-                best = _Best(n)  # what the failed call may have written
         if pending.size:
             self._make_trees()
         if segment_first is not None and pending.size:
