@@ -13,7 +13,11 @@ and the accuracy figures the model is validated on (``python -m tt_mujoco.valida
 - the final P error of the analytic kinematics after a weaving drive (bound 2 mm),
 - the largest |beta - eta phi| there (bound 1e-4 rad),
 - the largest |dv| and |d omega| of open-loop torques against the reduced ODE (bounds 5e-4 m/s,
-  5e-3 rad/s).
+  5e-3 rad/s);
+
+and, closed loop, the metrics of the paper's S-curve run and of the 20 dB noise episode under
+each setting, as ratios to the project's settings' (the open-loop checks above drive smoothly,
+where every setting converges to the same answer; the closed loop is where they part).
 
 A setting is applied to every model compiled while it is measured (the mass matrix does not
 depend on the solver, so the inertia check is not repeated).
@@ -21,7 +25,6 @@ depend on the solver, so the inertia check is not repeated).
 
 import copy
 import os
-import statistics
 import time
 from contextlib import contextmanager
 
@@ -29,7 +32,7 @@ import mujoco
 import numpy as np
 
 from tt_mujoco import validate
-from tt_mujoco.sim import Scenario, Stepper, build, physics
+from tt_mujoco.sim import Scenario, Stepper, build, physics, simulate
 from tt_mujoco.sim.simulate import run_episode
 from tt_mujoco.vehicle.params import Params
 
@@ -57,8 +60,8 @@ def model_options(options: dict):
     """Every model compiled inside gets ``options`` (fields of ``MjModel.opt``)."""
     original = physics.compile_model
 
-    def compile_with(p):
-        model = original(p)
+    def compile_with(*args):
+        model = original(*args)
         _apply(model, options)
         return model
 
@@ -69,47 +72,58 @@ def model_options(options: dict):
         physics.compile_model = original
 
 
-def recorded_inputs():
-    """The noisy main run's mj_step inputs and initial state (its own settings), recorded
-    before every ``mj_step`` of CPython's step (the compiled loop gives the same numbers)."""
+def recorded_inputs(scenario: Scenario):
+    """An episode's mj_step inputs and initial state (its own settings), recorded before every
+    ``mj_step`` of CPython's step (the compiled loop gives the same numbers)."""
     from bench_closed_loop import recording_mj_step
 
     os.environ["TT_MUJOCO_COMPILED"] = "0"
-    scenario = Scenario(traj="s_curve", duration=10.0, noise_snr_db=20.0)
-    built = build(scenario)
-    stepper = Stepper(built)
-    stepper.reset(np.random.default_rng(0))
-    plant, d = stepper.plant, stepper.plant.data
-    initial = (d.qpos.copy(), d.qvel.copy())
-    inputs = []
-    ctrl = built.new_controller()
-    ctrl.reset()
-    with recording_mj_step(d, inputs):
-        run_episode(stepper, ctrl)
+    try:
+        built = build(scenario)
+        stepper = Stepper(built)
+        stepper.reset(np.random.default_rng(0))
+        plant, d = stepper.plant, stepper.plant.data
+        initial = (d.qpos.copy(), d.qvel.copy())
+        inputs = []
+        ctrl = built.new_controller()
+        ctrl.reset()
+        with recording_mj_step(d, inputs):
+            run_episode(stepper, ctrl)
+    finally:
+        os.environ.pop("TT_MUJOCO_COMPILED", None)
     return plant.model, initial, [(ctrl_, qfrc) for ctrl_, qfrc, _, _ in inputs]
 
 
-def replay_cost(model, initial, inputs, options: dict) -> tuple[float, float, float]:
-    """(us a step, mean solver iterations, mean line-search iterations) of the replay."""
+def replay_once(model, initial, inputs, options: dict) -> tuple[float, float, float]:
+    """(seconds, mean solver iterations, mean line-search iterations) of one replay."""
     m = copy.copy(model)
     _apply(m, options)
-    times, niter, nls = [], [], []
-    for _ in range(3):
-        d = mujoco.MjData(m)
-        d.qpos[:], d.qvel[:] = initial
-        mujoco.mj_forward(m, d)
-        iters = lsiters = 0
-        start = time.perf_counter()
-        for u, q in inputs:
-            d.ctrl[:] = u
-            d.qfrc_applied[:] = q
-            mujoco.mj_step(m, d)
-            iters += int(d.solver_niter[0])
-            lsiters += int(d.solver[0].neval)
-        times.append(time.perf_counter() - start)
-        niter.append(iters / len(inputs))
-        nls.append(lsiters / len(inputs))
-    return 1e6 * min(times) / len(inputs), statistics.mean(niter), statistics.mean(nls)
+    d = mujoco.MjData(m)
+    d.qpos[:], d.qvel[:] = initial
+    mujoco.mj_forward(m, d)
+    iters = lsiters = 0
+    start = time.perf_counter()
+    for u, q in inputs:
+        d.ctrl[:] = u
+        d.qfrc_applied[:] = q
+        mujoco.mj_step(m, d)
+        iters += int(d.solver_niter[0])
+        lsiters += int(d.solver[0].neval)
+    return time.perf_counter() - start, iters / len(inputs), lsiters / len(inputs)
+
+
+def replay_costs(recording, rounds: int = 3) -> dict[str, tuple[float, float, float]]:
+    """Per setting: (us a step, mean solver iterations, mean line-search iterations), the best
+    of ``rounds`` replays, the settings taking turns in each round (the machine drifts)."""
+    model, initial, inputs = recording
+    runs = {name: [] for name in SETTINGS}
+    for _ in range(rounds):
+        for name, options in SETTINGS.items():
+            runs[name].append(replay_once(model, initial, inputs, options))
+    return {
+        name: (1e6 * min(r[0] for r in got) / len(inputs), got[0][1], got[0][2])
+        for name, got in runs.items()
+    }
 
 
 #: MuJoCo's own stage timers, in the order a step runs them (mjData.timer).
@@ -147,30 +161,59 @@ def stage_profile(model, initial, inputs) -> dict[str, float]:
     return out
 
 
+#: The closed-loop episodes each setting runs (replayed for the cost, run for the metrics), and
+#: the metrics compared.
+EPISODES = {
+    "noisy": Scenario(traj="s_curve", duration=10.0, noise_snr_db=20.0),
+    "paper": Scenario(traj="s_curve"),
+}
+CLOSED_LOOP_METRICS = ("rmse_lateral", "rmse_omega", "slip_lateral_max", "eq_violation_max")
+
+
+def closed_loop_metrics(options: dict) -> dict[str, dict]:
+    """Each episode's metrics with ``options`` applied to its model."""
+    with model_options(options):
+        return {name: simulate(scenario).metrics for name, scenario in EPISODES.items()}
+
+
 def main() -> None:
-    model, initial, inputs = recorded_inputs()
+    recordings = {name: recorded_inputs(scenario) for name, scenario in EPISODES.items()}
+    model, initial, inputs = recordings["noisy"]
     print("where a step of the project's settings goes (MuJoCo's timers, us a step):")
     profile = stage_profile(model, initial, inputs)
     for label, value in profile.items():
         print(f"  {label:28s} {value:6.2f}  ({100 * value / profile['whole step']:4.1f} %)")
-    base_us = None
-    header = (
-        f"{'setting':38s} {'us/step':>8s} {'ratio':>6s} {'iter':>5s} {'ls':>5s} "
-        f"{'P err mm':>9s} {'|b-ep|':>8s} {'|dv|':>8s} {'|dw|':>8s}"
+    costs = {name: replay_costs(recording) for name, recording in recordings.items()}
+    base = {name: cost[next(iter(SETTINGS))][0] for name, cost in costs.items()}
+    print(
+        f"{len(inputs)} steps of the 20 dB noise episode and "
+        f"{len(recordings['paper'][2])} of the paper's run replayed per setting"
     )
-    print(f"{len(inputs)} steps of the 20 dB noise episode replayed per setting")
-    print(header)
+    print(
+        f"{'setting':38s} {'us/step':>8s} {'ratio':>6s} {'iter':>5s} {'ls':>5s} "
+        f"{'paper':>6s} {'P err mm':>9s} {'|b-ep|':>8s} {'|dv|':>8s} {'|dw|':>8s}"
+    )
     for name, options in SETTINGS.items():
-        us, iters, ls = replay_cost(model, initial, inputs, options)
-        base_us = base_us or us
+        us, iters, ls = costs["noisy"][name]
         with model_options(options):
             kin = validate.check_kinematics(Params(), +1)
             dyn = validate.check_dynamics(Params())
         print(
-            f"{name:38s} {us:8.2f} {us / base_us:6.3f} {iters:5.2f} {ls:5.2f} "
+            f"{name:38s} {us:8.2f} {us / base['noisy']:6.3f} {iters:5.2f} {ls:5.2f} "
+            f"{costs['paper'][name][0] / base['paper']:6.3f} "
             f"{1e3 * kin['final_P_error_m']:9.3f} {kin['eq_violation_max_rad']:8.1e} "
             f"{dyn['v_max_abs_diff']:8.1e} {dyn['omega_max_abs_diff']:8.1e}"
         )
+    baseline = closed_loop_metrics({})
+    others = {name: closed_loop_metrics(o) for name, o in list(SETTINGS.items())[1:]}
+    for episode in EPISODES:
+        print(f"closed loop, {episode} episode: each setting's metrics over the project's")
+        print(f"{'setting':38s}" + "".join(f" {m:>17s}" for m in CLOSED_LOOP_METRICS))
+        values = (f" {baseline[episode][m]:17.4e}" for m in CLOSED_LOOP_METRICS)
+        print(f"{'project (absolute)':38s}" + "".join(values))
+        for name, got in others.items():
+            ratios = (got[episode][m] / baseline[episode][m] for m in CLOSED_LOOP_METRICS)
+            print(f"{name:38s}" + "".join(f" {r:17.3f}" for r in ratios))
 
 
 if __name__ == "__main__":
