@@ -280,8 +280,10 @@ def scene_xml(vehicle_file: str = VEHICLE_FILE, ground: tuple[str, str] = ("", F
   </visual>
 
   <asset>
-    <texture type="skybox" builtin="gradient" rgb1="0.3 0.5 0.7" rgb2="0 0 0" width="512"
-             height="3072"/>
+    <!-- The sky shows only in the live viewer (videos do not draw it), and every episode copies
+         the model: a small gradient keeps that copy small. -->
+    <texture type="skybox" builtin="gradient" rgb1="0.3 0.5 0.7" rgb2="0 0 0" width="128"
+             height="768"/>
     <texture type="2d" name="groundplane" builtin="checker" mark="edge" rgb1="0.2 0.3 0.4"
              rgb2="0.1 0.2 0.3" markrgb="0.8 0.8 0.8" width="300" height="300"/>
     <material name="groundplane" texture="groundplane" texuniform="true" texrepeat="2 2"
