@@ -1,9 +1,10 @@
 """The second controller form: a plain-number law that the closed loop compiles.
 
-A :class:`~tt_mujoco.controllers.Controller` subclass runs in the Python loop. A law written
-as one plain function of numbers and named records runs compiled, at the cost of the physics
-itself, wherever the episode has a compiled form (:mod:`tt_mujoco.sim.compiled`), and in the
-Python loop, with the same numbers, everywhere else::
+A :class:`~tt_mujoco.controllers.Controller` subclass's ``compute`` is Python, which the
+compiled loop calls back at every step. A law written as one plain function of numbers and
+named records runs compiled, at the cost of the physics itself, wherever the episode has a
+compiled form (:mod:`tt_mujoco.sim.compiled`), and in the Python loop, with the same numbers,
+everywhere else::
 
     from tt_mujoco.controllers import plain_law
 

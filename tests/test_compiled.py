@@ -130,14 +130,45 @@ CASES = [
         duration=3.0,
     ),
     dict(traj="s_curve", plant="reduced", reverse=True, faults=["payload:s=3,factor=2"]),
+    # a controller class, whose compute the kernel calls back at every step: alone, with the
+    # path schedule and noise (it is told of every change of the gains), on the reduced plant
+    # with a dropout and a sensor delay
+    dict(traj="s_curve", controller="examples/kanayama.py:KanayamaTracker", duration=3.0),
+    dict(
+        traj="s_curve",
+        controller="examples/kanayama.py:KanayamaTracker",
+        eta="path",
+        noise_snr_db=20.0,
+        duration=3.0,
+    ),
+    dict(
+        traj="circle",
+        controller="examples/kanayama.py:KanayamaTracker",
+        plant="reduced",
+        faults=["dropout:t=1,duration=0.3"],
+        sensor_delay=0.004,
+        duration=3.0,
+    ),
 ]
 
 
 def _both(monkeypatch, scenario):
+    """The scenario's result from the Python loop, then from the compiled one (checked to have
+    run: it may hand an episode back to the Python loop)."""
+    ran = []
+
+    def run_compiled(*args, **kwargs):
+        ran.append(outcome := run(*args, **kwargs))
+        return outcome
+
+    run = compiled.run_compiled
+    monkeypatch.setattr(compiled, "run_compiled", run_compiled)
     monkeypatch.setenv("TT_MUJOCO_COMPILED", "0")
     python = simulate(scenario)
     monkeypatch.setenv("TT_MUJOCO_COMPILED", "1")
-    return python, simulate(scenario)
+    fast = simulate(scenario)
+    assert len(ran) == 1 and ran[0] is not None
+    return python, fast
 
 
 @pytest.mark.parametrize("case", CASES, ids=lambda c: "-".join(str(v) for v in c.values()))
@@ -281,15 +312,81 @@ def test_the_compile_asked_at_exit_is_skipped_once_the_kernel_is_there(monkeypat
     assert started == []
 
 
-def test_a_user_controller_runs_the_python_loop():
+def test_a_subclass_of_a_built_in_law_runs_its_compute_called_back(monkeypatch):
     from tt_mujoco.controllers.pid import PidController
 
-    class Mine(PidController):
+    from tt_mujoco.sim.closed_loop import PYTHON
+    from tt_mujoco.sim.stepper import Stepper
+
+    class Mine(PidController):  # may change what it runs: its Python compute is the law
         pass
 
     built = build(Scenario(traj="circle", duration=3.0))
     controller = Mine.from_setup(built.controller_setup)
-    assert compiled.unsupported(built, controller) == "a Python controller class"
+    assert compiled.unsupported(built, controller) is None
+    stepper = Stepper(built)
+    stepper.reset(np.random.default_rng(0))
+    kernel = compiled.kernel()
+    _, _, law, _, _ = stepper.begin(
+        controller, None, compiled=True, call_back=kernel.PythonLawCallback
+    )
+    assert law.kind == PYTHON and isinstance(law.user, kernel.PythonLawCallback)
+
+
+FAILING = """
+import sys
+from tt_mujoco.controllers import Controller
+
+class Fails(Controller):
+    def compute(self, t, m, r):
+        self.log("v_seen", m.v)
+        if t >= 2.5:
+            BODY
+        return 0.3 + 0.01 * r.v_d - 0.05 * m.omega, 0.3 - 0.01 * r.v_d + 0.05 * m.omega
+"""
+
+
+@pytest.mark.parametrize(
+    "body",
+    ["raise ZeroDivisionError('gain')", "return None", "return float('nan'), 0.0", "sys.exit(0)"],
+)
+def test_a_controller_class_that_fails_stops_both_loops_alike(monkeypatch, tmp_path, body):
+    # What the compute raises cannot leave the kernel's C callback: it stops the kernel, and
+    # the kernel's caller raises it, at the same step and with the same rows as CPython's.
+    path = tmp_path / "fails.py"
+    path.write_text(FAILING.replace("BODY", body))
+    scenario = Scenario(traj="circle", controller=f"{path}:Fails", duration=3.0)
+    python, fast = _both(monkeypatch, scenario)
+    assert python.status != "ok" and "t=2.500 s" in python.message
+    assert (python.status, python.message) == (fast.status, fast.message)
+    assert set(python.timeseries) == set(fast.timeseries)
+    assert len(fast.timeseries["t"]) == 2500
+    for name, column in python.timeseries.items():
+        assert np.array_equal(column, fast.timeseries[name], equal_nan=True), name
+
+
+def test_an_interrupt_inside_a_called_back_compute_ends_the_run_as_it_does_in_python(
+    monkeypatch, tmp_path
+):
+    path = tmp_path / "stops.py"
+    path.write_text(FAILING.replace("BODY", "raise KeyboardInterrupt"))
+    scenario = Scenario(traj="circle", controller=f"{path}:Fails", duration=3.0)
+    for route in ("0", "1"):
+        monkeypatch.setenv("TT_MUJOCO_COMPILED", route)
+        with pytest.raises(KeyboardInterrupt):
+            simulate(scenario)
+
+
+def test_a_python_law_is_given_the_reference_records_leading_fields():
+    import inspect
+
+    from tt_mujoco.controllers import Reference
+
+    from tt_mujoco.sim import records
+    from tt_mujoco.sim.stepper import TARGET_FIELDS
+
+    given = tuple(inspect.signature(Reference).parameters)
+    assert records.REFERENCE_FIELDS[: len(TARGET_FIELDS)] == TARGET_FIELDS == given[:-1]
 
 
 def _fake_cache(monkeypatch, tmp_path):
@@ -382,8 +479,11 @@ def test_a_kernel_that_fails_to_load_leaves_the_episode_to_the_python_loop(
             raise EOFError("Ran out of input")
 
     class Broken:
-        no_user_law = None
+        no_user_law = 0.0  # a placeholder numba can type; never called
         run_chunk = BrokenDispatcher
+
+        class PythonLawCallback:
+            pass
 
     monkeypatch.setenv("TT_MUJOCO_CACHE", str(tmp_path))
     scenario = Scenario(traj="circle", duration=3.0, noise_snr_db=25.0)

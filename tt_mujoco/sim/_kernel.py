@@ -13,6 +13,7 @@ them by overloads.
 
 from __future__ import annotations
 
+import ctypes
 import math
 import types as pytypes
 
@@ -75,6 +76,39 @@ def no_user_law(m, r, model, gains, state, out, dt, limit):  # the built-in laws
     pass
 
 
+_C_LAW = ctypes.CFUNCTYPE(None, *[ctypes.c_void_p] * 6, ctypes.c_double, ctypes.c_double)
+
+
+class PythonLawCallback(types.WrapperAddressProtocol):
+    """A law Python computes (``python_law(law) -> (status, T_r, T_l, u1, u2)``, a controller
+    class's ``compute`` with its checks) as a C function of the kernel's law signature, which
+    the kernel calls back at every step (:func:`_python_law`): the step runs compiled, and
+    only the law in Python. What the law raises stops the kernel with
+    :data:`~tt_mujoco.sim.closed_loop.PYTHON_RAISED` and waits in :attr:`raised` for the
+    kernel's caller to raise it."""
+
+    def __init__(self, python_law):
+        self.python_law = python_law
+        self.law_record = None  # the kernel's law record, which the law reads (Stepper.begin)
+        self.raised = None
+        self._function = _C_LAW(self._call)  # held: the kernel calls its address
+
+    def _call(self, *_):
+        law = self.law_record
+        try:
+            status, T_r, T_l, u1, u2 = self.python_law(law)
+        except BaseException as err:  # nothing may leave a C callback: raised after the chunk
+            self.raised = err
+            status, T_r, T_l, u1, u2 = closed_loop.PYTHON_RAISED, math.nan, 0.0, 0.0, 0.0
+        law.torques[:] = (T_r, T_l, u1, u2, status)
+
+    def __wrapper_address__(self):
+        return ctypes.cast(self._function, ctypes.c_void_p).value
+
+    def signature(self):
+        return USER_LAW
+
+
 @intrinsic
 def _pointer(typingctx, array):
     """The address of a contiguous array's data (of float fields), as a C float pointer."""
@@ -106,8 +140,8 @@ def _path_pose(target, s):
     return lambda target, s: closed_loop.pose_at(target, s)
 
 
-# What only CPython's step runs: a path without closed form, a user's disturbance, a law that
-# Python computes. The kernel never meets them (compiled.unsupported); these give the types.
+# What only CPython's step runs: a path without closed form, a user's disturbance. The kernel
+# never meets them (compiled.unsupported); these give the types.
 @overload(closed_loop.hooked_curvature)
 def _hooked_curvature(target, s):
     return lambda target, s: (math.nan, math.nan)
@@ -125,7 +159,17 @@ def _disturbance_at(loop, t):
 
 @overload(closed_loop.python_law)
 def _python_law(law):
-    return lambda law: (LAW_OK, math.nan, math.nan, math.nan, math.nan)
+    """A law Python computes (a controller class's ``compute``), called back: ``law.user`` is
+    then a C function (:class:`tt_mujoco.sim.compiled.PythonLawCallback`) that reads the law
+    record from Python and writes ``(T_r, T_l, u1, u2, status)`` into ``law.torques``."""
+
+    def call_back(law):
+        out = law.torques
+        at = _pointer(out)
+        law.user(at, at, at, at, at, at, 0.0, 0.0)
+        return int(out[4]), out[0], out[1], out[2], out[3]
+
+    return call_back
 
 
 @overload(closed_loop.run_law)

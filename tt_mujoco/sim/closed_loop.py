@@ -76,6 +76,9 @@ PYTHON = USER + 1
 HOOKED_PATH = 3
 #: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
 NOMINAL_SINGULAR = -1.0
+#: The status of a law Python computes that raised, called back from the kernel: the kernel
+#: stops there, and its caller raises what the law raised (:mod:`tt_mujoco.sim.compiled`)
+PYTHON_RAISED = -2
 PATH_SCHEDULE, CURVATURE_SCHEDULE = schedule.PATH_SCHEDULE, schedule.CURVATURE_SCHEDULE
 #: where trailer 1's axle and the bodies' motion are in the measurement, and a trailer's gain
 #: in a train's row
@@ -151,7 +154,8 @@ def disturbance_at(loop, t):
 
 def python_law(law):
     """The law Python computes between the halves (:data:`PYTHON`): ``law.user``, called with
-    the law record (CPython only); ``(status, T_r, T_l, u1, u2)``."""
+    the law record; ``(status, T_r, T_l, u1, u2)``. The kernel calls it back through a C
+    function instead, which leaves them in ``law.torques``."""
     return law.user(law)
 
 

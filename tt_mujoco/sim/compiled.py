@@ -1,19 +1,20 @@
-"""The compiled episode: the closed loop of a built-in or plain-number law as machine code.
+"""The compiled episode: the closed loop as machine code, for every controller.
 
 :func:`tt_mujoco.sim.simulate.run_episode` hands an episode here when every part of it has a
 compiled form (:func:`unsupported` says why not otherwise): a built-in law
-(:data:`tt_mujoco.sim.kernel_sources.LAWS`: ISMC-STA, PID, FBL, ...) or a user's plain-number law
-(:mod:`tt_mujoco.controllers.plain`, compiled once per process by :func:`compile_law`) on the
-built-in nominal model, a static or dynamic target on a closed-form path (the S-curve, the
-circle, the cycloid, a CSV spline) driven forwards or backing up (the reverse target, with the
-hitch cascade or path feedback), the paper's disturbance (matched or as a wrench) or none,
-measurement noise, one trailer or a train, constant steering gains or either schedule
-(:mod:`tt_mujoco.sim.schedule`), path feedback, faults, DC motors, wind, a sensor delay,
-friction patches; not a per-step callback (a payload step on the reduced plant returns to
-Python, which recomputes the plant's constants and advances that step, then the kernel goes
-on). The loop then runs in numba, chunk by chunk, calling ``mj_step`` through
-MuJoCo's C library or stepping the reduced ODE, over the named records of
-:mod:`tt_mujoco.sim.records`.
+(:data:`tt_mujoco.sim.kernel_sources.LAWS`: ISMC-STA, PID, FBL, ...) on the built-in nominal
+model, a user's plain-number law (:mod:`tt_mujoco.controllers.plain`, compiled once per process
+by :func:`compile_law`), or any other controller, whose Python ``compute`` the kernel calls back
+at every step through a C function (:class:`tt_mujoco.sim._kernel.PythonLawCallback`); a
+static or dynamic target on a closed-form path (the S-curve, the circle, the cycloid, a CSV
+spline) driven forwards or backing up (the reverse target, with the hitch cascade or path
+feedback), the paper's disturbance (matched or as a wrench) or none, measurement noise, one
+trailer or a train, constant steering gains or either schedule (:mod:`tt_mujoco.sim.schedule`),
+path feedback, faults, DC motors, wind, a sensor delay, friction patches; not a per-step
+callback (a payload step on the reduced plant returns to Python, which recomputes the plant's
+constants and advances that step, then the kernel goes on). The loop then runs in numba, chunk
+by chunk, calling ``mj_step`` through MuJoCo's C library or stepping the reduced ODE, over the
+named records of :mod:`tt_mujoco.sim.records`.
 
 The loop it runs is :func:`tt_mujoco.sim.closed_loop.run_steps`, compiled from its source with
 every function it calls (:mod:`tt_mujoco.sim._kernel`), the one CPython runs for every other
@@ -63,18 +64,12 @@ def _enabled() -> bool:
 
 def unsupported(built, controller, on_step=None) -> str | None:
     """Why the episode has no compiled form (None when it has one); only a query."""
-    from tt_mujoco.controllers.plain import PlainLawController
-    from tt_mujoco.sim.episode import has_closed_form, is_law_class, model_of, users_disturbance
+    from tt_mujoco.sim.episode import has_closed_form, users_disturbance
 
     reasons = [
         (not _enabled(), "TT_MUJOCO_COMPILED=0"),
         (built.steps < MIN_STEPS, f"fewer than {MIN_STEPS} steps"),
         (on_step is not None, "a per-step callback"),
-        (
-            not (is_law_class(controller) or isinstance(controller, PlainLawController)),
-            "a Python controller class",
-        ),
-        (not getattr(model_of(controller), "builtin", False), "a custom model"),
         (not has_closed_form(built.path), "a path without closed form"),
         (users_disturbance(built), "a custom disturbance"),
     ]
@@ -412,19 +407,26 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
             file=sys.stderr,
         )
         return None
-    stepper.begin(controller, user, compiled=True)
+    _, _, law, _, _ = stepper.begin(
+        controller, user, compiled=True, call_back=k_mod.PythonLawCallback
+    )
+    callback = law.user if isinstance(law.user, k_mod.PythonLawCallback) else None
     entry = None
 
     def run_chunk(*args):
         nonlocal entry
         if entry is not None:
-            return entry(*args)
-        try:  # the first call loads the compiled code from the cache
-            entry = _compiled_for(k_mod.run_chunk, args)
             out = entry(*args)
-        except Exception as err:  # damaged: nothing has run, the Python loop takes over
-            raise _DamagedCacheError() from err
-        _write_manifest(sum(k_mod.run_chunk.stats.cache_misses.values()) > 0)
+        else:
+            try:  # the first call loads the compiled code from the cache
+                entry = _compiled_for(k_mod.run_chunk, args)
+                out = entry(*args)
+            except Exception as err:  # damaged: nothing has run, the Python loop takes over
+                raise _DamagedCacheError() from err
+            _write_manifest(sum(k_mod.run_chunk.stats.cache_misses.values()) > 0)
+        if callback is not None and callback.raised is not None:  # what the Python law raised
+            raised, callback.raised = callback.raised, None
+            raise raised
         return out
 
     def advance(*args):  # not compiled by the warm-up: its first call may add to the cache
@@ -438,12 +440,14 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
 
 
 def _user_law(k_mod, controller):
-    """The compiled form of a plain-number law (the kernel's placeholder for a built-in)."""
+    """The compiled form of a plain-number law, the kernel's placeholder for a built-in one,
+    or None for a controller whose Python ``compute`` the kernel calls back."""
     from tt_mujoco.controllers.plain import PlainLawController
+    from tt_mujoco.sim.episode import runs_built_in
 
     if isinstance(controller, PlainLawController):
         return compile_law(type(controller))
-    return k_mod.no_user_law
+    return k_mod.no_user_law if runs_built_in(controller) else None
 
 
 def compile_law(cls):

@@ -327,7 +327,7 @@ def _law_record(controller, nominal, user, steering, python):
         reference=records.new_record(records.REFERENCE_FIELDS),
         model=records.new_record(records.NOMINAL_FIELDS),
         measurement_values=np.zeros(len(records.MEASUREMENT_DTYPE)),
-        torques=np.zeros(2),
+        torques=np.zeros(5),
         follows_steering=kind < len(LAWS),
         steered_train=_train_constants(nominal.with_etas(tuple(steering.etas.tolist()))),
         axle_slew_rate=float(getattr(controller, "axle_slew_rate", math.inf)),

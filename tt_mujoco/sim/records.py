@@ -280,7 +280,9 @@ class LawRecord(NamedTuple):
     reference: np.ndarray
     model: np.ndarray
     measurement_values: np.ndarray
-    #: where the user's law writes its two torques
+    #: where a law the kernel calls out to writes what it computed: a plain-number law its two
+    #: torques; a Python law called back (closed_loop.python_law) its torques, its request
+    #: and its status
     torques: np.ndarray
     #: whether the law's model takes the scheduled gains (a built-in law's does), and a
     #: train's nominal constants with those gains (scratch: with the gains the axles follow,

@@ -63,19 +63,30 @@ _LOOP_VALUES = operator.attrgetter(*LOOP_COLUMNS)
 
 def seen_measurement(law) -> Measurement:
     """The measurement as a Python law sees it at this step (``law.measurement_values``,
-    ``law.measurement_rows``: noise, faults and the delay included)."""
-    values = law.measurement_values
-    if not len(law.measurement_rows):
+    ``law.measurement_rows``: noise, faults and the delay included), in floats from either
+    kind of record (CPython's lists, or the kernel's arrays)."""
+    values, rows = law.measurement_values, law.measurement_rows
+    if isinstance(values, np.ndarray):
+        values, rows = values.tolist(), rows.tolist()
+    if not len(rows):
         return Measurement._make(values)
     out = TrainMeasurement._make(values)
-    out.train = tuple(tuple(row) for row in law.measurement_rows)
+    out.train = tuple(tuple(row) for row in rows)
     return out
 
 
 def reference_of(law, path) -> Reference:
-    """The target at this step as a Python law sees it (``law.reference``) on ``path``."""
+    """The target at this step as a Python law sees it (``law.reference``) on ``path``, in
+    floats from either kind of record."""
     r = law.reference[0]
+    if isinstance(r, np.void):  # the kernel's record, as floats: its leading fields
+        return Reference(*r.tolist()[: len(TARGET_FIELDS)], path)
     return Reference(r.t, r.s, r.kappa, r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot, path)
+
+
+#: What a Python law is given of the reference record: its leading fields, in
+#: :class:`Reference`'s order (``tests/test_compiled.py`` checks both orders).
+TARGET_FIELDS = ("t", "s", "kappa", "v_d", "omega_d", "v_d_dot", "omega_d_dot")
 
 
 def _listed(made: tuple) -> tuple:
@@ -147,7 +158,7 @@ class _PythonLaw:
         controller, who, steering = self.controller, self.who, self.steering
         if self.steering_changed is not None and steering.kind and steering.updates[0] != self.told:
             self.told = int(steering.updates[0])
-            self.steering_changed(tuple(steering.etas))
+            self.steering_changed(tuple(map(float, steering.etas)))
         seen, ref = seen_measurement(law), reference_of(law, self.path)
         t = ref.t
         try:
@@ -327,28 +338,37 @@ class Stepper:
             masks=np.zeros(self.steps + 1, dtype=np.int64),
         )
 
-    def begin(self, controller=None, compiled_law=None, compiled: bool = False) -> tuple:
+    def begin(
+        self, controller=None, compiled_law=None, compiled: bool = False, call_back=None
+    ) -> tuple:
         """Make the (reset) episode's records for ``controller``: ``(loop, plant, law, target,
         stop)`` (:func:`tt_mujoco.sim.episode.episode_records`).
 
         ``compiled``: the records are NumPy's, for the kernel's loop, with ``compiled_law`` a
-        plain-number law compiled for it (its placeholder for a built-in law). Otherwise
-        CPython runs the step on the records as plain objects (:func:`tt_mujoco.sim.records.
-        interpreted`): a built-in law's own function, or any other controller's Python
-        ``compute`` between the halves (None: an agent's torques, :meth:`sense` and
-        :meth:`actuate`).
+        plain-number law compiled for it (its placeholder for a built-in law), or None for a
+        controller whose Python ``compute`` the kernel calls back through
+        ``call_back(python_law)``, a C function. Otherwise CPython runs the step on the records
+        as plain objects (:func:`tt_mujoco.sim.records.interpreted`): a built-in law's own
+        function, or any other controller's Python ``compute`` between the halves (None: an
+        agent's torques, :meth:`sense` and :meth:`actuate`).
         """
+        python = None
         if compiled:
-            made = episode.episode_records(self, controller, compiled_law)
+            callback = None
+            if compiled_law is None:  # a controller's compute, called back from the kernel
+                python = _PythonLaw(self, controller)
+                callback = call_back(python)
+            made = episode.episode_records(self, controller, compiled_law, callback)
+            if callback is not None:
+                callback.law_record = made[2]
         else:
-            python = None
             if controller is None or not episode.runs_built_in(controller):
                 python = _PythonLaw(self, controller)
             made = _listed(
                 records.interpreted(episode.episode_records(self, controller, None, python))
             )
-            if python is not None:
-                python.steering = made[1].steering
+        if python is not None:
+            python.steering = made[1].steering
         self._episode, self._log = made, None
         self._controller = controller
         self._interpreted = not compiled
