@@ -15,9 +15,9 @@ same-path gain, dynamic target, seed 0, both plants.
 Columns: Table 3's four (rmse and max of e_v, e_omega), the tractor's cross-track rms and the
 position error rms (mm), how the run ended, and the cost of a control step: the median of the
 controller's ``compute`` over the run (us), and for the NMPC the median solve (ms, once per
-sample period), and the real-time factor (simulated over wall-clock time of the run, in the
-Python loop). Timings are this machine's; every other figure is the same on every machine
-up to round-off.
+sample period), and the real-time factor (simulated over wall-clock time of the run, the step
+compiled and the controller's ``compute``, timed, called back from it at every step). Timings
+are this machine's; every other figure is the same on every machine up to round-off.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ import time
 
 import numpy as np
 
-from tt_mujoco.sim import Scenario, build
+from tt_mujoco.sim import Scenario, build, simulate
 from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sim.simulate import finish, run_episode
 from tt_mujoco.sim.stepper import Stepper
@@ -62,9 +62,9 @@ HEADER = (
 
 
 def timed_run(scenario: Scenario):
-    """``(result, compute times in s)``: :func:`tt_mujoco.sim.simulate` in the Python loop with
-    the controller's ``compute`` timed (a subclass of the controller, which the loop runs by
-    its Python ``compute``, between the step's halves)."""
+    """``(result, compute times in s)``: :func:`tt_mujoco.sim.simulate` with the controller's
+    ``compute`` timed (a subclass of the controller, whose Python ``compute`` the loop calls at
+    every step: a built-in law's too)."""
     built = build(scenario)
     check_user_code(built)
     stepper = Stepper(built)
@@ -117,6 +117,7 @@ def main(argv=None) -> int:
     parser.add_argument("--plants", nargs="+", default=["mujoco", "reduced"])
     parser.add_argument("--cases", nargs="+", default=list(CASES), choices=list(CASES))
     args = parser.parse_args(argv)
+    simulate(Scenario(duration=2.0))  # the compiled loop loads once a process: not in a row
     print("# Controller comparison: Table 3 and beyond\n")
     print("Written by `python docs/controller_comparison.py > docs/controller_comparison.md`")
     print("(see its docstring); `tests/test_controller_comparison.py` re-runs sample rows.\n")
