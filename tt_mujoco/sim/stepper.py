@@ -142,8 +142,9 @@ def _listed_train(constants):
 
 class _PythonLaw:
     """A controller's Python ``compute`` as the step's law (:data:`~tt_mujoco.sim.closed_loop.
-    PYTHON`), with the checks of user code: called by CPython's step with the law record,
-    it returns ``(status, T_r, T_l, u1, u2)`` or raises :class:`~tt_mujoco.sim.plant.StopRun`.
+    PYTHON`), with the checks of user code: called with the law record by CPython's step, or
+    back from the kernel's (:class:`tt_mujoco.sim._kernel.PythonLawCallback`), it returns
+    ``(status, T_r, T_l, u1, u2)`` or raises :class:`~tt_mujoco.sim.plant.StopRun`.
     """
 
     def __init__(self, stepper, controller):
