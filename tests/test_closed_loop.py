@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from tt_mujoco.controllers.plain import PlainLawController
 
-from tt_mujoco.sim import Scenario, build, closed_loop, compiled, episode, records
+from tt_mujoco.sim import Scenario, build, closed_loop, compiled, records
 from tt_mujoco.sim.measure import TRAIN_FIELDS
 from tt_mujoco.sim.stepper import Stepper
 
@@ -51,7 +51,7 @@ def _records(options) -> tuple:
     controller.reset()
     plain = isinstance(controller, PlainLawController)
     user = compiled.compile_law(type(controller)) if plain else compiled.kernel().no_user_law
-    loop, plant, law, target, stop = episode.episode_records(stepper, controller, user)
+    loop, plant, law, target, stop = stepper.begin(controller, user, kernel=compiled.kernel())
     log = records.LogRecord(
         measurement=np.empty((STEPS, len(records.MEASUREMENT_DTYPE))),
         loop=np.empty(STEPS, dtype=records.LOG_DTYPE),
@@ -167,12 +167,17 @@ HOOKED = [
 ]
 
 
+@pytest.mark.parametrize("route", ["0", "1"], ids=["cpython", "compiled"])
 @pytest.mark.parametrize("options, hooked", HOOKED, ids=["path", "matched", "wrench", "class"])
-def test_a_hooked_part_runs_the_step_as_the_built_in_one(tmp_path, monkeypatch, options, hooked):
+def test_a_hooked_part_runs_the_step_as_the_built_in_one(
+    tmp_path, monkeypatch, options, hooked, route
+):
     from tt_mujoco.sim import simulate
     from tt_mujoco.sim.stepper import Stepper
 
-    monkeypatch.setenv("TT_MUJOCO_COMPILED", "0")  # the built-in runs on CPython's step too
+    # Both on CPython's step, or both compiled (the hook called back from the kernel).
+    monkeypatch.setenv("TT_MUJOCO_COMPILED", route)
+    monkeypatch.setenv("TT_MUJOCO_COMPILE_NOW", "1")
     parts = tmp_path / "parts.py"
     parts.write_text(USER_PARTS)
     hooked = {key: value.format(parts=parts) for key, value in hooked.items()}

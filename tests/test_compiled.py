@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 
 from tt_mujoco.sim import Scenario, build, compiled, simulate
+from tt_mujoco.sim.simulate import run_episode
+from tt_mujoco.sim.stepper import Stepper
 
 
 @pytest.fixture(autouse=True)
@@ -130,6 +132,36 @@ CASES = [
         duration=3.0,
     ),
     dict(traj="s_curve", plant="reduced", reverse=True, faults=["payload:s=3,factor=2"]),
+    # a path without closed form and a user's disturbance, which the kernel calls back: the
+    # path for the target, for a plain-number law's pose, path feedback and the path schedule,
+    # for the static target and friction bands along it; the disturbance matched on a train,
+    # and as a wrench
+    dict(traj="examples/user_parts.py:lane_change", duration=3.0),
+    dict(
+        traj="examples/user_parts.py:lane_change",
+        controller="examples/kanayama.py:kanayama_law",
+        path_feedback={},
+        eta="path",
+        duration=3.0,
+    ),
+    dict(
+        traj="examples/user_parts.py:lane_change",
+        target="static",
+        ground=["band:1:2:0.2"],
+        duration=3.0,
+    ),
+    dict(
+        traj="s_curve",
+        disturbance_model="examples/user_parts.py:headwind_gusts",
+        trailers=2,
+        duration=3.0,
+    ),
+    dict(
+        traj="s_curve",
+        disturbance="wrench",
+        disturbance_model="examples/user_parts.py:headwind_gusts",
+        duration=3.0,
+    ),
     # a controller class, whose compute the kernel calls back at every step: alone, with the
     # path schedule and noise (it is told of every change of the gains), on the reduced plant
     # with a dropout and a sensor delay
@@ -327,9 +359,7 @@ def test_a_subclass_of_a_built_in_law_runs_its_compute_called_back(monkeypatch):
     stepper = Stepper(built)
     stepper.reset(np.random.default_rng(0))
     kernel = compiled.kernel()
-    _, _, law, _, _ = stepper.begin(
-        controller, None, compiled=True, call_back=kernel.PythonLawCallback
-    )
+    _, _, law, _, _ = stepper.begin(controller, None, kernel=kernel)
     assert law.kind == PYTHON and isinstance(law.user, kernel.PythonLawCallback)
 
 
@@ -363,6 +393,87 @@ def test_a_controller_class_that_fails_stops_both_loops_alike(monkeypatch, tmp_p
     assert len(fast.timeseries["t"]) == 2500
     for name, column in python.timeseries.items():
         assert np.array_equal(column, fast.timeseries[name], equal_nan=True), name
+
+
+BREAKING = """
+import math
+
+from tt_mujoco.reference.paths import ArcsPath
+
+
+class BreaksCurvature(ArcsPath):  # users' path classes: no closed form for the kernel
+    def curvature_and_rate(self, s):
+        if s > 1.5:
+            raise ValueError(f"no curvature at s={s}")
+        return super().curvature_and_rate(s)
+
+
+class BreaksPose(ArcsPath):
+    def pose_at(self, s):
+        if s > 1.5:
+            raise ValueError(f"no pose at s={s}")
+        return super().pose_at(s)
+
+
+def arcs(cls):
+    R = 1.5
+    return cls("s_curve", (0.0, 0.0, 0.0), [(math.pi * R, 1 / R), (math.pi * R, -1 / R)])
+
+
+def breaks_curvature():
+    return arcs(BreaksCurvature)
+
+
+def breaks_pose():
+    return arcs(BreaksPose)
+
+
+def breaks_at_2_5(t):
+    if t >= 2.5:
+        raise ValueError("no gust")
+    return -1.0, 0.0
+"""
+
+
+@pytest.mark.parametrize(
+    "hook",
+    [
+        dict(traj="{parts}:breaks_curvature"),  # the target's curvature, in the first half
+        dict(traj="{parts}:breaks_pose", controller="examples/kanayama.py:kanayama_law"),
+        dict(traj="{parts}:breaks_pose", eta="path"),  # the schedule's, after the row's log
+        dict(disturbance_model="{parts}:breaks_at_2_5"),  # before the row's log
+        dict(disturbance_model="{parts}:breaks_at_2_5", disturbance="wrench", trailers=2),
+    ],
+    ids=["curvature", "pose-law", "pose-schedule", "matched", "wrench"],
+)
+def test_a_hook_that_fails_stops_both_loops_alike(monkeypatch, tmp_path, hook):
+    # A path or disturbance the kernel calls back that raises stops the step where CPython's
+    # stops: the same rows kept, the same plant state handed back, the same error.
+    parts = tmp_path / "breaking.py"
+    parts.write_text(BREAKING)
+    options = {k: v.format(parts=parts) if isinstance(v, str) else v for k, v in hook.items()}
+    scenario = Scenario(**{"traj": "s_curve", "duration": 3.0, **options})
+    outcomes = []
+    for route in ("0", "1"):
+        monkeypatch.setenv("TT_MUJOCO_COMPILED", route)
+        built = build(scenario)
+        stepper = Stepper(built)
+        stepper.reset(np.random.default_rng(built.scenario.seed))
+        controller = built.new_controller()
+        controller.reset()
+        try:
+            status, message = run_episode(stepper, controller)
+        except Exception as err:  # a path's failure is raised as it is
+            status, message = type(err).__name__, str(err)
+        data = stepper.plant.data  # the MuJoCo plant where it stopped
+        state = np.concatenate([data.qpos, data.qvel, data.ctrl, data.qfrc_applied])
+        outcomes.append((status, message, stepper.timeseries(), stepper.k, state))
+    (status, message, rows, k, state), fast = outcomes
+    assert status != "ok" and (status, message, k) == (*fast[:2], fast[3])
+    assert 1000 < len(rows["t"]) < 3001 and rows.keys() == fast[2].keys()
+    for name, column in rows.items():
+        assert np.array_equal(column, fast[2][name], equal_nan=True), name
+    assert np.array_equal(state, fast[4])
 
 
 def test_an_interrupt_inside_a_called_back_compute_ends_the_run_as_it_does_in_python(
@@ -478,12 +589,16 @@ def test_a_kernel_that_fails_to_load_leaves_the_episode_to_the_python_loop(
         def compile(signature):
             raise EOFError("Ran out of input")
 
-    class Broken:
-        no_user_law = 0.0  # a placeholder numba can type; never called
-        run_chunk = BrokenDispatcher
+    real = compiled.kernel()
 
-        class PythonLawCallback:
-            pass
+    class Broken:  # placeholders numba can type, never called
+        no_user_law = no_hook = 0.0
+        run_chunk = BrokenDispatcher
+        CalledBack, PythonLawCallback, HookCallback = (
+            real.CalledBack,
+            real.PythonLawCallback,
+            real.HookCallback,
+        )
 
     monkeypatch.setenv("TT_MUJOCO_CACHE", str(tmp_path))
     scenario = Scenario(traj="circle", duration=3.0, noise_snr_db=25.0)

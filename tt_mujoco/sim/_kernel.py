@@ -76,37 +76,96 @@ def no_user_law(m, r, model, gains, state, out, dt, limit):  # the built-in laws
     pass
 
 
-_C_LAW = ctypes.CFUNCTYPE(None, *[ctypes.c_void_p] * 6, ctypes.c_double, ctypes.c_double)
+#: A Python hook the kernel calls back (:class:`HookCallback`): what to compute (0 a path's
+#: curvature and its rate, 1 its pose, 2 its pose as a plain-number law's reference; a
+#: disturbance's one answer), at which value (s or t), and where to write it.
+HOOK = types.void(types.float64, types.float64, _P)
 
 
-class PythonLawCallback(types.WrapperAddressProtocol):
-    """A law Python computes (``python_law(law) -> (status, T_r, T_l, u1, u2)``, a controller
-    class's ``compute`` with its checks) as a C function of the kernel's law signature, which
-    the kernel calls back at every step (:func:`_python_law`): the step runs compiled, and
-    only the law in Python. What the law raises stops the kernel with
-    :data:`~tt_mujoco.sim.closed_loop.PYTHON_RAISED` and waits in :attr:`raised` for the
-    kernel's caller to raise it."""
+@cfunc(HOOK, cache=True)
+def no_hook(what, value, out):  # the placeholder where the episode has no hook
+    pass
 
-    def __init__(self, python_law):
-        self.python_law = python_law
-        self.law_record = None  # the kernel's law record, which the law reads (Stepper.begin)
+
+class CalledBack(types.WrapperAddressProtocol):
+    """Python code as a C function the kernel calls back, of the type ``signature`` (a numba
+    first-class function, like a compiled law: the kernel compiles once for either). What the
+    code raises cannot leave a C callback: it sets the stop record's ``raised``, which stops
+    the step where CPython's would have stopped (:func:`~tt_mujoco.sim.closed_loop.run_steps`),
+    and waits in :attr:`raised` for the kernel's caller to raise it; once it is set, nothing
+    is called back again."""
+
+    signature_of = None  # the kernel's type of the function (its C signature)
+
+    def __init__(self, fn, prototype):
+        self.fn = fn
+        self.stop_record = None  # the episode's stop record (Stepper.begin)
         self.raised = None
-        self._function = _C_LAW(self._call)  # held: the kernel calls its address
+        self._function = prototype(self._call)  # held: the kernel calls its address
 
-    def _call(self, *_):
-        law = self.law_record
-        try:
-            status, T_r, T_l, u1, u2 = self.python_law(law)
-        except BaseException as err:  # nothing may leave a C callback: raised after the chunk
-            self.raised = err
-            status, T_r, T_l, u1, u2 = closed_loop.PYTHON_RAISED, math.nan, 0.0, 0.0, 0.0
-        law.torques[:] = (T_r, T_l, u1, u2, status)
+    def _failed(self, err: BaseException) -> None:
+        self.raised = err
+        self.stop_record[0]["raised"] = 1.0
+
+    def _call(self, *args):
+        raise NotImplementedError
 
     def __wrapper_address__(self):
         return ctypes.cast(self._function, ctypes.c_void_p).value
 
     def signature(self):
-        return USER_LAW
+        return self.signature_of
+
+
+_C_LAW = ctypes.CFUNCTYPE(None, *[ctypes.c_void_p] * 6, ctypes.c_double, ctypes.c_double)
+_C_HOOK = ctypes.CFUNCTYPE(None, ctypes.c_double, ctypes.c_double, ctypes.c_void_p)
+
+
+class PythonLawCallback(CalledBack):
+    """A law Python computes (``python_law(law) -> (status, T_r, T_l, u1, u2)``, a controller
+    class's ``compute`` with its checks) as a C function of the kernel's law signature, which
+    the kernel calls back at every step (:func:`_python_law`): the step runs compiled, and only
+    the law in Python."""
+
+    signature_of = USER_LAW
+
+    def __init__(self, python_law):
+        super().__init__(python_law, _C_LAW)
+        self.law_record = None  # the kernel's law record, which the law reads (Stepper.begin)
+
+    def _call(self, *_):
+        law = self.law_record
+        out = (math.nan, math.nan, math.nan, math.nan, LAW_OK)
+        if not self.stop_record[0]["raised"]:
+            try:
+                status, T_r, T_l, u1, u2 = self.fn(law)
+                out = (T_r, T_l, u1, u2, status)
+            except BaseException as err:  # raised by the kernel's caller
+                self._failed(err)
+        law.torques[:] = out
+
+
+class HookCallback(CalledBack):
+    """A user's path or disturbance, ``fn(what, value) -> tuple`` (:data:`HOOK`), as a C
+    function the kernel calls back, writing its answer into ``out`` (the record's
+    ``hook_out``)."""
+
+    signature_of = HOOK
+
+    def __init__(self, fn, out):
+        super().__init__(fn, _C_HOOK)
+        self.out = out
+
+    def _call(self, what, value, _):
+        out = self.out
+        if not self.stop_record[0]["raised"]:
+            try:
+                answer = self.fn(what, value)
+                out[: len(answer)] = answer
+                return
+            except BaseException as err:  # raised by the kernel's caller
+                self._failed(err)
+        out[:] = math.nan
 
 
 @intrinsic
@@ -140,27 +199,54 @@ def _path_pose(target, s):
     return lambda target, s: closed_loop.pose_at(target, s)
 
 
-# What only CPython's step runs: a path without closed form, a user's disturbance. The kernel
-# never meets them (compiled.unsupported); these give the types.
+# A path without closed form and a user's disturbance are Python, called back (HookCallback).
 @overload(closed_loop.hooked_curvature)
 def _hooked_curvature(target, s):
-    return lambda target, s: (math.nan, math.nan)
+    def call_back(target, s):
+        out = target.hook_out
+        target.path_hook(0.0, s, _pointer(out))
+        return out[0], out[1]
+
+    return call_back
+
+
+def _pose_called_back(what: float):
+    """The pose of a path called back, asked as ``what`` (:data:`HOOK`)."""
+
+    def call_back(target, s):
+        out = target.hook_out
+        target.path_hook(what, s, _pointer(out))
+        return out[0], out[1], out[2]
+
+    return call_back
 
 
 @overload(closed_loop.hooked_pose)
 def _hooked_pose(target, s):
-    return lambda target, s: (math.nan, math.nan, math.nan)
+    return _pose_called_back(1.0)
+
+
+@overload(closed_loop.hooked_law_pose)
+def _hooked_law_pose(target, s):
+    return _pose_called_back(2.0)
 
 
 @overload(closed_loop.disturbance_at)
 def _disturbance_at(loop, t):
-    return lambda loop, t: disturbances.paper_disturbance_of(t)
+    def call_back(loop, t):
+        if not loop.hooked_disturbance:
+            return disturbances.paper_disturbance_of(t)
+        out = loop.hook_out
+        loop.disturbance_hook(0.0, t, _pointer(out))
+        return out[0], out[1]
+
+    return call_back
 
 
 @overload(closed_loop.python_law)
 def _python_law(law):
     """A law Python computes (a controller class's ``compute``), called back: ``law.user`` is
-    then a C function (:class:`tt_mujoco.sim.compiled.PythonLawCallback`) that reads the law
+    then a C function (:class:`PythonLawCallback`) that reads the law
     record from Python and writes ``(T_r, T_l, u1, u2, status)`` into ``law.torques``."""
 
     def call_back(law):

@@ -65,7 +65,7 @@ LAWS = tuple(cls.LAW for cls in compiled_laws().values())
 
 RUNNING, FINISHED, BLEW_UP, JACKKNIFE = step.RUNNING, step.FINISHED, step.BLEW_UP, step.JACKKNIFE
 WARNING, LAW_FAILED, SINGULAR = step.WARNING, step.LAW_FAILED, step.SINGULAR
-PAYLOAD = step.PAYLOAD
+PAYLOAD, RAISED = step.PAYLOAD, step.RAISED
 LAW_OK, LAW_SINGULAR = base.LAW_OK, base.LAW_SINGULAR
 COS_BETA_MIN = reduced.COS_BETA_MIN
 #: ``law.kind`` of a user's plain-number law, and of a law that Python computes between the
@@ -76,9 +76,6 @@ PYTHON = USER + 1
 HOOKED_PATH = 3
 #: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
 NOMINAL_SINGULAR = -1.0
-#: The status of a law Python computes that raised, called back from the kernel: the kernel
-#: stops there, and its caller raises what the law raised (:mod:`tt_mujoco.sim.compiled`)
-PYTHON_RAISED = -2
 PATH_SCHEDULE, CURVATURE_SCHEDULE = schedule.PATH_SCHEDULE, schedule.CURVATURE_SCHEDULE
 #: where trailer 1's axle and the bodies' motion are in the measurement, and a trailer's gain
 #: in a train's row
@@ -135,7 +132,7 @@ def pointer(array):
 
 def hooked_curvature(target, s):
     """``(kappa, dkappa/ds)`` of a path without closed form (:data:`HOOKED_PATH`), from the
-    path object itself (CPython only; the kernel never runs such a path)."""
+    path object itself (the kernel calls it back: ``stop.raised`` says when it raised)."""
     return target.path_hook.curvature_and_rate(s)
 
 
@@ -144,10 +141,24 @@ def hooked_pose(target, s):
     return target.path_hook.pose_at(s)
 
 
+def hooked_law_pose(target, s):
+    """:func:`hooked_pose` asked for a plain-number law's reference: when the path fails there,
+    the law fails, as its Python form does when it asks the path itself (only the kernel runs
+    a plain-number law from the step's records)."""
+    return target.path_hook.pose_at(s)
+
+
+def law_pose_at(target, s):
+    """The path's pose at ``s`` as a plain-number law's reference (:func:`pose_at`)."""
+    if target.path_kind == HOOKED_PATH:
+        return hooked_law_pose(target, s)
+    return pose_at(target, s)
+
+
 def disturbance_at(loop, t):
     """``(a_v, a_w)`` of the disturbance at ``t``: the paper's, or the hook's (a user's
-    disturbance, with its checks: CPython only)."""
-    if loop.disturbance_hook is None:
+    disturbance, with its checks, which the kernel calls back)."""
+    if not loop.hooked_disturbance:
         return disturbances.paper_disturbance_of(t)
     return loop.disturbance_hook(t)
 
@@ -576,7 +587,7 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
                 for j in range(len(seen_row)):
                     seen_row[j] = sensed_row[j]
             return RUNNING
-        r.x_ref, r.y_ref, r.theta_ref = pose_at(target, state.s)
+        r.x_ref, r.y_ref, r.theta_ref = law_pose_at(target, state.s)
     # The nominal model at the measurement, for the law and the matched disturbance (a
     # built-in law's model takes the scheduled gains; the disturbance keeps the nominal's).
     c, model_train = law.nominal, law.nominal_train
@@ -660,6 +671,8 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
         a_v, a_w = disturbance_at(loop, t)
         force, torque = disturbances.wrench_of(mass, a_v, a_w)
         fx, fy, mz = plant_mujoco.chassis_wrench_of(force, torque, me[2])
+    if stop.raised:  # the disturbance, called back, raised: this row is not logged
+        return RAISED
     out = log.loop[row]
     out.s, out.v_d, out.omega_d = state.s, r.v_d, state.omega_ref
     out.v_d_dot, out.omega_d_dot, out.v_meas, out.omega_meas = (
@@ -680,6 +693,8 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
         return FINISHED
     if steering.kind == PATH_SCHEDULE:
         _offer_path(steering, target, me, rows, n)
+        if stop.raised:  # the path, called back, raised
+            return RAISED
         _steer(plant, law)
     elif steering.kind == CURVATURE_SCHEDULE and schedule.curvature_gains_of(
         state.kappa, steering.lengths, steering.offered
@@ -690,6 +705,8 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
         _gusts(loop.wind, k, me)
     if loop.ground.geoms.size:  # logged for step k; a failed advance is not handed back
         loop.ground.masks[k] = _ground(loop.ground, target)
+    if stop.raised:  # the path, called back, raised: the plant does not advance
+        return RAISED
     if pending:  # the caller changes the reduced plant's constants, then advances
         stop.T_r, stop.T_l, stop.dist_r, stop.dist_l = T_r, T_l, dist_r, dist_l
         return PAYLOAD
@@ -706,9 +723,13 @@ def run_steps(k, k_end, loop, plant, law, target, log, stop_record):
     row = 0
     while k <= k_end:
         code = sense_step(k, row, loop, plant, law, target, log, stop)
+        if stop.raised:  # Python code called back by the kernel raised: its caller raises it
+            return RAISED, k
         if code != RUNNING:
             return code, k
         status, T_r, T_l, u1, u2 = law_step(law, got.v, got.omega, dt, limit)
+        if stop.raised:
+            return RAISED, k
         if status != LAW_OK:
             stop.law_status = status
             stop.g11, stop.g12, stop.g21, stop.g22 = nm.g11, nm.g12, nm.g21, nm.g22
@@ -729,6 +750,7 @@ BORROWING = (
     advance_after_payload,
     path_at,
     pose_at,
+    law_pose_at,
     _sense,
     _ode,
     _first_singular,

@@ -6,14 +6,15 @@ compiled form (:func:`unsupported` says why not otherwise): a built-in law
 model, a user's plain-number law (:mod:`tt_mujoco.controllers.plain`, compiled once per process
 by :func:`compile_law`), or any other controller, whose Python ``compute`` the kernel calls back
 at every step through a C function (:class:`tt_mujoco.sim._kernel.PythonLawCallback`); a
-static or dynamic target on a closed-form path (the S-curve, the circle, the cycloid, a CSV
-spline) driven forwards or backing up (the reverse target, with the hitch cascade or path
-feedback), the paper's disturbance (matched or as a wrench) or none, measurement noise, one
-trailer or a train, constant steering gains or either schedule (:mod:`tt_mujoco.sim.schedule`),
-path feedback, faults, DC motors, wind, a sensor delay, friction patches; not a per-step
-callback (a payload step on the reduced plant returns to Python, which recomputes the plant's
-constants and advances that step, then the kernel goes on). The loop then runs in numba, chunk
-by chunk, calling ``mj_step`` through MuJoCo's C library or stepping the reduced ODE, over the
+static or dynamic target on any path (the S-curve, the circle, the cycloid and a CSV spline
+from their tables, a path without closed form called back), driven forwards or backing up (the
+reverse target, with the hitch cascade or path feedback), the paper's disturbance or a user's
+(called back), matched or as a wrench, or none, measurement noise, one trailer or a train,
+constant steering gains or either schedule (:mod:`tt_mujoco.sim.schedule`), path feedback,
+faults, DC motors, wind, a sensor delay, friction patches; not a per-step callback (a payload
+step on the reduced plant returns to Python, which recomputes the plant's constants and
+advances that step, then the kernel goes on). The loop then runs in numba, chunk by chunk,
+calling ``mj_step`` through MuJoCo's C library or stepping the reduced ODE, over the
 named records of :mod:`tt_mujoco.sim.records`.
 
 The loop it runs is :func:`tt_mujoco.sim.closed_loop.run_steps`, compiled from its source with
@@ -64,14 +65,10 @@ def _enabled() -> bool:
 
 def unsupported(built, controller, on_step=None) -> str | None:
     """Why the episode has no compiled form (None when it has one); only a query."""
-    from tt_mujoco.sim.episode import has_closed_form, users_disturbance
-
     reasons = [
         (not _enabled(), "TT_MUJOCO_COMPILED=0"),
         (built.steps < MIN_STEPS, f"fewer than {MIN_STEPS} steps"),
         (on_step is not None, "a per-step callback"),
-        (not has_closed_form(built.path), "a path without closed form"),
-        (users_disturbance(built), "a custom disturbance"),
     ]
     for failed, reason in reasons:
         if failed:
@@ -407,10 +404,9 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
             file=sys.stderr,
         )
         return None
-    _, _, law, _, _ = stepper.begin(
-        controller, user, compiled=True, call_back=k_mod.PythonLawCallback
-    )
-    callback = law.user if isinstance(law.user, k_mod.PythonLawCallback) else None
+    loop, _, law, target, _ = stepper.begin(controller, user, kernel=k_mod)
+    hooks = (law.user, target.path_hook, loop.disturbance_hook)
+    called_back = [hook for hook in hooks if isinstance(hook, k_mod.CalledBack)]
     entry = None
 
     def run_chunk(*args):
@@ -424,9 +420,9 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
             except Exception as err:  # damaged: nothing has run, the Python loop takes over
                 raise _DamagedCacheError() from err
             _write_manifest(sum(k_mod.run_chunk.stats.cache_misses.values()) > 0)
-        if callback is not None and callback.raised is not None:  # what the Python law raised
-            raised, callback.raised = callback.raised, None
-            raise raised
+        for hook in called_back:  # what Python code the kernel called back raised
+            if hook.raised is not None:
+                raise hook.raised
         return out
 
     def advance(*args):  # not compiled by the warm-up: its first call may add to the cache

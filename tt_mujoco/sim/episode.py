@@ -398,6 +398,7 @@ def _target_record(built, steps: int):
         wanted=np.array(outer.hitch_targets if cascade else [0.0] * n, dtype=float),
         rates=np.zeros((n, 3)),
         path_hook=hook,
+        hook_out=np.zeros(3),
     )
 
 

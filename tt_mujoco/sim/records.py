@@ -90,6 +90,9 @@ STOP_FIELDS = (
     *("v", "phi", "beta", "x", "y", "eta", "hitch", "warning", "law_status"),
     *("g11", "g12", "g21", "g22", "u1", "u2"),
     *("payloads", "T_r", "T_l", "dist_r", "dist_l"),
+    # 1 once Python code the kernel called back (a law, a path, a disturbance) raised: the step
+    # stops there, and the kernel's caller raises it
+    "raised",
 )
 
 
@@ -331,8 +334,11 @@ class TargetRecord(NamedTuple):
     cascade_constants: CascadeConstants
     wanted: np.ndarray
     rates: np.ndarray
-    #: the path object of a path without closed form (``path_kind`` 3: CPython only), else None
+    #: the path object of a path without closed form (``path_kind`` 3), else None; the kernel's
+    #: record holds a C function that calls it back (:mod:`tt_mujoco.sim._kernel`), and it
+    #: writes what it computed into ``hook_out``
     path_hook: Any
+    hook_out: np.ndarray
 
     # What a path offers the path feedback and the path schedule, run by CPython (the kernel
     # overloads the functions that call these).
@@ -436,9 +442,12 @@ class LoopRecord(NamedTuple):
     wind: WindRecord
     delay: DelayRecord
     ground: GroundRecord
-    #: a user's disturbance, ``t -> (a_v, a_w)`` with its checks (CPython only), else None:
-    #: the paper's
+    #: whether the disturbance is a user's, ``disturbance_hook``: ``t -> (a_v, a_w)`` with its
+    #: checks (else None: the paper's); the kernel's record holds a C function that calls it
+    #: back and writes what it computed into ``hook_out``
+    hooked_disturbance: bool
     disturbance_hook: Any
+    hook_out: np.ndarray
 
 
 class LogRecord(NamedTuple):

@@ -16,6 +16,7 @@ __all__ = [
     "JACKKNIFE",
     "LAW_FAILED",
     "PAYLOAD",
+    "RAISED",
     "RUNNING",
     "SINGULAR",
     "WARNING",
@@ -28,8 +29,9 @@ __all__ = [
 
 #: How a stretch of steps ended: still running, the episode's end, or why it stopped; or
 #: PAYLOAD: the reduced plant's constants change before this step's advance (a payload fault),
-#: which the caller applies before it advances the step and goes on.
-RUNNING, FINISHED, BLEW_UP, JACKKNIFE, WARNING, LAW_FAILED, SINGULAR, PAYLOAD = range(8)
+#: which the caller applies before it advances the step and goes on; or RAISED: Python code the
+#: kernel called back raised (``stop.raised``), which the kernel's caller raises.
+RUNNING, FINISHED, BLEW_UP, JACKKNIFE, WARNING, LAW_FAILED, SINGULAR, PAYLOAD, RAISED = range(9)
 
 
 def stop_code(x: float, v: float, omega: float, phi: float, beta: float, limits) -> int:

@@ -89,6 +89,43 @@ def reference_of(law, path) -> Reference:
 TARGET_FIELDS = ("t", "s", "kappa", "v_d", "omega_d", "v_d_dot", "omega_d_dot")
 
 
+def _called_back(stepper, made: tuple, kernel) -> tuple:
+    """The kernel's records with the Python they hold (a law, a path without closed form, a
+    user's disturbance) as C functions it calls back (:class:`tt_mujoco.sim._kernel.
+    CalledBack`), each given the records it reads and writes; placeholders where there is
+    none."""
+    loop, plant, law, target, stop = made
+    path, disturbance = target.path_hook, loop.disturbance_hook
+    who = usercode.controller_label(stepper.built)
+
+    def path_answer(what: float, s: float) -> tuple:
+        if what == 0.0:
+            return path.curvature_and_rate(s)
+        if what == 1.0:
+            return path.pose_at(s)
+        try:  # the reference pose of a plain-number law: its Python form asks for it itself
+            return path.pose_at(s)
+        except (Exception, SystemExit) as err:
+            raise law_failure(who, float(law.reference[0]["t"]), err) from None
+
+    target = target._replace(
+        path_hook=kernel.no_hook
+        if path is None
+        else kernel.HookCallback(path_answer, target.hook_out)
+    )
+    loop = loop._replace(
+        disturbance_hook=kernel.no_hook
+        if disturbance is None
+        else kernel.HookCallback(lambda what, t: disturbance(t), loop.hook_out)
+    )
+    for hook in (law.user, target.path_hook, loop.disturbance_hook):
+        if isinstance(hook, kernel.CalledBack):
+            hook.stop_record = stop
+    if isinstance(law.user, kernel.PythonLawCallback):
+        law.user.law_record = law
+    return loop, plant, law, target, stop
+
+
 def _listed(made: tuple) -> tuple:
     """The interpreted records with the arrays the step reads element by element every step as
     lists of floats (a NumPy element is a NumPy scalar, whose arithmetic is slower)."""
@@ -140,6 +177,13 @@ def _listed_train(constants):
     return constants._replace(trailers=constants.trailers.tolist())
 
 
+def law_failure(who: str, t: float, err: BaseException) -> StopRun:
+    """What a law's failure at ``t`` stops the run with."""
+    if isinstance(err, FloatingPointError):  # a built-in law's own failure
+        return StopRun("diverged", f"controller failed at t={t:.3f} s: {err}")
+    return usercode.failure(who, t, err)
+
+
 class _PythonLaw:
     """A controller's Python ``compute`` as the step's law (:data:`~tt_mujoco.sim.closed_loop.
     PYTHON`), with the checks of user code: called with the law record by CPython's step, or
@@ -164,10 +208,8 @@ class _PythonLaw:
         t = ref.t
         try:
             out = controller.compute(t, seen, ref)
-        except FloatingPointError as err:  # a built-in law's own failure
-            raise StopRun("diverged", f"controller failed at t={t:.3f} s: {err}") from None
         except (Exception, SystemExit) as err:
-            raise usercode.failure(who, t, err) from None
+            raise law_failure(who, t, err) from None
         T_r, T_l = usercode.checked_torques(out, who, t)
         signals = controller.take_signals()
         if signals:
@@ -294,7 +336,9 @@ class Stepper:
                 seen=np.zeros((depth, 3)),
             ),
             ground=self._ground_record(),
+            hooked_disturbance=episode.users_disturbance(self.built),
             disturbance_hook=self._disturbance_hook(),
+            hook_out=np.zeros(2),
         )
 
     def _disturbance_hook(self):
@@ -339,29 +383,27 @@ class Stepper:
             masks=np.zeros(self.steps + 1, dtype=np.int64),
         )
 
-    def begin(
-        self, controller=None, compiled_law=None, compiled: bool = False, call_back=None
-    ) -> tuple:
+    def begin(self, controller=None, compiled_law=None, kernel=None) -> tuple:
         """Make the (reset) episode's records for ``controller``: ``(loop, plant, law, target,
         stop)`` (:func:`tt_mujoco.sim.episode.episode_records`).
 
-        ``compiled``: the records are NumPy's, for the kernel's loop, with ``compiled_law`` a
-        plain-number law compiled for it (its placeholder for a built-in law), or None for a
-        controller whose Python ``compute`` the kernel calls back through
-        ``call_back(python_law)``, a C function. Otherwise CPython runs the step on the records
-        as plain objects (:func:`tt_mujoco.sim.records.interpreted`): a built-in law's own
-        function, or any other controller's Python ``compute`` between the halves (None: an
-        agent's torques, :meth:`sense` and :meth:`actuate`).
+        With the compiled ``kernel`` (:mod:`tt_mujoco.sim._kernel`), the records are NumPy's,
+        for its loop, with ``compiled_law`` a plain-number law compiled for it (its placeholder
+        for a built-in law), or None for a controller whose Python ``compute`` the kernel calls
+        back, as it calls back a path without closed form and a user's disturbance (C functions
+        of the kernel's). Otherwise CPython runs the step on the records as plain objects
+        (:func:`tt_mujoco.sim.records.interpreted`): a built-in law's own function, or any
+        other controller's Python ``compute`` between the halves (None: an agent's torques,
+        :meth:`sense` and :meth:`actuate`).
         """
         python = None
-        if compiled:
+        if kernel is not None:
             callback = None
             if compiled_law is None:  # a controller's compute, called back from the kernel
                 python = _PythonLaw(self, controller)
-                callback = call_back(python)
+                callback = kernel.PythonLawCallback(python)
             made = episode.episode_records(self, controller, compiled_law, callback)
-            if callback is not None:
-                callback.law_record = made[2]
+            made = _called_back(self, made, kernel)
         else:
             if controller is None or not episode.runs_built_in(controller):
                 python = _PythonLaw(self, controller)
@@ -372,7 +414,7 @@ class Stepper:
             python.steering = made[1].steering
         self._episode, self._log = made, None
         self._controller = controller
-        self._interpreted = not compiled
+        self._interpreted = kernel is None
         etas = tuple(np.asarray(made[1].steering.etas).tolist())
         self._changes = [(0, etas)]  # (first row, gains) of each change
         if self.motors is not None:  # the motors' torques as the step delivers them
