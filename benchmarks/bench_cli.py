@@ -67,6 +67,14 @@ CASES = {
     "reverse": ["--traj", "s_curve", "--reverse", "--trailers", "2"],
     "delay": ["--traj", "s_curve", "--sensor-delay", "0.01"],
     "wind": ["--traj", "s_curve", "--wind", "8:90:2"],
+    # a user's path and a user's disturbance, which the compiled step calls back
+    "user_path": ["--traj", f"{ROOT}/examples/user_parts.py:slalom"],
+    "user_disturbance": [
+        "--traj",
+        "s_curve",
+        "--disturbance-model",
+        f"{ROOT}/examples/user_parts.py:headwind_gusts",
+    ],
 }
 #: Cases whose physics a rollout of the logged inputs cannot replay: the path schedule sets its
 #: axles' targets from the hitches before every physics step, and the wind pushes the bodies

@@ -136,16 +136,16 @@ CASES = [
     # path for the target, for a plain-number law's pose, path feedback and the path schedule,
     # for the static target and friction bands along it; the disturbance matched on a train,
     # and as a wrench
-    dict(traj="examples/user_parts.py:lane_change", duration=3.0),
+    dict(traj="examples/user_parts.py:slalom", duration=3.0),
     dict(
-        traj="examples/user_parts.py:lane_change",
+        traj="examples/user_parts.py:slalom",
         controller="examples/kanayama.py:kanayama_law",
         path_feedback={},
         eta="path",
         duration=3.0,
     ),
     dict(
-        traj="examples/user_parts.py:lane_change",
+        traj="examples/user_parts.py:slalom",
         target="static",
         ground=["band:1:2:0.2"],
         duration=3.0,
