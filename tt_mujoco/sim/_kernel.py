@@ -24,7 +24,7 @@ from numba.extending import intrinsic, overload, register_jitable
 from tt_mujoco import exact
 from tt_mujoco.analysis import nearest
 from tt_mujoco.reference import feedback
-from tt_mujoco.sim import closed_loop, disturbances
+from tt_mujoco.sim import closed_loop
 from tt_mujoco.sim.closed_loop import LAWS
 from tt_mujoco.sim.kernel_sources import SHARED
 from tt_mujoco.vehicle import path_schedule
@@ -76,9 +76,9 @@ def no_user_law(m, r, model, gains, state, out, dt, limit):  # the built-in laws
     pass
 
 
-#: A Python hook the kernel calls back (:class:`HookCallback`): what to compute (0 a path's
-#: curvature and its rate, 1 its pose, 2 its pose as a plain-number law's reference; a
-#: disturbance's one answer), at which value (s or t), and where to write it.
+#: A Python hook the kernel calls back (:class:`HookCallback`): what to compute
+#: (:data:`~tt_mujoco.sim.closed_loop.HOOK_CURVATURE` and the others), at which value (s or t),
+#: and where to write it.
 HOOK = types.void(types.float64, types.float64, _P)
 
 
@@ -199,19 +199,20 @@ def _path_pose(target, s):
     return lambda target, s: closed_loop.pose_at(target, s)
 
 
-# A path without closed form and a user's disturbance are Python, called back (HookCallback).
+# A path without closed form and a user's disturbance are Python, called back (HookCallback),
+# asked what closed_loop.HOOK_* name.
 @overload(closed_loop.hooked_curvature)
 def _hooked_curvature(target, s):
     def call_back(target, s):
         out = target.hook_out
-        target.path_hook(0.0, s, _pointer(out))
+        target.path_hook(closed_loop.HOOK_CURVATURE, s, _pointer(out))
         return out[0], out[1]
 
     return call_back
 
 
 def _pose_called_back(what: float):
-    """The pose of a path called back, asked as ``what`` (:data:`HOOK`)."""
+    """The pose of a path called back, asked as ``what``."""
 
     def call_back(target, s):
         out = target.hook_out
@@ -223,21 +224,19 @@ def _pose_called_back(what: float):
 
 @overload(closed_loop.hooked_pose)
 def _hooked_pose(target, s):
-    return _pose_called_back(1.0)
+    return _pose_called_back(closed_loop.HOOK_POSE)
 
 
 @overload(closed_loop.hooked_law_pose)
 def _hooked_law_pose(target, s):
-    return _pose_called_back(2.0)
+    return _pose_called_back(closed_loop.HOOK_LAW_POSE)
 
 
-@overload(closed_loop.disturbance_at)
-def _disturbance_at(loop, t):
+@overload(closed_loop.hooked_disturbance_at)
+def _hooked_disturbance_at(loop, t):
     def call_back(loop, t):
-        if not loop.hooked_disturbance:
-            return disturbances.paper_disturbance_of(t)
         out = loop.hook_out
-        loop.disturbance_hook(0.0, t, _pointer(out))
+        loop.disturbance_hook(closed_loop.HOOK_DISTURBANCE, t, _pointer(out))
         return out[0], out[1]
 
     return call_back

@@ -72,8 +72,12 @@ COS_BETA_MIN = reduced.COS_BETA_MIN
 #: halves (a controller class, or a plain-number law when CPython runs the step)
 USER = len(LAWS)
 PYTHON = USER + 1
-#: ``target.path_kind`` of a path without a closed form, which only CPython's step reads
+#: ``target.path_kind`` of a path without a closed form, which the step calls
 HOOKED_PATH = 3
+#: What the kernel asks of a hook it calls back (:mod:`tt_mujoco.sim._kernel`, ``HOOK``): a
+#: path's curvature and its rate, its pose, its pose as a plain-number law's reference; a
+#: disturbance's answer
+HOOK_CURVATURE, HOOK_POSE, HOOK_LAW_POSE, HOOK_DISTURBANCE = 0.0, 1.0, 2.0, 0.0
 #: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
 NOMINAL_SINGULAR = -1.0
 PATH_SCHEDULE, CURVATURE_SCHEDULE = schedule.PATH_SCHEDULE, schedule.CURVATURE_SCHEDULE
@@ -155,12 +159,17 @@ def law_pose_at(target, s):
     return pose_at(target, s)
 
 
+def hooked_disturbance_at(loop, t):
+    """``(a_v, a_w)`` of a user's disturbance at ``t``, with its checks (the kernel calls it
+    back: ``stop.raised`` says when it raised)."""
+    return loop.disturbance_hook(t)
+
+
 def disturbance_at(loop, t):
-    """``(a_v, a_w)`` of the disturbance at ``t``: the paper's, or the hook's (a user's
-    disturbance, with its checks, which the kernel calls back)."""
+    """``(a_v, a_w)`` of the disturbance at ``t``: the paper's, or a user's."""
     if not loop.hooked_disturbance:
         return disturbances.paper_disturbance_of(t)
-    return loop.disturbance_hook(t)
+    return hooked_disturbance_at(loop, t)
 
 
 def python_law(law):
@@ -751,6 +760,7 @@ BORROWING = (
     path_at,
     pose_at,
     law_pose_at,
+    disturbance_at,
     _sense,
     _ode,
     _first_singular,

@@ -99,9 +99,9 @@ def _called_back(stepper, made: tuple, kernel) -> tuple:
     who = usercode.controller_label(stepper.built)
 
     def path_answer(what: float, s: float) -> tuple:
-        if what == 0.0:
+        if what == closed_loop.HOOK_CURVATURE:
             return path.curvature_and_rate(s)
-        if what == 1.0:
+        if what == closed_loop.HOOK_POSE:
             return path.pose_at(s)
         try:  # the reference pose of a plain-number law: its Python form asks for it itself
             return path.pose_at(s)
