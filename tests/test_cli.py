@@ -64,6 +64,27 @@ def test_cli_writes_outputs(s_curve_run):
         assert key in doc, key
     assert doc["config"]["scenario"]["traj"] == "s_curve"
     assert doc["status"] == "ok"
+    # every note is one line on the console and an entry in metrics.json, the same words
+    printed = [line[6:] for line in proc.stdout.splitlines() if line.startswith("note: ")]
+    assert printed == doc["notes"]
+
+
+def test_a_run_the_python_loop_takes_says_why(tmp_path):
+    # a short run takes the Python loop: the console and metrics.json say so, with the reason
+    out = tmp_path / "short"
+    proc = subprocess.run(
+        [
+            *(sys.executable, "-m", "tt_mujoco.run", "--traj", "circle", "--duration", "0.5"),
+            *("--no-video", "--no-plots", "--out", str(out)),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr
+    notes = json.loads((out / "metrics.json").read_text())["notes"]
+    assert len(notes) == 1 and "Python loop ran" in notes[0] and "500 control steps" in notes[0]
+    assert f"note: {notes[0]}" in proc.stdout.splitlines()
 
 
 def test_metrics_agree_with_timeseries(s_curve_run):

@@ -299,18 +299,22 @@ def test_checkpoint_rows_are_the_same(monkeypatch, tmp_path):
 @pytest.mark.parametrize(
     ("changes", "reason"),
     [
-        (dict(duration=1.0), "fewer than 2000 steps"),
+        (dict(duration=1.0), "the run has 1000 control steps, fewer than the 2000"),
     ],
 )
 def test_the_python_loop_runs_what_has_no_compiled_form(changes, reason):
-    built = build(Scenario(**{"traj": "circle", "duration": 3.0, **changes}))
-    assert compiled.unsupported(built, built.new_controller()) == reason
+    scenario = Scenario(**{"traj": "circle", "duration": 3.0, **changes})
+    built = build(scenario)
+    assert compiled.unsupported(built, built.new_controller()).startswith(reason)
+    # the run says so, once, in its notes (the command line prints them, metrics.json keeps them)
+    notes = simulate(scenario).notes
+    assert len(notes) == 1 and notes[0].startswith("the Python loop ran") and reason in notes[0]
 
 
 def test_switched_off_by_the_environment(monkeypatch):
     monkeypatch.setenv("TT_MUJOCO_COMPILED", "0")
     built = build(Scenario(traj="circle", duration=3.0))
-    assert compiled.unsupported(built, built.new_controller()) == "TT_MUJOCO_COMPILED=0"
+    assert compiled.unsupported(built, built.new_controller()).startswith("TT_MUJOCO_COMPILED=0")
 
 
 def test_first_use_compiles_in_the_background_and_runs_the_python_loop(monkeypatch, tmp_path):
@@ -548,9 +552,10 @@ def test_a_damaged_cache_is_set_aside_and_the_run_takes_the_python_loop(
     started = []
     monkeypatch.setattr(compiled, "_compile_in_background", lambda: started.append(1))
     monkeypatch.setattr(compiled, "_ASKED", True)  # a second episode: the compile starts now
-    assert not compiled.ready() and started == [1]
-    err = capsys.readouterr().err
-    assert "compiled-code cache could not be loaded" in err and "Python loop" in err
+    why = compiled.not_ready()
+    assert why is not None and started == [1]
+    assert why.startswith("the compiled-code cache could not be loaded") and str(cache) in why
+    assert capsys.readouterr().err == ""  # told once, in the run's notes (run_episode)
     assert not cache.exists() and list(cache.parent.glob(f"{cache.name}.damaged-*"))
 
 
@@ -567,9 +572,8 @@ def test_a_cache_a_background_compile_is_writing_is_not_set_aside(monkeypatch, t
     started = []
     monkeypatch.setattr(compiled, "_compile_in_background", lambda: started.append(1))
     monkeypatch.setattr(compiled, "_ASKED", True)
-    assert not compiled.ready()
+    assert "could not be loaded" not in compiled.not_ready()
     assert cache.exists() and not list(cache.parent.glob(f"{cache.name}.damaged-*"))
-    assert "could not be loaded" not in capsys.readouterr().err
     # a lock older than the stale age is a compile that died: the folder is judged again
     old = time.time() - compiled.COMPILE_LOCK_STALE_S - 1
     os.utime(cache / compiled.COMPILE_LOCK, (old, old))
@@ -607,7 +611,7 @@ def test_a_kernel_that_fails_to_load_leaves_the_episode_to_the_python_loop(
     monkeypatch.setenv("TT_MUJOCO_COMPILED", "1")
     monkeypatch.setattr(compiled, "_KERNEL", Broken)
     result = simulate(scenario)
-    assert "EOFError: Ran out of input" in capsys.readouterr().err
+    assert len(result.notes) == 1 and "EOFError: Ran out of input" in result.notes[0]
     for name, column in python.timeseries.items():
         assert np.array_equal(column, result.timeseries[name], equal_nan=True), name
 

@@ -253,7 +253,7 @@ def write_outputs(
     An interruption therefore leaves complete files and no ``metrics.json``.
     """
     written = []
-    notes = []
+    notes = list(result.notes)  # how the run ran (the loop, backing up), then the outputs'
     if config_toml is not None:
         atomic_write(out / CONFIG_FILE, config_toml)
         written.append(out / CONFIG_FILE)

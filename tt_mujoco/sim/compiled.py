@@ -49,7 +49,16 @@ import numpy as np
 from tt_mujoco.analysis import geometry
 from tt_mujoco.outputs import atomic_write
 
-__all__ = ["kernel", "ready", "run_compiled", "source_digest", "unsupported"]
+__all__ = [
+    "Fallback",
+    "compile_failure",
+    "kernel",
+    "not_ready",
+    "ready",
+    "run_compiled",
+    "source_digest",
+    "unsupported",
+]
 
 #: Shortest episode handed to the compiled loop (loading the compiled code is paid once per
 #: process: a short episode gains less than that).
@@ -63,12 +72,21 @@ def _enabled() -> bool:
     return os.environ.get("TT_MUJOCO_COMPILED", "1") != "0"
 
 
+class Fallback(Exception):  # noqa: N818 - a route, not an error: the Python loop runs
+    """The episode cannot run compiled after all; the message says why, in a sentence the
+    run's notes carry (:func:`tt_mujoco.sim.simulate.run_episode`). Nothing has run."""
+
+
 def unsupported(built, controller, on_step=None) -> str | None:
     """Why the episode has no compiled form (None when it has one); only a query."""
     reasons = [
-        (not _enabled(), "TT_MUJOCO_COMPILED=0"),
-        (built.steps < MIN_STEPS, f"fewer than {MIN_STEPS} steps"),
-        (on_step is not None, "a per-step callback"),
+        (not _enabled(), "TT_MUJOCO_COMPILED=0 turns the compiled loop off"),
+        (
+            built.steps < MIN_STEPS,
+            f"the run has {built.steps} control steps, fewer than the {MIN_STEPS} for which "
+            "loading the compiled loop pays",
+        ),
+        (on_step is not None, "a per-step callback (the live viewer) runs in Python"),
     ]
     for failed, reason in reasons:
         if failed:
@@ -80,14 +98,29 @@ def unsupported(built, controller, on_step=None) -> str | None:
     return None
 
 
-def ready() -> bool:
-    """Whether the compiled kernel can run now without compiling in the foreground: loaded in
-    this process, or in the cache (``TT_MUJOCO_COMPILE_NOW=1``: compile here instead). When
-    neither, one background process will fill the cache (:func:`_ask_for_compile`)."""
-    if _KERNEL is not None or _cached() or os.environ.get("TT_MUJOCO_COMPILE_NOW") == "1":
-        return True
+def not_ready() -> str | None:
+    """None when the compiled kernel can run now without compiling in the foreground: loaded
+    in this process, or in the cache (``TT_MUJOCO_COMPILE_NOW=1``: compile here instead).
+    Otherwise why not, and one background process will fill the cache
+    (:func:`_ask_for_compile`)."""
+    if _KERNEL is not None or os.environ.get("TT_MUJOCO_COMPILE_NOW") == "1":
+        return None
+    try:
+        if _cached():
+            return None
+        why = (
+            "the compiled loop is not in the cache yet (a background process compiles it "
+            "for the next run)"
+        )
+    except _DamagedCacheError as damaged:
+        why = str(damaged)
     _ask_for_compile()
-    return False
+    return why
+
+
+def ready() -> bool:
+    """Whether the compiled kernel can run now (:func:`not_ready` says why not)."""
+    return not_ready() is None
 
 
 #: Whether this process has asked for a background compile (see :func:`_ask_for_compile`).
@@ -111,8 +144,12 @@ def _ask_for_compile() -> None:
 
 def _compile_at_exit() -> None:
     """The asked-for compile, unless this process has loaded or found the kernel since."""
-    if _KERNEL is None and not _cached():
-        _compile_in_background()
+    try:
+        if _KERNEL is not None or _cached():
+            return
+    except _DamagedCacheError:
+        pass  # set aside: compile a fresh one
+    _compile_in_background()
 
 
 #: The cache folder's list of its files and their hashes, written once the kernel has run.
@@ -161,16 +198,13 @@ def _cached() -> bool:
     except FileNotFoundError:
         return False
     except (OSError, ValueError) as err:
-        set_aside_cache(err)
-        return False
+        raise _DamagedCacheError(set_aside_cache(err)) from err
     try:
         found = _cache_files(cache)
     except OSError as err:
-        set_aside_cache(err)
-        return False
+        raise _DamagedCacheError(set_aside_cache(err)) from err
     if not isinstance(listed, dict) or not listed or found != listed:
-        set_aside_cache(ValueError("its files differ from its manifest"))
-        return False
+        raise _DamagedCacheError(set_aside_cache(ValueError("its files differ from its manifest")))
     return True
 
 
@@ -356,9 +390,9 @@ def type_key(value):
     return typeof(value)
 
 
-def set_aside_cache(err: BaseException) -> None:
+def set_aside_cache(err: BaseException) -> str:
     """A cache that fails to load (truncated, garbage, foreign): move it aside, so that a
-    fresh one is compiled in the background, and say so in one line."""
+    fresh one is compiled in the background; what happened, in one sentence."""
     global _KERNEL
     cache = _cache_dir()
     aside = cache.with_name(f"{cache.name}.damaged-{os.getpid()}")
@@ -370,10 +404,9 @@ def set_aside_cache(err: BaseException) -> None:
     _KERNEL = None
     geometry.use_compiled_projection(None)
     sys.modules.pop("tt_mujoco.sim._kernel", None)
-    print(
-        f"note: the compiled-code cache could not be loaded ({type(err).__name__}: {err}); "
-        f"it was {where}, and this run uses the Python loop (same numbers)",
-        file=sys.stderr,
+    return (
+        f"the compiled-code cache could not be loaded ({type(err).__name__}: {err}); it was "
+        f"{where}, and a fresh one is compiled in the background"
     )
 
 
@@ -381,29 +414,56 @@ class _DamagedCacheError(Exception):
     """The cached kernel failed to load or to run its first chunk: nothing has run."""
 
 
+def compile_failure(err: BaseException, source_file: str | None) -> str:
+    """numba's error compiling a user's law, in one line: what has no compiled form and the
+    line of ``source_file`` (the law's file) where it is used."""
+    import linecache
+    import re
+
+    text = re.sub(r"\x1b\[[0-9;]*m", "", str(err))
+    lines = [line.strip() for line in text.splitlines()]
+    why = next((line for line in lines if line and not line.startswith("Failed in")), "")
+    signature = next((line[3:].strip() for line in lines if line.startswith(">>>")), None)
+    if why.startswith("No implementation of function") and signature:
+        why = f"numba has no {signature}"
+    why = re.sub(r"Function\(<function (\w+) at 0x[0-9a-f]+>\)", r"\1", why).rstrip(":")
+    why = why or type(err).__name__
+    if source_file is None:
+        return why
+    own = os.path.realpath(source_file)
+    places = re.findall(r"typing of [^\n]*? at (.+?) \((\d+)\)", text)
+    places += re.findall(r'File "(.+?)", line (\d+)', text)  # relative to the working folder
+    for path, number in places:
+        if os.path.realpath(path) == own:
+            code = linecache.getline(own, int(number)).strip()
+            return f"{why}, at {os.path.basename(path)} line {number}: {code}"
+    return why
+
+
 def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
     """Run the (reset) ``stepper``'s episode with ``controller`` compiled; ``(status,
-    message)`` as :func:`tt_mujoco.sim.simulate.run_episode`, or None when the compiled code
-    cannot be loaded (nothing has run then: the caller runs the Python loop)."""
+    message)`` as :func:`tt_mujoco.sim.simulate.run_episode`.
+
+    Raises
+    ------
+    Fallback
+        When the compiled code cannot be loaded or the user's law has no compiled form:
+        nothing has run, and the caller runs the Python loop.
+    """
     try:
         k_mod = kernel()
     except Exception as err:  # a damaged cache: its copy of the kernel does not import
-        set_aside_cache(err)
-        return None
+        raise Fallback(set_aside_cache(err)) from err
     try:
         user = _user_law(k_mod, controller)
     except Exception as err:  # numba cannot compile the user's law: the Python loop can run it
-        import re
+        import inspect
 
-        lines = [re.sub(r"\x1b\[[0-9;]*m", "", line).strip() for line in str(err).splitlines()]
-        why = next((line for line in lines if line and not line.startswith("Failed in")), "")
-        why = why or type(err).__name__
-        print(
-            f"note: the law {controller.name!r} has no compiled form ({why}); "
-            "it runs in the Python loop (same numbers, slower)",
-            file=sys.stderr,
-        )
-        return None
+        law = getattr(type(controller), "LAW", None)
+        source = inspect.getsourcefile(law) if law is not None else None
+        raise Fallback(
+            f"the law {controller.name!r} has no compiled form: {compile_failure(err, source)}"
+        ) from err
     loop, _, law, target, _ = stepper.begin(controller, user, kernel=k_mod)
     hooks = (law.user, target.path_hook, loop.disturbance_hook)
     called_back = [hook for hook in hooks if isinstance(hook, k_mod.CalledBack)]
@@ -431,8 +491,7 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
     try:
         return stepper.run(run_chunk, advance, progress)
     except _DamagedCacheError as damaged:
-        set_aside_cache(damaged.__cause__)
-        return None
+        raise Fallback(set_aside_cache(damaged.__cause__)) from damaged
 
 
 def _user_law(k_mod, controller):

@@ -7,7 +7,7 @@ import math
 import signal
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from numbers import Integral, Real
 
 import numpy as np
@@ -43,6 +43,10 @@ class Result:
     config: dict
     #: The traceback of the user code that stopped a "failed" run (None otherwise).
     details: str | None = None
+    #: What the run says about how it ran, a sentence each (the command line prints them and
+    #: writes them to ``metrics.json``'s ``notes``): why the Python loop ran instead of the
+    #: compiled one, what drove the vehicle backing up.
+    notes: list[str] = field(default_factory=list)
 
     @property
     def ok(self) -> bool:
@@ -89,14 +93,27 @@ def _time_limit_stop(stepper: Stepper, err: TimeLimitExceeded) -> tuple[str, str
 def run_episode(stepper: Stepper, controller, progress=None, on_step=None) -> tuple[str, str]:
     """Drive ``stepper`` (already reset) with ``controller`` to the end or a stop.
 
-    Returns ``(status, message)``; see :func:`simulate` for ``progress`` and ``on_step``.
+    Returns ``(status, message)``; see :func:`simulate` for ``progress`` and ``on_step``. The
+    compiled loop runs the episode where it can; where it cannot, the Python loop runs it (the
+    same numbers) and ``stepper.python_loop_reason`` says why, the one place every fallback
+    is told.
     """
-    if compiled.unsupported(stepper.built, controller, on_step) is None and compiled.ready():
-        outcome = compiled.run_compiled(stepper, controller, progress)
-        if outcome is not None:
-            return outcome
+    why = compiled.unsupported(stepper.built, controller, on_step) or compiled.not_ready()
+    if why is None:
+        try:
+            return compiled.run_compiled(stepper, controller, progress)
+        except compiled.Fallback as fallback:
+            why = str(fallback)
+    stepper.python_loop_reason = why
     stepper.begin(controller)
     return stepper.run(progress=progress, on_step=on_step)
+
+
+def python_loop_note(reason: str | None) -> str | None:
+    """The run's note for an episode the Python loop ran instead of the compiled one."""
+    if reason is None:
+        return None
+    return f"the Python loop ran this episode (the same numbers, slower): {reason}"
 
 
 def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint=None) -> Result:
@@ -271,4 +288,5 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
         wall_time_s=wall,
         config=config,
         details=stepper.stop_details,
+        notes=[note for note in (python_loop_note(stepper.python_loop_reason),) if note],
     )
