@@ -237,6 +237,12 @@ class Controller(ABC):
     #: Whether the controller drives the path backwards too (``--reverse``); a run that
     #: reverses with one that does not is refused before it starts.
     REVERSE: ClassVar[bool] = True
+    #: Whether, backing up, the controller steers the train itself (from the path and the
+    #: measured hitch angles): the loop then gives it the path's own reverse target, where
+    #: otherwise the hitch cascade (:mod:`tt_mujoco.controllers.backing`) sets the tractor's
+    #: yaw-rate target ``reference.omega_d`` and starts the trailers on the path. The run's
+    #: ``metrics.json`` says which drove it (``reversing``).
+    BACKS_UP_ITSELF: ClassVar[bool] = False
     PRESETS: ClassVar[dict[str, dict[str, float]]] = {"default": {}}
     DEFAULT_PRESET: ClassVar[str] = "default"
     #: The last unsaturated torque request (T_r, T_l), for logging; None: what compute returned.

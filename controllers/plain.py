@@ -108,6 +108,7 @@ def plain_law(
     presets: Mapping[str, Mapping[str, float]] | None = None,
     name: str | None = None,
     reverse: bool = True,
+    backs_up_itself: bool = False,
 ) -> Callable[[Callable], type[PlainLawController]]:
     """Declare a plain-number law (module docstring): its gains, its state, its name.
 
@@ -124,6 +125,10 @@ def plain_law(
         The controller's name (default: the function's).
     reverse : bool
         Whether the law drives the path backwards too.
+    backs_up_itself : bool
+        Whether, backing up, the law steers the train itself, so that the loop gives it the
+        path's own reverse target rather than the hitch cascade's
+        (:attr:`~tt_mujoco.controllers.Controller.BACKS_UP_ITSELF`).
 
     Returns
     -------
@@ -163,6 +168,7 @@ def plain_law(
             "PRESETS": table,
             "DEFAULT_PRESET": next(iter(table)),
             "REVERSE": bool(reverse),
+            "BACKS_UP_ITSELF": bool(backs_up_itself),
             "name": name or fn.__name__,
             "__doc__": fn.__doc__,
             "__module__": fn.__module__,

@@ -36,8 +36,19 @@ def test_plot_writes_the_four_figures(tmp_path):
     run = tt_mujoco.simulate(Scenario(traj="circle", plant="reduced", duration=0.5))
     made = run.plot(tmp_path)
     assert len(made) == 4 and all(p.exists() and p.stat().st_size > 0 for p in made)
-    with pytest.raises(ValueError, match="must be a folder"):
-        run.plot(tmp_path / "missing")
+    # a folder that does not exist yet is made, as a user expects; a file is refused
+    again = run.plot(tmp_path / "new" / "figures")
+    assert [p.name for p in again] == [p.name for p in made] and all(p.exists() for p in again)
+    (tmp_path / "a_file").write_text("")
+    with pytest.raises(ValueError, match=r"a_file.*is a file, not a folder"):
+        run.plot(tmp_path / "a_file")
+
+
+@pytest.mark.parametrize("wrong", ["s_curve", {"traj": "s_curve"}, None])
+def test_simulate_names_what_it_takes(wrong):
+    # simulate("s_curve") was an AttributeError about 'validate' from deep inside
+    with pytest.raises(TypeError, match=r"scenario=.* is not allowed: simulate takes a"):
+        tt_mujoco.simulate(wrong)
 
 
 def test_load_scenario_reads_a_toml_file_as_the_command_line_does(tmp_path):

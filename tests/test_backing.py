@@ -244,5 +244,5 @@ def test_the_backing_study_table_is_what_its_command_prints(path, plant, n, dist
 def test_gains_stable_backwards_are_left_to_themselves():
     # every eta_k > 1 (the paper's 3): no cascade, as the paper suite's "eta = 3 reverse" runs
     assert not isinstance(build(Scenario(reverse=True, eta="paper")).target, HitchCascade)
-    assert not Scenario(reverse=True, eta=3.0, trailers=2).backs_with_cascade
-    assert Scenario(reverse=True, eta=0.5).backs_with_cascade
+    assert build(Scenario(reverse=True, eta=3.0, trailers=2)).reversing == "hitches_free"
+    assert build(Scenario(reverse=True, eta=0.5)).reversing == "hitch_cascade"

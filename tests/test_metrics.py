@@ -14,6 +14,7 @@ from tt_mujoco.analysis.metrics import (
     compute_metrics,
     distance_to_polyline,
     max_abs,
+    metric_unit,
     rmse,
     signed_lateral_error,
     summary_table,
@@ -516,9 +517,35 @@ def test_summary_table_is_aligned():
     lines = text.splitlines()
     assert [line.split()[0] for line in lines] == ["rmse_v", "steps", "trailer_offtrack_rms"]
     assert [line.split()[1] for line in lines] == ["0.0147123", "5000", "nan"]
-    assert len({len(line) for line in lines}) == 1  # values right-aligned in one column
+    assert [line.split()[2:] for line in lines] == [["m/s"], [], ["m"]]  # each metric's unit
+    ends = {
+        line.index(value) + len(value)
+        for line, value in zip(lines, ("0.0147123", "5000", "nan"), strict=True)
+    }
+    assert len(ends) == 1  # values right-aligned in one column
     with pytest.raises(ValueError, match="wall_time_s"):
         summary_table(metrics, keys=("wall_time_s",))
+
+
+@pytest.mark.parametrize(
+    "options",
+    [
+        dict(trailers=3, faults=["dropout:t=0.2"]),
+        dict(reverse=True, path_feedback={}),
+        dict(reverse=True, eta=0.5),
+    ],
+)
+def test_every_built_in_metric_has_a_unit(options):
+    # generated from what runs report: a metric added without a unit fails here, and the
+    # summary would print it bare
+    from tt_mujoco.sim import Scenario, simulate
+
+    run = simulate(Scenario(traj="circle", plant="reduced", duration=0.4, **options))
+    numbers = [k for k, v in run.metrics.items() if isinstance(v, int | float)]
+    assert numbers and all(metric_unit(k) is not None for k in numbers), [
+        k for k in numbers if metric_unit(k) is None
+    ]
+    assert metric_unit("my_metric") is None  # a user's metric: no unit is made up for it
 
 
 def test_default_summary_covers_compute_metrics_output():

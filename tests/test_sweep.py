@@ -376,3 +376,38 @@ def test_a_scheduler_that_accepts_and_never_answers_is_given_up_at_the_deadline(
         executor.Executors(1, address).open()
     assert time.monotonic() - start < 10
     server.close()
+
+
+@pytest.mark.parametrize("width", [4.0, 12.0])
+def test_the_sweep_figures_label_units_and_keep_their_titles_inside(reference, monkeypatch, width):
+    # the histograms' axes had no units, and a long title was clipped at the figure's sides
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from tt_mujoco.analysis.metrics import metric_unit
+    from tt_mujoco.sweep import tables
+
+    made = []
+    monkeypatch.setattr(tables, "save_figure", lambda fig, path, dpi: made.append(fig) or path)
+    real_figure = Figure
+
+    def narrow(*args, figsize=None, **kwargs):  # every figure as narrow or wide as asked
+        return real_figure(*args, figsize=(width, figsize[1]), **kwargs)
+
+    monkeypatch.setattr("matplotlib.figure.Figure", narrow)
+    rows = sweep.read_table(reference / "runs.csv")
+    tables.plot_summary(rows, parse_spec(ITEMS, repeats=REPEATS, seed=7), reference)
+    assert len(made) == 2
+    for fig in made:
+        canvas = FigureCanvasAgg(fig)
+        canvas.draw()
+        renderer = canvas.get_renderer()
+        title = fig._suptitle.get_window_extent(renderer)
+        assert 0 <= title.x0 and title.x1 <= fig.bbox.width, fig._suptitle.get_text()
+        for ax in fig.axes:
+            if not ax.get_visible() or ax.get_xlabel() == "":
+                continue
+            for label in (ax.get_xlabel(), ax.get_ylabel()):
+                name = label.split(" [")[0]
+                if metric_unit(name):
+                    assert label == f"{name} [{metric_unit(name)}]"

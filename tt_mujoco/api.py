@@ -76,13 +76,14 @@ class Run:
         return frame
 
     def plot(self, out_dir) -> list[Path]:
-        """Write the run's four figures (as the command line does) into the existing folder
-        ``out_dir``; returns their paths."""
+        """Write the run's four figures (as the command line does) into the folder
+        ``out_dir``, made first when it does not exist; returns their paths."""
         from tt_mujoco.viz import plots
 
         out = Path(out_dir)
-        if not out.is_dir():
-            raise ValueError(f"out_dir={str(out_dir)!r} is not allowed: it must be a folder")
+        if out.exists() and not out.is_dir():
+            raise ValueError(f"out_dir={str(out_dir)!r} is not allowed: it is a file, not a folder")
+        out.mkdir(parents=True, exist_ok=True)
         made = plots.plot_run(
             self.result.timeseries,
             self.result.reference_polyline,
@@ -132,7 +133,14 @@ def simulate(scenario: Scenario, progress=None) -> Run:
     ------
     ValueError
         A bad scenario value, or a user's controller or disturbance that fails before the run.
+    TypeError
+        ``scenario`` is not a :class:`Scenario`.
     """
+    if not isinstance(scenario, Scenario):
+        raise TypeError(
+            f"scenario={scenario!r} is not allowed: simulate takes a tt_mujoco.Scenario, e.g. "
+            "tt_mujoco.Scenario(traj='s_curve'), or tt_mujoco.load_scenario(FILE)"
+        )
     return Run(_simulate(scenario, progress=progress))
 
 

@@ -17,6 +17,7 @@ existing non-empty one; ``metrics.json`` is written last, so its presence marks 
 from __future__ import annotations
 
 import argparse
+import functools
 import shutil
 import signal
 import sys
@@ -153,6 +154,14 @@ def build_parser(schema: Schema | None = None) -> argparse.ArgumentParser:
     )
     outputs.add_arguments(o)
     return p
+
+
+def usage(width: int = 100) -> str:
+    """The command's usage as ``--help`` prints it at ``width`` columns: the synopsis
+    docs/getting-started.md shows (``tests/test_docs.py`` keeps it the parser's)."""
+    parser = build_parser()
+    parser.formatter_class = functools.partial(argparse.HelpFormatter, width=width)
+    return parser.format_usage()
 
 
 class Invocation(NamedTuple):
@@ -473,16 +482,28 @@ def _interrupted(out: Path, created: bool, live) -> int:
     )
 
 
+def steering_shown(s: Scenario) -> str:
+    """The trailers' steering as ``config.toml`` names it, with the gains it gives:
+    ``eta=same_path (-0.142857)``, ``eta=path schedule``, ``3 trailers, eta=paper (3, 3, 3)``."""
+    kind = s.eta_schedule_kind
+    if kind is not None:
+        shown = f"eta={kind} schedule"
+    else:
+        etas = s.nominal_params().etas
+        gains = ", ".join(f"{e:.6g}" for e in etas)
+        shown = f"eta={s.eta} ({gains})" if isinstance(s.eta, str) else f"eta={gains}"
+    n = s.plant_params().n_trailers
+    return shown if n == 1 else f"{n} trailers, {shown}"
+
+
 def _print_summary(result, out: Path, written, notes) -> None:
 
     s = result.scenario
-    etas = s.nominal_params().etas
-    gains = ", ".join(f"{e:.4g}" for e in etas)
-    shown = f"eta={etas[0]:g}" if len(etas) == 1 else f"{len(etas)} trailers, eta_k={gains}"
     print(
-        f"{s.traj} | {s.controller} | {s.target} target | {s.plant} plant | {shown} | "
-        f"disturbance={s.disturbance}"
+        f"{s.traj} | {s.controller} | {s.target} target | {s.plant} plant | {steering_shown(s)}"
+        f" | disturbance={s.disturbance}"
         + ("" if s.terrain == "flat" else f" | terrain={s.terrain}")
+        + (f" | backing up: {result.metrics['reversing']}" if s.reverse else "")
         + f" | status={result.status}"
     )
     # A train adds its worst trailer, and every trailer's off-tracking.

@@ -82,8 +82,9 @@ class Option:
         Whether the command line has it.
     consts : tuple of (str, object)
         Extra flags that each set one value (``--no-disturbance`` is disturbance "none").
-    metavar : str or None
-        The value's name in ``--help``.
+    metavar : str, callable or None
+        The value's name in ``--help``; a callable gives it when the parser is built (the
+        names a registry holds then, ``{ismc_sta,pid,...,HOOK}``).
     choices : tuple
         The allowed values, where they are a short list (for ``--help`` and hints).
     axis : bool
@@ -103,7 +104,7 @@ class Option:
     file: bool = False
     cli: bool = True
     consts: tuple[tuple[str, Any], ...] = ()
-    metavar: str | None = None
+    metavar: str | Callable[[], str] | None = None
     choices: tuple = ()
     axis: bool = True
 
@@ -486,6 +487,7 @@ class Schema:
                 continue
             flags = opt.cli_flags
             shown_default = _shown_default(opt)
+            metavar = opt.metavar() if callable(opt.metavar) else opt.metavar
             help_text = opt.help + (f" [{opt.unit}]" if opt.unit else "")
             help_text += f" (default: {shown_default})" if shown_default else ""
             common = dict(dest=opt.name, default=argparse.SUPPRESS, help=help_text)
@@ -496,7 +498,7 @@ class Schema:
                     *flags,
                     action="append",
                     type=_cli_type(opt, lambda v, label: v),
-                    metavar=opt.metavar,
+                    metavar=metavar,
                     **common,
                 )
             elif opt.form == "table":
@@ -504,11 +506,10 @@ class Schema:
                     *flags,
                     action="append",
                     type=_entry_type(flags[0]),
-                    metavar=opt.metavar or "NAME=VALUE",
+                    metavar=metavar or "NAME=VALUE",
                     **common,
                 )
             else:
-                metavar = opt.metavar
                 if metavar is None and opt.choices:
                     metavar = "{" + ",".join(map(str, opt.choices)) + "}"
                 group.add_argument(

@@ -39,6 +39,7 @@ __all__ = [
     "DEFAULT_SUMMARY_KEYS",
     "DIAGNOSTIC_COLUMNS",
     "METRICS",
+    "METRIC_UNITS",
     "OPTIONAL_COLUMNS",
     "REQUIRED_COLUMNS",
     "Polyline",
@@ -50,6 +51,7 @@ __all__ = [
     "follower_offtrack",
     "max_abs",
     "metric_name",
+    "metric_unit",
     "resolve_metrics",
     "rmse",
     "signed_lateral_error",
@@ -116,6 +118,49 @@ DEFAULT_SUMMARY_KEYS = (
     "steps",
     "finite_samples",
 )
+
+#: The unit of every built-in metric that is a number ("" for a count or a fraction); a
+#: trailer's own metric (``trailer_2_offtrack_rms``) has its one-trailer form's unit
+#: (:func:`metric_unit`). docs/metrics.md defines each.
+METRIC_UNITS = {
+    **dict.fromkeys(("rmse_v", "max_abs_v", "slip_lateral_max", "slip_longitudinal_max"), "m/s"),
+    **dict.fromkeys(
+        ("rmse_omega", "max_abs_omega", "rmse_omega_tracked", "max_abs_omega_tracked"), "rad/s"
+    ),
+    **dict.fromkeys(
+        (
+            *("rmse_lateral", "max_lateral", "cross_track_rms", "cross_track_max"),
+            *("along_track_rms", "along_track_max", "rmse_position", "max_position"),
+            *("trailer_rmse_lateral", "trailer_max_lateral", "trailer_offtrack_rms"),
+            *("trailer_offtrack_max", "leading_cross_track_rms", "leading_cross_track_max"),
+            *("train_offtrack_rms_worst", "train_offtrack_max_worst"),
+        ),
+        "m",
+    ),
+    **dict.fromkeys(("phi_max_abs_deg", "train_phi_max_abs_deg"), "deg"),
+    "eq_violation_max": "rad",
+    **dict.fromkeys(("sample_period_s", "sim_time_s", "wall_time_s"), "s"),
+    **dict.fromkeys(
+        (
+            *("torque_saturation_fraction", "disturbance_clipped_fraction", "steps"),
+            *("finite_samples", "trailer_lateral_samples", "trailer_offtrack_samples"),
+        ),
+        "",
+    ),
+}
+
+
+def metric_unit(name: str) -> str | None:
+    """The unit of the built-in metric ``name`` ("" for a pure number), None for one that is
+    not built in (a user's metric: its unit is its author's)."""
+    if name in METRIC_UNITS:
+        return METRIC_UNITS[name]
+    parts = name.split("_")
+    if len(parts) > 2 and parts[0] == "trailer" and parts[1].isdigit():
+        rest = "_".join(parts[2:])  # trailer_2_offtrack_rms, trailer_2_phi_max_abs_deg
+        return METRIC_UNITS.get(f"trailer_{rest}", METRIC_UNITS.get(rest))
+    return None
+
 
 # Relative margin under which a commanded torque counts as saturated: a controller that clips its
 # own output to exactly the limit must count as saturated despite rounding.
@@ -490,9 +535,10 @@ def _format_value(value) -> str:
 
 
 def summary_table(metrics: Mapping[str, object], keys: Sequence[str] = DEFAULT_SUMMARY_KEYS) -> str:
-    """Plain-text two-column table of selected metrics, for the CLI's printed summary.
+    """Plain-text table of selected metrics, for the CLI's printed summary.
 
-    Names are left-aligned, values right-aligned; floats use 6 significant digits.
+    Names are left-aligned, values right-aligned; floats use 6 significant digits; then each
+    built-in metric's unit (:func:`metric_unit`).
 
     Parameters
     ----------
@@ -518,7 +564,8 @@ def summary_table(metrics: Mapping[str, object], keys: Sequence[str] = DEFAULT_S
     name_width = max(len(k) for k in keys)
     value_width = max(len(v) for v in values)
     return "\n".join(
-        f"{k:<{name_width}}  {v:>{value_width}}" for k, v in zip(keys, values, strict=True)
+        f"{k:<{name_width}}  {v:>{value_width}}  {metric_unit(k) or ''}".rstrip()
+        for k, v in zip(keys, values, strict=True)
     )
 
 

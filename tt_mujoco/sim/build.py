@@ -39,7 +39,38 @@ from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.vehicle.params import Params, jackknife_phi_deg
 from tt_mujoco.vehicle.path_schedule import PathSchedule, axle_chain, path_schedule
 
-__all__ = ["Build", "build", "noise_std"]
+__all__ = ["REVERSING_DRIVES", "Build", "build", "noise_std", "reversing_drive"]
+
+#: What sets the tractor's yaw-rate target backing up (``--reverse``), by name; the run's
+#: ``metrics.json`` says which under ``reversing``, and its notes in a sentence.
+REVERSING_DRIVES = {
+    "hitch_cascade": "the hitch cascade sets the tractor's yaw-rate target so that the last "
+    "trailer's axle tracks the path (tt_mujoco.controllers.backing; --no-hitch-feedback turns "
+    "it off)",
+    "path_feedback": "the outer path feedback sets the yaw-rate target from the tractor's "
+    "errors to the path (--path-feedback)",
+    "controller": "the controller steers the train itself (it sets BACKS_UP_ITSELF): it is "
+    "given the path's own reverse target, and the trailers start straight",
+    "hitches_free": "the path's own reverse target drives the tractor and the hitches are left "
+    "to themselves",
+}
+
+
+def reversing_drive(scenario: Scenario, cls: type[Controller]) -> str | None:
+    """What drives a run backing up (a key of :data:`REVERSING_DRIVES`), None driving
+    forward: path feedback when asked for; the controller itself when its class says so
+    (``BACKS_UP_ITSELF``); otherwise the hitch cascade while it is on and some hitch is
+    unstable backwards (eta_k < 1; with every eta_k > 1, such as the paper's 3, the hitches
+    are stable reversing by themselves, docs/model.md Section 3)."""
+    if not scenario.reverse:
+        return None
+    if scenario.path_feedback is not None:
+        return "path_feedback"
+    if getattr(cls, "BACKS_UP_ITSELF", False):
+        return "controller"
+    if scenario.hitch_feedback is None or min(scenario.nominal_params().etas) >= 1.0:
+        return "hitches_free"
+    return "hitch_cascade"
 
 
 def noise_std(target, duration: float, snr_db: float) -> tuple[float, float]:
@@ -90,6 +121,8 @@ class Build:
     path_schedule: PathSchedule | None = None
     #: The path's arc length where the tractor starts (its end when reversing).
     start_s: float = 0.0
+    #: What drives the run backing up (:func:`reversing_drive`), None driving forward.
+    reversing: str | None = None
     #: Hitch angles phi_1..phi_N (rad) at the start: zeros, or, backing up with the hitch
     #: cascade, those that put every axle on the path (phi0_deg, when set, replaces phi_1).
     initial_hitches: tuple = ()
@@ -179,12 +212,14 @@ def _delay_steps(scenario: Scenario, dt: float, duration: float) -> int:
     return steps
 
 
-def _initial_hitches(scenario: Scenario, path, start_s: float, plant_p: Params) -> tuple:
+def _initial_hitches(
+    scenario: Scenario, path, start_s: float, plant_p: Params, reversing: str | None
+) -> tuple:
     """Backing up with the cascade from the path's end ("on_path" start): the hitch angles
     that put every axle on the path there (the trailers lead, so they start where they must
     go); otherwise straight (zeros)."""
     n = plant_p.n_trailers
-    if not (scenario.backs_with_cascade and scenario.start == "on_path"):
+    if not (reversing == "hitch_cascade" and scenario.start == "on_path"):
         return (0.0,) * n
     chain = axle_chain(path, np.array([start_s]), [(t.L, t.L0) for t in plant_p.trailers])
     phis = tuple(float(axle["phi"][0]) for axle in chain)
@@ -233,6 +268,14 @@ def build(scenario: Scenario) -> Build:
     nominal = scenario.nominal_params()
     plant_p = scenario.plant_params()
     _plant_class(scenario.plant).check_supported(scenario.disturbance)
+    cls = controller_class(scenario.controller)
+    if scenario.reverse and not getattr(cls, "REVERSE", True):
+        backing = ", ".join(n for n in CONTROLLERS if getattr(CONTROLLERS[n], "REVERSE", True))
+        raise ValueError(
+            f"controller={scenario.controller!r} with reverse=True is not allowed: it tracks the "
+            f"path driving forward only (these back up: {backing})"
+        )
+    reversing = reversing_drive(scenario, cls)
     path, target, pose = make_target(
         scenario.traj,
         kind=scenario.target,
@@ -249,7 +292,7 @@ def build(scenario: Scenario) -> Build:
         start_s = target.s_end
     if scenario.path_feedback is not None:
         target = PathFeedback.from_config(target, scenario.path_feedback)
-    elif scenario.backs_with_cascade:
+    elif reversing == "hitch_cascade":
         target = HitchCascade.from_config(target, nominal, scenario.hitch_feedback)
     dt = scenario.control_dt
     # "on_path": the vehicle starts in the reference's initial state, pose *and* speed (paper
@@ -272,13 +315,6 @@ def build(scenario: Scenario) -> Build:
             nominal.axle_slew_rate if scenario.eta_schedule_kind == "path" else math.inf
         ),
     )
-    cls = controller_class(scenario.controller)
-    if scenario.reverse and not getattr(cls, "REVERSE", True):
-        backing = ", ".join(n for n in CONTROLLERS if getattr(CONTROLLERS[n], "REVERSE", True))
-        raise ValueError(
-            f"controller={scenario.controller!r} with reverse=True is not allowed: it tracks the "
-            f"path driving forward only (these back up: {backing})"
-        )
     result = Build(
         scenario=scenario,
         nominal=nominal,
@@ -305,7 +341,8 @@ def build(scenario: Scenario) -> Build:
             else None
         ),
         start_s=start_s,
-        initial_hitches=_initial_hitches(scenario, path, start_s, plant_p),
+        reversing=reversing,
+        initial_hitches=_initial_hitches(scenario, path, start_s, plant_p, reversing),
         delay_steps=_delay_steps(scenario, dt, duration),
         relief=relief_of(parse_terrain(scenario.terrain), drawn_polyline(path, duration), plant_p),
     )

@@ -94,6 +94,18 @@ def _spec(parse):
     return convert
 
 
+def _controller_names() -> str:
+    from tt_mujoco.controllers import CONTROLLERS  # the registry as it is when asked
+
+    return "{" + ",".join((*CONTROLLERS, "HOOK")) + "}"
+
+
+def _path_names() -> str:
+    from tt_mujoco.reference.paths import PATHS  # the registry as it is when asked
+
+    return "{" + ",".join((*PATHS, "PATH.csv", "HOOK")) + "}"
+
+
 def _controller(value, label):
     from tt_mujoco.controllers import CONTROLLERS  # the registry as it is when asked
 
@@ -210,6 +222,7 @@ class Scenario:
         "reference path: cycloid, s_curve, circle, a CSV file with header x,y[,v], or a hook "
         "package.module:NAME / path/to/file.py:NAME (a ReferencePath or a factory)",
         file=True,
+        metavar=_path_names,
     )
     controller: str = option(
         CONTROLLER,
@@ -217,6 +230,7 @@ class Scenario:
         "a registered controller (ismc_sta, pid, fbl, ...), or a hook package.module:Class / "
         "path/to/file.py:Class (a Controller subclass or a plain_law)",
         file=True,
+        metavar=_controller_names,
     )
     gains: str | dict | None = option(
         None,
@@ -528,15 +542,6 @@ class Scenario:
             self.trailers = len(self.trailers) + 1
         if self.control_dt is None:
             self.control_dt = self.timestep
-
-    @property
-    def backs_with_cascade(self) -> bool:
-        """Reversing with the hitch cascade: reverse, hitch_feedback on, no path feedback, and
-        some hitch unstable backwards (eta_k < 1; with every eta_k > 1, such as the paper's 3,
-        the hitches are stable reversing by themselves, docs/model.md Section 3)."""
-        if not (self.reverse and self.hitch_feedback is not None and self.path_feedback is None):
-            return False
-        return min(self.nominal_params().etas) < 1.0
 
     @property
     def eta_schedule_kind(self) -> str | None:

@@ -18,7 +18,7 @@ from tt_mujoco.registry import describe_failure as usercode_failure
 from tt_mujoco.registry import shown
 from tt_mujoco.sim import compiled
 from tt_mujoco.sim import faults as faults_mod
-from tt_mujoco.sim.build import Build, build, drawn_polyline
+from tt_mujoco.sim.build import REVERSING_DRIVES, Build, build, drawn_polyline
 from tt_mujoco.sim.ground import ground_report, parse_patches
 from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sim.relief import RampRelief
@@ -265,6 +265,8 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
         metrics["controller"] = report
     if error is not None:
         metrics.setdefault("metric_errors", {})["controller.report"] = error
+    if built.reversing is not None:
+        metrics["reversing"] = built.reversing
     metrics["wall_time_s"] = wall
     metrics["status"] = status
     if stepper.faults is not None:
@@ -288,5 +290,6 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
         wall_time_s=wall,
         config=config,
         details=stepper.stop_details,
-        notes=[note for note in (python_loop_note(stepper.python_loop_reason),) if note],
+        notes=[note for note in (python_loop_note(stepper.python_loop_reason),) if note]
+        + ([f"backing up: {REVERSING_DRIVES[built.reversing]}"] if built.reversing else []),
     )

@@ -225,6 +225,26 @@ def summary_text(summary: Mapping, metric_names: Sequence[str]) -> str:
     return "\n".join(lines)
 
 
+def labelled(name: str) -> str:
+    """An axis label: a metric's or an option's name with its unit, ``rmse_lateral [m]``
+    (a gain, a count or a user's metric: the name alone)."""
+    from tt_mujoco.analysis.metrics import metric_unit
+    from tt_mujoco.sim.scenario import SCHEMA
+
+    unit = metric_unit(name)
+    if unit is None and name in SCHEMA.names:
+        unit = SCHEMA[name].unit
+    return f"{name} [{unit}]" if unit else name
+
+
+def _suptitle(fig, text: str) -> None:
+    """A figure's title, wrapped to the figure's width (a long one was clipped at its sides)."""
+    import textwrap
+
+    width_in = fig.get_size_inches()[0]
+    fig.suptitle(textwrap.fill(text, width=max(30, int(width_in * 10))))
+
+
 def plot_summary(
     rows: Sequence[Mapping], spec: SweepSpec, out: Path, metric: str = "rmse_lateral"
 ) -> list[Path]:
@@ -255,12 +275,12 @@ def plot_summary(
                 tag = f"{label}: median {med:.3g}" if by else f"median {med:.3g}"
                 ax.hist(xg, bins=bins, color=colour[label], alpha=0.55 if by else 0.8, label=tag)
                 ax.axvline(med, color=colour[label] if by else "k", lw=1, ls="--")
-        ax.set_xlabel(name)
+        ax.set_xlabel(labelled(name))
         ax.set_ylabel("runs")
         ax.legend(fontsize=8)
     for ax in axs[len(names) :]:
         ax.set_visible(False)
-    fig.suptitle(f"{len(rows)} runs: {len(ok)} ok, {failed} failed (histograms of ok runs)")
+    _suptitle(fig, f"{len(rows)} runs: {len(ok)} ok, {failed} failed (histograms of ok runs)")
     paths = [save_figure(fig, out / "histograms.png", 120)]
 
     axes = [a for a in spec.axes if a.varies and a.name != "seed" and _is_numeric(rows, a.name)]
@@ -304,8 +324,8 @@ def plot_summary(
             if bad.any():
                 top_row = np.full(bad.sum(), top)
                 ax.scatter(xs[bad], top_row, marker="x", color="tab:red", label="failed")
-            ax.set_xlabel(axis.name)
-            ax.set_ylabel(metric)
+            ax.set_xlabel(labelled(axis.name))
+            ax.set_ylabel(labelled(metric))
             ax.legend(fontsize=8)
         for ax in panels[len(axes) :]:
             ax.set_visible(False)
@@ -315,13 +335,14 @@ def plot_summary(
         other = "rmse_v" if metric != "rmse_v" else "rmse_omega"
         x_all = _numeric(rows, other)
         ax.scatter(x_all[~bad], y_all[~bad], s=12, alpha=0.6, color="tab:blue")
-        ax.set_xlabel(other)
-        ax.set_ylabel(metric)
-    fig.suptitle(
+        ax.set_xlabel(labelled(other))
+        ax.set_ylabel(labelled(metric))
+    _suptitle(
+        fig,
         f"{metric} per run ({failed} failed runs drawn at the top in red; lines: median per "
         f"value{' and group' if by else ''})"
         if axes
-        else f"{metric} per run ({failed} failed runs not drawn)"
+        else f"{metric} per run ({failed} failed runs not drawn)",
     )
     paths.append(save_figure(fig, out / "scatter.png", 120))
     return paths
