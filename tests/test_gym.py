@@ -15,10 +15,59 @@ from tt_mujoco import gym_env  # noqa: E402
 from tt_mujoco.sim import Scenario, simulate  # noqa: E402
 
 
-@pytest.mark.filterwarnings("ignore::UserWarning")  # advisory: unbounded obs, torque units
-def test_gymnasium_env_checker_passes():
-    env = gym_env.TractorTrailerEnv(duration=0.5)
+@pytest.mark.filterwarnings("error")  # not one warning: normalised actions, finite bounds
+@pytest.mark.parametrize(
+    "options",
+    [{}, {"plant": "reduced", "reverse": True, "traj": "circle"}, {"noise_snr_db": 20.0}],
+)
+def test_gymnasium_env_checker_passes(options):
+    env = gym_env.TractorTrailerEnv(duration=0.5, **options)
     check_env(env, skip_render_check=True)
+    assert env.action_space.low.tolist() == [-1.0, -1.0] and env.action_space.high.tolist() == [
+        1.0,
+        1.0,
+    ]
+    assert np.all(np.isfinite(env.observation_space.low))
+    assert np.all(np.isfinite(env.observation_space.high))
+
+
+@pytest.mark.parametrize("plant", ["mujoco", "reduced"])
+def test_every_observation_stays_within_its_bounds(plant):
+    # random actions, a train that jackknifes, circles that wind the heading past pi
+    env = gym_env.TractorTrailerEnv(traj="circle", plant=plant, trailers=2, duration=3.0)
+    rng = np.random.default_rng(0)
+    for episode in range(2):
+        obs, _ = env.reset(seed=episode)
+        seen = [obs]
+        while True:
+            obs, _, terminated, truncated, info = env.step(rng.uniform(-1, 1, 2))
+            seen.append(obs)
+            if terminated or truncated:
+                break
+        assert all(env.observation_space.contains(o) for o in seen), info["status"]
+        headings = [i for i, n in enumerate(env.observation_names) if n.startswith("theta0")]
+        assert np.all(np.abs(np.array(seen)[:, headings]) <= np.pi)
+
+
+def test_a_normalised_action_is_a_fraction_of_the_torque_limit():
+    # 0.5 of the 15 N m limit is 7.5 N m exactly: the same episode both ways, bit for bit
+    limit = Scenario().nominal_params().torque_limit
+    runs = []
+    for units, action in (("normalized", [0.5, -0.25]), ("torque", [0.5 * limit, -0.25 * limit])):
+        env = gym_env.TractorTrailerEnv(traj="circle", duration=0.2, action_units=units)
+        env.reset(seed=0)
+        runs.append([env.step(np.array(action))[0] for _ in range(10)])
+    assert np.array_equal(runs[0], runs[1])
+    with pytest.raises(ValueError, match="action_units='nm' is not allowed"):
+        gym_env.TractorTrailerEnv(action_units="nm")
+
+
+@pytest.mark.parametrize("action", [None, "abc", [1.0], [[1.0, 2.0, 3.0]], [np.nan, 0.0]])
+def test_a_bad_action_is_named(action):
+    env = gym_env.TractorTrailerEnv(traj="circle", duration=0.2)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=r"action=.* is not allowed: give two finite numbers"):
+        env.step(action)
 
 
 def test_registered_and_makes_the_reduced_plant_too():
@@ -37,7 +86,7 @@ def test_reward_is_negative_squared_tracking_error_and_episode_truncates():
     names = gym_env.OBSERVATION_NAMES
     steps = 0
     while True:
-        obs, reward, terminated, truncated, info = env.step(np.array([1.0, 1.0]))
+        obs, reward, terminated, truncated, info = env.step(np.array([1.0, 1.0]) / 15.0)
         steps += 1
         o = dict(zip(names, obs, strict=True))
         # No noise: the observed v, omega are the true ones the reward uses.
@@ -47,6 +96,7 @@ def test_reward_is_negative_squared_tracking_error_and_episode_truncates():
         if terminated or truncated:
             break
     assert truncated and not terminated
+    assert info["status"] == "ok"  # the run finished, as metrics.json would say
     assert steps == round(0.3 / gym_env.DEFAULT_CONTROL_DT)
     assert info["t"] == pytest.approx(0.3)
 
@@ -57,7 +107,7 @@ def test_same_seed_same_observations_with_noise():
         obs, _ = env.reset(seed=seed)
         seen = [obs]
         for _ in range(20):
-            seen.append(env.step(np.array([2.0, 1.0]))[0])
+            seen.append(env.step(np.array([2.0, 1.0]) / 15.0)[0])
         return np.array(seen)
 
     a, b, c = rollout(7), rollout(7), rollout(8)
@@ -71,7 +121,7 @@ def test_jackknife_terminates_with_a_penalty_worse_than_any_tracking():
     env = gym_env.TractorTrailerEnv(eta="paper", duration=5.0)
     env.reset(seed=0, options={"phi0_deg": 20.0})
     for _ in range(500):
-        _, reward, terminated, truncated, info = env.step(np.array([15.0, -15.0]))
+        _, reward, terminated, truncated, info = env.step(np.array([1.0, -1.0]))
         if terminated or truncated:
             break
     assert terminated and info["status"] == "jackknife"
@@ -81,7 +131,7 @@ def test_jackknife_terminates_with_a_penalty_worse_than_any_tracking():
 def _drive_with_ismc_sta(scenario) -> list[dict]:
     """The observations of an episode of ``scenario`` driven through the env by the ISMC-STA
     law on the nominal model (a train's model takes every hitch angle), as dicts by name."""
-    env = gym_env.TractorTrailerEnv(scenario)
+    env = gym_env.TractorTrailerEnv(scenario, action_units="torque")
     nominal = scenario.nominal_params()
     ctrl = make_controller("ismc_sta", reduced_model(nominal), torque_limit=nominal.torque_limit)
     ctrl.reset()
@@ -158,7 +208,7 @@ def test_render_works_without_a_display():
     assert proc.stdout.split() == ["(480,", "640,", "3)", "1", "1"]  # an image that changes
 
 
-@pytest.mark.filterwarnings("ignore::UserWarning")  # advisory: unbounded obs, torque units
+@pytest.mark.filterwarnings("error")
 def test_a_train_env_passes_the_checker_and_observes_every_trailer():
     env = gym_env.TractorTrailerEnv(trailers=3, duration=0.5, traj="circle")
     check_env(env, skip_render_check=True)
@@ -231,7 +281,7 @@ def test_the_physical_options_reach_the_env():
         "traj": "circle", "duration": 0.2, "terrain": "slope:5:90", "actuator": "dc_motor",
         "sensor_delay": 0.01, "wind": "8:0:2", "ground": ["band:0:1:0.1"],
     }  # fmt: skip
-    env = gym_env.TractorTrailerEnv(**options)
+    env = gym_env.TractorTrailerEnv(**options, action_units="torque")
     env.reset(seed=1)
     env.step(np.full(2, 1.0, dtype=np.float32))
     stepper = env._stepper

@@ -5,8 +5,10 @@ model by default, or the reduced ODE), with the same reference targets, disturba
 faults, all taken from a :class:`~tt_mujoco.sim.Scenario`. Instead of a controller, the agent
 chooses the wheel torques:
 
-- **action**: ``(T_r, T_l)`` in N m, a ``Box(-torque_limit, torque_limit, (2,))``; the
-  actuators saturate, so values outside are clipped, as a real motor driver would.
+- **action**: the wheel torques ``(T_r, T_l)`` as fractions of the torque limit, a
+  ``Box(-1, 1, (2,))`` (``action_units="torque"``: in N m, ``Box(-torque_limit,
+  torque_limit)``); the actuators saturate, so values outside are clipped, as a real motor
+  driver would.
 - **observation**: the measurement layer (:class:`tt_mujoco.sim.measure.Measurement`, its 19
   fields in order, with the scenario's measurement noise on v and omega and any sensor dropout
   applied), then for a train trailers 2..N (``x0_k, y0_k, theta0_k, phi_k, beta_k, v0_k``, as
@@ -25,15 +27,22 @@ chooses the wheel torques:
   ``rmse_v^2 + rmse_omega^2`` of ``metrics.json``. A jackknife or a blow-up ends the episode
   (``terminated``) with the reward ``-(1 + steps left)``, as if every remaining step had an
   error of 1: ending early never pays.
-- **truncated** when the scenario's duration is reached.
-- **info**: ``t``, ``status`` ("running", "jackknife", "diverged", "failed"), the errors ``e_v``,
-  ``e_omega``, the target's derivatives ``v_d_dot``, ``omega_d_dot`` (what the project's
+- **truncated** when the scenario's duration is reached (``info["status"]`` is then "ok", as
+  the finished run's ``metrics.json`` says).
+- **info**: ``t``, ``status`` ("running", "ok", "jackknife", "diverged", "failed"), the errors
+  ``e_v``, ``e_omega``, the target's derivatives ``v_d_dot``, ``omega_d_dot`` (what the project's
   controllers also use), ``slip_longitudinal`` (m/s) and ``etas``, the trailers' steering gains
   in force (a scheduled eta changes them; a model-based agent hands them to its model, as
   :meth:`controllers.base.Controller.steering_changed` does).
 
-The action keeps physical units (N m); wrap it in ``gymnasium.wrappers.RescaleAction`` for a
-normalised ``[-1, 1]`` space. The observation is unbounded (positions, wheel angles).
+Every observation has finite bounds (:func:`observation_bounds`), each from a limit the
+project keeps: positions within the reach of the path in the episode (``MAX_SPEED`` times the
+duration, plus the train's length), headings wrapped to ``[-pi, pi]``, speeds within
+``MAX_SPEED``, the yaw rate within the wheels' ``MAX_SPEED`` apart, the hitch angles within
+``pi``. A state beyond them has blown up: the observation is clipped to them.
+
+Vectorised, the environment resets an episode that ended on the step after (gymnasium's
+``AutoresetMode.NEXT_STEP``, ``metadata["autoreset_mode"]``).
 
 One step is one control period ``scenario.control_dt`` (default here 0.01 s: 10 physics
 steps of 1 ms). The default scenario has no disturbance (``Scenario(disturbance="none")``);
@@ -53,6 +62,7 @@ first ``reset()`` there is no state to draw, and it raises ``gymnasium.error.Res
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import ClassVar
 
 import numpy as np
@@ -66,13 +76,22 @@ except ImportError as err:  # pragma: no cover - depends on the optional extra
 import mujoco
 
 from tt_mujoco import sim
+from tt_mujoco.defaults import MAX_SPEED
 from tt_mujoco.reference.feedback import path_errors
 from tt_mujoco.schema import Schema
+from tt_mujoco.sim.build import drawn_polyline
 from tt_mujoco.sim.measure import Measurement
 from tt_mujoco.sim.timeseries import train_columns
 from tt_mujoco.viz.render import Offscreen
 
-__all__ = ["ENV_ID", "OBSERVATION_NAMES", "TractorTrailerEnv", "observation_names"]
+__all__ = [
+    "ACTION_UNITS",
+    "ENV_ID",
+    "OBSERVATION_NAMES",
+    "TractorTrailerEnv",
+    "observation_bounds",
+    "observation_names",
+]
 
 ENV_ID = "tt_mujoco/TractorTrailer-v0"
 
@@ -88,6 +107,61 @@ def observation_names(n_trailers: int = 1) -> tuple[str, ...]:
 OBSERVATION_NAMES = observation_names(1)
 #: The environment's default control period (s): 100 Hz is plenty for an agent.
 DEFAULT_CONTROL_DT = 0.01
+#: The action's units: fractions of the torque limit (the default), or N m.
+ACTION_UNITS = ("normalized", "torque")
+#: The observation fields that are headings, wrapped to [-pi, pi] (a unit's own, or its error
+#: against the path's tangent).
+HEADINGS = ("theta", "theta0", "heading_error")
+
+
+def _field(name: str) -> str:
+    """An observation's quantity: ``x0_2`` is an ``x0``, ``cross_track_trailer_1`` a
+    ``cross_track``."""
+    for prefix in ("cross_track", "heading_error"):
+        if name.startswith(prefix):
+            return prefix
+    base, _, k = name.rpartition("_")
+    return base if k.isdigit() and base else name
+
+
+def observation_bounds(names, params, reference: np.ndarray, duration: float):
+    """``(low, high)`` of each observation in ``names``: what a state that has not blown up
+    stays within, from the project's limits (``MAX_SPEED``, the wheels' radius ``r`` and half
+    track ``d``) and the episode's reach of the path (``reference``, an ``(N, 2)`` polyline).
+
+    Parameters
+    ----------
+    names : sequence of str
+        :func:`observation_names`.
+    params : Params
+        The plant's parameters (the train's length, ``r``, ``d``).
+    reference : ndarray
+        The path as the episode can reach it.
+    duration : float
+        The episode's length (s).
+    """
+    reach = MAX_SPEED * duration + sum(t.L + t.L0 for t in params.trailers) + params.d
+    (x_lo, y_lo), (x_hi, y_hi) = reference.min(axis=0), reference.max(axis=0)
+    wheel_rate = MAX_SPEED / params.r
+    bounds = {
+        "x": (x_lo - reach, x_hi + reach),
+        "y": (y_lo - reach, y_hi + reach),
+        "x0": (x_lo - reach, x_hi + reach),
+        "y0": (y_lo - reach, y_hi + reach),
+        "cross_track": (-reach, reach),
+        **dict.fromkeys(HEADINGS, (-math.pi, math.pi)),
+        **dict.fromkeys(("phi", "beta"), (-math.pi, math.pi)),
+        **dict.fromkeys(("v", "v0", "v_d"), (-MAX_SPEED, MAX_SPEED)),
+        **dict.fromkeys(("omega", "omega_d"), (-MAX_SPEED / params.d, MAX_SPEED / params.d)),
+        **dict.fromkeys(("theta_l", "theta_r"), (-wheel_rate * duration, wheel_rate * duration)),
+        **dict.fromkeys(("theta_l_dot", "theta_r_dot"), (-wheel_rate, wheel_rate)),
+        **dict.fromkeys(
+            ("slip_lateral", "slip_lateral_trailer", "slip_left", "slip_right"),
+            (-2.0 * MAX_SPEED, 2.0 * MAX_SPEED),
+        ),
+    }
+    pairs = [bounds[_field(name)] for name in names]
+    return np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
 
 
 def scenario_overrides(overrides: dict, schema: Schema = sim.SCHEMA) -> dict:
@@ -114,13 +188,26 @@ class TractorTrailerEnv(gymnasium.Env):
     render_mode : {None, "rgb_array"}
         ``"rgb_array"`` renders the MuJoCo plant offscreen (needs an OpenGL backend, see
         :func:`tt_mujoco.viz.render.select_gl_backend`).
+    action_units : {"normalized", "torque"}
+        The action as fractions of the torque limit in ``[-1, 1]`` (the default), or as
+        torques in N m.
     **overrides
         Scenario fields to replace, e.g. ``traj="circle", plant="reduced"``.
     """
 
-    metadata: ClassVar[dict] = {"render_modes": ["rgb_array"], "render_fps": 30}
+    metadata: ClassVar[dict] = {
+        "render_modes": ["rgb_array"],
+        "render_fps": 30,
+        "autoreset_mode": gymnasium.vector.AutoresetMode.NEXT_STEP,
+    }
 
-    def __init__(self, scenario: sim.Scenario | None = None, render_mode=None, **overrides):
+    def __init__(
+        self,
+        scenario: sim.Scenario | None = None,
+        render_mode=None,
+        action_units: str = "normalized",
+        **overrides,
+    ):
         if scenario is None:
             scenario = sim.Scenario(disturbance="none", control_dt=DEFAULT_CONTROL_DT)
         if overrides:
@@ -129,6 +216,10 @@ class TractorTrailerEnv(gymnasium.Env):
             raise ValueError(f"render_mode={render_mode!r} is not allowed: use None or 'rgb_array'")
         if render_mode is not None and scenario.plant != "mujoco":
             raise ValueError("render_mode='rgb_array' needs plant='mujoco'")
+        if action_units not in ACTION_UNITS:
+            raise ValueError(
+                f"action_units={action_units!r} is not allowed: use one of {ACTION_UNITS}"
+            )
         self.scenario = scenario
         self.render_mode = render_mode
         self._built = sim.build(scenario)
@@ -140,10 +231,16 @@ class TractorTrailerEnv(gymnasium.Env):
         limit = self.nominal.torque_limit
         self.n_trailers = self.plant_params.n_trailers
         self.observation_names = observation_names(self.n_trailers)
-        self.action_space = spaces.Box(-limit, limit, shape=(2,), dtype=np.float32)
-        self.observation_space = spaces.Box(
-            -np.inf, np.inf, shape=(len(self.observation_names),), dtype=np.float64
+        self.action_units = action_units
+        self._action_scale = limit if action_units == "normalized" else 1.0
+        bound = 1.0 if action_units == "normalized" else limit
+        self.action_space = spaces.Box(-bound, bound, shape=(2,), dtype=np.float32)
+        reach = drawn_polyline(self.path, self.duration)
+        self._low, self._high = observation_bounds(
+            self.observation_names, self.plant_params, reach, self.duration
         )
+        self.observation_space = spaces.Box(self._low, self._high, dtype=np.float64)
+        self._headings = np.array([_field(n) in HEADINGS for n in self.observation_names])
         self._reverse = bool(scenario.reverse)
         self._pose_at, self._curvature = self.path.pose_at, self.path.curvature_and_rate
         self.dt = scenario.control_dt
@@ -174,9 +271,21 @@ class TractorTrailerEnv(gymnasium.Env):
     def step(self, action):
         if self._stepper.plant is None:
             raise RuntimeError("call reset() before step()")
-        a = np.asarray(action, dtype=float).reshape(2)
-        if not np.all(np.isfinite(a)):
-            raise ValueError(f"action={action!r} is not allowed: torques must be finite")
+        try:
+            a = np.asarray(action, dtype=float).reshape(2)
+        except (TypeError, ValueError):
+            a = None
+        if a is None or not np.all(np.isfinite(a)):
+            raise ValueError(
+                f"action={action!r} is not allowed: give two finite numbers (T_r, T_l)"
+                + (
+                    ", fractions of the torque limit in [-1, 1]"
+                    if self.action_units == "normalized"
+                    else " in N m"
+                )
+            )
+        if self.action_units == "normalized":
+            a = a * self._action_scale
         stepper = self._stepper
         steps_left = self.max_steps - stepper.k - 1
         try:
@@ -190,7 +299,7 @@ class TractorTrailerEnv(gymnasium.Env):
         e_v, e_w = me.v - self._ref.v_d, me.omega - self._ref.omega_d
         reward = -(e_v * e_v + e_w * e_w)
         truncated = steps_left <= 0
-        return obs, float(reward), False, truncated, self._info("running")
+        return obs, float(reward), False, truncated, self._info("ok" if truncated else "running")
 
     def render(self):
         """An RGB image (480 x 640) of the MuJoCo plant from the chase camera. Headless like
@@ -246,8 +355,10 @@ class TractorTrailerEnv(gymnasium.Env):
         errors = self._path_errors(me)
         lead = errors[-2:] if self._reverse else errors[:2]
         obs = np.array([*seen, *train, *errors, *lead, ref.v_d, ref.omega_d], dtype=np.float64)
+        obs[self._headings] = np.remainder(obs[self._headings] + math.pi, 2 * math.pi) - math.pi
+        obs = np.clip(obs, self._low, self._high)  # beyond: the state has blown up
         self._last_obs = obs
-        return obs
+        return obs.copy()
 
     def _path_errors(self, me) -> list[float]:
         """``[cross_track, heading_error]`` of the tractor's P and of each trailer's axle, in
