@@ -311,6 +311,24 @@ def test_the_python_loop_runs_what_has_no_compiled_form(changes, reason):
     assert len(notes) == 1 and notes[0].startswith("the Python loop ran") and reason in notes[0]
 
 
+def test_a_single_short_run_in_a_new_process_takes_the_faster_python_loop(monkeypatch):
+    # loading the compiled loop costs what the Python loop takes for its first
+    # COLD_MIN_STEPS steps: a process's first episode shorter than that runs in Python, its
+    # next ones compiled, and a long one compiled at once
+    monkeypatch.delenv("TT_MUJOCO_COMPILE_NOW", raising=False)
+    monkeypatch.setattr(compiled, "_KERNEL", None)
+    monkeypatch.setattr(compiled, "_EPISODES", 0)
+    short = build(Scenario(traj="circle", duration=13.0))
+    why = compiled.loading_pays(short)
+    assert why is not None and "13000 control steps" in why and "next episode" in why
+    assert compiled.loading_pays(short) is None  # the process's second episode
+    monkeypatch.setattr(compiled, "_EPISODES", 0)
+    assert compiled.loading_pays(build(Scenario(traj="circle", duration=30.0))) is None
+    monkeypatch.setattr(compiled, "_EPISODES", 0)
+    monkeypatch.setenv("TT_MUJOCO_COMPILE_NOW", "1")  # the tests and benchmarks ask for it
+    assert compiled.loading_pays(short) is None
+
+
 def test_switched_off_by_the_environment(monkeypatch):
     monkeypatch.setenv("TT_MUJOCO_COMPILED", "0")
     built = build(Scenario(traj="circle", duration=3.0))

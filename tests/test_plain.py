@@ -127,3 +127,47 @@ def test_the_law_is_a_controller_class_with_its_gains():
     cls = controller_class(LAW)
     assert cls.name == "kanayama_law" and cls.STATE == ("int_v", "int_w", "saturated")
     assert cls.PRESETS["default"] == controller_class(CLASS).PRESETS["default"]
+
+
+def test_a_law_compiled_once_is_loaded_by_the_next_process_and_recompiled_when_edited(tmp_path):
+    # the law's C entry is cached on disk (keyed by the law's source): a second process loads
+    # it; an edit of the law, or of a helper it calls, is a new key, compiled afresh
+    import subprocess
+    import sys
+
+    law = tmp_path / "cached_law.py"
+    token = __import__("uuid").uuid4().hex  # a law no earlier run of this test compiled
+    source = (
+        f"# {token}\n"
+        "from tt_mujoco.controllers import plain_law\n\n"
+        "def gain():\n    return {k}\n\n"
+        "@plain_law(gains={{'k': 5.0}})\n"
+        "def cached_law(m, r, model, k, s, dt, torque_limit):\n"
+        "    return gain() * k.k * (r.v_d - m.v), gain() * k.k * (r.v_d - m.v)\n"
+    )
+    script = (
+        "from tt_mujoco.controllers import controller_class\n"
+        "from tt_mujoco.sim import Scenario, compiled, simulate\n"
+        f"spec = {str(law) + ':cached_law'!r}\n"
+        "entry = compiled.compile_law(controller_class(spec))\n"
+        "run = simulate(Scenario(controller=spec, traj='circle', duration=2.5))\n"
+        "print(entry.cache_hits, run.timeseries['T_r'][3], run.notes)\n"
+    )
+    env = {**__import__("os").environ, "TT_MUJOCO_COMPILE_NOW": "1"}
+
+    def process():
+        done = subprocess.run(
+            [sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=600
+        )
+        assert done.returncode == 0, done.stderr
+        hits, torque, notes = done.stdout.split(" ", 2)
+        assert notes.strip() == "[]"  # it ran compiled
+        return int(hits), float(torque)
+
+    law.write_text(source.format(k="1.0"))
+    first = process()
+    assert first[0] == 0  # compiled
+    assert process() == (1, first[1])  # loaded, the same law
+    law.write_text(source.format(k="2.0"))  # the helper changed, the law did not
+    hits, torque = process()
+    assert hits == 0 and torque != first[1]

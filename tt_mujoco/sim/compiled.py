@@ -3,19 +3,19 @@
 :func:`tt_mujoco.sim.simulate.run_episode` hands an episode here when every part of it has a
 compiled form (:func:`unsupported` says why not otherwise): a built-in law
 (:data:`tt_mujoco.sim.kernel_sources.LAWS`: ISMC-STA, PID, FBL, ...) on the built-in nominal
-model, a user's plain-number law (:mod:`tt_mujoco.controllers.plain`, compiled once per process
-by :func:`compile_law`), or any other controller, whose Python ``compute`` the kernel calls back
-at every step through a C function (:class:`tt_mujoco.sim._kernel.PythonLawCallback`); a
-static or dynamic target on any path (the S-curve, the circle, the cycloid and a CSV spline
-from their tables, a path without closed form called back), driven forwards or backing up (the
-reverse target, with the hitch cascade or path feedback), the paper's disturbance or a user's
-(called back), matched or as a wrench, or none, measurement noise, one trailer or a train,
-constant steering gains or either schedule (:mod:`tt_mujoco.sim.schedule`), path feedback,
-faults, DC motors, wind, a sensor delay, friction patches; not a per-step callback (a payload
-step on the reduced plant returns to Python, which recomputes the plant's constants and
-advances that step, then the kernel goes on). The loop then runs in numba, chunk by chunk,
-calling ``mj_step`` through MuJoCo's C library or stepping the reduced ODE, over the
-named records of :mod:`tt_mujoco.sim.records`.
+model, a user's plain-number law (:mod:`tt_mujoco.controllers.plain`, compiled once by
+:func:`compile_law` and cached on disk, keyed by its source), or any other controller, whose
+Python ``compute`` the kernel calls back at every step through a C function
+(:class:`tt_mujoco.sim._kernel.PythonLawCallback`); a static or dynamic target on any path (the
+S-curve, the circle, the cycloid and a CSV spline from their tables, a path without closed form
+called back), driven forwards or backing up (the reverse target, with the hitch cascade or path
+feedback), the paper's disturbance or a user's (called back), matched or as a wrench, or none,
+measurement noise, one trailer or a train, constant steering gains or either schedule
+(:mod:`tt_mujoco.sim.schedule`), path feedback, faults, DC motors, wind, a sensor delay,
+friction patches; not a per-step callback (a payload step on the reduced plant returns to
+Python, which recomputes the plant's constants and advances that step, then the kernel goes on).
+The loop then runs in numba, chunk by chunk, calling ``mj_step`` through MuJoCo's C library or
+stepping the reduced ODE, over the named records of :mod:`tt_mujoco.sim.records`.
 
 The loop it runs is :func:`tt_mujoco.sim.closed_loop.run_steps`, compiled from its source with
 every function it calls (:mod:`tt_mujoco.sim._kernel`), the one CPython runs for every other
@@ -30,6 +30,9 @@ every file the kernel compiles: numba's own cache only watches the file of the f
 caches). Compiling takes seconds, so it never happens in the user's run: the first episode that
 could run compiled finds no whole cache (:func:`ready`), starts one background process that
 compiles it, and runs the Python loop (same numbers); later episodes load it, once per process.
+Loading costs about half a second, so a process's first episode, when short
+(:data:`COLD_MIN_STEPS`), runs in the Python loop, which finishes it sooner
+(:func:`loading_pays`). Every episode the Python loop runs says why in the run's notes.
 The kernel runs from a copy of its source inside that folder, so every checkout of the same
 sources shares one cache, and a manifest of the folder's files lets a damaged cache be set
 aside rather than recompiled in the foreground. ``TT_MUJOCO_COMPILE_NOW=1`` compiles in the
@@ -63,6 +66,13 @@ __all__ = [
 #: Shortest episode handed to the compiled loop (loading the compiled code is paid once per
 #: process: a short episode gains less than that).
 MIN_STEPS = 2000
+#: Shortest first episode of a process that loads the compiled loop: loading it (numba and the
+#: cached code, about 0.5 s) costs what the Python loop takes for 13,000 to 25,000 control
+#: steps of one trailer on either plant (``benchmarks/bench_cold_start.py``), so a shorter
+#: single run is faster in the Python loop; the process's next episode loads it.
+COLD_MIN_STEPS = 25000
+#: Episodes this process has started (:func:`tt_mujoco.sim.simulate.run_episode`).
+_EPISODES = 0
 
 
 _KERNEL = None
@@ -116,6 +126,24 @@ def not_ready() -> str | None:
         why = str(damaged)
     _ask_for_compile()
     return why
+
+
+def loading_pays(built) -> str | None:
+    """None when loading the compiled loop pays for this episode: it is loaded already, the
+    process has run an episode before (a sweep's worker, a notebook), the episode is long
+    (:data:`COLD_MIN_STEPS`), or ``TT_MUJOCO_COMPILE_NOW=1`` asks for it; otherwise why the
+    Python loop is faster. Counts the episode."""
+    global _EPISODES
+    _EPISODES += 1
+    if _KERNEL is not None or _EPISODES > 1 or built.steps >= COLD_MIN_STEPS:
+        return None
+    if os.environ.get("TT_MUJOCO_COMPILE_NOW") == "1":
+        return None
+    return (
+        f"a single run of {built.steps} control steps in a new process, fewer than the "
+        f"{COLD_MIN_STEPS} for which loading the compiled loop pays (the process's next "
+        "episode loads it)"
+    )
 
 
 def ready() -> bool:
@@ -507,8 +535,9 @@ def _user_law(k_mod, controller):
 
 def compile_law(cls):
     """The plain-number law of ``cls`` (a :class:`~tt_mujoco.controllers.plain.
-    PlainLawController` subclass) compiled with the kernel's law signature, once per process
-    and class."""
+    PlainLawController` subclass) compiled with the kernel's law signature: loaded from the
+    compiled-code cache where a process compiled the same law before, once per process and
+    class."""
     key = (cls.__module__, cls.__qualname__, cls.LAW)
     compiled_law = _LAWS.get(key)
     if compiled_law is None:
@@ -519,8 +548,9 @@ def compile_law(cls):
 _LAWS: dict = {}
 
 
-def _register_helpers(fn, seen=None) -> None:
-    """Let numba compile the plain functions a law calls from its own module (and theirs)."""
+def _register_helpers(fn, seen=None) -> set:
+    """Let numba compile the plain functions a law calls from its own module (and theirs);
+    the functions registered."""
     import types
 
     from numba.extending import register_jitable
@@ -536,38 +566,110 @@ def _register_helpers(fn, seen=None) -> None:
             seen.add(helper)
             register_jitable(helper)
             _register_helpers(helper, seen)
+    return seen
+
+
+#: The C entry of a plain-number law, written into the cache folder once per law and version
+#: (:func:`_law_entry`), so that numba caches it on disk as it does the kernel: a law's second
+#: process loads it instead of compiling it. ``{...}`` are filled in per law.
+_ENTRY_SOURCE = """\
+# The C entry of the plain-number law {name} ({file}), written by tt_mujoco.sim.compiled:
+# numba caches its compiled code beside this file. The law's source digest is in the name.
+from numba import carray, cfunc
+
+
+@cfunc(USER_LAW, error_model="numpy", cache=True)
+def entry(m, r, model, gains, state, out, dt, limit):
+    torques = carray(out, 2)
+    T_r, T_l = law(
+        carray(m, {n_meas}).view(MEASUREMENT)[0],
+        carray(r, {n_ref}).view(REFERENCE)[0],
+        carray(model, {n_model}).view(NOMINAL)[0],
+        carray(gains, {n_gains}).view(GAINS)[0],
+        carray(state, {n_state}).view(STATE)[0],
+        dt,
+        limit,
+    )
+    torques[0], torques[1] = T_r, T_l
+"""
+
+
+def _law_digest(cls, helpers) -> str:
+    """What a law's compiled code depends on: its gains' and state's names, and the files of
+    the law, of its helpers and of every function they call from elsewhere (a compiled one
+    from another module of the user's): numba freezes a law's globals when it compiles."""
+    import inspect
+
+    digest = hashlib.sha256()
+    names = (*cls.PRESETS[cls.DEFAULT_PRESET], "|", *cls.STATE)
+    digest.update(" ".join(names).encode())
+    files = set()
+    for fn in (cls.LAW, *helpers):
+        for name in fn.__code__.co_names:
+            used = getattr(fn.__globals__.get(name), "py_func", fn.__globals__.get(name))
+            if inspect.isfunction(used):
+                files.add(inspect.getsourcefile(used))
+        files.add(inspect.getsourcefile(fn))
+    for file in sorted(f for f in files if f):
+        try:
+            digest.update(Path(file).read_bytes())
+        except OSError:
+            digest.update(file.encode())
+    return digest.hexdigest()[:16]
 
 
 def _compile_law(cls):
-    from numba import carray, cfunc, njit
+    """The law's C entry, from the cache when a process compiled it before (keyed by
+    :func:`_law_digest`), compiled and cached otherwise."""
+    import importlib.util
+
+    from numba import njit
 
     from tt_mujoco.sim import records
 
     k_mod = kernel()
-    _register_helpers(cls.LAW)
+    helpers = _register_helpers(cls.LAW)
     law = njit(error_model="numpy", cache=True)(cls.LAW)
     gain_names = tuple(cls.PRESETS[cls.DEFAULT_PRESET]) or ("unused",)
-    gains_dtype = records.record_dtype(gain_names)
-    state_dtype = records.record_dtype(cls.STATE or ("unused",))
-    meas_dtype, ref_dtype = (
-        records.MEASUREMENT_DTYPE,
-        records.record_dtype(records.REFERENCE_FIELDS),
-    )
-    model_dtype = records.record_dtype(records.NOMINAL_FIELDS)
-    n_meas, n_gains, n_state = len(meas_dtype), len(gains_dtype), len(state_dtype)
-    n_ref, n_model = len(ref_dtype), len(model_dtype)
+    dtypes = {
+        "MEASUREMENT": records.MEASUREMENT_DTYPE,
+        "REFERENCE": records.record_dtype(records.REFERENCE_FIELDS),
+        "NOMINAL": records.record_dtype(records.NOMINAL_FIELDS),
+        "GAINS": records.record_dtype(gain_names),
+        "STATE": records.record_dtype(cls.STATE or ("unused",)),
+    }
+    sizes = {
+        "n_meas": len(dtypes["MEASUREMENT"]),
+        "n_ref": len(dtypes["REFERENCE"]),
+        "n_model": len(dtypes["NOMINAL"]),
+        "n_gains": len(dtypes["GAINS"]),
+        "n_state": len(dtypes["STATE"]),
+    }
+    import inspect
 
-    def wrapper(m, r, model, gains, state, out, dt, limit):
-        torques = carray(out, 2)
-        T_r, T_l = law(
-            carray(m, n_meas).view(meas_dtype)[0],
-            carray(r, n_ref).view(ref_dtype)[0],
-            carray(model, n_model).view(model_dtype)[0],
-            carray(gains, n_gains).view(gains_dtype)[0],
-            carray(state, n_state).view(state_dtype)[0],
-            dt,
-            limit,
-        )
-        torques[0], torques[1] = T_r, T_l
+    file = inspect.getsourcefile(cls.LAW) or "?"
+    source = _ENTRY_SOURCE.format(name=cls.__qualname__, file=file, **sizes)
+    name = f"law_{cls.LAW.__name__}_{_law_digest(cls, helpers)}"
+    path = _cache_dir() / "laws" / f"{name}.py"
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if not path.is_file() or path.read_text() != source:
+            atomic_write(path, source)
+    except OSError:  # no cache: a file of its own for this process
+        import tempfile
 
-    return cfunc(k_mod.USER_LAW, error_model="numpy")(wrapper)
+        path = Path(tempfile.mkdtemp(prefix="tt_mujoco-law-")) / f"{name}.py"
+        path.write_text(source)
+    module_name = f"tt_mujoco_{name}"
+    if module_name in sys.modules:
+        return sys.modules[module_name].entry
+    spec = importlib.util.spec_from_file_location(module_name, path)
+    module = importlib.util.module_from_spec(spec)
+    module.__dict__.update(law=law, USER_LAW=k_mod.USER_LAW, **dtypes)
+    sys.modules[module_name] = module  # numba's cache finds the entry's module by its name
+    try:
+        spec.loader.exec_module(module)
+    except BaseException:
+        del sys.modules[module_name]
+        raise
+    return module.entry

@@ -98,22 +98,28 @@ def run_episode(stepper: Stepper, controller, progress=None, on_step=None) -> tu
     same numbers) and ``stepper.python_loop_reason`` says why, the one place every fallback
     is told.
     """
+    sooner = compiled.loading_pays(stepper.built)  # counts the process's episodes
     why = compiled.unsupported(stepper.built, controller, on_step) or compiled.not_ready()
-    if why is None:
+    sooner = sooner if why is None else None
+    if why is None and sooner is None:
         try:
             return compiled.run_compiled(stepper, controller, progress)
         except compiled.Fallback as fallback:
             why = str(fallback)
-    stepper.python_loop_reason = why
+    stepper.python_loop_reason = python_loop_note(why, sooner)
     stepper.begin(controller)
     return stepper.run(progress=progress, on_step=on_step)
 
 
-def python_loop_note(reason: str | None) -> str | None:
-    """The run's note for an episode the Python loop ran instead of the compiled one."""
-    if reason is None:
-        return None
-    return f"the Python loop ran this episode (the same numbers, slower): {reason}"
+def python_loop_note(slower: str | None, sooner: str | None = None) -> str | None:
+    """The run's note for an episode the Python loop ran instead of the compiled one: why the
+    compiled loop could not run it (``slower``), or why the Python loop is the faster here
+    (``sooner``)."""
+    if sooner is not None:
+        return f"the Python loop ran this episode (the same numbers, sooner): {sooner}"
+    if slower is not None:
+        return f"the Python loop ran this episode (the same numbers, slower): {slower}"
+    return None
 
 
 def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint=None) -> Result:
@@ -290,6 +296,6 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
         wall_time_s=wall,
         config=config,
         details=stepper.stop_details,
-        notes=[note for note in (python_loop_note(stepper.python_loop_reason),) if note]
+        notes=[note for note in (stepper.python_loop_reason,) if note]
         + ([f"backing up: {REVERSING_DRIVES[built.reversing]}"] if built.reversing else []),
     )

@@ -282,7 +282,7 @@ class Stepper:
         self.k = 0
         self.finished = False
         self.stop_details = None  # the traceback of user code that stopped the episode
-        self.python_loop_reason = None  # why the Python loop ran it (simulate.run_episode)
+        self.python_loop_reason = None  # the note on why the Python loop ran it (run_episode)
         self._signals: dict[str, np.ndarray] = {}  # what the controller logged, by name
         noise_v, noise_w = b.noise_std
         self._noise = rng.standard_normal(2 * (self.steps + 1)) if noise_v or noise_w else None

@@ -1,0 +1,113 @@
+"""Single commands as a user runs them: each a fresh process, against what it cannot beat.
+
+Run: ``python benchmarks/bench_cold_start.py [--tries N]``. After one warm-up round (so that the
+compiled-code cache holds the kernel and the plain law, as on any run after the first), each
+try runs, one after the other in new processes:
+
+- ``python -c "import numpy, mujoco"``: what any MuJoCo program pays before its first line;
+- ``python -m tt_mujoco.run --help``;
+- the README's main command without video (``--traj s_curve --no-video``), and the same with
+  ``--no-plots``; its episode's physics floor, MuJoCo's C rollout of the run's own inputs on one
+  thread (``bench_cli.floor``, checked to end in the run's final state), is timed in this
+  process from that run's time series;
+- the same run in the Python loop (``TT_MUJOCO_COMPILED=0``), whose ``wall_time_s`` a compiled
+  run should never exceed;
+- ``--controller examples/kanayama.py:kanayama_law`` (a plain-number law, its second and later
+  processes) against the built-in law's run above.
+
+Each figure is the median over the tries of a ratio taken within one try: the machine is shared,
+and whole-process times drift by tenths of a second from one minute to the next.
+"""
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from bench_cli import floor  # the episode's C rollout, checked against the run
+
+from tt_mujoco.outputs import read_timeseries
+
+ROOT = Path(__file__).resolve().parents[1]
+MAIN = ["--traj", "s_curve", "--no-video", "--quiet"]
+LAW = ["--controller", f"{ROOT}/examples/kanayama.py:kanayama_law"]
+
+
+def user_env(**extra) -> dict:
+    """The environment a user's shell gives: no compile forced into the run."""
+    env = {k: v for k, v in os.environ.items() if k != "TT_MUJOCO_COMPILE_NOW"}
+    return {**env, **extra}
+
+
+def timed(cmd: list[str], env: dict | None = None) -> float:
+    """Wall seconds of ``cmd`` as a new process."""
+    start = time.perf_counter()
+    subprocess.run(cmd, env=env or user_env(), check=True, stdout=subprocess.DEVNULL)
+    return time.perf_counter() - start
+
+
+def run(argv: list[str], out: Path, env: dict | None = None) -> tuple[float, float]:
+    """(whole-process seconds, the run's ``wall_time_s``) of ``python -m tt_mujoco.run``."""
+    whole = timed([sys.executable, "-m", "tt_mujoco.run", *argv, "--out", str(out)], env)
+    return whole, json.loads((out / "metrics.json").read_text())["wall_time_s"]
+
+
+def one_try(tmp: Path, j: int) -> dict:
+    py = sys.executable
+    importing = timed([py, "-c", "import numpy, mujoco"])
+    helping = timed([py, "-m", "tt_mujoco.run", "--help"])
+    plots, _ = run(MAIN, tmp / f"plots-{j}")
+    main_whole, main_loop = run([*MAIN, "--no-plots"], tmp / f"main-{j}")
+    c_floor = floor(
+        ["--traj", "s_curve"], read_timeseries(tmp / f"main-{j}" / "timeseries.parquet")
+    )
+    python_env = user_env(TT_MUJOCO_COMPILED="0")
+    _, python_loop = run([*MAIN, "--no-plots"], tmp / f"python-{j}", python_env)
+    law_whole, law_loop = run([*MAIN, "--no-plots", *LAW], tmp / f"law-{j}")
+    figures = {
+        "import numpy, mujoco (s)": importing,
+        "C floor of the main episode (s)": c_floor,
+        "--help / import": helping / importing,
+        "main command, no video / (import + floor)": plots / (importing + c_floor),
+        "main command, no video, no plots / (import + floor)": main_whole / (importing + c_floor),
+        "main run's wall_time_s: floor / loop": c_floor / main_loop,
+        "main run's wall_time_s: compiled / Python loop": main_loop / python_loop,
+        "kanayama_law, whole process / the built-in law's": law_whole / main_whole,
+        "kanayama_law's wall_time_s: floor / loop": c_floor / law_loop,
+    }
+    print(
+        f"try {j + 1}: import {importing:.3f} s, --help {helping:.3f} s, main {plots:.2f} s "
+        f"(no plots {main_whole:.2f} s, its loop {main_loop:.3f} s, Python loop "
+        f"{python_loop:.3f} s), floor {c_floor:.3f} s, kanayama_law {law_whole:.2f} s "
+        f"(loop {law_loop:.3f} s)",
+        flush=True,
+    )
+    return figures
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--tries", type=int, default=5, help="tries after the warm-up (default 5)")
+    args = p.parse_args()
+    with tempfile.TemporaryDirectory() as folder:
+        tmp = Path(folder)
+        run([*MAIN, "--no-plots"], tmp / "warm-main")  # fills the cache if it is empty ...
+        run([*MAIN, "--no-plots", *LAW], tmp / "warm-law")
+        from tt_mujoco.sim import compiled  # ... by a background compile: wait for it
+
+        while compiled.compile_in_progress(compiled._cache_dir()):
+            time.sleep(1.0)
+        run([*MAIN, "--no-plots", *LAW], tmp / "warm-law-2")  # compiles the law once
+        tries = [one_try(tmp, j) for j in range(args.tries)]
+    print(f"medians over {args.tries} tries:")
+    for name in tries[0]:
+        print(f"  {name:<55} {statistics.median(t[name] for t in tries):8.3f}")
+
+
+if __name__ == "__main__":
+    main()
