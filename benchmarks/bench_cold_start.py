@@ -9,11 +9,15 @@ try runs, one after the other in new processes:
 - the README's main command without video (``--traj s_curve --no-video``), and the same with
   ``--no-plots``; its episode's physics floor, MuJoCo's C rollout of the run's own inputs on one
   thread (``bench_cli.floor``, checked to end in the run's final state), is timed in this
-  process from that run's time series;
-- the same run in the Python loop (``TT_MUJOCO_COMPILED=0``), whose ``wall_time_s`` a compiled
-  run should never exceed;
-- ``--controller examples/kanayama.py:kanayama_law`` (a plain-number law, its second and later
-  processes) against the built-in law's run above.
+  process from that run's time series. Its 13,782 steps are fewer than
+  ``compiled.COLD_MIN_STEPS``: a single such run takes the Python loop;
+- the same run with the Python loop forced (``TT_MUJOCO_COMPILED=0``), whose ``wall_time_s``
+  the chosen route's should not exceed;
+- a long run, 40 s on the circle (``--traj circle --duration 40``, 40,001 steps), which a new
+  process runs compiled (numba and the kernel loaded from the cache), against the same run in
+  the Python loop and its own C floor;
+- that long run with ``--controller examples/kanayama.py:kanayama_law`` (a plain-number law,
+  loaded from the cache like the kernel) against the built-in law's.
 
 Each figure is the median over the tries of a ratio taken within one try: the machine is shared,
 and whole-process times drift by tenths of a second from one minute to the next.
@@ -35,6 +39,7 @@ from tt_mujoco.outputs import read_timeseries
 
 ROOT = Path(__file__).resolve().parents[1]
 MAIN = ["--traj", "s_curve", "--no-video", "--quiet"]
+LONG = ["--traj", "circle", "--duration", "40", "--no-video", "--no-plots", "--quiet"]
 LAW = ["--controller", f"{ROOT}/examples/kanayama.py:kanayama_law"]
 
 
@@ -63,12 +68,15 @@ def one_try(tmp: Path, j: int) -> dict:
     helping = timed([py, "-m", "tt_mujoco.run", "--help"])
     plots, _ = run(MAIN, tmp / f"plots-{j}")
     main_whole, main_loop = run([*MAIN, "--no-plots"], tmp / f"main-{j}")
-    c_floor = floor(
-        ["--traj", "s_curve"], read_timeseries(tmp / f"main-{j}" / "timeseries.parquet")
-    )
+    series = read_timeseries(tmp / f"main-{j}" / "timeseries.parquet")
+    c_floor = floor(["--traj", "s_curve"], series)
     python_env = user_env(TT_MUJOCO_COMPILED="0")
     _, python_loop = run([*MAIN, "--no-plots"], tmp / f"python-{j}", python_env)
-    law_whole, law_loop = run([*MAIN, "--no-plots", *LAW], tmp / f"law-{j}")
+    long_whole, long_loop = run(LONG, tmp / f"long-{j}")
+    long_series = read_timeseries(tmp / f"long-{j}" / "timeseries.parquet")
+    long_floor = floor(["--traj", "circle", "--duration", "40"], long_series)
+    _, long_python = run(LONG, tmp / f"long-python-{j}", python_env)
+    law_whole, law_loop = run([*LONG, *LAW], tmp / f"law-{j}")
     figures = {
         "import numpy, mujoco (s)": importing,
         "C floor of the main episode (s)": c_floor,
@@ -76,15 +84,19 @@ def one_try(tmp: Path, j: int) -> dict:
         "main command, no video / (import + floor)": plots / (importing + c_floor),
         "main command, no video, no plots / (import + floor)": main_whole / (importing + c_floor),
         "main run's wall_time_s: floor / loop": c_floor / main_loop,
-        "main run's wall_time_s: compiled / Python loop": main_loop / python_loop,
-        "kanayama_law, whole process / the built-in law's": law_whole / main_whole,
-        "kanayama_law's wall_time_s: floor / loop": c_floor / law_loop,
+        "main run's wall_time_s / the forced Python loop's": main_loop / python_loop,
+        "40 s run's wall_time_s: floor / loop": long_floor / long_loop,
+        "40 s run's wall_time_s / the forced Python loop's": long_loop / long_python,
+        "40 s run, whole process / (import + floor)": long_whole / (importing + long_floor),
+        "40 s kanayama_law, whole process / the built-in law's": law_whole / long_whole,
+        "40 s kanayama_law's wall_time_s: floor / loop": long_floor / law_loop,
     }
     print(
         f"try {j + 1}: import {importing:.3f} s, --help {helping:.3f} s, main {plots:.2f} s "
-        f"(no plots {main_whole:.2f} s, its loop {main_loop:.3f} s, Python loop "
-        f"{python_loop:.3f} s), floor {c_floor:.3f} s, kanayama_law {law_whole:.2f} s "
-        f"(loop {law_loop:.3f} s)",
+        f"(no plots {main_whole:.2f} s, its loop {main_loop:.3f} s, forced Python loop "
+        f"{python_loop:.3f} s, floor {c_floor:.3f} s); 40 s run {long_whole:.2f} s (loop "
+        f"{long_loop:.3f} s, Python loop {long_python:.3f} s, floor {long_floor:.3f} s), "
+        f"kanayama_law {law_whole:.2f} s (loop {law_loop:.3f} s)",
         flush=True,
     )
     return figures
@@ -96,13 +108,12 @@ def main() -> None:
     args = p.parse_args()
     with tempfile.TemporaryDirectory() as folder:
         tmp = Path(folder)
-        run([*MAIN, "--no-plots"], tmp / "warm-main")  # fills the cache if it is empty ...
-        run([*MAIN, "--no-plots", *LAW], tmp / "warm-law")
+        run(LONG, tmp / "warm-main")  # fills the cache if it is empty ...
         from tt_mujoco.sim import compiled  # ... by a background compile: wait for it
 
         while compiled.compile_in_progress(compiled._cache_dir()):
             time.sleep(1.0)
-        run([*MAIN, "--no-plots", *LAW], tmp / "warm-law-2")  # compiles the law once
+        run([*LONG, *LAW], tmp / "warm-law")  # compiles the law once
         tries = [one_try(tmp, j) for j in range(args.tries)]
     print(f"medians over {args.tries} tries:")
     for name in tries[0]:
