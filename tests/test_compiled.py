@@ -635,14 +635,19 @@ def test_a_kernel_that_fails_to_load_leaves_the_episode_to_the_python_loop(
 
 
 def test_the_cache_key_lists_the_sources_the_kernel_compiles():
-    # One list (kernel_sources.SHARED and STEP) is what the kernel registers and what the key
-    # hashes.
+    # What the kernel registers (kernel_sources.SHARED and STEP, discovered) and the functions
+    # it gives a form of its own (COMPILED_FORMS) are what the key hashes.
     import inspect
 
     from tt_mujoco.sim import kernel_sources
 
     files = kernel_sources.source_files()
-    shared = (*kernel_sources.SHARED, *kernel_sources.STEP, *kernel_sources.RECORDS)
+    shared = (
+        *kernel_sources.SHARED,
+        *kernel_sources.STEP,
+        *kernel_sources.COMPILED_FORMS,
+        *kernel_sources.RECORDS,
+    )
     for fn in shared:
         assert inspect.getsourcefile(fn) in files
     assert len(files) == len(set(files))
@@ -714,3 +719,34 @@ def test_backing_up_hands_its_targets_state_back(monkeypatch, options):
     scenario = Scenario(traj="s_curve", reverse=True, duration=3.0, **options)
     states = _states_after_both_loops(monkeypatch, scenario, state_of)
     assert states[0] == states[1]
+
+
+def test_a_background_compile_that_fails_is_told_once_and_not_retried(monkeypatch, tmp_path):
+    # the compile's program records what failed beside the cache, and the lock is released;
+    # a later run says why in its notes and starts no new compile for the same sources
+    import subprocess
+    import sys
+
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    lock = cache / compiled.COMPILE_LOCK
+    lock.touch()
+    sabotage = "import tt_mujoco.sim.compiled as c\nc.warm_up = lambda: 1 / 0\n"
+    done = subprocess.run(
+        [sys.executable, "-c", sabotage + compiled.compile_script(lock)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode != 0 and "ZeroDivisionError" in done.stderr
+    assert not lock.exists()
+    assert (cache / compiled.COMPILE_FAILED).read_text() == "ZeroDivisionError: division by zero\n"
+    monkeypatch.setattr(compiled, "_cache_dir", lambda: cache)
+    monkeypatch.delenv("TT_MUJOCO_COMPILE_NOW", raising=False)
+    monkeypatch.setattr(compiled, "_KERNEL", None)
+    started = []
+    monkeypatch.setattr(compiled, "_compile_in_background", lambda: started.append(1))
+    monkeypatch.setattr(compiled, "_ASKED", True)
+    why = compiled.not_ready()
+    assert why.startswith("the background compile of the compiled loop failed (ZeroDivisionError")
+    assert str(cache / compiled.COMPILE_LOG) in why and started == []

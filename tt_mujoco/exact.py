@@ -10,9 +10,12 @@ from __future__ import annotations
 
 import math
 
+from tt_mujoco.compiled_form import compiled_form
+
 __all__ = ["hypot_of"]
 
 
+@compiled_form("CPython's hypot algorithm ported, exact to the last bit (numba's differs)")
 def hypot_of(x: float, y: float) -> float:
     """``math.hypot(x, y)``. Numba's own hypot (the C library's) differs from CPython's in the
     last bit for about 0.6 % of pairs; the kernel's overload is CPython's algorithm."""

@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 from types import SimpleNamespace
 
+from tt_mujoco.compiled_form import compiled_form
 from tt_mujoco.vehicle.path_schedule import path_pose
 
 __all__ = [
@@ -64,6 +65,7 @@ def curvature_and_rate_at(path, s: float) -> tuple[float, float]:
     return feedback_curvature(path, s) if 0.0 <= s <= path.length else (0.0, 0.0)
 
 
+@compiled_form("the target record's path (closed_loop.path_at), not a path object")
 def feedback_curvature(path, s: float) -> tuple[float, float]:
     """The path's ``(kappa, dkappa/ds)`` at ``s`` as the feedback reads it (the compiled
     episode gives its path record's)."""

@@ -23,6 +23,7 @@ from numba.extending import intrinsic, overload, register_jitable
 
 from tt_mujoco import exact
 from tt_mujoco.analysis import nearest
+from tt_mujoco.compiled_form import compiled_form_reason
 from tt_mujoco.reference import feedback
 from tt_mujoco.sim import closed_loop
 from tt_mujoco.sim.closed_loop import LAWS
@@ -31,6 +32,20 @@ from tt_mujoco.vehicle import path_schedule
 
 for _fn in SHARED:
     register_jitable(_fn)
+
+#: The functions given a compiled form here, each marked beside its Python source
+#: (:func:`tt_mujoco.compiled_form.compiled_form`; ``tests/test_kernel_sources.py`` holds the
+#: two to each other).
+COMPILED_FORMS_GIVEN = []
+
+
+def compiled_form_of(fn):
+    """numba's ``overload`` of ``fn``, a function marked with why its compiled form differs."""
+    if compiled_form_reason(fn) is None:
+        raise TypeError(f"{fn.__qualname__} has a compiled form but no compiled_form mark")
+    COMPILED_FORMS_GIVEN.append(fn)
+    return overload(fn)
+
 
 LAW_OK = closed_loop.LAW_OK
 
@@ -54,12 +69,12 @@ binding.load_library_permanently(closed_loop.mujoco_library())
 _mj_step = types.ExternalFunction("mj_step", types.void(types.voidptr, types.voidptr))
 
 
-@overload(closed_loop.mj_step)
+@compiled_form_of(closed_loop.mj_step)
 def _mj_step_by_symbol(model_address, data_address):
     return lambda model_address, data_address: _mj_step(model_address, data_address)
 
 
-@overload(closed_loop.floats)
+@compiled_form_of(closed_loop.floats)
 def _floats(array):
     return lambda array: array
 
@@ -179,7 +194,7 @@ def _pointer(typingctx, array):
     return _P(array), codegen
 
 
-@overload(closed_loop.pointer)
+@compiled_form_of(closed_loop.pointer)
 def _pointer_of(array):
     return lambda array: _pointer(array)
 
@@ -192,7 +207,7 @@ def project_points(points, window, extend, table, out):
     nearest.nearest_segments_of(points, window, extend, table, out)
 
 
-@overload(path_schedule.path_pose)
+@compiled_form_of(path_schedule.path_pose)
 def _path_pose(target, s):
     """The path schedule's projection and the path feedback read the target record's path
     (:func:`~tt_mujoco.sim.closed_loop.pose_at`)."""
@@ -201,7 +216,7 @@ def _path_pose(target, s):
 
 # A path without closed form and a user's disturbance are Python, called back (HookCallback),
 # asked what closed_loop.HOOK_* name.
-@overload(closed_loop.hooked_curvature)
+@compiled_form_of(closed_loop.hooked_curvature)
 def _hooked_curvature(target, s):
     def call_back(target, s):
         out = target.hook_out
@@ -222,17 +237,17 @@ def _pose_called_back(what: float):
     return call_back
 
 
-@overload(closed_loop.hooked_pose)
+@compiled_form_of(closed_loop.hooked_pose)
 def _hooked_pose(target, s):
     return _pose_called_back(closed_loop.HOOK_POSE)
 
 
-@overload(closed_loop.hooked_law_pose)
+@compiled_form_of(closed_loop.hooked_law_pose)
 def _hooked_law_pose(target, s):
     return _pose_called_back(closed_loop.HOOK_LAW_POSE)
 
 
-@overload(closed_loop.hooked_disturbance_at)
+@compiled_form_of(closed_loop.hooked_disturbance_at)
 def _hooked_disturbance_at(loop, t):
     def call_back(loop, t):
         out = loop.hook_out
@@ -242,7 +257,7 @@ def _hooked_disturbance_at(loop, t):
     return call_back
 
 
-@overload(closed_loop.python_law)
+@compiled_form_of(closed_loop.python_law)
 def _python_law(law):
     """A law Python computes (a controller class's ``compute``), called back: ``law.user`` is
     then a C function (:class:`PythonLawCallback`) that reads the law
@@ -257,7 +272,7 @@ def _python_law(law):
     return call_back
 
 
-@overload(closed_loop.run_law)
+@compiled_form_of(closed_loop.run_law)
 def _run_law(kind, dt, tracking, model, state, gains, saturation):
     """The built-in law of index ``kind``: a test of ``kind`` for each law of :data:`LAWS`,
     written out here (numba cannot index a tuple of functions at run time)."""
@@ -271,7 +286,7 @@ def _run_law(kind, dt, tracking, model, state, gains, saturation):
     return scope["run_law"]
 
 
-@overload(feedback.feedback_curvature)
+@compiled_form_of(feedback.feedback_curvature)
 def _feedback_curvature(target, s):
     """The path feedback reads the target record's path
     (:func:`~tt_mujoco.sim.closed_loop.path_at`)."""
@@ -338,7 +353,7 @@ def _hypot(x, y):
     return factor * (h / scale)
 
 
-@overload(exact.hypot_of)
+@compiled_form_of(exact.hypot_of)
 def _hypot_of(x, y):
     """The shared functions' hypot gives Python's numbers (:func:`_hypot`)."""
     return lambda x, y: _hypot(x, y)

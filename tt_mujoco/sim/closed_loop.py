@@ -24,6 +24,7 @@ import os
 
 import numpy as np
 
+from tt_mujoco.compiled_form import compiled_form
 from tt_mujoco.controllers import backing, base, compiled_laws
 from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
 from tt_mujoco.sim import (
@@ -38,6 +39,7 @@ from tt_mujoco.sim import (
     step,
     wind,
 )
+from tt_mujoco.sim.records import ARCS_PATH, HOOKED_PATH, SPLINE_PATH
 from tt_mujoco.vehicle import path_schedule, reduced, train
 from tt_mujoco.vehicle import steering as steering_math
 
@@ -72,12 +74,10 @@ COS_BETA_MIN = reduced.COS_BETA_MIN
 #: halves (a controller class, or a plain-number law when CPython runs the step)
 USER = len(LAWS)
 PYTHON = USER + 1
-#: ``target.path_kind`` of a path without a closed form, which the step calls
-HOOKED_PATH = 3
 #: What the kernel asks of a hook it calls back (:mod:`tt_mujoco.sim._kernel`, ``HOOK``): a
 #: path's curvature and its rate, its pose, its pose as a plain-number law's reference; a
 #: disturbance's answer
-HOOK_CURVATURE, HOOK_POSE, HOOK_LAW_POSE, HOOK_DISTURBANCE = 0.0, 1.0, 2.0, 0.0
+HOOK_CURVATURE, HOOK_POSE, HOOK_LAW_POSE, HOOK_DISTURBANCE = 0.0, 1.0, 2.0, 3.0
 #: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
 NOMINAL_SINGULAR = -1.0
 PATH_SCHEDULE, CURVATURE_SCHEDULE = schedule.PATH_SCHEDULE, schedule.CURVATURE_SCHEDULE
@@ -91,6 +91,9 @@ WHEEL_RATES = tuple(measure.Measurement._fields.index(f"theta_{w}_dot") for w in
 ETA_COLUMN = train.TRAILER_ROW.index("eta")
 
 
+@compiled_form(
+    "a test of kind for each built-in law, written out (numba cannot index a tuple of functions)"
+)
 def run_law(kind: int, dt, tracking, model, state, gains, saturation):
     """One step of the built-in law ``LAWS[kind]`` (the kernel compiles a test of ``kind``
     for each law in :data:`LAWS`: a tuple of functions cannot be indexed at run time)."""
@@ -112,18 +115,21 @@ def _c_mj_step():
     return function
 
 
+@compiled_form("MuJoCo's C step, called by its symbol in MuJoCo's library")
 def mj_step(model_address, data_address) -> None:
     """MuJoCo's ``mj_step`` on the model and data at these addresses (the plant record's
     ``pointers``); the kernel calls the library's symbol."""
     _c_mj_step()(int(model_address), int(data_address))
 
 
+@compiled_form("the array itself: numba reads an array's floats as they are")
 def floats(array):
     """A float array to read from: CPython reads a list of its values (a NumPy element is a
     NumPy scalar, whose arithmetic is slower than a float's); the kernel, the array itself."""
     return array.tolist() if isinstance(array, np.ndarray) else array
 
 
+@compiled_form("the array's data address as a C double pointer (an intrinsic)")
 def pointer(array):
     """The address of a contiguous float array's data, as a C double pointer. A record as
     CPython reads it (:func:`tt_mujoco.sim.records.interpreted`) is passed as a copy of its
@@ -134,17 +140,20 @@ def pointer(array):
     return array.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
 
 
+@compiled_form("the path's Python code called back through a C function (HookCallback)")
 def hooked_curvature(target, s):
     """``(kappa, dkappa/ds)`` of a path without closed form (:data:`HOOKED_PATH`), from the
     path object itself (the kernel calls it back: ``stop.raised`` says when it raised)."""
     return target.path_hook.curvature_and_rate(s)
 
 
+@compiled_form("the path's Python code called back through a C function (HookCallback)")
 def hooked_pose(target, s):
     """The pose of a path without closed form at ``s`` (ReferencePath.pose_at)."""
     return target.path_hook.pose_at(s)
 
 
+@compiled_form("the path's Python code called back through a C function (HookCallback)")
 def hooked_law_pose(target, s):
     """:func:`hooked_pose` asked for a plain-number law's reference: when the path fails there,
     the law fails, as its Python form does when it asks the path itself (only the kernel runs
@@ -159,6 +168,7 @@ def law_pose_at(target, s):
     return pose_at(target, s)
 
 
+@compiled_form("the disturbance's Python code called back through a C function (HookCallback)")
 def hooked_disturbance_at(loop, t):
     """``(a_v, a_w)`` of a user's disturbance at ``t``, with its checks (the kernel calls it
     back: ``stop.raised`` says when it raised)."""
@@ -172,6 +182,9 @@ def disturbance_at(loop, t):
     return hooked_disturbance_at(loop, t)
 
 
+@compiled_form(
+    "the controller's Python compute called back through a C function (PythonLawCallback)"
+)
 def python_law(law):
     """The law Python computes between the halves (:data:`PYTHON`): ``law.user``, called with
     the law record; ``(status, T_r, T_l, u1, u2)``. The kernel calls it back through a C
@@ -181,9 +194,9 @@ def python_law(law):
 
 def path_at(target, s):
     """``(kappa, dkappa/ds)`` of the target's path at ``s``."""
-    if target.path_kind == 0:
+    if target.path_kind == ARCS_PATH:
         return paths.arcs_curvature_of(s, target.bounds, target.kappas)
-    if target.path_kind == 2:
+    if target.path_kind == SPLINE_PATH:
         bounds, cells = target.bounds, target.cells
         return spline.spline_curvature_of(s, target.length, target.kappa_ends, bounds, cells)
     if target.path_kind == HOOKED_PATH:
@@ -197,9 +210,9 @@ def pose_at(target, s):
         return hooked_pose(target, s)
     bounds = target.bounds
     clipped = min(max(s, 0.0), target.length)
-    if target.path_kind == 0:
+    if target.path_kind == ARCS_PATH:
         x, y, heading = paths.arcs_pose_of(clipped, bounds, target.kappas, target.starts)
-    elif target.path_kind == 2:
+    elif target.path_kind == SPLINE_PATH:
         x, y, heading = spline.spline_pose_of(clipped, bounds, target.pose_cells)
     else:
         x, y, heading = paths.cycloid_pose_of(clipped)

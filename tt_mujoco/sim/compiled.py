@@ -115,6 +115,9 @@ def not_ready() -> str | None:
     (:func:`_ask_for_compile`)."""
     if _KERNEL is not None or os.environ.get("TT_MUJOCO_COMPILE_NOW") == "1":
         return None
+    failed = compile_failure_of(_cache_dir())
+    if failed is not None:  # not tried again for these sources: it would fail alike
+        return failed
     try:
         if _cached():
             return None
@@ -126,6 +129,44 @@ def not_ready() -> str | None:
         why = str(damaged)
     _ask_for_compile()
     return why
+
+
+#: Written by a background compile that failed: the error in one line, and in full.
+COMPILE_FAILED, COMPILE_LOG = "compile.failed", "compile.log"
+
+
+def compile_failure_of(cache: Path) -> str | None:
+    """Why the background compile into ``cache`` failed, in one sentence, or None."""
+    try:
+        error = (cache / COMPILE_FAILED).read_text().strip()
+    except OSError:
+        return None
+    return (
+        f"the background compile of the compiled loop failed ({error}; the whole error is in "
+        f"{cache / COMPILE_LOG}); it is not tried again until these sources change"
+    )
+
+
+def compile_script(lock: Path) -> str:
+    """The background compile's program: at the lowest priority (on a busy machine the user's
+    run, not the compile, gets the core), the kernel compiled into the cache; what fails is
+    written beside it (:data:`COMPILE_FAILED`, its traceback on the process's stderr, which is
+    :data:`COMPILE_LOG`), and the lock is released either way."""
+    return (
+        "import os, pathlib, traceback\n"
+        "os.nice(19)\n"
+        f"lock = pathlib.Path({str(lock)!r})\n"
+        "try:\n"
+        "    os.environ['TT_MUJOCO_COMPILE_NOW'] = '1'\n"
+        "    from tt_mujoco.sim import compiled\n"
+        "    compiled.warm_up()\n"
+        "except BaseException as err:\n"
+        "    text = ' '.join(f'{type(err).__name__}: {err}'.split())[:300]\n"
+        f"    (lock.parent / {COMPILE_FAILED!r}).write_text(text + '\\n')\n"
+        "    raise\n"
+        "finally:\n"
+        "    lock.unlink(missing_ok=True)\n"
+    )
 
 
 def loading_pays(built) -> str | None:
@@ -264,19 +305,19 @@ def _compile_in_background() -> None:
         os.close(fd)
     except OSError:
         return  # compiling already, or no cache to compile into
-    # At the lowest priority: on a busy machine the user's run, not the compile, gets the core.
-    code = (
-        "import os, pathlib; os.nice(19); from tt_mujoco.sim import compiled; "
-        "os.environ['TT_MUJOCO_COMPILE_NOW'] = '1'; compiled.warm_up(); "
-        f"pathlib.Path({str(lock)!r}).unlink(missing_ok=True)"
-    )
+    try:
+        log = open(cache / COMPILE_LOG, "wb")  # the compile writes it to its end
+    except OSError:
+        log = subprocess.DEVNULL
     subprocess.Popen(
-        [sys.executable, "-c", code],
+        [sys.executable, "-c", compile_script(lock)],
         stdin=subprocess.DEVNULL,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
+        stdout=log,
+        stderr=log,
         start_new_session=True,
     )
+    if log is not subprocess.DEVNULL:
+        log.close()  # the child holds its own copy
 
 
 def warm_up() -> None:

@@ -16,7 +16,7 @@ import pickle
 import numpy as np
 
 from tt_mujoco.defaults import JACKKNIFE_DEG
-from tt_mujoco.sim import closed_loop, schedule, step
+from tt_mujoco.sim import closed_loop, records, schedule, step
 from tt_mujoco.sim.scenario import jackknife_phi_deg
 
 USER = closed_loop.USER
@@ -82,7 +82,7 @@ def model_of(controller):
 
 def has_closed_form(path) -> bool:
     """Whether the step reads ``path`` from its own tables (the arcs, the cycloid, a spline),
-    not by calling it (:data:`~tt_mujoco.sim.closed_loop.HOOKED_PATH`; a subclass may change
+    not by calling it (:data:`~tt_mujoco.sim.records.HOOKED_PATH`; a subclass may change
     what it computes)."""
     from tt_mujoco.reference.paths import ArcsPath, CycloidPath
     from tt_mujoco.reference.spline import SplinePath
@@ -115,7 +115,6 @@ def carry_payloads(stepper, plant, faults, stop_record):
     """The payload changes of a step on the reduced plant: made to the plant (its parameters,
     in the order made), and the plant record rebuilt on its new constants (the gains in force
     kept); ``stop.payloads`` cleared."""
-    from tt_mujoco.sim import records
     from tt_mujoco.vehicle import reduced
     from tt_mujoco.vehicle.train import TRAILER_ROW
 
@@ -139,7 +138,6 @@ def episode_records(stepper, controller, user, python=None) -> tuple:
     compiled form of a plain-number law (any placeholder for a built-in one), or ``python``,
     the law that Python computes between the halves (:data:`~tt_mujoco.sim.closed_loop.
     PYTHON`: a controller's :meth:`compute`, or an agent's torques)."""
-    from tt_mujoco.sim import records
 
     plant = _plant_record(stepper, stepper.built.nominal)
     law = _law_record(controller, stepper.built.nominal, user, plant.steering, python)
@@ -184,7 +182,6 @@ def _hand_back_steering(stepper, controller, steering, changes) -> None:
 
 def _steering_record(stepper, mujoco_plant: bool):
     """The scheduler's gains and tables, and where the plant's couplings are."""
-    from tt_mujoco.sim import records
     from tt_mujoco.sim.schedule import EtaScheduler, PathEtaScheduler
     from tt_mujoco.vehicle.path_schedule import BLEND_PHI, driven_path
 
@@ -223,7 +220,6 @@ def _steering_record(stepper, mujoco_plant: bool):
 
 
 def _plant_record(stepper, nominal):
-    from tt_mujoco.sim import records
     from tt_mujoco.sim.measure import Addresses, Lengths
     from tt_mujoco.sim.plant_mujoco import MujocoPlant
     from tt_mujoco.vehicle import reduced
@@ -287,7 +283,6 @@ def _train_constants(params):
 
 def _law_record(controller, nominal, user, steering, python):
     from tt_mujoco.controllers.plain import PlainLawController
-    from tt_mujoco.sim import records
     from tt_mujoco.sim.closed_loop import LAWS, PYTHON
     from tt_mujoco.sim.measure import TRAIN_FIELDS
     from tt_mujoco.vehicle import reduced
@@ -343,8 +338,6 @@ def _target_record(built, steps: int):
     from tt_mujoco.reference.reverse import ReverseTarget
     from tt_mujoco.reference.spline import SplinePath
     from tt_mujoco.reference.targets import DynamicTarget, StaticTarget
-    from tt_mujoco.sim import records
-    from tt_mujoco.sim.closed_loop import HOOKED_PATH
 
     target, path, outer = inner_target(built.target), built.path, built.target
     if type(target) not in (StaticTarget, DynamicTarget, ReverseTarget):
@@ -363,13 +356,13 @@ def _target_record(built, steps: int):
     cells, pose_cells, kappa_ends = np.zeros((0, 5)), np.zeros((0, 10)), np.zeros(2)
     bounds, hook = np.zeros(0), None
     if not has_closed_form(path):  # a user's path: CPython's step calls it
-        kind, hook = HOOKED_PATH, path
+        kind, hook = records.HOOKED_PATH, path
     elif type(path) is ArcsPath:
-        kind, (bounds, kappas, starts) = 0, path.closed_form
+        kind, (bounds, kappas, starts) = records.ARCS_PATH, path.closed_form
     elif type(path) is SplinePath:
-        kind, (bounds, cells, pose_cells, kappa_ends) = 2, path.closed_form
+        kind, (bounds, cells, pose_cells, kappa_ends) = records.SPLINE_PATH, path.closed_form
     else:
-        kind = 1
+        kind = records.CYCLOID_PATH
     return records.TargetRecord(
         dynamic=target.kind == "dynamic",
         profile=_profile_table(target, built.control_dt, steps),
@@ -407,7 +400,6 @@ def hand_back(stepper, controller, status, k, episode_records, changes) -> None:
     faults, the friction patches and the schedule (``changes``: ``(first row, gains)`` of each
     change of the scheduled gains). The motors' torques are the record's own
     (:meth:`~tt_mujoco.sim.stepper.Stepper.begin`); the stepper syncs the reduced ODE."""
-    from tt_mujoco.sim import records
 
     loop, plant, law, target, _ = episode_records
     stepper.k = k
@@ -464,7 +456,7 @@ def outcome(status, stop_record, stepper, controller, k) -> tuple[str, str]:
     code of :mod:`tt_mujoco.sim.step`), from the ``stop`` record."""
     from tt_mujoco.controllers.base import LAW_NOT_FINITE, LAW_SINGULAR
     from tt_mujoco.controllers.plain import PlainLawController
-    from tt_mujoco.sim import records, usercode
+    from tt_mujoco.sim import usercode
     from tt_mujoco.sim.plant import StopRun
     from tt_mujoco.vehicle.reduced import SingularityError
 

@@ -1,36 +1,30 @@
-"""What the compiled kernel compiles: the closed loop's step and the plain-number functions it
-calls, the one list of them.
+"""What the compiled kernel compiles: the closed loop's step and every plain-number function it
+calls, discovered from the step itself, not listed by hand.
 
-:mod:`tt_mujoco.sim._kernel` registers each of :data:`SHARED` and :data:`STEP` with numba, and
+:data:`STEP` (the step's functions), :data:`LAWS` (the built-in laws) and the nearest-segment
+search the metrics compile are the roots; :func:`discover` follows, through each function's
+code, every function of the package it names (directly, or as ``module.function`` of one of
+the package's modules), and then theirs. A function marked with
+:func:`tt_mujoco.compiled_form.compiled_form` is not followed: the kernel gives it a form of its
+own. :mod:`tt_mujoco.sim._kernel` registers each of :data:`SHARED` with numba, and
 :func:`tt_mujoco.sim.compiled.source_digest` keys the compiled-code cache by the files they are
-defined in: a function added here is compiled and watched with no second list to keep.
-Importing this module imports no numba.
+defined in (:func:`source_files`): a helper a new part calls is compiled and watched with no
+list to keep. Importing this module imports no numba.
 """
 
 from __future__ import annotations
 
+import dis
 import inspect
+import types
 
 from tt_mujoco.analysis import nearest
-from tt_mujoco.controllers import backing, base
-from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
-from tt_mujoco.sim import (
-    closed_loop,
-    disturbances,
-    faults,
-    ground,
-    measure,
-    motors,
-    plant_mujoco,
-    plant_reduced,
-    records,
-    schedule,
-    step,
-    wind,
-)
-from tt_mujoco.vehicle import params, path_schedule, reduced, rolling, steering, train
+from tt_mujoco.compiled_form import compiled_form_reason
+from tt_mujoco.controllers import backing
+from tt_mujoco.sim import closed_loop, measure, motors, records, wind
+from tt_mujoco.vehicle import reduced, train
 
-__all__ = ["LAWS", "RECORDS", "SHARED", "STEP", "source_files"]
+__all__ = ["COMPILED_FORMS", "LAWS", "RECORDS", "SHARED", "STEP", "discover", "source_files"]
 
 #: The built-in laws (:data:`tt_mujoco.sim.closed_loop.LAWS`).
 LAWS = closed_loop.LAWS
@@ -39,113 +33,69 @@ LAWS = closed_loop.LAWS
 #: its own options.
 STEP = (*closed_loop.BORROWING, *closed_loop.HALVES)
 
-SHARED = (
-    step.stop_code,
-    step.noisy,
-    step.clip,
-    step.clip_pair,
-    step.hitch_stop,
-    measure.train_rows_of,
-    plant_reduced.reduced_train_rows_of,
-    train.tractor_pass,
-    train._behind,
-    train._beside,
-    train.trailer_pass,
-    train._masses,
-    train._add,
-    train.mass_and_bias_of,
-    train.trailer_rates_of,
-    train.poses_of,
-    train.train_derivative_of,
-    train.train_rk4_step_of,
-    measure.yaw_from_quat,
-    measure.measure_values,
-    reduced.hitch_and_axle,
-    reduced.phi_rate_of,
-    reduced.rolling_rates_of,
-    reduced.inertia_terms_of,
-    reduced.coriolis_of,
-    reduced.solve_dynamics_of,
-    reduced.nominal_of,
-    reduced.derivative_of,
-    reduced.rk4_step_of,
-    reduced.torque_for_force_of,
-    reduced.trailer_speed_of,
-    reduced.rk4_stage,
-    reduced.rk4_combine,
-    reduced.rk4_update,
-    reduced.with_eta_of,
-    plant_reduced.reduced_measure_values,
-    targets.yaw_rate_targets,
-    targets.travelled,
-    path_base.arc_segment,
-    spline.spline_curvature_of,
-    spline.spline_pose_of,
-    paths.arcs_curvature_of,
-    paths.arcs_pose_of,
-    paths.cycloid_pose_of,
-    path_base.continued_pose,
-    base.inverse_of,
-    base.saturate_of,
-    base.deepens,
-    base.finite_pair,
-    base.torques_of,
-    *LAWS,
-    paths.cycloid_curvature_and_rate,
-    feedback.path_errors_of,
-    feedback.feedback_of,
-    feedback.curvature_and_rate_at,
-    reverse.reverse_targets_of,
-    rolling.hitch_rates_of,
-    backing.steady_axle_curvature_of,
-    backing.steady_solve_of,
-    backing.cascade_of,
-    disturbances.paper_disturbance_of,
-    disturbances.wrench_of,
-    plant_mujoco.chassis_wrench_of,
-    plant_mujoco.aim_steering_of,
-    schedule.gains_moved,
-    faults.dropped_of,
-    faults.sensor_of,
-    faults.fault_torque_of,
-    faults.payloads_of,
-    motors.available_torque,
-    motors.deliver_of,
-    plant_mujoco.scale_body_of,
-    ground.patch_contains_of,
-    ground.wheel_frictions_of,
-    wind.drag_force,
-    wind.drag_moment,
-    wind.wind_wrenches_of,
-    schedule.curvature_gains_of,
-    params.same_path_eta,
-    params.train_same_path_etas_of,
-    steering.wrap_angle,
-    steering.same_path_geometry_of,
-    steering.exact_same_path_eta_of,
-    steering.exact_train_same_path_etas_of,
-    steering.followed_gain_of,
-    steering.followed_gains_of,
-    steering.trailer_followed_gain_of,
-    path_schedule.nearest_arc_length_of,
-    path_schedule.bisect_right_of,
-    path_schedule.hermite_of,
-    path_schedule.blended_gain_of,
-    path_schedule.table_eta_of,
-    path_schedule.table_gain_of,
-    path_schedule.signed_offset_of,
-    path_schedule.record_driven_of,
-    path_schedule.driven_offset_of,
-    path_schedule.driven_steering_of,
-    path_schedule.axle_gain_of,
-    nearest.segment_distance2_of,
-    nearest._better,
-    nearest._beyond,
-    nearest._chord_distance2,
-    nearest._scan,
-    nearest._rays,
-    nearest.nearest_segment_of,
-    nearest.nearest_segments_of,
+_PACKAGE = "tt_mujoco."
+
+
+def _ours(obj) -> bool:
+    return getattr(obj, "__module__", None) is not None and (
+        obj.__module__.startswith(_PACKAGE) or obj.__module__ == "tt_mujoco"
+    )
+
+
+def _codes(code: types.CodeType):
+    """A function's code and the code nested in it (comprehensions, inner functions)."""
+    yield code
+    for const in code.co_consts:
+        if isinstance(const, types.CodeType):
+            yield from _codes(const)
+
+
+def _called(fn) -> set:
+    """The package's functions that ``fn``'s code loads: a global one (``name(...)``), or one
+    of a module of the package that it holds (``module.name(...)``), read from its bytecode."""
+    scope, found = fn.__globals__, set()
+    for code in _codes(fn.__code__):
+        module = None
+        for ins in dis.get_instructions(code):
+            obj = None
+            if ins.opname == "LOAD_GLOBAL":
+                obj = scope.get(ins.argval)
+                module = obj if isinstance(obj, types.ModuleType) else None
+            elif ins.opname in ("LOAD_ATTR", "LOAD_METHOD") and module is not None:
+                obj, module = vars(module).get(ins.argval), None
+            else:
+                module = None
+            if isinstance(obj, types.FunctionType) and _ours(obj):
+                found.add(obj)
+    return found
+
+
+def discover(roots, step=()) -> tuple[tuple, tuple]:
+    """``(called, compiled_forms)``: the ``roots`` and every function of the package they
+    call, directly or through each other, that the kernel compiles from its source (the
+    ``step``'s functions, which it registers with their own options, excluded), and those they
+    reach that are marked to have a compiled form of their own; each in the order of their
+    modules and lines, so the same sources give the same tuples."""
+    seen, stack, marked = set(roots), list(roots), set()
+    while stack:
+        for fn in _called(stack.pop()):
+            if fn in seen:
+                continue
+            seen.add(fn)
+            if compiled_form_reason(fn) is not None:
+                marked.add(fn)
+                continue
+            stack.append(fn)
+    order = lambda fn: (fn.__module__, fn.__code__.co_firstlineno)  # noqa: E731
+    called = sorted(seen - set(step) - marked, key=order)
+    return tuple(called), tuple(sorted(marked, key=order))
+
+
+#: What the kernel compiles besides the step, and the functions whose compiled form it gives
+#: itself (:func:`tt_mujoco.compiled_form.compiled_form`).
+SHARED, COMPILED_FORMS = discover(
+    (*STEP, closed_loop.run_steps, *LAWS, nearest.nearest_segments_of),
+    step=(*STEP, closed_loop.run_steps),
 )
 
 
@@ -177,6 +127,6 @@ def source_files() -> list[str]:
     """The files the shared functions and the record types are defined in, each once, in the
     order of their modules' names (so the same sources in another folder list alike); numba
     compiles the functions with their module's constants, so the whole file counts."""
-    objects = (*SHARED, *STEP, *RECORDS)
+    objects = (*SHARED, *STEP, *COMPILED_FORMS, *RECORDS)
     files = {obj.__module__: inspect.getsourcefile(obj) for obj in objects}
     return [files[module] for module in sorted(files)]
