@@ -24,3 +24,38 @@ def test_misspelt_options_get_a_hint_and_exit_2(tmp_path, argv, hint):
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and hint in lines[0] and "Traceback" not in proc.stderr
     assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["--no-disturbance", "--disturbance-mode", "wrench"],  # a const flag and its option
+        ["--video", "--no-video"],  # a switch both ways
+        ["--duration", "1", "--duration", "2"],  # a value twice
+        ["--plant", "reduced", "--plant", "mujoco"],
+    ],
+)
+def test_one_command_line_setting_an_option_twice_is_refused(argv):
+    # the last one won in silence (a wrench ran under --no-disturbance); now both are named
+    from tt_mujoco import run
+    from tt_mujoco.cliargs import BadInputError
+
+    with pytest.raises(BadInputError, match=r"both set .* give one of them") as info:
+        run.options_from_argv(argv)
+    assert argv[0] in str(info.value) and argv[-1] in str(info.value)
+
+
+def test_the_same_value_twice_is_no_conflict():
+    from tt_mujoco import run
+
+    given = run.options_from_argv(["--seed", "3", "--seed", "3", "--no-disturbance"])
+    assert given["seed"] == 3 and given["disturbance"] == "none"
+
+
+def test_a_duration_that_is_not_whole_control_periods_is_refused():
+    # --duration 1.04 --control-dt 0.05 ran 1.05 s and said nothing
+    from tt_mujoco.sim import Scenario
+
+    with pytest.raises(ValueError, match=r"duration=1.04 is not allowed: .* would last 1.05 s"):
+        Scenario(duration=1.04, control_dt=0.05).validate()
+    Scenario(duration=0.3, control_dt=0.01).validate()  # 30 periods, whatever the rounding

@@ -132,8 +132,6 @@ def test_resolved_options_round_trip_through_toml(tmp_path):
     argv = [
         "--traj",
         "cycloid",
-        "--eta",
-        "-0.2",
         "--gains",
         '{"k1_v": 12.5}',
         "--control-dt",

@@ -176,3 +176,55 @@ def test_disturbance_hook_replaces_the_papers(tmp_path):
     none = simulate(Scenario(duration=1.0, disturbance="none"))
     assert zero.metrics["rmse_v"] == none.metrics["rmse_v"]
     assert math.isfinite(zero.metrics["rmse_v"])
+
+
+@pytest.mark.parametrize(
+    ("metrics", "message"),
+    [
+        (["a.py:rmse_v"], "would land under 'rmse_v'"),  # a built-in metric
+        (["a.py:trailer_2_offtrack_rms"], "would land under 'trailer_2_offtrack_rms'"),
+        (["a.py:status"], "would land under 'status'"),  # the run's own entries
+        (["a.py:config"], "would land under 'config'"),
+        (["a.py:offtrack_follower"], "would land under 'offtrack_follower'"),
+        (["a.py:fm", "b.py:fm"], "metric 'a.py:fm' lands under 'fm' already"),  # two users'
+    ],
+)
+def test_a_metric_that_would_shadow_another_is_refused(tmp_path, metrics, message):
+    # its value replaced the built-in's in metrics.json, the summary and the sweep table, or
+    # was dropped, or one of two like-named metrics was: now exit 2 before anything runs
+    body = "".join(f"def {n}(ts, path):\n    return 1.0\n\n" for n in (
+        "rmse_v", "trailer_2_offtrack_rms", "status", "config", "offtrack_follower", "fm"
+    ))  # fmt: skip
+    for name in ("a.py", "b.py"):
+        (tmp_path / name).write_text(body)
+    out = tmp_path / "out"
+    args = [
+        a
+        for spec in metrics
+        for a in ("--metric", str(tmp_path / spec.split(":")[0]) + ":" + spec.split(":")[1])
+    ]
+    proc = _run([*args, "--out", str(out)])
+    shown = message.replace("'a.py:", f"'{tmp_path / 'a.py'}:")
+    assert proc.returncode == 2 and shown in proc.stderr, proc.stderr
+    assert "Traceback" not in proc.stderr and not out.exists()
+
+
+def test_every_key_a_run_writes_is_a_metric_or_the_runs_own(tmp_path):
+    # generated from what a run with every report writes: a new top-level key must be declared
+    # (metrics.METRIC_UNITS, TEXT_METRICS or RUN_KEYS), so that no user's metric can take it
+    from tt_mujoco.analysis.metrics import builtin_key
+
+    out = tmp_path / "all"
+    proc = _run(
+        [
+            *("--traj", "circle", "--duration", "1.2", "--reverse", "--trailers", "2"),
+            *("--terrain", "slope:3", "--ground", "band:0:0.5:0.5", "--fault", "dropout:t=0.5"),
+            *("--controller", "nmpc", "--metric", "examples/user_parts.py:final_position_error"),
+            *("--out", str(out)),
+        ]
+    )
+    assert proc.returncode in (0, 3), proc.stderr
+    doc = json.loads((out / "metrics.json").read_text())
+    for key in ("terrain", "ground", "faults", "controller", "reversing", "notes"):
+        assert key in doc, key  # the run wrote every kind of report
+    assert [k for k in doc if not builtin_key(k)] == ["final_position_error"]

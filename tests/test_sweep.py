@@ -93,6 +93,7 @@ def test_values_lists_generators_and_toml_agree():
         (["faults=payload:t=20", "duration=3"], {}, "after the end of the run"),
         (["scale.Mx=1.1"], {}, "scale.Mx"),
         (["Mr"], {}, "write OPTION=VALUES"),
+        (["gain.k1_v=5", "gain.k1_v=10"], {}, "'gain.k1_v=5' and 'gain.k1_v=10' both give"),
     ],
 )
 def test_bad_specs_raise_one_clear_error(items, kwargs, message):
@@ -110,6 +111,11 @@ def test_cli_bad_spec_is_exit_2_with_one_line(tmp_path, capsys):
     (tmp_path / "used" / "x").write_text("")
     assert sweep.main(["duration=1", "--out", str(tmp_path / "used")]) == 2
     assert "pass --resume" in capsys.readouterr().err
+    # a flag that only changes a resume is refused without one, not ignored
+    for flag in ("--extend", "--retry-errors"):
+        assert sweep.main(["duration=1", flag, "--out", str(tmp_path / "x")]) == 2
+        assert f"{flag} is not allowed without --resume" in capsys.readouterr().err
+        assert not (tmp_path / "x").exists()
 
 
 def test_scales_gains_and_timestep_reach_the_scenario():

@@ -37,7 +37,16 @@ def controller(tmp_path, body: str, start: float = 0.3) -> str:
 
 def cli(tmp_path, capsys, *extra):
     out = tmp_path / "out"
-    code = run.main([*ARGV, *extra, "--quiet", "--out", str(out)])
+    # an option in extra replaces ARGV's (one command line may not give an option twice)
+    flags, base, value_of_dropped = {a for a in extra if a.startswith("--")}, [], False
+    for a in ARGV:
+        if value_of_dropped and not a.startswith("--"):
+            value_of_dropped = False
+            continue
+        value_of_dropped = a in flags
+        if not value_of_dropped:
+            base.append(a)
+    code = run.main([*base, *extra, "--quiet", "--out", str(out)])
     return code, out, capsys.readouterr().err
 
 

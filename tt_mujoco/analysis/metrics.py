@@ -42,8 +42,11 @@ __all__ = [
     "METRIC_UNITS",
     "OPTIONAL_COLUMNS",
     "REQUIRED_COLUMNS",
+    "RUN_KEYS",
+    "TEXT_METRICS",
     "Polyline",
     "PolylineProjection",
+    "builtin_key",
     "compute_metrics",
     "distance_to_polyline",
     "error_signals",
@@ -574,14 +577,49 @@ def summary_table(metrics: Mapping[str, object], keys: Sequence[str] = DEFAULT_S
 METRICS = Registry("metric")
 
 
+#: The keys ``metrics.json`` holds beside the metrics: the run's outcome, its configuration and
+#: its parts' reports (no user's metric may take one).
+RUN_KEYS = (
+    *("status", "message", "notes", "config", "metric_errors", "reversing"),
+    *("controller", "faults", "terrain", "ground"),
+)
+#: Built-in metrics that are a word, not a number.
+TEXT_METRICS = ("offtrack_follower",)
+
+
+def builtin_key(name: str) -> bool:
+    """Whether ``metrics.json`` keeps ``name`` for a built-in metric or the run's own entry."""
+    return metric_unit(name) is not None or name in TEXT_METRICS or name in RUN_KEYS
+
+
 def resolve_metrics(specs) -> dict:
-    """``{name: function}`` for the names and hooks in ``specs`` (ValueError for a bad one)."""
-    out = {}
+    """``{name: function}`` for the names and hooks in ``specs``.
+
+    Raises
+    ------
+    ValueError
+        A bad name or hook, or one whose key (:func:`metric_name`) is a built-in metric's, the
+        run's own (:data:`RUN_KEYS`) or another of ``specs``': its value would replace theirs,
+        or be replaced.
+    """
+    out, given = {}, {}
     for spec in specs:
         fn = METRICS.resolve(spec)
         if not callable(fn):
             raise ValueError(f"metric {spec!r} is not allowed: {fn!r} is not callable")
-        out[metric_name(spec)] = fn
+        name = metric_name(spec)
+        if builtin_key(name):
+            raise ValueError(
+                f"metric {spec!r} is not allowed: it would land under {name!r} in metrics.json, "
+                "which holds the run's own value there; rename the function (or register the "
+                "metric under another name)"
+            )
+        if name in out:
+            raise ValueError(
+                f"metric {spec!r} is not allowed: metric {given[name]!r} lands under {name!r} "
+                "already; rename one of the two functions"
+            )
+        out[name], given[name] = fn, spec
     return out
 
 

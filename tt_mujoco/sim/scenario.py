@@ -561,6 +561,14 @@ class Scenario:
                 f"duration={self.duration!r} is not allowed: it is shorter than one control "
                 f"period ({self.control_dt!r} s)"
             )
+        if self.duration is not None:
+            periods = self.duration / self.control_dt
+            if abs(periods - round(periods)) > 1e-9 * max(1.0, periods):
+                whole = round(periods) * self.control_dt
+                raise ValueError(
+                    f"duration={self.duration!r} is not allowed: it is not a whole number of "
+                    f"control periods ({self.control_dt!r} s); the run would last {whole:g} s"
+                )
         ratio = self.control_dt / self.timestep
         if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
             raise ValueError(

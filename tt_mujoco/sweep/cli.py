@@ -122,6 +122,9 @@ def main(argv: list[str] | None = None) -> int:
         workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
         if workers < 1:
             raise BadSpecError(f"--workers {workers} is not allowed: it must be >= 1")
+        for flag, name in (("--extend", "extend"), ("--retry-errors", "retry_errors")):
+            if getattr(args, name) and not args.resume:  # it would be ignored in silence
+                raise BadSpecError(f"{flag} is not allowed without --resume: it changes a resume")
         if args.resume and args.out is None:
             raise BadSpecError("--resume needs --out DIR, the folder of the sweep to continue")
         config = args.config

@@ -295,8 +295,15 @@ def parse_spec(
     """
     base = load_spec(config) if config is not None else SweepSpec()
     axes = {a.name: a for a in base.axes}
+    given = {}
     for item in items:
         axis = parse_item(item)
+        if axis.name in given:  # the same command line: which one was meant?
+            raise BadSpecError(
+                f"{given[axis.name]!r} and {item!r} both give option {axis.name!r}: give it once "
+                "(its values as one list, e.g. NAME=1,2,3)"
+            )
+        given[axis.name] = item
         axes.pop(axis.name, None)
         axes[axis.name] = axis
     return _make_spec(
