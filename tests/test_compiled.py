@@ -501,13 +501,26 @@ def test_a_hook_that_fails_stops_both_loops_alike(monkeypatch, tmp_path, hook):
 def test_an_interrupt_inside_a_called_back_compute_ends_the_run_as_it_does_in_python(
     monkeypatch, tmp_path
 ):
+    # a KeyboardInterrupt the compute raises itself is its failure (tt_mujoco.guard); a real
+    # Ctrl-C (SIGINT) arriving while it runs ends the run as an interrupt: alike on both loops
     path = tmp_path / "stops.py"
     path.write_text(FAILING.replace("BODY", "raise KeyboardInterrupt"))
     scenario = Scenario(traj="circle", controller=f"{path}:Fails", duration=3.0)
+    outcomes = []
+    for route in ("0", "1"):
+        monkeypatch.setenv("TT_MUJOCO_COMPILED", route)
+        run = simulate(scenario)
+        outcomes.append((run.status, run.message, len(run.timeseries["t"])))
+    assert outcomes[0] == outcomes[1] and outcomes[0][0] == "failed"
+    assert "KeyboardInterrupt" in outcomes[0][1]
+    real = tmp_path / "interrupted.py"
+    real.write_text(
+        FAILING.replace("BODY", "import os, signal; os.kill(os.getpid(), signal.SIGINT)")
+    )
     for route in ("0", "1"):
         monkeypatch.setenv("TT_MUJOCO_COMPILED", route)
         with pytest.raises(KeyboardInterrupt):
-            simulate(scenario)
+            simulate(Scenario(traj="circle", controller=f"{real}:Fails", duration=3.0))
 
 
 def test_a_python_law_is_given_the_reference_records_leading_fields():

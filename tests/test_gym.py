@@ -293,3 +293,21 @@ def test_the_physical_options_reach_the_env():
     assert stepper.plant.model.opt.gravity[1] < 0  # the grade rises along +y
     with pytest.raises(ValueError, match="did you mean 'terrain'"):
         gym_env.TractorTrailerEnv(terain="slope:5")
+
+
+def test_a_users_path_that_fails_mid_episode_ends_it_as_failed(tmp_path):
+    # it was a traceback out of step(); now the episode ends, saying why
+    parts = tmp_path / "parts.py"
+    parts.write_text(
+        "from tt_mujoco.reference.paths import ArcsPath\n\n"
+        "class P(ArcsPath):\n    def pose_at(self, s):\n        if s > 0.3:\n"
+        "            raise RuntimeError('no pose here')\n        return super().pose_at(s)\n\n"
+        "def p():\n    return P('arc', (0.0, 0.0, 0.0), [(10.0, 0.5)])\n"
+    )
+    env = gym_env.TractorTrailerEnv(traj=f"{parts}:p", plant="reduced", duration=3.0)
+    env.reset(seed=0)
+    for _ in range(300):
+        _, _, terminated, truncated, info = env.step(np.array([0.3, 0.3]))
+        if terminated or truncated:
+            break
+    assert terminated and info["status"] == "failed" and "no pose here" in info["message"]

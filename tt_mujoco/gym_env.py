@@ -26,7 +26,8 @@ chooses the wheel torques:
   ``e = z - z_d`` with the true velocities, so that an episode's return is ``-N`` times
   ``rmse_v^2 + rmse_omega^2`` of ``metrics.json``. A jackknife or a blow-up ends the episode
   (``terminated``) with the reward ``-(1 + steps left)``, as if every remaining step had an
-  error of 1: ending early never pays.
+  error of 1: ending early never pays; so does a user's path or disturbance that fails
+  (``info["status"]`` "failed", ``info["message"]`` why).
 - **truncated** when the scenario's duration is reached (``info["status"]`` is then "ok", as
   the finished run's ``metrics.json`` says).
 - **info**: ``t``, ``status`` ("running", "ok", "jackknife", "diverged", "failed"), the errors
@@ -80,8 +81,10 @@ from tt_mujoco.defaults import MAX_SPEED
 from tt_mujoco.reference.feedback import path_errors
 from tt_mujoco.schema import Schema
 from tt_mujoco.sim.build import drawn_polyline
+from tt_mujoco.sim.episode import has_closed_form
 from tt_mujoco.sim.measure import Measurement
 from tt_mujoco.sim.timeseries import train_columns
+from tt_mujoco.sim.usercode import CheckedPath, path_label
 from tt_mujoco.viz.render import Offscreen
 
 __all__ = [
@@ -242,7 +245,10 @@ class TractorTrailerEnv(gymnasium.Env):
         self.observation_space = spaces.Box(self._low, self._high, dtype=np.float64)
         self._headings = np.array([_field(n) in HEADINGS for n in self.observation_names])
         self._reverse = bool(scenario.reverse)
-        self._pose_at, self._curvature = self.path.pose_at, self.path.curvature_and_rate
+        asked = self.path
+        if not has_closed_form(asked):  # a user's path: guarded and checked, as the step asks it
+            asked = CheckedPath(asked, path_label(self._built))
+        self._pose_at, self._curvature = asked.pose_at, asked.curvature_and_rate
         self.dt = scenario.control_dt
         self.max_steps = self._built.steps
         self._seeded = False
@@ -293,7 +299,7 @@ class TractorTrailerEnv(gymnasium.Env):
                 raise RuntimeError("the episode is over: call reset()")
             obs = self._sense()
         except sim.StopRun as stop:
-            info = {"t": stepper.k * self.dt, "status": stop.status}
+            info = {"t": stepper.k * self.dt, "status": stop.status, "message": stop.message}
             return self._last_obs, -(1.0 + steps_left), True, False, info
         me = self._me
         e_v, e_w = me.v - self._ref.v_d, me.omega - self._ref.omega_d

@@ -26,9 +26,12 @@ import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
+from tt_mujoco.guard import shown_error, users_failure
+
 __all__ = [
     "HookError",
     "Registry",
+    "call_hook",
     "check_finite_fields",
     "closest",
     "describe_failure",
@@ -66,8 +69,15 @@ def check_finite_fields(obj, what: str, names) -> None:
 
 def shown(value, limit: int = 80) -> str:
     """``repr(value)`` for a message, cut to ``limit`` characters (a 10 MB value is not
-    echoed back)."""
-    text = repr(value)
+    echoed back); a user's object whose ``repr`` fails is named by its type."""
+    try:
+        text = repr(value)
+        if not isinstance(text, str):
+            raise TypeError("__repr__ returned a non-string")
+    except BaseException as err:
+        if not users_failure(err):
+            raise
+        return f"<a {type(value).__name__} whose repr fails>"
     if len(text) <= limit:
         return text
     return f"{text[: limit - 30]}... ({len(text)} characters)"
@@ -106,9 +116,23 @@ def describe_failure(err: BaseException) -> str:
     mine = [f for f in frames if not _inside_package(f.filename)] or frames
     place = f"{mine[-1].filename}, line {mine[-1].lineno}: " if mine else ""
     if isinstance(err, SystemExit):
-        return f"{place}it called sys.exit({err.code!r})"
-    text = str(err)
+        return f"{place}it called sys.exit({shown(err.code)})"
+    if isinstance(err, RecursionError):
+        return f"{place}RecursionError: it recursed deeper than Python allows"
+    text = shown_error(err)
     return f"{place}{type(err).__name__}{': ' + text if text else ''}"
+
+
+def call_hook(what: str, fn, *args, **kwargs):
+    """``fn(*args, **kwargs)``, a user's code called before the run; what it raises that is
+    its failure (:func:`tt_mujoco.guard.users_failure`) becomes a :class:`HookError` naming
+    ``what``, the file and the line."""
+    try:
+        return fn(*args, **kwargs)
+    except BaseException as err:
+        if not users_failure(err):
+            raise
+        raise HookError(f"{what} failed: {describe_failure(err)}") from None
 
 
 def is_hook(spec) -> bool:
@@ -159,8 +183,10 @@ def _module_from_file(path: Path, what: str, spec: str):
     sys.modules[module_name] = module  # before exec: dataclasses and pickling look it up
     try:
         loader_spec.loader.exec_module(module)
-    except (Exception, SystemExit) as err:  # sys.exit at import must not end the run as done
+    except BaseException as err:  # sys.exit at import must not end the run as done
         del sys.modules[module_name]
+        if not users_failure(err):
+            raise
         raise HookError(
             f"{what} {spec!r}: importing {str(path)!r} failed: {describe_failure(err)}"
         ) from None
@@ -192,7 +218,9 @@ def load_hook(spec: str, what: str = "hook") -> object:
             raise HookError(
                 f"{what} {spec!r}: module {where!r} cannot be imported: {err}"
             ) from None
-        except (Exception, SystemExit) as err:
+        except BaseException as err:
+            if not users_failure(err):
+                raise
             raise HookError(
                 f"{what} {spec!r}: importing module {where!r} failed: {describe_failure(err)}"
             ) from None

@@ -19,16 +19,14 @@ from __future__ import annotations
 import argparse
 import functools
 import shutil
-import signal
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 from typing import NamedTuple
 
 from tt_mujoco import config as config_mod
-from tt_mujoco import sim
+from tt_mujoco import guard, sim
 from tt_mujoco.analysis.metrics import DEFAULT_SUMMARY_KEYS, metric_name, summary_table
 from tt_mujoco.background import BackgroundCall
 from tt_mujoco.cliargs import BadInputError, Parser
@@ -356,13 +354,10 @@ def _fail(message: str, code: int = EXIT_BAD_INPUT) -> int:
     return code
 
 
-def _sigterm(signum, frame):
-    raise KeyboardInterrupt  # a batch system's stop: the same clean exit as Ctrl-C
-
-
 def main(argv: list[str] | None = None) -> int:
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGTERM, _sigterm)
+    # Ctrl-C and a batch system's SIGTERM: the same clean exit, told from a KeyboardInterrupt
+    # a user's code raises itself (tt_mujoco.guard)
+    guard.interrupts_from_signals()
     try:
         return _main(argv)
     except KeyboardInterrupt:  # before a folder exists (start-up); later ones are handled inside

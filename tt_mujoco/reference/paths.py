@@ -29,6 +29,7 @@ import math
 
 import numpy as np
 
+from tt_mujoco.guard import users_failure
 from tt_mujoco.reference.path_base import (
     DEFAULT_MAX_CURVATURE,
     Pose,
@@ -37,7 +38,7 @@ from tt_mujoco.reference.path_base import (
     positive_number,
 )
 from tt_mujoco.reference.spline import SplinePath, from_csv, from_waypoints
-from tt_mujoco.registry import Registry, is_hook, load_hook
+from tt_mujoco.registry import HookError, Registry, describe_failure, is_hook, load_hook
 
 __all__ = [
     "CYCLOID_LENGTH",
@@ -338,6 +339,10 @@ def _from_hook(spec: str, **kw) -> ReferencePath:
             obj = obj(**kw)
         except TypeError as err:
             raise ValueError(f"path {spec!r} does not take the options {kw}: {err}") from None
+        except BaseException as err:  # the user's factory: its failure is bad input
+            if not users_failure(err):
+                raise
+            raise HookError(f"path {spec!r} failed: {describe_failure(err)}") from None
     elif kw:
         raise ValueError(f"path {spec!r} is a fixed path: it takes no options ({sorted(kw)})")
     if not isinstance(obj, ReferencePath):

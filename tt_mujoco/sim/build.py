@@ -27,6 +27,7 @@ from tt_mujoco.defaults import MAX_DURATION, MAX_PHYSICS_STEPS, MAX_SPEED
 from tt_mujoco.reference.feedback import PathFeedback
 from tt_mujoco.reference.reverse import ReverseTarget
 from tt_mujoco.reference.targets import make_target
+from tt_mujoco.registry import call_hook, is_hook
 from tt_mujoco.sim.disturbances import make_disturbance
 from tt_mujoco.sim.faults import FaultSchedule, parse_faults
 from tt_mujoco.sim.ground import GroundPatches, parse_patches
@@ -347,5 +348,8 @@ def build(scenario: Scenario) -> Build:
         relief=relief_of(parse_terrain(scenario.terrain), drawn_polyline(path, duration), plant_p),
     )
     result.new_faults()  # a fault after the end of the run is refused now
-    result.new_controller()  # bad gains fail before any work
+    if is_hook(scenario.controller):  # the user's __init__ runs here: guarded as user code
+        call_hook(f"controller {scenario.controller!r}", result.new_controller)
+    else:
+        result.new_controller()  # bad gains fail before any work
     return result

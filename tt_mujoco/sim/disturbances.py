@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 
-from tt_mujoco.registry import Registry
+from tt_mujoco.registry import Registry, call_hook
 
 __all__ = [
     "DISTURBANCES",
@@ -62,7 +62,7 @@ def make_disturbance(spec: str):
     """The disturbance callable ``t -> (a_v, a_omega)`` a name or hook stands for."""
     obj = DISTURBANCES.resolve(spec)
     if isinstance(obj, type):
-        obj = obj()
+        obj = call_hook(f"disturbance {spec!r}", obj)
     if not callable(obj):
         raise ValueError(f"disturbance {spec!r} is not allowed: {obj!r} is not callable")
     return obj

@@ -355,8 +355,10 @@ def _target_record(built, steps: int):
     kappas, starts = np.zeros(0), np.zeros((0, 3))
     cells, pose_cells, kappa_ends = np.zeros((0, 5)), np.zeros((0, 10)), np.zeros(2)
     bounds, hook = np.zeros(0), None
-    if not has_closed_form(path):  # a user's path: CPython's step calls it
-        kind, hook = records.HOOKED_PATH, path
+    if not has_closed_form(path):  # a user's path: the step calls it, guarded and checked
+        from tt_mujoco.sim.usercode import CheckedPath, path_label
+
+        kind, hook = records.HOOKED_PATH, CheckedPath(path, path_label(built))
     elif type(path) is ArcsPath:
         kind, (bounds, kappas, starts) = records.ARCS_PATH, path.closed_form
     elif type(path) is SplinePath:

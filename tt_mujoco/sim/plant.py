@@ -11,9 +11,12 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from typing import ClassVar
 
+from tt_mujoco.guard import control_signal
+
 __all__ = ["Plant", "StopRun"]
 
 
+@control_signal  # the project's own stop: it passes through the guard of user code as it is
 class StopRun(Exception):  # noqa: N818 - a control-flow signal, not an error
     """The run must stop: ``status`` is "jackknife", "diverged" or "failed" (the user's code
     failed), ``message`` says when and why, ``details`` (optional) is the user code's

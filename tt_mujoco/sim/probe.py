@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from tt_mujoco.guard import users_failure
 from tt_mujoco.registry import HookError, describe_failure, is_hook
 from tt_mujoco.sim.plant import StopRun
 from tt_mujoco.sim.stepper import Stepper
@@ -38,7 +39,9 @@ def check_user_code(built) -> None:
             controller = built.new_controller()
             controller.reset()
             _ = controller.gains, controller.name  # what the run's record reads at its end
-        except (Exception, SystemExit) as err:
+        except BaseException as err:
+            if not users_failure(err):
+                raise
             hint = ""
             if isinstance(err, AttributeError):
                 hint = " (does its __init__ call super().__init__(setup, gains)?)"
@@ -50,7 +53,9 @@ def check_user_code(built) -> None:
             out = controller.compute(ref.t, me, ref)
         except StopRun:
             pass  # the initial state itself stops the run: the run will say so
-        except (Exception, SystemExit) as err:
+        except BaseException as err:
+            if not users_failure(err):
+                raise
             raise HookError(f"{who} fails on the initial state: {describe_failure(err)}") from None
         else:
             try:
@@ -64,5 +69,7 @@ def check_user_code(built) -> None:
             checked_disturbance(built.disturbance(0.0), who, 0.0)
         except StopRun as stop:
             raise HookError(stop.message) from None
-        except (Exception, SystemExit) as err:
+        except BaseException as err:
+            if not users_failure(err):
+                raise
             raise HookError(f"{who} fails at t=0: {describe_failure(err)}") from None

@@ -14,6 +14,7 @@ import numpy as np
 
 from tt_mujoco.analysis.metrics import compute_metrics
 from tt_mujoco.defaults import MAX_SPEED
+from tt_mujoco.guard import control_signal, noting_interrupts, users_failure
 from tt_mujoco.registry import describe_failure as usercode_failure
 from tt_mujoco.registry import shown
 from tt_mujoco.sim import compiled
@@ -53,6 +54,7 @@ class Result:
         return self.status == "ok"
 
 
+@control_signal
 class TimeLimitExceeded(BaseException):
     """The run's wall-clock limit passed (raised by SIGALRM wherever the run then was;
     a BaseException, so that the guard around user code does not take it for the user's)."""
@@ -160,7 +162,7 @@ def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint
     controller.reset()
     start_wall = time.perf_counter()
     try:
-        with wall_time_limit(built.scenario.time_limit_s):
+        with wall_time_limit(built.scenario.time_limit_s), noting_interrupts():
             status, message = run_episode(stepper, controller, progress, on_step)
     except TimeLimitExceeded as err:
         status, message = _time_limit_stop(stepper, err)
@@ -188,8 +190,10 @@ def controller_report(controller) -> tuple[dict, str | None]:
             number = int(value) if isinstance(value, Integral) else float(value)
             clean[str(key)] = number if finite else None
         return clean, None
-    except Exception as err:  # the user's code: kept as an error, never raised
-        return {}, f"{type(err).__name__}: {err}"
+    except BaseException as err:  # the user's code: kept as an error, never raised
+        if not users_failure(err):
+            raise
+        return {}, usercode_failure(err)
 
 
 def user_metric(fn, ts: dict, path) -> tuple[float | None, str | None]:
@@ -204,7 +208,9 @@ def user_metric(fn, ts: dict, path) -> tuple[float | None, str | None]:
         views[key].flags.writeable = False
     try:
         value = fn(views, path)
-    except (Exception, SystemExit) as err:
+    except BaseException as err:
+        if not users_failure(err):
+            raise
         return None, usercode_failure(err)
     if value is None or isinstance(value, int | float):
         return value, None

@@ -28,6 +28,7 @@ import numpy as np
 
 from tt_mujoco.controllers import Reference
 from tt_mujoco.defaults import JACKKNIFE_DEG, MAX_SPEED
+from tt_mujoco.guard import users_failure
 from tt_mujoco.sim import closed_loop, episode, records, usercode
 from tt_mujoco.sim.build import Build
 from tt_mujoco.sim.checkpoint import Checkpoint
@@ -103,9 +104,11 @@ def _called_back(stepper, made: tuple, kernel) -> tuple:
             return path.curvature_and_rate(s)
         if what == closed_loop.HOOK_POSE:
             return path.pose_at(s)
-        try:  # the reference pose of a plain-number law: its Python form asks for it itself
-            return path.pose_at(s)
-        except (Exception, SystemExit) as err:
+        try:  # the reference pose of a plain-number law: its Python form asks the path itself
+            return getattr(path, "path", path).pose_at(s)
+        except BaseException as err:
+            if not users_failure(err):
+                raise
             raise law_failure(who, float(law.reference[0]["t"]), err) from None
 
     target = target._replace(
@@ -201,14 +204,17 @@ class _PythonLaw:
 
     def __call__(self, law):
         controller, who, steering = self.controller, self.who, self.steering
-        if self.steering_changed is not None and steering.kind and steering.updates[0] != self.told:
-            self.told = int(steering.updates[0])
-            self.steering_changed(tuple(map(float, steering.etas)))
         seen, ref = seen_measurement(law), reference_of(law, self.path)
         t = ref.t
         try:
+            if self.steering_changed is not None and steering.kind:
+                if steering.updates[0] != self.told:
+                    self.told = int(steering.updates[0])
+                    self.steering_changed(tuple(map(float, steering.etas)))
             out = controller.compute(t, seen, ref)
-        except (Exception, SystemExit) as err:
+        except BaseException as err:
+            if not users_failure(err):
+                raise
             raise law_failure(who, t, err) from None
         T_r, T_l = usercode.checked_torques(out, who, t)
         signals = controller.take_signals()
@@ -353,7 +359,9 @@ class Stepper:
         def disturbance(t: float) -> tuple[float, float]:
             try:
                 out = dist(t)
-            except (Exception, SystemExit) as err:
+            except BaseException as err:
+                if not users_failure(err):
+                    raise
                 raise usercode.failure(who, t, err) from None
             return usercode.checked_disturbance(out, who, t)
 

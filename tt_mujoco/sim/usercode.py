@@ -15,10 +15,12 @@ import math
 import traceback
 from numbers import Real
 
+from tt_mujoco.guard import users_failure
 from tt_mujoco.registry import describe_failure, shown
 from tt_mujoco.sim.plant import StopRun
 
 __all__ = [
+    "CheckedPath",
     "checked_disturbance",
     "checked_signals",
     "checked_torques",
@@ -80,6 +82,46 @@ def checked_signals(signals: dict, who: str, t: float) -> dict[str, float]:
             )
         out[name] = float(value)
     return out
+
+
+class CheckedPath:
+    """A user's path as the step asks it (``curvature_and_rate``, ``pose_at``), on both loops:
+    what it raises that is its failure (:func:`tt_mujoco.guard.users_failure`), or an answer
+    that is not finite numbers, stops the run as "failed" at that arc length, its rows kept."""
+
+    def __init__(self, path, who: str):
+        self.path, self.who = path, who
+
+    def _asked(self, method: str, s: float, names: tuple[str, ...]):
+        try:
+            out = getattr(self.path, method)(s)
+        except BaseException as err:
+            if not users_failure(err):
+                raise
+            details = "".join(traceback.format_exception(err))
+            message = f"{self.who} failed at s={s:.3f} m: {describe_failure(err)}"
+            raise StopRun("failed", message, details) from None
+        try:
+            values = tuple(float(v) for v in out) if len(out) == len(names) else None
+        except (TypeError, ValueError):
+            values = None
+        if values is None or not all(math.isfinite(v) for v in values):
+            raise StopRun(
+                "failed",
+                f"{self.who} returned {shown(out)} from {method}({s:.6g}): it must return "
+                f"{len(names)} finite numbers ({', '.join(names)})",
+            )
+        return values
+
+    def curvature_and_rate(self, s: float) -> tuple[float, float]:
+        return self._asked("curvature_and_rate", s, ("kappa", "dkappa/ds"))
+
+    def pose_at(self, s: float) -> tuple[float, float, float]:
+        return self._asked("pose_at", s, ("x", "y", "heading"))
+
+
+def path_label(built) -> str:
+    return f"path {built.scenario.traj!r}"
 
 
 def controller_label(built) -> str:

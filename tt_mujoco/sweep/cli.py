@@ -5,11 +5,11 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import signal
 import sys
 import time
 from pathlib import Path
 
+from tt_mujoco import guard
 from tt_mujoco.cliargs import BadInputError, Parser
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_OK
 from tt_mujoco.executor import ExecutorError
@@ -111,10 +111,6 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-def _sigterm(signum, frame):
-    raise KeyboardInterrupt  # a batch system's stop: same clean, resumable exit as Ctrl-C
-
-
 def main(argv: list[str] | None = None) -> int:
     out = None
     try:
@@ -154,7 +150,7 @@ def main(argv: list[str] | None = None) -> int:
         out = args.out
         if out is None:
             out = free_name(RENDERS / f"sweep-{time.strftime('%Y%m%d-%H%M%S')}")
-        signal.signal(signal.SIGTERM, _sigterm)
+        guard.interrupts_from_signals()  # Ctrl-C, SIGTERM: the same clean, resumable exit
         result = run_sweep(
             spec,
             out,

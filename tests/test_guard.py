@@ -1,0 +1,172 @@
+"""One guard for user code (tt_mujoco.guard): every hook kind x every way of failing x both
+loops, generated, not listed. A failure before the run is bad input (exit 2, nothing left); one
+during the run stops it as "failed" (exit 3, its rows and metrics kept); a report or metric that
+fails after it is kept as an error beside the run's metrics (exit 0). Never a traceback, never a
+KeyboardInterrupt taken for Ctrl-C, never the process ended by the user's sys.exit."""
+
+from __future__ import annotations
+
+import json
+import textwrap
+
+import pytest
+
+from tt_mujoco import guard, run
+from tt_mujoco.registry import describe_failure
+
+#: Ways a user's code fails: (name, statement that fails, what the message shows)
+FAILURES = {
+    "ValueError": ("raise ValueError('bad value')", "ValueError: bad value"),
+    "BaseException": ("raise BaseException('base')", "BaseException: base"),
+    "GeneratorExit": ("raise GeneratorExit('gone')", "GeneratorExit: gone"),
+    "KeyboardInterrupt": ("raise KeyboardInterrupt", "KeyboardInterrupt"),
+    "SystemExit(0)": ("sys.exit(0)", "it called sys.exit(0)"),
+    "SystemExit(3)": ("sys.exit(3)", "it called sys.exit(3)"),
+    "recursion": ("recurse(0)", "RecursionError"),
+    "raising __str__": ("raise Unprintable()", "Unprintable: (its message cannot be shown"),
+}
+
+PRELUDE = """
+import math
+import sys
+
+from tt_mujoco.controllers import Controller
+from tt_mujoco.reference.paths import ArcsPath
+
+
+def recurse(n):
+    return recurse(n + 1)
+
+
+class Unprintable(Exception):
+    def __str__(self):
+        raise RuntimeError("no words")
+
+
+def fail():
+    FAIL
+"""
+
+#: Hook kinds: (the user's code after PRELUDE, the options that use it, when it fails)
+HOOKS = {
+    "import": (
+        "fail()\n\nclass C(Controller):\n    def compute(self, t, m, r):\n"
+        "        return 0.0, 0.0\n",
+        ["--controller", "{file}:C"],
+        "before",
+    ),
+    "controller __init__": (
+        "class C(Controller):\n    def __init__(self, setup, gains=None):\n"
+        "        super().__init__(setup, gains)\n        fail()\n\n"
+        "    def compute(self, t, m, r):\n        return 0.0, 0.0\n",
+        ["--controller", "{file}:C"],
+        "before",
+    ),
+    "controller reset": (
+        "class C(Controller):\n    def reset(self):\n        fail()\n\n"
+        "    def compute(self, t, m, r):\n        return 0.0, 0.0\n",
+        ["--controller", "{file}:C"],
+        "before",
+    ),
+    "controller compute": (
+        "class C(Controller):\n    def compute(self, t, m, r):\n"
+        "        if t > 0.5:\n            fail()\n        return 0.5, 0.5\n",
+        ["--controller", "{file}:C"],
+        "during",
+    ),
+    "controller report": (
+        "class C(Controller):\n    def compute(self, t, m, r):\n        return 0.5, 0.5\n\n"
+        "    def report(self):\n        fail()\n",
+        ["--controller", "{file}:C"],
+        "after",
+    ),
+    "disturbance": (
+        "def d(t):\n    if t > 0.5:\n        fail()\n    return 0.1, 0.0\n",
+        ["--disturbance-model", "{file}:d"],
+        "during",
+    ),
+    "disturbance class": (
+        "class D:\n    def __init__(self):\n        fail()\n\n"
+        "    def __call__(self, t):\n        return 0.0, 0.0\n",
+        ["--disturbance-model", "{file}:D"],
+        "before",
+    ),
+    "path factory": ("def p():\n    fail()\n", ["--traj", "{file}:p"], "before"),
+    "path method": (
+        "class P(ArcsPath):\n    def curvature_and_rate(self, s):\n        if s > 0.5:\n"
+        "            fail()\n        return super().curvature_and_rate(s)\n\n"
+        "def p():\n    return P('arc', (0.0, 0.0, 0.0), [(10.0, 0.5)])\n",
+        ["--traj", "{file}:p"],
+        "during",
+    ),
+    "metric": ("def m(ts, path):\n    fail()\n", ["--metric", "{file}:m"], "after"),
+}
+
+
+@pytest.fixture(autouse=True)
+def _compile_now(monkeypatch):
+    monkeypatch.setenv("TT_MUJOCO_COMPILE_NOW", "1")
+
+
+def _cases():
+    for hook, (_, _, when) in HOOKS.items():
+        for failure in FAILURES:
+            for loop in ("python", "compiled") if when == "during" else ("python",):
+                yield pytest.param(hook, failure, loop, id=f"{hook}-{failure}-{loop}")
+
+
+@pytest.mark.parametrize(("hook", "failure", "loop"), list(_cases()))
+def test_every_hook_failing_every_way_ends_as_promised(
+    tmp_path, monkeypatch, capsys, hook, failure, loop
+):
+    code, options, when = HOOKS[hook]
+    statement, shown = FAILURES[failure]
+    file = tmp_path / f"user_{abs(hash((hook, failure, loop)))}.py"
+    file.write_text(PRELUDE.replace("FAIL", statement) + "\n" + textwrap.dedent(code))
+    monkeypatch.setenv("TT_MUJOCO_COMPILED", "1" if loop == "compiled" else "0")
+    out = tmp_path / "out"
+    argv = [o.format(file=file) for o in options]
+    argv += ["--plant", "reduced", "--traj", "circle"] if "--traj" not in argv else []
+    argv += ["--duration", "2", "--no-video", "--no-plots", "--quiet", "--out", str(out)]
+    exit_code = run.main(argv)
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    if when == "before":
+        assert exit_code == 2 and shown in err, err
+        assert not out.exists() or not any(out.iterdir())
+        return
+    doc = json.loads((out / "metrics.json").read_text())
+    if when == "during":
+        assert exit_code == 3 and shown in err, err
+        assert doc["status"] == "failed" and doc["steps"] > 400 and shown in doc["message"]
+        return
+    assert exit_code == 0 and doc["status"] == "ok"
+    assert any(shown in e for e in doc["metric_errors"].values()), doc["metric_errors"]
+
+
+def test_a_real_interrupt_is_not_the_users_failure(monkeypatch):
+    # a KeyboardInterrupt the signal handlers raise is Ctrl-C; one a user's code raises is not
+    event = guard.threading.Event()
+    monkeypatch.setattr(guard, "_INTERRUPTED", event)
+    assert guard.users_failure(KeyboardInterrupt())
+    event.set()
+    assert not guard.users_failure(KeyboardInterrupt())
+    monkeypatch.setattr(guard, "_INTERRUPTED", None)  # no handler of ours: an API user's
+    assert not guard.users_failure(KeyboardInterrupt())
+    from tt_mujoco.sim.simulate import TimeLimitExceeded
+
+    assert not guard.users_failure(TimeLimitExceeded(1.0))  # the project's own signal
+    assert guard.users_failure(GeneratorExit()) and guard.users_failure(SystemExit(0))
+
+
+def test_the_failure_is_worded_whatever_the_exception_does():
+    class UnrepresentableError(Exception):
+        def __str__(self):
+            raise RecursionError
+
+    class Code:
+        def __repr__(self):
+            raise ValueError("no repr")
+
+    assert "its message cannot be shown: RecursionError" in describe_failure(UnrepresentableError())
+    assert "sys.exit(<a Code whose repr fails>)" in describe_failure(SystemExit(Code()))

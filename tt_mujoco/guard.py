@@ -1,0 +1,110 @@
+"""The one place that knows what a user's code may raise, and what is not its failure.
+
+Every call into a user's code (a module's import, a controller's construction and methods, a
+path and its factory, a disturbance, a metric, a report) catches ``BaseException`` and asks
+:func:`users_failure` whether to keep what was raised as that code's failure (a bad input
+before the run, exit 2; a failed run during it, exit 3, every row kept) or to let it pass:
+the project's own control signals (:func:`control_signal`: a run's time limit) and a real
+interrupt (Ctrl-C, SIGTERM: :func:`interrupts_from_signals`). A ``KeyboardInterrupt`` a user's
+code raises itself, ``SystemExit`` (``sys.exit(0)`` included), ``GeneratorExit`` and any other
+``BaseException`` are its failures. :func:`shown_error` words one safely, whatever its
+``__str__`` does.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+
+__all__ = [
+    "control_signal",
+    "interrupts_from_signals",
+    "noting_interrupts",
+    "shown_error",
+    "users_failure",
+]
+
+_CONTROL: list[type] = []
+#: Whether a signal handler of ours has turned a real interrupt into KeyboardInterrupt
+#: (``None``: no handler of ours is installed, so every KeyboardInterrupt counts as real).
+_INTERRUPTED: threading.Event | None = None
+
+
+def control_signal(cls: type) -> type:
+    """Declare ``cls`` (a class decorator) one of the project's own control signals: raised
+    into a user's code from outside it (an alarm), it is never that code's failure."""
+    _CONTROL.append(cls)
+    return cls
+
+
+def interrupts_from_signals() -> None:
+    """Install, in the main thread, the handlers through which a real interrupt reaches the
+    run: SIGINT (Ctrl-C) and SIGTERM (a batch system's stop) raise ``KeyboardInterrupt`` after
+    noting that it is real. The command-line entry points call it; an API user's process keeps
+    its own handlers, and there every KeyboardInterrupt counts as real."""
+    global _INTERRUPTED
+    if threading.current_thread() is not threading.main_thread():
+        return
+    _INTERRUPTED = threading.Event()
+
+    def interrupted(signum, frame):
+        _INTERRUPTED.set()
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGINT, interrupted)
+    signal.signal(signal.SIGTERM, interrupted)
+
+
+@contextlib.contextmanager
+def noting_interrupts():
+    """While a run goes on (:func:`tt_mujoco.sim.simulate`), in a process's main thread: a
+    real Ctrl-C (or a SIGTERM the command line turns into one) notes that it came, then does
+    what the handler before did (raise ``KeyboardInterrupt``), so that one a user's code raises
+    itself is told apart, on every route. A signal ignored or left to the system (a sweep's
+    worker ignores SIGINT) raises no exception: every ``KeyboardInterrupt`` is then a user's."""
+    global _INTERRUPTED
+    before = _INTERRUPTED
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    noted = _INTERRUPTED = threading.Event()
+    previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+
+    def interrupted(signum, frame):
+        noted.set()
+        previous[signum](signum, frame)  # the default handler, or ours: raises
+        raise KeyboardInterrupt
+
+    for sig, handler in previous.items():
+        if callable(handler):
+            signal.signal(sig, interrupted)
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            if callable(handler):
+                signal.signal(sig, handler)
+        _INTERRUPTED = before
+
+
+def users_failure(err: BaseException) -> bool:
+    """Whether ``err``, raised while a user's code ran, is that code's failure."""
+    if isinstance(err, tuple(_CONTROL)):
+        return False
+    if isinstance(err, KeyboardInterrupt):
+        return _INTERRUPTED is not None and not _INTERRUPTED.is_set()
+    return True
+
+
+def shown_error(err: BaseException) -> str:
+    """``err``'s message, or, where its ``__str__`` itself fails, what it is."""
+    try:
+        text = str(err)
+        if not isinstance(text, str):
+            raise TypeError("__str__ returned a non-string")
+        return text
+    except BaseException as inner:  # a user's exception's own code
+        if not users_failure(inner):
+            raise
+        return f"(its message cannot be shown: {type(inner).__name__} in its __str__)"
