@@ -47,3 +47,6 @@ EXIT_OK, EXIT_BAD_INPUT, EXIT_DIVERGED, EXIT_INTERRUPTED = 0, 2, 3, 130
 #: A run's wall-clock time limit (s): ends a run whose user code hangs (exit code 3). The
 #: longest run the caps allow takes minutes, so the default never stops a working run.
 TIME_LIMIT_S = 3600.0
+
+#: The video's cameras (``--camera``): one that follows the tractor, one over the whole run.
+CAMERAS = ("follow", "overview")

@@ -28,12 +28,12 @@ from typing import NamedTuple
 from tt_mujoco import config as config_mod
 from tt_mujoco import guard, sim
 from tt_mujoco.analysis.metrics import DEFAULT_SUMMARY_KEYS, metric_name, summary_table
-from tt_mujoco.background import BackgroundCall
 from tt_mujoco.cliargs import BadInputError, Parser
 from tt_mujoco.config import CONFIG_FILE
 from tt_mujoco.controllers import controller_class
 from tt_mujoco.controllers.base import resolve_gains
 from tt_mujoco.defaults import (
+    CAMERAS,
     CONTROLLER,
     EXIT_BAD_INPUT,
     EXIT_DIVERGED,
@@ -52,15 +52,8 @@ from tt_mujoco.outputs import (
 )
 from tt_mujoco.progress import progress_bar
 from tt_mujoco.schema import Option, Schema, boolean, choice, number
-from tt_mujoco.sim import COLUMNS, SCHEMA, Scenario, build
-from tt_mujoco.sim.checkpoint import read_checkpoint
-from tt_mujoco.sim.faults import RECOVERY_S
-from tt_mujoco.sim.probe import check_user_code
+from tt_mujoco.sim import COLUMNS, SCHEMA, Scenario
 from tt_mujoco.sim.timeseries import UNITS, train_columns, unit_of
-from tt_mujoco.vehicle import reduced
-from tt_mujoco.viz import render
-from tt_mujoco.viz import viewer as viewer_mod
-from tt_mujoco.viz.scene import CAMERAS
 
 __all__ = [
     "OUTPUTS",
@@ -282,6 +275,9 @@ def write_outputs(
         # A run that stopped at its first step has one sample: nothing to draw.
         notes.append("figures and video skipped: the run has fewer than 2 samples")
         plots = video = False
+    from tt_mujoco.background import BackgroundCall
+    from tt_mujoco.viz import render
+
     staging = Path(tempfile.mkdtemp(dir=out, prefix=STAGING))  # this run's own
     figures = None
     try:
@@ -366,7 +362,17 @@ def main(argv: list[str] | None = None) -> int:
 
 def _main(argv: list[str] | None) -> int:
     try:
-        invocation = _parse(argv)
+        invocation = _parse(argv)  # --help ends here: the simulation is not imported for it
+    except (BadInputError, ValueError) as err:
+        return _fail(str(err))
+    except OSError as err:  # a name the file system refuses (too long, not encodable, ...)
+        return _file_system_refused(err)
+    from tt_mujoco.sim.build import build
+    from tt_mujoco.sim.probe import check_user_code
+    from tt_mujoco.vehicle import reduced
+    from tt_mujoco.viz import viewer as viewer_mod
+
+    try:
         scenario, args, shown = invocation.scenario, invocation.args, invocation.outputs
         # Everything simulate checks, before an output folder exists; simulate reuses it.
         built = build(scenario)
@@ -385,9 +391,7 @@ def _main(argv: list[str] | None) -> int:
     except (BadInputError, ValueError, reduced.SingularityError) as err:  # OutputError too
         return _fail(str(err))
     except OSError as err:  # a name the file system refuses (too long, not encodable, ...)
-        name = str(err.filename or "")
-        shown = name if len(name) <= 80 else name[:77] + "..."
-        return _fail(f"{shown!r}: {err.strerror}")
+        return _file_system_refused(err)
     except viewer_mod.ViewerUnavailable as err:
         return _fail(str(err))
 
@@ -446,6 +450,12 @@ def _main(argv: list[str] | None) -> int:
     return EXIT_OK
 
 
+def _file_system_refused(err: OSError) -> int:
+    name = str(err.filename or "")
+    shown = name if len(name) <= 80 else name[:77] + "..."
+    return _fail(f"{shown!r}: {err.strerror}")
+
+
 def _abandon(out: Path, created: bool, live, message: str, code: int) -> int:
     """A run that produced no result: close the viewer, remove the folder made for it."""
     if live is not None:
@@ -459,6 +469,8 @@ def _abandon(out: Path, created: bool, live, message: str, code: int) -> int:
 
 def _interrupted(out: Path, created: bool, live) -> int:
     """Ctrl-C or SIGTERM during the simulation: keep the rows computed, say where they are."""
+    from tt_mujoco.sim.checkpoint import read_checkpoint
+
     partial = out / CHECKPOINT_FILE
     try:
         rows = read_checkpoint(partial)
@@ -493,6 +505,8 @@ def steering_shown(s: Scenario) -> str:
 
 def _print_summary(result, out: Path, written, notes) -> None:
 
+    from tt_mujoco.sim import faults
+
     s = result.scenario
     print(
         f"{s.traj} | {s.controller} | {s.target} target | {s.plant} plant | {steering_shown(s)}"
@@ -520,7 +534,7 @@ def _print_summary(result, out: Path, written, notes) -> None:
         if "t_acted" in fault:
             where += f" (t={fault['t_acted']:.3f} s)"
         print(
-            f"fault {fault['kind']} at {where}, until {RECOVERY_S:g} s after its end: "
+            f"fault {fault['kind']} at {where}, until {faults.RECOVERY_S:g} s after its end: "
             f"max|e_v| {w['max_abs_v']:.4g} m/s, max|e_omega| {w['max_abs_omega']:.4g} rad/s, "
             f"max lateral {w['max_lateral']:.4g} m"
         )

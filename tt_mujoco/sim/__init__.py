@@ -19,21 +19,53 @@ nominal model, non-finite numbers or MuJoCo warnings stop the run, which keeps e
 to that point and reports the time and state.
 """
 
+import sys
+import types
+
 from tt_mujoco.defaults import JACKKNIFE_DEG, MAX_SPEED
-from tt_mujoco.sim.build import Build, build
-from tt_mujoco.sim.disturbances import disturbance
-from tt_mujoco.sim.plant import Plant, StopRun
-from tt_mujoco.sim.scenario import (
-    DISTURBANCE_MODES,
-    PLANTS,
-    SCHEMA,
-    TARGETS,
-    Scenario,
-    jackknife_phi_deg,
-)
-from tt_mujoco.sim.simulate import Result, simulate
-from tt_mujoco.sim.stepper import Stepper
-from tt_mujoco.sim.timeseries import COLUMNS
+
+#: Where each name of the package's API is defined: loaded on first use (PEP 562), so that a
+#: command that needs only the options (``--help``, a scenario file's check) does not import
+#: the simulation, MuJoCo included.
+_WHERE = {
+    "Build": "build",
+    "build": "build",
+    "disturbance": "disturbances",
+    "Plant": "plant",
+    "StopRun": "plant",
+    "DISTURBANCE_MODES": "scenario",
+    "PLANTS": "scenario",
+    "SCHEMA": "scenario",
+    "TARGETS": "scenario",
+    "Scenario": "scenario",
+    "jackknife_phi_deg": "scenario",
+    "Result": "simulate",
+    "simulate": "simulate",
+    "Stepper": "stepper",
+    "COLUMNS": "timeseries",
+}
+
+
+def __getattr__(name: str):
+    if name in _WHERE:
+        import importlib
+
+        return getattr(importlib.import_module(f"tt_mujoco.sim.{_WHERE[name]}"), name)
+    raise AttributeError(f"module 'tt_mujoco.sim' has no attribute {name!r}")
+
+
+class _Package(types.ModuleType):
+    """This package: ``build`` and ``simulate`` stay the functions when their modules of the
+    same names are imported (the import system binds a submodule to its package's name)."""
+
+    def __setattr__(self, name: str, value) -> None:
+        if name in _WHERE and isinstance(value, types.ModuleType):
+            return  # the name is the API's: __getattr__ gives the function
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
+
 
 __all__ = [
     "COLUMNS",

@@ -10,6 +10,7 @@ from collections.abc import Mapping
 import mujoco
 import numpy as np
 
+from tt_mujoco.defaults import CAMERAS
 from tt_mujoco.sim.timeseries import COLUMNS
 from tt_mujoco.vehicle.params import Params
 
@@ -31,7 +32,6 @@ __all__ = [
 ]
 
 #: Camera modes of :func:`render_video`.
-CAMERAS = ("follow", "overview")
 
 
 #: Columns a video needs (SI units, radians): the time series' first 14, t to theta_r.
