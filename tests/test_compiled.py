@@ -763,3 +763,26 @@ def test_a_background_compile_that_fails_is_told_once_and_not_retried(monkeypatc
     why = compiled.not_ready()
     assert why.startswith("the background compile of the compiled loop failed (ZeroDivisionError")
     assert str(cache / compiled.COMPILE_LOG) in why and started == []
+
+
+def test_a_run_the_python_loop_takes_sooner_judges_no_cache_during_the_run(monkeypatch, tmp_path):
+    # a single short run neither keys nor hashes the cache while it runs (that cost it a
+    # tenth of its loop): the compile it asks for judges the cache as the process exits
+    monkeypatch.delenv("TT_MUJOCO_COMPILE_NOW", raising=False)
+    monkeypatch.setattr(compiled, "_KERNEL", None)
+    monkeypatch.setattr(compiled, "_EPISODES", 0)
+    asked, judged = [], []
+    monkeypatch.setattr(compiled, "_ask_for_compile", lambda: asked.append(1))
+    monkeypatch.setattr(compiled, "_cached", lambda: judged.append(1) or False)
+    run = simulate(Scenario(traj="circle", duration=3.0))
+    assert "sooner" in run.notes[0] and asked == [1] and judged == []
+    # at exit: a compile that failed for these sources is not tried again
+    started = []
+    monkeypatch.setattr(compiled, "_compile_in_background", lambda: started.append(1))
+    monkeypatch.setattr(compiled, "_cache_dir", lambda: tmp_path)
+    (tmp_path / compiled.COMPILE_FAILED).write_text("ZeroDivisionError: x\n")
+    compiled._compile_at_exit()
+    assert started == [] and judged == []
+    (tmp_path / compiled.COMPILE_FAILED).unlink()
+    compiled._compile_at_exit()
+    assert started == [1] and judged == [1]

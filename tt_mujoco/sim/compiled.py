@@ -169,6 +169,16 @@ def compile_script(lock: Path) -> str:
     )
 
 
+def ask_for_cache() -> None:
+    """For an episode the Python loop runs anyway (:func:`loading_pays`): whether this
+    version's cache is whole is judged as the process exits (:func:`_compile_at_exit`), not
+    during the run (keying the cache reads every source the kernel compiles, and judging it
+    hashes its files: a tenth of a short run), and a background compile fills it if not, so
+    that the next long run finds it."""
+    if _KERNEL is None:
+        _ask_for_compile()
+
+
 def loading_pays(built) -> str | None:
     """None when loading the compiled loop pays for this episode: it is loaded already, the
     process has run an episode before (a sweep's worker, a notebook), the episode is long
@@ -214,8 +224,8 @@ def _ask_for_compile() -> None:
 def _compile_at_exit() -> None:
     """The asked-for compile, unless this process has loaded or found the kernel since."""
     try:
-        if _KERNEL is not None or _cached():
-            return
+        if _KERNEL is not None or compile_failure_of(_cache_dir()) or _cached():
+            return  # loaded, failed for these sources (not tried again), or whole
     except _DamagedCacheError:
         pass  # set aside: compile a fresh one
     _compile_in_background()

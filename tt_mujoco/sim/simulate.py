@@ -101,7 +101,11 @@ def run_episode(stepper: Stepper, controller, progress=None, on_step=None) -> tu
     is told.
     """
     sooner = compiled.loading_pays(stepper.built)  # counts the process's episodes
-    why = compiled.unsupported(stepper.built, controller, on_step) or compiled.not_ready()
+    why = compiled.unsupported(stepper.built, controller, on_step)
+    if why is None and sooner is not None:
+        compiled.ask_for_cache()  # no cache to check: the Python loop runs this one anyway
+    elif why is None:
+        why = compiled.not_ready()
     sooner = sooner if why is None else None
     if why is None and sooner is None:
         try:
