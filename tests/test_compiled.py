@@ -348,12 +348,16 @@ def test_first_use_compiles_in_the_background_and_runs_the_python_loop(monkeypat
     assert compiled.unsupported(built, built.new_controller()) is None  # a query: no compile
     assert started == []
     # the first episode leaves the machine to the run: the compile starts as the process exits
-    assert not compiled.ready() and started == [] and at_exit == [compiled._compile_at_exit]
+    assert (
+        compiled.not_ready() is not None
+        and started == []
+        and at_exit == [compiled._compile_at_exit]
+    )
     at_exit[0]()
     assert started == [1]
     # a process that runs a second episode starts it then, and registers nothing more
     started.clear()
-    assert not compiled.ready() and started == [1] and len(at_exit) == 1
+    assert compiled.not_ready() is not None and started == [1] and len(at_exit) == 1
 
 
 def test_the_compile_asked_at_exit_is_skipped_once_the_kernel_is_there(monkeypatch, tmp_path):
@@ -556,7 +560,7 @@ def test_a_whole_cache_is_ready_without_compiling(monkeypatch, tmp_path):
     _fake_cache(monkeypatch, tmp_path)
     started = []
     monkeypatch.setattr(compiled, "_compile_in_background", lambda: started.append(1))
-    assert compiled.ready() and started == []
+    assert compiled.not_ready() is None and started == []
 
 
 @pytest.mark.parametrize("damage", ["truncate", "garbage_manifest", "moved"])
@@ -608,7 +612,7 @@ def test_a_cache_a_background_compile_is_writing_is_not_set_aside(monkeypatch, t
     # a lock older than the stale age is a compile that died: the folder is judged again
     old = time.time() - compiled.COMPILE_LOCK_STALE_S - 1
     os.utime(cache / compiled.COMPILE_LOCK, (old, old))
-    assert not compiled.ready()
+    assert compiled.not_ready() is not None
     assert not cache.exists() and list(cache.parent.glob(f"{cache.name}.damaged-*"))
 
 

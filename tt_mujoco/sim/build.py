@@ -185,7 +185,13 @@ class Build:
         return EtaScheduler(plant, self.plant_params) if kind == "curvature" else None
 
     def new_controller(self) -> Controller:
-        return self.controller_class.from_setup(self.controller_setup, self.scenario.gains)
+        """A new controller of the scenario's; a user's class's construction is its code, so
+        what it raises there is a :class:`~tt_mujoco.registry.HookError` (bad input)."""
+        make = self.controller_class.from_setup
+        if not is_hook(self.scenario.controller):
+            return make(self.controller_setup, self.scenario.gains)
+        who = f"controller {self.scenario.controller!r}"
+        return call_hook(who, make, self.controller_setup, self.scenario.gains)
 
 
 def drawn_polyline(path, duration: float) -> np.ndarray:
@@ -348,8 +354,5 @@ def build(scenario: Scenario) -> Build:
         relief=relief_of(parse_terrain(scenario.terrain), drawn_polyline(path, duration), plant_p),
     )
     result.new_faults()  # a fault after the end of the run is refused now
-    if is_hook(scenario.controller):  # the user's __init__ runs here: guarded as user code
-        call_hook(f"controller {scenario.controller!r}", result.new_controller)
-    else:
-        result.new_controller()  # bad gains fail before any work
+    result.new_controller()  # bad gains, and a user's __init__ that fails, before any work
     return result

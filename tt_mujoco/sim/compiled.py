@@ -28,7 +28,7 @@ Compiled code is cached on disk under ``$TT_MUJOCO_CACHE`` or ``~/.cache/tt_mujo
 folder keyed by :func:`source_digest` (the interpreter, numba, llvmlite and MuJoCo versions and
 every file the kernel compiles: numba's own cache only watches the file of the function it
 caches). Compiling takes seconds, so it never happens in the user's run: the first episode that
-could run compiled finds no whole cache (:func:`ready`), starts one background process that
+could run compiled finds no whole cache (:func:`not_ready`), starts one background process that
 compiles it, and runs the Python loop (same numbers); later episodes load it, once per process.
 Loading costs about half a second, so a process's first episode, when short
 (:data:`COLD_MIN_STEPS`), runs in the Python loop, which finishes it sooner
@@ -57,7 +57,6 @@ __all__ = [
     "compile_failure",
     "kernel",
     "not_ready",
-    "ready",
     "run_compiled",
     "source_digest",
     "unsupported",
@@ -153,7 +152,7 @@ def compile_script(lock: Path) -> str:
     written beside it (:data:`COMPILE_FAILED`, its traceback on the process's stderr, which is
     :data:`COMPILE_LOG`), and the lock is released either way."""
     return (
-        "import os, pathlib, traceback\n"
+        "import os, pathlib\n"
         "os.nice(19)\n"
         f"lock = pathlib.Path({str(lock)!r})\n"
         "try:\n"
@@ -195,11 +194,6 @@ def loading_pays(built) -> str | None:
         f"{COLD_MIN_STEPS} for which loading the compiled loop pays (the process's next "
         "episode loads it)"
     )
-
-
-def ready() -> bool:
-    """Whether the compiled kernel can run now (:func:`not_ready` says why not)."""
-    return not_ready() is None
 
 
 #: Whether this process has asked for a background compile (see :func:`_ask_for_compile`).
@@ -621,7 +615,7 @@ def _register_helpers(fn, seen=None) -> set:
 
 
 #: The C entry of a plain-number law, written into the cache folder once per law and version
-#: (:func:`_law_entry`), so that numba caches it on disk as it does the kernel: a law's second
+#: (:func:`_compile_law`), so that numba caches it on disk as it does the kernel: a law's second
 #: process loads it instead of compiling it. ``{...}`` are filled in per law.
 _ENTRY_SOURCE = """\
 # The C entry of the plain-number law {name} ({file}), written by tt_mujoco.sim.compiled:
@@ -673,6 +667,7 @@ def _compile_law(cls):
     """The law's C entry, from the cache when a process compiled it before (keyed by
     :func:`_law_digest`), compiled and cached otherwise."""
     import importlib.util
+    import inspect
 
     from numba import njit
 
@@ -696,11 +691,12 @@ def _compile_law(cls):
         "n_gains": len(dtypes["GAINS"]),
         "n_state": len(dtypes["STATE"]),
     }
-    import inspect
-
+    name = f"law_{cls.LAW.__name__}_{_law_digest(cls, helpers)}"
+    module_name = f"tt_mujoco_{name}"
+    if module_name in sys.modules:  # the same law, of another class: compiled already
+        return sys.modules[module_name].entry
     file = inspect.getsourcefile(cls.LAW) or "?"
     source = _ENTRY_SOURCE.format(name=cls.__qualname__, file=file, **sizes)
-    name = f"law_{cls.LAW.__name__}_{_law_digest(cls, helpers)}"
     path = _cache_dir() / "laws" / f"{name}.py"
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -711,9 +707,6 @@ def _compile_law(cls):
 
         path = Path(tempfile.mkdtemp(prefix="tt_mujoco-law-")) / f"{name}.py"
         path.write_text(source)
-    module_name = f"tt_mujoco_{name}"
-    if module_name in sys.modules:
-        return sys.modules[module_name].entry
     spec = importlib.util.spec_from_file_location(module_name, path)
     module = importlib.util.module_from_spec(spec)
     module.__dict__.update(law=law, USER_LAW=k_mod.USER_LAW, **dtypes)

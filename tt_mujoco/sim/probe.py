@@ -35,8 +35,8 @@ def check_user_code(built) -> None:
     s = built.scenario
     if is_hook(s.controller):
         who = controller_label(built)
+        controller = built.new_controller()  # its construction guarded there (HookError)
         try:
-            controller = built.new_controller()
             controller.reset()
             _ = controller.gains, controller.name  # what the run's record reads at its end
         except BaseException as err:

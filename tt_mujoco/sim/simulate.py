@@ -97,27 +97,26 @@ def run_episode(stepper: Stepper, controller, progress=None, on_step=None) -> tu
 
     Returns ``(status, message)``; see :func:`simulate` for ``progress`` and ``on_step``. The
     compiled loop runs the episode where it can; where it cannot, the Python loop runs it (the
-    same numbers) and ``stepper.python_loop_reason`` says why, the one place every fallback
-    is told.
+    same numbers) and ``stepper.loop_note`` says why, the one place every fallback is told.
     """
     sooner = compiled.loading_pays(stepper.built)  # counts the process's episodes
     why = compiled.unsupported(stepper.built, controller, on_step)
     if why is None and sooner is not None:
-        compiled.ask_for_cache()  # no cache to check: the Python loop runs this one anyway
-    elif why is None:
-        why = compiled.not_ready()
-    sooner = sooner if why is None else None
-    if why is None and sooner is None:
-        try:
-            return compiled.run_compiled(stepper, controller, progress)
-        except compiled.Fallback as fallback:
-            why = str(fallback)
-    stepper.python_loop_reason = python_loop_note(why, sooner)
+        compiled.ask_for_cache()  # no cache to judge: the Python loop runs this one anyway
+        stepper.loop_note = python_loop_note(sooner=sooner)
+    else:
+        why = why or compiled.not_ready()
+        if why is None:
+            try:
+                return compiled.run_compiled(stepper, controller, progress)
+            except compiled.Fallback as fallback:
+                why = str(fallback)
+        stepper.loop_note = python_loop_note(why)
     stepper.begin(controller)
     return stepper.run(progress=progress, on_step=on_step)
 
 
-def python_loop_note(slower: str | None, sooner: str | None = None) -> str | None:
+def python_loop_note(slower: str | None = None, sooner: str | None = None) -> str | None:
     """The run's note for an episode the Python loop ran instead of the compiled one: why the
     compiled loop could not run it (``slower``), or why the Python loop is the faster here
     (``sooner``)."""
@@ -287,6 +286,9 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
     metrics["status"] = status
     if stepper.faults is not None:
         metrics["faults"] = faults_mod.fault_report(stepper.faults, ts, measured_against, limit)
+    notes = [stepper.loop_note] if stepper.loop_note else []
+    if built.reversing is not None:
+        notes.append(f"backing up: {REVERSING_DRIVES[built.reversing]}")
     config = {
         "scenario": scenario.to_dict(),
         "nominal_params": built.nominal.to_dict(),
@@ -306,6 +308,5 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
         wall_time_s=wall,
         config=config,
         details=stepper.stop_details,
-        notes=[note for note in (stepper.python_loop_reason,) if note]
-        + ([f"backing up: {REVERSING_DRIVES[built.reversing]}"] if built.reversing else []),
+        notes=notes,
     )

@@ -105,7 +105,7 @@ def _called_back(stepper, made: tuple, kernel) -> tuple:
         if what == closed_loop.HOOK_POSE:
             return path.pose_at(s)
         try:  # the reference pose of a plain-number law: its Python form asks the path itself
-            return getattr(path, "path", path).pose_at(s)
+            return path.path.pose_at(s)
         except BaseException as err:
             if not users_failure(err):
                 raise
@@ -288,7 +288,7 @@ class Stepper:
         self.k = 0
         self.finished = False
         self.stop_details = None  # the traceback of user code that stopped the episode
-        self.python_loop_reason = None  # the note on why the Python loop ran it (run_episode)
+        self.loop_note = None  # why the Python loop ran it, as the run's note (run_episode)
         self._signals: dict[str, np.ndarray] = {}  # what the controller logged, by name
         noise_v, noise_w = b.noise_std
         self._noise = rng.standard_normal(2 * (self.steps + 1)) if noise_v or noise_w else None
