@@ -66,9 +66,10 @@ __all__ = [
 #: process: a short episode gains less than that).
 MIN_STEPS = 2000
 #: Shortest first episode of a process that loads the compiled loop: loading it (numba and the
-#: cached code, about 0.5 s) costs what the Python loop takes for 13,000 to 25,000 control
-#: steps of one trailer on either plant (``benchmarks/bench_cold_start.py``), so a shorter
-#: single run is faster in the Python loop; the process's next episode loads it.
+#: cached code) costs about half a second, more than the Python loop takes for the main run's
+#: 13782 steps of one trailer, so a shorter single run is faster in the Python loop; the
+#: process's next episode loads it. ``benchmarks/bench_cold_start.py`` times both sides of the
+#: line: the main run as chosen against its Python loop, a 40 s run compiled against its own.
 COLD_MIN_STEPS = 25000
 #: Episodes this process has started (:func:`tt_mujoco.sim.simulate.run_episode`).
 _EPISODES = 0
