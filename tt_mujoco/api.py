@@ -24,6 +24,7 @@ from pathlib import Path
 from tt_mujoco.sim import COLUMNS, Result, Scenario
 from tt_mujoco.sim import simulate as _simulate
 from tt_mujoco.sim.timeseries import UNITS, unit_of
+from tt_mujoco.world.builtin import parse_world
 
 __all__ = ["Run", "load_scenario", "simulate"]
 
@@ -89,6 +90,7 @@ class Run:
             self.result.reference_polyline,
             out,
             params=self.scenario.plant_params(),
+            world=parse_world(self.scenario.world),
         )
         return [Path(f) for f in made]
 
@@ -111,6 +113,7 @@ class Run:
                 info=info,
                 outcome=outcome,
                 terrain=self.scenario.terrain,
+                world=self.scenario.world,
             )
         )
 

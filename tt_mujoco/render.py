@@ -105,6 +105,7 @@ def main(argv: list[str] | None = None) -> int:
             info=info,
             outcome=outcome,
             terrain=config.get("scenario", {}).get("terrain", "flat"),
+            world=config.get("scenario", {}).get("world", "none"),
         )
     except (ValueError, FileExistsError, json.JSONDecodeError) as exc:
         return fail(str(exc))

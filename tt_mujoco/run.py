@@ -54,6 +54,7 @@ from tt_mujoco.progress import progress_bar
 from tt_mujoco.schema import Option, Schema, boolean, choice, number
 from tt_mujoco.sim import COLUMNS, SCHEMA, Scenario
 from tt_mujoco.sim.timeseries import UNITS, train_columns, unit_of
+from tt_mujoco.world.builtin import parse_world
 
 __all__ = [
     "OUTPUTS",
@@ -290,6 +291,7 @@ def write_outputs(
                 result.reference_polyline,
                 staging,
                 params=result.scenario.plant_params(),
+                world=parse_world(result.scenario.world),
                 forked=None if video else False,  # nothing to overlap without a video
             )
         if video:
@@ -308,6 +310,7 @@ def write_outputs(
                     info=info,
                     outcome=outcome,
                     terrain=result.scenario.terrain,
+                    world=result.scenario.world,
                 )
                 written.append(publish_new(Path(path), out / "video.mp4"))
             except render.RenderUnavailable as err:  # no GL must not lose the results

@@ -581,7 +581,7 @@ METRICS = Registry("metric")
 #: its parts' reports (no user's metric may take one).
 RUN_KEYS = (
     *("status", "message", "notes", "config", "metric_errors", "reversing"),
-    *("controller", "faults", "terrain", "ground"),
+    *("controller", "faults", "terrain", "ground", "world"),
 )
 #: Built-in metrics that are a word, not a number.
 TEXT_METRICS = ("offtrack_follower",)

@@ -39,6 +39,8 @@ from tt_mujoco.sim.schedule import EtaScheduler, PathEtaScheduler
 from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.vehicle.params import Params, jackknife_phi_deg
 from tt_mujoco.vehicle.path_schedule import PathSchedule, axle_chain, path_schedule
+from tt_mujoco.world.builtin import parse_world
+from tt_mujoco.world.part import check_world
 
 __all__ = ["REVERSING_DRIVES", "Build", "build", "noise_std", "reversing_drive"]
 
@@ -131,16 +133,25 @@ class Build:
     delay_steps: int = 0
     #: The ground's shape (a ramp, a rough ground: :mod:`tt_mujoco.sim.relief`), else None.
     relief: Any = None
+    #: The obstacles and the goal (:mod:`tt_mujoco.world`), else None.
+    world: Any = None
 
-    def new_plant(self, phi0_deg: float | None = None) -> Plant:
-        """A fresh plant in the initial state (``phi0_deg`` overrides the scenario's)."""
+    def initial_phis(self, phi0_deg: float | None = None):
+        """The hitch angles the plant starts with (rad): the scenario's ``phi0_deg`` (or
+        ``phi0_deg``) for hitch 1, and, backing up with the hitch cascade, those that put every
+        axle on the path."""
         s = self.scenario
         phi0 = math.radians(s.phi0_deg if phi0_deg is None else phi0_deg)
         if any(self.initial_hitches):  # backing up: the trailers start on the path ...
             if phi0_deg is None and s.phi0_deg == 0.0:
-                phi0 = self.initial_hitches
-            else:  # ... but for hitch 1 when its angle is given
-                phi0 = (phi0, *self.initial_hitches[1:])
+                return self.initial_hitches
+            return (phi0, *self.initial_hitches[1:])  # ... but for hitch 1 when it is given
+        return phi0
+
+    def new_plant(self, phi0_deg: float | None = None) -> Plant:
+        """A fresh plant in the initial state (``phi0_deg`` overrides the scenario's)."""
+        s = self.scenario
+        phi0 = self.initial_phis(phi0_deg)
         if s.plant == "mujoco":
             wrench = s.disturbance == "wrench"
             terrain = parse_terrain(s.terrain)
@@ -153,6 +164,7 @@ class Build:
                 phi0,
                 gravity,
                 self.relief,
+                self.world,
             )
             patches = parse_patches(s.ground)
             if patches:
@@ -352,7 +364,11 @@ def build(scenario: Scenario) -> Build:
         initial_hitches=_initial_hitches(scenario, path, start_s, plant_p, reversing),
         delay_steps=_delay_steps(scenario, dt, duration),
         relief=relief_of(parse_terrain(scenario.terrain), drawn_polyline(path, duration), plant_p),
+        world=parse_world(scenario.world),
     )
+    phis = result.initial_phis()
+    phis = phis if isinstance(phis, tuple) else (phis,) + (0.0,) * (plant_p.n_trailers - 1)
+    check_world(result.world, plant_p, result.initial_pose, phis)
     result.new_faults()  # a fault after the end of the run is refused now
     result.new_controller()  # bad gains, and a user's __init__ that fails, before any work
     return result

@@ -42,6 +42,7 @@ from tt_mujoco.sim import (
 from tt_mujoco.sim.records import ARCS_PATH, HOOKED_PATH, SPLINE_PATH
 from tt_mujoco.vehicle import path_schedule, reduced, train
 from tt_mujoco.vehicle import steering as steering_math
+from tt_mujoco.world import contact
 
 __all__ = [
     "BORROWING",
@@ -67,7 +68,7 @@ LAWS = tuple(cls.LAW for cls in compiled_laws().values())
 
 RUNNING, FINISHED, BLEW_UP, JACKKNIFE = step.RUNNING, step.FINISHED, step.BLEW_UP, step.JACKKNIFE
 WARNING, LAW_FAILED, SINGULAR = step.WARNING, step.LAW_FAILED, step.SINGULAR
-PAYLOAD, RAISED = step.PAYLOAD, step.RAISED
+PAYLOAD, RAISED, COLLISION = step.PAYLOAD, step.RAISED, step.COLLISION
 LAW_OK, LAW_SINGULAR = base.LAW_OK, base.LAW_SINGULAR
 COS_BETA_MIN = reduced.COS_BETA_MIN
 #: ``law.kind`` of a user's plain-number law, and of a law that Python computes between the
@@ -533,6 +534,27 @@ def _gusts(weather, k, me):
         weather.wrenches[i] = wrenches[i]
 
 
+def _touch(world, k, me, rows, n, stop):
+    """The world's contact check at step ``k``: every unit's pose from the measurement ``me``
+    and the train's ``rows``, their least gap to the obstacles logged in
+    ``world.clearance``; COLLISION (the unit, obstacle and gap in ``stop``) when one touches,
+    else RUNNING."""
+    poses = world.poses
+    poses[0, 0], poses[0, 1], poses[0, 2] = me[0], me[1], me[2]
+    poses[1, 0], poses[1, 1], poses[1, 2] = me[X0], me[Y0], me[THETA0]
+    for i in range(n - 1):
+        row = rows[i]
+        poses[i + 2, 0], poses[i + 2, 1], poses[i + 2, 2] = row[0], row[1], row[2]
+    gap, unit, obstacle = contact.clearance_of(
+        poses, world.boxes, world.polygons, world.sizes, world.circles, world.corners
+    )
+    world.clearance[k] = gap
+    if gap > 0.0:
+        return RUNNING
+    stop.unit, stop.obstacle, stop.gap = unit, obstacle, gap
+    return COLLISION
+
+
 def _model_steered(steering_kind: int, follows_steering: bool) -> bool:
     """Whether the law's nominal model takes the scheduled gains: the plant's steering is
     scheduled (``plant.steering.kind``) and the law follows it (a built-in law's model does)."""
@@ -568,6 +590,11 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
             stop.v, stop.phi, stop.beta, stop.x, stop.y = v, rows[i][3], rows[i][4], x, y
             stop.hitch, stop.eta = i + 2.0, law.nominal_train.trailers[i + 1][2]
             return JACKKNIFE
+    if len(loop.world.sizes):  # a world: no unit may touch an obstacle
+        code = _touch(loop.world, k, me, rows, n, stop)
+        if code != RUNNING:
+            stop.v, stop.x, stop.y = v, x, y
+            return code
     if len(noise):
         v_m = step.noisy(v, lim.noise_v, noise, 2 * k)
         w_m = step.noisy(omega, lim.noise_w, noise, 2 * k + 1)
@@ -789,6 +816,7 @@ BORROWING = (
     _delayed,
     _ground,
     _gusts,
+    _touch,
     _model_steered,
     _has_delay,
 )

@@ -428,6 +428,10 @@ def hand_back(stepper, controller, status, k, episode_records, changes) -> None:
         faults.held[:] = np.asarray(loop.faults.held).tolist()
         faults.payload_rows[:] = np.asarray(loop.faults.payloads).tolist()
         faults.payload_state[:] = np.asarray(loop.faults.payload_state).tolist()
+    if status == step.COLLISION:
+        stop = records.values_of(episode_records[4])
+        unit, obstacle = int(stop["unit"]), int(stop["obstacle"])
+        stepper.collision = (unit, obstacle, k * stepper.dt, stop["gap"])
     if loop.ground.geoms.size:  # one mask per advance: k of them
         stepper.log_ground(loop.ground.masks[:k], loop.ground.arcs)
     if plant.steering.kind:  # a Python law has been told of every change as it came
@@ -473,6 +477,16 @@ def outcome(status, stop_record, stepper, controller, k) -> tuple[str, str]:
         hitch = int(value["hitch"])
         eta = stepper.eta if hitch == 1 else value["eta"]
         return "jackknife", jackknife_message(t, phi, beta, eta, x, y, v, hitch=hitch)
+    if status == step.COLLISION:
+        from tt_mujoco.vehicle.footprint import unit_names
+
+        unit = unit_names(stepper.built.plant_params.n_trailers)[int(value["unit"])]
+        obstacle = stepper.built.world.all_obstacles[int(value["obstacle"])].name
+        return "collision", (
+            f"collision at t={t:.3f} s: the {unit} touched obstacle {obstacle!r} "
+            f"({-1000 * value['gap']:.1f} mm deep; the tractor at x={value['x']:.3f}, "
+            f"y={value['y']:.3f} m)"
+        )
     if status == step.WARNING:
         import mujoco
 

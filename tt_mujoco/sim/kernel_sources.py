@@ -108,6 +108,7 @@ RECORDS = (
     records.WindRecord,
     records.DelayRecord,
     records.GroundRecord,
+    records.WorldRecord,
     wind.DragConstants,
     motors.MotorConstants,
     records.PlantRecord,

@@ -15,7 +15,7 @@ import numpy as np
 
 from tt_mujoco.sim.measure import Layout, Measurement, measure, measure_train
 from tt_mujoco.vehicle import reduced, train
-from tt_mujoco.vehicle.mjcf import VEHICLE_FILE, scene_xml, trailer_suffix, vehicle_xml
+from tt_mujoco.vehicle.mjcf import FLOOR_XML, VEHICLE_FILE, scene_xml, trailer_suffix, vehicle_xml
 from tt_mujoco.vehicle.params import Params
 
 __all__ = ["Vehicle", "compile_model", "layout_of"]
@@ -27,15 +27,25 @@ _COMPILED: dict[tuple[str, str], mujoco.MjModel] = {}
 _COMPILED_MAX = 16
 
 
-def compile_model(p: Params, relief=None) -> mujoco.MjModel:
+def compile_model(p: Params, relief=None, world=None) -> mujoco.MjModel:
     """Compile the scene for ``p`` from the generated XML (no files are read or written), on
-    the ground ``relief`` (:mod:`tt_mujoco.sim.relief`; None: the flat floor).
+    the ground ``relief`` (:mod:`tt_mujoco.sim.relief`; None: the flat floor), among the
+    obstacles of ``world`` (:mod:`tt_mujoco.world`; None: none).
 
     Returns a private copy: callers may change it (faults edit ``body_mass``, the steering
     schedule ``eq_data``) without touching the cached original.
     """
-    xml = vehicle_xml(p, uneven=relief is not None)
-    scene = scene_xml() if relief is None else scene_xml(ground=relief.geoms_xml())
+    obstacles = world is not None and bool(world.all_obstacles)
+    xml = vehicle_xml(p, uneven=relief is not None, footprints=obstacles)
+    assets, geoms = ("", FLOOR_XML) if relief is None else relief.geoms_xml()
+    if obstacles:
+        from tt_mujoco.vehicle.footprint import footprints
+        from tt_mujoco.world.mjcf import obstacles_xml
+
+        polygons = world.polygons(footprints(p)[-1])
+        more = obstacles_xml(polygons, [o.name for o in world.all_obstacles])
+        assets, geoms = "\n    ".join(filter(None, (assets, more[0]))), f"{geoms}\n    {more[1]}"
+    scene = scene_xml(ground=(assets, geoms))
     key = (xml, scene)
     model = _COMPILED.get(key)
     if model is None:
@@ -127,12 +137,14 @@ class Vehicle:
         Parameters the MJCF is built from (the *plant's* parameters).
     relief : RampRelief or RoughRelief, optional
         The ground's shape (:mod:`tt_mujoco.sim.relief`): the vehicle is placed resting on it.
+    world : World, optional
+        Obstacles (:mod:`tt_mujoco.world`), collision geoms of the scene.
     """
 
-    def __init__(self, params: Params, relief=None):
+    def __init__(self, params: Params, relief=None, world=None):
         self.params = params
         self.relief = relief
-        self.model = compile_model(params, relief)
+        self.model = compile_model(params, relief, world)
         self.data = mujoco.MjData(self.model)
         self.layout = layout_of(self.model, params)
         self._settled_height = None

@@ -68,6 +68,8 @@ class MujocoPlant(Plant):
         keeps the model's flat-ground gravity.
     relief : RampRelief or RoughRelief, optional
         The ground's shape (:mod:`tt_mujoco.sim.relief`), the vehicle resting on it.
+    world : World, optional
+        The obstacles (:mod:`tt_mujoco.world`), collision geoms of the scene.
     """
 
     name = "mujoco"
@@ -82,8 +84,9 @@ class MujocoPlant(Plant):
         phi0: float = 0.0,
         gravity=None,
         relief=None,
+        world=None,
     ):
-        self.vehicle = Vehicle(params, relief)
+        self.vehicle = Vehicle(params, relief, world)
         if gravity is not None:  # the model is the vehicle's own copy (physics.compile_model)
             self.vehicle.model.opt.gravity[:] = gravity
         self.vehicle.set_state(x=pose[0], y=pose[1], theta=pose[2], phi=phi0, v=v_init)

@@ -45,6 +45,7 @@ __all__ = [
     "SteeringRecord",
     "TargetRecord",
     "WindRecord",
+    "WorldRecord",
     "interpreted",
     "new_record",
     "record_dtype",
@@ -90,6 +91,8 @@ STOP_FIELDS = (
     *("v", "phi", "beta", "x", "y", "eta", "hitch", "warning", "law_status"),
     *("g11", "g12", "g21", "g22", "u1", "u2"),
     *("payloads", "T_r", "T_l", "dist_r", "dist_l"),
+    # a collision: the unit (0: the tractor), the obstacle and how deep they overlap (m)
+    *("unit", "obstacle", "gap"),
     # 1 once Python code the kernel called back (a law, a path, a disturbance) raised: the step
     # stops there, and the kernel's caller raises it
     "raised",
@@ -423,6 +426,23 @@ class GroundRecord(NamedTuple):
     masks: np.ndarray
 
 
+class WorldRecord(NamedTuple):
+    """A world's obstacles and the units' footprints (:mod:`tt_mujoco.world.part`)."""
+
+    #: every unit's footprint (tractor first: N + 1 rows of rear, front, half width) and, as the
+    #: step measures them, their poses (x, y, heading); a unit's corners (4 x 2, scratch)
+    boxes: np.ndarray
+    poses: np.ndarray
+    corners: np.ndarray
+    #: the obstacles (empty: no world): their corners (M x V x 2, counter-clockwise, each
+    #: ``sizes[o]`` of them) and the circles around them (M x (x, y, radius))
+    polygons: np.ndarray
+    sizes: np.ndarray
+    circles: np.ndarray
+    #: per control step, the least gap between a unit and an obstacle (m)
+    clearance: np.ndarray
+
+
 class LoopRecord(NamedTuple):
     """The episode's constants and its noise."""
 
@@ -447,6 +467,7 @@ class LoopRecord(NamedTuple):
     wind: WindRecord
     delay: DelayRecord
     ground: GroundRecord
+    world: WorldRecord
     #: whether the disturbance is a user's, ``disturbance_hook``: ``t -> (a_v, a_w)`` with its
     #: checks (else None: the paper's); the kernel's record holds a C function that calls it
     #: back and writes what it computed into ``hook_out``

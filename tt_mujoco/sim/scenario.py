@@ -94,6 +94,13 @@ def _spec(parse):
     return convert
 
 
+def _world(value, label):
+    from tt_mujoco.world.builtin import parse_world
+
+    parse_world(value)  # a WorldError (a ValueError) naming what is wrong
+    return value.strip()
+
+
 def _controller_names() -> str:
     from tt_mujoco.controllers import CONTROLLERS  # the registry as it is when asked
 
@@ -532,6 +539,17 @@ class Scenario:
         metavar="band:S0:S1:MU|rect:X0:Y0:X1:Y1:MU",
     )
 
+    #: The obstacles and the goal (:mod:`tt_mujoco.world`): ``"none"``, a named world
+    #: (:data:`tt_mujoco.world.builtin.WORLDS`) or a world file ``path/to/world.toml``. A
+    #: unit that touches an obstacle stops the run (status "collision", exit code 3).
+    world: str = option(
+        "none",
+        _world,
+        "obstacles and a goal: none, a named world (loading_bay, alley, yard) or a world file "
+        "(TOML); a unit touching an obstacle stops the run (exit code 3)",
+        metavar="none|NAME|FILE.toml",
+    )
+
     def __post_init__(self):
         # The shorthands every interface accepts, written into the fields they stand for.
         if isinstance(self.eta, str) and self.eta.strip().lower() in ETA_WORDS:
@@ -595,6 +613,11 @@ class Scenario:
             raise ValueError(
                 f"terrain={self.terrain!r} with plant={self.plant!r} is not allowed: the reduced "
                 "plant has flat ground only; use plant='mujoco'"
+            )
+        if self.world != "none" and not parse_terrain(self.terrain).flat:
+            raise ValueError(
+                f"world={self.world!r} with terrain={self.terrain!r} is not allowed: a world's "
+                "obstacles stand on flat ground; use terrain='flat'"
             )
         self.nominal_params()  # the trailers' count and tables, checked by Params
         self._check_phi0()

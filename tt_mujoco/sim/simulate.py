@@ -26,6 +26,7 @@ from tt_mujoco.sim.relief import RampRelief
 from tt_mujoco.sim.scenario import Scenario
 from tt_mujoco.sim.stepper import Stepper
 from tt_mujoco.sim.terrain import parse_terrain
+from tt_mujoco.world.part import world_report
 
 __all__ = ["Result", "simulate"]
 
@@ -275,6 +276,10 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
         }
     if scenario.ground and len(ts["t"]):
         metrics["ground"] = ground_report(parse_patches(scenario.ground), stepper.ground_masks, ts)
+    if built.world is not None:
+        metrics["world"] = world_report(
+            built.world, built.plant_params, ts, stepper.world_clearance, stepper.collision
+        )
     report, error = controller_report(controller)
     if report:
         metrics["controller"] = report

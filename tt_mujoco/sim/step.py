@@ -12,6 +12,7 @@ import math
 
 __all__ = [
     "BLEW_UP",
+    "COLLISION",
     "FINISHED",
     "JACKKNIFE",
     "LAW_FAILED",
@@ -30,8 +31,10 @@ __all__ = [
 #: How a stretch of steps ended: still running, the episode's end, or why it stopped; or
 #: PAYLOAD: the reduced plant's constants change before this step's advance (a payload fault),
 #: which the caller applies before it advances the step and goes on; or RAISED: Python code the
-#: kernel called back raised (``stop.raised``), which the kernel's caller raises.
+#: kernel called back raised (``stop.raised``), which the kernel's caller raises; or
+#: COLLISION: a unit touched an obstacle of the world (:mod:`tt_mujoco.world.contact`).
 RUNNING, FINISHED, BLEW_UP, JACKKNIFE, WARNING, LAW_FAILED, SINGULAR, PAYLOAD, RAISED = range(9)
+COLLISION = 9
 
 
 def stop_code(x: float, v: float, omega: float, phi: float, beta: float, limits) -> int:

@@ -49,6 +49,7 @@ from tt_mujoco.sim.scenario import jackknife_phi_deg
 from tt_mujoco.sim.step import FINISHED, PAYLOAD, RUNNING, SINGULAR, WARNING
 from tt_mujoco.sim.timeseries import LOOP_COLUMNS, assemble_columns, train_columns
 from tt_mujoco.sim.wind import DragConstants, parse_wind
+from tt_mujoco.world.part import world_record
 
 __all__ = ["CHECKPOINT_COLUMNS", "Stepper"]
 
@@ -283,6 +284,8 @@ class Stepper:
             DcMotors(b.plant_params, b.control_dt) if b.scenario.actuator == "dc_motor" else None
         )
         self._ground_masks = [] if b.scenario.ground else None  # the patches under the wheels
+        self._world = world_record(b.world, b.plant_params, self.steps)
+        self.collision = None  # (unit, obstacle, t, gap) of the contact that stopped the episode
         self.scheduler = b.new_scheduler(self.plant)
         b.target.reset()
         self.k = 0
@@ -343,6 +346,7 @@ class Stepper:
                 seen=np.zeros((depth, 3)),
             ),
             ground=self._ground_record(),
+            world=self._world,
             hooked_disturbance=episode.users_disturbance(self.built),
             disturbance_hook=self._disturbance_hook(),
             hook_out=np.zeros(2),
@@ -647,6 +651,12 @@ class Stepper:
         if self.scheduler is not None:
             return self.scheduler.etas
         return self.built.plant_params.etas
+
+    @property
+    def world_clearance(self) -> np.ndarray:
+        """Per control step, the least gap between a unit and the world's obstacles (m; inf
+        for the steps not run, empty without obstacles)."""
+        return self._world.clearance
 
     @property
     def ground_masks(self) -> list[int]:

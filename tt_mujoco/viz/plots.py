@@ -133,9 +133,37 @@ def _train(c: dict) -> list[tuple[int, str]]:
 
 
 # --- figures of one run ---------------------------------------------------------------------------
-def _path_figure(c: dict, ref: np.ndarray) -> Figure:
+def _draw_world(ax, world, params: Params) -> None:
+    """A world's obstacles (grey) and its goal: the last trailer's footprint there, dashed."""
+    from matplotlib.patches import Polygon
+
+    from tt_mujoco.vehicle.footprint import footprints
+    from tt_mujoco.world.world import rectangle
+
+    boxes = footprints(params)
+    for i, polygon in enumerate(world.polygons(boxes[-1])):
+        label = "obstacle" if i == 0 else None
+        ax.add_patch(Polygon(polygon, closed=True, fc="0.6", ec="0.3", lw=0.8, label=label))
+    goal = world.goal
+    if goal is not None:
+        heading = np.radians(goal.heading_deg)
+        corners = rectangle(goal.x, goal.y, heading, *boxes[-1])
+        ax.add_patch(Polygon(corners, closed=True, fill=False, ec="tab:green", ls="--", lw=1.2))
+        ax.plot(goal.x, goal.y, "*", color="tab:green", ms=10, label="goal (last axle)")
+        length = boxes[-1][1]
+        ax.annotate(
+            "",
+            xy=(goal.x + length * np.cos(heading), goal.y + length * np.sin(heading)),
+            xytext=(goal.x, goal.y),
+            arrowprops={"arrowstyle": "->", "color": "tab:green"},
+        )
+
+
+def _path_figure(c: dict, ref: np.ndarray, world=None, params: Params | None = None) -> Figure:
     fig = Figure(figsize=(7, 6), layout="constrained")
     ax = fig.add_subplot()
+    if world is not None:
+        _draw_world(ax, world, Params() if params is None else params)
     ax.plot(ref[:, 0], ref[:, 1], "--", color=REFERENCE_COLOR, lw=1.2, label="reference path")
     ax.plot(c["x"], c["y"], color=TRACTOR_COLOR, lw=1.6, label="tractor P")
     ax.plot(c["x0"], c["y0"], color=TRAILER_COLOR, lw=1.2, label="trailer P0")
@@ -255,7 +283,9 @@ def _articulation_figure(c: dict, params: Params) -> Figure:
     return fig
 
 
-def plot_run(ts: Mapping, reference_polyline, out_dir, params: Params | None = None) -> list[Path]:
+def plot_run(
+    ts: Mapping, reference_polyline, out_dir, params: Params | None = None, world=None
+) -> list[Path]:
     """Write the run's figures (:data:`FIGURES`) into ``out_dir`` (created if missing).
 
     - ``path.png``: reference path, tractor P and trailer P0, equal axes, start (circle) and
@@ -274,6 +304,8 @@ def plot_run(ts: Mapping, reference_polyline, out_dir, params: Params | None = N
     out_dir : str or Path
     params : Params, optional
         The run's parameters (torque limit, eta); ``Params()`` if not given.
+    world : World, optional
+        The run's obstacles and goal (:mod:`tt_mujoco.world`), drawn in ``path.png``.
 
     Returns
     -------
@@ -298,7 +330,7 @@ def plot_run(ts: Mapping, reference_polyline, out_dir, params: Params | None = N
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     figures = (
-        _path_figure(c, ref),
+        _path_figure(c, ref, world, p),
         _errors_figure(c, err),
         _torques_figure(c, p.torque_limit),
         _articulation_figure(c, p),

@@ -51,6 +51,7 @@ from tt_mujoco.viz.scene import (
     trailer_wheel_angles,
     validated_columns,
 )
+from tt_mujoco.world.builtin import parse_world
 
 __all__ = [
     "CAMERAS",
@@ -233,6 +234,8 @@ class RunRenderer:
         turned from the plane's frame, where the run is computed, into the world's; a ramp or
         a rough ground is placed along ``reference_polyline`` as the run placed it, the
         vehicle resting on it in every frame.
+    world : str
+        The run's obstacles (``Scenario.world``: :mod:`tt_mujoco.world`), drawn in the scene.
     """
 
     def __init__(
@@ -246,6 +249,7 @@ class RunRenderer:
         camera: str = "follow",
         info: str = "",
         terrain: str = "flat",
+        world: str = "none",
     ):
         _check_video_args(width, height, fps, camera)
         self.info = info
@@ -269,7 +273,7 @@ class RunRenderer:
         self.params = params
         #: A ramp or a rough ground, placed along the run's reference as the run placed it.
         self.relief = relief_of(ground, polyline, params) if len(polyline) > 1 else None
-        self.vehicle = Vehicle(params, self.relief)
+        self.vehicle = Vehicle(params, self.relief, parse_world(world))
         self.model = self.vehicle.model
         self.times, self.index = frame_schedule(self.cols["t"], fps)
         self.n_frames = len(self.times)
@@ -577,6 +581,7 @@ def render_video(
     info: str = "",
     outcome: tuple[str, list[str]] | None = None,
     terrain: str = "flat",
+    world: str = "none",
 ) -> Path:
     """Render a run to an H.264 MP4 (see :class:`RunRenderer` for what is drawn).
 
@@ -586,7 +591,7 @@ def render_video(
 
     Parameters
     ----------
-    ts, params, reference_polyline, width, height, fps, camera, terrain
+    ts, params, reference_polyline, width, height, fps, camera, terrain, world
         As for :class:`RunRenderer`.
     out_path : str or Path
         The ``.mp4`` to write, in an existing folder; never overwritten.
@@ -630,7 +635,7 @@ def render_video(
 
     with (
         RunRenderer(
-            ts, params, reference_polyline, width, height, fps, camera, info, terrain
+            ts, params, reference_polyline, width, height, fps, camera, info, terrain, world
         ) as renderer,
         temporary_beside(out, suffix=".tmp.mp4") as tmp,
     ):
