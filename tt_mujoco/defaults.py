@@ -50,3 +50,8 @@ TIME_LIMIT_S = 3600.0
 
 #: The video's cameras (``--camera``): one that follows the tractor, one over the whole run.
 CAMERAS = ("follow", "overview")
+
+#: The along-track loop's gain on a planned path (1/s, ``Scenario.along_track_gain``): an
+#: along-track error decays with a time constant of 1 s, well inside the speed loop's (ISMC-STA
+#: lambda = 6 1/s), so the loops do not fight; the run ends where its path does.
+DOCKING_GAIN = 1.0

@@ -57,6 +57,7 @@ __all__ = [
     "Target",
     "TargetSetup",
     "make_target",
+    "target_on",
 ]
 
 #: Target kinds accepted by :func:`make_target`.
@@ -544,6 +545,17 @@ _CYCLOID_SPEEDS = ("paper", "static", "dynamic")
 _STARTS = ("on_path", "paper")
 
 
+def target_on(path, kind: str = "dynamic", duration: float | None = None, **ramp) -> TargetSetup:
+    """The target on ``path`` (its stations' speeds, else the ramp profile over its length
+    with ``ramp``'s ``cruise`` and ``ramp_time``) and its initial pose."""
+    if path.station_speeds is not None:
+        profile = StationSpeed(*path.station_speeds)
+    else:
+        profile = RampSpeed(path.length, **ramp)
+    target_cls = DynamicTarget if kind == "dynamic" else StaticTarget
+    return TargetSetup(path, target_cls(path, profile, duration), path.initial_pose)
+
+
 def make_target(
     path_name_or_csv: str, kind: str = "dynamic", duration: float | None = None, **kw
 ) -> TargetSetup:
@@ -603,12 +615,7 @@ def make_target(
         R = positive_number("R", kw.get("R", 1.0))
         path = circle(R, length=max(2.0 * math.pi * R, profile.total_distance))
     else:  # s_curve, CSV files, registered and hooked paths: ramp profile unless given speeds
-        path = get_path(text, **kw)
-        if path.station_speeds is not None:
-            profile = StationSpeed(*path.station_speeds)
-        else:
-            profile = RampSpeed(path.length, **ramp)
-
+        return target_on(get_path(text, **kw), kind, duration, **ramp)
     target_cls = DynamicTarget if kind == "dynamic" else StaticTarget
     target = target_cls(path, profile, duration)
     return TargetSetup(path, target, path.initial_pose)

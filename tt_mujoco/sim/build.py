@@ -9,6 +9,7 @@ go through it, so an option means the same everywhere and bad input fails the sa
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -23,10 +24,10 @@ from tt_mujoco.controllers import (
     reduced_model,
 )
 from tt_mujoco.controllers.backing import HitchCascade
-from tt_mujoco.defaults import MAX_DURATION, MAX_PHYSICS_STEPS, MAX_SPEED
+from tt_mujoco.defaults import DOCKING_GAIN, MAX_DURATION, MAX_PHYSICS_STEPS, MAX_SPEED
 from tt_mujoco.reference.feedback import PathFeedback
 from tt_mujoco.reference.reverse import ReverseTarget
-from tt_mujoco.reference.targets import make_target
+from tt_mujoco.reference.targets import make_target, target_on
 from tt_mujoco.registry import call_hook, is_hook
 from tt_mujoco.sim.disturbances import make_disturbance
 from tt_mujoco.sim.faults import FaultSchedule, parse_faults
@@ -41,6 +42,7 @@ from tt_mujoco.vehicle.params import Params, jackknife_phi_deg
 from tt_mujoco.vehicle.path_schedule import PathSchedule, axle_chain, path_schedule
 from tt_mujoco.world.builtin import parse_world
 from tt_mujoco.world.part import check_world
+from tt_mujoco.world.plan import PLAN, planned
 
 __all__ = ["REVERSING_DRIVES", "Build", "build", "noise_std", "reversing_drive"]
 
@@ -135,6 +137,10 @@ class Build:
     relief: Any = None
     #: The obstacles and the goal (:mod:`tt_mujoco.world`), else None.
     world: Any = None
+    #: The planned path (``traj="plan"``: :class:`tt_mujoco.world.plan.Plan`), else None.
+    plan: Any = None
+    #: The along-track loop's gain (1/s; ``Scenario.along_track_gain`` resolved).
+    along_track_gain: float = 0.0
 
     def initial_phis(self, phi0_deg: float | None = None):
         """The hitch angles the plant starts with (rad): the scenario's ``phi0_deg`` (or
@@ -212,6 +218,13 @@ def drawn_polyline(path, duration: float) -> np.ndarray:
     R = 1e4 m on a 1 s run is a 20 m arc, not 63 km of polyline. Every run keeps it (its
     ``reference_path.parquet``); the ground's shapes are placed along it."""
     return path.dense(length=min(path.length, MAX_SPEED * duration))
+
+
+def _along_track_gain(scenario: Scenario) -> float:
+    """``Scenario.along_track_gain``, its default resolved: on for a planned path."""
+    if scenario.along_track_gain is not None:
+        return float(scenario.along_track_gain)
+    return DOCKING_GAIN if scenario.traj == PLAN else 0.0
 
 
 def _delay_steps(scenario: Scenario, dt: float, duration: float) -> int:
@@ -295,13 +308,23 @@ def build(scenario: Scenario) -> Build:
             f"path driving forward only (these back up: {backing})"
         )
     reversing = reversing_drive(scenario, cls)
-    path, target, pose = make_target(
-        scenario.traj,
-        kind=scenario.target,
-        duration=scenario.duration,
-        start=scenario.start,
-        **scenario.path_options,
-    )
+    world = parse_world(scenario.world)
+    plan = None
+    if scenario.traj == PLAN:
+        if world is None:
+            raise ValueError("traj='plan' is not allowed without a world: give --world")
+        deadline = time.monotonic() + scenario.time_limit_s
+        plan = planned(world, plant_p, scenario.seed, bool(scenario.reverse), deadline)
+        ramp = {k: v for k, v in scenario.path_options.items() if k in ("cruise", "ramp_time")}
+        path, target, pose = target_on(plan.path, scenario.target, scenario.duration, **ramp)
+    else:
+        path, target, pose = make_target(
+            scenario.traj,
+            kind=scenario.target,
+            duration=scenario.duration,
+            start=scenario.start,
+            **scenario.path_options,
+        )
     duration = float(target.duration)
     _check_size(scenario, duration)
     start_s = 0.0
@@ -364,7 +387,9 @@ def build(scenario: Scenario) -> Build:
         initial_hitches=_initial_hitches(scenario, path, start_s, plant_p, reversing),
         delay_steps=_delay_steps(scenario, dt, duration),
         relief=relief_of(parse_terrain(scenario.terrain), drawn_polyline(path, duration), plant_p),
-        world=parse_world(scenario.world),
+        world=world,
+        plan=plan,
+        along_track_gain=_along_track_gain(scenario),
     )
     phis = result.initial_phis()
     phis = phis if isinstance(phis, tuple) else (phis,) + (0.0,) * (plant_p.n_trailers - 1)

@@ -287,12 +287,17 @@ def _update_target(target, k, v_m, dt, pose):
         omega_d, omega_d_dot = targets.yaw_rate_targets(kappa, rate, v_ref, a_ref)
     state.kappa = kappa
     state.omega_ref = omega_d
-    if target.feedback:
+    if target.feedback or target.along_gain > 0.0:
         s_near, e_y, e_psi = feedback.path_errors_of(
             target, state.s_near, pose[0], pose[1], pose[2]
         )
         state.s_near, state.e_y, state.e_psi = s_near, e_y, e_psi
-        state.kappa_near = path_at(target, s_near)[0]
+    if target.along_gain > 0.0:  # where the profile puts the tractor, less where it is
+        nominal = target.s_end - s_ref if target.reverse else s_ref
+        v_ref += target.along_gain * (nominal - state.s_near)
+    if target.feedback:
+        state.kappa_near = path_at(target, state.s_near)[0]
+        e_y, e_psi = state.e_y, state.e_psi
         omega_d, omega_d_dot = feedback.feedback_of(
             target.feedback_gains,
             (omega_d, a_ref, omega_d_dot),

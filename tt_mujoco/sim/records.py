@@ -336,6 +336,8 @@ class TargetRecord(NamedTuple):
     #: reversing (:class:`~tt_mujoco.reference.reverse.ReverseTarget`) from arc length s_end
     reverse: bool
     s_end: float
+    #: the along-track loop's gain k_s (1/s; 0: none): v_d gains k_s (s_nominal - s_near)
+    along_gain: float
     #: whether the hitch cascade sets omega_d (:class:`~tt_mujoco.controllers.backing.
     #: HitchCascade`), its constants (arrays), the hitches' wanted angles and scratch rates
     cascade: bool

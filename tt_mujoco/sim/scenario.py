@@ -110,7 +110,7 @@ def _controller_names() -> str:
 def _path_names() -> str:
     from tt_mujoco.reference.paths import PATHS  # the registry as it is when asked
 
-    return "{" + ",".join((*PATHS, "PATH.csv", "HOOK")) + "}"
+    return "{" + ",".join((*PATHS, "plan", "PATH.csv", "HOOK")) + "}"
 
 
 def _controller(value, label):
@@ -226,8 +226,9 @@ class Scenario:
     traj: str = option(
         "s_curve",
         text,
-        "reference path: cycloid, s_curve, circle, a CSV file with header x,y[,v], or a hook "
-        "package.module:NAME / path/to/file.py:NAME (a ReferencePath or a factory)",
+        "reference path: cycloid, s_curve, circle, plan (planned from the --world's start to "
+        "its goal), a CSV file with header x,y[,v], or a hook package.module:NAME / "
+        "path/to/file.py:NAME (a ReferencePath or a factory)",
         file=True,
         metavar=_path_names,
     )
@@ -539,6 +540,18 @@ class Scenario:
         metavar="band:S0:S1:MU|rect:X0:Y0:X1:Y1:MU",
     )
 
+    #: The along-track loop's gain k_s (1/s): the speed target gains ``k_s (s_nominal(t) -
+    #: s*)``, s* the tractor's nearest path point and s_nominal(t) where the speed profile
+    #: puts it, so that the run ends where its path does (docs/worlds.md). 0: none, the
+    #: paper's; None: :data:`tt_mujoco.defaults.DOCKING_GAIN` on a planned path, else 0.
+    along_track_gain: float | None = option(
+        None,
+        number(0, optional=True),
+        "gain of the along-track loop (1/s): the speed target corrected toward where the "
+        "speed profile puts the tractor on its path; default: on for --traj plan, else off",
+        unit="1/s",
+        metavar="K",
+    )
     #: The obstacles and the goal (:mod:`tt_mujoco.world`): ``"none"``, a named world
     #: (:data:`tt_mujoco.world.builtin.WORLDS`) or a world file ``path/to/world.toml``. A
     #: unit that touches an obstacle stops the run (status "collision", exit code 3).

@@ -280,6 +280,8 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
         metrics["world"] = world_report(
             built.world, built.plant_params, ts, stepper.world_clearance, stepper.collision
         )
+        if built.plan is not None:
+            metrics["world"]["plan"] = built.plan.report()
     report, error = controller_report(controller)
     if report:
         metrics["controller"] = report

@@ -32,6 +32,7 @@ WORLDS = {
     "loading_bay": {
         "description": "a building's front with one bay to back the last trailer into",
         "bounds": [-3.0, 7.5, -2.0, 3.5],
+        "start": {"x": [0.0, 7.0], "y": [-1.5, 0.3], "heading_deg": [-180.0, 180.0]},
         "goal": {
             "x": 4.0,
             "y": 2.0,
@@ -46,6 +47,7 @@ WORLDS = {
     "alley": {
         "description": "a corridor 1.2 m wide turning 90 deg left, ending in a dock",
         "bounds": [-3.0, 7.0, -1.0, 5.0],
+        "start": {"x": [-1.0, 1.0], "y": [-0.05, 0.05], "heading_deg": [175.0, 185.0]},
         "goal": {"x": 5.6, "y": 4.0, "heading_deg": -90.0},
         "obstacle": [
             _wall("alley south wall", [-3.0, -0.625], [6.225, -0.625]),
@@ -58,6 +60,7 @@ WORLDS = {
     "yard": {
         "description": "an open yard with a row of parked trailers and one free slot",
         "bounds": [-3.0, 8.0, -3.0, 4.0],
+        "start": {"x": [0.0, 7.0], "y": [-2.5, 0.5], "heading_deg": [-180.0, 180.0]},
         "goal": {"x": 3.6, "y": 3.0, "heading_deg": -90.0},
         "obstacle": [
             _parked("parked trailer 1", 2.0, 3.0, -90.0),

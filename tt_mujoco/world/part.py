@@ -22,7 +22,14 @@ from tt_mujoco.vehicle.reduced import hitch_and_axle
 from tt_mujoco.world import contact
 from tt_mujoco.world.world import World, WorldError
 
-__all__ = ["check_world", "no_world_record", "unit_poses", "world_record", "world_report"]
+__all__ = [
+    "check_world",
+    "no_world_record",
+    "start_problem",
+    "unit_poses",
+    "world_record",
+    "world_report",
+]
 
 
 def no_world_record(n_units: int = 2) -> WorldRecord:
@@ -95,27 +102,38 @@ def _outside(bounds, points) -> bool:
     )
 
 
+def start_problem(world: World, p: Params, pose, hitches, margin: float = 0.0) -> str | None:
+    """Why the train of ``p`` cannot start in ``world`` with the tractor at ``pose`` and
+    ``hitches`` (a unit's axle outside the bounds, or a unit within ``margin`` of an
+    obstacle), or None."""
+    start = unit_poses(pose, hitches, p)
+    if world.bounds is not None and _outside(world.bounds, start[:, :2]):
+        return (
+            f"the start is not allowed: a unit's axle lies outside world {world.name!r}'s "
+            f"bounds {list(world.bounds)}"
+        )
+    obstacles = world.all_obstacles
+    gap, unit, obstacle = _first_touch(world, p, start, range(p.n_trailers + 1))
+    if obstacles and gap <= margin:
+        where = "stands on" if gap <= 0.0 else f"comes within {margin:g} m of"
+        return (
+            f"the start is not allowed: the {unit_names(p.n_trailers)[unit]} {where} obstacle "
+            f"{obstacles[obstacle].name!r} of world {world.name!r} (the run starts with the "
+            f"tractor at x={pose[0]:g}, y={pose[1]:g} m, heading {math.degrees(pose[2]):g} deg)"
+        )
+    return None
+
+
 def check_world(world: World | None, p: Params, pose, hitches) -> None:
     """Raise a :class:`WorldError` when ``world`` cannot be driven by vehicle ``p`` starting at
     ``pose`` with ``hitches``: a bay narrower than the last unit, a goal or a start on an
     obstacle or outside the bounds."""
     if world is None:
         return
-    boxes, names = footprints(p), unit_names(p.n_trailers)
-    obstacles = world.all_obstacles
-    start = unit_poses(pose, hitches, p)
-    if world.bounds is not None and _outside(world.bounds, start[:, :2]):
-        raise WorldError(
-            f"the start is not allowed: a unit's axle lies outside world {world.name!r}'s "
-            f"bounds {list(world.bounds)}"
-        )
-    gap, unit, obstacle = _first_touch(world, p, start, range(len(boxes)))
-    if obstacles and gap <= 0.0:
-        raise WorldError(
-            f"the start is not allowed: the {names[unit]} stands on obstacle "
-            f"{obstacles[obstacle].name!r} of world {world.name!r} (the run starts with the "
-            f"tractor at x={pose[0]:g}, y={pose[1]:g} m, heading {math.degrees(pose[2]):g} deg)"
-        )
+    problem = start_problem(world, p, pose, hitches)
+    if problem is not None:
+        raise WorldError(problem)
+    boxes, obstacles = footprints(p), world.all_obstacles
     goal = world.goal
     if goal is None:
         return

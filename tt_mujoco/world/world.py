@@ -14,6 +14,11 @@ coordinates are the run's (the path's frame, metres, headings in degrees in the 
     heading_tolerance_deg = 2.8648       # deg (default: 0.05 rad)
     bay = {width = 0.5, depth = 1.2, back = 0.3, wall = 0.05}   # the slot's walls (optional)
 
+    [start]                              # where a planned run starts (--traj plan):
+    x = [0.0, 7.0]                       # the tractor's axle: a number, or a range to draw
+    y = [-1.5, 0.2]                      # from with the run's seed
+    heading_deg = [-180.0, 180.0]        # the train straight behind it
+
     [[obstacle]]
     kind = "box"                         # x, y, length, width, heading_deg (default 0)
     [[obstacle]]
@@ -39,7 +44,16 @@ import numpy as np
 
 from tt_mujoco.world import contact
 
-__all__ = ["Bay", "Goal", "Obstacle", "World", "WorldError", "convex_ccw", "world_from_table"]
+__all__ = [
+    "Bay",
+    "Goal",
+    "Obstacle",
+    "Start",
+    "World",
+    "WorldError",
+    "convex_ccw",
+    "world_from_table",
+]
 
 #: A goal's default tolerances: the last axle within 1 cm and 0.05 rad of the goal pose.
 POSITION_TOLERANCE, HEADING_TOLERANCE_DEG = 0.01, math.degrees(0.05)
@@ -50,7 +64,8 @@ KINDS = {
     "polygon": (("points",), ()),
     "parked_trailer": (("x", "y"), ("heading_deg",)),
 }
-_TOP = ("name", "description", "bounds", "goal", "obstacle")
+_TOP = ("name", "description", "bounds", "start", "goal", "obstacle")
+_START = ("x", "y", "heading_deg")
 _GOAL = ("x", "y", "heading_deg", "position_tolerance", "heading_tolerance_deg", "bay")
 _BAY = ("width", "depth", "back", "wall")
 
@@ -181,14 +196,40 @@ class Goal:
 
 
 @dataclass(frozen=True)
+class Start:
+    """Where a planned run starts: the tractor's axle ``x``, ``y`` (m) and ``heading_deg``,
+    each a value or a ``(low, high)`` range drawn from uniformly."""
+
+    x: float | tuple[float, float]
+    y: float | tuple[float, float]
+    heading_deg: float | tuple[float, float]
+
+    def draw(self, rng) -> tuple[float, float, float]:
+        """A pose ``(x, y, heading)`` (m, rad): the fixed values, the ranges drawn."""
+
+        def value(v):
+            return float(rng.uniform(*v)) if isinstance(v, tuple) else v
+
+        x, y, heading = value(self.x), value(self.y), value(self.heading_deg)
+        return x, y, math.radians(heading)
+
+    @property
+    def drawn(self) -> bool:
+        """Whether any of the values is a range."""
+        return any(isinstance(v, tuple) for v in (self.x, self.y, self.heading_deg))
+
+
+@dataclass(frozen=True)
 class World:
-    """Obstacles, an optional goal and optional ``bounds`` (x_min, x_max, y_min, y_max)."""
+    """Obstacles, an optional goal and start, and optional ``bounds`` (x_min, x_max, y_min,
+    y_max)."""
 
     name: str
     obstacles: tuple[Obstacle, ...] = ()
     goal: Goal | None = None
     bounds: tuple[float, float, float, float] | None = None
     description: str = ""
+    start: Start | None = None
 
     @property
     def all_obstacles(self) -> tuple[Obstacle, ...]:
@@ -253,6 +294,27 @@ def _goal(table) -> Goal:
     return Goal(**values, bay=bay)
 
 
+def _start(table) -> Start:
+    _keys(table, _START, "start")
+    values = {}
+    for key in _START:
+        if key not in table:
+            raise WorldError(f"start needs {key!r}: it takes {', '.join(_START)}")
+        value = table[key]
+        if isinstance(value, list):
+            if len(value) != 2:
+                raise WorldError(
+                    f"start {key}={value!r} is not allowed: give a number or [low, high]"
+                )
+            low, high = (_number(v, f"start {key}") for v in value)
+            if not low <= high:
+                raise WorldError(f"start {key}={value!r} is not allowed: low <= high")
+            values[key] = (low, high)
+        else:
+            values[key] = _number(value, f"start {key}")
+    return Start(**values)
+
+
 def world_from_table(table, name: str) -> World:
     """A :class:`World` from a parsed TOML table (the file's contents), checked."""
     _keys(table, _TOP, f"world {name!r}")
@@ -274,6 +336,7 @@ def world_from_table(table, name: str) -> World:
         goal=_goal(table["goal"]) if "goal" in table else None,
         bounds=bounds,
         description=str(table.get("description", "")),
+        start=_start(table["start"]) if "start" in table else None,
     )
 
 

@@ -1,0 +1,170 @@
+"""Planned maneuvers (tt_mujoco.world.plan, tt_mujoco.world.dubins): the Dubins words reach
+their goal and are shortest, a plan keeps its margin at every point (checked more finely than
+the planner checks it), starts are the seed's on every route, and a world with no way through
+is one message (exit 2)."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from tt_mujoco import run
+from tt_mujoco.sim import Scenario, build, simulate
+from tt_mujoco.vehicle.params import Params
+from tt_mujoco.world.builtin import WORLDS, parse_world
+from tt_mujoco.world.dubins import dubins_words, sample_word
+from tt_mujoco.world.part import start_problem
+from tt_mujoco.world.plan import MARGIN, clearance_along, plan_path, start_pose
+from tt_mujoco.world.plan import train_length as chain_length
+from tt_mujoco.world.world import world_from_table
+
+
+def test_every_dubins_word_appears_and_reaches_its_goal():
+    rng = np.random.default_rng(0)
+    seen = set()
+    for _ in range(500):
+        start = (*rng.uniform(-2, 2, 2), rng.uniform(-np.pi, np.pi))
+        goal = (*rng.uniform(-5, 5, 2), rng.uniform(-np.pi, np.pi))
+        radius = rng.uniform(0.5, 2.0)
+        words = dubins_words(start, goal, radius)
+        assert words, (start, goal)
+        for word in words:
+            seen.add(word.kinds)
+            end = sample_word(start, word, 0.01)[-1]
+            assert math.hypot(end[0] - goal[0], end[1] - goal[1]) < 1e-6
+        lengths = [w.length for w in words]
+        assert lengths == sorted(lengths)
+        assert lengths[0] >= math.hypot(goal[0] - start[0], goal[1] - start[1]) - 1e-9
+    assert seen == {"LSL", "RSR", "LSR", "RSL", "RLR", "LRL"}
+
+
+def test_a_dubins_path_is_no_longer_than_a_sampled_turn_then_line():
+    """Against a simple feasible path (turn toward the goal, straight, turn onto its heading
+    would need a search; here: goal straight ahead), the shortest word is the straight."""
+    (word,) = dubins_words((0, 0, 0), (3, 0, 0), 1.0)[:1]
+    assert word.kinds in ("LSL", "RSR") and word.length == pytest.approx(3.0)
+
+
+#: A world to drive into forward: a gap between two crates, the goal beyond it.
+GATE = {
+    "goal": {"x": 5.0, "y": 1.0, "heading_deg": 0.0},
+    "obstacle": [
+        {"kind": "box", "name": "crate south", "x": 3.0, "y": 0.2, "length": 0.6, "width": 0.8},
+        {"kind": "box", "name": "crate north", "x": 3.0, "y": 1.8, "length": 0.6, "width": 0.8},
+    ],
+}
+
+
+@pytest.mark.parametrize("trailers", [1, 2])
+@pytest.mark.parametrize(
+    ("table", "start", "reverse"),
+    [(WORLDS["yard"], (1.0, -1.5, math.pi / 2), True), (GATE, (-1.0, -1.5, 0.0), False)],
+    ids=["yard backing up", "gate forward"],
+)
+def test_a_plan_keeps_its_margin_everywhere_and_ends_at_the_goal(trailers, table, start, reverse):
+    p = Params().with_trailers(trailers) if trailers > 1 else Params()
+    world = world_from_table(table, "w")
+    plan = plan_path(world, p, start, reverse)
+    # Checked five times finer than the planner looks: the margin holds between its samples.
+    fine, _ = clearance_along(plan.path, p, world, step=0.01)
+    assert fine > MARGIN - 0.01
+    assert plan.clearance > MARGIN
+    path = plan.path
+    goal = world.goal
+    tractor_end = np.array(path.pose_at(0.0 if reverse else path.length))
+    tractor_start = np.array(path.pose_at(path.length if reverse else 0.0))
+    d = chain_length(p)
+    heading = math.radians(goal.heading_deg)
+    expected = (goal.x + d * math.cos(heading), goal.y + d * math.sin(heading))
+    np.testing.assert_allclose(tractor_end[:2], expected, atol=1e-9)
+    np.testing.assert_allclose(tractor_start[:2], start[:2], atol=1e-9)
+
+
+def test_a_start_is_the_seeds_and_clear():
+    p = Params()
+    world = parse_world("loading_bay")
+    poses = [start_pose(world, p, seed) for seed in range(20)]
+    assert poses == [start_pose(world, p, seed) for seed in range(20)]
+    assert len(set(poses)) == 20
+    for pose in poses:
+        assert start_problem(world, p, pose, (0.0,), MARGIN) is None
+        assert 0.0 <= pose[0] <= 7.0 and -1.5 <= pose[1] <= 0.3
+
+
+def test_a_planned_run_reaches_the_bay_with_noise(workdir=None):
+    """Backing into the loading bay from seed 1's start, 20 dB noise, MuJoCo: the last axle
+    ends within the goal's 1 cm and 0.05 rad (measured 1.5 mm, 0.11 deg), every unit clear."""
+    result = simulate(
+        Scenario(world="loading_bay", traj="plan", reverse=True, seed=1, noise_snr_db=20.0)
+    )
+    assert result.status == "ok"
+    world = result.metrics["world"]
+    assert world["goal"]["reached"], world
+    assert world["goal"]["position_error_m"] < 0.01
+    assert world["min_clearance_m"] > 0.0
+    assert world["plan"]["direction"] == "reverse"
+
+
+def test_the_same_seed_plans_the_same_maneuver_on_every_route(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    scenario = Scenario(world="yard", traj="plan", reverse=True, seed=4, plant="reduced")
+    api = simulate(scenario).metrics["world"]["plan"]
+    code = run.main(
+        [
+            *("--world", "yard", "--traj", "plan", "--reverse", "--seed", "4"),
+            *("--plant", "reduced", "--no-video", "--no-plots", "--quiet", "--out", "cli"),
+        ]
+    )
+    assert code == 0
+    cli = json.loads((tmp_path / "cli" / "metrics.json").read_text())["world"]["plan"]
+    for key in ("word", "radius_m", "exit_m", "length_m", "clearance_m"):
+        assert cli[key] == api[key]
+    assert build(scenario).initial_pose == build(scenario).initial_pose
+
+
+def test_a_world_with_no_way_through_is_one_message(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    walled = dict(WORLDS["loading_bay"])
+    walled["obstacle"] = [
+        *walled["obstacle"],
+        {
+            "kind": "wall",
+            "name": "barrier",
+            "start": [-3, 0.6],
+            "end": [7.5, 0.6],
+            "thickness": 0.05,
+        },
+    ]
+    walled["obstacle"][-1]["thickness"] = 0.05
+    walled["start"] = {"x": 2.0, "y": -1.0, "heading_deg": 0.0}
+    (tmp_path / "walled.toml").write_text(_toml(walled))
+    code = run.main(
+        ["--world", "walled.toml", "--traj", "plan", "--reverse", "--out", "o", "--quiet"]
+    )
+    err = capsys.readouterr().err
+    assert code == 2 and "no path to world" in err and "candidates tried" in err, err
+    assert len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o").exists()
+
+
+def test_plan_without_a_world_is_refused(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    code = run.main(["--traj", "plan", "--out", "o", "--quiet"])
+    assert code == 2 and "without a world" in capsys.readouterr().err
+
+
+def _toml(table) -> str:
+    def value(v):
+        if isinstance(v, str):
+            return json.dumps(v)
+        if isinstance(v, list):
+            return "[" + ", ".join(value(x) for x in v) + "]"
+        if isinstance(v, dict):
+            return "{" + ", ".join(f"{k} = {value(x)}" for k, x in v.items()) + "}"
+        return repr(v)
+
+    lines = [f"{k} = {value(v)}" for k, v in table.items() if k != "obstacle"]
+    for o in table.get("obstacle", []):
+        lines += ["[[obstacle]]", *(f"{k} = {value(v)}" for k, v in o.items())]
+    return "\n".join(lines) + "\n"
