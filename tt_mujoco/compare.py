@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from tt_mujoco import guard
 from tt_mujoco.cliargs import BadInputError, Parser
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_OK
 from tt_mujoco.outputs import (
@@ -200,6 +201,7 @@ def _expand(patterns: list[str]) -> list[Path]:
     return folders
 
 
+@guard.command
 def main(argv: list[str] | None = None) -> int:
     parser = Parser(
         prog="python -m tt_mujoco.compare",

@@ -9,15 +9,25 @@ interrupt (Ctrl-C, SIGTERM: :func:`interrupts_from_signals`). A ``KeyboardInterr
 code raises itself, ``SystemExit`` (``sys.exit(0)`` included), ``GeneratorExit`` and any other
 ``BaseException`` are its failures. :func:`shown_error` words one safely, whatever its
 ``__str__`` does.
+
+Every command's ``main`` is wrapped by :func:`command`: what escapes it that is neither bad
+input (the commands turn that into exit 2 themselves) nor an interrupt is a bug of ours: one
+line on stderr naming the file its traceback was written to, and exit code 70.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
+import os
 import signal
+import sys
 import threading
 
+from tt_mujoco.defaults import EXIT_BUG
+
 __all__ = [
+    "command",
     "control_signal",
     "interrupts_from_signals",
     "noting_interrupts",
@@ -108,3 +118,44 @@ def shown_error(err: BaseException) -> str:
         if not users_failure(inner):
             raise
         return f"(its message cannot be shown: {type(inner).__name__} in its __str__)"
+
+
+def crash_file(err: BaseException) -> str:
+    """Write ``err``'s traceback to a new file in the temporary folder; its path."""
+    import tempfile  # only when there is a bug to report: --help stays quick
+    import time
+    import traceback
+
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    text = "".join(traceback.format_exception(err))
+    fd, path = tempfile.mkstemp(prefix=f"tt_mujoco-crash-{stamp}-", suffix=".txt")
+    with os.fdopen(fd, "w", encoding="utf-8") as out:
+        out.write(f"tt-mujoco {' '.join(sys.argv)}\n{text}")
+    return path
+
+
+def command(main):
+    """A command's ``main(argv) -> int``, guarded: a bug of ours (anything it raises but
+    ``SystemExit`` and ``KeyboardInterrupt``) is one line naming the file its traceback is in,
+    and :data:`~tt_mujoco.defaults.EXIT_BUG`."""
+
+    @functools.wraps(main)
+    def guarded(argv=None):
+        try:
+            return main(argv)
+        except (SystemExit, KeyboardInterrupt):
+            raise
+        except BaseException as err:
+            try:
+                where = crash_file(err)
+            except OSError as failed:  # a full or read-only temporary folder
+                where = f"nowhere ({failed.strerror})"
+            print(
+                f"error: internal error, a bug of tt-mujoco ({shown_error(err)}); "
+                f"its traceback is in {where}: please report it",
+                file=sys.stderr,
+            )
+            return EXIT_BUG
+
+    guarded.guarded = True
+    return guarded

@@ -26,14 +26,16 @@ chooses the wheel torques:
   ``e = z - z_d`` with the true velocities, so that an episode's return is ``-N`` times
   ``rmse_v^2 + rmse_omega^2`` of ``metrics.json``. A jackknife or a blow-up ends the episode
   (``terminated``) with the reward ``-(1 + steps left)``, as if every remaining step had an
-  error of 1: ending early never pays; so does a user's path or disturbance that fails
+  error of 1: ending early never pays; so does a unit touching a world's obstacle (status
+  "collision"), and a user's path or disturbance that fails
   (``info["status"]`` "failed", ``info["message"]`` why).
 - **truncated** when the scenario's duration is reached (``info["status"]`` is then "ok", as
   the finished run's ``metrics.json`` says).
-- **info**: ``t``, ``status`` ("running", "ok", "jackknife", "diverged", "failed"), the errors
-  ``e_v``, ``e_omega``, the target's derivatives ``v_d_dot``, ``omega_d_dot`` (what the project's
-  controllers also use), ``slip_longitudinal`` (m/s) and ``etas``, the trailers' steering gains
-  in force (a scheduled eta changes them; a model-based agent hands them to its model, as
+- **info**: ``t``, ``status`` ("running", "ok", "jackknife", "diverged", "collision",
+  "failed"), the errors ``e_v``, ``e_omega``, the target's derivatives ``v_d_dot``,
+  ``omega_d_dot`` (what the project's controllers also use), ``slip_longitudinal`` (m/s)
+  and ``etas``, the trailers' steering gains in force (a scheduled eta changes them; a
+  model-based agent hands them to its model, as
   :meth:`controllers.base.Controller.steering_changed` does).
 
 Every observation has finite bounds (:func:`observation_bounds`), each from a limit the

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tt_mujoco import guard
 from tt_mujoco.outputs import read_timeseries, run_timeseries_file
 from tt_mujoco.viz.render import (
     CAMERAS,
@@ -34,6 +35,7 @@ def _check_rows(ts, steps) -> str:
     return ""
 
 
+@guard.command
 def main(argv: list[str] | None = None) -> int:
     """``python -m tt_mujoco.render RUN_DIR``: re-render a finished run's video.
 

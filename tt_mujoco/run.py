@@ -1,9 +1,11 @@
 """``python -m tt_mujoco.run``: one closed-loop run, with metrics, time series, plots and video.
 
 Exit codes (docs/model.md Section 11): 0 done; 2 bad input (one message, no traceback, nothing
-written); 3 the run diverged or jackknifed (the message gives the time and state; everything
-computed up to then is still written); 130 interrupted (Ctrl-C, or the live viewer closed):
-files already written are complete, and ``metrics.json``, written last, is absent.
+written); 3 the run diverged, jackknifed or hit an obstacle (the message gives the time and
+state; everything computed up to then is still written); 70 a bug of ours (one line naming the
+file its traceback went to: :func:`tt_mujoco.guard.command`); 130 interrupted (Ctrl-C, or the
+live viewer closed): files already written are complete, and ``metrics.json``, written last,
+is absent.
 
 Options can come from a TOML file (``--config FILE``, see :mod:`tt_mujoco.config`); the
 command line overrides it, and every run writes its resolved options to ``config.toml`` so
@@ -353,6 +355,7 @@ def _fail(message: str, code: int = EXIT_BAD_INPUT) -> int:
     return code
 
 
+@guard.command
 def main(argv: list[str] | None = None) -> int:
     # Ctrl-C and a batch system's SIGTERM: the same clean exit, told from a KeyboardInterrupt
     # a user's code raises itself (tt_mujoco.guard)

@@ -28,6 +28,7 @@ import mujoco
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from tt_mujoco import guard
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_OK
 from tt_mujoco.outputs import (
     OutputError,
@@ -442,6 +443,7 @@ def validation_markdown(results: dict, trailers: int = 1) -> str:
     return "\n".join(lines)
 
 
+@guard.command
 def main(argv: list[str] | None = None) -> int:
     """Exit 0 written and every bound holds, 1 written but a bound does not hold, 2 a used or
     unwritable ``--out`` (refused before the checks run)."""

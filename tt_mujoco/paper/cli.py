@@ -7,6 +7,7 @@ import sys
 import time
 from pathlib import Path
 
+from tt_mujoco import guard
 from tt_mujoco.cliargs import BadInputError, Parser, integer_at_least
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_OK
 from tt_mujoco.outputs import atomic_write, claim_folder, release_folder, remove_if_empty
@@ -54,6 +55,7 @@ def docs_page(summary: str, command: str) -> str:
     return "\n".join(lines).rstrip() + f"\n\nWritten by `{command}`.\n"
 
 
+@guard.command
 def main(argv: list[str] | None = None) -> int:
     """Exit 0 done, 2 bad input, 1 if a run raised an error (it is in the report)."""
     try:

@@ -24,7 +24,12 @@ from tt_mujoco.controllers import (
     reduced_model,
 )
 from tt_mujoco.controllers.backing import HitchCascade
-from tt_mujoco.defaults import DOCKING_GAIN, MAX_DURATION, MAX_PHYSICS_STEPS, MAX_SPEED
+from tt_mujoco.defaults import (
+    DOCKING_GAIN,
+    MAX_DURATION,
+    MAX_PHYSICS_STEPS,
+    MAX_SPEED,
+)
 from tt_mujoco.reference.feedback import PathFeedback
 from tt_mujoco.reference.reverse import ReverseTarget
 from tt_mujoco.reference.targets import make_target, target_on

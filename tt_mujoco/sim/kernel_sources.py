@@ -23,6 +23,7 @@ from tt_mujoco.compiled_form import compiled_form_reason
 from tt_mujoco.controllers import backing
 from tt_mujoco.sim import closed_loop, measure, motors, records, wind
 from tt_mujoco.vehicle import reduced, train
+from tt_mujoco.world import part
 
 __all__ = ["COMPILED_FORMS", "LAWS", "RECORDS", "SHARED", "STEP", "discover", "source_files"]
 
@@ -108,7 +109,7 @@ RECORDS = (
     records.WindRecord,
     records.DelayRecord,
     records.GroundRecord,
-    records.WorldRecord,
+    part.WorldRecord,
     wind.DragConstants,
     motors.MotorConstants,
     records.PlantRecord,

@@ -23,6 +23,7 @@ from tt_mujoco.sim.timeseries import LOOP_COLUMNS
 from tt_mujoco.sim.wind import DragConstants
 from tt_mujoco.vehicle.reduced import ModelConstants
 from tt_mujoco.vehicle.train import TrainConstants
+from tt_mujoco.world.part import WorldRecord
 
 __all__ = [
     "LAW_FLAGS",
@@ -45,7 +46,6 @@ __all__ = [
     "SteeringRecord",
     "TargetRecord",
     "WindRecord",
-    "WorldRecord",
     "interpreted",
     "new_record",
     "record_dtype",
@@ -426,23 +426,6 @@ class GroundRecord(NamedTuple):
     frictions: np.ndarray
     #: per control step, the bit mask of the patches some wheel stood on during its advance
     masks: np.ndarray
-
-
-class WorldRecord(NamedTuple):
-    """A world's obstacles and the units' footprints (:mod:`tt_mujoco.world.part`)."""
-
-    #: every unit's footprint (tractor first: N + 1 rows of rear, front, half width) and, as the
-    #: step measures them, their poses (x, y, heading); a unit's corners (4 x 2, scratch)
-    boxes: np.ndarray
-    poses: np.ndarray
-    corners: np.ndarray
-    #: the obstacles (empty: no world): their corners (M x V x 2, counter-clockwise, each
-    #: ``sizes[o]`` of them) and the circles around them (M x (x, y, radius))
-    polygons: np.ndarray
-    sizes: np.ndarray
-    circles: np.ndarray
-    #: per control step, the least gap between a unit and an obstacle (m)
-    clearance: np.ndarray
 
 
 class LoopRecord(NamedTuple):

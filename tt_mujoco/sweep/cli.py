@@ -111,6 +111,7 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+@guard.command
 def main(argv: list[str] | None = None) -> int:
     out = None
     try:

@@ -21,7 +21,11 @@ import numpy as np
 
 from tt_mujoco.vehicle.params import Params
 
-__all__ = ["FOOTPRINT_COLUMNS", "footprints", "unit_names"]
+__all__ = ["FOOTPRINT_BITS", "FOOTPRINT_COLUMNS", "OBSTACLE_BITS", "footprints", "unit_names"]
+
+#: ``(contype, conaffinity)`` of a unit's footprint box in the MuJoCo scene and of a world's
+#: obstacle: each meets only the other (never the wheels, the floor or another unit).
+FOOTPRINT_BITS, OBSTACLE_BITS = (2, 0), (0, 2)
 
 #: The columns of :func:`footprints`: the rectangle's rear and front ends along the unit's
 #: heading and its half width (m), in the unit's frame.

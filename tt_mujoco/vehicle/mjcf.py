@@ -188,8 +188,7 @@ def _with_footprints(xml: str, p: Params) -> str:
     """``xml`` with each unit's footprint box (:func:`tt_mujoco.vehicle.footprint.footprints`)
     after its first geom: the tractor's frame is at its axle, trailer k's at its hitch, L0_k
     ahead of its axle."""
-    from tt_mujoco.vehicle.footprint import footprints
-    from tt_mujoco.world.mjcf import FOOTPRINT_BITS
+    from tt_mujoco.vehicle.footprint import FOOTPRINT_BITS, footprints
 
     contype, conaffinity = FOOTPRINT_BITS
     anchors = [("tractor_chassis", 0.0)] + [

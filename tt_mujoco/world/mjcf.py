@@ -1,21 +1,21 @@
 """A world's obstacles as the MuJoCo scene's geoms.
 
 Each obstacle is a prism (a mesh of its polygon's corners at the floor and at
-:data:`OBSTACLE_HEIGHT`) fixed to the world. Collisions are by bit: an obstacle
-(``contype=0, conaffinity=2``) meets only the units' footprint boxes (``contype=2,
-conaffinity=0``, :func:`tt_mujoco.vehicle.mjcf.vehicle_xml` with ``footprints=True``), never
+:data:`OBSTACLE_HEIGHT`) fixed to the world. Collisions are by bit
+(:data:`tt_mujoco.vehicle.footprint.OBSTACLE_BITS`): an obstacle meets only the units'
+footprint boxes (:func:`tt_mujoco.vehicle.mjcf.vehicle_xml` with ``footprints=True``), never
 the wheels or the floor, so that the scene's contacts are the step's contact check's
 (:mod:`tt_mujoco.world.contact`) between the same shapes.
 """
 
 from __future__ import annotations
 
-__all__ = ["FOOTPRINT_BITS", "OBSTACLE_BITS", "OBSTACLE_HEIGHT", "obstacles_xml"]
+from tt_mujoco.vehicle.footprint import OBSTACLE_BITS
+
+__all__ = ["OBSTACLE_HEIGHT", "obstacles_xml"]
 
 #: How tall an obstacle stands (m): above every unit's footprint box.
 OBSTACLE_HEIGHT = 0.3
-#: ``(contype, conaffinity)`` of an obstacle and of a unit's footprint box.
-OBSTACLE_BITS, FOOTPRINT_BITS = (0, 2), (2, 0)
 
 
 def _g(x: float) -> str:

@@ -12,10 +12,10 @@ least gap. After it, :func:`world_report` gives ``metrics.json`` its ``world`` s
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
-from tt_mujoco.sim.records import WorldRecord
 from tt_mujoco.vehicle.footprint import footprints, unit_names
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.reduced import hitch_and_axle
@@ -23,6 +23,7 @@ from tt_mujoco.world import contact
 from tt_mujoco.world.world import World, WorldError
 
 __all__ = [
+    "WorldRecord",
     "check_world",
     "no_world_record",
     "start_problem",
@@ -30,6 +31,24 @@ __all__ = [
     "world_record",
     "world_report",
 ]
+
+
+class WorldRecord(NamedTuple):
+    """A world's obstacles and the units' footprints, as the step reads them: the world part's
+    record (:data:`tt_mujoco.sim.records.LoopRecord` holds it as ``world``)."""
+
+    #: every unit's footprint (tractor first: N + 1 rows of rear, front, half width) and, as the
+    #: step measures them, their poses (x, y, heading); a unit's corners (4 x 2, scratch)
+    boxes: np.ndarray
+    poses: np.ndarray
+    corners: np.ndarray
+    #: the obstacles (empty: no world): their corners (M x V x 2, counter-clockwise, each
+    #: ``sizes[o]`` of them) and the circles around them (M x (x, y, radius))
+    polygons: np.ndarray
+    sizes: np.ndarray
+    circles: np.ndarray
+    #: per control step, the least gap between a unit and an obstacle (m)
+    clearance: np.ndarray
 
 
 def no_world_record(n_units: int = 2) -> WorldRecord:

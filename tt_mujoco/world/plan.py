@@ -18,7 +18,8 @@ last axle, straight) ahead of it along the goal's heading.
   then straight ``exit + D`` to the tractor's place at the goal.
 
 The candidates (each exit length of :data:`EXITS`, each radius of :data:`RADII` scaled by the
-train's least radius, each Dubins word) are tried shortest first; the first whose every unit
+train's least radius, each Dubins word) are tried shortest first, the long exits before the
+short ones; the first whose every unit
 keeps ``margin`` from every obstacle at every sample (``step`` apart along the path) is the
 plan. Every formula it uses is the project's own: the axle chain, the footprints and the
 contact check (:mod:`tt_mujoco.world.contact`).
@@ -60,8 +61,10 @@ START_DRAWS = 1000
 
 #: The clearance every unit keeps from every obstacle along a plan (m).
 MARGIN = 0.05
-#: The straight lengths out of (or into) the goal tried (m).
-EXITS = (0.0, 0.25, 0.5, 1.0, 1.5)
+#: The straight lengths out of (or into) the goal tried, as multiples of the train's length
+#: ``D``: the long ones first (the train then ends a straight as long as itself, on which the
+#: hitch cascade straightens it), the short ones where no long one is clear.
+EXITS = ((1.0, 1.5, 2.0), (0.0, 0.25, 0.5))
 #: The turning radii tried, as multiples of the train's least radius (:func:`least_radius`).
 RADII = (1.0, 1.25, 1.5, 2.0, 3.0)
 #: The least turning radius of one unit's path (m) per trailer: the hitch cascade backs the
@@ -187,18 +190,19 @@ def plan_path(
     tail_at_start = _ahead(start, -d)
     base = least_radius(p)
     candidates = []
-    for exit_length in EXITS:
-        for scale in RADII:
-            radius = base * scale
-            if reverse:
-                out = _ahead(tractor_at_goal, exit_length)
-                words = dubins_words(out, tail_at_start, radius)
-            else:
-                words = dubins_words(start, _ahead(goal_pose, -exit_length), radius)
-            candidates += [(w.length + exit_length, exit_length, w) for w in words]
-    candidates.sort(key=lambda c: c[0])
+    for tier, exits in enumerate(EXITS):
+        for exit_length in (d * share for share in exits):
+            for scale in RADII:
+                radius = base * scale
+                if reverse:
+                    out = _ahead(tractor_at_goal, exit_length)
+                    words = dubins_words(out, tail_at_start, radius)
+                else:
+                    words = dubins_words(start, _ahead(goal_pose, -exit_length), radius)
+                candidates += [(tier, w.length + exit_length, exit_length, w) for w in words]
+    candidates.sort(key=lambda c: c[:2])
     best, tried = None, 0
-    for _, exit_length, word in candidates:
+    for _, _, exit_length, word in candidates:
         if deadline is not None and time.monotonic() > deadline:
             break
         tried += 1

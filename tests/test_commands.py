@@ -1,0 +1,57 @@
+"""Every command of the package, found rather than listed: its ``main`` is guarded, so that a bug
+of ours is one line on stderr naming the file its traceback went to, and exit code 70."""
+
+import argparse
+import importlib
+import pkgutil
+import re
+from pathlib import Path
+
+import pytest
+
+import tt_mujoco
+from tt_mujoco.defaults import EXIT_BUG
+
+
+def _commands() -> list[str]:
+    """The modules with a ``main`` that ``python -m`` runs (``if __name__ == "__main__"`` or
+    a package's ``__main__.py``)."""
+    found = []
+    root = Path(tt_mujoco.__file__).parent
+    for info in pkgutil.walk_packages([str(root)], "tt_mujoco."):
+        if info.name.endswith("__main__"):
+            continue  # importing it runs the command; its package stands for it
+        path = root.joinpath(*info.name.split(".")[1:])
+        source = path / "__main__.py" if info.ispkg else path.with_suffix(".py")
+        if source.exists() and re.search(r"sys\.exit\(main\(\)\)", source.read_text()):
+            found.append(info.name + (".cli" if info.ispkg else ""))
+    return sorted(found)
+
+
+COMMANDS = _commands()
+
+
+def test_the_commands_are_found():
+    assert {"tt_mujoco.run", "tt_mujoco.sweep.cli", "tt_mujoco.render"} <= set(COMMANDS)
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_a_bug_of_ours_is_one_line_and_exit_70(name, monkeypatch, tmp_path, capsys):
+    module = importlib.import_module(name)
+    assert getattr(module.main, "guarded", False), f"{name}.main is not @guard.command"
+
+    def broken(self, *args, **kwargs):
+        raise RuntimeError("a bug planted by the test")
+
+    monkeypatch.setattr(argparse.ArgumentParser, "parse_known_args", broken)
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    monkeypatch.setattr("tempfile.tempdir", None)
+    monkeypatch.chdir(tmp_path)
+    code = module.main(["--help"])
+    err = capsys.readouterr().err
+    assert code == EXIT_BUG, err
+    assert len(err.strip().splitlines()) == 1 and "a bug of tt-mujoco" in err, err
+    (crash,) = tmp_path.glob("tt_mujoco-crash-*.txt")
+    assert str(crash) in err
+    text = crash.read_text()
+    assert "Traceback" in text and "RuntimeError: a bug planted by the test" in text

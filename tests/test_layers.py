@@ -1,0 +1,75 @@
+"""The package's layers (docs/layout.md): every module imports only its own layer and the
+layers above it, so that data flows one way. Read from the source of every module, the
+imports inside functions included; the order is the one docs/layout.md states."""
+
+import ast
+import re
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+#: The order docs/layout.md gives (its sentence "each row imports only rows above it (...)").
+SENTENCE = re.compile(r"each row imports only rows above it \((.*?)\)", re.S)
+#: The modules of the top row: defaults, the schema, the registries, the output helpers ...
+APPLICATIONS = (
+    *("run", "render", "validate", "validate_train", "model", "compare", "sweep", "paper"),
+    *("gym_env", "config", "api"),
+)
+
+
+def _order() -> list[str]:
+    text = (ROOT / "docs" / "layout.md").read_text()
+    rows = re.findall(r"`(\w+)`", SENTENCE.search(text).group(1))
+    assert rows[:2] == ["vehicle", "reference"] and "sim" in rows, rows
+    return rows
+
+
+ORDER = _order()
+
+
+def _layer(module: str) -> int | None:
+    """0: the package's own helpers; 1..: the rows of ORDER; then the applications."""
+    parts = module.split(".")
+    if parts[0] != "tt_mujoco" or len(parts) == 1:
+        return None
+    if parts[1] in ORDER:
+        return 1 + ORDER.index(parts[1])
+    return len(ORDER) + 1 if parts[1] in APPLICATIONS else 0
+
+
+def _modules():
+    for path in sorted((ROOT / "tt_mujoco").rglob("*.py")):
+        yield (
+            path,
+            "tt_mujoco." + ".".join(path.relative_to(ROOT / "tt_mujoco").with_suffix("").parts),
+        )
+    for path in sorted((ROOT / "controllers").rglob("*.py")):
+        rel = ".".join(path.relative_to(ROOT / "controllers").with_suffix("").parts)
+        yield path, f"tt_mujoco.controllers.{rel}"
+
+
+def _imported(tree) -> set[str]:
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names.add(node.module)
+            if node.module == "tt_mujoco":
+                names |= {f"tt_mujoco.{a.name}" for a in node.names}
+        elif isinstance(node, ast.Import):
+            names |= {a.name for a in node.names}
+    return names
+
+
+def test_no_module_imports_a_layer_below_its_own():
+    wrong = []
+    for path, module in _modules():
+        mine = _layer(module.removesuffix(".__init__"))
+        for name in _imported(ast.parse(path.read_text())):
+            theirs = _layer(name)
+            if mine is not None and theirs is not None and theirs > mine:
+                wrong.append(f"{module} imports {name}")
+    assert not wrong, "\n".join(wrong)
+
+
+def test_every_subpackage_has_a_layer():
+    packages = {p.name for p in (ROOT / "tt_mujoco").iterdir() if (p / "__init__.py").exists()}
+    assert packages <= {*ORDER, *APPLICATIONS}, packages - {*ORDER, *APPLICATIONS}
