@@ -101,3 +101,25 @@ def test_clearance_is_the_least_gap_over_units_and_obstacles():
             contact.unit_corners_of(*poses[u], boxes[u], corners)
             gaps += [(contact.gap_of(corners, 4, p, len(p)), u, o) for o, p in enumerate(polygons)]
         assert got == min(gaps)
+
+
+def test_a_capped_clearance_is_the_least_of_the_cap_and_the_clearance():
+    rng = np.random.default_rng(11)
+    polygons = [_polygon(rng, rng.uniform(-3, 3, 2), rng.uniform(0.2, 0.6, 2)) for _ in range(6)]
+    table = np.zeros((6, 7, 2))
+    circles = np.zeros((6, 3))
+    for o, poly in enumerate(polygons):
+        table[o, : len(poly)] = poly
+        centre = poly.mean(axis=0)
+        circles[o] = (*centre, np.max(np.hypot(*(poly - centre).T)))
+    sizes = np.array([len(p) for p in polygons], dtype=np.int64)
+    boxes = np.array([[-0.3, 0.225, 0.12]])
+    for _ in range(100):
+        poses = np.array([[*rng.uniform(-3, 3, 2), rng.uniform(-np.pi, np.pi)]])
+        exact, *_ = contact.clearance_of(poses, boxes, table, sizes, circles, np.zeros((4, 2)))
+        for cap in (0.05, 0.5):
+            capped, unit, _ = contact.clearance_of(
+                poses, boxes, table, sizes, circles, np.zeros((4, 2)), cap
+            )
+            assert capped == pytest.approx(min(exact, cap), abs=1e-12)
+            assert (unit == -1) == (exact >= cap)

@@ -551,7 +551,7 @@ def _touch(world, k, me, rows, n, stop):
         row = rows[i]
         poses[i + 2, 0], poses[i + 2, 1], poses[i + 2, 2] = row[0], row[1], row[2]
     gap, unit, obstacle = contact.clearance_of(
-        poses, world.boxes, world.polygons, world.sizes, world.circles, world.corners
+        poses, world.boxes, world.polygons, world.sizes, world.circles, world.corners, math.inf
     )
     world.clearance[k] = gap
     if gap > 0.0:

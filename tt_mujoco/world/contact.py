@@ -55,12 +55,13 @@ def _separation_of(a, na: int, b, nb: int) -> float:
     return best
 
 
-def gap_of(a, na: int, b, nb: int) -> float:
+def gap_of(a, na: int, b, nb: int, enough: float = math.inf) -> float:
     """The signed distance between convex polygons ``a`` and ``b`` (their first ``na`` and
     ``nb`` rows, counter-clockwise): their distance when apart, else minus the least depth of
-    their overlap along an edge normal (zero when they touch)."""
+    their overlap along an edge normal (zero when they touch). When an edge already separates
+    them by ``enough`` or more, that separation (a lower bound of the distance) instead."""
     separation = max(_separation_of(a, na, b, nb), _separation_of(b, nb, a, na))
-    if separation <= 0.0:
+    if separation <= 0.0 or separation >= enough:
         return separation
     distance = math.inf
     for i in range(na):
@@ -76,13 +77,17 @@ def gap_of(a, na: int, b, nb: int) -> float:
     return distance
 
 
-def clearance_of(poses, boxes, polygons, sizes, circles, corners) -> tuple[float, int, int]:
+def clearance_of(
+    poses, boxes, polygons, sizes, circles, corners, cap: float = math.inf
+) -> tuple[float, int, int]:
     """``(clearance, unit, obstacle)``: the least :func:`gap_of` between any unit's footprint
     (unit ``u`` at ``poses[u] = (x, y, heading)`` with box ``boxes[u]``) and any obstacle
     (``polygons[o]``'s first ``sizes[o]`` rows, within the circle ``circles[o] = (x, y,
-    radius)``), and the pair it is between; ``corners`` is a ``(4, 2)`` scratch array. An
-    obstacle whose circle is farther than the least gap so far is not looked at closer."""
-    best, unit, obstacle = math.inf, -1, -1
+    radius)``), and the pair it is between; ``corners`` is a ``(4, 2)`` scratch array. Gaps of
+    ``cap`` or more are not told apart: the clearance is then ``cap`` and the pair ``(-1, -1)``.
+    An obstacle that cannot come closer than the least gap so far is not looked at closer:
+    its circle is farther, or an edge separates it by more."""
+    best, unit, obstacle = cap, -1, -1
     for u in range(len(boxes)):
         box = boxes[u]
         x, y, heading = poses[u, 0], poses[u, 1], poses[u, 2]
@@ -95,7 +100,7 @@ def clearance_of(poses, boxes, polygons, sizes, circles, corners) -> tuple[float
             reach = math.hypot(cx - circle[0], cy - circle[1]) - radius - circle[2]
             if reach >= best:
                 continue
-            gap = gap_of(corners, 4, polygons[o], sizes[o])
+            gap = gap_of(corners, 4, polygons[o], sizes[o], best)
             if gap < best:
                 best, unit, obstacle = gap, u, o
     return best, unit, obstacle
