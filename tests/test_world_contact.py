@@ -81,16 +81,25 @@ def test_unit_corners_are_the_box_turned_about_the_axle(heading):
     assert 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y) > 0  # counter-clockwise
 
 
-def test_clearance_is_the_least_gap_over_units_and_obstacles():
-    rng = np.random.default_rng(7)
-    polygons = [_polygon(rng, rng.uniform(-4, 4, 2), rng.uniform(0.2, 0.6, 2)) for _ in range(9)]
-    table = np.zeros((9, 7, 2))
-    circles = np.zeros((9, 3))
+def _obstacles(rng, count: int, spread: float):
+    """``count`` random convex polygons within ``spread`` of the origin, and their arrays as
+    the step takes them: corners, sizes, enclosing circles."""
+    polygons = [
+        _polygon(rng, rng.uniform(-spread, spread, 2), rng.uniform(0.2, 0.6, 2))
+        for _ in range(count)
+    ]
+    table = np.zeros((count, 7, 2))
+    circles = np.zeros((count, 3))
     for o, poly in enumerate(polygons):
         table[o, : len(poly)] = poly
         centre = poly.mean(axis=0)
         circles[o] = (*centre, np.max(np.hypot(*(poly - centre).T)))
-    sizes = np.array([len(p) for p in polygons], dtype=np.int64)
+    return polygons, table, np.array([len(p) for p in polygons], dtype=np.int64), circles
+
+
+def test_clearance_is_the_least_gap_over_units_and_obstacles():
+    rng = np.random.default_rng(7)
+    polygons, table, sizes, circles = _obstacles(rng, 9, 4.0)
     boxes = np.array([[-0.3, 0.225, 0.12], [-0.12, 0.4, 0.12]])
     for _ in range(50):
         poses = np.c_[rng.uniform(-4, 4, (2, 2)), rng.uniform(-np.pi, np.pi, 2)]
@@ -105,14 +114,7 @@ def test_clearance_is_the_least_gap_over_units_and_obstacles():
 
 def test_a_capped_clearance_is_the_least_of_the_cap_and_the_clearance():
     rng = np.random.default_rng(11)
-    polygons = [_polygon(rng, rng.uniform(-3, 3, 2), rng.uniform(0.2, 0.6, 2)) for _ in range(6)]
-    table = np.zeros((6, 7, 2))
-    circles = np.zeros((6, 3))
-    for o, poly in enumerate(polygons):
-        table[o, : len(poly)] = poly
-        centre = poly.mean(axis=0)
-        circles[o] = (*centre, np.max(np.hypot(*(poly - centre).T)))
-    sizes = np.array([len(p) for p in polygons], dtype=np.int64)
+    _, table, sizes, circles = _obstacles(rng, 6, 3.0)
     boxes = np.array([[-0.3, 0.225, 0.12]])
     for _ in range(100):
         poses = np.array([[*rng.uniform(-3, 3, 2), rng.uniform(-np.pi, np.pi)]])
