@@ -2,12 +2,12 @@
 command line (exit 2, one line, nothing written), and the run's contact check on both plants
 against the geometry and against MuJoCo's own contacts."""
 
-import json
 import math
 
 import mujoco
 import numpy as np
 import pytest
+import tomli_w
 
 from tt_mujoco import run
 from tt_mujoco.sim.physics import Vehicle
@@ -121,34 +121,6 @@ def test_bad_world_table_is_refused_by_name(case):
     assert expected in str(err.value)
 
 
-def _toml(value) -> str:
-    if isinstance(value, str):
-        return json.dumps(value)
-    if isinstance(value, bool):
-        return str(value).lower()
-    if isinstance(value, list):
-        return "[" + ", ".join(_toml(v) for v in value) + "]"
-    if isinstance(value, dict):
-        return "{" + ", ".join(f"{k} = {_toml(v)}" for k, v in value.items()) + "}"
-    return (
-        repr(float(value))
-        if isinstance(value, float) and math.isfinite(value)
-        else ("nan" if isinstance(value, float) else str(value))
-    )
-
-
-def _file(table) -> str:
-    lines = []
-    for key, value in table.items():
-        if key == "obstacle" and isinstance(value, list):
-            for o in value:
-                lines.append("[[obstacle]]")
-                lines += [f"{k} = {_toml(v)}" for k, v in o.items()]
-        else:
-            lines.insert(0, f"{key} = {_toml(value)}")
-    return "\n".join(lines) + "\n"
-
-
 def _refused(argv, expected, workdir, capsys):
     out = workdir / "out"
     code = run.main([*argv, "--out", str(out), "--quiet", "--no-video", "--no-plots"])
@@ -163,7 +135,7 @@ def _refused(argv, expected, workdir, capsys):
 @pytest.mark.parametrize("case", sorted(BAD_TABLES))
 def test_bad_world_file_is_exit_2_naming_it(case, workdir, capsys):
     table, expected = BAD_TABLES[case]
-    (workdir / "w.toml").write_text(_file(table))
+    (workdir / "w.toml").write_text(tomli_w.dumps(table))
     _refused(["--traj", "line.csv", "--world", "w.toml"], expected, workdir, capsys)
 
 

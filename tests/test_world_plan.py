@@ -8,13 +8,14 @@ import math
 
 import numpy as np
 import pytest
+import tomli_w
 
 from tt_mujoco import run
 from tt_mujoco.sim import Scenario, build, simulate
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.world.builtin import WORLDS, parse_world
 from tt_mujoco.world.dubins import dubins_words, sample_word
-from tt_mujoco.world.part import start_problem
+from tt_mujoco.world.part import start_problem, world_record
 from tt_mujoco.world.plan import MARGIN, clearance_along, plan_path, start_pose
 from tt_mujoco.world.plan import train_length as chain_length
 from tt_mujoco.world.world import world_from_table
@@ -39,9 +40,7 @@ def test_every_dubins_word_appears_and_reaches_its_goal():
     assert seen == {"LSL", "RSR", "LSR", "RSL", "RLR", "LRL"}
 
 
-def test_a_dubins_path_is_no_longer_than_a_sampled_turn_then_line():
-    """Against a simple feasible path (turn toward the goal, straight, turn onto its heading
-    would need a search; here: goal straight ahead), the shortest word is the straight."""
+def test_the_shortest_word_to_a_pose_straight_ahead_is_the_straight():
     (word,) = dubins_words((0, 0, 0), (3, 0, 0), 1.0)[:1]
     assert word.kinds in ("LSL", "RSR") and word.length == pytest.approx(3.0)
 
@@ -67,7 +66,7 @@ def test_a_plan_keeps_its_margin_everywhere_and_ends_at_the_goal(trailers, table
     world = world_from_table(table, "w")
     plan = plan_path(world, p, start, reverse)
     # Checked five times finer than the planner looks: the margin holds between its samples.
-    fine, _ = clearance_along(plan.path, p, world, step=0.01)
+    fine, _ = clearance_along(plan.path, p, world_record(world, p, 0), step=0.01)
     assert fine > MARGIN - 0.01
     assert plan.clearance > MARGIN
     path = plan.path
@@ -88,11 +87,11 @@ def test_a_start_is_the_seeds_and_clear():
     assert poses == [start_pose(world, p, seed) for seed in range(20)]
     assert len(set(poses)) == 20
     for pose in poses:
-        assert start_problem(world, p, pose, (0.0,), MARGIN) is None
+        assert start_problem(world, world_record(world, p, 0), p, pose, (0.0,), MARGIN) is None
         assert 0.0 <= pose[0] <= 7.0 and -1.5 <= pose[1] <= 0.3
 
 
-def test_a_planned_run_reaches_the_bay_with_noise(workdir=None):
+def test_a_planned_run_reaches_the_bay_with_noise():
     """Backing into the loading bay from seed 1's start, 20 dB noise, MuJoCo: the last axle
     ends within the goal's 1 cm and 0.05 rad (measured 1.5 mm, 0.11 deg), every unit clear."""
     result = simulate(
@@ -138,7 +137,7 @@ def test_a_world_with_no_way_through_is_one_message(tmp_path, monkeypatch, capsy
     ]
     walled["obstacle"][-1]["thickness"] = 0.05
     walled["start"] = {"x": 2.0, "y": -1.0, "heading_deg": 0.0}
-    (tmp_path / "walled.toml").write_text(_toml(walled))
+    (tmp_path / "walled.toml").write_text(tomli_w.dumps(walled))
     code = run.main(
         ["--world", "walled.toml", "--traj", "plan", "--reverse", "--out", "o", "--quiet"]
     )
@@ -152,19 +151,3 @@ def test_plan_without_a_world_is_refused(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     code = run.main(["--traj", "plan", "--out", "o", "--quiet"])
     assert code == 2 and "without a world" in capsys.readouterr().err
-
-
-def _toml(table) -> str:
-    def value(v):
-        if isinstance(v, str):
-            return json.dumps(v)
-        if isinstance(v, list):
-            return "[" + ", ".join(value(x) for x in v) + "]"
-        if isinstance(v, dict):
-            return "{" + ", ".join(f"{k} = {value(x)}" for k, x in v.items()) + "}"
-        return repr(v)
-
-    lines = [f"{k} = {value(v)}" for k, v in table.items() if k != "obstacle"]
-    for o in table.get("obstacle", []):
-        lines += ["[[obstacle]]", *(f"{k} = {value(v)}" for k, v in o.items())]
-    return "\n".join(lines) + "\n"

@@ -24,7 +24,6 @@ from pathlib import Path
 from tt_mujoco.sim import COLUMNS, Result, Scenario
 from tt_mujoco.sim import simulate as _simulate
 from tt_mujoco.sim.timeseries import UNITS, unit_of
-from tt_mujoco.world.builtin import parse_world
 
 __all__ = ["Run", "load_scenario", "simulate"]
 
@@ -80,6 +79,7 @@ class Run:
         """Write the run's four figures (as the command line does) into the folder
         ``out_dir``, made first when it does not exist; returns their paths."""
         from tt_mujoco.viz import plots
+        from tt_mujoco.world.builtin import parse_world
 
         out = Path(out_dir)
         if out.exists() and not out.is_dir():

@@ -56,7 +56,6 @@ from tt_mujoco.progress import progress_bar
 from tt_mujoco.schema import Option, Schema, boolean, choice, number
 from tt_mujoco.sim import COLUMNS, SCHEMA, Scenario
 from tt_mujoco.sim.timeseries import UNITS, train_columns, unit_of
-from tt_mujoco.world.builtin import parse_world
 
 __all__ = [
     "OUTPUTS",
@@ -286,6 +285,7 @@ def write_outputs(
     try:
         if plots:  # drawn in a forked process while the video renders here
             from tt_mujoco.viz import plots as plots_mod  # matplotlib: only where it draws
+            from tt_mujoco.world.builtin import parse_world
 
             figures = BackgroundCall(
                 plots_mod.plot_run,

@@ -545,6 +545,12 @@ _CYCLOID_SPEEDS = ("paper", "static", "dynamic")
 _STARTS = ("on_path", "paper")
 
 
+def _setup(path, profile, kind: str, duration: float | None) -> TargetSetup:
+    """The ``kind`` of target of ``profile`` on ``path``, and the path's initial pose."""
+    target_cls = DynamicTarget if kind == "dynamic" else StaticTarget
+    return TargetSetup(path, target_cls(path, profile, duration), path.initial_pose)
+
+
 def target_on(path, kind: str = "dynamic", duration: float | None = None, **ramp) -> TargetSetup:
     """The target on ``path`` (its stations' speeds, else the ramp profile over its length
     with ``ramp``'s ``cruise`` and ``ramp_time``) and its initial pose."""
@@ -552,8 +558,7 @@ def target_on(path, kind: str = "dynamic", duration: float | None = None, **ramp
         profile = StationSpeed(*path.station_speeds)
     else:
         profile = RampSpeed(path.length, **ramp)
-    target_cls = DynamicTarget if kind == "dynamic" else StaticTarget
-    return TargetSetup(path, target_cls(path, profile, duration), path.initial_pose)
+    return _setup(path, profile, kind, duration)
 
 
 def make_target(
@@ -616,6 +621,4 @@ def make_target(
         path = circle(R, length=max(2.0 * math.pi * R, profile.total_distance))
     else:  # s_curve, CSV files, registered and hooked paths: ramp profile unless given speeds
         return target_on(get_path(text, **kw), kind, duration, **ramp)
-    target_cls = DynamicTarget if kind == "dynamic" else StaticTarget
-    target = target_cls(path, profile, duration)
-    return TargetSetup(path, target, path.initial_pose)
+    return _setup(path, profile, kind, duration)

@@ -147,17 +147,17 @@ class Build:
     #: The along-track loop's gain (1/s; ``Scenario.along_track_gain`` resolved).
     along_track_gain: float = 0.0
 
-    def initial_phis(self, phi0_deg: float | None = None):
-        """The hitch angles the plant starts with (rad): the scenario's ``phi0_deg`` (or
-        ``phi0_deg``) for hitch 1, and, backing up with the hitch cascade, those that put every
-        axle on the path."""
+    def initial_phis(self, phi0_deg: float | None = None) -> tuple:
+        """The hitch angles phi_1..phi_N the plant starts with (rad): the scenario's
+        ``phi0_deg`` (or ``phi0_deg``) for hitch 1, the others 0; backing up with the hitch
+        cascade, those that put every axle on the path."""
         s = self.scenario
         phi0 = math.radians(s.phi0_deg if phi0_deg is None else phi0_deg)
         if any(self.initial_hitches):  # backing up: the trailers start on the path ...
             if phi0_deg is None and s.phi0_deg == 0.0:
                 return self.initial_hitches
             return (phi0, *self.initial_hitches[1:])  # ... but for hitch 1 when it is given
-        return phi0
+        return (phi0,) + (0.0,) * (self.plant_params.n_trailers - 1)
 
     def new_plant(self, phi0_deg: float | None = None) -> Plant:
         """A fresh plant in the initial state (``phi0_deg`` overrides the scenario's)."""
@@ -396,9 +396,7 @@ def build(scenario: Scenario) -> Build:
         plan=plan,
         along_track_gain=_along_track_gain(scenario),
     )
-    phis = result.initial_phis()
-    phis = phis if isinstance(phis, tuple) else (phis,) + (0.0,) * (plant_p.n_trailers - 1)
-    check_world(result.world, plant_p, result.initial_pose, phis)
+    check_world(result.world, plant_p, result.initial_pose, result.initial_phis())
     result.new_faults()  # a fault after the end of the run is refused now
     result.new_controller()  # bad gains, and a user's __init__ that fails, before any work
     return result

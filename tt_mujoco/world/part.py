@@ -106,8 +106,7 @@ def unit_poses(pose, hitches, p: Params) -> np.ndarray:
     return np.array(poses, dtype=float)
 
 
-def _first_touch(world: World, p: Params, poses: np.ndarray, units) -> tuple[float, int, int]:
-    record = world_record(world, p, 0)
+def _first_touch(record: WorldRecord, poses: np.ndarray, units) -> tuple[float, int, int]:
     boxes = record.boxes[list(units)]
     return contact.clearance_of(
         poses, boxes, record.polygons, record.sizes, record.circles, record.corners
@@ -121,10 +120,12 @@ def _outside(bounds, points) -> bool:
     )
 
 
-def start_problem(world: World, p: Params, pose, hitches, margin: float = 0.0) -> str | None:
-    """Why the train of ``p`` cannot start in ``world`` with the tractor at ``pose`` and
-    ``hitches`` (a unit's axle outside the bounds, or a unit within ``margin`` of an
-    obstacle), or None."""
+def start_problem(
+    world: World, record: WorldRecord, p: Params, pose, hitches, margin: float = 0.0
+) -> str | None:
+    """Why the train of ``p`` cannot start in ``world`` (its ``record``:
+    :func:`world_record`) with the tractor at ``pose`` and ``hitches`` (a unit's axle outside
+    the bounds, or a unit within ``margin`` of an obstacle), or None."""
     start = unit_poses(pose, hitches, p)
     if world.bounds is not None and _outside(world.bounds, start[:, :2]):
         return (
@@ -132,7 +133,7 @@ def start_problem(world: World, p: Params, pose, hitches, margin: float = 0.0) -
             f"bounds {list(world.bounds)}"
         )
     obstacles = world.all_obstacles
-    gap, unit, obstacle = _first_touch(world, p, start, range(p.n_trailers + 1))
+    gap, unit, obstacle = _first_touch(record, start, range(p.n_trailers + 1))
     if obstacles and gap <= margin:
         where = "stands on" if gap <= 0.0 else f"comes within {margin:g} m of"
         return (
@@ -149,7 +150,8 @@ def check_world(world: World | None, p: Params, pose, hitches) -> None:
     obstacle or outside the bounds."""
     if world is None:
         return
-    problem = start_problem(world, p, pose, hitches)
+    record = world_record(world, p, 0)
+    problem = start_problem(world, record, p, pose, hitches)
     if problem is not None:
         raise WorldError(problem)
     boxes, obstacles = footprints(p), world.all_obstacles
@@ -173,7 +175,7 @@ def check_world(world: World | None, p: Params, pose, hitches) -> None:
             f"goal x={goal.x!r}, y={goal.y!r} is not allowed: it lies outside world "
             f"{world.name!r}'s bounds {list(world.bounds)}"
         )
-    gap, _, obstacle = _first_touch(world, p, at_goal, [len(boxes) - 1])
+    gap, _, obstacle = _first_touch(record, at_goal, [len(boxes) - 1])
     if obstacles and gap <= 0.0:
         raise WorldError(
             f"goal x={goal.x!r}, y={goal.y!r}, heading_deg={goal.heading_deg!r} is not allowed: "

@@ -67,21 +67,17 @@ MARGIN = 0.05
 EXITS = ((1.0, 1.5, 2.0), (0.0, 0.25, 0.5))
 #: The turning radii tried, as multiples of the train's least radius (:func:`least_radius`).
 RADII = (1.0, 1.25, 1.5, 2.0, 3.0)
-#: The least turning radius of one unit's path (m) per trailer: the hitch cascade backs the
-#: paper's vehicle around R = 1.5 m (the reversing S-curve); each further trailer adds a
-#: third of it.
-RADIUS_PER_TRAIN = 1.0
+#: The least turning radius of one trailer's plan (m): the hitch cascade backs the paper's
+#: vehicle around R = 1.5 m (the reversing S-curve); each further trailer adds a third of it
+#: (:func:`least_radius`).
+LEAST_RADIUS = 1.5
 #: The spacing of the samples the plan is checked at (m), and every how many of them a first
 #: look is taken.
 STEP, COARSE = 0.05, 8
 
 
 class PlanError(WorldError):
-    """No plan: the message says why; ``best`` is the candidate that came closest, if any."""
-
-    def __init__(self, message: str, best=None):
-        super().__init__(message)
-        self.best = best
+    """No plan: the message says why and how far the best candidate got."""
 
 
 @dataclass(frozen=True)
@@ -122,7 +118,7 @@ def train_length(p: Params) -> float:
 
 def least_radius(p: Params) -> float:
     """The least turning radius a plan uses for this train (m)."""
-    return RADIUS_PER_TRAIN * (1.0 + (p.n_trailers - 1) / 3.0) * 1.5
+    return LEAST_RADIUS * (1.0 + (p.n_trailers - 1) / 3.0)
 
 
 def _ahead(pose, distance: float):
@@ -142,16 +138,16 @@ def _word_pieces(word) -> list[tuple[float, float]]:
 
 
 def clearance_along(
-    path, p: Params, world: World, step: float = STEP, below: float = -math.inf
+    path, p: Params, record, step: float = STEP, below: float = -math.inf
 ) -> tuple[float, float]:
-    """``(gap, reached)``: the least gap between any unit and any obstacle of ``world`` with
-    the tractor at arc lengths ``step`` apart along ``path``, every unit on the path's axle
-    chain, and the fraction of the samples looked at. With ``below``, it stops at the first
-    sample whose gap is under it, looking first at every :data:`COARSE`-th sample (a path that
-    fails is most often told there, and those samples are among the others), and gaps of
-    ``below`` or more are not told apart (the gap is then ``below``)."""
+    """``(gap, reached)``: the least gap between any unit of ``p`` and any obstacle of a
+    world's ``record`` (:func:`~tt_mujoco.world.part.world_record`) with the tractor at arc
+    lengths ``step`` apart along ``path``, every unit on the path's axle chain, and the
+    fraction of the samples looked at. With ``below``, it stops at the first sample whose gap
+    is under it, looking first at every :data:`COARSE`-th sample (a path that fails is most
+    often told there, and those samples are among the others), and gaps of ``below`` or more
+    are not told apart (the gap is then ``below``)."""
     cap = math.inf if below == -math.inf else below
-    record = world_record(world, p, 0)
     if not record.sizes.size:
         return math.inf, 1.0
     s = np.linspace(0.0, path.length, max(2, math.ceil(path.length / step) + 1))
@@ -210,6 +206,7 @@ def plan_path(
     tractor_at_goal = _ahead(goal_pose, d)
     tail_at_start = _ahead(start, -d)
     base = least_radius(p)
+    record = world_record(world, p, 0)
     candidates = []
     for tier, exits in enumerate(EXITS):
         for exit_length in (d * share for share in exits):
@@ -222,7 +219,7 @@ def plan_path(
                     words = dubins_words(start, _ahead(goal_pose, -exit_length), radius)
                 candidates += [(tier, w.length + exit_length, exit_length, w) for w in words]
     candidates.sort(key=lambda c: c[:2])
-    best, tried = None, 0
+    best, tried = 0.0, 0
     for _, _, exit_length, word in candidates:
         if deadline is not None and time.monotonic() > deadline:
             break
@@ -233,11 +230,10 @@ def plan_path(
         else:
             pieces = [*_word_pieces(word), (exit_length + d, 0.0)]
             path = _arcs(start, pieces)
-        gap, reached = clearance_along(path, p, world, below=margin)
-        if best is None or reached > best[0]:
-            best = (reached, path)
+        gap, reached = clearance_along(path, p, record, below=margin)
+        best = max(best, reached)
         if gap >= margin:  # clear: its exact clearance, for the report
-            gap, _ = clearance_along(path, p, world)
+            gap, _ = clearance_along(path, p, record)
             return Plan(
                 path=path,
                 direction="reverse" if reverse else "forward",
@@ -249,13 +245,12 @@ def plan_path(
                 planning_time_s=time.perf_counter() - began,
             )
     why = "its time limit passed" if tried < len(candidates) else "none is clear"
-    closest = "" if best is None else f"; the best is clear for {100 * best[0]:.0f} % of it"
+    closest = f"; the best is clear for {100 * best:.0f} % of it" if tried else ""
     raise PlanError(
         f"no path to world {world.name!r}'s goal from x={start[0]:.3f}, y={start[1]:.3f} m, "
         f"heading {math.degrees(start[2]):.1f} deg "
         f"({'backing up' if reverse else 'forward'}): {tried} of {len(candidates)} candidates "
-        f"tried, {why} with a margin of {margin:g} m{closest}",
-        best=None if best is None else best[1],
+        f"tried, {why} with a margin of {margin:g} m{closest}"
     )
 
 
@@ -267,10 +262,10 @@ def start_pose(world: World, p: Params, seed: int) -> tuple[float, float, float]
     if world.start is None:
         raise WorldError(f"world {world.name!r} has no start: give [start] x, y, heading_deg")
     rng = np.random.default_rng([seed, 0x5747])
-    problem = None
+    record, problem = world_record(world, p, 0), None
     for _ in range(START_DRAWS if world.start.drawn else 1):
         pose = world.start.draw(rng)
-        problem = start_problem(world, p, pose, (0.0,) * p.n_trailers, MARGIN)
+        problem = start_problem(world, record, p, pose, (0.0,) * p.n_trailers, MARGIN)
         if problem is None:
             return pose
     if world.start.drawn:
