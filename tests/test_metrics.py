@@ -880,3 +880,26 @@ def test_lateral_error_from_the_cross_track_projection_is_the_projection_itself(
         cross, lateral = cross_track_and_lateral(line, points)
         np.testing.assert_array_equal(cross, line.project(points, extend_ends=True).signed_distance)
         np.testing.assert_array_equal(lateral, line.project(points).signed_distance)
+
+
+def test_merged_metrics_of_a_run_cut_in_two_are_the_whole_runs():
+    """merge_metrics: the metrics of consecutive pieces, each computed on its own rows, are
+    those of the whole where a metric is a per-sample mean or maximum (the velocity errors,
+    the saturation, the counts); each piece's path errors are against its own reference."""
+    from tt_mujoco.analysis.metrics import merge_metrics
+    from tt_mujoco.sim import Scenario, simulate
+
+    result = simulate(Scenario(traj="s_curve", plant="reduced", duration=4.0, noise_snr_db=20.0))
+    ts, line = result.timeseries, result.reference_polyline
+    cut = len(ts["t"]) // 3
+    pieces = [{k: v[:cut] for k, v in ts.items()}, {k: v[cut:] for k, v in ts.items()}]
+    whole = compute_metrics(ts, line, 15.0)
+    merged = merge_metrics([compute_metrics(piece, line, 15.0) for piece in pieces])
+    for name in ("rmse_v", "rmse_omega", "max_abs_v", "torque_saturation_fraction"):
+        assert merged[name] == pytest.approx(whole[name], rel=1e-12), name
+    for name in ("steps", "finite_samples"):
+        assert merged[name] == whole[name]
+    assert merged["sim_time_s"] == pytest.approx(whole["sim_time_s"])
+    # a path error is measured sample by sample against the same line: the same too
+    assert merged["cross_track_rms"] == pytest.approx(whole["cross_track_rms"], rel=1e-9)
+    assert merged["offtrack_follower"] == whole["offtrack_follower"]

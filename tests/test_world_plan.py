@@ -13,10 +13,11 @@ import tomli_w
 from tt_mujoco import run
 from tt_mujoco.sim import Scenario, build, simulate
 from tt_mujoco.vehicle.params import Params
+from tt_mujoco.vehicle.path_schedule import axle_chain
 from tt_mujoco.world.builtin import WORLDS, parse_world
 from tt_mujoco.world.dubins import dubins_words, sample_word
 from tt_mujoco.world.part import start_problem, world_record
-from tt_mujoco.world.plan import MARGIN, clearance_along, plan_path, start_pose
+from tt_mujoco.world.plan import MARGIN, PlanError, clearance_along, plan_path, planned, start_pose
 from tt_mujoco.world.plan import train_length as chain_length
 from tt_mujoco.world.world import world_from_table
 
@@ -65,11 +66,12 @@ def test_a_plan_keeps_its_margin_everywhere_and_ends_at_the_goal(trailers, table
     p = Params().with_trailers(trailers) if trailers > 1 else Params()
     world = world_from_table(table, "w")
     plan = plan_path(world, p, start, reverse)
+    assert plan.cusps == 0
     # Checked five times finer than the planner looks: the margin holds between its samples.
-    fine, _ = clearance_along(plan.path, p, world_record(world, p, 0), step=0.01)
+    fine, _ = clearance_along(plan.legs[0].path, p, world_record(world, p, 0), step=0.01)
     assert fine > MARGIN - 0.01
     assert plan.clearance > MARGIN
-    path = plan.path
+    path = plan.legs[0].path
     goal = world.goal
     tractor_end = np.array(path.pose_at(0.0 if reverse else path.length))
     tractor_start = np.array(path.pose_at(path.length if reverse else 0.0))
@@ -151,3 +153,80 @@ def test_plan_without_a_world_is_refused(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     code = run.main(["--traj", "plan", "--out", "o", "--quiet"])
     assert code == 2 and "without a world" in capsys.readouterr().err
+
+
+def _units_along(leg, p, step=0.01):
+    """Every unit's pose (x, y, heading) at samples ``step`` apart along a leg."""
+    path = leg.path
+    s = np.linspace(0.0, path.length, max(2, int(path.length / step) + 1))
+    x, y, heading = path.pose(s)
+    chain = axle_chain(path, s, [(t.L, t.L0) for t in p.trailers])
+    units = [np.column_stack([x, y, heading])]
+    units += [np.column_stack([a["x"], a["y"], a["theta"]]) for a in chain]
+    return units
+
+
+#: Starts the loading bay's train cannot back in from directly (it faces away from the
+#: building, too close to turn): a forward leg first, a cusp, then backing in.
+FACING_AWAY = [(5.8, -0.8, -math.pi / 2), (6.9, -0.9, -1.73), (1.5, -0.8, -math.pi / 2)]
+
+
+@pytest.mark.parametrize("trailers", [1, 2])
+@pytest.mark.parametrize("start", FACING_AWAY)
+def test_a_plan_with_a_cusp_joins_its_legs_and_keeps_its_margin_and_bounds(trailers, start):
+    p = Params().with_trailers(trailers) if trailers > 1 else Params()
+    world = parse_world("loading_bay")
+    plan = plan_path(world, p, start, reverse=True)
+    assert plan.cusps == 1, plan.report()
+    forward, backing = plan.legs
+    assert (forward.direction, backing.direction) == ("forward", "reverse")
+    # the forward leg starts at the start and ends where the backing leg starts (its far end)
+    np.testing.assert_allclose(forward.path.pose_at(0.0), start, atol=1e-9)
+    np.testing.assert_allclose(
+        forward.path.pose_at(forward.path.length),
+        backing.path.pose_at(backing.path.length),
+        atol=1e-9,
+    )
+    d = chain_length(p)
+    goal = world.goal
+    heading = math.radians(goal.heading_deg)
+    expected = (goal.x + d * math.cos(heading), goal.y + d * math.sin(heading))
+    np.testing.assert_allclose(backing.path.pose_at(0.0)[:2], expected, atol=1e-9)
+    record = world_record(world, p, 0)
+    x_min, x_max, y_min, y_max = world.bounds
+    for leg in plan.legs:
+        fine, _ = clearance_along(leg.path, p, record, step=0.01)
+        assert fine > MARGIN - 0.01
+        for unit in _units_along(leg, p):
+            assert (unit[:, 0] >= x_min).all() and (unit[:, 0] <= x_max).all()
+            assert (unit[:, 1] >= y_min).all() and (unit[:, 1] <= y_max).all()
+    report = plan.report()
+    assert report["cusps"] == 1 and [leg["direction"] for leg in report["legs"]] == [
+        "forward",
+        "reverse",
+    ]
+    assert report["length_m"] == pytest.approx(forward.path.length + backing.path.length)
+
+
+def test_driving_forward_a_plan_has_no_cusp():
+    """Forward only, the train reaches no goal that faces out of a dead end: one message."""
+    world = parse_world("loading_bay")
+    with pytest.raises(PlanError, match="forward"):
+        plan_path(world, Params(), FACING_AWAY[0], reverse=False)
+
+
+@pytest.mark.parametrize("name", sorted(WORLDS))
+def test_no_plan_leaves_its_world(name):
+    """Every axle stays inside the world's bounds along every leg of the seeds' plans."""
+    world = parse_world(name)
+    p = Params()
+    x_min, x_max, y_min, y_max = world.bounds
+    for seed in range(6):
+        try:
+            plan = planned(world, p, seed, reverse=True)
+        except PlanError:
+            continue
+        for leg in plan.legs:
+            for unit in _units_along(leg, p, step=0.05):
+                assert x_min <= unit[:, 0].min() and unit[:, 0].max() <= x_max, (name, seed)
+                assert y_min <= unit[:, 1].min() and unit[:, 1].max() <= y_max, (name, seed)

@@ -228,6 +228,12 @@ class TractorTrailerEnv(gymnasium.Env):
         self.scenario = scenario
         self.render_mode = render_mode
         self._built = sim.build(scenario)
+        if self._built.plan is not None and self._built.plan.cusps:
+            raise ValueError(
+                f"seed={scenario.seed!r}: the plan from this start has a cusp; the env drives "
+                "one leg, forward or backing up (choose a seed or start the train backs in "
+                "from directly)"
+            )
         self._stepper = sim.Stepper(self._built)
         self.nominal = self._built.nominal
         self.plant_params = self._built.plant_params

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import re
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -53,6 +54,7 @@ __all__ = [
     "finite_prefix_length",
     "follower_offtrack",
     "max_abs",
+    "merge_metrics",
     "metric_name",
     "metric_unit",
     "resolve_metrics",
@@ -512,6 +514,52 @@ def train_metrics(
     out["train_offtrack_rms_worst"] = _worst(worst_rms)
     out["train_offtrack_max_worst"] = _worst(worst_max)
     out["train_phi_max_abs_deg"] = _worst(worst_phi)
+    return out
+
+
+#: The samples each of the metrics that count their own were taken over (the others: every
+#: finite sample, ``finite_samples``).
+_OWN_SAMPLES = {
+    "trailer_offtrack_rms": "trailer_offtrack_samples",
+    "trailer_rmse_lateral": "trailer_lateral_samples",
+}
+
+
+def merge_metrics(parts: Sequence[Mapping]) -> dict:
+    """The metrics of consecutive pieces of one run, each computed on its own rows (a
+    maneuver's legs, each against its own path and leading unit), as one: counts and times
+    add up, every RMS is the root of the mean square over all the samples it counted, every
+    maximum the largest, every fraction the mean over the samples, the worst unit's RMS
+    recomputed from the merged units'; text and the sample period are the last piece's."""
+    parts = [part for part in parts if part.get("finite_samples")]
+    if not parts:
+        return {}
+    out: dict = {}
+    for name in dict.fromkeys(name for part in parts for name in part):
+        having = [part for part in parts if name in part]
+        values = [part[name] for part in having]
+        if any(isinstance(value, str) for value in values) or name == "sample_period_s":
+            out[name] = values[-1]
+        elif name in ("steps", "sim_time_s") or name.endswith("_samples"):
+            out[name] = sum(values)
+        elif "max" in name:
+            out[name] = _worst(values)
+        else:
+            weights = np.array(
+                [part.get(_OWN_SAMPLES.get(name, "finite_samples"), 0) for part in having],
+                dtype=float,
+            )
+            values = np.array(values, dtype=float)
+            kept = np.isfinite(values) & (weights > 0)
+            if not kept.any():
+                out[name] = math.nan
+                continue
+            squared = "rms" in name or name.startswith("rmse")
+            mean = np.average(values[kept] ** 2 if squared else values[kept], weights=weights[kept])
+            out[name] = float(math.sqrt(mean) if squared else mean)
+    units = [name for name in out if re.fullmatch(r"trailer(_\d+)?_offtrack_rms", name)]
+    if "train_offtrack_rms_worst" in out:
+        out["train_offtrack_rms_worst"] = _worst([out[name] for name in units])
     return out
 
 

@@ -8,10 +8,11 @@ go through it, so an option means the same everywhere and bad input fails the sa
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -49,7 +50,23 @@ from tt_mujoco.world.builtin import parse_world
 from tt_mujoco.world.part import check_world
 from tt_mujoco.world.plan import PLAN, planned
 
-__all__ = ["REVERSING_DRIVES", "Build", "build", "noise_std", "reversing_drive"]
+__all__ = [
+    "PLAN_FORWARD_DRIVE",
+    "REVERSING_DRIVES",
+    "Build",
+    "LegStart",
+    "build",
+    "noise_std",
+    "reversing_drive",
+]
+
+#: What keeps the tractor on a planned leg it drives forward (without ``--path-feedback``):
+#: a plan's place matters, and the paper's velocity tracking alone leaves the tractor up to
+#: 3 cm off a Dubins word's curvature steps.
+PLAN_FORWARD_DRIVE = (
+    "driving a planned leg forward: the path feedback (tt_mujoco.reference.feedback, its "
+    "default gains) sets the yaw-rate target from the tractor's errors to the plan"
+)
 
 #: What sets the tractor's yaw-rate target backing up (``--reverse``), by name; the run's
 #: ``metrics.json`` says which under ``reversing``, and its notes in a sentence.
@@ -144,6 +161,8 @@ class Build:
     world: Any = None
     #: The planned path (``traj="plan"``: :class:`tt_mujoco.world.plan.Plan`), else None.
     plan: Any = None
+    #: The index of the plan's leg this run drives.
+    leg: int = 0
     #: The along-track loop's gain (1/s; ``Scenario.along_track_gain`` resolved).
     along_track_gain: float = 0.0
 
@@ -293,8 +312,22 @@ def _check_size(scenario: Scenario, duration: float) -> None:
         )
 
 
-def build(scenario: Scenario) -> Build:
+class LegStart(NamedTuple):
+    """Where a leg of a planned maneuver starts: the plan, the leg's index, and the state the
+    last leg stopped in (the tractor's pose, the hitch angles; None: the plan's start)."""
+
+    plan: Any
+    index: int
+    pose: tuple | None = None
+    phis: tuple | None = None
+
+
+def build(scenario: Scenario, leg: LegStart | None = None) -> Build:
     """Validate ``scenario`` and build its run.
+
+    A planned run (``traj="plan"``) is built for the plan's first leg, or for ``leg``: the
+    run drives one leg, its ``scenario`` the given one with ``reverse`` the leg's (see
+    :mod:`tt_mujoco.sim.maneuver`).
 
     Raises
     ------
@@ -302,11 +335,29 @@ def build(scenario: Scenario) -> Build:
         Naming the first bad option and what is allowed.
     """
     scenario.validate()
+    if scenario.traj == PLAN and leg is None:
+        world = parse_world(scenario.world)
+        if world is None:
+            raise ValueError("traj='plan' is not allowed without a world: give --world")
+        deadline = time.monotonic() + scenario.time_limit_s
+        plan = planned(
+            world, scenario.plant_params(), scenario.seed, bool(scenario.reverse), deadline
+        )
+        leg = LegStart(plan, 0)
+    backs_up = scenario.reverse  # a leg of a maneuver that backs up may not
+    if leg is not None and leg.plan.cusps and parse_faults(scenario.faults):
+        raise ValueError(
+            f"faults={scenario.faults!r} is not allowed here: this start's plan has "
+            f"{leg.plan.cusps} cusp(s), each leg a run from rest, and a fault is timed within "
+            "one run (give a start the train backs in from directly, or no faults)"
+        )
+    if leg is not None:
+        scenario = dataclasses.replace(scenario, reverse=leg.plan.legs[leg.index].reverse)
     nominal = scenario.nominal_params()
     plant_p = scenario.plant_params()
     _plant_class(scenario.plant).check_supported(scenario.disturbance)
     cls = controller_class(scenario.controller)
-    if scenario.reverse and not getattr(cls, "REVERSE", True):
+    if backs_up and not getattr(cls, "REVERSE", True):
         backing = ", ".join(n for n in CONTROLLERS if getattr(CONTROLLERS[n], "REVERSE", True))
         raise ValueError(
             f"controller={scenario.controller!r} with reverse=True is not allowed: it tracks the "
@@ -315,13 +366,16 @@ def build(scenario: Scenario) -> Build:
     reversing = reversing_drive(scenario, cls)
     world = parse_world(scenario.world)
     plan = None
-    if scenario.traj == PLAN:
-        if world is None:
-            raise ValueError("traj='plan' is not allowed without a world: give --world")
-        deadline = time.monotonic() + scenario.time_limit_s
-        plan = planned(world, plant_p, scenario.seed, bool(scenario.reverse), deadline)
+    if leg is not None:
+        plan = leg.plan
         ramp = {k: v for k, v in scenario.path_options.items() if k in ("cruise", "ramp_time")}
-        path, target, pose = target_on(plan.path, scenario.target, scenario.duration, **ramp)
+        leg_path = plan.legs[leg.index].path
+        duration = scenario.duration
+        if duration is not None and plan.cusps:  # each leg its share, by its length
+            whole = sum(one.path.length for one in plan.legs)
+            steps = round(duration * leg_path.length / whole / scenario.control_dt)
+            duration = max(steps, 1) * scenario.control_dt
+        path, target, pose = target_on(leg_path, scenario.target, duration, **ramp)
     else:
         path, target, pose = make_target(
             scenario.traj,
@@ -337,10 +391,14 @@ def build(scenario: Scenario) -> Build:
         target = ReverseTarget(target)
         pose = target.initial_pose
         start_s = target.s_end
+    if leg is not None and leg.pose is not None:
+        pose = leg.pose  # where the last leg stopped
     if scenario.path_feedback is not None:
         target = PathFeedback.from_config(target, scenario.path_feedback)
     elif reversing == "hitch_cascade":
         target = HitchCascade.from_config(target, nominal, scenario.hitch_feedback)
+    elif plan is not None and not scenario.reverse:
+        target = PathFeedback.from_config(target, {})  # see PLAN_FORWARD_DRIVE
     dt = scenario.control_dt
     # "on_path": the vehicle starts in the reference's initial state, pose *and* speed (paper
     # Section 6.3). The paper's static cycloid target starts at 0.765 m/s while its vehicle is
@@ -389,11 +447,16 @@ def build(scenario: Scenario) -> Build:
         ),
         start_s=start_s,
         reversing=reversing,
-        initial_hitches=_initial_hitches(scenario, path, start_s, plant_p, reversing),
+        initial_hitches=(
+            _initial_hitches(scenario, path, start_s, plant_p, reversing)
+            if leg is None or leg.phis is None
+            else tuple(leg.phis)
+        ),
         delay_steps=_delay_steps(scenario, dt, duration),
         relief=relief_of(parse_terrain(scenario.terrain), drawn_polyline(path, duration), plant_p),
         world=world,
         plan=plan,
+        leg=0 if leg is None else leg.index,
         along_track_gain=_along_track_gain(scenario),
     )
     check_world(result.world, plant_p, result.initial_pose, result.initial_phis())

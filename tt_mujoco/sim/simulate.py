@@ -19,7 +19,13 @@ from tt_mujoco.registry import describe_failure as usercode_failure
 from tt_mujoco.registry import shown
 from tt_mujoco.sim import compiled
 from tt_mujoco.sim import faults as faults_mod
-from tt_mujoco.sim.build import REVERSING_DRIVES, Build, build, drawn_polyline
+from tt_mujoco.sim.build import (
+    PLAN_FORWARD_DRIVE,
+    REVERSING_DRIVES,
+    Build,
+    build,
+    drawn_polyline,
+)
 from tt_mujoco.sim.ground import ground_report, parse_patches
 from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sim.relief import RampRelief
@@ -62,15 +68,16 @@ class TimeLimitExceeded(BaseException):
 
 
 @contextlib.contextmanager
-def wall_time_limit(seconds: float):
-    """Raise :class:`TimeLimitExceeded` in this thread after ``seconds`` of wall time; a
-    no-op outside a process's main thread, where signals cannot be received."""
+def wall_time_limit(seconds: float, told: float | None = None):
+    """Raise :class:`TimeLimitExceeded` (of ``told``, the limit as the user gave it; default
+    ``seconds``) in this thread after ``seconds`` of wall time; a no-op outside a process's
+    main thread, where signals cannot be received."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
 
     def expired(signum, frame):
-        raise TimeLimitExceeded(seconds)
+        raise TimeLimitExceeded(seconds if told is None else told)
 
     previous = signal.signal(signal.SIGALRM, expired)
     signal.setitimer(signal.ITIMER_REAL, seconds)
@@ -160,13 +167,26 @@ def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint
     else:
         built = build(scenario)
         check_user_code(built)
+    if built.plan is not None and built.plan.cusps:
+        from tt_mujoco.sim.maneuver import drive  # a maneuver: its legs one after the other
+
+        return drive(built, progress, on_step, checkpoint)
+    rng = np.random.default_rng(built.scenario.seed)
+    leg = drive_leg(built, rng, built.scenario.time_limit_s, progress, on_step, checkpoint)
+    return finish(built, *leg)
+
+
+def drive_leg(built: Build, rng, time_limit: float, progress=None, on_step=None, checkpoint=None):
+    """``(stepper, controller, status, message, wall)``: one episode of ``built`` (a run, or
+    one leg of a maneuver) with the noise of ``rng``, stopped after ``time_limit`` s of wall
+    time (what is left of the scenario's); the others as :func:`simulate`'s."""
     stepper = Stepper(built)
-    stepper.reset(np.random.default_rng(built.scenario.seed), checkpoint=checkpoint)
+    stepper.reset(rng, checkpoint=checkpoint)
     controller = built.new_controller()
     controller.reset()
     start_wall = time.perf_counter()
     try:
-        with wall_time_limit(built.scenario.time_limit_s), noting_interrupts():
+        with wall_time_limit(time_limit, built.scenario.time_limit_s), noting_interrupts():
             status, message = run_episode(stepper, controller, progress, on_step)
     except TimeLimitExceeded as err:
         status, message = _time_limit_stop(stepper, err)
@@ -175,7 +195,7 @@ def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint
     wall = time.perf_counter() - start_wall
     if progress is not None:
         progress(stepper.steps, stepper.steps)
-    return finish(built, stepper, controller, status, message, wall)
+    return stepper, controller, status, message, wall
 
 
 def controller_report(controller) -> tuple[dict, str | None]:
@@ -251,6 +271,16 @@ def _relief_times(relief, ts) -> dict:
     }
 
 
+def driven_leg(leg: dict, reverse: bool, metrics: dict, t, status: str, offset=0.0) -> None:
+    """Add to a plan's ``leg`` report how it was driven: when (``t_start_s``, ``t_end_s``,
+    the maneuver's time), how it ended, and its leading point's rms off its path."""
+    leg["t_start_s"] = offset
+    leg["t_end_s"] = offset + float(t[-1]) if len(t) else offset
+    leg["status"] = status
+    leading = "leading_cross_track_rms" if reverse else "cross_track_rms"
+    leg["leading_cross_track_rms"] = metrics.get(leading)
+
+
 def finish(built: Build, stepper: Stepper, controller, status, message, wall) -> Result:
     """The :class:`Result` of an episode: time series, metrics (built-in and the scenario's
     extra ones) and the configuration."""
@@ -281,7 +311,9 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
             built.world, built.plant_params, ts, stepper.world_clearance, stepper.collision
         )
         if built.plan is not None:
-            metrics["world"]["plan"] = built.plan.report()
+            report = built.plan.report()
+            driven_leg(report["legs"][built.leg], scenario.reverse, metrics, ts["t"], status)
+            metrics["world"]["plan"] = report
     report, error = controller_report(controller)
     if report:
         metrics["controller"] = report
@@ -296,6 +328,8 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
     notes = [stepper.loop_note] if stepper.loop_note else []
     if built.reversing is not None:
         notes.append(f"backing up: {REVERSING_DRIVES[built.reversing]}")
+    elif built.plan is not None and scenario.path_feedback is None:
+        notes.append(PLAN_FORWARD_DRIVE)
     config = {
         "scenario": scenario.to_dict(),
         "nominal_params": built.nominal.to_dict(),

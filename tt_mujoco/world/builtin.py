@@ -31,7 +31,7 @@ def _parked(name, x, y, heading_deg) -> dict:
 WORLDS = {
     "loading_bay": {
         "description": "a building's front with one bay to back the last trailer into",
-        "bounds": [-3.0, 7.5, -2.0, 3.5],
+        "bounds": [-4.0, 11.0, -6.0, 3.5],
         "start": {"x": [0.0, 7.0], "y": [-1.5, 0.3], "heading_deg": [-180.0, 180.0]},
         "goal": {
             "x": 4.0,
@@ -41,7 +41,7 @@ WORLDS = {
         },
         "obstacle": [
             _wall("building front west", [0.5, 1.025], [3.675, 1.025]),
-            _wall("building front east", [4.325, 1.025], [7.5, 1.025]),
+            _wall("building front east", [4.325, 1.025], [11.0, 1.025]),
         ],
     },
     "alley": {
@@ -59,7 +59,7 @@ WORLDS = {
     },
     "yard": {
         "description": "an open yard with a row of parked trailers and one free slot",
-        "bounds": [-3.0, 8.0, -3.0, 4.0],
+        "bounds": [-4.0, 11.0, -7.0, 4.0],
         "start": {"x": [0.0, 7.0], "y": [-2.5, 0.5], "heading_deg": [-180.0, 180.0]},
         "goal": {"x": 3.6, "y": 3.0, "heading_deg": -90.0},
         "obstacle": [

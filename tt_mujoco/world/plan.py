@@ -17,12 +17,18 @@ last axle, straight) ahead of it along the goal's heading.
 - **Forward**: from the tractor's start, a Dubins word to the goal pose ``exit`` short of it,
   then straight ``exit + D`` to the tractor's place at the goal.
 
+- **Backing up with a cusp** (when no path backs in directly): the train drives forward to a
+  cusp, stops, and backs in. The leg it backs: from the tractor at the goal, straight out for
+  an exit, an arc (of :data:`CUSP_TURNS`, at a radius of :data:`CUSP_RADII`) and a straight
+  ``D``, on which the train stands straight at the cusp. The forward leg: a Dubins word from
+  the start to that last straight, then along it to the cusp.
+
 The candidates (each exit length of :data:`EXITS`, each radius of :data:`RADII` scaled by the
 train's least radius, each Dubins word) are tried shortest first, the long exits before the
-short ones; the first whose every unit
-keeps ``margin`` from every obstacle at every sample (``step`` apart along the path) is the
-plan. Every formula it uses is the project's own: the axle chain, the footprints and the
-contact check (:mod:`tt_mujoco.world.contact`).
+short ones, the plans with a cusp last; the first whose every unit keeps ``margin`` from every
+obstacle, and every axle inside the world's bounds, at every sample (``step`` apart along each
+leg) is the plan. Every formula it uses is the project's own: the axle chain, the footprints
+and the contact check (:mod:`tt_mujoco.world.contact`).
 """
 
 from __future__ import annotations
@@ -42,10 +48,14 @@ from tt_mujoco.world.part import start_problem, world_record
 from tt_mujoco.world.world import World, WorldError
 
 __all__ = [
+    "CUSP_EXITS",
+    "CUSP_RADII",
+    "CUSP_TURNS",
     "EXITS",
     "MARGIN",
     "PLAN",
     "RADII",
+    "Leg",
     "Plan",
     "PlanError",
     "plan_path",
@@ -74,6 +84,11 @@ LEAST_RADIUS = 1.5
 #: The spacing of the samples the plan is checked at (m), and every how many of them a first
 #: look is taken.
 STEP, COARSE = 0.05, 8
+#: A cusp's place: the straight out of the goal before the arc (multiples of ``D``), the arc's
+#: turn (rad, left positive) and radius (multiples of the least radius).
+CUSP_EXITS = (0.5, 1.0, 2.0)
+CUSP_TURNS = (0.0, math.pi / 4, -math.pi / 4, math.pi / 2, -math.pi / 2)
+CUSP_RADII = (1.0, 1.5)
 
 
 class PlanError(WorldError):
@@ -81,30 +96,61 @@ class PlanError(WorldError):
 
 
 @dataclass(frozen=True)
-class Plan:
-    """A planned path and how it was found."""
+class Leg:
+    """One leg of a plan: the tractor's path and the way it is driven. A leg is driven from
+    rest to rest; backing up (``"reverse"``), the run drives the path from its end to its
+    start, the last axle leading."""
 
     #: the tractor's path (consecutive arcs, in closed form)
     path: ArcsPath
-    #: "reverse" (the run backs it up) or "forward"
+    #: "forward" or "reverse"
     direction: str
-    #: the Dubins word, its radius (m), the straight exit (m)
+    #: its pieces, as letters: a Dubins word ("LSR"), or the backing leg's "S", "SLS", ...
     word: str
+    #: the radius of its arcs (m; 0 for a straight)
     radius: float
+
+    @property
+    def reverse(self) -> bool:
+        return self.direction == "reverse"
+
+    def report(self) -> dict:
+        return {
+            "direction": self.direction,
+            "word": self.word,
+            "radius_m": self.radius,
+            "length_m": float(self.path.length),
+        }
+
+
+@dataclass(frozen=True)
+class Plan:
+    """A planned maneuver, its legs driven one after the other, and how it was found."""
+
+    legs: tuple[Leg, ...]
+    #: the straight exit out of (or into) the goal (m)
     exit: float
     #: the least clearance of any unit along it (m), the candidates tried, the time taken (s)
     clearance: float
     candidates: int
     planning_time_s: float
 
+    @property
+    def cusps(self) -> int:
+        """The direction switches: one between each two legs."""
+        return len(self.legs) - 1
+
     def report(self) -> dict:
         """The plan as ``metrics.json``'s ``world.plan`` gives it."""
+        last = self.legs[-1]
         return {
-            "direction": self.direction,
-            "word": self.word,
-            "radius_m": self.radius,
+            "direction": last.direction,
+            "word": " + ".join(leg.word for leg in self.legs),
+            "radius_m": last.radius if not self.cusps else self.legs[0].radius,
             "exit_m": self.exit,
-            "length_m": float(self.path.length),
+            "length_m": float(sum(leg.path.length for leg in self.legs)),
+            "cusps": self.cusps,
+            "legs": [leg.report() for leg in self.legs],
             "clearance_m": self.clearance,
             "candidates": self.candidates,
             "planning_time_s": self.planning_time_s,
@@ -138,7 +184,7 @@ def _word_pieces(word) -> list[tuple[float, float]]:
 
 
 def clearance_along(
-    path, p: Params, record, step: float = STEP, below: float = -math.inf
+    path, p: Params, record, step: float = STEP, below: float = -math.inf, bounds=None
 ) -> tuple[float, float]:
     """``(gap, reached)``: the least gap between any unit of ``p`` and any obstacle of a
     world's ``record`` (:func:`~tt_mujoco.world.part.world_record`) with the tractor at arc
@@ -146,9 +192,10 @@ def clearance_along(
     fraction of the samples looked at. With ``below``, it stops at the first sample whose gap
     is under it, looking first at every :data:`COARSE`-th sample (a path that fails is most
     often told there, and those samples are among the others), and gaps of ``below`` or more
-    are not told apart (the gap is then ``below``)."""
+    are not told apart (the gap is then ``below``). With ``bounds`` (x_min, x_max, y_min,
+    y_max), a sample with an axle outside them has the gap -inf."""
     cap = math.inf if below == -math.inf else below
-    if not record.sizes.size:
+    if not record.sizes.size and bounds is None:
         return math.inf, 1.0
     s = np.linspace(0.0, path.length, max(2, math.ceil(path.length / step) + 1))
     lengths = [(t.L, t.L0) for t in p.trailers]
@@ -162,6 +209,12 @@ def clearance_along(
             poses[0] = x[i], y[i], heading[i]
             for k, axle in enumerate(chain, start=1):
                 poses[k] = axle["x"][i], axle["y"][i], axle["theta"][i]
+            if bounds is not None and _outside(bounds, poses):
+                yield i, -math.inf
+                continue
+            if not record.sizes.size:
+                yield i, math.inf
+                continue
             gap, _, _ = contact.clearance_of(
                 poses,
                 record.boxes,
@@ -185,6 +238,57 @@ def clearance_along(
     return least, 1.0
 
 
+def _direct(start, goal_pose, d, base, reverse):
+    """The candidates without a cusp: ``((tier, length), exit, origin, pieces, word)``."""
+    tractor_at_goal = _ahead(goal_pose, d)
+    tail_at_start = _ahead(start, -d)
+    for tier, exits in enumerate(EXITS):
+        for exit_length in (d * share for share in exits):
+            for scale in RADII:
+                if reverse:
+                    out = _ahead(tractor_at_goal, exit_length)
+                    for word in dubins_words(out, tail_at_start, base * scale):
+                        pieces = [(exit_length, 0.0), *_word_pieces(word), (d, 0.0)]
+                        key = (tier, word.length + exit_length)
+                        yield key, exit_length, tractor_at_goal, pieces, word
+                else:
+                    for word in dubins_words(start, _ahead(goal_pose, -exit_length), base * scale):
+                        pieces = [*_word_pieces(word), (exit_length + d, 0.0)]
+                        yield (tier, word.length + exit_length), exit_length, start, pieces, word
+
+
+def _backing_legs(goal_pose, d, base):
+    """The legs a cusp plan backs in on, each ``(leg, exit)``: from the tractor at the goal
+    straight out, an arc of :data:`CUSP_TURNS` and a straight ``d`` to the cusp."""
+    tractor_at_goal = _ahead(goal_pose, d)
+    for share in CUSP_EXITS:
+        exit_length = d * share
+        for turn in CUSP_TURNS:
+            for scale in CUSP_RADII if turn else (0.0,):
+                radius = base * scale
+                kappa = math.copysign(1.0 / radius, turn) if turn else 0.0
+                arc = abs(turn) * radius
+                path = _arcs(tractor_at_goal, [(exit_length, 0.0), (arc, kappa), (d, 0.0)])
+                word = "S" if not turn else ("SLS" if turn > 0 else "SRS")
+                yield Leg(path, "reverse", word, radius), exit_length
+
+
+def _with_cusp(start, goal_pose, d, base):
+    """The candidates with one cusp, ``(length, exit, backing leg, word)``: the forward leg a
+    Dubins word from ``start`` to the backing leg's last straight, then along it."""
+    for backing, exit_length in _backing_legs(goal_pose, d, base):
+        approach = backing.path.pose_at(backing.path.length - d)
+        for scale in RADII:
+            for word in dubins_words(start, approach, base * scale):
+                yield word.length + d + backing.path.length, exit_length, backing, word
+
+
+def _outside(bounds, poses) -> bool:
+    x_min, x_max, y_min, y_max = bounds
+    x, y = poses[:, 0], poses[:, 1]
+    return bool(((x < x_min) | (x > x_max) | (y < y_min) | (y > y_max)).any())
+
+
 def plan_path(
     world: World,
     p: Params,
@@ -193,7 +297,7 @@ def plan_path(
     margin: float = MARGIN,
     deadline: float | None = None,
 ) -> Plan:
-    """The shortest candidate path (see the module) from the tractor's ``start`` pose
+    """The shortest candidate plan (see the module) from the tractor's ``start`` pose
     ``(x, y, heading)`` (the train straight) to ``world``'s goal that keeps ``margin`` (m)
     from every obstacle; a :class:`PlanError` when none does (or when ``deadline``, a
     ``time.monotonic()`` value, passes first)."""
@@ -203,53 +307,62 @@ def plan_path(
         raise WorldError(f"world {world.name!r} has no goal to plan a path to")
     d = train_length(p)
     goal_pose = (goal.x, goal.y, math.radians(goal.heading_deg))
-    tractor_at_goal = _ahead(goal_pose, d)
-    tail_at_start = _ahead(start, -d)
     base = least_radius(p)
     record = world_record(world, p, 0)
-    candidates = []
-    for tier, exits in enumerate(EXITS):
-        for exit_length in (d * share for share in exits):
-            for scale in RADII:
-                radius = base * scale
-                if reverse:
-                    out = _ahead(tractor_at_goal, exit_length)
-                    words = dubins_words(out, tail_at_start, radius)
-                else:
-                    words = dubins_words(start, _ahead(goal_pose, -exit_length), radius)
-                candidates += [(tier, w.length + exit_length, exit_length, w) for w in words]
-    candidates.sort(key=lambda c: c[:2])
-    best, tried = 0.0, 0
-    for _, _, exit_length, word in candidates:
+    direction = "reverse" if reverse else "forward"
+    best, tried, total, late = 0.0, 0, 0, False
+
+    def clear(path) -> bool:
+        nonlocal best
+        gap, reached = clearance_along(path, p, record, below=margin, bounds=world.bounds)
+        best = max(best, reached)
+        return gap >= margin
+
+    def found(legs, exit_length) -> Plan:
+        clearance = min(clearance_along(leg.path, p, record)[0] for leg in legs)
+        return Plan(
+            legs=tuple(legs),
+            exit=exit_length,
+            clearance=clearance,
+            candidates=tried,
+            planning_time_s=time.perf_counter() - began,
+        )
+
+    direct = sorted(_direct(start, goal_pose, d, base, reverse), key=lambda c: c[0])
+    total += len(direct)
+    for _, exit_length, origin, pieces, word in direct:
         if deadline is not None and time.monotonic() > deadline:
+            late = True
             break
         tried += 1
-        if reverse:
-            pieces = [(exit_length, 0.0), *_word_pieces(word), (d, 0.0)]
-            path = _arcs(tractor_at_goal, pieces)
-        else:
-            pieces = [*_word_pieces(word), (exit_length + d, 0.0)]
-            path = _arcs(start, pieces)
-        gap, reached = clearance_along(path, p, record, below=margin)
-        best = max(best, reached)
-        if gap >= margin:  # clear: its exact clearance, for the report
-            gap, _ = clearance_along(path, p, record)
-            return Plan(
-                path=path,
-                direction="reverse" if reverse else "forward",
-                word=word.kinds,
-                radius=word.radius,
-                exit=exit_length,
-                clearance=gap,
-                candidates=tried,
-                planning_time_s=time.perf_counter() - began,
-            )
-    why = "its time limit passed" if tried < len(candidates) else "none is clear"
-    closest = f"; the best is clear for {100 * best:.0f} % of it" if tried else ""
+        path = _arcs(origin, pieces)
+        if clear(path):
+            return found([Leg(path, direction, word.kinds, word.radius)], exit_length)
+    if reverse and not late:
+        cusped = sorted(_with_cusp(start, goal_pose, d, base), key=lambda c: c[0])
+        total += len(cusped)
+        backing_clear: dict[int, bool] = {}
+        for _, exit_length, backing, word in cusped:
+            if deadline is not None and time.monotonic() > deadline:
+                late = True
+                break
+            tried += 1
+            key = id(backing)
+            if key not in backing_clear:
+                backing_clear[key] = clear(backing.path)
+            if not backing_clear[key]:
+                continue
+            forward = _arcs(start, [*_word_pieces(word), (d, 0.0)])
+            if clear(forward):
+                return found(
+                    [Leg(forward, "forward", word.kinds, word.radius), backing], exit_length
+                )
+    why = "its time limit passed" if late else "none is clear"
+    closest = f"; the best is clear for {math.floor(100 * best)} % of it" if tried else ""
     raise PlanError(
         f"no path to world {world.name!r}'s goal from x={start[0]:.3f}, y={start[1]:.3f} m, "
         f"heading {math.degrees(start[2]):.1f} deg "
-        f"({'backing up' if reverse else 'forward'}): {tried} of {len(candidates)} candidates "
+        f"({'backing up' if reverse else 'forward'}): {tried} of {total} candidates "
         f"tried, {why} with a margin of {margin:g} m{closest}"
     )
 
