@@ -9,11 +9,20 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 #: The order docs/layout.md gives (its sentence "each row imports only rows above it (...)").
 SENTENCE = re.compile(r"each row imports only rows above it \((.*?)\)", re.S)
-#: The modules of the top row: defaults, the schema, the registries, the output helpers ...
-APPLICATIONS = (
-    *("run", "render", "validate", "validate_train", "model", "compare", "sweep", "paper"),
-    *("gym_env", "config", "api"),
-)
+
+
+def _applications() -> set[str]:
+    """The top row's modules, as docs/layout.md's table names them (its row of "the
+    applications"), and the Python API."""
+    text = (ROOT / "docs" / "layout.md").read_text()
+    row = next(line for line in text.splitlines() if "the applications" in line)
+    names = re.findall(r"`(?:tt_mujoco/)?(\w+)(?:\.py|/)?`", row.split("|")[1])
+    assert "run" in names and "gym_env" in names, names
+    return {*names, "api"}
+
+
+#: The modules of the top row (the others outside ORDER: the package's own helpers).
+APPLICATIONS = _applications()
 
 
 def _order() -> list[str]:

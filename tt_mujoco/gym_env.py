@@ -22,9 +22,14 @@ chooses the wheel torques:
   forward, the last trailer when reversing), and the tracking target ``(v_d, omega_d)``.
   :func:`observation_names` gives the names for N trailers, ``env.observation_names`` the
   environment's; :data:`OBSERVATION_NAMES` are the one-trailer vehicle's.
-- **reward**: the negative squared tracking error ``-(e_v^2 + e_omega^2)`` after the step,
-  ``e = z - z_d`` with the true velocities, so that an episode's return is ``-N`` times
-  ``rmse_v^2 + rmse_omega^2`` of ``metrics.json``. A jackknife or a blow-up ends the episode
+- **reward**, by ``task``: ``"velocity"`` (the default), the negative squared tracking error
+  ``-(e_v^2 + e_omega^2)`` after the step, ``e = z - z_d`` with the true velocities, so that an
+  episode's return is ``-N`` times ``rmse_v^2 + rmse_omega^2`` of ``metrics.json``;
+  ``"path"``, following the path with the unit that leads the motion (the tractor forward, the
+  last trailer backing up): the negative mean of its squared cross-track and heading errors
+  and the speed error, each scaled by :data:`PATH_TASK_SCALES` (an error of one scale costs 1
+  a step), so an agent that stands still on the path still pays for its speed error. A
+  jackknife or a blow-up ends the episode
   (``terminated``) with the reward ``-(1 + steps left)``, as if every remaining step had an
   error of 1: ending early never pays; so does a unit touching a world's obstacle (status
   "collision"), and a user's path or disturbance that fails
@@ -93,6 +98,8 @@ __all__ = [
     "ACTION_UNITS",
     "ENV_ID",
     "OBSERVATION_NAMES",
+    "PATH_TASK_SCALES",
+    "TASKS",
     "TractorTrailerEnv",
     "observation_bounds",
     "observation_names",
@@ -114,6 +121,11 @@ OBSERVATION_NAMES = observation_names(1)
 DEFAULT_CONTROL_DT = 0.01
 #: The action's units: fractions of the torque limit (the default), or N m.
 ACTION_UNITS = ("normalized", "torque")
+#: What the reward rewards: tracking the velocity target, or following the path.
+TASKS = ("velocity", "path")
+#: The path task's error scales: the leading unit's cross-track (m) and heading error (rad),
+#: the speed error (m/s). An error of one scale costs as much as one of another.
+PATH_TASK_SCALES = {"cross_track": 0.05, "heading_error": 0.1, "speed": 0.2}
 #: The observation fields that are headings, wrapped to [-pi, pi] (a unit's own, or its error
 #: against the path's tangent).
 HEADINGS = ("theta", "theta0", "heading_error")
@@ -196,6 +208,9 @@ class TractorTrailerEnv(gymnasium.Env):
     action_units : {"normalized", "torque"}
         The action as fractions of the torque limit in ``[-1, 1]`` (the default), or as
         torques in N m.
+    task : {"velocity", "path"}
+        What the reward rewards (see the module): tracking ``(v_d, omega_d)``, or following
+        the path with the leading unit.
     **overrides
         Scenario fields to replace, e.g. ``traj="circle", plant="reduced"``.
     """
@@ -211,6 +226,7 @@ class TractorTrailerEnv(gymnasium.Env):
         scenario: sim.Scenario | None = None,
         render_mode=None,
         action_units: str = "normalized",
+        task: str = "velocity",
         **overrides,
     ):
         if scenario is None:
@@ -225,6 +241,9 @@ class TractorTrailerEnv(gymnasium.Env):
             raise ValueError(
                 f"action_units={action_units!r} is not allowed: use one of {ACTION_UNITS}"
             )
+        if task not in TASKS:
+            raise ValueError(f"task={task!r} is not allowed: use one of {TASKS}")
+        self.task = task
         self.scenario = scenario
         self.render_mode = render_mode
         self._built = sim.build(scenario)
@@ -309,9 +328,7 @@ class TractorTrailerEnv(gymnasium.Env):
         except sim.StopRun as stop:
             info = {"t": stepper.k * self.dt, "status": stop.status, "message": stop.message}
             return self._last_obs, -(1.0 + steps_left), True, False, info
-        me = self._me
-        e_v, e_w = me.v - self._ref.v_d, me.omega - self._ref.omega_d
-        reward = -(e_v * e_v + e_w * e_w)
+        reward = self._reward()
         truncated = steps_left <= 0
         return obs, float(reward), False, truncated, self._info("ok" if truncated else "running")
 
@@ -353,6 +370,19 @@ class TractorTrailerEnv(gymnasium.Env):
         )
         return self._renderer.render()
 
+    def last_measurement(self):
+        """The measurement of the last step (:class:`tt_mujoco.sim.measure.Measurement`: true
+        poses, the scenario's noise on v and omega)."""
+        return self._me
+
+    def last_axle_pose(self) -> tuple[float, float, float]:
+        """``(x, y, theta)`` of the last trailer's axle at the last step."""
+        me = self._me
+        if self.n_trailers == 1:
+            return me.x0, me.y0, me.theta0
+        row = me.train[-1]
+        return row[0], row[1], row[2]
+
     def close(self):
         if self._renderer is not None:
             self._renderer.close()
@@ -368,6 +398,7 @@ class TractorTrailerEnv(gymnasium.Env):
         train = [value for row in seen.train for value in row] if self.n_trailers > 1 else []
         errors = self._path_errors(me)
         lead = errors[-2:] if self._reverse else errors[:2]
+        self._lead = lead
         obs = np.array([*seen, *train, *errors, *lead, ref.v_d, ref.omega_d], dtype=np.float64)
         obs[self._headings] = np.remainder(obs[self._headings] + math.pi, 2 * math.pi) - math.pi
         obs = np.clip(obs, self._low, self._high)  # beyond: the state has blown up
@@ -387,6 +418,21 @@ class TractorTrailerEnv(gymnasium.Env):
             self._unit_s[i] = s
             out += [e_y, e_psi]
         return out
+
+    def _reward(self) -> float:
+        """The step's reward for the env's task (see the module), after the step."""
+        me, ref = self._me, self._ref
+        if self.task == "velocity":
+            e_v, e_w = me.v - ref.v_d, me.omega - ref.omega_d
+            return -(e_v * e_v + e_w * e_w)
+        scales = PATH_TASK_SCALES
+        e_y, e_psi = self._lead
+        errors = (
+            e_y / scales["cross_track"],
+            e_psi / scales["heading_error"],
+            (me.v - ref.v_d) / scales["speed"],
+        )
+        return -sum(e * e for e in errors) / len(errors)
 
     def _info(self, status: str) -> dict:
         me, ref = self._me, self._ref
