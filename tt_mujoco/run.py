@@ -94,6 +94,14 @@ OUTPUTS = Schema(
             choice(*TIMESERIES_FORMATS),
             choices=TIMESERIES_FORMATS,
         ),
+        Option(
+            "mcap",
+            False,
+            "also write run.mcap: the run as ROS 2 messages for Foxglove and ROS 2's bag tools "
+            "(the mcap extra; python -m tt_mujoco.bag converts a finished run)",
+            boolean,
+            form="switch",
+        ),
         Option("quiet", False, "no progress bar", boolean, form="switch"),
         Option(
             "viewer",
@@ -246,6 +254,7 @@ def write_outputs(
     quiet,
     config_toml: str | None = None,
     timeseries_format: str = "parquet",
+    mcap: bool = False,
 ):
     """Write ``config.toml`` (if given), the time series, figures, video and, last,
     ``metrics.json`` into ``out``.
@@ -273,6 +282,21 @@ def write_outputs(
     write_timeseries(ts_file, result.timeseries, (*COLUMNS, *extra), units)
     (out / CHECKPOINT_FILE).unlink(missing_ok=True)  # the complete file replaces it
     written.append(ts_file)
+    if mcap:
+        from tt_mujoco.bag import BAG_FILE, write_bag
+        from tt_mujoco.world.builtin import parse_world
+
+        scenario = result.scenario
+        written.append(
+            write_bag(
+                result.timeseries,
+                result.reference_polyline,
+                scenario.plant_params(),
+                out / BAG_FILE,
+                bool(scenario.reverse),
+                parse_world(scenario.world),
+            )
+        )
     if len(result.timeseries["t"]) < 2 and (plots or video):
         # A run that stopped at its first step has one sample: nothing to draw.
         notes.append("figures and video skipped: the run has fewer than 2 samples")
@@ -381,6 +405,8 @@ def _main(argv: list[str] | None) -> int:
     try:
         scenario, args, shown = invocation.scenario, invocation.args, invocation.outputs
         # Everything simulate checks, before an output folder exists; simulate reuses it.
+        if shown["mcap"]:
+            _check_mcap()
         built = build(scenario)
         check_user_code(built)
         config_toml = config_mod.dump_config(invocation.file_form())
@@ -428,6 +454,7 @@ def _main(argv: list[str] | None) -> int:
             quiet=shown["quiet"],
             config_toml=config_toml,
             timeseries_format=shown["timeseries_format"],
+            mcap=shown["mcap"],
         )
     except OSError as err:  # a full disk, a quota, a vanished folder
         if live is not None:
@@ -454,6 +481,16 @@ def _main(argv: list[str] | None) -> int:
     if not result.ok:
         return _fail(f"the run stopped: {result.message}", EXIT_DIVERGED)
     return EXIT_OK
+
+
+def _check_mcap() -> None:
+    """``--mcap`` needs the mcap extra: said before the run, not after it."""
+    from importlib.util import find_spec
+
+    if find_spec("mcap_ros2") is None:
+        raise BadInputError(
+            "mcap=True needs the mcap extra to write run.mcap: pip install 'tt-mujoco[mcap]'"
+        )
 
 
 def _file_system_refused(err: OSError) -> int:

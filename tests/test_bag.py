@@ -1,0 +1,167 @@
+"""Runs as MCAP files of ROS 2 messages (tt_mujoco.bag): every topic with its ROS 2 schema and
+its count, the values the run's own, read back by the mcap readers without ROS; the command's
+bad input is exit 2 with nothing written."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+pytest.importorskip("mcap_ros2")
+
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
+
+from tt_mujoco import bag, run
+from tt_mujoco.outputs import read_timeseries
+from tt_mujoco.world.builtin import parse_world
+
+
+@pytest.fixture(scope="module")
+def bay_run(tmp_path_factory):
+    """A planned run into the loading bay, two trailers, written with --mcap."""
+    folder = tmp_path_factory.mktemp("bag") / "run"
+    code = run.main(
+        [
+            *("--world", "loading_bay", "--traj", "plan", "--reverse", "--seed", "1"),
+            *("--trailers", "2", "--plant", "reduced", "--no-video", "--no-plots"),
+            *("--quiet", "--mcap", "--out", str(folder)),
+        ]
+    )
+    assert code == 0
+    return folder
+
+
+def _read(path):
+    with open(path, "rb") as stream:
+        reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+        summary = reader.get_summary()
+        channels = {
+            c.topic: (
+                summary.schemas[c.schema_id].name,
+                summary.statistics.channel_message_counts[c.id],
+            )
+            for c in summary.channels.values()
+        }
+        messages = {}
+        for _, channel, message, decoded in reader.iter_decoded_messages():
+            messages.setdefault(channel.topic, []).append((message.log_time, decoded))
+    return channels, messages
+
+
+def test_every_topic_has_its_ros2_schema_and_count(bay_run):
+    channels, _ = _read(bay_run / bag.BAG_FILE)
+    ts = read_timeseries(bay_run / "timeseries.parquet")
+    rows = len(range(0, len(ts["t"]), round(1.0 / (bag.DEFAULT_RATE * 0.001))))
+    expected = {
+        "/tf": "tf2_msgs/msg/TFMessage",
+        "/tractor/odom": "nav_msgs/msg/Odometry",
+        "/trailer_1/odom": "nav_msgs/msg/Odometry",
+        "/trailer_2/odom": "nav_msgs/msg/Odometry",
+        "/joint_states": "sensor_msgs/msg/JointState",
+        "/reference/point": "geometry_msgs/msg/PoseStamped",
+        "/tracking_errors": "std_msgs/msg/Float64MultiArray",
+    }
+    for topic, schema in expected.items():
+        assert channels[topic] == (schema, rows), topic
+    assert channels["/reference/path"] == ("nav_msgs/msg/Path", 1)
+    assert channels["/world/goal"] == ("geometry_msgs/msg/PoseStamped", 1)
+    obstacles = len(parse_world("loading_bay").all_obstacles)
+    assert sorted(t for t in channels if t.startswith("/world/obstacle_")) == sorted(
+        f"/world/obstacle_{k}" for k in range(1, obstacles + 1)
+    )
+
+
+def test_the_messages_hold_the_runs_values(bay_run):
+    _, messages = _read(bay_run / bag.BAG_FILE)
+    ts = read_timeseries(bay_run / "timeseries.parquet")
+    stride = round(1.0 / (bag.DEFAULT_RATE * 0.001))
+    for j in (0, 7, len(messages["/tf"]) - 1):
+        i = j * stride
+        log_time, odom = messages["/trailer_2/odom"][j]
+        assert log_time == round(ts["t"][i] * 1e9)
+        assert odom.pose.pose.position.x == ts["x0_2"][i]
+        assert odom.pose.pose.position.y == ts["y0_2"][i]
+        q = odom.pose.pose.orientation
+        assert 2 * math.atan2(q.z, q.w) == pytest.approx(ts["theta0_2"][i], abs=1e-12)
+        assert odom.twist.twist.linear.x == ts["v0_2"][i]
+        _, joints = messages["/joint_states"][j]
+        assert joints.name[:2] == ["hitch_1", "hitch_2"]
+        assert joints.position[0] == ts["phi"][i] and joints.position[1] == ts["phi_2"][i]
+        assert joints.effort[-2:] == [ts["T_r"][i], ts["T_l"][i]]
+        _, tf = messages["/tf"][j]
+        assert [t.child_frame_id for t in tf.transforms] == ["tractor", "trailer_1", "trailer_2"]
+        assert tf.transforms[0].transform.translation.x == ts["x"][i]
+        _, errors = messages["/tracking_errors"][j]
+        labels = [d.label for d in errors.layout.dim]
+        assert labels[:2] == ["e_v", "e_omega"]
+        assert errors.data[0] == pytest.approx(ts["v"][i] - ts["v_d"][i], abs=1e-15)
+    _, path = messages["/reference/path"][0]
+    line = read_timeseries(bay_run / "reference_path.parquet")
+    assert len(path.poses) == len(line["x"])
+    assert path.poses[-1].pose.position.x == line["x"][-1]
+    goal = parse_world("loading_bay").goal
+    _, pose = messages["/world/goal"][0]
+    assert (pose.pose.position.x, pose.pose.position.y) == (goal.x, goal.y)
+
+
+def test_the_command_converts_a_run_once(bay_run, capsys):
+    out = bay_run / "again.mcap"
+    assert bag.main([str(bay_run), "--out", str(out), "--rate", "10"]) == 0
+    channels, _ = _read(out)
+    ts = read_timeseries(bay_run / "timeseries.parquet")
+    assert channels["/tf"][1] == len(range(0, len(ts["t"]), 100))
+    assert bag.main([str(bay_run), "--out", str(out)]) == 2
+    assert "never overwritten" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("args", "says"),
+    [
+        (["--rate", "0"], "rate=0.0"),
+        (["--rate", "nan"], "rate=nan"),
+    ],
+)
+def test_bad_input_is_exit_2_and_writes_nothing(bay_run, tmp_path, capsys, args, says):
+    out = tmp_path / "x.mcap"
+    assert bag.main([str(bay_run), "--out", str(out), *args]) == 2
+    assert says in capsys.readouterr().err
+    assert not out.exists() and not list(tmp_path.iterdir())
+
+
+def test_a_folder_that_is_not_a_run_is_refused(tmp_path, capsys):
+    (tmp_path / "metrics.json").write_text(json.dumps({"status": "ok"}))
+    (tmp_path / "timeseries.csv").write_text("t\n0\n")
+    assert bag.main([str(tmp_path)]) == 2
+    assert "not a run's metrics" in capsys.readouterr().err
+    assert not (tmp_path / bag.BAG_FILE).exists()
+    assert bag.main([str(tmp_path / "missing")]) == 2
+
+
+def test_mcap_without_the_extra_is_refused_before_the_run(tmp_path, monkeypatch, capsys):
+    import importlib.util
+
+    real = importlib.util.find_spec
+    monkeypatch.setattr(
+        importlib.util,
+        "find_spec",
+        lambda name, *a: None if name == "mcap_ros2" else real(name, *a),
+    )
+    monkeypatch.chdir(tmp_path)
+    code = run.main(["--plant", "reduced", "--duration", "0.5", "--mcap", "--out", "o", "--quiet"])
+    assert code == 2 and "mcap extra" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_every_schema_names_only_types_it_defines():
+    for name in bag.MESSAGES:
+        text = bag.schema_text(name)
+        defined = {
+            line.removeprefix("MSG: ") for line in text.splitlines() if line.startswith("MSG: ")
+        }
+        for line in text.splitlines():
+            words = line.split()
+            if words and "/" in words[0] and not line.startswith("MSG: "):
+                assert words[0].split("[")[0] in defined, (name, line)
+    assert np.isfinite(bag.DEFAULT_RATE)
