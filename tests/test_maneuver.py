@@ -124,3 +124,26 @@ def test_the_gym_env_refuses_a_plan_with_a_cusp(facing_away):
 
     with pytest.raises(ValueError, match="cusp"):
         TractorTrailerEnv(world=facing_away, traj="plan", reverse=True, plant="reduced")
+
+
+def test_a_leg_that_cannot_start_keeps_what_was_driven(facing_away, monkeypatch):
+    """After the first leg ran, a leg that cannot be built (a user's controller that fails
+    to be made again, a unit outside the bounds) stops the maneuver as "failed", the rows
+    driven kept: never bad input (exit 2) after the run began."""
+    from tt_mujoco.sim import maneuver
+
+    real = maneuver.build
+
+    def second_fails(scenario, leg=None):
+        if leg is not None and leg.index > 0:
+            raise ValueError("controller 'mine.py:Law' failed: mine.py, line 3: RuntimeError")
+        return real(scenario, leg)
+
+    monkeypatch.setattr(maneuver, "build", second_fails)
+    result = simulate(Scenario(world=facing_away, traj="plan", reverse=True, plant="reduced"))
+    assert result.status == "failed"
+    assert result.message.startswith("leg 2 of 2 could not start: controller 'mine.py:Law'")
+    legs = result.metrics["world"]["plan"]["legs"]
+    assert legs[0]["status"] == "ok" and "status" not in legs[1]
+    assert result.timeseries["t"][-1] == pytest.approx(legs[0]["t_end_s"])
+    assert not result.metrics["world"]["goal"]["reached"]

@@ -57,11 +57,18 @@ def drive(first: Build, progress=None, on_step=None, checkpoint=None) -> Result:
     asked = dataclasses.replace(first.scenario, reverse=plan.legs[-1].reverse)
     began = time.perf_counter()
     driven = []  # (build, stepper, result) of each leg that ran
+    stop = None  # why a leg could not start
     built = first
     for index in range(len(plan.legs)):
         if index:
             pose, phis = final_state(driven[-1][2].timeseries, built.plant_params.n_trailers)
-            built = build(asked, LegStart(plan, index, pose, phis))
+            try:
+                built = build(asked, LegStart(plan, index, pose, phis))
+            except ValueError as err:  # where the last leg stopped, this one cannot start
+                # (a user's controller failing to be made again, a unit left the bounds):
+                # after the run began, a stop that keeps what was driven
+                stop = f"leg {index + 1} of {len(plan.legs)} could not start: {err}"
+                break
         rng = np.random.default_rng([asked.seed, index] if index else asked.seed)
         left = max(asked.time_limit_s - (time.perf_counter() - began), _LEAST_LIMIT)
         stepper, controller, status, message, wall = drive_leg(
@@ -71,11 +78,11 @@ def drive(first: Build, progress=None, on_step=None, checkpoint=None) -> Result:
         driven.append((built, stepper, result))
         if status != "ok" or not len(result.timeseries["t"]):
             break
-    return _joined(asked, plan, driven)
+    return _joined(asked, plan, driven, stop)
 
 
-def _joined(asked, plan, driven) -> Result:
-    """One result of the legs that ran."""
+def _joined(asked, plan, driven, stop: str | None = None) -> Result:
+    """One result of the legs that ran (``stop``: why the next could not start)."""
     offsets, t0 = [], 0.0
     for built, _, result in driven:
         offsets.append(t0)
@@ -122,7 +129,8 @@ def _joined(asked, plan, driven) -> Result:
         if key in last.metrics and key not in metrics:
             metrics[key] = last.metrics[key]
     metrics["wall_time_s"] = sum(result.wall_time_s for _, _, result in driven)
-    metrics["status"] = last.status
+    status = "failed" if stop is not None else last.status
+    metrics["status"] = status
     notes = []
     for _, _, result in driven:
         notes += [note for note in result.notes if note not in notes]
@@ -131,7 +139,9 @@ def _joined(asked, plan, driven) -> Result:
         "driven one after the other, each from rest where the last stopped"
     )
     message = f"completed {t0:.3f} s in {len(plan.legs)} legs"
-    if last.status != "ok":
+    if stop is not None:
+        message = stop
+    elif last.status != "ok":
         stopped = plan.legs[len(driven) - 1].direction
         message = f"leg {len(driven)} of {len(plan.legs)} ({stopped}): {last.message}"
     config = dict(last.config)
@@ -141,7 +151,7 @@ def _joined(asked, plan, driven) -> Result:
         scenario=asked,
         timeseries=ts,
         metrics=metrics,
-        status=last.status,
+        status=status,
         message=message,
         reference_polyline=polyline,
         wall_time_s=metrics["wall_time_s"],
