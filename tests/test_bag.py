@@ -165,3 +165,41 @@ def test_every_schema_names_only_types_it_defines():
             if words and "/" in words[0] and not line.startswith("MSG: "):
                 assert words[0].split("[")[0] in defined, (name, line)
     assert np.isfinite(bag.DEFAULT_RATE)
+
+
+@pytest.mark.parametrize(
+    ("edit", "says"),
+    [
+        (lambda doc: doc["config"].update(scenario=[1, 2]), "config.scenario"),
+        (lambda doc: doc["config"]["scenario"].update(world=3), "config.scenario"),
+        (lambda doc: doc["config"].update(plant_params="L"), "config.plant_params"),
+        (lambda doc: doc["config"]["scenario"].update(world="gone.toml"), "gone.toml"),
+    ],
+)
+def test_an_edited_run_folder_is_one_message(bay_run, tmp_path, capsys, edit, says):
+    import shutil
+
+    folder = tmp_path / "edited"
+    shutil.copytree(bay_run, folder, ignore=shutil.ignore_patterns("*.mcap"))
+    doc = json.loads((folder / "metrics.json").read_text())
+    edit(doc)
+    (folder / "metrics.json").write_text(json.dumps(doc))
+    assert bag.main([str(folder)]) == 2
+    err = capsys.readouterr().err
+    assert says in err and len(err.strip().splitlines()) == 1, err
+    assert not (folder / bag.BAG_FILE).exists()
+
+
+def test_a_time_series_without_a_column_is_one_message(bay_run, tmp_path, capsys):
+    import shutil
+
+    from tt_mujoco.outputs import write_timeseries
+
+    folder = tmp_path / "cut"
+    shutil.copytree(bay_run, folder, ignore=shutil.ignore_patterns("*.mcap"))
+    ts = read_timeseries(folder / "timeseries.parquet")
+    del ts["theta_l"]
+    (folder / "timeseries.parquet").unlink()
+    write_timeseries(folder / "timeseries.parquet", ts, list(ts))
+    assert bag.main([str(folder)]) == 2
+    assert "theta_l" in capsys.readouterr().err

@@ -143,6 +143,16 @@ def _units(ts: dict, n: int) -> list[tuple[str, str, str, str, str]]:
     return units
 
 
+def needed_columns(n_trailers: int) -> list[str]:
+    """The time-series columns :func:`write_bag` reads for a train of ``n_trailers``."""
+    from tt_mujoco.sim.timeseries import COLUMNS, train_columns
+
+    used = ("t", "x", "y", "theta", "phi", "beta", "v", "omega", "x0", "y0", "theta0", "v0")
+    used += ("theta_l", "theta_r", "T_r", "T_l", "x_ref", "y_ref", "v_d", "omega_d")
+    assert set(used) <= set(COLUMNS)
+    return [*used, *train_columns(n_trailers)]
+
+
 def _error_columns(ts: dict, polyline: np.ndarray, reverse: bool) -> dict[str, np.ndarray]:
     from tt_mujoco.analysis.metrics import error_signals
 
@@ -366,10 +376,16 @@ def main(argv: list[str] | None = None) -> int:
         if not isinstance(config, dict) or not isinstance(config.get("plant_params"), dict):
             return fail(f"{metrics_path} is not a run's metrics (no config.plant_params)")
         scenario = config.get("scenario", {})
+        world_name = scenario.get("world", "none") if isinstance(scenario, dict) else None
+        if not isinstance(world_name, str):
+            return fail(f"{metrics_path}: config.scenario is not a run's scenario (a table)")
         params = params_from_config(config["plant_params"])
         ts = read_timeseries(ts_path)
+        missing = [c for c in needed_columns(params.n_trailers) if c not in ts]
+        if missing:
+            return fail(f"{ts_path} lacks the columns {missing}: it is not a run's time series")
         polyline, _ = reference_polyline_for(ts, run_dir)
-        world = parse_world(scenario.get("world", "none"))
+        world = parse_world(world_name)
         reverse = bool(scenario.get("reverse"))
         write_bag(ts, polyline, params, out, reverse, world, args.rate)
     except (ValueError, KeyError, ImportError, FileExistsError, json.JSONDecodeError) as err:
