@@ -18,6 +18,7 @@ core's, the medians and 95th percentiles over the seeds planned.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 from collections import Counter
@@ -55,7 +56,10 @@ def one(args) -> dict:
         "position_error_m": report["goal"]["position_error_m"],
         "heading_error_deg": report["goal"]["heading_error_deg"],
         # the worst leg's: each leg's leading point against its own path
-        "leading_rms_m": max(leg["leading_cross_track_rms"] for leg in legs),
+        "leading_rms_m": max(
+            (v for leg in legs if (v := leg.get("leading_cross_track_rms")) is not None),
+            default=math.nan,
+        ),
         "clearance_m": report["min_clearance_m"],
         "time_s": metrics["sim_time_s"],
     }

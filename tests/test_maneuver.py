@@ -147,3 +147,17 @@ def test_a_leg_that_cannot_start_keeps_what_was_driven(facing_away, monkeypatch)
     assert legs[0]["status"] == "ok" and "status" not in legs[1]
     assert result.timeseries["t"][-1] == pytest.approx(legs[0]["t_end_s"])
     assert not result.metrics["world"]["goal"]["reached"]
+
+
+@pytest.mark.parametrize("world_seed", range(6))
+def test_planned_runs_reach_the_goal_in_generated_worlds(world_seed, tmp_path):
+    """Worlds no one drew (tests/generated_worlds.py), one trailer, the reduced plant: every
+    start the planner plans from is driven to the goal, with or without a cusp."""
+    from generated_worlds import random_world
+
+    path = tmp_path / "generated.toml"
+    path.write_text(tomli_w.dumps(random_world(np.random.default_rng(world_seed))))
+    result = simulate(Scenario(world=str(path), traj="plan", reverse=True, plant="reduced"))
+    assert result.status == "ok", result.message
+    goal = result.metrics["world"]["goal"]
+    assert goal["reached"], goal

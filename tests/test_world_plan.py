@@ -230,3 +230,43 @@ def test_no_plan_leaves_its_world(name):
             for unit in _units_along(leg, p, step=0.05):
                 assert x_min <= unit[:, 0].min() and unit[:, 0].max() <= x_max, (name, seed)
                 assert y_min <= unit[:, 1].min() and unit[:, 1].max() <= y_max, (name, seed)
+
+
+#: Generated worlds the planner is checked in (tests/generated_worlds.py), each from its seed.
+GENERATED = range(16)
+
+
+@pytest.mark.parametrize("world_seed", GENERATED)
+def test_a_plan_in_a_generated_world_keeps_its_promises(world_seed):
+    """In worlds no one drew, every plan found keeps the margin (checked five times finer)
+    and the bounds along every leg, joins its legs, and ends with the last axle on the goal."""
+    from generated_worlds import random_world
+
+    world = world_from_table(random_world(np.random.default_rng(world_seed)), "generated")
+    p = Params()
+    record = world_record(world, p, 0)
+    x_min, x_max, y_min, y_max = world.bounds
+    planned_any = False
+    for seed in range(2):
+        try:
+            plan = planned(world, p, seed, reverse=True)
+        except PlanError:
+            continue
+        planned_any = True
+        for leg in plan.legs:
+            fine, _ = clearance_along(leg.path, p, record, step=0.01)
+            assert fine > MARGIN - 0.01, (world_seed, seed)
+            for unit in _units_along(leg, p, step=0.05):
+                assert x_min <= unit[:, 0].min() and unit[:, 0].max() <= x_max
+                assert y_min <= unit[:, 1].min() and unit[:, 1].max() <= y_max
+        for one, two in zip(plan.legs, plan.legs[1:], strict=False):
+            np.testing.assert_allclose(
+                one.path.pose_at(one.path.length), two.path.pose_at(two.path.length), atol=1e-9
+            )
+        last = plan.legs[-1].path
+        goal = world.goal
+        heading = math.radians(goal.heading_deg)
+        d = chain_length(p)
+        expected = (goal.x + d * math.cos(heading), goal.y + d * math.sin(heading))
+        np.testing.assert_allclose(last.pose_at(0.0)[:2], expected, atol=1e-9)
+    assert planned_any, f"generated world {world_seed}: no start planned (the generator's fault?)"
