@@ -76,21 +76,35 @@ def test_a_maneuver_with_a_cusp_reaches_the_goal(facing_away, plant, trailers):
     assert any("cusp" in note for note in result.notes)
 
 
-def test_a_maneuver_is_the_same_on_the_cli_and_the_api(facing_away, tmp_path, monkeypatch):
+def test_a_maneuver_is_the_same_on_every_route(facing_away, tmp_path, monkeypatch):
+    """The same seed, the same maneuver: the Python API, the command line, a scenario file and
+    a sweep give the same plan and the same end (the Gym goal env's start: test_gym_goal.py)."""
+    import csv
+
+    from tt_mujoco import sweep
+
     monkeypatch.chdir(tmp_path)
     scenario = Scenario(world=facing_away, traj="plan", reverse=True, plant="reduced", seed=3)
-    api = simulate(scenario)
-    code = run.main(
-        [
-            *("--world", facing_away, "--traj", "plan", "--reverse", "--seed", "3"),
-            *("--plant", "reduced", "--no-video", "--quiet", "--out", "cli"),
-        ]
+    api = simulate(scenario).metrics["world"]
+    options = ("--world", facing_away, "--traj", "plan", "--reverse", "--seed", "3")
+    quiet = ("--plant", "reduced", "--no-video", "--quiet")
+    assert run.main([*options, *quiet, "--out", "cli"]) == 0
+    (tmp_path / "scenario.toml").write_text(
+        tomli_w.dumps({"world": facing_away, "traj": "plan", "reverse": True, "seed": 3})
     )
-    assert code == 0
-    doc = json.loads((tmp_path / "cli" / "metrics.json").read_text())
-    assert doc["world"]["goal"] == api.metrics["world"]["goal"]
-    assert doc["world"]["plan"]["legs"] == api.metrics["world"]["plan"]["legs"]
-    assert doc["config"]["scenario"]["reverse"] is True
+    assert run.main(["--config", "scenario.toml", *quiet, "--no-plots", "--out", "toml"]) == 0
+    items = [f"world={facing_away}", "traj=plan", "reverse=true", "plant=reduced", "seed=3"]
+    assert sweep.main([*items, "--quiet", "--no-figures", "--out", "sweep"]) == 0
+    for folder in ("cli", "toml"):
+        doc = json.loads((tmp_path / folder / "metrics.json").read_text())
+        assert doc["world"]["goal"] == api["goal"], folder
+        assert doc["world"]["plan"]["legs"] == api["plan"]["legs"], folder
+        assert doc["config"]["scenario"]["reverse"] is True
+    (row,) = csv.DictReader((tmp_path / "sweep" / "runs.csv").open())
+    assert int(row["world.plan.cusps"]) == api["plan"]["cusps"] == 1
+    for key in ("position_error_m", "heading_error_deg"):
+        assert float(row[f"world.goal.{key}"]) == api["goal"][key]
+    assert float(row["world.plan.length_m"]) == api["plan"]["length_m"]
     assert (tmp_path / "cli" / "path.png").stat().st_size > 0
 
 
