@@ -1,0 +1,326 @@
+"""``python -m tt_mujoco.identify LOG``: the trailers' geometry and steering gains fitted to a
+log of the vehicle, with confidence intervals and what the log cannot tell apart.
+
+A log is a CSV or Parquet file, or a run's folder (its time series), with the columns ``t``
+(s, strictly increasing), ``v`` (m/s) and ``omega`` (rad/s) of the tractor's axle, and ``phi``,
+``phi_2``, ... (rad) of the hitches (``--columns phi=hitch_deg`` maps another name; a name
+ending in ``_deg`` is read in degrees). Each hitch angle moves by the train's kinematics
+(docs/model.md Section 2, paper eq. 13 for one trailer; :func:`tt_mujoco.vehicle.train.
+trailer_rates_of` for N): its rate is a function of the hitch angles, ``v`` and ``omega``, and
+of each trailer's ``L``, ``L0`` and ``eta``. The fit (scipy's ``least_squares``) makes the
+rates of the logged hitch angles (central differences) those the kinematics give, over the
+parameters chosen with ``--fit`` (default ``L,L0``: each trailer's; ``eta`` too where the log
+can tell it). Then the fitted train is replayed open loop (its hitch angles integrated from the
+first logged ones under the logged ``v``, ``omega``) and its hitch angles compared with the log.
+
+Written into ``--out`` (a new folder): ``identified.toml`` (the fitted vehicle, a scenario file
+every command takes: ``python -m tt_mujoco.run --config identified.toml``), ``identify.json``
+(estimates, 95 % confidence intervals, correlations, the replay's errors) and ``identify.md``.
+Two parameters whose estimates correlate beyond :data:`CORRELATED` are reported as not told
+apart by this log, with the excitation that would tell them apart. Bad logs (a missing column,
+time not increasing, a gap, a value that is not a finite number) are exit 2 naming the column
+and the row.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from tt_mujoco import guard
+from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_OK
+from tt_mujoco.vehicle.params import Params
+
+__all__ = ["CORRELATED", "FITTABLE", "Fit", "LogError", "fit_train", "main", "read_log"]
+
+#: The parameters a fit can take, per trailer.
+FITTABLE = ("L", "L0", "eta")
+#: Above this |correlation| two estimates are not told apart by the log.
+CORRELATED = 0.95
+#: At most this many rows enter the fit (the log is thinned evenly beyond it).
+FIT_ROWS = 4000
+#: A step in ``t`` longer than this many times the median is a gap in the log.
+GAP = 5.0
+
+
+class LogError(ValueError):
+    """A log that cannot be used: the message names the column and the row."""
+
+
+def read_log(path: Path, columns: dict[str, str] | None = None, trailers: int | None = None):
+    """``(t, v, omega, phis)`` of a log (see the module): ``phis`` is ``(rows, N)``, N the
+    number of ``phi`` columns found (or ``trailers``). Raises :class:`LogError`."""
+    from tt_mujoco.outputs import read_timeseries, run_timeseries_file
+
+    path = Path(path)
+    file = run_timeseries_file(path) if path.is_dir() else path
+    if not file.is_file():
+        raise LogError(f"{file} not found: give a CSV or Parquet log, or a run's folder")
+    try:
+        table = read_timeseries(file)
+    except (OSError, ValueError) as err:
+        raise LogError(f"{file}: {err}") from None
+    mapping = dict(columns or {})
+    count = trailers or 1
+    while trailers is None and (f"phi_{count + 1}" in table or f"phi_{count + 1}" in mapping):
+        count += 1
+    names = ["t", "v", "omega", "phi", *(f"phi_{k}" for k in range(2, count + 1))]
+    data = {}
+    for name in names:
+        column = mapping.get(name, name)
+        if column not in table:
+            raise LogError(f"{file} has no column {column!r} (for {name}); it has {sorted(table)}")
+        values = np.asarray(table[column], dtype=float)
+        if column.endswith("_deg"):
+            values = np.radians(values)
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            raise LogError(
+                f"{file}: column {column!r} row {int(bad[0]) + 2} is {values[bad[0]]!r}, not a "
+                "finite number"
+            )
+        data[name] = values
+    t = data["t"]
+    if t.size < 10:
+        raise LogError(f"{file} has {t.size} rows: a fit needs at least 10")
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        i = int(np.flatnonzero(steps <= 0)[0]) + 1
+        raise LogError(
+            f"{file}: column 't' does not increase at row {i + 2} ({t[i]!r} after {t[i - 1]!r})"
+        )
+    median = float(np.median(steps))
+    if np.any(steps > GAP * median):
+        i = int(np.flatnonzero(steps > GAP * median)[0]) + 1
+        raise LogError(
+            f"{file}: a gap in column 't' at row {i + 2}: {steps[i - 1]:.6g} s after "
+            f"{t[i - 1]!r}, more than {GAP:g} times the log's period ({median:.6g} s)"
+        )
+    phis = np.column_stack([data[n] for n in names[3:]])
+    return t, data["v"], data["omega"], phis
+
+
+def _with(p: Params, values: dict[tuple[int, str], float]) -> Params:
+    """``p`` with trailer k's field set for each ``(k, field)`` (k from 1; a gain stays the
+    number it is, whatever the lengths become)."""
+    first = {field: float(value) for (k, field), value in values.items() if k == 1}
+    train = list(p.train)
+    for (k, field), value in values.items():
+        if k > 1:
+            train[k - 2] = dataclasses.replace(train[k - 2], **{field: float(value)})
+    return p.replace(**first, train=tuple(train))
+
+
+def _rates(p: Params, phis: np.ndarray, v: np.ndarray, omega: np.ndarray) -> np.ndarray:
+    """Every hitch's rate (rows, N) by the train's kinematics; NaN where singular."""
+    from tt_mujoco.vehicle.train import trailer_rates_of, train_constants
+
+    c = train_constants(p)
+    out = [[0.0, 0.0, 0.0] for _ in range(p.n_trailers)]
+    rates = np.full(phis.shape, np.nan)
+    for i in range(len(v)):
+        if trailer_rates_of(phis[i], float(v[i]), float(omega[i]), c, out):
+            rates[i] = [row[0] for row in out]
+    return rates
+
+
+class Fit:
+    """A fit's estimates, their 95 % intervals and correlations, and the replay's errors."""
+
+    def __init__(self, names, estimates, half_widths, correlation, params, replay_rms, phi_max):
+        self.names = list(names)
+        self.estimates = np.asarray(estimates)
+        self.half_widths = np.asarray(half_widths)
+        self.correlation = np.asarray(correlation)
+        self.params = params
+        self.replay_rms = list(replay_rms)
+        self.phi_max = list(phi_max)
+
+    def confounded(self) -> list[tuple[str, str, float]]:
+        """The pairs this log does not tell apart: ``(a, b, correlation)``."""
+        pairs = []
+        for i in range(len(self.names)):
+            for j in range(i + 1, len(self.names)):
+                rho = float(self.correlation[i, j])
+                if abs(rho) > CORRELATED:
+                    pairs.append((self.names[i], self.names[j], rho))
+        return pairs
+
+    def report(self) -> dict:
+        return {
+            "estimates": {
+                n: {"value": float(e), "ci95": [float(e - h), float(e + h)]}
+                for n, e, h in zip(self.names, self.estimates, self.half_widths, strict=True)
+            },
+            "correlation": {
+                a: {b: float(self.correlation[i, j]) for j, b in enumerate(self.names)}
+                for i, a in enumerate(self.names)
+            },
+            "not_told_apart": [
+                {"parameters": [a, b], "correlation": rho} for a, b, rho in self.confounded()
+            ],
+            "replay_phi_rms_deg": [math.degrees(r) for r in self.replay_rms],
+            "phi_max_abs_deg": [math.degrees(m) for m in self.phi_max],
+        }
+
+
+def fit_train(t, v, omega, phis, p: Params, fit=("L", "L0")) -> Fit:
+    """Fit ``fit`` (of :data:`FITTABLE`, every trailer's) of train ``p`` (its initial guess)
+    to a log's ``t, v, omega, phis`` (see the module)."""
+    from scipy.optimize import least_squares
+
+    n = phis.shape[1]
+    if n != p.n_trailers:
+        raise LogError(f"the log has {n} hitch angle column(s); the vehicle has {p.n_trailers}")
+    unknown = [f for f in fit if f not in FITTABLE]
+    if unknown or not fit:
+        raise LogError(f"fit={','.join(fit)!r} is not allowed: choose from {', '.join(FITTABLE)}")
+    keys = [(k, field) for k in range(1, n + 1) for field in fit]
+    names = [f"{field}_{k}" if n > 1 else field for k, field in keys]
+    trailers = p.trailers
+    x0 = np.array([getattr(trailers[k - 1], field) for k, field in keys], dtype=float)
+    rate = np.gradient(phis, t, axis=0)
+    keep = np.unique(np.linspace(1, len(t) - 2, min(FIT_ROWS, len(t) - 2)).astype(int))
+    sample = phis[keep], v[keep], omega[keep], rate[keep]
+
+    def residuals(x):
+        model = _rates(_with(p, dict(zip(keys, x, strict=True))), *sample[:3])
+        error = (model - sample[3]).ravel()
+        return np.where(np.isfinite(error), error, 10.0)  # singular: far off
+
+    lower = [-np.inf if f == "eta" else 1e-3 for _, f in keys]
+    result = least_squares(residuals, x0, bounds=(lower, np.inf), x_scale="jac")
+    jac, dof = result.jac, max(result.fun.size - len(x0), 1)
+    sigma2 = float(result.fun @ result.fun) / dof
+    try:
+        cov = np.linalg.inv(jac.T @ jac) * sigma2
+    except np.linalg.LinAlgError:
+        cov = np.full((len(x0), len(x0)), np.inf)
+    spread = np.sqrt(np.abs(np.diag(cov)))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        correlation = cov / np.outer(spread, spread)
+    fitted = _with(p, dict(zip(keys, result.x, strict=True)))
+    replayed = replay(t, v, omega, phis[0], fitted)
+    errors = replayed - phis
+    return Fit(
+        names,
+        result.x,
+        1.96 * spread,
+        correlation,
+        fitted,
+        np.sqrt(np.nanmean(errors**2, axis=0)),
+        np.max(np.abs(phis), axis=0),
+    )
+
+
+def replay(t, v, omega, phi0, p: Params) -> np.ndarray:
+    """The hitch angles of train ``p`` from ``phi0`` under the logged ``v``, ``omega`` (RK4 at
+    the log's steps, the inputs linear between samples); NaN from a singularity on."""
+    phis = np.full((len(t), len(phi0)), np.nan)
+    phis[0] = phi0
+
+    def f(phi, i, w):
+        vi = (1 - w) * v[i] + w * v[min(i + 1, len(v) - 1)]
+        oi = (1 - w) * omega[i] + w * omega[min(i + 1, len(v) - 1)]
+        return _rates(p, phi[None, :], np.array([vi]), np.array([oi]))[0]
+
+    for i in range(len(t) - 1):
+        h, y = t[i + 1] - t[i], phis[i]
+        k1 = f(y, i, 0.0)
+        k2 = f(y + 0.5 * h * k1, i, 0.5)
+        k3 = f(y + 0.5 * h * k2, i, 0.5)
+        k4 = f(y + h * k3, i, 1.0)
+        nxt = y + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        if not np.all(np.isfinite(nxt)):
+            break
+        phis[i + 1] = nxt
+    return phis
+
+
+def identified_toml(p: Params) -> str:
+    """The fitted vehicle as a scenario file every command takes."""
+    import tomli_w
+
+    first = p.trailers[0]
+    doc = {"eta": float(first.eta), "params": {"L": float(first.L), "L0": float(first.L0)}}
+    if p.n_trailers > 1:
+        doc["trailers"] = p.n_trailers
+        doc["train"] = [
+            {"L": float(t.L), "L0": float(t.L0), "eta": float(t.eta)} for t in p.trailers[1:]
+        ]
+    return "# the vehicle python -m tt_mujoco.identify fitted\n" + tomli_w.dumps(doc)
+
+
+def _markdown(fit: Fit, log: Path) -> str:
+    lines = [
+        f"# Identified from {log}",
+        "",
+        "| parameter | estimate | 95 % interval |",
+        "|---|---|---|",
+    ]
+    for n, e, h in zip(fit.names, fit.estimates, fit.half_widths, strict=True):
+        lines.append(f"| {n} | {e:.6g} | {e - h:.6g} .. {e + h:.6g} |")
+    lines += ["", "Replayed open loop: hitch angle rms error "]
+    lines[-1] += ", ".join(f"{math.degrees(r):.3g} deg" for r in fit.replay_rms) + "."
+    for a, b, rho in fit.confounded():
+        lines.append(
+            f"- {a} and {b} are not told apart by this log (correlation {rho:+.3f}): its hitch "
+            f"angles reach {max(math.degrees(m) for m in fit.phi_max):.1f} deg at most; the "
+            "terms that separate them grow with the articulation, so drive tighter turns (or "
+            "back up), or fix one of them (--fit)."
+        )
+    return "\n".join(lines) + "\n"
+
+
+@guard.command
+def main(argv: list[str] | None = None) -> int:
+    """``python -m tt_mujoco.identify LOG``: see the module. Exit codes: 0 written; 2 bad
+    input (a bad log, bad options, an output folder in use)."""
+    from tt_mujoco.outputs import atomic_write, claim_folder, release_folder, write_json
+
+    parser = argparse.ArgumentParser(
+        prog="python -m tt_mujoco.identify",
+        description="Fit the trailers' L, L0 and eta to a log (t, v, omega, phi, phi_2, ...).",
+    )
+    parser.add_argument("log", type=Path, metavar="LOG", help="a CSV or Parquet log, or a run")
+    parser.add_argument("--fit", default="L,L0", help="of L, L0, eta (default L,L0)")
+    parser.add_argument("--eta", default="same_path", help="the initial or fixed eta")
+    parser.add_argument(
+        "--columns", action="append", default=[], metavar="NAME=COLUMN", help="map a column"
+    )
+    parser.add_argument("--out", type=Path, default=None, help="a new folder")
+    args = parser.parse_args(argv)
+
+    def fail(message: str) -> int:
+        print(f"tt_mujoco.identify: {message}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+    try:
+        mapping = dict(item.split("=", 1) for item in args.columns)
+    except ValueError:
+        return fail(f"--columns {args.columns!r} is not allowed: give NAME=COLUMN")
+    try:
+        t, v, omega, phis = read_log(args.log, mapping)
+        from tt_mujoco.sim import Scenario
+
+        p = Scenario(eta=args.eta, trailers=phis.shape[1]).plant_params()
+        fit = fit_train(t, v, omega, phis, p, tuple(f.strip() for f in args.fit.split(",")))
+        out, _ = claim_folder(args.out, Path("renders") / f"identify-{args.log.stem}")
+    except ValueError as err:  # LogError, a bad --eta, an --out in use
+        return fail(str(err))
+    atomic_write(out / "identified.toml", identified_toml(fit.params))
+    write_json(out / "identify.json", fit.report(), strict=True)
+    atomic_write(out / "identify.md", _markdown(fit, args.log))
+    release_folder(out)
+    print(_markdown(fit, args.log), end="")
+    print(f"wrote identified.toml, identify.json, identify.md to {out}/")
+    return EXIT_OK
+
+
+if __name__ == "__main__":
+    sys.exit(main())
