@@ -22,6 +22,7 @@ import numpy as np
 
 try:
     from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 except ImportError:  # an optional extra: say how to get it
     sys.exit('this example needs Stable-Baselines3: pip install -e ".[gym,rl]"')
 
@@ -57,11 +58,19 @@ def main(argv=None) -> int:
         seed=args.seed,
     )
     env = TractorTrailerEnv(scenario, task="path")
-    model = PPO("MlpPolicy", env, seed=args.seed, verbose=0)
+    # The observations' scales differ by orders of magnitude (positions, wheel angles, errors):
+    # PPO learns on running-normalised ones, as Stable-Baselines3 recommends.
+    venv = VecNormalize(DummyVecEnv([lambda: TractorTrailerEnv(scenario, task="path")]))
+    model = PPO("MlpPolicy", venv, seed=args.seed, verbose=0)
     began = time.perf_counter()
     model.learn(total_timesteps=args.steps)
     trained = time.perf_counter() - began
-    rms, status, steps = episode(env, lambda obs: model.predict(obs, deterministic=True)[0])
+    venv.training = False
+
+    def act(obs):
+        return model.predict(venv.normalize_obs(obs), deterministic=True)[0]
+
+    rms, status, steps = episode(env, act)
     reference = tt_mujoco.simulate(scenario)
     key = "leading_cross_track_rms"
     print(

@@ -27,9 +27,10 @@ chooses the wheel torques:
   episode's return is ``-N`` times ``rmse_v^2 + rmse_omega^2`` of ``metrics.json``;
   ``"path"``, following the path with the unit that leads the motion (the tractor forward, the
   last trailer backing up): the negative mean of its squared cross-track and heading errors
-  and the speed error, each scaled by :data:`PATH_TASK_SCALES` (an error of one scale costs 1
-  a step), so an agent that stands still on the path still pays for its speed error. A
-  jackknife or a blow-up ends the episode
+  and the speed error, each scaled by :data:`PATH_TASK_SCALES`, capped at 1 a step (an error
+  of one scale or more costs 1), so an agent that stands still on the path still pays for its
+  speed error, and no step costs more than one a failure leaves. A jackknife or a blow-up
+  ends the episode
   (``terminated``) with the reward ``-(1 + steps left)``, as if every remaining step had an
   error of 1: ending early never pays; so does a unit touching a world's obstacle (status
   "collision"), and a user's path or disturbance that fails
@@ -432,7 +433,7 @@ class TractorTrailerEnv(gymnasium.Env):
             e_psi / scales["heading_error"],
             (me.v - ref.v_d) / scales["speed"],
         )
-        return -sum(e * e for e in errors) / len(errors)
+        return -min(1.0, sum(e * e for e in errors) / len(errors))
 
     def _info(self, status: str) -> dict:
         me, ref = self._me, self._ref
