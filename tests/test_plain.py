@@ -171,3 +171,42 @@ def test_a_law_compiled_once_is_loaded_by_the_next_process_and_recompiled_when_e
     law.write_text(source.format(k="2.0"))  # the helper changed, the law did not
     hits, torque = process()
     assert hits == 0 and torque != first[1]
+
+
+#: How a law can fail mid-run, each in a line its body runs from the 2500th step on: Python
+#: raises in each; numba raises in some and returns inf or NaN in others (its error model).
+FAILURES = {
+    "raise": "raise ValueError('gave up')",
+    "assert": "assert s.n < 2500.0, 'too many steps'",
+    "divide": "x = 1.0 / (s.n - s.n)",
+    "sqrt": "x = math.sqrt(-s.n)",
+    "log": "x = math.log(0.0 * s.n)",
+}
+
+
+@pytest.mark.parametrize("failure", FAILURES)
+def test_a_law_that_fails_mid_run_stops_alike_on_both_routes(monkeypatch, tmp_path, failure):
+    """The compiled law stops where the Python loop stops, with the same status, message and
+    rows, and the traceback kept: what its Python form raises at that step."""
+    law = tmp_path / "failing_law.py"
+    law.write_text(
+        "import math\n\nfrom tt_mujoco.controllers import plain_law\n\n"
+        "@plain_law(state=('n',))\n"
+        "def failing_law(m, r, model, k, s, dt, torque_limit):\n"
+        "    s.n += 1.0\n"
+        "    x = 0.0\n"
+        "    if s.n >= 2500.0:\n"
+        f"        {FAILURES[failure]}\n"
+        "    return x, 0.0\n"
+    )
+    kw = dict(controller=f"{law}:failing_law", traj="circle", duration=3.0, disturbance="none")
+    built = build(Scenario(**kw))
+    assert compiled.unsupported(built, built.new_controller()) is None
+    fast = _run(monkeypatch, "1", **kw)
+    assert not any("Python loop" in note for note in fast.notes), fast.notes  # compiled
+    python = _run(monkeypatch, "0", **kw)
+    _same(python, fast)
+    assert fast.status == "failed" and "failing_law.py, line 10" in fast.message, fast.message
+    assert len(fast.timeseries["t"]) == 2499
+    last = python.details.strip().splitlines()[-1]
+    assert fast.details.strip().splitlines()[-1] == last

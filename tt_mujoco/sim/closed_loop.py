@@ -69,7 +69,10 @@ LAWS = tuple(cls.LAW for cls in compiled_laws().values())
 RUNNING, FINISHED, BLEW_UP, JACKKNIFE = step.RUNNING, step.FINISHED, step.BLEW_UP, step.JACKKNIFE
 WARNING, LAW_FAILED, SINGULAR = step.WARNING, step.LAW_FAILED, step.SINGULAR
 PAYLOAD, RAISED, COLLISION = step.PAYLOAD, step.RAISED, step.COLLISION
-LAW_OK, LAW_SINGULAR = base.LAW_OK, base.LAW_SINGULAR
+LAW_OK, LAW_SINGULAR, LAW_RAISED = base.LAW_OK, base.LAW_SINGULAR, base.LAW_RAISED
+#: Where a plain-number law's C entry says, in ``law.torques``, that the law raised (1.0):
+#: an exception cannot leave a C function (:mod:`tt_mujoco.sim.compiled`, its entry)
+USER_RAISED = 2
 COS_BETA_MIN = reduced.COS_BETA_MIN
 #: ``law.kind`` of a user's plain-number law, and of a law that Python computes between the
 #: halves (a controller class, or a plain-number law when CPython runs the step)
@@ -337,6 +340,8 @@ def law_step(law, v_m, w_m, dt, limit):
             pointer(law.measurement_values), pointer(law.reference), pointer(law.model),
             pointer(law.user_gains), pointer(law.user_state), pointer(out), dt, limit,
         )  # fmt: skip
+        if out[USER_RAISED] != 0.0:
+            return LAW_RAISED, math.nan, math.nan, math.nan, math.nan
         T_r, T_l = out[0], out[1]
         if not (math.isfinite(T_r) and math.isfinite(T_l)):
             return base.LAW_NOT_FINITE, T_r, T_l, T_r, T_l

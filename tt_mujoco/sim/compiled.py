@@ -626,16 +626,21 @@ from numba import carray, cfunc
 
 @cfunc(USER_LAW, error_model="numpy", cache=True)
 def entry(m, r, model, gains, state, out, dt, limit):
-    torques = carray(out, 2)
-    T_r, T_l = law(
-        carray(m, {n_meas}).view(MEASUREMENT)[0],
-        carray(r, {n_ref}).view(REFERENCE)[0],
-        carray(model, {n_model}).view(NOMINAL)[0],
-        carray(gains, {n_gains}).view(GAINS)[0],
-        carray(state, {n_state}).view(STATE)[0],
-        dt,
-        limit,
-    )
+    torques = carray(out, 3)
+    torques[2] = 0.0
+    try:
+        T_r, T_l = law(
+            carray(m, {n_meas}).view(MEASUREMENT)[0],
+            carray(r, {n_ref}).view(REFERENCE)[0],
+            carray(model, {n_model}).view(NOMINAL)[0],
+            carray(gains, {n_gains}).view(GAINS)[0],
+            carray(state, {n_state}).view(STATE)[0],
+            dt,
+            limit,
+        )
+    except Exception:  # it cannot leave a C function: the loop stops, Python says what
+        torques[2] = 1.0
+        return
     torques[0], torques[1] = T_r, T_l
 """
 

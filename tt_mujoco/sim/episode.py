@@ -461,7 +461,7 @@ def _profile_table(target, dt: float, steps: int) -> np.ndarray:
 def outcome(status, stop_record, stepper, controller, k) -> tuple[str, str]:
     """``(status, message)`` of an episode that ended at step ``k`` with ``status`` (a stop
     code of :mod:`tt_mujoco.sim.step`), from the ``stop`` record."""
-    from tt_mujoco.controllers.base import LAW_NOT_FINITE, LAW_SINGULAR
+    from tt_mujoco.controllers.base import LAW_NOT_FINITE, LAW_RAISED, LAW_SINGULAR
     from tt_mujoco.controllers.plain import PlainLawController
     from tt_mujoco.sim import usercode
     from tt_mujoco.sim.plant import StopRun
@@ -499,6 +499,18 @@ def outcome(status, stop_record, stepper, controller, k) -> tuple[str, str]:
         return "jackknife", f"jackknife at t={t + stepper.dt:.3f} s: {err}"
     # LAW_FAILED: the nominal model's singularity, or the law's own failure
     law_status = int(value["law_status"])
+    if law_status in (LAW_RAISED, LAW_NOT_FINITE) and isinstance(controller, PlainLawController):
+        # what its Python form raises there, as the Python loop would have stopped it (numba's
+        # error model gives inf where Python raises ZeroDivisionError)
+        again = raised_again(stepper, controller, t)
+        if again is not None:
+            return again
+        if law_status == LAW_RAISED:
+            return "failed", (
+                f"{usercode.controller_label(stepper.built)} failed at t={t:.3f} s: its compiled "
+                "form raised where its Python form does not (numba's semantics differ from "
+                "Python's there: integer width, an error model)"
+            )
     u1, u2 = value["u1"], value["u2"]
     if isinstance(controller, PlainLawController):  # the user's law returned no torques
         try:
@@ -514,6 +526,46 @@ def outcome(status, stop_record, stepper, controller, k) -> tuple[str, str]:
     except FloatingPointError as err:
         return "diverged", f"controller failed at t={t:.3f} s: {err}"
     raise AssertionError(f"unknown status {status}")  # pragma: no cover
+
+
+def _floats(record) -> list[float]:
+    """A record's values in field order (a structured array's first row, or a plain array)."""
+    values = np.asarray(record)
+    if values.dtype.names:
+        return [float(values.reshape(-1)[0][name]) for name in values.dtype.names]
+    return [float(v) for v in values.reshape(-1)]
+
+
+def raised_again(stepper, controller, t: float) -> tuple[str, str] | None:
+    """``(status, message)`` of a compiled plain-number law that failed at time ``t``, as the
+    Python loop stops it (the traceback kept): its Python form called with what the compiled
+    law was given at that step raises what it raised; None where it does not raise."""
+    from tt_mujoco.controllers.base import Nominal
+    from tt_mujoco.controllers.plain import LawReference, LawState
+    from tt_mujoco.guard import users_failure
+    from tt_mujoco.sim import usercode
+    from tt_mujoco.sim.measure import Measurement
+
+    law = stepper._episode[2]
+    m = Measurement(*_floats(law.measurement_values))
+    r = LawReference(*_floats(law.reference))
+    model = Nominal(*_floats(law.model))
+    state = LawState(controller.STATE)
+    for name, value in zip(controller.STATE, _floats(law.user_state), strict=False):
+        setattr(state, name, value)
+    setup = controller.setup
+    who = usercode.controller_label(stepper.built)
+    try:
+        type(controller).LAW(
+            m, r, model, controller.gain_record, state, setup.control_dt, setup.torque_limit
+        )
+    except BaseException as err:
+        if not users_failure(err):
+            raise
+        stop = usercode.failure(who, t, err)
+        stepper.stop_details = stop.details
+        return stop.status, stop.message
+    return None
 
 
 #: ``stop.law_status`` of the nominal model's own singularity
