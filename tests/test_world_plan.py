@@ -145,6 +145,8 @@ def test_a_world_with_no_way_through_is_one_message(tmp_path, monkeypatch, capsy
     )
     err = capsys.readouterr().err
     assert code == 2 and "no path to world" in err and "candidates tried" in err, err
+    # where the candidate that got furthest was blocked, and by what
+    assert "then the " in err and ("'barrier'" in err or "bounds" in err), err
     assert len(err.strip().splitlines()) == 1
     assert not (tmp_path / "o").exists()
 

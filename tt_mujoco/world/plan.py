@@ -40,6 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from tt_mujoco.reference.paths import ArcsPath
+from tt_mujoco.vehicle.footprint import unit_names
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.path_schedule import axle_chain
 from tt_mujoco.world import contact
@@ -184,7 +185,13 @@ def _word_pieces(word) -> list[tuple[float, float]]:
 
 
 def clearance_along(
-    path, p: Params, record, step: float = STEP, below: float = -math.inf, bounds=None
+    path,
+    p: Params,
+    record,
+    step: float = STEP,
+    below: float = -math.inf,
+    bounds=None,
+    blocked: dict | None = None,
 ) -> tuple[float, float]:
     """``(gap, reached)``: the least gap between any unit of ``p`` and any obstacle of a
     world's ``record`` (:func:`~tt_mujoco.world.part.world_record`) with the tractor at arc
@@ -192,8 +199,10 @@ def clearance_along(
     fraction of the samples looked at. With ``below``, it stops at the first sample whose gap
     is under it, looking first at every :data:`COARSE`-th sample (a path that fails is most
     often told there, and those samples are among the others), and gaps of ``below`` or more
-    are not told apart (the gap is then ``below``). With ``bounds`` (x_min, x_max, y_min,
-    y_max), a sample with an axle outside them has the gap -inf."""
+    are not told apart (the gap is then ``below``); ``blocked`` (a dict) then receives where:
+    the ``unit`` (index, tractor 0), the ``obstacle`` (index, None: outside the bounds) and
+    the tractor's ``x``, ``y``. With ``bounds`` (x_min, x_max, y_min, y_max), a sample with an
+    axle outside them has the gap -inf."""
     cap = math.inf if below == -math.inf else below
     if not record.sizes.size and bounds is None:
         return math.inf, 1.0
@@ -202,7 +211,7 @@ def clearance_along(
     poses = np.zeros((p.n_trailers + 1, 3))
 
     def gaps(arcs):
-        """Each sample's least gap, the units placed on the axle chain."""
+        """Each sample's least gap, the unit and the obstacle (None: out of bounds)."""
         x, y, heading = path.pose(arcs)
         chain = axle_chain(path, arcs, lengths)
         for i in range(len(arcs)):
@@ -210,12 +219,12 @@ def clearance_along(
             for k, axle in enumerate(chain, start=1):
                 poses[k] = axle["x"][i], axle["y"][i], axle["theta"][i]
             if bounds is not None and _outside(bounds, poses):
-                yield i, -math.inf
+                yield i, -math.inf, 0, None
                 continue
             if not record.sizes.size:
-                yield i, math.inf
+                yield i, math.inf, 0, None
                 continue
-            gap, _, _ = contact.clearance_of(
+            gap, unit, obstacle = contact.clearance_of(
                 poses,
                 record.boxes,
                 record.polygons,
@@ -224,17 +233,22 @@ def clearance_along(
                 record.corners,
                 cap,
             )
-            yield i, gap
+            yield i, gap, int(unit), int(obstacle)
+
+    def told(gap, unit, obstacle):
+        if blocked is not None:
+            blocked.update(unit=unit, obstacle=obstacle, x=poses[0][0], y=poses[0][1])
+        return gap
 
     if below > -math.inf:
-        for i, gap in gaps(s[::COARSE]):
+        for i, gap, unit, obstacle in gaps(s[::COARSE]):
             if gap < below:
-                return gap, i * COARSE / len(s)
+                return told(gap, unit, obstacle), i * COARSE / len(s)
     least = math.inf
-    for i, gap in gaps(s):
+    for i, gap, unit, obstacle in gaps(s):
         least = min(least, gap)
         if least < below:
-            return least, (i + 1) / len(s)
+            return told(least, unit, obstacle), (i + 1) / len(s)
     return least, 1.0
 
 
@@ -311,11 +325,18 @@ def plan_path(
     record = world_record(world, p, 0)
     direction = "reverse" if reverse else "forward"
     best, tried, total, late = 0.0, 0, 0, False
+    worst = {}  # where the candidate that got furthest was blocked
 
-    def clear(path) -> bool:
+    def clear(path, word: str = "") -> bool:
         nonlocal best
-        gap, reached = clearance_along(path, p, record, below=margin, bounds=world.bounds)
-        best = max(best, reached)
+        where = {}
+        gap, reached = clearance_along(
+            path, p, record, below=margin, bounds=world.bounds, blocked=where
+        )
+        if reached > best:
+            best = reached
+            worst.clear()
+            worst.update(where, word=word)
         return gap >= margin
 
     def found(legs, exit_length) -> Plan:
@@ -336,7 +357,7 @@ def plan_path(
             break
         tried += 1
         path = _arcs(origin, pieces)
-        if clear(path):
+        if clear(path, f"{word.kinds} at {word.radius:.3g} m"):
             return found([Leg(path, direction, word.kinds, word.radius)], exit_length)
     if reverse and not late:
         cusped = sorted(_with_cusp(start, goal_pose, d, base), key=lambda c: c[0])
@@ -349,16 +370,29 @@ def plan_path(
             tried += 1
             key = id(backing)
             if key not in backing_clear:
-                backing_clear[key] = clear(backing.path)
+                backing_clear[key] = clear(backing.path, f"backing {backing.word}")
             if not backing_clear[key]:
                 continue
             forward = _arcs(start, [*_word_pieces(word), (d, 0.0)])
-            if clear(forward):
+            if clear(forward, f"forward {word.kinds} at {word.radius:.3g} m, then backing"):
                 return found(
                     [Leg(forward, "forward", word.kinds, word.radius), backing], exit_length
                 )
     why = "its time limit passed" if late else "none is clear"
-    closest = f"; the best is clear for {math.floor(100 * best)} % of it" if tried else ""
+    closest = ""
+    if tried and worst:
+        names = unit_names(p.n_trailers)
+        obstacles = world.all_obstacles
+        what = (
+            "leaves the world's bounds"
+            if worst.get("obstacle") is None
+            else f"comes within {margin:g} m of {obstacles[worst['obstacle']].name!r}"
+        )
+        closest = (
+            f"; the best ({worst['word']}) is clear for {math.floor(100 * best)} % of it, "
+            f"then the {names[worst['unit']]} {what} (the tractor at x={worst['x']:.2f}, "
+            f"y={worst['y']:.2f} m)"
+        )
     raise PlanError(
         f"no path to world {world.name!r}'s goal from x={start[0]:.3f}, y={start[1]:.3f} m, "
         f"heading {math.degrees(start[2]):.1f} deg "
