@@ -183,6 +183,8 @@ def test_an_edited_run_folder_is_one_message(bay_run, tmp_path, capsys, edit, sa
     shutil.copytree(bay_run, folder, ignore=shutil.ignore_patterns("*.mcap"))
     doc = json.loads((folder / "metrics.json").read_text())
     edit(doc)
+    if says == "gone.toml":  # a run from before runs kept their world
+        (folder / "world.toml").unlink()
     (folder / "metrics.json").write_text(json.dumps(doc))
     assert bag.main([str(folder)]) == 2
     err = capsys.readouterr().err
@@ -203,3 +205,32 @@ def test_a_time_series_without_a_column_is_one_message(bay_run, tmp_path, capsys
     write_timeseries(folder / "timeseries.parquet", ts, list(ts))
     assert bag.main([str(folder)]) == 2
     assert "theta_l" in capsys.readouterr().err
+
+
+def test_a_run_keeps_its_world_and_converts_without_the_file(tmp_path, monkeypatch):
+    """The run keeps the world it ran in (world.toml): the conversion reads that copy, so a
+    world file edited or gone since changes nothing."""
+    import copy
+
+    import tomli_w
+
+    from tt_mujoco.world.builtin import KEPT_WORLD, WORLDS
+    from tt_mujoco.world.world import read_world, world_from_table
+
+    monkeypatch.chdir(tmp_path)
+    table = copy.deepcopy(WORLDS["loading_bay"])
+    table["start"] = {"x": 2.0, "y": -1.0, "heading_deg": 180.0}
+    (tmp_path / "mine.toml").write_text(tomli_w.dumps(table))
+    code = run.main(
+        [
+            *("--world", "mine.toml", "--traj", "plan", "--reverse", "--plant", "reduced"),
+            *("--no-video", "--no-plots", "--quiet", "--out", "r"),
+        ]
+    )
+    assert code == 0
+    kept = read_world(tmp_path / "r" / KEPT_WORLD)
+    assert kept == world_from_table(table, "mine")
+    (tmp_path / "mine.toml").unlink()
+    assert bag.main(["r"]) == 0
+    channels, _ = _read(tmp_path / "r" / bag.BAG_FILE)
+    assert channels["/world/goal"][1] == 1

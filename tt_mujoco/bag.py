@@ -369,7 +369,7 @@ def main(argv: list[str] | None = None) -> int:
             return fail(f"{needed} not found: RUN_DIR must be a finished run's folder")
     try:
         from tt_mujoco.viz.render import params_from_config, reference_polyline_for
-        from tt_mujoco.world.builtin import parse_world
+        from tt_mujoco.world.builtin import run_world
 
         doc = json.loads(metrics_path.read_text())
         config = doc.get("config") if isinstance(doc, dict) else None
@@ -385,7 +385,7 @@ def main(argv: list[str] | None = None) -> int:
         if missing:
             return fail(f"{ts_path} lacks the columns {missing}: it is not a run's time series")
         polyline, _ = reference_polyline_for(ts, run_dir)
-        world = parse_world(world_name)
+        world = run_world(run_dir, world_name)
         reverse = bool(scenario.get("reverse"))
         write_bag(ts, polyline, params, out, reverse, world, args.rate)
     except (ValueError, KeyError, ImportError, FileExistsError, json.JSONDecodeError) as err:

@@ -20,6 +20,7 @@ from tt_mujoco.viz.render import (
     render_video,
     run_labels,
 )
+from tt_mujoco.world.builtin import run_world
 
 
 def _check_rows(ts, steps) -> str:
@@ -107,7 +108,7 @@ def main(argv: list[str] | None = None) -> int:
             info=info,
             outcome=outcome,
             terrain=config.get("scenario", {}).get("terrain", "flat"),
-            world=config.get("scenario", {}).get("world", "none"),
+            world=run_world(run_dir, config.get("scenario", {}).get("world", "none")),
         )
     except (ValueError, FileExistsError, json.JSONDecodeError) as exc:
         return fail(str(exc))

@@ -282,9 +282,15 @@ def write_outputs(
     write_timeseries(ts_file, result.timeseries, (*COLUMNS, *extra), units)
     (out / CHECKPOINT_FILE).unlink(missing_ok=True)  # the complete file replaces it
     written.append(ts_file)
+    world = None
+    if result.scenario.world != "none":  # its copy: re-rendering reads it, not the file
+        from tt_mujoco.world.builtin import KEPT_WORLD, kept_world_toml, parse_world
+
+        world = parse_world(result.scenario.world)
+        atomic_write(out / KEPT_WORLD, kept_world_toml(world))
+        written.append(out / KEPT_WORLD)
     if mcap:
         from tt_mujoco.bag import BAG_FILE, write_bag
-        from tt_mujoco.world.builtin import parse_world
 
         scenario = result.scenario
         written.append(
@@ -294,7 +300,7 @@ def write_outputs(
                 scenario.plant_params(),
                 out / BAG_FILE,
                 bool(scenario.reverse),
-                parse_world(scenario.world),
+                world,
             )
         )
     if len(result.timeseries["t"]) < 2 and (plots or video):
@@ -309,7 +315,6 @@ def write_outputs(
     try:
         if plots:  # drawn in a forked process while the video renders here
             from tt_mujoco.viz import plots as plots_mod  # matplotlib: only where it draws
-            from tt_mujoco.world.builtin import parse_world
 
             figures = BackgroundCall(
                 plots_mod.plot_run,
@@ -317,7 +322,7 @@ def write_outputs(
                 result.reference_polyline,
                 staging,
                 params=result.scenario.plant_params(),
-                world=parse_world(result.scenario.world),
+                world=world,
                 forked=None if video else False,  # nothing to overlap without a video
             )
         if video:
@@ -336,7 +341,7 @@ def write_outputs(
                     info=info,
                     outcome=outcome,
                     terrain=result.scenario.terrain,
-                    world=result.scenario.world,
+                    world=world,
                 )
                 written.append(publish_new(Path(path), out / "video.mp4"))
             except render.RenderUnavailable as err:  # no GL must not lose the results

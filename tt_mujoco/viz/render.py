@@ -234,8 +234,9 @@ class RunRenderer:
         turned from the plane's frame, where the run is computed, into the world's; a ramp or
         a rough ground is placed along ``reference_polyline`` as the run placed it, the
         vehicle resting on it in every frame.
-    world : str
-        The run's obstacles (``Scenario.world``: :mod:`tt_mujoco.world`), drawn in the scene.
+    world : str or World
+        The run's obstacles (``Scenario.world``, or the :class:`~tt_mujoco.world.World` a run
+        kept: :mod:`tt_mujoco.world`), drawn in the scene.
     """
 
     def __init__(
@@ -249,7 +250,7 @@ class RunRenderer:
         camera: str = "follow",
         info: str = "",
         terrain: str = "flat",
-        world: str = "none",
+        world="none",
     ):
         _check_video_args(width, height, fps, camera)
         self.info = info
@@ -273,7 +274,9 @@ class RunRenderer:
         self.params = params
         #: A ramp or a rough ground, placed along the run's reference as the run placed it.
         self.relief = relief_of(ground, polyline, params) if len(polyline) > 1 else None
-        self.vehicle = Vehicle(params, self.relief, parse_world(world))
+        self.vehicle = Vehicle(
+            params, self.relief, parse_world(world) if isinstance(world, str) else world
+        )
         self.model = self.vehicle.model
         self.times, self.index = frame_schedule(self.cols["t"], fps)
         self.n_frames = len(self.times)
@@ -581,7 +584,7 @@ def render_video(
     info: str = "",
     outcome: tuple[str, list[str]] | None = None,
     terrain: str = "flat",
-    world: str = "none",
+    world="none",
 ) -> Path:
     """Render a run to an H.264 MP4 (see :class:`RunRenderer` for what is drawn).
 

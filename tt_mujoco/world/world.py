@@ -35,9 +35,10 @@ the MuJoCo scene (:mod:`tt_mujoco.world.mjcf`) both take.
 
 from __future__ import annotations
 
+import copy
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -230,6 +231,8 @@ class World:
     bounds: tuple[float, float, float, float] | None = None
     description: str = ""
     start: Start | None = None
+    #: the table it was read from (a world file's contents), to keep beside a run
+    table: dict | None = field(default=None, compare=False, repr=False)
 
     @property
     def all_obstacles(self) -> tuple[Obstacle, ...]:
@@ -337,6 +340,7 @@ def world_from_table(table, name: str) -> World:
         bounds=bounds,
         description=str(table.get("description", "")),
         start=_start(table["start"]) if "start" in table else None,
+        table=copy.deepcopy(dict(table)),
     )
 
 
