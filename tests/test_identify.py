@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from tt_mujoco import identify
 from tt_mujoco.outputs import write_timeseries
@@ -146,3 +148,37 @@ def test_a_log_without_a_column_or_with_a_bad_fit_is_exit_2(tmp_path, capsys):
     assert identify.main([str(_log(tmp_path)), "--fit", "mass", "--out", str(tmp_path / "o")]) == 2
     assert "fit='mass' is not allowed" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+_VALUE = st.floats(allow_nan=True, allow_infinity=True, width=64) | st.integers(-(10**6), 10**6)
+
+
+@settings(
+    max_examples=200, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    rows=st.integers(0, 30),
+    names=st.lists(
+        st.sampled_from(["t", "v", "omega", "phi", "phi_2", "hitch_deg", "x"]), unique=True
+    ),
+    data=st.data(),
+)
+def test_any_log_is_read_or_refused_in_one_line(tmp_path_factory, rows, names, data):
+    """Logs with any columns and any values: read, or one LogError; never another error."""
+    folder = tmp_path_factory.mktemp("fuzz")
+    table = {
+        n: np.array(data.draw(st.lists(_VALUE, min_size=rows, max_size=rows)), float) for n in names
+    }
+    path = folder / "log.csv"
+    if names:
+        write_timeseries(path, table, names)
+    else:
+        path.write_text("")
+    try:
+        t, _, _, phis = identify.read_log(
+            path, {"phi": "hitch_deg"} if "hitch_deg" in names else None
+        )
+    except identify.LogError as err:
+        assert str(err) and "\n" not in str(err)
+    else:
+        assert np.all(np.diff(t) > 0) and np.all(np.isfinite(phis)) and len(t) >= 10

@@ -8,6 +8,8 @@ import mujoco
 import numpy as np
 import pytest
 import tomli_w
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from tt_mujoco import run
 from tt_mujoco.sim.physics import Vehicle
@@ -276,3 +278,66 @@ def test_mujoco_contacts_are_the_geometric_check(trailers):
         touching += gap < 0
         apart += gap > 0
     assert touching > 30 and apart > 30  # both cases were tried
+
+
+# --- the reader against what a file can hold (property-based) -------------------------------
+
+#: Anything a TOML file can give a key: numbers of every kind, text, booleans, lists, tables.
+_ANY = st.recursive(
+    st.none().map(lambda _: "none")
+    | st.booleans()
+    | st.integers(-(10**30), 10**30)
+    | st.floats(allow_nan=True, allow_infinity=True)
+    | st.text(max_size=8),
+    lambda inner: (
+        st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=6), inner, max_size=4)
+    ),
+    max_leaves=8,
+)
+
+
+def _paths(table, prefix=()):
+    """Every key path of a nested table (lists by index)."""
+    items = table.items() if isinstance(table, dict) else enumerate(table)
+    for key, value in items:
+        yield (*prefix, key)
+        if isinstance(value, dict | list):
+            yield from _paths(value, (*prefix, key))
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(data=st.data(), name=st.sampled_from(sorted(WORLDS)))
+def test_a_world_table_with_any_value_anywhere_is_a_world_or_one_world_error(data, name):
+    """A named world's table with one value replaced, or one key removed or added, anywhere:
+    the reader gives a World or a WorldError naming what is wrong, never another exception."""
+    import copy
+
+    table = copy.deepcopy(WORLDS[name])
+    paths = list(_paths(table))
+    path = data.draw(st.sampled_from(paths))
+    parent = table
+    for key in path[:-1]:
+        parent = parent[key]
+    action = data.draw(st.sampled_from(["replace", "remove", "add"]))
+    if action == "replace":
+        parent[path[-1]] = data.draw(_ANY)
+    elif action == "remove" and isinstance(parent, dict):
+        del parent[path[-1]]
+    elif isinstance(parent, dict):
+        parent[data.draw(st.text(min_size=1, max_size=6))] = data.draw(_ANY)
+    try:
+        world = world_from_table(table, "fuzzed")
+    except WorldError as err:
+        assert str(err) and "\n" not in str(err)
+    else:
+        assert world.name
+
+
+@pytest.mark.parametrize("name", sorted(WORLDS))
+def test_the_copy_a_run_keeps_is_the_same_world(name):
+    import tomllib
+
+    from tt_mujoco.world.builtin import kept_world_toml, parse_world
+
+    world = parse_world(name)
+    assert world_from_table(tomllib.loads(kept_world_toml(world)), "kept") == world

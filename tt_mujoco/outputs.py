@@ -15,6 +15,7 @@ import io
 import json
 import os
 import tempfile
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -312,7 +313,11 @@ def read_timeseries(path) -> dict[str, np.ndarray]:
         header = next(csv.reader(f), None)
     if not header:
         raise ValueError(f"{path} is empty: a time series needs a header row")
-    data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    with warnings.catch_warnings():  # a header and no rows: no columns' rows, said so below
+        warnings.simplefilter("ignore", UserWarning)
+        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+    if data.size == 0:
+        return {name.strip(): np.zeros(0) for name in header}
     if data.shape[1] != len(header):
         raise ValueError(f"{path} has {len(header)} header names but {data.shape[1]} columns")
     return {name.strip(): data[:, j].copy() for j, name in enumerate(header)}

@@ -248,7 +248,7 @@ class World:
 def _obstacle(table, i: int) -> Obstacle:
     what = f"obstacle {i + 1}"
     kind = table.get("kind") if isinstance(table, dict) else None
-    if kind not in KINDS:
+    if not isinstance(kind, str) or kind not in KINDS:
         raise WorldError(f"{what} kind={kind!r} is not allowed: use one of {', '.join(KINDS)}")
     required, optional = KINDS[kind]
     _keys(table, ("kind", "name", *required, *optional), what)
