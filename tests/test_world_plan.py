@@ -272,3 +272,14 @@ def test_a_plan_in_a_generated_world_keeps_its_promises(world_seed):
         expected = (goal.x + d * math.cos(heading), goal.y + d * math.sin(heading))
         np.testing.assert_allclose(last.pose_at(0.0)[:2], expected, atol=1e-9)
     assert planned_any, f"generated world {world_seed}: no start planned (the generator's fault?)"
+
+
+def test_no_plan_names_the_blocked_candidate_when_a_backing_leg_was_clear(monkeypatch):
+    """A cusp plan's backing leg that is clear while every forward leg to it is not: the
+    message names the blocked candidate that got furthest (a clear leg is no candidate)."""
+    from tt_mujoco.world import plan as plan_module
+
+    monkeypatch.setattr(plan_module, "LEAST_RADIUS", 2.5)  # turns too wide for the bay
+    with pytest.raises(PlanError, match="then the ") as caught:
+        planned(parse_world("loading_bay"), Params().with_trailers(3), 0, reverse=True)
+    assert "is clear for" in str(caught.value)

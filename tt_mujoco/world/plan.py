@@ -333,7 +333,7 @@ def plan_path(
         gap, reached = clearance_along(
             path, p, record, below=margin, bounds=world.bounds, blocked=where
         )
-        if reached > best:
+        if gap < margin and reached > best:  # the blocked candidate that got furthest
             best = reached
             worst.clear()
             worst.update(where, word=word)
