@@ -102,6 +102,20 @@ OUTPUTS = Schema(
             boolean,
             form="switch",
         ),
+        Option(
+            "live",
+            0,
+            "serve the run live to Foxglove at ws://localhost:PORT (0: no; the mcap extra)",
+            number(0, 65535, integer=True),
+            metavar="PORT",
+        ),
+        Option(
+            "live_realtime",
+            True,
+            "with --live: pace the run to real time (else as fast as it runs)",
+            boolean,
+            form="switch",
+        ),
         Option("quiet", False, "no progress bar", boolean, form="switch"),
         Option(
             "viewer",
@@ -113,7 +127,7 @@ OUTPUTS = Schema(
     )
 )
 #: Output options read from a file but not written to a run's config.toml: how it was watched.
-NOT_WRITTEN = ("quiet", "viewer")
+NOT_WRITTEN = ("quiet", "viewer", "live", "live_realtime")
 #: Every option of the command: the scenario's and the outputs'.
 RUN_SCHEMA = SCHEMA + OUTPUTS
 #: The rows of a run in progress (raw logged columns), removed once the time series is written.
@@ -424,7 +438,30 @@ def _main(argv: list[str] | None) -> int:
                 )
             viewer_mod.check_display()
             live = viewer_mod.LiveViewer(reference=built.path.dense())
-        out, created = _output_dir(args.out, scenario)
+        if shown["live"]:
+            if live is not None:
+                raise BadInputError("--live and --viewer are not allowed together: choose one")
+            from tt_mujoco.viz.foxglove_live import FoxgloveLive, LiveError
+            from tt_mujoco.world.builtin import parse_world
+
+            try:
+                live = FoxgloveLive(
+                    built.plant_params,
+                    built.path.dense(),
+                    parse_world(scenario.world),
+                    port=shown["live"],
+                    realtime=shown["live_realtime"],
+                )
+            except LiveError as err:
+                raise BadInputError(str(err)) from None
+            if not shown["quiet"]:
+                print(f"live: Foxglove, connect to ws://localhost:{live.port}", file=sys.stderr)
+        try:
+            out, created = _output_dir(args.out, scenario)
+        except BaseException:
+            if live is not None:  # no run: no server left listening
+                live.close()
+            raise
     except (BadInputError, ValueError, reduced.SingularityError) as err:  # OutputError too
         return _fail(str(err))
     except OSError as err:  # a name the file system refuses (too long, not encodable, ...)
