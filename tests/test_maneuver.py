@@ -194,37 +194,3 @@ def test_the_nmpc_drives_both_legs_to_the_goal(facing_away):
     world = result.metrics["world"]
     assert [leg["status"] for leg in world["plan"]["legs"]] == ["ok", "ok"]
     assert world["goal"]["reached"], world["goal"]
-
-
-def test_a_train_stopped_off_its_plan_at_a_cusp_is_planned_for_again(facing_away, monkeypatch):
-    """The forward leg ends 40 cm to the side of the backing leg's start (as a disturbed run
-    may): the backing is planned again from where the train stands, and the train still
-    reaches the goal; the replan is reported."""
-    from tt_mujoco.sim import maneuver
-
-    real = maneuver.final_state
-
-    def pushed_aside(ts, n):
-        (x, y, theta), phis = real(ts, n)
-        return (x - 0.4 * math.sin(theta), y + 0.4 * math.cos(theta), theta), phis
-
-    monkeypatch.setattr(maneuver, "final_state", pushed_aside)
-    result = simulate(Scenario(world=facing_away, traj="plan", reverse=True, plant="reduced"))
-    assert result.status == "ok", result.message
-    plan = result.metrics["world"]["plan"]
-    (replan,) = plan["replans"]
-    assert replan["at_leg"] == 2 and "400 mm" in replan["why"]
-    assert result.metrics["world"]["goal"]["reached"]
-
-
-def test_the_off_plan_test_says_why():
-    from tt_mujoco.reference.paths import ArcsPath
-    from tt_mujoco.sim.maneuver import off_plan
-    from tt_mujoco.world.plan import Leg
-
-    leg = Leg(ArcsPath("p", (0.0, 0.0, 0.0), [(2.0, 0.0)]), "reverse", "S", 0.0)
-    assert off_plan(leg, (2.0, 0.0, 0.0), (0.0,)) is None
-    assert off_plan(leg, (2.0, 0.1, 0.1), (0.0, 0.2)) is None  # the cascade takes it back
-    assert "mm" in off_plan(leg, (2.0, 0.3, 0.0), (0.0,))
-    assert "deg off" in off_plan(leg, (2.0, 0.0, 0.4), (0.0,))
-    assert "hitch" in off_plan(leg, (2.0, 0.0, 0.0), (0.0, 0.4))

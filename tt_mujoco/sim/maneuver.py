@@ -6,10 +6,12 @@ the last trailer's axle does (the hitch cascade, or whatever drives the scenario
 A leg starts where the last one stopped: the tractor's measured pose and hitch angles, at rest,
 on a fresh plant (on MuJoCo, the wheels' spin angles and the settled contacts of the last
 leg are not carried over; the train is at rest and straight to within the tracking error).
-A leg that stops (a collision, a jackknife, the time limit) stops the maneuver. At a cusp, a
-train that stopped off the next leg's start (further than :data:`REPLAN_OFF` says) is planned
-for again from where it stands, at most :data:`MOST_REPLANS` times; the plan's report lists
-each replan (``world.plan.replans``).
+A leg that stops (a collision, a jackknife, the time limit) stops the maneuver. A train that
+stopped off the next leg's start drives that leg as planned: the hitch cascade takes the offset
+back. Planning again from where it stood was tried and measured worse (the loading bay, two
+trailers, 20 dB noise, 1000 seeds: 961 reached, against 986; every start lost was one with a
+cusp, at 5 cm and at 25 cm off alike): a fresh plan from a train not quite straight starts
+backing worse than the planned leg does.
 
 The maneuver's result is one run: the legs' time series joined (time running on), the
 reference the legs' paths in the order driven, the legs' metrics merged
@@ -22,7 +24,6 @@ from its path). A user's metric is given the joined series and the last leg's pa
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 
 import numpy as np
@@ -31,49 +32,11 @@ from tt_mujoco.analysis.metrics import RUN_KEYS, merge_metrics
 from tt_mujoco.sim.build import Build, LegStart, build
 from tt_mujoco.sim.simulate import Result, drive_leg, driven_leg, finish, user_metric
 from tt_mujoco.world.part import world_report
-from tt_mujoco.world.plan import Plan, PlanError, plan_path
 
 __all__ = ["drive", "final_state"]
 
 #: Never less than this is left to a leg's wall-clock limit (s): an alarm of 0 is none.
 _LEAST_LIMIT = 1e-3
-#: A train stopped at a cusp further than this from the next leg's start is planned for
-#: again: the tractor's distance (m), its heading (rad), any hitch (rad). Measured on the
-#: loading bay with two trailers and 20 dB noise (benchmarks/bench_maneuvers.py, 1000 seeds),
-#: replanning from 5 cm, 0.1 rad or 10 deg off lost more starts than it saved (961 reached,
-#: against 986 without): the hitch cascade takes such an offset back on the planned leg, and a
-#: fresh plan from a train not quite straight starts it worse. Only a train well off is
-#: planned for again.
-REPLAN_OFF = (0.25, 0.35, math.radians(20.0))
-#: At most this many replans in one maneuver.
-MOST_REPLANS = 2
-
-
-def off_plan(leg, pose, phis) -> str | None:
-    """Why a train stopped at ``pose`` with ``phis`` is off ``leg``'s start, or None."""
-    start = leg.path.pose_at(leg.path.length if leg.reverse else 0.0)
-    distance = math.hypot(pose[0] - start[0], pose[1] - start[1])
-    heading = abs(math.remainder(pose[2] - start[2], math.tau))
-    bent = max(abs(phi) for phi in phis)
-    far, turned, folded = REPLAN_OFF
-    if distance > far:
-        return f"the tractor stopped {1000 * distance:.0f} mm from the next leg's start"
-    if heading > turned:
-        return f"the tractor stopped {math.degrees(heading):.1f} deg off the next leg's heading"
-    if bent > folded:
-        return f"a hitch stopped at {math.degrees(bent):.1f} deg"
-    return None
-
-
-def _spliced(plan: Plan, index: int, fresh: Plan) -> Plan:
-    """``plan``'s legs before ``index``, then ``fresh``'s."""
-    return Plan(
-        legs=(*plan.legs[:index], *fresh.legs),
-        exit=fresh.exit,
-        clearance=min(plan.clearance, fresh.clearance),
-        candidates=plan.candidates + fresh.candidates,
-        planning_time_s=plan.planning_time_s + fresh.planning_time_s,
-    )
 
 
 def final_state(ts: dict, n_trailers: int) -> tuple[tuple, tuple]:
@@ -100,25 +63,10 @@ def drive(first: Build, progress=None, on_step=None, checkpoint=None) -> Result:
     began = time.perf_counter()
     driven = []  # (build, stepper, result) of each leg that ran
     stop = None  # why a leg could not start
-    replans = []
     built = first
-    index = 0
-    while index < len(plan.legs):
+    for index in range(len(plan.legs)):
         if index:
             pose, phis = final_state(driven[-1][2].timeseries, built.plant_params.n_trailers)
-            why = off_plan(plan.legs[index], pose, phis)
-            if why is not None and len(replans) < MOST_REPLANS:
-                deadline = time.monotonic() + asked.time_limit_s - (time.perf_counter() - began)
-                try:
-                    fresh = plan_path(first.world, first.plant_params, pose, asked.reverse,
-                                      deadline=deadline)  # fmt: skip
-                except PlanError as err:
-                    stop = f"leg {index + 1} could not start: {why}, and {err}"
-                    break
-                plan = _spliced(plan, index, fresh)
-                replans.append(
-                    {"at_leg": index + 1, "why": why, "planning_time_s": fresh.planning_time_s}
-                )
             try:
                 built = build(asked, LegStart(plan, index, pose, phis))
             except ValueError as err:  # where the last leg stopped, this one cannot start
@@ -135,13 +83,11 @@ def drive(first: Build, progress=None, on_step=None, checkpoint=None) -> Result:
         driven.append((built, stepper, result))
         if status != "ok" or not len(result.timeseries["t"]):
             break
-        index += 1
-    return _joined(asked, plan, driven, stop, replans)
+    return _joined(asked, plan, driven, stop)
 
 
-def _joined(asked, plan, driven, stop: str | None = None, replans=()) -> Result:
-    """One result of the legs that ran (``stop``: why the next could not start; ``replans``:
-    the plan's replans at its cusps)."""
+def _joined(asked, plan, driven, stop: str | None = None) -> Result:
+    """One result of the legs that ran (``stop``: why the next could not start)."""
     offsets, t0 = [], 0.0
     for built, _, result in driven:
         offsets.append(t0)
@@ -183,7 +129,6 @@ def _joined(asked, plan, driven, stop: str | None = None, replans=()) -> Result:
     for leg, (built, _, result), offset in zip(report["legs"], driven, offsets, strict=False):
         t = result.timeseries["t"]
         driven_leg(leg, built.scenario.reverse, result.metrics, t, result.status, offset)
-    report["replans"] = list(replans)
     metrics["world"]["plan"] = report
     for key in ("controller", "reversing", "metric_errors"):
         if key in last.metrics and key not in metrics:
