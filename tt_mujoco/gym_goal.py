@@ -177,7 +177,8 @@ class TractorTrailerGoalEnv(gymnasium.Env):
         self._env = env
         obs, info = env.reset(seed=episode_seed)
         info = {**info, "seed": episode_seed}
-        return self._observation(obs), self._goal_info(info, failed=False, steps_left=0)
+        observation = self._observation(obs)
+        return observation, self._goal_info(info, observation, failed=False, steps_left=0)
 
     def step(self, action):
         if self._env is None:
@@ -186,8 +187,8 @@ class TractorTrailerGoalEnv(gymnasium.Env):
         steps_left = env.max_steps - env._stepper.k - 1
         obs, _, terminated, truncated, info = env.step(action)
         failed = bool(terminated)  # the inner env ends early only on a failure
-        info = self._goal_info(info, failed, steps_left if failed else 0)
         observation = self._observation(obs)
+        info = self._goal_info(info, observation, failed, steps_left if failed else 0)
         reward = float(self.compute_reward(observation["achieved_goal"], self.desired_goal, info))
         if not failed and info["is_success"] and abs(env.last_measurement().v) < REST_SPEED:
             terminated = True
@@ -198,12 +199,10 @@ class TractorTrailerGoalEnv(gymnasium.Env):
         of 4 values on their last axis, any leading shape), ``info`` a dict or an array of
         them (a failure's reward counts for the steps it left)."""
         achieved, desired = np.asarray(achieved_goal, float), np.asarray(desired_goal, float)
-        distance, heading = self._errors(achieved, desired)
         if self.reward_type == "sparse":
-            base = -(
-                (distance > self.position_tolerance) | (heading > self.heading_tolerance)
-            ).astype(float)
+            base = -(~self._within(achieved, desired)).astype(float)
         else:
+            distance, heading = self._errors(achieved, desired)
             base = -(distance + self.train_length * heading)
         return base * (1.0 + self._steps_left(info, np.shape(base)))
 
@@ -249,11 +248,13 @@ class TractorTrailerGoalEnv(gymnasium.Env):
             return np.full(shape, float(info.get("steps_left", 0)))
         return np.array([float(i.get("steps_left", 0)) for i in np.ravel(info)]).reshape(shape)
 
-    def _goal_info(self, info: dict, failed: bool, steps_left: int) -> dict:
-        pose = self._env.last_axle_pose()
-        achieved = np.array([pose[0], pose[1], math.cos(pose[2]), math.sin(pose[2])])
-        distance, heading = self._errors(achieved, self.desired_goal)
-        success = bool(distance <= self.position_tolerance and heading <= self.heading_tolerance)
+    def _within(self, achieved, desired):
+        """Whether each achieved goal is within the goal's tolerances of the desired one."""
+        distance, heading = self._errors(achieved, desired)
+        return (distance <= self.position_tolerance) & (heading <= self.heading_tolerance)
+
+    def _goal_info(self, info: dict, observation: dict, failed: bool, steps_left: int) -> dict:
+        success = bool(self._within(observation["achieved_goal"], self.desired_goal))
         return {
             **info,
             "is_success": success and not failed,

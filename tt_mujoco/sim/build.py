@@ -335,8 +335,8 @@ def build(scenario: Scenario, leg: LegStart | None = None) -> Build:
         Naming the first bad option and what is allowed.
     """
     scenario.validate()
+    world = parse_world(scenario.world)
     if scenario.traj == PLAN and leg is None:
-        world = parse_world(scenario.world)
         if world is None:
             raise ValueError("traj='plan' is not allowed without a world: give --world")
         deadline = time.monotonic() + scenario.time_limit_s
@@ -364,7 +364,6 @@ def build(scenario: Scenario, leg: LegStart | None = None) -> Build:
             f"path driving forward only (these back up: {backing})"
         )
     reversing = reversing_drive(scenario, cls)
-    world = parse_world(scenario.world)
     plan = None
     if leg is not None:
         plan = leg.plan

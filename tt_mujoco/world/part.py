@@ -26,6 +26,7 @@ __all__ = [
     "WorldRecord",
     "check_world",
     "no_world_record",
+    "outside_bounds",
     "start_problem",
     "unit_poses",
     "world_record",
@@ -113,7 +114,9 @@ def _first_touch(record: WorldRecord, poses: np.ndarray, units) -> tuple[float, 
     )
 
 
-def _outside(bounds, points) -> bool:
+def outside_bounds(bounds, points) -> bool:
+    """Whether any of ``points`` (rows of x, y, ...) lies outside ``bounds`` (x_min, x_max,
+    y_min, y_max)."""
     x_min, x_max, y_min, y_max = bounds
     return bool(np.any((points[:, 0] < x_min) | (points[:, 0] > x_max))) or bool(
         np.any((points[:, 1] < y_min) | (points[:, 1] > y_max))
@@ -127,7 +130,7 @@ def start_problem(
     :func:`world_record`) with the tractor at ``pose`` and ``hitches`` (a unit's axle outside
     the bounds, or a unit within ``margin`` of an obstacle), or None."""
     start = unit_poses(pose, hitches, p)
-    if world.bounds is not None and _outside(world.bounds, start[:, :2]):
+    if world.bounds is not None and outside_bounds(world.bounds, start[:, :2]):
         return (
             f"the start is not allowed: a unit's axle lies outside world {world.name!r}'s "
             f"bounds {list(world.bounds)}"
@@ -170,7 +173,7 @@ def check_world(world: World | None, p: Params, pose, hitches) -> None:
             f"{-boxes[-1][0]:g} m behind its axle; use back > {-boxes[-1][0]:g} m"
         )
     at_goal = np.array([[goal.x, goal.y, math.radians(goal.heading_deg)]])
-    if world.bounds is not None and _outside(world.bounds, at_goal[:, :2]):
+    if world.bounds is not None and outside_bounds(world.bounds, at_goal[:, :2]):
         raise WorldError(
             f"goal x={goal.x!r}, y={goal.y!r} is not allowed: it lies outside world "
             f"{world.name!r}'s bounds {list(world.bounds)}"

@@ -45,7 +45,7 @@ from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.path_schedule import axle_chain
 from tt_mujoco.world import contact
 from tt_mujoco.world.dubins import dubins_words
-from tt_mujoco.world.part import start_problem, world_record
+from tt_mujoco.world.part import outside_bounds, start_problem, world_record
 from tt_mujoco.world.world import World, WorldError
 
 __all__ = [
@@ -218,7 +218,7 @@ def clearance_along(
             poses[0] = x[i], y[i], heading[i]
             for k, axle in enumerate(chain, start=1):
                 poses[k] = axle["x"][i], axle["y"][i], axle["theta"][i]
-            if bounds is not None and _outside(bounds, poses):
+            if bounds is not None and outside_bounds(bounds, poses):
                 yield i, -math.inf, 0, None
                 continue
             if not record.sizes.size:
@@ -295,12 +295,6 @@ def _with_cusp(start, goal_pose, d, base):
         for scale in RADII:
             for word in dubins_words(start, approach, base * scale):
                 yield word.length + d + backing.path.length, exit_length, backing, word
-
-
-def _outside(bounds, poses) -> bool:
-    x_min, x_max, y_min, y_max = bounds
-    x, y = poses[:, 0], poses[:, 1]
-    return bool(((x < x_min) | (x > x_max) | (y < y_min) | (y > y_max)).any())
 
 
 def plan_path(
