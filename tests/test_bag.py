@@ -17,6 +17,7 @@ from mcap_ros2.decoder import DecoderFactory
 
 from tt_mujoco import bag, run
 from tt_mujoco.outputs import read_timeseries
+from tt_mujoco.runfolder import default_out
 from tt_mujoco.world.builtin import parse_world
 
 
@@ -109,13 +110,16 @@ def test_the_messages_hold_the_runs_values(bay_run):
 
 
 def test_the_command_converts_a_run_once(bay_run, capsys):
-    out = bay_run / "again.mcap"
+    out = bay_run.parent / "again.mcap"
     assert bag.main([str(bay_run), "--out", str(out), "--rate", "10"]) == 0
     channels, _ = _read(out)
     ts = read_timeseries(bay_run / "timeseries.parquet")
     assert channels["/tf"][1] == len(range(0, len(ts["t"]), 100))
     assert bag.main([str(bay_run), "--out", str(out)]) == 2
     assert "never overwritten" in capsys.readouterr().err
+    inside = bay_run / "again.mcap"
+    assert bag.main([str(bay_run), "--out", str(inside)]) == 2
+    assert "inside the run folder" in capsys.readouterr().err and not inside.exists()
 
 
 @pytest.mark.parametrize(
@@ -137,7 +141,7 @@ def test_a_folder_that_is_not_a_run_is_refused(tmp_path, capsys):
     (tmp_path / "timeseries.csv").write_text("t\n0\n")
     assert bag.main([str(tmp_path)]) == 2
     assert "not a run's metrics" in capsys.readouterr().err
-    assert not (tmp_path / bag.BAG_FILE).exists()
+    assert not default_out(tmp_path, "ros2", ".mcap").exists()
     assert bag.main([str(tmp_path / "missing")]) == 2
 
 
@@ -191,7 +195,7 @@ def test_an_edited_run_folder_is_one_message(bay_run, tmp_path, capsys, edit, sa
     assert bag.main([str(folder)]) == 2
     err = capsys.readouterr().err
     assert says in err and len(err.strip().splitlines()) == 1, err
-    assert not (folder / bag.BAG_FILE).exists()
+    assert not default_out(folder, "ros2", ".mcap").exists()
 
 
 def test_a_time_series_without_a_column_is_one_message(bay_run, tmp_path, capsys):
@@ -234,7 +238,7 @@ def test_a_run_keeps_its_world_and_converts_without_the_file(tmp_path, monkeypat
     assert kept == world_from_table(table, "mine")
     (tmp_path / "mine.toml").unlink()
     assert bag.main(["r"]) == 0
-    channels, _ = _read(tmp_path / "r" / bag.BAG_FILE)
+    channels, _ = _read(tmp_path / "r.ros2.mcap")  # beside the run: a reader writes outside it
     assert channels["/world/goal"][1] == 1
 
 

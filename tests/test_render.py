@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from tt_mujoco import render as render_cli
+from tt_mujoco import runfolder
 from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
@@ -279,27 +280,36 @@ def run_dir(tmp_path):
     ts, _ = demo.open_loop_timeseries(p, duration=1.0, dt=0.02)
     names = list(ts)
     table = np.column_stack([ts[n] for n in names])
-    np.savetxt(
-        tmp_path / "timeseries.csv", table, delimiter=",", header=",".join(names), comments=""
-    )
+    folder = tmp_path / "run"
+    folder.mkdir()
+    np.savetxt(folder / "timeseries.csv", table, delimiter=",", header=",".join(names), comments="")
     config = {"params": p.to_dict(), "traj": "no_such_path_for_the_test"}
-    (tmp_path / "metrics.json").write_text(json.dumps({"rmse_v": 0.0, "config": config}))
-    return tmp_path
+    (folder / "metrics.json").write_text(json.dumps({"rmse_v": 0.0, "config": config}))
+    return folder
 
 
 def test_cli_refuses_to_overwrite(run_dir, capsys):
-    existing = run_dir / "video.mp4"
+    existing = run_dir.parent / "run.follow.mp4"  # the default: beside the run, by its camera
     existing.write_bytes(b"old video")
     assert render_cli.main([str(run_dir), "--no-progress"]) == 2
     assert "--out" in capsys.readouterr().err
-    other = run_dir / "other.mp4"
+    other = run_dir.parent / "other.mp4"
     other.write_bytes(b"other")
     assert render_cli.main([str(run_dir), "--out", str(other), "--no-progress"]) == 2
     assert existing.read_bytes() == b"old video" and other.read_bytes() == b"other"
 
 
+@pytest.mark.parametrize("inside", ["video.mp4", "sub/video.mp4"])
+def test_cli_never_writes_inside_the_run_folder(run_dir, capsys, inside):
+    before = sorted(p.name for p in run_dir.iterdir())
+    out = run_dir / inside
+    assert render_cli.main([str(run_dir), "--out", str(out), "--no-progress"]) == 2
+    assert "inside the run folder" in capsys.readouterr().err
+    assert sorted(p.name for p in run_dir.iterdir()) == before
+
+
 def test_cli_rerenders_a_run_to_a_new_file(run_dir):
-    out = run_dir / "small.mp4"
+    out = run_dir.parent / "small.mp4"
     argv = [str(run_dir), "--out", str(out), "--width", "64", "--height", "48", "--fps", "10"]
     code = render_cli.main([*argv, "--camera", "overview", "--no-progress"])
     if code == 1:
@@ -317,9 +327,9 @@ def test_cli_rejects_a_folder_that_is_not_a_run(tmp_path, capsys):
 
 def test_params_from_config_round_trip_and_unknown_names():
     p = Params(eta="paper", Mf=10.0)
-    assert render.params_from_config(p.to_dict()) == p
+    assert runfolder.params_from_config(p.to_dict()) == p
     with pytest.raises(ValueError, match="wheelbase"):
-        render.params_from_config({"wheelbase": 1.0})
+        runfolder.params_from_config({"wheelbase": 1.0})
 
 
 def _break(run_dir, how):
@@ -347,7 +357,7 @@ def test_cli_refuses_a_broken_run_naming_what_is_wrong(run_dir, capsys, how):
     code = render_cli.main([str(run_dir), "--no-progress"])
     err = capsys.readouterr().err
     assert code == 2 and expected in err and "Traceback" not in err
-    assert not (run_dir / "video.mp4").exists()
+    assert not (run_dir.parent / "run.follow.mp4").exists()
 
 
 def test_cli_out_the_file_system_refuses_is_exit_2(run_dir, capsys):
@@ -407,12 +417,12 @@ def test_render_draws_the_runs_own_path_after_its_csv_file_changed(tmp_path, cap
     path, out = _csv_run(tmp_path)
     kept = read_timeseries(out / REFERENCE_FILE)
     path.write_text("x,y\n0,0\n1,1\n2,0\n3,1\n")
-    polyline, source = render.reference_polyline_for({}, out)
+    polyline, source = runfolder.reference_polyline_for({}, out)
     assert source == f"the run's own {REFERENCE_FILE}"
     np.testing.assert_array_equal(polyline[:, 0], kept["x"])
     assert polyline[-1, 0] == pytest.approx(3.0, abs=0.05)  # the old path's end, x = 3 m
     path.unlink()
-    assert render.reference_polyline_for({}, out)[1] == source
+    assert runfolder.reference_polyline_for({}, out)[1] == source
 
 
 def test_render_refuses_plant_params_edited_off_the_recorded_trace(tmp_path, capsys):
@@ -422,10 +432,10 @@ def test_render_refuses_plant_params_edited_off_the_recorded_trace(tmp_path, cap
     _, out = _csv_run(tmp_path)
     doc = json.loads((out / "metrics.json").read_text())
     ts = read_timeseries(out / "timeseries.parquet")
-    as_run = render.params_from_config(doc["config"]["plant_params"])
-    assert render.check_trace(as_run, ts) == ""
+    as_run = runfolder.params_from_config(doc["config"]["plant_params"])
+    assert runfolder.check_trace(as_run, ts) == ""
     mujoco_run = simulate(Scenario(duration=1.0, phi0_deg=10.0))  # contact physics: same rule
-    assert render.check_trace(Params(), mujoco_run.timeseries) == ""
+    assert runfolder.check_trace(Params(), mujoco_run.timeseries) == ""
     doc["config"]["plant_params"]["L"] *= 1.5
     (out / "metrics.json").write_text(json.dumps(doc))
     code = render_cli.main([str(out), "--no-progress", "--out", str(tmp_path / "v.mp4")])
@@ -433,7 +443,7 @@ def test_render_refuses_plant_params_edited_off_the_recorded_trace(tmp_path, cap
     assert code == 2 and "are not the vehicle of its time series" in err, err
     assert not (tmp_path / "v.mp4").exists()
     series = demo.open_loop_timeseries(Params(), duration=1.0, dt=0.02)[0]
-    assert render.check_trace(Params(), series) == ""
+    assert runfolder.check_trace(Params(), series) == ""
 
 
 def test_a_grade_is_drawn_as_a_slope_the_whole_scene_turned_alike(series):

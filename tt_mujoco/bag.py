@@ -27,7 +27,6 @@ Rows are written at ``rate`` (Hz; the run's own rate at most), each at its simul
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from pathlib import Path
@@ -35,7 +34,8 @@ from pathlib import Path
 import numpy as np
 
 from tt_mujoco import guard
-from tt_mujoco.outputs import publish_new, read_timeseries, run_timeseries_file, temporary_beside
+from tt_mujoco.outputs import publish_new, temporary_beside
+from tt_mujoco.runfolder import check_out, default_out, read_run
 
 __all__ = ["BAG_FILE", "DEFAULT_RATE", "MESSAGES", "main", "write_bag"]
 
@@ -141,16 +141,6 @@ def _units(ts: dict, n: int) -> list[tuple[str, str, str, str, str]]:
             (f"trailer_{k}", f"x0{suffix}", f"y0{suffix}", f"theta0{suffix}", f"v0{suffix}")
         )
     return units
-
-
-def needed_columns(n_trailers: int) -> list[str]:
-    """The time-series columns :func:`write_bag` reads for a train of ``n_trailers``."""
-    from tt_mujoco.sim.timeseries import COLUMNS, train_columns
-
-    used = ("t", "x", "y", "theta", "phi", "beta", "v", "omega", "x0", "y0", "theta0", "v0")
-    used += ("theta_l", "theta_r", "T_r", "T_l", "x_ref", "y_ref", "v_d", "omega_d")
-    assert set(used) <= set(COLUMNS)
-    return [*used, *train_columns(n_trailers)]
 
 
 def _error_columns(ts: dict, polyline: np.ndarray, reverse: bool) -> dict[str, np.ndarray]:
@@ -346,7 +336,12 @@ def main(argv: list[str] | None = None) -> int:
         "overwrites a file.",
     )
     parser.add_argument("run_dir", type=Path, metavar="RUN_DIR")
-    parser.add_argument("--out", type=Path, default=None, help=f"default RUN_DIR/{BAG_FILE}")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        help="a new file outside the run folder (default: RUN_DIR.ros2.mcap beside it)",
+    )
     parser.add_argument(
         "--rate",
         type=float,
@@ -360,35 +355,15 @@ def main(argv: list[str] | None = None) -> int:
         return 2
 
     run_dir: Path = args.run_dir
-    out = args.out if args.out is not None else run_dir / BAG_FILE
-    if out.exists() or out.is_symlink():
-        return fail(f"{out} exists and is never overwritten; name a new file with --out FILE")
-    ts_path, metrics_path = run_timeseries_file(run_dir), run_dir / "metrics.json"
-    for needed in (ts_path, metrics_path):
-        if not needed.is_file():
-            return fail(f"{needed} not found: RUN_DIR must be a finished run's folder")
+    out = args.out if args.out is not None else default_out(run_dir, "ros2", ".mcap")
     try:
-        from tt_mujoco.viz.render import params_from_config, reference_polyline_for
-        from tt_mujoco.world.builtin import run_world
-
-        doc = json.loads(metrics_path.read_text())
-        config = doc.get("config") if isinstance(doc, dict) else None
-        if not isinstance(config, dict) or not isinstance(config.get("plant_params"), dict):
-            return fail(f"{metrics_path} is not a run's metrics (no config.plant_params)")
-        scenario = config.get("scenario", {})
-        world_name = scenario.get("world", "none") if isinstance(scenario, dict) else None
-        if not isinstance(world_name, str):
-            return fail(f"{metrics_path}: config.scenario is not a run's scenario (a table)")
-        params = params_from_config(config["plant_params"])
-        ts = read_timeseries(ts_path)
-        missing = [c for c in needed_columns(params.n_trailers) if c not in ts]
-        if missing:
-            return fail(f"{ts_path} lacks the columns {missing}: it is not a run's time series")
-        polyline, _ = reference_polyline_for(ts, run_dir)
-        world = run_world(run_dir, world_name)
-        reverse = bool(scenario.get("reverse"))
-        write_bag(ts, polyline, params, out, reverse, world, args.rate)
-    except (ValueError, KeyError, ImportError, FileExistsError, json.JSONDecodeError) as err:
+        if out.exists() or out.is_symlink():
+            return fail(f"{out} exists and is never overwritten; name a new file with --out FILE")
+        check_out(out)
+        run = read_run(run_dir)
+        reverse = bool(run.scenario.get("reverse"))
+        write_bag(run.timeseries, run.reference, run.params, out, reverse, run.world, args.rate)
+    except (ValueError, KeyError, ImportError, FileExistsError) as err:
         return fail(str(err))
     except OSError as err:
         return fail(f"{out}: {err.strerror}")

@@ -16,7 +16,6 @@ Runs on different paths are refused (their errors do not compare) unless
 from __future__ import annotations
 
 import glob
-import json
 import math
 import sys
 from pathlib import Path
@@ -28,18 +27,15 @@ from tt_mujoco import guard
 from tt_mujoco.cliargs import BadInputError, Parser
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_OK
 from tt_mujoco.outputs import (
-    REFERENCE_FILE,
     OutputError,
     atomic_write,
     claim_folder,
-    read_timeseries,
     release_folder,
-    run_timeseries_file,
     save_figure,
     write_json,
 )
+from tt_mujoco.runfolder import FinishedRun, check_out, read_run
 from tt_mujoco.viz.plots import DPI, plot_comparison
-from tt_mujoco.viz.render import reference_polyline_for
 
 __all__ = ["Run", "load_run", "main", "metrics_table"]
 
@@ -47,38 +43,24 @@ DEFAULT_OUT = Path("renders") / "compare"
 
 
 class Run:
-    """A finished run: its label, metrics, configuration and time series."""
+    """A finished run as compare shows it: its label, metrics, configuration and time series."""
 
-    def __init__(self, folder: Path, metrics: dict, timeseries: dict):
-        self.folder = folder
-        self.metrics = metrics
-        self.config = metrics.get("config", {})
-        self.timeseries = timeseries
-        scenario = self.config.get("scenario", {})
+    def __init__(self, run: FinishedRun):
+        self.folder = run.folder
+        self.metrics = run.metrics
+        self.config = run.config
+        self.timeseries = run.timeseries
+        self.reference = run.reference
+        scenario = run.scenario
         self.path = str(scenario.get("traj", "?"))
         parts = [scenario.get("controller", "?"), scenario.get("plant", "?")]
-        self.label = f"{folder.name} ({', '.join(str(p) for p in parts)})"
+        self.label = f"{run.folder.name} ({', '.join(str(p) for p in parts)})"
 
 
 def load_run(folder: Path) -> Run:
-    """Read a run folder; BadInputError naming what is missing or broken."""
-    metrics_file = folder / "metrics.json"
-    ts_file = run_timeseries_file(folder)
-    if not (metrics_file.is_file() and ts_file.is_file()):
-        raise BadInputError(
-            f"{str(folder)!r} is not a finished run: it needs metrics.json and a time series"
-        )
-    try:
-        metrics = json.loads(metrics_file.read_text())
-    except (OSError, json.JSONDecodeError) as err:
-        raise BadInputError(f"{metrics_file}: {err}") from None
-    if not isinstance(metrics, dict):
-        raise BadInputError(f"{metrics_file} is not a run's metrics (a JSON object)")
-    try:
-        ts = read_timeseries(ts_file)
-    except (OSError, ValueError) as err:
-        raise BadInputError(f"{ts_file}: {err}") from None
-    return Run(folder, metrics, ts)
+    """Read a run folder through :func:`tt_mujoco.runfolder.read_run`; RunFolderError (a
+    BadInputError) naming what is missing or broken."""
+    return Run(read_run(folder))
 
 
 def _numeric(value) -> bool:
@@ -166,12 +148,9 @@ def compare(folders: list[Path], out: Path | None, allow_different_paths: bool) 
             "pass --allow-different-paths to compare them anyway"
         )
     _, rows = metrics_table(runs)
-    try:
-        reference = reference_polyline_for(runs[0].timeseries, runs[0].folder)[0]
-    except ValueError as err:
-        if (runs[0].folder / REFERENCE_FILE).exists():  # the run's own copy, edited or broken
-            raise BadInputError(f"{runs[0].folder / REFERENCE_FILE}: {err}") from None
-        reference = None  # a run from before runs kept their path: drawn without it
+    reference = runs[0].reference
+    if out is not None:
+        check_out(out / "compare.md")
     folder, _ = claim_folder(out, DEFAULT_OUT)
     atomic_write(folder / "compare.md", _markdown(runs, rows))
     write_json(

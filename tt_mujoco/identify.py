@@ -282,6 +282,7 @@ def main(argv: list[str] | None = None) -> int:
     """``python -m tt_mujoco.identify LOG``: see the module. Exit codes: 0 written; 2 bad
     input (a bad log, bad options, an output folder in use)."""
     from tt_mujoco.outputs import atomic_write, claim_folder, release_folder, write_json
+    from tt_mujoco.runfolder import check_out
 
     parser = argparse.ArgumentParser(
         prog="python -m tt_mujoco.identify",
@@ -305,6 +306,8 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError:
         return fail(f"--columns {args.columns!r} is not allowed: give NAME=COLUMN")
     try:
+        if args.out is not None:
+            check_out(args.out / "identified.toml")
         t, v, omega, phis = read_log(args.log, mapping)
         from tt_mujoco.sim import Scenario
 

@@ -14,7 +14,6 @@ re-renders a finished run.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import textwrap
 from collections.abc import Mapping
@@ -24,7 +23,7 @@ import mujoco
 import numpy as np
 
 from tt_mujoco.analysis.geometry import Polyline
-from tt_mujoco.outputs import REFERENCE_FILE, publish_new, read_timeseries, temporary_beside
+from tt_mujoco.outputs import publish_new, temporary_beside
 from tt_mujoco.progress import progress_bar
 from tt_mujoco.sim.physics import Vehicle
 from tt_mujoco.sim.relief import relief_of
@@ -63,13 +62,10 @@ __all__ = [
     "VIDEO_COLUMNS",
     "RenderUnavailable",
     "RunRenderer",
-    "check_trace",
     "frame_schedule",
     "overview_camera",
-    "params_from_config",
     "pose_vehicle",
     "project_to_pixel",
-    "reference_polyline_for",
     "render_video",
     "run_labels",
     "select_gl_backend",
@@ -662,62 +658,3 @@ def render_video(
                     writer.add_image(card)
         publish_new(tmp, out)
     return out
-
-
-# --- re-rendering a finished run --------------------------------------------------------------
-def params_from_config(params: Mapping) -> Params:
-    """``Params`` from ``metrics.json["config"]["params"]`` (non-init fields such as
-    ``steering`` are ignored; unknown names are an error)."""
-    init = {f.name for f in dataclasses.fields(Params) if f.init}
-    computed = {f.name for f in dataclasses.fields(Params) if not f.init}
-    unknown = sorted(set(params) - init - computed)
-    if unknown:
-        raise ValueError(
-            f"config params {unknown} are not Params fields; allowed: {', '.join(sorted(init))}"
-        )
-    return Params(**{k: v for k, v in params.items() if k in init})
-
-
-def reference_polyline_for(ts: Mapping, run_dir=None) -> tuple[np.ndarray, str]:
-    """A finished run's reference path, from what the run kept: its ``reference_path.parquet``
-    (written by every run), else the recorded reference point ``(x_ref, y_ref)``. A path file
-    the run was given (a CSV path) is never read again: it may have changed since.
-
-    Returns the polyline and a note on where it came from.
-    """
-    if run_dir is not None:
-        stored = Path(run_dir) / REFERENCE_FILE
-        if stored.is_file():
-            line = read_timeseries(stored)
-            polyline = np.column_stack([line.get("x", ()), line.get("y", ())])
-            if polyline.shape[0] < 2 or not np.all(np.isfinite(polyline)):
-                raise ValueError(
-                    f"{stored} is not a reference path: it needs at least 2 finite rows of x, y"
-                )
-            return polyline, f"the run's own {REFERENCE_FILE}"
-    if "x_ref" not in ts or "y_ref" not in ts:
-        raise ValueError("the run has no reference path: no reference_path.parquet, no x_ref/y_ref")
-    return np.column_stack(
-        [ts["x_ref"], ts["y_ref"]]
-    ), "the recorded reference point (x_ref, y_ref)"
-
-
-def check_trace(params: Params, ts: Mapping) -> str:
-    """Why ``params`` cannot be the vehicle that recorded ``ts``, or "": the distance between
-    the tractor's P and the trailer axle P0 is fixed by the hitch lengths and the articulation,
-    ``|P - P0|^2 = L^2 + L0^2 + 2 L L0 cos(theta - theta0)`` (docs/model.md Section 2), which an
-    edited L or L0 breaks (the video would draw the trailer off its own trace)."""
-    needed = ("x", "y", "theta", "x0", "y0", "theta0")
-    if not all(name in ts for name in needed) or len(ts["t"]) == 0:
-        return ""
-    L, L0 = params.L, params.L0
-    recorded = np.hypot(ts["x"] - ts["x0"], ts["y"] - ts["y0"])
-    implied = np.sqrt(L * L + L0 * L0 + 2.0 * L * L0 * np.cos(ts["theta"] - ts["theta0"]))
-    worst = float(np.max(np.abs(recorded - implied)))
-    if worst > 1e-6:
-        return (
-            f"its plant_params (L={L:g} m, L0={L0:g} m) are not the vehicle of its time series: "
-            f"the recorded axle spacing is off theirs by up to {worst * 1000:.3g} mm (was "
-            "metrics.json edited?)"
-        )
-    return ""

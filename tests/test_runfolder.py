@@ -1,0 +1,273 @@
+"""One guard for what is read back (tt_mujoco/runfolder.py): every file of a finished run's
+folder x every kind of damage, generated from what the module declares (its metrics fields,
+its columns, the files a run keeps), read by read_run and by every command that reads run
+folders. A damaged file is exit 2, one line naming the file (and the field, column or row),
+with nothing written anywhere; damage a run may carry (a missing reference path or kept world)
+is read as before."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tt_mujoco import bag, compare, render, run, runfolder
+from tt_mujoco.outputs import REFERENCE_FILE, read_timeseries, write_timeseries
+from tt_mujoco.world.builtin import KEPT_WORLD
+
+#: The commands that read run folders, each with the arguments that make it write a new file.
+COMMANDS = {
+    "render": lambda folder, good, out: render.main(
+        [str(folder), "--out", str(out / "v.mp4"), "--no-progress", "--width", "64"]
+    ),
+    "bag": lambda folder, good, out: bag.main([str(folder), "--out", str(out / "b.mcap")]),
+    "compare": lambda folder, good, out: compare.main(
+        [str(good), str(folder), "--out", str(out / "cmp")]
+    ),
+}
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory) -> dict[str, Path]:
+    """Two finished runs in a world (a reduced-plant maneuver), one kept as Parquet, one as
+    CSV."""
+    base = tmp_path_factory.mktemp("runs")
+    runs = {}
+    for fmt in ("parquet", "csv"):
+        folder = base / fmt
+        argv = ["--world", "loading_bay", "--traj", "plan", "--reverse", "--plant", "reduced"]
+        argv += ["--duration", "3", "--timeseries-format", fmt, "--out", str(folder)]
+        assert run.main([*argv, "--no-video", "--no-plots", "--quiet"]) in (0, 3)
+        runs[fmt] = folder
+    return runs
+
+
+def _metrics(folder: Path) -> dict:
+    return json.loads((folder / runfolder.METRICS_FILE).read_text())
+
+
+def _put(doc: dict, path: str, value) -> None:
+    keys = path.split(".")
+    for key in keys[:-1]:
+        doc = doc.setdefault(key, {})
+    doc[keys[-1]] = value
+
+
+def _wrong_values(field: runfolder.MetricsField) -> list:
+    """Values of JSON types the field does not allow."""
+    candidates = [["a", "list"], "text", 7, -3, 1.5, True, None, {"a": 1}]
+    return [v for v in candidates if field.why_not(v)][:3]
+
+
+def _edit_metrics(path: str, value, says: str | None = None):
+    def edit(folder: Path) -> str:
+        doc = _metrics(folder)
+        _put(doc, path, value)
+        (folder / runfolder.METRICS_FILE).write_text(json.dumps(doc))
+        return says or path
+
+    return edit
+
+
+def _metrics_text(text: str, says: str):
+    def edit(folder: Path) -> str:
+        (folder / runfolder.METRICS_FILE).write_bytes(text.encode("latin-1"))
+        return says
+
+    return edit
+
+
+def _series_edit(change, says: str):
+    def edit(folder: Path) -> str:
+        ts = read_timeseries(folder / "timeseries.parquet")
+        change(ts)
+        (folder / "timeseries.parquet").unlink()
+        write_timeseries(folder / "timeseries.parquet", ts, list(ts))
+        return says
+
+    return edit
+
+
+def _file_damage(name: str, how: str):
+    def edit(folder: Path) -> str:
+        file = folder / name
+        data = file.read_bytes()
+        if how == "missing":
+            file.unlink()
+        elif how == "empty":
+            file.write_bytes(b"")
+        elif how == "truncated":
+            file.write_bytes(data[: len(data) // 2])
+        elif how == "not UTF-8":
+            file.write_bytes(b"\xff\xfe\x80" + data)
+        return name
+
+    return edit
+
+
+def _nan_at(column: str, row: int):
+    def change(ts):
+        ts[column][row] = np.nan
+
+    return change
+
+
+def _drop(column: str):
+    def change(ts):
+        del ts[column]
+
+    return change
+
+
+def _backwards(ts):
+    ts["t"][5] = ts["t"][3]
+
+
+def _cases() -> dict[str, tuple]:
+    """name -> (damage, format the damage applies to)."""
+    cases = {}
+    for field in runfolder.METRICS_FIELDS:
+        for value in _wrong_values(field):
+            cases[f"metrics {field.path}={json.dumps(value)}"] = (
+                _edit_metrics(field.path, value),
+                "parquet",
+            )
+    cases["metrics NaN"] = (_metrics_text('{"config": {}, "rmse_v": NaN}', "NaN"), "parquet")
+    cases["metrics 1e400"] = (_metrics_text('{"config": {}, "rmse_v": 1e400}', "beyond"), "parquet")
+    cases["metrics huge int"] = (
+        _metrics_text('{"config": {}, "steps": ' + "9" * 5000 + "}", "strict JSON"),
+        "parquet",
+    )
+    cases["metrics key twice"] = (_metrics_text('{"config": {}, "config": {}}', "twice"), "parquet")
+    cases["metrics a list"] = (_metrics_text("[1, 2]", "not a run's metrics"), "parquet")
+    cases["metrics no config"] = (_metrics_text('{"status": "ok"}', "no config"), "parquet")
+    cases["metrics deep"] = (_metrics_text("[" * 100000 + "]" * 100000, "strict JSON"), "parquet")
+    cases["plant_params extra key"] = (
+        _edit_metrics("config.plant_params.wheelbase", 1.0, "['wheelbase'] are not Params fields"),
+        "parquet",
+    )
+    cases["plant_params L=-1"] = (
+        _edit_metrics("config.plant_params.L", -1.0, "plant_params: L=-1.0"),
+        "parquet",
+    )
+    cases["plant_params L edited"] = (
+        _edit_metrics("config.plant_params.L", 0.5, "are not the vehicle"),
+        "parquet",
+    )
+    cases["plant_params L huge"] = (
+        _edit_metrics("config.plant_params.L", 10**30, "are not the vehicle"),
+        "parquet",
+    )
+    cases["steps beyond rows"] = (_edit_metrics("steps", 10**7, "the file is cut"), "parquet")
+    for how in ("missing", "empty", "truncated", "not UTF-8"):
+        cases[f"metrics.json {how}"] = (_file_damage("metrics.json", how), "parquet")
+        cases[f"timeseries.parquet {how}"] = (_file_damage("timeseries.parquet", how), "parquet")
+        cases[f"timeseries.csv {how}"] = (_file_damage("timeseries.csv", how), "csv")
+        if how != "missing":  # without it the run's reference point is drawn
+            cases[f"{REFERENCE_FILE} {how}"] = (_file_damage(REFERENCE_FILE, how), "parquet")
+            cases[f"{KEPT_WORLD} {how}"] = (_file_damage(KEPT_WORLD, how), "parquet")
+    for column in runfolder.read_columns(1):
+        cases[f"no column {column}"] = (_series_edit(_drop(column), column), "parquet")
+    for column in runfolder.STATE_COLUMNS:
+        cases[f"NaN in {column}"] = (_series_edit(_nan_at(column, 7), column), "parquet")
+    cases["time backwards"] = (_series_edit(_backwards, "time must increase"), "parquet")
+    return cases
+
+
+CASES = _cases()
+#: Damage a finished run may carry: read as before.
+ACCEPTED = {
+    f"{REFERENCE_FILE} missing": _file_damage(REFERENCE_FILE, "missing"),
+    f"{KEPT_WORLD} missing": _file_damage(KEPT_WORLD, "missing"),
+    "an extra metric": _edit_metrics("my_metric", {"a": [1, None, "x"]}),
+}
+
+
+def _damaged(finished, tmp_path, damage, fmt) -> tuple[Path, str]:
+    folder = tmp_path / "run"
+    shutil.copytree(finished[fmt], folder)
+    return folder, damage(folder)
+
+
+def test_the_matrix_covers_every_declared_field_column_and_file():
+    names = " ".join(CASES)
+    assert all(f.path in names for f in runfolder.METRICS_FIELDS)
+    assert all(f"no column {c}" in CASES for c in runfolder.read_columns(1))
+    for file in (
+        "metrics.json",
+        "timeseries.parquet",
+        "timeseries.csv",
+        REFERENCE_FILE,
+        KEPT_WORLD,
+    ):
+        assert f"{file} truncated" in CASES
+    assert len(CASES) >= 80, len(CASES)
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_a_damaged_run_folder_is_refused_naming_what(finished, tmp_path, name):
+    damage, fmt = CASES[name]
+    folder, says = _damaged(finished, tmp_path, damage, fmt)
+    with pytest.raises(runfolder.RunFolderError) as err:
+        runfolder.read_run(folder)
+    message = str(err.value)
+    assert says in message and len(message.splitlines()) == 1, message
+
+
+@pytest.mark.parametrize("name", list(ACCEPTED))
+def test_what_a_run_may_lack_is_read_as_before(finished, tmp_path, name):
+    folder, _ = _damaged(finished, tmp_path, ACCEPTED[name], "parquet")
+    kept = runfolder.read_run(finished["parquet"])
+    again = runfolder.read_run(folder)
+    assert again.world == kept.world
+    np.testing.assert_array_equal(again.timeseries["x"], kept.timeseries["x"])
+
+
+# Every command x a sample of every kind of damage (each kind's first case): exit 2, one line,
+# nothing written anywhere, the run folder unchanged.
+_KINDS = {}
+for _name in CASES:
+    _KINDS.setdefault(_name.split(" ")[0] + " " + _name.split(" ")[-1][:4], _name)
+
+
+@pytest.mark.parametrize("command", list(COMMANDS))
+@pytest.mark.parametrize("name", sorted(set(_KINDS.values())))
+def test_every_command_refuses_a_damaged_run_in_one_line(finished, tmp_path, capsys, command, name):
+    damage, fmt = CASES[name]
+    folder, says = _damaged(finished, tmp_path, damage, fmt)
+    before = {p: p.read_bytes() for p in folder.iterdir()}
+    out = tmp_path / "out"
+    out.mkdir()
+    code = COMMANDS[command](folder, finished["parquet"], out)
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1 and says in err, err
+    assert not list(out.iterdir())
+    assert {p: p.read_bytes() for p in folder.iterdir()} == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "run"]
+
+
+@pytest.mark.parametrize("command", list(COMMANDS))
+def test_no_command_writes_inside_a_run_folder(finished, tmp_path, capsys, command):
+    folder = tmp_path / "run"
+    shutil.copytree(finished["parquet"], folder)
+    before = sorted(p.name for p in folder.iterdir())
+    code = COMMANDS[command](folder, finished["csv"], folder / "sub")
+    assert code == 2 and "inside the run folder" in capsys.readouterr().err
+    assert sorted(p.name for p in folder.iterdir()) == before
+
+
+def test_defaults_are_beside_the_run(tmp_path):
+    assert runfolder.default_out(tmp_path / "r", "follow", ".mp4") == tmp_path / "r.follow.mp4"
+    assert runfolder.default_out(Path("."), "ros2", ".mcap").parent == Path.cwd().parent
+
+
+def test_a_reader_is_the_only_one_that_opens_a_run_folder():
+    """No command module reads metrics.json or a run's time series itself."""
+    root = Path(runfolder.__file__).parent
+    for module in ("render.py", "bag.py", "compare.py"):
+        text = (root / module).read_text()
+        assert "read_timeseries" not in text and "json.load" not in text, module

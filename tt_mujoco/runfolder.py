@@ -1,0 +1,387 @@
+"""A finished run's folder read back through one guard: :func:`read_run`.
+
+Every command that reads a run folder (``render``, ``bag``, ``compare``) reads it here, and
+here only: each file is checked against what :data:`METRICS_FIELDS` and :func:`read_run`
+declare before anything uses it, and any deviation is a :class:`RunFolderError` (a bad input:
+one line, exit code 2) naming the file and the field, column or row. What is checked:
+
+- ``metrics.json``: UTF-8, strict JSON (no ``NaN``, no infinities, no number beyond a float,
+  no key given twice), an object, and each declared field of the declared type where present
+  (:data:`METRICS_FIELDS`); the vehicle's parameters are ``Params`` fields with allowed values;
+- the time series (``timeseries.parquet`` or ``.csv``): readable, at least one row, every
+  column a run of that train writes (:data:`tt_mujoco.sim.timeseries.COLUMNS` and the
+  trailers' columns), the states finite, time increasing, as many rows as ``steps`` says, and
+  the axle spacing that ``plant_params`` implies (:func:`check_trace`);
+- ``reference_path.parquet``, when the run kept it: at least two finite rows of ``x, y``;
+- ``world.toml``, when the run kept it: a world file (:func:`tt_mujoco.world.world.read_world`).
+
+A reader never writes inside a run folder: :func:`check_out` refuses an output there.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from tt_mujoco.cliargs import BadInputError
+from tt_mujoco.outputs import REFERENCE_FILE, read_timeseries, run_timeseries_file
+from tt_mujoco.sim.timeseries import COLUMNS, train_columns
+from tt_mujoco.vehicle.params import Params
+
+__all__ = [
+    "METRICS_FIELDS",
+    "METRICS_FILE",
+    "READ_COLUMNS",
+    "STATE_COLUMNS",
+    "FinishedRun",
+    "MetricsField",
+    "RunFolderError",
+    "check_out",
+    "check_trace",
+    "default_out",
+    "params_from_config",
+    "read_columns",
+    "read_run",
+    "reference_polyline_for",
+]
+
+METRICS_FILE = "metrics.json"
+
+
+class RunFolderError(BadInputError):
+    """A run folder that is not what a finished run writes: exit code 2, naming the file, in
+    one line (a library's message over several lines is joined)."""
+
+    def __init__(self, message: str):
+        super().__init__(
+            "; ".join(line.strip() for line in str(message).splitlines() if line.strip())
+        )
+
+
+@dataclass(frozen=True)
+class MetricsField:
+    """A declared field of ``metrics.json``: its dotted path and the JSON types it may hold."""
+
+    path: str
+    types: tuple[type, ...]
+    #: What the field holds, for the message that refuses it.
+    what: str
+
+    def why_not(self, value) -> str:
+        """Why ``value`` cannot be this field, or ""."""
+        if isinstance(value, bool) and bool not in self.types:
+            return f"holds {value!r}, not {self.what}"
+        if not isinstance(value, self.types):
+            return f"holds {_shown(value)}, not {self.what}"
+        if int in self.types and isinstance(value, int) and value < 0:
+            return f"holds {value}, not {self.what}"
+        return ""
+
+
+_TEXT = ((str,), "a string")
+#: The fields of ``metrics.json`` that the readers use, where the run writes them; every other
+#: key is a metric (a number, a string, null or a table of them) and is left to its reader.
+METRICS_FIELDS = (
+    MetricsField("status", *_TEXT),
+    MetricsField("message", *_TEXT),
+    MetricsField("steps", (int,), "a whole number of steps >= 0"),
+    MetricsField("config", (dict,), "a table (the run's configuration)"),
+    MetricsField("config.scenario", (dict,), "a table (the run's scenario)"),
+    *(MetricsField(f"config.scenario.{k}", *_TEXT) for k in ("traj", "controller", "plant")),
+    *(MetricsField(f"config.scenario.{k}", *_TEXT) for k in ("target", "terrain", "world")),
+    MetricsField("config.scenario.reverse", (bool,), "true or false"),
+    MetricsField("config.plant_params", (dict,), "a table of the vehicle's parameters"),
+    MetricsField("config.params", (dict,), "a table of the vehicle's parameters"),
+)
+#: The time-series columns the readers use (with the trailers' columns of a train): every run
+#: writes them (:data:`tt_mujoco.sim.timeseries.COLUMNS`).
+READ_COLUMNS = (
+    *("t", "x", "y", "theta", "phi", "beta", "v", "omega", "x0", "y0", "theta0", "v0"),
+    *("theta_l", "theta_r", "T_r", "T_l", "x_ref", "y_ref", "v_d", "omega_d"),
+)
+assert set(READ_COLUMNS) <= set(COLUMNS)
+#: The time-series columns that hold the train's state: finite in every row a run keeps.
+STATE_COLUMNS = ("t", "x", "y", "theta", "phi", "beta", "x0", "y0", "theta0")
+
+
+def _shown(value) -> str:
+    text = json.dumps(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _lookup(doc: Mapping, path: str):
+    """The value at dotted ``path``, or ``_MISSING``."""
+    value = doc
+    for key in path.split("."):
+        if not isinstance(value, Mapping) or key not in value:
+            return _MISSING
+        value = value[key]
+    return value
+
+
+_MISSING = object()
+
+
+@dataclass(frozen=True)
+class FinishedRun:
+    """A run folder that passed :func:`read_run`'s checks."""
+
+    folder: Path
+    metrics: Mapping
+    params: Params
+    timeseries: Mapping[str, np.ndarray]
+    reference: np.ndarray
+    #: Where :attr:`reference` came from (the run's own path file, or its reference point).
+    reference_source: str
+    world: object | None
+
+    @property
+    def config(self) -> Mapping:
+        return self.metrics.get("config", {})
+
+    @property
+    def scenario(self) -> Mapping:
+        return self.config.get("scenario", {})
+
+    @property
+    def status(self) -> str | None:
+        return self.metrics.get("status")
+
+    @property
+    def message(self) -> str:
+        return self.metrics.get("message", "")
+
+
+def read_run(folder) -> FinishedRun:
+    """Read and check a finished run's folder (see the module's docstring).
+
+    Raises
+    ------
+    RunFolderError
+        Naming the file and the field, column or row that is not a run's.
+    """
+    folder = Path(folder)
+    metrics_file, ts_file = folder / METRICS_FILE, run_timeseries_file(folder)
+    if not folder.is_dir():
+        raise RunFolderError(f"{str(folder)!r} is not a folder: give a finished run's folder")
+    missing = [str(f) for f in (metrics_file, ts_file) if not f.is_file()]
+    if not ts_file.is_file():  # neither form of the time series
+        missing[-1] = f"{ts_file.with_suffix('.parquet')} (or {ts_file.with_suffix('.csv').name})"
+    if missing:
+        raise RunFolderError(
+            f"{' and '.join(missing)} not found: {folder} is not a finished run's folder"
+        )
+    metrics = _read_metrics(metrics_file)
+    raw_params = metrics["config"].get("plant_params", metrics["config"].get("params"))
+    if raw_params is None:
+        raise RunFolderError(f"{metrics_file} has no config.plant_params or config.params")
+    try:
+        params = params_from_config(raw_params)
+    except (ValueError, TypeError) as err:
+        raise RunFolderError(f"{metrics_file}: config.plant_params: {err}") from None
+    ts = _read_series(ts_file, params, metrics.get("steps"))
+    problem = check_trace(params, ts)
+    if problem:
+        raise RunFolderError(f"{metrics_file}: {problem}")
+    try:
+        reference, source = reference_polyline_for(ts, folder)
+    except (OSError, ValueError) as err:
+        raise RunFolderError(f"{folder / REFERENCE_FILE}: {err}") from None
+    return FinishedRun(folder, metrics, params, ts, reference, source, _world(folder, metrics))
+
+
+def read_columns(n_trailers: int) -> tuple[str, ...]:
+    """The columns :func:`read_run` requires of the time series of a train of ``n_trailers``."""
+    return (*READ_COLUMNS, *train_columns(n_trailers))
+
+
+def _read_metrics(path: Path) -> dict:
+    def strict_float(text: str) -> float:
+        value = float(text)
+        if not math.isfinite(value):
+            raise ValueError(f"the number {text[:40]} is beyond a float")
+        return value
+
+    def no_constant(name: str):
+        raise ValueError(f"{name} is not JSON (strict JSON has no NaN or infinities)")
+
+    def unique(pairs):
+        keys = [k for k, _ in pairs]
+        twice = sorted({k for k in keys if keys.count(k) > 1})
+        if twice:
+            raise ValueError(f"the key {twice[0]!r} is given twice")
+        return dict(pairs)
+
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise RunFolderError(f"{path} is not UTF-8 text (byte {err.start})") from None
+    except OSError as err:
+        raise RunFolderError(f"{path}: {err.strerror}") from None
+    try:
+        doc = json.loads(
+            text, parse_float=strict_float, parse_constant=no_constant, object_pairs_hook=unique
+        )
+    except json.JSONDecodeError as err:
+        raise RunFolderError(f"{path} is not JSON: {err}") from None
+    except (ValueError, RecursionError) as err:
+        raise RunFolderError(f"{path} is not strict JSON: {err}") from None
+    if not isinstance(doc, dict):
+        raise RunFolderError(f"{path} is not a run's metrics: it holds {_shown(doc)}, not a table")
+    if "config" not in doc:
+        raise RunFolderError(f"{path} is not a run's metrics: it has no config")
+    for field in METRICS_FIELDS:
+        value = _lookup(doc, field.path)
+        if value is not _MISSING:
+            why = field.why_not(value)
+            if why:
+                raise RunFolderError(f"{path}: {field.path} {why}")
+    return doc
+
+
+def _read_series(path: Path, params: Params, steps) -> dict[str, np.ndarray]:
+    try:
+        ts = read_timeseries(path)
+    except (OSError, ValueError, TypeError, KeyError) as err:
+        raise RunFolderError(f"{path} is not a time series: {err}") from None
+    missing = [c for c in read_columns(params.n_trailers) if c not in ts]
+    if missing:
+        shown = ", ".join(missing[:6]) + (", ..." if len(missing) > 6 else "")
+        raise RunFolderError(
+            f"{path} lacks the column(s) {shown}: it is not the time series of a run of "
+            f"{params.n_trailers} trailer(s)"
+        )
+    n = len(ts["t"])
+    if n == 0:
+        raise RunFolderError(f"{path} has no rows")
+    if isinstance(steps, int) and n < steps:
+        raise RunFolderError(
+            f"{path} has {n} rows but metrics.json says the run took {steps} steps: the file is cut"
+        )
+    for name in (*STATE_COLUMNS, *train_columns(params.n_trailers)):
+        bad = np.flatnonzero(~np.isfinite(ts[name]))
+        if bad.size:
+            row = int(bad[0])
+            raise RunFolderError(
+                f"{path}: row {row + 2} holds {float(ts[name][row])!r} in column {name!r}"
+            )
+    backwards = np.flatnonzero(np.diff(ts["t"]) <= 0.0)
+    if backwards.size:
+        row = int(backwards[0]) + 1
+        raise RunFolderError(
+            f"{path}: row {row + 2} has t = {ts['t'][row]!r}, not after the row before's "
+            f"{ts['t'][row - 1]!r}: time must increase"
+        )
+    return ts
+
+
+def _world(folder: Path, metrics: Mapping):
+    from tt_mujoco.world.builtin import KEPT_WORLD, run_world
+    from tt_mujoco.world.world import WorldError
+
+    name = _lookup(metrics, "config.scenario.world")
+    name = "none" if name is _MISSING else name
+    kept = folder / KEPT_WORLD
+    if name != "none" and kept.is_file():
+        try:
+            table = tomllib.loads(kept.read_bytes().decode("utf-8"))
+        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as err:
+            raise RunFolderError(f"{kept} is not a world file: {err}") from None
+        if not isinstance(table.get("name"), str):
+            raise RunFolderError(f"{kept} is not the world a run kept: it has no name")
+    try:
+        return run_world(folder, name)
+    except (OSError, WorldError) as err:
+        where = kept if kept.is_file() else f"{folder / METRICS_FILE}: config.scenario.world"
+        raise RunFolderError(f"{where}: {err}") from None
+
+
+def check_out(out: Path) -> None:
+    """Refuse ``out`` when it would be written inside a run's folder: a finished run is a
+    record, which a reader of it never changes."""
+    for parent in Path(out).resolve().parents:
+        if (parent / METRICS_FILE).is_file() or any(parent.glob(".in-progress*")):
+            raise BadInputError(
+                f"{out} is inside the run folder {parent}, which a reader never writes into: "
+                "name a file elsewhere with --out"
+            )
+
+
+def default_out(run_dir: Path, kind: str, suffix: str) -> Path:
+    """Where a reader writes what it makes of ``run_dir`` unless told: beside the run folder,
+    ``<run>.<kind><suffix>`` (``renders/run.follow.mp4`` for ``renders/run``)."""
+    run_dir = Path(run_dir)
+    if not run_dir.name:  # "." or ".."
+        run_dir = run_dir.resolve()
+    return run_dir.parent / f"{run_dir.name}.{kind}{suffix}"
+
+
+def params_from_config(params: Mapping) -> Params:
+    """``Params`` from ``metrics.json["config"]["plant_params"]`` (non-init fields such as
+    ``steering`` are ignored; unknown names are an error)."""
+    if not isinstance(params, Mapping):
+        raise ValueError(f"it holds {_shown(params)}, not a table of the vehicle's parameters")
+    init = {f.name for f in dataclasses.fields(Params) if f.init}
+    computed = {f.name for f in dataclasses.fields(Params) if not f.init}
+    unknown = sorted(set(params) - init - computed)
+    if unknown:
+        raise ValueError(
+            f"config params {unknown} are not Params fields; allowed: {', '.join(sorted(init))}"
+        )
+    return Params(**{k: v for k, v in params.items() if k in init})
+
+
+def reference_polyline_for(ts: Mapping, run_dir=None) -> tuple[np.ndarray, str]:
+    """A finished run's reference path, from what the run kept: its ``reference_path.parquet``
+    (written by every run), else the recorded reference point ``(x_ref, y_ref)``. A path file
+    the run was given (a CSV path) is never read again: it may have changed since.
+
+    Returns the polyline and a note on where it came from.
+    """
+    if run_dir is not None:
+        stored = Path(run_dir) / REFERENCE_FILE
+        if stored.is_file():
+            line = read_timeseries(stored)
+            polyline = np.column_stack([line.get("x", ()), line.get("y", ())])
+            if polyline.shape[0] < 2 or not np.all(np.isfinite(polyline)):
+                raise ValueError(
+                    f"{stored} is not a reference path: it needs at least 2 finite rows of x, y"
+                )
+            return polyline, f"the run's own {REFERENCE_FILE}"
+    if "x_ref" not in ts or "y_ref" not in ts:
+        raise ValueError("the run has no reference path: no reference_path.parquet, no x_ref/y_ref")
+    return np.column_stack(
+        [ts["x_ref"], ts["y_ref"]]
+    ), "the recorded reference point (x_ref, y_ref)"
+
+
+def check_trace(params: Params, ts: Mapping) -> str:
+    """Why ``params`` cannot be the vehicle that recorded ``ts``, or "": the distance between
+    the tractor's P and the trailer axle P0 is fixed by the hitch lengths and the articulation,
+    ``|P - P0|^2 = L^2 + L0^2 + 2 L L0 cos(theta - theta0)`` (docs/model.md Section 2), which an
+    edited L or L0 breaks (the video would draw the trailer off its own trace)."""
+    needed = ("x", "y", "theta", "x0", "y0", "theta0")
+    if not all(name in ts for name in needed) or len(ts["t"]) == 0:
+        return ""
+    try:
+        L, L0 = float(params.L), float(params.L0)
+    except OverflowError:
+        return "its plant_params L or L0 is beyond a float"
+    recorded = np.hypot(ts["x"] - ts["x0"], ts["y"] - ts["y0"])
+    with np.errstate(over="ignore", invalid="ignore"):
+        implied = np.sqrt(L * L + L0 * L0 + 2.0 * L * L0 * np.cos(ts["theta"] - ts["theta0"]))
+        worst = float(np.max(np.abs(recorded - implied)))
+    if not worst <= 1e-6:
+        return (
+            f"its plant_params (L={L:g} m, L0={L0:g} m) are not the vehicle of its time series: "
+            f"the recorded axle spacing is off theirs by up to {worst * 1000:.3g} mm (was "
+            "metrics.json edited?)"
+        )
+    return ""
