@@ -172,7 +172,7 @@ WORLD_CASES = {
         "[goal]\nx = 3.0\ny = 2.0\nheading_deg = 0\nbay = {width = 0.5, depth = 1, back = 0.1}\n",
         "bay back=0.1",
     ),
-    "not toml": ("obstacle = [\n", "cannot be read"),
+    "not toml": ("obstacle = [\n", "is not valid TOML"),
 }
 
 

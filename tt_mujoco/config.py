@@ -30,11 +30,11 @@ written: ``out`` (a repeat needs a new folder), ``config``, and how the run was 
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 
 import tomli_w
 
+from tt_mujoco.outputs import read_toml
 from tt_mujoco.registry import existing_file
 from tt_mujoco.schema import Schema
 
@@ -53,19 +53,8 @@ def load_config(path) -> dict:
     ValueError
         The file is missing, unreadable or not valid TOML (the message has the line).
     """
-    file = existing_file(path, "config file")
-    try:
-        with file.open("rb") as handle:
-            return tomllib.load(handle)
-    except tomllib.TOMLDecodeError as err:
-        raise ValueError(f"config file {str(path)!r} is not valid TOML: {err}") from None
-    except RecursionError:
-        raise ValueError(
-            f"config file {str(path)!r} is nested too deeply: a scenario file is flat keys and "
-            "a few tables"
-        ) from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise ValueError(f"config file {str(path)!r} cannot be read: {err}") from None
+    existing_file(path, "config file")
+    return read_toml(path, "config file")
 
 
 def read_options(table: dict, source, schema: Schema) -> dict:

@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import dataclasses
 import io
 import json
+import math
 import os
 import tempfile
 import warnings
@@ -321,6 +323,148 @@ def read_timeseries(path) -> dict[str, np.ndarray]:
     if data.shape[1] != len(header):
         raise ValueError(f"{path} has {len(header)} header names but {data.shape[1]} columns")
     return {name.strip(): data[:, j].copy() for j, name in enumerate(header)}
+
+
+def shown_json(value) -> str:
+    """``value`` as JSON, cut to 40 characters, for a message."""
+    text = json.dumps(value, default=repr)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+@dataclasses.dataclass(frozen=True)
+class JsonField:
+    """A declared field of a JSON document read back: its dotted path, the JSON types it may
+    hold and, in words, what it holds (for the message that refuses it)."""
+
+    path: str
+    types: tuple[type, ...]
+    what: str
+    required: bool = False
+
+    def why_not(self, value) -> str:
+        """Why ``value`` cannot be this field, or ""."""
+        if isinstance(value, bool) and bool not in self.types:
+            return f"holds {value!r}, not {self.what}"
+        if not isinstance(value, self.types):
+            return f"holds {shown_json(value)}, not {self.what}"
+        if int in self.types and isinstance(value, int) and value < 0:
+            return f"holds {value}, not {self.what}"
+        return ""
+
+
+_MISSING = object()
+
+
+def lookup(doc, path: str, default=None):
+    """The value at dotted ``path`` of nested tables, or ``default``."""
+    value = doc
+    for key in path.split("."):
+        if not isinstance(value, Mapping) or key not in value:
+            return default
+        value = value[key]
+    return value
+
+
+def check_fields(doc: Mapping, fields) -> str:
+    """Why ``doc`` breaks one of the declared ``fields`` (naming it), or ""."""
+    for field in fields:
+        value = lookup(doc, field.path, _MISSING)
+        if value is _MISSING:
+            if field.required:
+                return f"{field.path} is missing: it holds {field.what}"
+            continue
+        why = field.why_not(value)
+        if why:
+            return f"{field.path} {why}"
+    return ""
+
+
+def parse_strict_json(text: str):
+    """``text`` as strict JSON: no NaN or infinities, no number beyond a float, no key twice.
+
+    Raises
+    ------
+    ValueError
+        Saying what is not strict JSON (``json.JSONDecodeError`` with its line and column).
+    """
+
+    def strict_float(number: str) -> float:
+        value = float(number)
+        if not math.isfinite(value):
+            raise ValueError(f"the number {number[:40]} is beyond a float")
+        return value
+
+    def no_constant(name: str):
+        raise ValueError(f"{name} is not JSON (strict JSON has no NaN or infinities)")
+
+    def unique(pairs):
+        keys = [k for k, _ in pairs]
+        twice = sorted({k for k in keys if keys.count(k) > 1})
+        if twice:
+            raise ValueError(f"the key {twice[0]!r} is given twice")
+        return dict(pairs)
+
+    try:
+        return json.loads(
+            text, parse_float=strict_float, parse_constant=no_constant, object_pairs_hook=unique
+        )
+    except RecursionError:
+        raise ValueError("it is nested too deeply") from None
+
+
+def read_strict_json(path):
+    """The strict JSON file ``path`` (:func:`parse_strict_json`).
+
+    Raises
+    ------
+    ValueError
+        Naming the file: unreadable, not UTF-8, or not strict JSON.
+    """
+    try:
+        text = Path(path).read_bytes().decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise ValueError(f"{path} is not UTF-8 text (byte {err.start})") from None
+    except OSError as err:
+        raise ValueError(f"{path} cannot be read: {err.strerror}") from None
+    try:
+        return parse_strict_json(text)
+    except json.JSONDecodeError as err:
+        raise ValueError(f"{path} is not JSON: {err}") from None
+    except ValueError as err:
+        raise ValueError(f"{path} is not strict JSON: {err}") from None
+
+
+def read_toml(path, what: str) -> dict:
+    """The TOML file ``path`` as a table: the one reader of every TOML file (scenario files,
+    sweep specifications, world files, the copies a run keeps).
+
+    Raises
+    ------
+    ValueError
+        Naming ``what`` and the file: unreadable, not UTF-8, not valid TOML (with its line), or
+        nested too deeply.
+    """
+    import tomllib
+
+    shown = f"{what} {str(path)!r}"
+    try:
+        data = Path(path).read_bytes()
+    except OSError as err:
+        raise ValueError(f"{shown} cannot be read: {err.strerror}") from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise ValueError(
+            f"{shown} cannot be read: it is not UTF-8 text (byte {err.start})"
+        ) from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise ValueError(f"{shown} is not valid TOML: {err}") from None
+    except RecursionError:
+        raise ValueError(
+            f"{shown} is nested too deeply: a TOML file here is keys and a few tables"
+        ) from None
 
 
 def write_json(path: Path, doc, strict: bool = False) -> None:

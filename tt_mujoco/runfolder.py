@@ -21,9 +21,6 @@ A reader never writes inside a run folder: :func:`check_out` refuses an output t
 from __future__ import annotations
 
 import dataclasses
-import json
-import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,7 +28,17 @@ from pathlib import Path
 import numpy as np
 
 from tt_mujoco.cliargs import BadInputError
-from tt_mujoco.outputs import REFERENCE_FILE, read_timeseries, run_timeseries_file
+from tt_mujoco.outputs import (
+    REFERENCE_FILE,
+    JsonField,
+    check_fields,
+    lookup,
+    read_strict_json,
+    read_timeseries,
+    read_toml,
+    run_timeseries_file,
+    shown_json,
+)
 from tt_mujoco.sim.timeseries import COLUMNS, train_columns
 from tt_mujoco.vehicle.params import Params
 
@@ -41,7 +48,6 @@ __all__ = [
     "READ_COLUMNS",
     "STATE_COLUMNS",
     "FinishedRun",
-    "MetricsField",
     "RunFolderError",
     "check_out",
     "check_trace",
@@ -65,40 +71,20 @@ class RunFolderError(BadInputError):
         )
 
 
-@dataclass(frozen=True)
-class MetricsField:
-    """A declared field of ``metrics.json``: its dotted path and the JSON types it may hold."""
-
-    path: str
-    types: tuple[type, ...]
-    #: What the field holds, for the message that refuses it.
-    what: str
-
-    def why_not(self, value) -> str:
-        """Why ``value`` cannot be this field, or ""."""
-        if isinstance(value, bool) and bool not in self.types:
-            return f"holds {value!r}, not {self.what}"
-        if not isinstance(value, self.types):
-            return f"holds {_shown(value)}, not {self.what}"
-        if int in self.types and isinstance(value, int) and value < 0:
-            return f"holds {value}, not {self.what}"
-        return ""
-
-
 _TEXT = ((str,), "a string")
 #: The fields of ``metrics.json`` that the readers use, where the run writes them; every other
 #: key is a metric (a number, a string, null or a table of them) and is left to its reader.
 METRICS_FIELDS = (
-    MetricsField("status", *_TEXT),
-    MetricsField("message", *_TEXT),
-    MetricsField("steps", (int,), "a whole number of steps >= 0"),
-    MetricsField("config", (dict,), "a table (the run's configuration)"),
-    MetricsField("config.scenario", (dict,), "a table (the run's scenario)"),
-    *(MetricsField(f"config.scenario.{k}", *_TEXT) for k in ("traj", "controller", "plant")),
-    *(MetricsField(f"config.scenario.{k}", *_TEXT) for k in ("target", "terrain", "world")),
-    MetricsField("config.scenario.reverse", (bool,), "true or false"),
-    MetricsField("config.plant_params", (dict,), "a table of the vehicle's parameters"),
-    MetricsField("config.params", (dict,), "a table of the vehicle's parameters"),
+    JsonField("status", *_TEXT),
+    JsonField("message", *_TEXT),
+    JsonField("steps", (int,), "a whole number of steps >= 0"),
+    JsonField("config", (dict,), "a table (the run's configuration)"),
+    JsonField("config.scenario", (dict,), "a table (the run's scenario)"),
+    *(JsonField(f"config.scenario.{k}", *_TEXT) for k in ("traj", "controller", "plant")),
+    *(JsonField(f"config.scenario.{k}", *_TEXT) for k in ("target", "terrain", "world")),
+    JsonField("config.scenario.reverse", (bool,), "true or false"),
+    JsonField("config.plant_params", (dict,), "a table of the vehicle's parameters"),
+    JsonField("config.params", (dict,), "a table of the vehicle's parameters"),
 )
 #: The time-series columns the readers use (with the trailers' columns of a train): every run
 #: writes them (:data:`tt_mujoco.sim.timeseries.COLUMNS`).
@@ -109,24 +95,6 @@ READ_COLUMNS = (
 assert set(READ_COLUMNS) <= set(COLUMNS)
 #: The time-series columns that hold the train's state: finite in every row a run keeps.
 STATE_COLUMNS = ("t", "x", "y", "theta", "phi", "beta", "x0", "y0", "theta0")
-
-
-def _shown(value) -> str:
-    text = json.dumps(value)
-    return text if len(text) <= 40 else text[:37] + "..."
-
-
-def _lookup(doc: Mapping, path: str):
-    """The value at dotted ``path``, or ``_MISSING``."""
-    value = doc
-    for key in path.split("."):
-        if not isinstance(value, Mapping) or key not in value:
-            return _MISSING
-        value = value[key]
-    return value
-
-
-_MISSING = object()
 
 
 @dataclass(frozen=True)
@@ -203,46 +171,19 @@ def read_columns(n_trailers: int) -> tuple[str, ...]:
 
 
 def _read_metrics(path: Path) -> dict:
-    def strict_float(text: str) -> float:
-        value = float(text)
-        if not math.isfinite(value):
-            raise ValueError(f"the number {text[:40]} is beyond a float")
-        return value
-
-    def no_constant(name: str):
-        raise ValueError(f"{name} is not JSON (strict JSON has no NaN or infinities)")
-
-    def unique(pairs):
-        keys = [k for k, _ in pairs]
-        twice = sorted({k for k in keys if keys.count(k) > 1})
-        if twice:
-            raise ValueError(f"the key {twice[0]!r} is given twice")
-        return dict(pairs)
-
     try:
-        text = path.read_bytes().decode("utf-8")
-    except UnicodeDecodeError as err:
-        raise RunFolderError(f"{path} is not UTF-8 text (byte {err.start})") from None
-    except OSError as err:
-        raise RunFolderError(f"{path}: {err.strerror}") from None
-    try:
-        doc = json.loads(
-            text, parse_float=strict_float, parse_constant=no_constant, object_pairs_hook=unique
-        )
-    except json.JSONDecodeError as err:
-        raise RunFolderError(f"{path} is not JSON: {err}") from None
-    except (ValueError, RecursionError) as err:
-        raise RunFolderError(f"{path} is not strict JSON: {err}") from None
+        doc = read_strict_json(path)
+    except ValueError as err:
+        raise RunFolderError(str(err)) from None
     if not isinstance(doc, dict):
-        raise RunFolderError(f"{path} is not a run's metrics: it holds {_shown(doc)}, not a table")
+        raise RunFolderError(
+            f"{path} is not a run's metrics: it holds {shown_json(doc)}, not a table"
+        )
     if "config" not in doc:
         raise RunFolderError(f"{path} is not a run's metrics: it has no config")
-    for field in METRICS_FIELDS:
-        value = _lookup(doc, field.path)
-        if value is not _MISSING:
-            why = field.why_not(value)
-            if why:
-                raise RunFolderError(f"{path}: {field.path} {why}")
+    why = check_fields(doc, METRICS_FIELDS)
+    if why:
+        raise RunFolderError(f"{path}: {why}")
     return doc
 
 
@@ -286,14 +227,13 @@ def _world(folder: Path, metrics: Mapping):
     from tt_mujoco.world.builtin import KEPT_WORLD, run_world
     from tt_mujoco.world.world import WorldError
 
-    name = _lookup(metrics, "config.scenario.world")
-    name = "none" if name is _MISSING else name
+    name = lookup(metrics, "config.scenario.world", "none")
     kept = folder / KEPT_WORLD
     if name != "none" and kept.is_file():
         try:
-            table = tomllib.loads(kept.read_bytes().decode("utf-8"))
-        except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as err:
-            raise RunFolderError(f"{kept} is not a world file: {err}") from None
+            table = read_toml(kept, "the kept world")
+        except ValueError as err:
+            raise RunFolderError(str(err)) from None
         if not isinstance(table.get("name"), str):
             raise RunFolderError(f"{kept} is not the world a run kept: it has no name")
     try:
@@ -327,7 +267,7 @@ def params_from_config(params: Mapping) -> Params:
     """``Params`` from ``metrics.json["config"]["plant_params"]`` (non-init fields such as
     ``steering`` are ignored; unknown names are an error)."""
     if not isinstance(params, Mapping):
-        raise ValueError(f"it holds {_shown(params)}, not a table of the vehicle's parameters")
+        raise ValueError(f"it holds {shown_json(params)}, not a table of the vehicle's parameters")
     init = {f.name for f in dataclasses.fields(Params) if f.init}
     computed = {f.name for f in dataclasses.fields(Params) if not f.init}
     unknown = sorted(set(params) - init - computed)

@@ -118,7 +118,7 @@ def _check_same_spec(out: Path, spec: SweepSpec, resume: bool, extend: bool) -> 
     saved = out / SPEC_FILE
     if not resume or extend or not saved.exists():
         return
-    if saved.read_text(encoding="utf-8") != spec.to_toml():
+    if saved.read_bytes() != spec.to_toml().encode("utf-8"):
         raise BadSpecError(
             f"--out {str(out)!r} holds a sweep with another specification ({SPEC_FILE}): "
             "--resume continues it as it is; pass --extend to add the new runs to it (its "

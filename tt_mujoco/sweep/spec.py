@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -10,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import tomli_w
 
+from tt_mujoco.outputs import read_toml
 from tt_mujoco.sweep.options import (
     DISTRIBUTIONS,
     GRID_GENERATORS,
@@ -216,12 +216,9 @@ def load_spec(path: str | Path) -> SweepSpec:
     """
     path = Path(path)
     try:
-        with open(path, "rb") as fh:
-            doc = tomllib.load(fh)
-    except OSError as err:
-        raise BadSpecError(f"--config {str(path)!r} cannot be read: {err.strerror}") from None
-    except tomllib.TOMLDecodeError as err:
-        raise BadSpecError(f"--config {str(path)!r} is not valid TOML: {err}") from None
+        doc = read_toml(path, "--config")
+    except ValueError as err:
+        raise BadSpecError(str(err)) from None
     unknown = sorted(set(doc) - {"sweep", "options"})
     if unknown:
         raise BadSpecError(

@@ -4,39 +4,97 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 
-from tt_mujoco.outputs import save_figure
-from tt_mujoco.sweep.options import KEY_METRICS, PERCENTILES, RESULT_COLUMNS, WALL_COLUMNS
+from tt_mujoco.outputs import (
+    JsonField,
+    check_fields,
+    parse_strict_json,
+    save_figure,
+    shown_json,
+)
+from tt_mujoco.sweep.options import (
+    KEY_METRICS,
+    PERCENTILES,
+    RESULT_COLUMNS,
+    WALL_COLUMNS,
+    BadSpecError,
+)
 from tt_mujoco.sweep.runs import config_columns
 from tt_mujoco.sweep.spec import SweepSpec
 
-
 # --- journal and table -------------------------------------------------------------------------
+_SCALARS = (str, int, float, bool, type(None))
+#: A journal record, as the sweep writes one per finished run (:func:`read_journal`).
+JOURNAL_FIELDS = (
+    JsonField("run_id", (str,), "a string (the run's id)", required=True),
+    JsonField("index", (int,), "a whole number >= 0 (the run's place)", required=True),
+    JsonField("status", (str,), "a string (ok, jackknife, diverged, error, ...)", required=True),
+    JsonField("message", (str,), "a string"),
+    JsonField("error", (str,), "a string"),
+    JsonField("metrics", (dict,), "a table of the run's metrics", required=True),
+    JsonField("config", (dict,), "a table of the run's configuration"),
+    JsonField("run_wall_s", (int, float, type(None)), "a number of seconds or null"),
+)
+
+
+def _record_problem(record) -> str:
+    """Why ``record`` is not a journal record, or ""."""
+    if not isinstance(record, dict):
+        return f"it holds {shown_json(record)}, not a run's record (a table)"
+    why = check_fields(record, JOURNAL_FIELDS)
+    if why:
+        return why
+    for table in ("metrics", "config"):
+        for name, value in record.get(table, {}).items():
+            if not isinstance(value, _SCALARS):
+                return f"{table}.{name} holds {shown_json(value)}, not a number, text or null"
+    return ""
+
+
 def read_journal(path: Path) -> dict[str, dict]:
-    """Finished runs by run_id. A line cut by a kill is dropped (that run runs again)."""
+    """Finished runs by run_id, each line checked against :data:`JOURNAL_FIELDS`.
+
+    Only the last line may be cut (a kill while it was written: no newline after it, not
+    JSON): it is dropped and that run runs again. Any other line that is not a run's record is
+    damage, refused naming the line and the field.
+
+    Raises
+    ------
+    BadSpecError
+        A damaged line: ``journal.jsonl line N: ...`` (exit code 2).
+    """
     done = {}
-    if not path.exists():
+    try:
+        data = Path(path).read_bytes()
+    except FileNotFoundError:
         return done
-    with open(path, encoding="utf-8") as fh:
-        for line in fh:
-            try:
-                record = json.loads(line)
-            except json.JSONDecodeError:
+    except OSError as err:
+        raise BadSpecError(f"{path} cannot be read: {err.strerror}") from None
+    lines = data.split(b"\n")
+    for number, raw in enumerate(lines, start=1):
+        if not raw.strip():
+            continue
+        try:
+            record = parse_strict_json(raw.decode("utf-8"))
+        except (UnicodeDecodeError, ValueError) as err:
+            if number == len(lines):  # no newline after it: cut by a kill
                 continue
-            # A line that is not a run's record (hand-edited, or from another program) is
-            # dropped like a cut one: that run runs again.
-            if (
-                isinstance(record, dict)
-                and isinstance(record.get("run_id"), str)
-                and isinstance(record.get("metrics"), dict)
-            ):
-                done[record["run_id"]] = record
+            reason = "not UTF-8 text" if isinstance(err, UnicodeDecodeError) else str(err)
+            raise BadSpecError(
+                f"{path} line {number} is not a run's record ({reason}): remove that line to "
+                "run that run again"
+            ) from None
+        why = _record_problem(record)
+        if why:
+            raise BadSpecError(
+                f"{path} line {number}: {why}; remove that line to run that run again"
+            )
+        done[record["run_id"]] = record
     return done
 
 

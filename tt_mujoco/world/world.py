@@ -37,12 +37,12 @@ from __future__ import annotations
 
 import copy
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from tt_mujoco.outputs import read_toml
 from tt_mujoco.world import contact
 
 __all__ = [
@@ -347,7 +347,7 @@ def world_from_table(table, name: str) -> World:
 def read_world(path: Path) -> World:
     """The world in TOML file ``path``."""
     try:
-        table = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as err:
-        raise WorldError(f"world file {str(path)!r} cannot be read: {err}") from None
+        table = read_toml(path, "world file")
+    except ValueError as err:
+        raise WorldError(str(err)) from None
     return world_from_table(table, path.stem)
