@@ -62,6 +62,14 @@ CASES = {
         "--controller",
         f"{ROOT}/examples/kanayama.py:kanayama_law",
     ],
+    # a user's reversing law that reads the path (examples/backing_law.py): no hitch cascade
+    "backing_law": [
+        "--traj",
+        "s_curve",
+        "--reverse",
+        "--controller",
+        f"{ROOT}/examples/backing_law.py:backing_law",
+    ],
     "reduced": ["--traj", "s_curve", "--plant", "reduced"],
     "path": ["--traj", "s_curve", "--eta", "path"],
     "reverse": ["--traj", "s_curve", "--reverse", "--trailers", "2"],
@@ -87,7 +95,8 @@ FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS
 
 
 def cli_run(argv: list[str], out: Path) -> tuple[float, float, dict]:
-    """(whole main() seconds, the run's simulation seconds, its time series)."""
+    """(whole main() seconds, the run's simulation seconds, its time series); the run's
+    metrics are kept in :data:`LAST_METRICS`."""
     start = time.perf_counter()
     with contextlib.redirect_stdout(io.StringIO()):  # the summary table
         code = run.main([*argv, *QUIET, "--out", str(out)])
@@ -95,7 +104,13 @@ def cli_run(argv: list[str], out: Path) -> tuple[float, float, dict]:
     if code != 0:
         raise SystemExit(f"{argv}: exit {code}")
     metrics = json.loads((out / "metrics.json").read_text())
+    LAST_METRICS.clear()
+    LAST_METRICS.update(metrics)
     return whole, metrics["wall_time_s"], read_timeseries(out / "timeseries.parquet")
+
+
+#: The metrics of the last run of :func:`cli_run`.
+LAST_METRICS: dict = {}
 
 
 def floor(argv: list[str], ts: dict) -> float:
@@ -172,7 +187,11 @@ def main() -> None:
             argv = CASES[case]
             first = cli_run(argv, Path(tmp) / f"{case}-warm")[0]
             # the first run of a case in this process loads the kernel (a plain law compiles)
-            print(f"{case:9s} first run in the process: main() {first:.3f} s", flush=True)
+            line = f"{case:9s} first run in the process: main() {first:.3f} s"
+            if "--reverse" in argv:  # what backing up achieved: the leading axle's error
+                rms = LAST_METRICS["trailer_rmse_lateral"]
+                line += f" ({LAST_METRICS['status']}, trailer axle {rms * 1000:.1f} mm rms)"
+            print(line, flush=True)
             for i in range(args.repeats):
                 # --tries pairs, each a run and right after it its yardstick (the rollout of its
                 # inputs, or the Python loop): the figure is the median of the pairs' ratios, so

@@ -33,6 +33,23 @@ The law's arguments, each read by field name:
 It returns the two wheel torques ``(T_r, T_l)`` (N m); the loop clips them at the limit. The
 body may use arithmetic, ``math`` functions, ``if`` and ``for``: what numba compiles in
 nopython mode. A train's measurement carries trailer 1 only in ``m``; the model is the train's.
+
+A law declared with ``plain_law(..., path=True)`` takes two more arguments, ``path`` and
+``vehicle`` (:mod:`tt_mujoco.controllers.path_view`): the run's path, read by
+``path_pose_at(path, s)`` (pose and curvature at any arc length) and ``path_nearest(path, x,
+y, s_near, reach)`` (the nearest point to any point, such as a trailer's axle, with its arc
+length and signed distance), and the vehicle's parameters and the direction of travel by name
+(``vehicle.L0``, ``vehicle.eta``, ``vehicle.direction``, ...)::
+
+    from tt_mujoco.controllers import plain_law
+    from tt_mujoco.controllers.path_view import path_nearest
+
+    @plain_law(gains={"k": 1.0}, state=("s0",), path=True)
+    def my_law(m, r, model, k, s, dt, torque_limit, path, vehicle):
+        s.s0, x, y, theta, kappa, lateral = path_nearest(path, m.x0, m.y0, s.s0, 0.5)
+        ...
+
+``examples/backing_law.py`` backs a trailer along a path this way, on its axle.
 """
 
 from __future__ import annotations
@@ -42,7 +59,9 @@ from collections import namedtuple
 from collections.abc import Callable, Mapping, Sequence
 from typing import ClassVar
 
+import numpy as np
 from tt_mujoco.controllers.base import Controller, Nominal
+from tt_mujoco.controllers.path_view import VEHICLE_FIELDS, path_table, vehicle_values
 
 __all__ = ["NOMINAL_FIELDS", "REFERENCE_FIELDS", "PlainLawController", "plain_law"]
 
@@ -55,6 +74,8 @@ REFERENCE_FIELDS = (
 NOMINAL_FIELDS = Nominal._fields
 
 LawReference = namedtuple("LawReference", REFERENCE_FIELDS)
+#: The vehicle as a law that sees the path is given it (its Python loop's form).
+LawVehicle = namedtuple("LawVehicle", VEHICLE_FIELDS)
 
 
 class LawState:
@@ -82,11 +103,31 @@ class PlainLawController(Controller):
     LAW: ClassVar[Callable]
     STATE: ClassVar[tuple[str, ...]] = ()
 
+    #: Whether the law takes the run's path and the vehicle (``plain_law(..., path=True)``).
+    SEES_PATH: ClassVar[bool] = False
+
     def __init__(self, setup, gains=None):
         super().__init__(setup, gains)
         self.gain_record = namedtuple("Gains", tuple(self._gains))(**self._gains)
         self._train = getattr(setup.params, "n_trailers", 1) > 1
+        self.path_table = self.vehicle_record = None
+        if self.SEES_PATH:
+            if setup.path is None:
+                raise ValueError(f"the law {self.name!r} reads the path, and this run has none")
+            self.path_table = path_table(setup.path)
+            values = vehicle_values(setup.params, setup.reverse)
+            self.vehicle_record = LawVehicle(*values)
         self.reset()
+
+    def law_data(self) -> np.ndarray:
+        """What the compiled loop hands the law as its gains: the gains, then (a law that sees
+        the path) the vehicle's values, the number of the path table's samples and the table,
+        row by row (:func:`tt_mujoco.sim.compiled.compile_law` reads it back)."""
+        gains = np.array(list(self.gain_record) or [0.0], dtype=float)
+        if not self.SEES_PATH:
+            return gains
+        head = [*gains, *self.vehicle_record, float(self.path_table.shape[1])]
+        return np.concatenate([np.array(head), self.path_table.ravel()])
 
     def reset(self) -> None:
         self.law_state = LawState(self.STATE)
@@ -97,6 +138,9 @@ class PlainLawController(Controller):
         r = reference
         ref = LawReference(t, r.s, r.kappa, r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot, *r.pose)
         law = type(self).LAW
+        if self.SEES_PATH:
+            return law(m, ref, model, self.gain_record, self.law_state, setup.control_dt,
+                       setup.torque_limit, self.path_table, self.vehicle_record)  # fmt: skip
         return law(m, ref, model, self.gain_record, self.law_state, setup.control_dt,
                    setup.torque_limit)  # fmt: skip
 
@@ -109,6 +153,7 @@ def plain_law(
     name: str | None = None,
     reverse: bool = True,
     backs_up_itself: bool = False,
+    path: bool = False,
 ) -> Callable[[Callable], type[PlainLawController]]:
     """Declare a plain-number law (module docstring): its gains, its state, its name.
 
@@ -129,6 +174,9 @@ def plain_law(
         Whether, backing up, the law steers the train itself, so that the loop gives it the
         path's own reverse target rather than the hitch cascade's
         (:attr:`~tt_mujoco.controllers.Controller.BACKS_UP_ITSELF`).
+    path : bool
+        Whether the law takes two more arguments, the run's ``path`` and the ``vehicle``
+        (:mod:`tt_mujoco.controllers.path_view`).
 
     Returns
     -------
@@ -169,6 +217,7 @@ def plain_law(
             "DEFAULT_PRESET": next(iter(table)),
             "REVERSE": bool(reverse),
             "BACKS_UP_ITSELF": bool(backs_up_itself),
+            "SEES_PATH": bool(path),
             "name": name or fn.__name__,
             "__doc__": fn.__doc__,
             "__module__": fn.__module__,

@@ -77,7 +77,8 @@ REVERSING_DRIVES = {
     "path_feedback": "the outer path feedback sets the yaw-rate target from the tractor's "
     "errors to the path (--path-feedback)",
     "controller": "the controller steers the train itself (it sets BACKS_UP_ITSELF): it is "
-    "given the path's own reverse target, and the trailers start straight",
+    "given the path's own reverse target, and the trailers start on the path as with the "
+    "cascade",
     "hitches_free": "the path's own reverse target drives the tractor and the hitches are left "
     "to themselves",
 }
@@ -271,11 +272,11 @@ def _delay_steps(scenario: Scenario, dt: float, duration: float) -> int:
 def _initial_hitches(
     scenario: Scenario, path, start_s: float, plant_p: Params, reversing: str | None
 ) -> tuple:
-    """Backing up with the cascade from the path's end ("on_path" start): the hitch angles
-    that put every axle on the path there (the trailers lead, so they start where they must
-    go); otherwise straight (zeros)."""
+    """Backing up from the path's end ("on_path" start) with the cascade, or with a controller
+    that steers the train itself: the hitch angles that put every axle on the path there (the
+    trailers lead, so they start where they must go); otherwise straight (zeros)."""
     n = plant_p.n_trailers
-    if not (reversing == "hitch_cascade" and scenario.start == "on_path"):
+    if not (reversing in ("hitch_cascade", "controller") and scenario.start == "on_path"):
         return (0.0,) * n
     chain = axle_chain(path, np.array([start_s]), [(t.L, t.L0) for t in plant_p.trailers])
     phis = tuple(float(axle["phi"][0]) for axle in chain)

@@ -182,11 +182,15 @@ def ask_for_cache() -> None:
 def loading_pays(built) -> str | None:
     """None when loading the compiled loop pays for this episode: it is loaded already, the
     process has run an episode before (a sweep's worker, a notebook), the episode is long
-    (:data:`COLD_MIN_STEPS`), or ``TT_MUJOCO_COMPILE_NOW=1`` asks for it; otherwise why the
-    Python loop is faster. Counts the episode."""
+    (:data:`COLD_MIN_STEPS`), its law reads the path (a plain-number law with ``path=True``,
+    whose Python form searches the path in Python at every step), or
+    ``TT_MUJOCO_COMPILE_NOW=1`` asks for it; otherwise why the Python loop is faster. Counts
+    the episode."""
     global _EPISODES
     _EPISODES += 1
     if _KERNEL is not None or _EPISODES > 1 or built.steps >= COLD_MIN_STEPS:
+        return None
+    if getattr(built.controller_class, "SEES_PATH", False):
         return None
     if os.environ.get("TT_MUJOCO_COMPILE_NOW") == "1":
         return None
@@ -643,6 +647,39 @@ def entry(m, r, model, gains, state, out, dt, limit):
         return
     torques[0], torques[1] = T_r, T_l
 """
+#: The C entry of a law that sees the path (``plain_law(..., path=True)``): what it is handed
+#: as its gains holds the gains, the vehicle's values, the number of the path table's samples
+#: and the table, row by row (:meth:`~tt_mujoco.controllers.plain.PlainLawController.law_data`).
+_PATH_ENTRY_SOURCE = """\
+# The C entry of the plain-number law {name} ({file}), which sees the path, written by
+# tt_mujoco.sim.compiled: numba caches its compiled code beside this file. The law's source
+# digest is in the name.
+from numba import carray, cfunc
+
+
+@cfunc(USER_LAW, error_model="numpy", cache=True)
+def entry(m, r, model, gains, state, out, dt, limit):
+    torques = carray(out, 3)
+    torques[2] = 0.0
+    samples = int(carray(gains, {n_head})[{n_head} - 1])
+    data = carray(gains, {n_head} + {n_rows} * samples)
+    try:
+        T_r, T_l = law(
+            carray(m, {n_meas}).view(MEASUREMENT)[0],
+            carray(r, {n_ref}).view(REFERENCE)[0],
+            carray(model, {n_model}).view(NOMINAL)[0],
+            data[:{n_gains}].view(GAINS)[0],
+            carray(state, {n_state}).view(STATE)[0],
+            dt,
+            limit,
+            data[{n_head}:].reshape(({n_rows}, samples)),
+            data[{n_gains}:{n_gains} + {n_vehicle}].view(VEHICLE)[0],
+        )
+    except Exception:  # it cannot leave a C function: the loop stops, Python says what
+        torques[2] = 1.0
+        return
+    torques[0], torques[1] = T_r, T_l
+"""
 
 
 def _law_digest(cls, helpers) -> str:
@@ -651,10 +688,13 @@ def _law_digest(cls, helpers) -> str:
     from another module of the user's): numba freezes a law's globals when it compiles."""
     import inspect
 
+    from tt_mujoco.sim import kernel_sources
+
     digest = hashlib.sha256()
-    names = (*cls.PRESETS[cls.DEFAULT_PRESET], "|", *cls.STATE)
+    names = (*cls.PRESETS[cls.DEFAULT_PRESET], "|", *cls.STATE, "|", str(cls.SEES_PATH))
     digest.update(" ".join(names).encode())
-    files = set()
+    # the package's functions the law reaches (the path's, and what they call)
+    files = {inspect.getsourcefile(fn) for fn in kernel_sources.discover((cls.LAW, *helpers))[0]}
     for fn in (cls.LAW, *helpers):
         for name in fn.__code__.co_names:
             used = getattr(fn.__globals__.get(name), "py_func", fn.__globals__.get(name))
@@ -677,6 +717,7 @@ def _compile_law(cls):
 
     from numba import njit
 
+    from tt_mujoco.controllers.path_view import PATH_ROWS, VEHICLE_FIELDS
     from tt_mujoco.sim import records
 
     k_mod = kernel()
@@ -684,6 +725,7 @@ def _compile_law(cls):
     law = njit(error_model="numpy", cache=True)(cls.LAW)
     gain_names = tuple(cls.PRESETS[cls.DEFAULT_PRESET]) or ("unused",)
     dtypes = {
+        "VEHICLE": records.record_dtype(VEHICLE_FIELDS),
         "MEASUREMENT": records.MEASUREMENT_DTYPE,
         "REFERENCE": records.record_dtype(records.REFERENCE_FIELDS),
         "NOMINAL": records.record_dtype(records.NOMINAL_FIELDS),
@@ -696,13 +738,17 @@ def _compile_law(cls):
         "n_model": len(dtypes["NOMINAL"]),
         "n_gains": len(dtypes["GAINS"]),
         "n_state": len(dtypes["STATE"]),
+        "n_vehicle": len(VEHICLE_FIELDS),
+        "n_head": len(gain_names) + len(VEHICLE_FIELDS) + 1,
+        "n_rows": len(PATH_ROWS),
     }
     name = f"law_{cls.LAW.__name__}_{_law_digest(cls, helpers)}"
     module_name = f"tt_mujoco_{name}"
     if module_name in sys.modules:  # the same law, of another class: compiled already
         return sys.modules[module_name].entry
     file = inspect.getsourcefile(cls.LAW) or "?"
-    source = _ENTRY_SOURCE.format(name=cls.__qualname__, file=file, **sizes)
+    template = _PATH_ENTRY_SOURCE if cls.SEES_PATH else _ENTRY_SOURCE
+    source = template.format(name=cls.__qualname__, file=file, **sizes)
     path = _cache_dir() / "laws" / f"{name}.py"
     try:
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -294,7 +294,7 @@ def _law_record(controller, nominal, user, steering, python):
         if python_law:
             kind, user = PYTHON, python
         else:
-            user_gains = np.array(list(controller.gain_record), dtype=float)
+            user_gains = controller.law_data()
             user_state = np.array([getattr(controller.law_state, f) for f in controller.STATE])
         anti_windup = False
     else:

@@ -20,7 +20,7 @@ import types
 
 from tt_mujoco.analysis import nearest
 from tt_mujoco.compiled_form import compiled_form_reason
-from tt_mujoco.controllers import backing
+from tt_mujoco.controllers import backing, path_view
 from tt_mujoco.sim import closed_loop, measure, motors, records, wind
 from tt_mujoco.vehicle import reduced, train
 from tt_mujoco.world import part
@@ -92,10 +92,11 @@ def discover(roots, step=()) -> tuple[tuple, tuple]:
     return tuple(called), tuple(sorted(marked, key=order))
 
 
-#: What the kernel compiles besides the step, and the functions whose compiled form it gives
-#: itself (:func:`tt_mujoco.compiled_form.compiled_form`).
+#: What the kernel compiles besides the step (and the functions a user's plain-number law may
+#: call on its path, :data:`tt_mujoco.controllers.path_view.LAW_LIBRARY`), and the functions
+#: whose compiled form it gives itself (:func:`tt_mujoco.compiled_form.compiled_form`).
 SHARED, COMPILED_FORMS = discover(
-    (*STEP, closed_loop.run_steps, *LAWS, nearest.nearest_segments_of),
+    (*STEP, closed_loop.run_steps, *LAWS, nearest.nearest_segments_of, *path_view.LAW_LIBRARY),
     step=(*STEP, closed_loop.run_steps),
 )
 
