@@ -59,6 +59,8 @@ def interrupts_from_signals() -> None:
     _INTERRUPTED = threading.Event()
 
     def interrupted(signum, frame):
+        if _INTERRUPTED.is_set():  # one stop is enough: the same signal sent twice (to the
+            return  # process and to its group) must not break the clean-up of the first
         _INTERRUPTED.set()
         raise KeyboardInterrupt
 
@@ -82,6 +84,8 @@ def noting_interrupts():
     previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
 
     def interrupted(signum, frame):
+        if noted.is_set():  # the same stop again (to the process and to its group)
+            return
         noted.set()
         previous[signum](signum, frame)  # the default handler, or ours: raises
         raise KeyboardInterrupt

@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import functools
 import shutil
+import signal
 import sys
 import tempfile
 import time
@@ -28,7 +29,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from tt_mujoco import config as config_mod
-from tt_mujoco import guard, sim
+from tt_mujoco import guard, sim, watchdog
 from tt_mujoco.analysis.metrics import DEFAULT_SUMMARY_KEYS, metric_name, summary_table
 from tt_mujoco.cliargs import BadInputError, Parser
 from tt_mujoco.config import CONFIG_FILE
@@ -38,6 +39,7 @@ from tt_mujoco.defaults import (
     CAMERAS,
     CONTROLLER,
     EXIT_BAD_INPUT,
+    EXIT_BUG,
     EXIT_DIVERGED,
     EXIT_INTERRUPTED,
     EXIT_OK,
@@ -132,6 +134,10 @@ NOT_WRITTEN = ("quiet", "viewer", "live", "live_realtime")
 RUN_SCHEMA = SCHEMA + OUTPUTS
 #: The rows of a run in progress (raw logged columns), removed once the time series is written.
 CHECKPOINT_FILE = "timeseries.partial.arrows"
+#: Whether the simulation runs in a watched child (:mod:`tt_mujoco.watchdog`): only when this
+#: module is the command (``python -m tt_mujoco.run``), never when ``main`` is called from
+#: Python, whose process is the caller's.
+WATCHED = False
 #: The traceback of the user's code that stopped a run (status "failed").
 ERROR_LOG = "error.log"
 
@@ -469,6 +475,15 @@ def _main(argv: list[str] | None) -> int:
     except viewer_mod.ViewerUnavailable as err:
         return _fail(str(err))
 
+    if WATCHED and live is None:  # from here on, the run in a watched child
+        limit = scenario.time_limit_s
+        watchdog.supervise(
+            limit,
+            lambda traceback, interrupt: _hung(
+                out, limit, scenario.controller, traceback, interrupt
+            ),
+            lambda signum: _killed(out, signum),
+        )
     update, bar = _progress_bar("simulating", shown["quiet"] or shown["viewer"])
     try:
         # Rows reach the disk every 8192 steps while the run goes on: a killed run keeps them.
@@ -552,6 +567,57 @@ def _abandon(out: Path, created: bool, live, message: str, code: int) -> int:
     return _fail(f"{message}{'; ' + nothing if nothing else ''}", code)
 
 
+def _kept_rows(out: Path) -> dict:
+    from tt_mujoco.sim.checkpoint import read_checkpoint
+
+    try:
+        return read_checkpoint(out / CHECKPOINT_FILE)
+    except (OSError, ValueError):
+        return {}
+
+
+def _hung(out: Path, limit: float, controller: str, traceback: str, interrupt: bool) -> int:
+    """The watchdog killed a run stuck in code that never returned to Python
+    (:mod:`tt_mujoco.watchdog`), past its time limit or an interrupt: keep its rows and its
+    traceback, say where it hung."""
+    site = watchdog.hang_site(traceback)
+    if traceback:
+        atomic_write(out / ERROR_LOG, traceback)
+    t = _kept_rows(out).get("t", ())
+    rows = (
+        f"the {len(t)} rows computed to t={t[-1]:.3f} s are kept in {out / CHECKPOINT_FILE}"
+        if len(t)
+        else "no rows had reached the disk"
+    )
+    release_folder(out)
+    why = (
+        "interrupted, the run did not stop"
+        if interrupt
+        else f"the run passed its time limit of {limit:g} s (wall clock; --time-limit)"
+    )
+    return _fail(
+        f"{why} in code that never returned to Python (a compiled law's own loop, or a call "
+        f"into C; the controller: {controller}), at {site}; it was stopped; {rows}; its "
+        f"traceback is in {out / ERROR_LOG}; the folder has no metrics.json, so it is labelled "
+        "incomplete",
+        EXIT_INTERRUPTED if interrupt else EXIT_DIVERGED,
+    )
+
+
+def _killed(out: Path, signum: int) -> int:
+    """The run's process was killed by a signal it did not handle (a crash in C code, the
+    out-of-memory killer): a bug or the machine, said in one line, the rows kept."""
+    t = _kept_rows(out).get("t", ())
+    name = signal.Signals(signum).name if signum in signal.Signals._value2member_map_ else signum
+    release_folder(out)
+    return _fail(
+        f"the simulation's process was killed by {name} (a crash in compiled code, or the "
+        f"machine ran out of memory): the {len(t)} rows that reached the disk are kept in "
+        f"{out / CHECKPOINT_FILE}; if it happens again, please report it",
+        EXIT_BUG,
+    )
+
+
 def _interrupted(out: Path, created: bool, live) -> int:
     """Ctrl-C or SIGTERM during the simulation: keep the rows computed, say where they are."""
     from tt_mujoco.sim.checkpoint import read_checkpoint
@@ -629,4 +695,5 @@ def _print_summary(result, out: Path, written, notes) -> None:
 
 
 if __name__ == "__main__":
+    WATCHED = watchdog.available()  # the command itself: its run goes on in a watched child
     sys.exit(main())

@@ -1,0 +1,183 @@
+"""The time limit that holds for code that never returns to Python (tt_mujoco/watchdog.py): the
+command's run in a watched child. Each case runs the command in a process of its own, as a
+user does, and checks the exit code, the one line, the rows and traceback kept, and that no
+process is left behind."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+from tt_mujoco import watchdog
+from tt_mujoco.defaults import EXIT_BUG, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_OK
+
+pytestmark = pytest.mark.skipif(not watchdog.available(), reason="no fork here")
+
+#: A plain-number law that spins in its own compiled loop after ``spin_after`` m of travel, a
+#: class whose compute calls machine code that never returns, and one that kills its process.
+USER_CODE = textwrap.dedent(
+    """
+    from numba import njit
+    from tt_mujoco.controllers import Controller, plain_law
+
+
+    @plain_law(gains={"spin_after": 0.3})
+    def spin_law(m, r, model, k, s, dt, torque_limit):
+        if m.x > k.spin_after:
+            x = 0.0
+            while x >= 0.0:
+                x += 1.0
+                if x > 1e300:
+                    x = 0.0
+        return 0.5, 0.5
+
+
+    @njit(cache=False)
+    def forever(x):
+        while x >= 0.0:
+            x += 1.0
+            if x > 1e300:
+                x = 0.0
+        return x
+
+
+    class StuckInC(Controller):
+        def compute(self, t, measurement, reference):
+            if t > 0.3:
+                forever(1.0)  # the line the message names
+            return 0.5, 0.5
+
+
+    class Crash(Controller):
+        def compute(self, t, measurement, reference):
+            if t > 0.3:
+                import os, signal
+                os.kill(os.getpid(), signal.SIGKILL)
+            return 0.5, 0.5
+    """
+)
+BASE = ["--plant", "reduced", "--no-video", "--no-plots", "--quiet"]
+
+
+def _start(
+    tmp_path: Path, *argv: str, duration: str = "20", compile_now: bool = True
+) -> subprocess.Popen:
+    (tmp_path / "user.py").write_text(USER_CODE)
+    env = {**os.environ, "TT_MUJOCO_COMPILE_NOW": "1" if compile_now else "0"}
+    cmd = [sys.executable, "-m", "tt_mujoco.run", *BASE, "--duration", duration, "--out", "o"]
+    cmd += argv
+    return subprocess.Popen(
+        cmd, cwd=tmp_path, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+
+
+@pytest.fixture
+def compiled_spin(tmp_path):
+    """The spinning law compiled (and cached) by a run that does not spin: the runs under test
+    load it, so that their time limit is not spent compiling."""
+    proc = _start(tmp_path, "--controller", "user.py:spin_law", "--gains", '{"spin_after": 1e9}')
+    _, err = proc.communicate(timeout=300)
+    assert proc.returncode in (EXIT_OK, EXIT_DIVERGED), err  # driven open loop: it may tip
+    import shutil
+
+    shutil.rmtree(tmp_path / "o")
+
+
+def _no_process_left(tmp_path: Path) -> None:
+    time.sleep(0.3)
+    found = subprocess.run(["pgrep", "-f", "--out o"], capture_output=True, text=True)
+    mine = [
+        pid
+        for pid in found.stdout.split()
+        if Path(f"/proc/{pid}/cwd").exists() and os.readlink(f"/proc/{pid}/cwd") == str(tmp_path)
+    ]
+    assert not mine, mine
+
+
+@pytest.mark.parametrize(
+    ("controller", "names"),
+    [("user.py:spin_law", "compiled.py"), ("user.py:StuckInC", "user.py, line 29 in compute")],
+)
+def test_code_that_never_returns_is_stopped_at_its_time_limit(
+    compiled_spin, tmp_path, controller, names
+):
+    proc = _start(tmp_path, "--controller", controller, "--time-limit", "1")
+    began = time.monotonic()
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == EXIT_DIVERGED, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "time limit of 1 s" in err and "never returned" in err, err
+    assert names in err, err
+    out = tmp_path / "o"
+    assert "most recent call first" in (out / "error.log").read_text()
+    assert not (out / "metrics.json").exists()  # labelled incomplete
+    assert time.monotonic() - began < 60
+    _no_process_left(tmp_path)
+
+
+def test_an_interrupt_ends_code_that_never_returns(compiled_spin, tmp_path):
+    proc = _start(tmp_path, "--controller", "user.py:spin_law")
+    time.sleep(4)  # loaded and spinning
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == EXIT_INTERRUPTED, err
+    assert "interrupted" in err and len(err.strip().splitlines()) == 1, err
+    _no_process_left(tmp_path)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_to_the_command_reaches_its_run_once(tmp_path, signum):
+    proc = _start(tmp_path, "--traj", "circle", "--trailers", "3", duration="600")
+    time.sleep(4)
+    proc.send_signal(signum)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == EXIT_INTERRUPTED, err
+    assert err.startswith("error: interrupted at t=") and len(err.strip().splitlines()) == 1
+    assert (tmp_path / "o" / "timeseries.partial.arrows").exists()
+    _no_process_left(tmp_path)
+
+
+def test_a_killed_command_leaves_no_run_behind(tmp_path):
+    proc = _start(tmp_path, "--traj", "circle", "--trailers", "3", duration="600")
+    time.sleep(3)
+    proc.kill()
+    proc.communicate(timeout=30)
+    _no_process_left(tmp_path)
+
+
+def test_a_run_killed_by_a_signal_is_one_line_and_exit_70(tmp_path):
+    proc = _start(tmp_path, "--controller", "user.py:Crash", compile_now=False)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == EXIT_BUG, err
+    assert "killed by SIGKILL" in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_a_run_that_ends_passes_its_exit_code_and_output_through(tmp_path):
+    proc = _start(tmp_path, duration="1", compile_now=False)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == EXIT_OK, err
+    assert "wrote" in out and (tmp_path / "o" / "metrics.json").exists()
+
+
+def test_the_hang_site_is_the_main_threads_innermost_frame():
+    dump = textwrap.dedent(
+        """\
+        Thread 0x00007f (most recent call first):
+          File "/x/threading.py", line 327 in wait
+          File "/x/threading.py", line 1002 in _bootstrap
+
+        Current thread 0x00007e (most recent call first):
+          File "/u/user.py", line 29 in compute
+          File "/p/run.py", line 692 in <module>
+          File "<frozen runpy>", line 88 in _run_code
+        """
+    )
+    assert watchdog.hang_site(dump) == "/u/user.py, line 29 in compute"
+    assert watchdog.hang_site("") == "an unknown place"

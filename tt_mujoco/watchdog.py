@@ -1,0 +1,188 @@
+"""A time limit that holds for code that never returns to Python: the run in a child process,
+watched by its parent.
+
+The in-process limit (``--time-limit``, a SIGALRM that raises between Python bytecodes) cannot
+stop a compiled law spinning in its own loop, or a user's class stuck in a C call: neither
+returns to the interpreter, and Ctrl-C and SIGTERM do not reach them either.
+:func:`supervise` forks just before the simulation. The child runs it and everything after it,
+as the process would have; the parent only waits, and leaves with the child's exit code. If
+the child is still running a grace period after its own limit should have stopped it (or
+after an interrupt), the parent asks it for the Python traceback of where it is
+(:mod:`faulthandler`, which answers from C whatever the interpreter is doing), kills it, and
+hands over to ``on_expiry`` with the traceback: the caller keeps the rows the child wrote and
+says where it hung.
+
+Linux only (:func:`available`); elsewhere, or with ``TT_MUJOCO_WATCHDOG=0``, the run stays in
+one process, with the in-process limit alone.
+"""
+
+from __future__ import annotations
+
+import os
+import select
+import signal
+import sys
+import time
+from collections.abc import Callable
+
+__all__ = [
+    "GRACE_FRACTION",
+    "GRACE_S",
+    "INTERRUPT_GRACE_S",
+    "available",
+    "hang_site",
+    "supervise",
+]
+
+#: How long after its limit a run may take to stop by itself (the in-process limit stops it
+#: at the next Python bytecode): this many seconds plus this fraction of the limit.
+GRACE_S, GRACE_FRACTION = 2.0, 0.1
+#: How long after an interrupt a run may take to stop by itself.
+INTERRUPT_GRACE_S = 3.0
+#: How long the parent waits for the child's traceback before it kills it.
+_DUMP_WAIT_S = 1.0
+
+
+def available() -> bool:
+    """Whether runs are supervised here: Linux (a fork that keeps numba and MuJoCo usable,
+    and pidfd), unless ``TT_MUJOCO_WATCHDOG=0`` keeps the run in one process (for a tool
+    that does not follow a fork, such as a sampling profiler)."""
+    if os.environ.get("TT_MUJOCO_WATCHDOG") == "0":
+        return False
+    return sys.platform.startswith("linux") and hasattr(os, "pidfd_open")
+
+
+def supervise(
+    limit_s: float,
+    on_expiry: Callable[[str, bool], int],
+    on_killed: Callable[[int], int],
+) -> None:
+    """Fork; return in the child (the run goes on there), never return in the parent.
+
+    The child stays in the parent's process group, so a terminal's Ctrl-C and a debugger's
+    prompt reach it as they would the one process. The parent passes Ctrl-C and SIGTERM sent
+    to it on to the child (which stops once, however often it is told:
+    :func:`tt_mujoco.guard.interrupts_from_signals`); a child that has not ended within
+    :data:`INTERRUPT_GRACE_S` of an interrupt is stuck where signals do not reach it, and is
+    ended as at its time limit.
+
+    Parameters
+    ----------
+    limit_s : float
+        The run's own time limit (s); the parent waits this long plus the grace
+        (:data:`GRACE_S`, :data:`GRACE_FRACTION`).
+    on_expiry : callable
+        Called in the parent with the child's traceback (text, maybe empty) and whether an
+        interrupt (rather than the time limit) ended it, once it has been killed; returns the
+        exit code.
+    on_killed : callable
+        Called in the parent with the signal number when something else killed the child (a
+        crash in C, the kernel's out-of-memory killer); returns the exit code.
+    """
+    import faulthandler
+    import tempfile
+
+    for stream in (sys.stdout, sys.stderr):
+        stream.flush()
+    # where the child writes its traceback when asked: a file with no name, never an output
+    fd, name = tempfile.mkstemp(prefix="tt_mujoco-watch-", suffix=".txt")
+    os.unlink(name)
+    pid = os.fork()
+    if pid == 0:  # the child: the run
+        _die_with_parent()
+        dump = os.fdopen(fd, "w")  # held open: the signal handler writes into it
+        faulthandler.register(signal.SIGUSR1, file=dump, all_threads=True)
+        return
+    try:
+        seconds = limit_s * (1.0 + GRACE_FRACTION) + GRACE_S
+        code = _wait(pid, seconds, fd, on_expiry, on_killed)
+    finally:
+        os.close(fd)
+    for stream in (sys.stdout, sys.stderr):
+        stream.flush()
+    os._exit(code)  # the child ran the process's exit handlers; the parent runs none
+
+
+def _die_with_parent() -> None:
+    """The child is killed with its parent (Linux's parent-death signal): a parent killed
+    outright leaves no run going on by itself."""
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        pr_set_pdeathsig = 1
+        libc.prctl(pr_set_pdeathsig, signal.SIGKILL)
+    except (OSError, AttributeError):
+        pass
+    if os.getppid() == 1:  # the parent died before the request
+        os._exit(1)
+
+
+def _wait(pid, seconds, traceback_fd, on_expiry, on_killed) -> int:
+    deadline = [time.monotonic() + seconds, False]  # when, and whether an interrupt set it
+
+    def interrupted(signum, frame):
+        # passed on: a signal sent to the parent alone must stop the run; one sent to the
+        # whole group (a terminal's Ctrl-C) reaches the child twice, which stops once
+        try:
+            os.kill(pid, signum)
+        except ProcessLookupError:
+            pass
+        deadline[:] = [min(deadline[0], time.monotonic() + INTERRUPT_GRACE_S), True]
+
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, interrupted)
+    exited = os.pidfd_open(pid)  # readable once the child has exited
+    try:
+        while (left := deadline[0] - time.monotonic()) > 0.0:
+            # woken at least every 0.25 s: an interrupt may bring the deadline forward
+            if select.select([exited], [], [], min(left, 0.25))[0]:
+                _, status = os.waitpid(pid, 0)
+                code = os.waitstatus_to_exitcode(status)
+                return code if code >= 0 else on_killed(-code)
+    finally:
+        os.close(exited)
+    return on_expiry(_ask_and_kill(pid, traceback_fd), deadline[1])
+
+
+def _ask_and_kill(pid: int, traceback_fd: int) -> str:
+    """The child's traceback (asked with SIGUSR1; faulthandler writes it from the signal
+    handler, whatever the child is doing), then the child killed and reaped."""
+
+    def written() -> str:
+        return os.pread(traceback_fd, 1 << 20, 0).decode(errors="replace")
+
+    try:
+        os.kill(pid, signal.SIGUSR1)
+    except ProcessLookupError:
+        pass
+    end, last = time.monotonic() + _DUMP_WAIT_S, None
+    while time.monotonic() < end:  # until the dump has stopped growing
+        time.sleep(0.05)
+        text = written()
+        if text and text == last:
+            break
+        last = text
+    try:
+        os.kill(pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+    os.waitpid(pid, 0)
+    return written()
+
+
+def hang_site(traceback: str) -> str:
+    """Where the main thread of a :mod:`faulthandler` dump was: ``FILE, line N in NAME`` of its
+    innermost frame, or "an unknown place". The main thread is the one that runs a module's
+    code (a frame ``in <module>``: the command's)."""
+    blocks, frames = [], None
+    for line in traceback.splitlines():
+        if "(most recent call first)" in line:
+            frames = []
+            blocks.append(frames)
+        elif frames is not None and line.strip().startswith("File "):
+            frames.append(line.strip().removeprefix("File ").replace('"', ""))
+    for frames in blocks:
+        if any(frame.endswith(" in <module>") for frame in frames):
+            return frames[0]
+    return blocks[0][0] if blocks and blocks[0] else "an unknown place"
