@@ -181,3 +181,20 @@ def test_the_hang_site_is_the_main_threads_innermost_frame():
     )
     assert watchdog.hang_site(dump) == "/u/user.py, line 29 in compute"
     assert watchdog.hang_site("") == "an unknown place"
+
+
+def test_a_sweeps_run_that_never_returns_is_recorded_and_the_sweep_goes_on(compiled_spin, tmp_path):
+    import csv
+
+    env = {**os.environ, "TT_MUJOCO_COMPILE_NOW": "1"}
+    cmd = [sys.executable, "-m", "tt_mujoco.sweep", "plant=reduced", "duration=4"]
+    cmd += ["controller=user.py:spin_law", "gain.spin_after=0.3,1e9", "time_limit_s=2"]
+    cmd += ["--workers", "1", "--out", "sw", "--quiet", "--no-figures"]
+    done = subprocess.run(cmd, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
+    rows = {r["gain.spin_after"]: r for r in csv.DictReader(open(tmp_path / "sw" / "runs.csv"))}
+    hung = rows["0.3"]
+    assert hung["status"] == "failed", done.stderr
+    assert "never returned to Python" in hung["message"] and "compiled.py" in hung["message"]
+    assert rows["1000000000.0"]["status"] != "error", rows  # the other run was run, once
+    assert not (tmp_path / "sw" / ".hangs").exists()
+    _no_process_left(tmp_path)

@@ -14,23 +14,34 @@ says where it hung.
 
 Linux only (:func:`available`); elsewhere, or with ``TT_MUJOCO_WATCHDOG=0``, the run stays in
 one process, with the in-process limit alone.
+
+A sweep's worker runs many runs and is watched by the sweep itself: :func:`armed` sets
+faulthandler's own timer (a C thread, which needs no interpreter) around each run, which,
+should the run outlive its grace, writes the run's name and every thread's traceback into
+the worker's hang file and ends the worker; the sweep, which sees its worker die, reads the
+file (:func:`read_hangs`) and records that run as failed there instead of running it again.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import select
 import signal
 import sys
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 __all__ = [
     "GRACE_FRACTION",
     "GRACE_S",
     "INTERRUPT_GRACE_S",
+    "armed",
     "available",
+    "grace_for",
     "hang_site",
+    "read_hangs",
     "supervise",
 ]
 
@@ -94,8 +105,7 @@ def supervise(
         faulthandler.register(signal.SIGUSR1, file=dump, all_threads=True)
         return
     try:
-        seconds = limit_s * (1.0 + GRACE_FRACTION) + GRACE_S
-        code = _wait(pid, seconds, fd, on_expiry, on_killed)
+        code = _wait(pid, grace_for(limit_s), fd, on_expiry, on_killed)
     finally:
         os.close(fd)
     for stream in (sys.stdout, sys.stderr):
@@ -186,3 +196,55 @@ def hang_site(traceback: str) -> str:
         if any(frame.endswith(" in <module>") for frame in frames):
             return frames[0]
     return blocks[0][0] if blocks and blocks[0] else "an unknown place"
+
+
+def grace_for(limit_s: float) -> float:
+    """How long after it began a run of time limit ``limit_s`` is taken to hang."""
+    return limit_s * (1.0 + GRACE_FRACTION) + GRACE_S
+
+
+_HANG_FILE = None  # this worker's hang file, opened at its first run
+
+
+@contextlib.contextmanager
+def armed(limit_s: float, hang_dir, label: str):
+    """Around one run in a sweep's worker: should it outlive :func:`grace_for` its limit,
+    write ``label`` and every thread's traceback into this worker's file in ``hang_dir`` and
+    end the process (faulthandler's timer, a C thread). ``hang_dir`` None: no watch."""
+    import faulthandler
+
+    global _HANG_FILE
+    if hang_dir is None:
+        yield
+        return
+    if _HANG_FILE is None:
+        _HANG_FILE = open(Path(hang_dir) / f"worker-{os.getpid()}.txt", "w+")  # held open
+    f = _HANG_FILE
+    f.seek(0)
+    f.truncate()
+    f.write(f"{label}\n")
+    f.flush()
+    faulthandler.dump_traceback_later(grace_for(limit_s), exit=True, file=f)
+    try:
+        yield
+    finally:
+        faulthandler.cancel_dump_traceback_later()
+        f.seek(0)
+        f.truncate()
+        f.flush()
+
+
+def read_hangs(hang_dir) -> dict[str, str]:
+    """The runs a worker ended for hanging: label -> its traceback (each file read is
+    emptied, so a run is told once)."""
+    found = {}
+    for file in sorted(Path(hang_dir).glob("worker-*.txt")):
+        try:
+            text = file.read_text(errors="replace")
+        except OSError:
+            continue
+        label, _, traceback = text.partition("\n")
+        if label and "most recent call first" in traceback:
+            found[label] = traceback
+            file.write_text("")
+    return found

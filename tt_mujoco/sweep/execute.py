@@ -6,12 +6,14 @@ import concurrent.futures as cf
 import contextlib
 import json
 import os
+import shutil
 import sys
 import time
 from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from tt_mujoco import watchdog
 from tt_mujoco.executor import Executors, ignore_sigint
 from tt_mujoco.outputs import atomic_write, json_safe, write_json
 from tt_mujoco.progress import progress_bar
@@ -58,6 +60,10 @@ class SweepResult:
     files: list[Path] = field(default_factory=list)
 
 
+#: The sweep folder's folder of its workers' hang files while it runs (removed at its end).
+HANG_DIR = ".hangs"
+
+
 def _progress(total: int, initial: int, quiet: bool):
     if quiet:
         return None
@@ -88,7 +94,7 @@ def _lock(out: Path):
 def prepare_out(out: Path, resume: bool) -> None:
     """Make the output folder; refuse a used one unless resuming, and any sweep file in it that
     is a symlink (outputs are never written through one)."""
-    for name in (JOURNAL, SPEC_FILE, TABLE, "summary.csv", "summary.json", ".lock"):
+    for name in (JOURNAL, SPEC_FILE, TABLE, "summary.csv", "summary.json", ".lock", HANG_DIR):
         if (out / name).is_symlink():
             raise BadSpecError(
                 f"--out {str(out)!r}: {name} is a symlink; outputs are never written through "
@@ -239,7 +245,25 @@ def _worker_count(workers: int, runs: int, scheduler: str | None) -> int:
 
 
 def _execute(todo, done, journal_path, workers, scheduler, quiet, total, reused) -> None:
-    """Run ``todo`` through the executor, journalling each result as it arrives."""
+    """Run ``todo`` through the executor, journalling each result as it arrives. Local
+    workers watch each run for a hang (:func:`tt_mujoco.watchdog.armed`, files in
+    :data:`HANG_DIR`, removed at the end); a Dask cluster's workers are its own."""
+    hang_dir = None
+    if scheduler is None:
+        hang_dir = journal_path.parent / HANG_DIR
+        hang_dir.mkdir(exist_ok=True)
+    try:
+        _execute_watched(
+            todo, done, journal_path, workers, scheduler, quiet, total, reused, hang_dir
+        )
+    finally:
+        if hang_dir is not None:
+            shutil.rmtree(hang_dir, ignore_errors=True)
+
+
+def _execute_watched(
+    todo, done, journal_path, workers, scheduler, quiet, total, reused, hang_dir
+) -> None:
     # The workers import run_one by its module's name (tt_mujoco.sweep.runs), which a Dask
     # worker on another machine can do too.
     executors = Executors(workers, scheduler, ignore_sigint)
@@ -262,7 +286,8 @@ def _execute(todo, done, journal_path, workers, scheduler, quiet, total, reused)
                     if todo[0]["run_id"] in crashes and inflight:
                         break
                     run = todo.popleft()
-                    inflight[executor.submit(run_one, run["options"])] = run
+                    future = executor.submit(run_one, run["options"], hang_dir, run["run_id"])
+                    inflight[future] = run
                 finished, _ = cf.wait(inflight, return_when=cf.FIRST_COMPLETED)
                 broken = []
                 for fut in finished:
@@ -290,7 +315,10 @@ def _execute(todo, done, journal_path, workers, scheduler, quiet, total, reused)
                         bar.update(1)
                         bar.set_postfix(failed=failures, refresh=False)
                 if broken:
-                    executor = _recover(executors, broken, inflight, todo, crashes, journal, done)
+                    hung = watchdog.read_hangs(hang_dir) if hang_dir is not None else {}
+                    executor = _recover(
+                        executors, broken, inflight, todo, crashes, journal, done, hung
+                    )
                     failures = sum(1 for r in done.values() if r.get("status") != "ok")
     except BaseException:
         executors.close(cancel=True)
@@ -301,14 +329,37 @@ def _execute(todo, done, journal_path, workers, scheduler, quiet, total, reused)
     executors.close()
 
 
-def _recover(executors, broken, inflight, todo, crashes, journal, done) -> cf.Executor:
-    """A worker process died (segfault, out of memory): every run in flight is suspect.
+def _recover(executors, broken, inflight, todo, crashes, journal, done, hung) -> cf.Executor:
+    """A worker process died (segfault, out of memory, or ended by its watch for a run that
+    hung): every run in flight is suspect.
 
-    Suspects run again one at a time; a run that was alone in flight when a worker died (or in
-    flight at two deaths) is recorded as an error.
+    A run its worker's watch names (``hung``: label -> traceback) is recorded as failed where
+    it hung, never run again. The other suspects run again one at a time; a run that was alone
+    in flight when a worker died (or in flight at two deaths) is recorded as an error.
     """
-    suspects = broken + list(inflight.values())
+    inflight_runs = list(inflight.values())
+    suspects = broken + inflight_runs
     inflight.clear()
+    for label, traceback in hung.items():
+        run_id, _, limit = label.partition(" ")
+        run = next((r for r in suspects if r["run_id"] == run_id), None)
+        if run is None:
+            continue
+        suspects.remove(run)
+        message = (
+            f"the run passed its time limit of {float(limit):g} s in code that never returned to "
+            f"Python, at {watchdog.hang_site(traceback)}: its worker was ended"
+        )
+        record = {
+            **{"run_id": run_id, "index": run["index"], "status": "failed"},
+            **{"message": message, "error": "", "metrics": {}, "run_wall_s": None},
+        }
+        journal.write(_json_line(record))
+        journal.flush()
+        done[run_id] = record
+    if len(suspects) < len(broken) + len(inflight_runs):  # the watch named the cause
+        todo.extendleft(reversed(suspects))  # the others were only in flight with it
+        return executors.reopen()
     alone = len(suspects) == 1
     for run in reversed(suspects):
         crashes[run["run_id"]] = crashes.get(run["run_id"], 0) + 1

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tt_mujoco import watchdog
 from tt_mujoco.controllers import controller_class
 from tt_mujoco.controllers.base import resolve_gains
 from tt_mujoco.registry import is_hook
@@ -234,13 +235,18 @@ def _flatten_metrics(value, prefix: str = "", out: dict | None = None) -> dict:
     return out
 
 
-def run_one(options: Mapping) -> dict:
+def run_one(options: Mapping, hang_dir=None, label: str = "") -> dict:
     """Simulate one run; never raises for a run's failure (worker entry point).
 
     Parameters
     ----------
     options : mapping
         One run's options (see :func:`expand`).
+    hang_dir : path, optional
+        The sweep's folder for hang files: the run is watched there
+        (:func:`tt_mujoco.watchdog.armed`) under ``label`` (its run id), so that one that
+        never returns to Python ends its worker, and the sweep records it.
+    label : str
 
     Returns
     -------
@@ -256,7 +262,10 @@ def run_one(options: Mapping) -> dict:
         config = scenario_columns(options)  # while every file the run reads is there
         # A Build: its user code was tried on the initial state by validate_runs, once per
         # configuration, before the sweep started; simulate(Scenario) would try it again.
-        result = simulate(build(build_scenario(options)))
+        built = build(build_scenario(options))
+        limit = built.scenario.time_limit_s
+        with watchdog.armed(limit, hang_dir, f"{label} {limit!r}"):
+            result = simulate(built)
         metrics = _flatten_metrics({k: v for k, v in result.metrics.items() if k != "status"})
         out = {"status": result.status, "message": result.message, "error": "", "metrics": metrics}
         out["config"] = config
