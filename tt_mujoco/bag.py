@@ -37,7 +37,15 @@ from tt_mujoco import guard
 from tt_mujoco.outputs import publish_new, temporary_beside
 from tt_mujoco.runfolder import check_out, default_out, read_run
 
-__all__ = ["BAG_FILE", "DEFAULT_RATE", "MESSAGES", "main", "write_bag"]
+__all__ = [
+    "BAG_FILE",
+    "DEFAULT_RATE",
+    "LOG_TOPICS",
+    "MESSAGES",
+    "main",
+    "read_bag_log",
+    "write_bag",
+]
 
 #: The file a run writes (``--mcap``) and the command writes by default.
 BAG_FILE = "run.mcap"
@@ -294,6 +302,111 @@ def write_bag(
                 )
             writer.finish()
         return publish_new(partial, out)
+
+
+#: The topics a log in MCAP is read from by default (what :func:`write_bag` writes, and what a
+#: ROS 2 vehicle commonly records): the tractor's odometry and the joint states.
+LOG_TOPICS = {"odom": "/tractor/odom", "joints": "/joint_states"}
+
+
+def read_bag_log(path, topics: dict[str, str] | None = None) -> dict[str, np.ndarray]:
+    """A vehicle's log from an MCAP file of ROS 2 messages, as columns on the odometry's times.
+
+    ``t`` (s), ``v`` (m/s) and ``omega`` (rad/s) are the ``nav_msgs/msg/Odometry`` of
+    ``topics["odom"]`` (its header stamps, or its log times where a topic stamps none; its
+    twist's linear x and angular z); every joint of the ``sensor_msgs/msg/JointState`` of
+    ``topics["joints"]`` is a column named as the joint (``hitch_1``, ... as :func:`write_bag`
+    names them), its positions interpolated linearly at the odometry's times (which are kept
+    only within the joints' span: two topics at their own rates, with samples dropped, read
+    alike).
+
+    Raises
+    ------
+    ValueError
+        Naming the file and the topic, the joint or the message: not an MCAP file, a topic
+        absent or of another type, a stamp that does not increase, a value that is not a
+        finite number.
+    """
+    import struct
+
+    from mcap.exceptions import McapError
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    chosen = {**LOG_TOPICS, **(topics or {})}
+    wanted = {
+        chosen["odom"]: "nav_msgs/msg/Odometry",
+        chosen["joints"]: "sensor_msgs/msg/JointState",
+    }
+    odom, joints = [], []
+    try:
+        with open(path, "rb") as stream:
+            reader = make_reader(stream, decoder_factories=[DecoderFactory()])
+            summary = reader.get_summary()
+            if summary is None:
+                raise ValueError(f"{path} has no summary: it is cut or not a finished MCAP file")
+            found = {c.topic: summary.schemas[c.schema_id].name for c in summary.channels.values()}
+            for topic, kind in wanted.items():
+                if topic not in found:
+                    raise ValueError(
+                        f"{path} has no topic {topic!r} ({kind}); its topics: {sorted(found)}"
+                    )
+                if found[topic] != kind:
+                    raise ValueError(f"{path}: topic {topic!r} holds {found[topic]}, not {kind}")
+            for _, channel, message, msg in reader.iter_decoded_messages(topics=list(wanted)):
+                at = (msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec, message.log_time)
+                if channel.topic == chosen["odom"]:
+                    odom.append((at, msg.twist.twist.linear.x, msg.twist.twist.angular.z))
+                else:
+                    joints.append((at, list(msg.name), list(msg.position)))
+    except (McapError, OSError, EOFError, KeyError, AttributeError, struct.error) as err:
+        raise ValueError(f"{path} cannot be read as MCAP of ROS 2 messages: {err}") from None
+    for topic, rows in ((chosen["odom"], odom), (chosen["joints"], joints)):
+        if len(rows) < 2:
+            raise ValueError(f"{path}: topic {topic!r} has {len(rows)} message(s): too few")
+        # a topic's header stamps, or its log times where it stamps none (all zero)
+        use_stamps = any(row[0][0] > 0.0 for row in rows)
+        rows[:] = [(at[0] if use_stamps else 1e-9 * at[1], *rest) for at, *rest in rows]
+        stamps = np.array([row[0] for row in rows])
+        back = np.flatnonzero(np.diff(stamps) <= 0.0)
+        if back.size:
+            k = int(back[0]) + 1
+            raise ValueError(
+                f"{path}: topic {topic!r} message {k + 1}'s stamp {float(stamps[k])!r} does not "
+                f"come after message {k}'s {float(stamps[k - 1])!r}"
+            )
+    table = {"t": np.array([r[0] for r in odom]), "v": np.array([r[1] for r in odom])}
+    table["omega"] = np.array([r[2] for r in odom])
+    for name in ("v", "omega"):
+        bad = np.flatnonzero(~np.isfinite(table[name]))
+        if bad.size:
+            raise ValueError(
+                f"{path}: topic {chosen['odom']!r} message {int(bad[0]) + 1} has {name} = "
+                f"{float(table[name][bad[0]])!r}, not a finite number"
+            )
+    joint_t = np.array([r[0] for r in joints])
+    keep = (table["t"] >= joint_t[0]) & (table["t"] <= joint_t[-1])
+    table = {name: column[keep] for name, column in table.items()}
+    names = joints[0][1]
+    for k, (_, these, positions) in enumerate(joints):
+        if these != names or len(positions) != len(names):
+            raise ValueError(
+                f"{path}: topic {chosen['joints']!r} message {k + 1} names the joints "
+                f"{these}, not {names} as the first does"
+            )
+    positions = np.array([r[2] for r in joints], dtype=float)
+    for j, name in enumerate(names):
+        column = positions[:, j]
+        if np.all(np.isnan(column)):
+            continue  # a joint the log does not give a position of
+        bad = np.flatnonzero(~np.isfinite(column))
+        if bad.size:
+            raise ValueError(
+                f"{path}: topic {chosen['joints']!r} message {int(bad[0]) + 1} has joint "
+                f"{name!r} at {float(column[bad[0]])!r}, not a finite number"
+            )
+        table[name] = np.interp(table["t"], joint_t, column)
+    return table
 
 
 def _headings(polyline: np.ndarray) -> np.ndarray:

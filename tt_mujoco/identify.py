@@ -1,17 +1,22 @@
 """``python -m tt_mujoco.identify LOG``: the trailers' geometry and steering gains fitted to a
 log of the vehicle, with confidence intervals and what the log cannot tell apart.
 
-A log is a CSV or Parquet file, or a run's folder (its time series), with the columns ``t``
-(s, strictly increasing), ``v`` (m/s) and ``omega`` (rad/s) of the tractor's axle, and ``phi``,
+A log is a CSV or Parquet file, or a run's folder (its time series), with the columns ``t`` (s,
+strictly increasing), ``v`` (m/s) and ``omega`` (rad/s) of the tractor's axle, and ``phi``,
 ``phi_2``, ... (rad) of the hitches (``--columns phi=hitch_deg`` maps another name; a name
-ending in ``_deg`` is read in degrees). Each hitch angle moves by the train's kinematics
-(docs/model.md Section 2, paper eq. 13 for one trailer; :func:`tt_mujoco.vehicle.train.
-trailer_rates_of` for N): its rate is a function of the hitch angles, ``v`` and ``omega``, and
-of each trailer's ``L``, ``L0`` and ``eta``. The fit (scipy's ``least_squares``) makes the
-rates of the logged hitch angles (central differences) those the kinematics give, over the
-parameters chosen with ``--fit`` (default ``L,L0``: each trailer's; ``eta`` too where the log
-can tell it). Then the fitted train is replayed open loop (its hitch angles integrated from the
-first logged ones under the logged ``v``, ``omega``) and its hitch angles compared with the log.
+ending in ``_deg`` is read in degrees); or an MCAP file of ROS 2 messages (the mcap extra):
+``t``, ``v`` and ``omega`` from the odometry topic, the hitch angles from the joint states'
+``hitch_1``, ``hitch_2``, ... (``--topics odom=/my/odom``, ``--columns phi=my_hitch_joint``),
+each topic at its own rate (:func:`tt_mujoco.bag.read_bag_log`). Each hitch angle moves by the
+train's kinematics (docs/model.md Section 2, paper eq. 13 for one trailer;
+:func:`tt_mujoco.vehicle.train.trailer_rates_of` for N): its rate is a function of the hitch
+angles, ``v`` and ``omega``, and of each trailer's ``L``, ``L0`` and ``eta``. The fit (scipy's
+``least_squares``) makes each logged step of the hitch angles the one the kinematics predict
+from the step before (RK4 under the logged inputs; not rates by differences, whose bias a log
+at 25 Hz feels), over the parameters chosen with ``--fit`` (default ``L,L0``: each trailer's;
+``eta`` too where the log can tell it). Then the fitted train is replayed open loop (its hitch
+angles integrated from the first logged ones under the logged ``v``, ``omega``) and its hitch
+angles compared with the log.
 
 Written into ``--out`` (a new folder): ``identified.toml`` (the fitted vehicle, a scenario file
 every command takes: ``python -m tt_mujoco.run --config identified.toml``), ``identify.json``
@@ -52,20 +57,41 @@ class LogError(ValueError):
     """A log that cannot be used: the message names the column and the row."""
 
 
-def read_log(path: Path, columns: dict[str, str] | None = None, trailers: int | None = None):
+def read_log(
+    path: Path,
+    columns: dict[str, str] | None = None,
+    trailers: int | None = None,
+    topics: dict[str, str] | None = None,
+):
     """``(t, v, omega, phis)`` of a log (see the module): ``phis`` is ``(rows, N)``, N the
-    number of ``phi`` columns found (or ``trailers``). Raises :class:`LogError`."""
+    number of ``phi`` columns found (or ``trailers``); ``topics`` names an MCAP log's odometry
+    and joint-state topics (:data:`tt_mujoco.bag.LOG_TOPICS`). Raises :class:`LogError`."""
     from tt_mujoco.outputs import read_timeseries, run_timeseries_file
 
     path = Path(path)
     file = run_timeseries_file(path) if path.is_dir() else path
     if not file.is_file():
-        raise LogError(f"{file} not found: give a CSV or Parquet log, or a run's folder")
-    try:
-        table = read_timeseries(file)
-    except (OSError, ValueError) as err:
-        raise LogError(f"{file}: {err}") from None
+        raise LogError(f"{file} not found: give a CSV, Parquet or MCAP log, or a run's folder")
     mapping = dict(columns or {})
+    if file.suffix == ".mcap":  # ROS 2 messages: the joints are named, hitch_k for phi_k
+        from tt_mujoco.bag import read_bag_log
+
+        try:
+            table = read_bag_log(file, topics)
+        except ValueError as err:
+            raise LogError(str(err)) from None
+        except ImportError:
+            raise LogError(
+                f"{file} is MCAP: reading it needs the mcap extra (pip install 'tt-mujoco[mcap]')"
+            ) from None
+        mapping = {"phi": "hitch_1", **{f"phi_{k}": f"hitch_{k}" for k in range(2, 10)}, **mapping}
+        if trailers is None:  # as many trailers as hitch joints with positions
+            trailers = sum(1 for k in range(1, 10) if f"hitch_{k}" in table)
+    else:
+        try:
+            table = read_timeseries(file)
+        except (OSError, ValueError) as err:
+            raise LogError(f"{file}: {err}") from None
     count = trailers or 1
     while trailers is None and (f"phi_{count + 1}" in table or f"phi_{count + 1}" in mapping):
         count += 1
@@ -184,13 +210,16 @@ def fit_train(t, v, omega, phis, p: Params, fit=("L", "L0")) -> Fit:
     names = [f"{field}_{k}" if n > 1 else field for k, field in keys]
     trailers = p.trailers
     x0 = np.array([getattr(trailers[k - 1], field) for k, field in keys], dtype=float)
-    rate = np.gradient(phis, t, axis=0)
-    keep = np.unique(np.linspace(1, len(t) - 2, min(FIT_ROWS, len(t) - 2)).astype(int))
-    sample = phis[keep], v[keep], omega[keep], rate[keep]
+    keep = np.unique(np.linspace(0, len(t) - 2, min(FIT_ROWS, len(t) - 1)).astype(int))
+    h = (t[keep + 1] - t[keep])[:, None]
+    ahead = v[keep], omega[keep], v[keep + 1], omega[keep + 1]
 
     def residuals(x):
-        model = _rates(_with(p, dict(zip(keys, x, strict=True))), *sample[:3])
-        error = (model - sample[3]).ravel()
+        # each logged step predicted from the one before (RK4, the inputs linear between
+        # samples), as a rate: a derivative taken by differences would carry a bias of the
+        # third derivative times h^2 / 6, which a log at 25 Hz feels
+        train = _with(p, dict(zip(keys, x, strict=True)))
+        error = ((_steps(train, phis[keep], h, *ahead) - phis[keep + 1]) / h).ravel()
         return np.where(np.isfinite(error), error, 10.0)  # singular: far off
 
     lower = [-np.inf if f == "eta" else 1e-3 for _, f in keys]
@@ -216,6 +245,17 @@ def fit_train(t, v, omega, phis, p: Params, fit=("L", "L0")) -> Fit:
         np.sqrt(np.nanmean(errors**2, axis=0)),
         np.max(np.abs(phis), axis=0),
     )
+
+
+def _steps(p: Params, phis, h, v0, w0, v1, w1) -> np.ndarray:
+    """One RK4 step of length ``h`` (rows, 1) from each row of ``phis``, the inputs going
+    linearly from ``(v0, w0)`` to ``(v1, w1)``: the hitch angles one step on."""
+    vm, wm = 0.5 * (v0 + v1), 0.5 * (w0 + w1)
+    k1 = _rates(p, phis, v0, w0)
+    k2 = _rates(p, phis + 0.5 * h * k1, vm, wm)
+    k3 = _rates(p, phis + 0.5 * h * k2, vm, wm)
+    k4 = _rates(p, phis + h * k3, v1, w1)
+    return phis + h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
 
 
 def replay(t, v, omega, phi0, p: Params) -> np.ndarray:
@@ -294,6 +334,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--columns", action="append", default=[], metavar="NAME=COLUMN", help="map a column"
     )
+    parser.add_argument(
+        "--topics",
+        action="append",
+        default=[],
+        metavar="KIND=TOPIC",
+        help="an MCAP log's topics: odom=/tractor/odom, joints=/joint_states (the defaults)",
+    )
     parser.add_argument("--out", type=Path, default=None, help="a new folder")
     args = parser.parse_args(argv)
 
@@ -306,9 +353,16 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError:
         return fail(f"--columns {args.columns!r} is not allowed: give NAME=COLUMN")
     try:
+        topics = dict(item.split("=", 1) for item in args.topics)
+    except ValueError:
+        return fail(f"--topics {args.topics!r} is not allowed: give odom=TOPIC or joints=TOPIC")
+    unknown = sorted(set(topics) - {"odom", "joints"})
+    if unknown:
+        return fail(f"--topics {unknown[0]}=... is not allowed: use odom=TOPIC or joints=TOPIC")
+    try:
         if args.out is not None:
             check_out(args.out / "identified.toml")
-        t, v, omega, phis = read_log(args.log, mapping)
+        t, v, omega, phis = read_log(args.log, mapping, topics=topics)
         from tt_mujoco.sim import Scenario
 
         p = Scenario(eta=args.eta, trailers=phis.shape[1]).plant_params()
