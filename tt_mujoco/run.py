@@ -476,7 +476,7 @@ def _main(argv: list[str] | None) -> int:
         return _fail(str(err))
 
     if WATCHED and live is None:  # from here on, the run in a watched child
-        limit = scenario.time_limit_s
+        limit = built.wall_limit
         watchdog.supervise(
             limit,
             lambda traceback, interrupt: _hung(

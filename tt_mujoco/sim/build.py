@@ -167,6 +167,11 @@ class Build:
     #: The along-track loop's gain (1/s; ``Scenario.along_track_gain`` resolved).
     along_track_gain: float = 0.0
 
+    @property
+    def wall_limit(self) -> float:
+        """How long the run may take, wall clock (s; ``Scenario.time_limit_s``)."""
+        return self.scenario.time_limit_s
+
     def initial_phis(self, phi0_deg: float | None = None) -> tuple:
         """The hitch angles phi_1..phi_N the plant starts with (rad): the scenario's
         ``phi0_deg`` (or ``phi0_deg``) for hitch 1, the others 0; backing up with the hitch

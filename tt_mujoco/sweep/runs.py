@@ -263,7 +263,7 @@ def run_one(options: Mapping, hang_dir=None, label: str = "") -> dict:
         # A Build: its user code was tried on the initial state by validate_runs, once per
         # configuration, before the sweep started; simulate(Scenario) would try it again.
         built = build(build_scenario(options))
-        limit = built.scenario.time_limit_s
+        limit = built.wall_limit
         with watchdog.armed(limit, hang_dir, f"{label} {limit!r}"):
             result = simulate(built)
         metrics = _flatten_metrics({k: v for k, v in result.metrics.items() if k != "status"})
