@@ -41,7 +41,16 @@ from tt_mujoco import guard
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_OK
 from tt_mujoco.vehicle.params import Params
 
-__all__ = ["CORRELATED", "FITTABLE", "Fit", "LogError", "fit_train", "main", "read_log"]
+__all__ = [
+    "CORRELATED",
+    "FITTABLE",
+    "Fit",
+    "LogError",
+    "fit_train",
+    "main",
+    "read_log",
+    "step_errors",
+]
 
 #: The parameters a fit can take, per trailer.
 FITTABLE = ("L", "L0", "eta")
@@ -210,17 +219,7 @@ def fit_train(t, v, omega, phis, p: Params, fit=("L", "L0")) -> Fit:
     names = [f"{field}_{k}" if n > 1 else field for k, field in keys]
     trailers = p.trailers
     x0 = np.array([getattr(trailers[k - 1], field) for k, field in keys], dtype=float)
-    keep = np.unique(np.linspace(0, len(t) - 2, min(FIT_ROWS, len(t) - 1)).astype(int))
-    h = (t[keep + 1] - t[keep])[:, None]
-    ahead = v[keep], omega[keep], v[keep + 1], omega[keep + 1]
-
-    def residuals(x):
-        # each logged step predicted from the one before (RK4, the inputs linear between
-        # samples), as a rate: a derivative taken by differences would carry a bias of the
-        # third derivative times h^2 / 6, which a log at 25 Hz feels
-        train = _with(p, dict(zip(keys, x, strict=True)))
-        error = ((_steps(train, phis[keep], h, *ahead) - phis[keep + 1]) / h).ravel()
-        return np.where(np.isfinite(error), error, 10.0)  # singular: far off
+    residuals = step_errors(p, keys, t, v, omega, phis)
 
     lower = [-np.inf if f == "eta" else 1e-3 for _, f in keys]
     result = least_squares(residuals, x0, bounds=(lower, np.inf), x_scale="jac")
@@ -245,6 +244,24 @@ def fit_train(t, v, omega, phis, p: Params, fit=("L", "L0")) -> Fit:
         np.sqrt(np.nanmean(errors**2, axis=0)),
         np.max(np.abs(phis), axis=0),
     )
+
+
+def step_errors(p: Params, keys, t, v, omega, phis):
+    """The fit's residuals as a function of the values ``x`` of ``keys`` (``(trailer,
+    field)`` pairs of ``p``): each logged step of the hitch angles predicted from the one
+    before (RK4, the inputs linear between samples), less the logged one, as a rate (rad/s),
+    at most :data:`FIT_ROWS` steps. A derivative taken by differences instead would carry a
+    bias of the third derivative times h^2 / 6, which a log at 25 Hz feels."""
+    keep = np.unique(np.linspace(0, len(t) - 2, min(FIT_ROWS, len(t) - 1)).astype(int))
+    h = (t[keep + 1] - t[keep])[:, None]
+    ahead = v[keep], omega[keep], v[keep + 1], omega[keep + 1]
+
+    def residuals(x):
+        train = _with(p, dict(zip(keys, x, strict=True)))
+        error = ((_steps(train, phis[keep], h, *ahead) - phis[keep + 1]) / h).ravel()
+        return np.where(np.isfinite(error), error, 10.0)  # singular: far off
+
+    return residuals
 
 
 def _steps(p: Params, phis, h, v0, w0, v1, w1) -> np.ndarray:
