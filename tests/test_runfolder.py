@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from tt_mujoco import bag, compare, render, run, runfolder
 from tt_mujoco.outputs import REFERENCE_FILE, read_timeseries, write_timeseries
@@ -271,3 +273,74 @@ def test_a_reader_is_the_only_one_that_opens_a_run_folder():
     for module in ("render.py", "bag.py", "compare.py"):
         text = (root / module).read_text()
         assert "read_timeseries" not in text and "json.load" not in text, module
+
+
+# --- property-based: any metrics.json, any journal line -------------------------------------
+
+_JSON = st.recursive(
+    st.none()
+    | st.booleans()
+    | st.integers(-(10**30), 10**30)
+    | st.floats(allow_nan=False, allow_infinity=False)
+    | st.text(max_size=8),
+    lambda inner: (
+        st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=6), inner, max_size=3)
+    ),
+    max_leaves=8,
+)
+
+
+def _paths(doc, prefix=()):
+    items = doc.items() if isinstance(doc, dict) else enumerate(doc)
+    for key, value in items:
+        yield (*prefix, key)
+        if isinstance(value, dict | list) and len(prefix) < 3:
+            yield from _paths(value, (*prefix, key))
+
+
+@settings(
+    max_examples=150,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
+@given(data=st.data())
+def test_any_edit_of_metrics_json_is_read_or_refused_in_one_line(finished, tmp_path_factory, data):
+    """Any JSON value put anywhere in a run's metrics.json (or the file replaced by any text):
+    read_run reads it or raises RunFolderError, in one line; nothing else."""
+    folder = tmp_path_factory.mktemp("edited") / "run"
+    shutil.copytree(finished["parquet"], folder)
+    doc = _metrics(folder)
+    if data.draw(st.booleans()):
+        path = data.draw(st.sampled_from(list(_paths(doc))))
+        parent = doc
+        for key in path[:-1]:
+            parent = parent[key]
+        parent[path[-1]] = data.draw(_JSON)
+        (folder / runfolder.METRICS_FILE).write_text(json.dumps(doc))
+    else:
+        raw = data.draw(st.binary(max_size=200))
+        (folder / runfolder.METRICS_FILE).write_bytes(raw)
+    try:
+        runfolder.read_run(folder)
+    except runfolder.RunFolderError as err:
+        assert len(str(err).splitlines()) == 1
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    lines=st.lists(
+        st.binary(max_size=120) | _JSON.map(lambda v: json.dumps(v).encode()), max_size=5
+    )
+)
+def test_any_journal_is_read_or_refused_in_one_line(tmp_path_factory, lines):
+    from tt_mujoco.sweep.options import BadSpecError
+    from tt_mujoco.sweep.tables import read_journal
+
+    path = tmp_path_factory.mktemp("journal") / "journal.jsonl"
+    path.write_bytes(b"\n".join(lines))
+    try:
+        done = read_journal(path)
+    except BadSpecError as err:
+        assert len(str(err).splitlines()) == 1
+    else:
+        assert all(isinstance(k, str) and isinstance(r, dict) for k, r in done.items())
