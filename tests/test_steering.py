@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -151,6 +152,17 @@ def _steering_jacobian(plant):
     return J[rows[0]]
 
 
+def _advance(plant, etas) -> None:
+    """One physics step of a plant whose axles are actuated, as the loop takes it: each
+    axle's target aimed from its hitch towards ``etas``, then MuJoCo's step."""
+    from tt_mujoco.sim.plant_mujoco import aim_steering_of
+
+    eq_data, ids, hitches_q, actuated, max_turn = plant.steering
+    assert actuated
+    aim_steering_of(eq_data, ids, hitches_q, list(etas), plant.data.qpos, max_turn)
+    mujoco.mj_step(plant.model, plant.data)
+
+
 def test_an_actuated_axle_holds_beta_eta_phi_and_loads_the_hitch_with_nothing():
     from tt_mujoco.sim.plant_mujoco import MujocoPlant
 
@@ -163,7 +175,7 @@ def test_an_actuated_axle_holds_beta_eta_phi_and_loads_the_hitch_with_nothing():
     plant = MujocoPlant(Params(), (0.0, 0.0, 0.0), 0.8, wrench=False, phi0=0.2)
     plant.steer_by_actuator()
     plant.set_etas((2.0,))
-    plant.advance(1)
+    _advance(plant, (2.0,))
     assert _steering_jacobian(plant)[[lay.steer_v, lay.hitch_v]] == pytest.approx([1.0, 0.0])
 
     plant = MujocoPlant(Params(), (0.0, 0.0, 0.0), 0.8, wrench=False, phi0=0.2)
@@ -172,7 +184,7 @@ def test_an_actuated_axle_holds_beta_eta_phi_and_loads_the_hitch_with_nothing():
     for step in range(300):  # the gain ramps at 1 1/s from -1/7 while the hitch settles
         eta = eta0 + 0.001 * step
         plant.set_etas((eta,))
-        plant.advance(1)
+        _advance(plant, (eta,))
         me = plant.measure()
         worst = max(worst, abs(me.beta - eta * me.phi))
     # a target moving at d(eta phi)/dt ~ 0.2 rad/s behind a coupling of time constant
@@ -204,7 +216,7 @@ def test_an_actuated_axle_starts_where_it_stands_and_turns_at_its_slew_rate():
     plant.set_etas((2.0,))  # asks beta = 0.4 rad at once
     targets = []
     for _ in range(50):
-        plant.advance(1)
+        _advance(plant, (2.0,))
         targets.append(row[0])
     # 2 rad/s at 1 ms a step: 2 mrad a step, far short of the 0.43 rad asked
     assert np.diff([start, *targets]) == pytest.approx(np.full(50, 2e-3), abs=1e-12)

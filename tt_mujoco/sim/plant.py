@@ -56,16 +56,6 @@ class Plant(ABC):
         """The vehicle's state now, a :class:`tt_mujoco.sim.measure.Measurement`."""
 
     @abstractmethod
-    def apply(self, T_r, T_l, dist_r, dist_l, wrench_force, wrench_torque, theta) -> None:
-        """Set the inputs for the next :meth:`advance`: wheel torques (after saturation and
-        actuator faults), matched disturbance torques, and the chassis wrench (force along the
-        heading ``theta`` and yaw moment) in wrench mode."""
-
-    @abstractmethod
-    def advance(self, substeps: int) -> None:
-        """Advance ``substeps`` physics steps; raise :class:`StopRun` on a numerical failure."""
-
-    @abstractmethod
     def scale_trailer_mass(self, factor: float, trailer: int = 1) -> None:
         """Payload step: trailer ``trailer``'s body mass and yaw inertia times ``factor``."""
 

@@ -4,12 +4,9 @@ from __future__ import annotations
 
 import math
 
-import mujoco
-import numpy as np
-
 from tt_mujoco.sim.measure import measure, measure_train
 from tt_mujoco.sim.physics import Vehicle, wheel_geoms
-from tt_mujoco.sim.plant import Plant, StopRun
+from tt_mujoco.sim.plant import Plant
 from tt_mujoco.vehicle.params import Params
 
 __all__ = ["MujocoPlant"]
@@ -98,11 +95,6 @@ class MujocoPlant(Plant):
         self._trailer = self.model.body("trailer_body").id
         self._wrench = wrench
         self._ground = None  # friction patches, see set_ground
-        # Views into MjData, made once: building them costs more than the writes.
-        self._ctrl = self.data.ctrl
-        self._qfrc = self.data.qfrc_applied
-        self._xfrc = self.data.xfrc_applied
-        self._warnings = self.data.warning.number
         self._qpos, self._qvel, self._layout = self.data.qpos, self.data.qvel, lay
         self._measure = measure if params.n_trailers == 1 else measure_train
         # eq_data rows of the joint equalities q_steer = polycoef(q_hitch): polycoef[1] = -eta.
@@ -180,25 +172,12 @@ class MujocoPlant(Plant):
         for row, eta in zip(self._steering_rows, etas, strict=True):
             row[1] = -eta
 
-    def apply(self, T_r, T_l, dist_r, dist_l, wrench_force, wrench_torque, theta) -> None:
-        ctrl = self._ctrl
-        ctrl[self._act_r] = T_r
-        ctrl[self._act_l] = T_l
-        if self._wrench:
-            xfrc = self._xfrc[self._tractor]
-            xfrc[0], xfrc[1], xfrc[5] = chassis_wrench_of(wrench_force, wrench_torque, theta)
-        else:
-            qfrc = self._qfrc
-            qfrc[self._wheel_r] = dist_r
-            qfrc[self._wheel_l] = dist_l
-
     def set_ground(self, ground) -> None:
         """Friction patches (:class:`tt_mujoco.sim.ground.GroundPatches`): from now on each
         step sets every wheel's contact friction from where it touches the floor."""
         m = self.model
         self._ground = ground
         self._contact_geoms = wheel_geoms(m)
-        self.ground_mask = 0
 
     @property
     def ground(self):
@@ -208,23 +187,3 @@ class MujocoPlant(Plant):
         if self._ground is None:
             return None
         return self._ground, self._contact_geoms, self.data.geom_xpos, self.model.geom_friction
-
-    def advance(self, substeps: int) -> None:
-        if self._ground is not None:
-            ids = self._contact_geoms
-            mus, self.ground_mask = self._ground.frictions(self.data.geom_xpos[ids, :2])
-            self.model.geom_friction[ids, 0] = mus
-        start = self.data.time  # a warning resets MuJoCo's state, its clock included
-        if self._actuated_etas is None:
-            mujoco.mj_step(self.model, self.data, nstep=substeps)
-        else:  # the actuated axles' targets follow the hitches every physics step
-            for _ in range(substeps):
-                aim_steering_of(
-                    self._eq_data, self._steering_ids, self._hitches_q, self._actuated_etas,
-                    self._qpos, self._max_turn,
-                )  # fmt: skip
-                mujoco.mj_step(self.model, self.data)
-        # MuJoCo resets the state when a warning fires: stop at once, before it is measured.
-        if self._warnings.any():
-            i = int(np.flatnonzero(self._warnings)[0])
-            raise StopRun("diverged", warning_message(mujoco.mjtWarning(i).name, start))

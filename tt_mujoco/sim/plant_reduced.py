@@ -40,7 +40,6 @@ class ReducedPlant(Plant):
         ode = reduced.ReducedPlant if n == 1 else train.TrainODE
         self.ode = ode(params, state=state)
         self.timestep = timestep
-        self._tau = (0.0, 0.0)
 
     def measure(self):
         p = self.params
@@ -63,9 +62,6 @@ class ReducedPlant(Plant):
         out.train = tuple(tuple(row) for row in rows)
         return out
 
-    def apply(self, T_r, T_l, dist_r, dist_l, wrench_force, wrench_torque, theta) -> None:
-        self._tau = (T_r + dist_r, T_l + dist_l)
-
     def scale_trailer_mass(self, factor: float, trailer: int = 1) -> None:
         p = self.params
         if trailer == 1:
@@ -85,11 +81,6 @@ class ReducedPlant(Plant):
     def _set_params(self, params: Params) -> None:
         self.params = params
         self.ode.params = params
-
-    def advance(self, substeps: int) -> None:
-        """Raises :class:`tt_mujoco.vehicle.reduced.SingularityError` at |beta| = 90 deg."""
-        for _ in range(substeps):
-            self.ode.step(self._tau, self.timestep)
 
 
 def reduced_train_rows_of(state, c, places, speeds, out) -> None:
