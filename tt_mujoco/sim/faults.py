@@ -274,22 +274,6 @@ class FaultSchedule:
             if row[0] == 0.0 and not math.isnan(row[acted])
         }
 
-    def sensor(self, k: int, phi: float, v: float, omega: float) -> tuple[float, float, float]:
-        """The controller's (phi, v, omega) at step k: held during a dropout."""
-        return sensor_of(k, self.dropouts, self.held, phi, v, omega)
-
-    def torque(self, k: int, T_r: float, T_l: float) -> tuple[float, float]:
-        """The torques the wheels deliver at step k for the controller's (saturated) ones."""
-        return fault_torque_of(k, self.actuators, T_r, T_l)
-
-    def payloads(self, k: int, s: float) -> list[tuple[int, float]]:
-        """``(trailer, factor)`` of each payload change taking effect at step k, the reference
-        being at arc length ``s`` (m): at its time, or where ``s`` reaches its place (from
-        either side: backing up, the arc length falls; :func:`payloads_of`)."""
-        out = [[0.0, 0.0] for _ in self.payload_rows]
-        count = payloads_of(k, s, self.payload_rows, self.payload_state, out)
-        return [(int(trailer), factor) for trailer, factor in out[:count]]
-
 
 #: What a dropout holds: whether a sample was received, its (phi, v, omega), and the steps held.
 HELD = ("received", "phi", "v", "omega", "steps")
