@@ -237,6 +237,17 @@ def _key(name: str) -> str:
     return name.strip().lower().replace("-", "_")
 
 
+def _identity(obj) -> tuple[str, str]:
+    """Where a part is defined: its module and qualified name."""
+    return str(getattr(obj, "__module__", "")), str(getattr(obj, "__qualname__", repr(obj)))
+
+
+def _shown(obj) -> str:
+    module, name = _identity(obj)
+    built_in = module.startswith("tt_mujoco")
+    return f"{'the built-in ' if built_in else ''}{module}.{name}" if module else repr(obj)
+
+
 class Registry:
     """Named parts of one kind, extensible by registration or by hook.
 
@@ -253,14 +264,34 @@ class Registry:
         self.also = also
         self._items: dict[str, object] = {}
 
-    def register(self, name: str, obj: object | None = None) -> Callable | object:
+    def register(
+        self, name: str, obj: object | None = None, *, replace: bool = False
+    ) -> Callable | object:
         """Register ``obj`` under ``name`` (case and ``-``/``_`` are not significant); used
-        without ``obj`` it is a decorator."""
+        without ``obj`` it is a decorator.
+
+        A name is one part: a name taken by a built-in part, or by another part of the user's,
+        is refused (``ValueError``) unless ``replace=True`` says so on purpose. The same part
+        registered again (a module imported twice, a notebook cell run again: the same module
+        and qualified name) replaces itself.
+        """
         if not isinstance(name, str) or not name.strip() or ":" in name:
             raise ValueError(f"{self.what} name {name!r} is not allowed: use a plain word")
 
         def add(item):
-            self._items[_key(name)] = item
+            key = _key(name)
+            old = self._items.get(key)
+            if old is not None and old is not item and not replace:
+                again = _identity(old) == _identity(item) and not _identity(old)[0].startswith(
+                    "tt_mujoco"
+                )
+                if not again:
+                    raise ValueError(
+                        f"{self.what} name {name!r} is taken by {_shown(old)}: a name is one "
+                        f"part; choose another name, or pass replace=True to replace it on "
+                        "purpose"
+                    )
+            self._items[key] = item
             return item
 
         return add if obj is None else add(obj)
