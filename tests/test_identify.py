@@ -383,3 +383,50 @@ def test_other_topics_are_named_on_the_command_line(tmp_path, capsys):
     assert "no topic '/base/odom'" in capsys.readouterr().err
     assert identify.main([str(path), "--topics", "imu=/imu"]) == 2
     assert "--topics imu=..." in capsys.readouterr().err
+
+
+# --- 20 dB of measurement noise on the MuJoCo plant's log -----------------------------------
+def _noisy(x, rng, snr_db=20.0):
+    return x + np.sqrt(np.mean(x**2)) / 10 ** (snr_db / 20) * rng.standard_normal(x.shape)
+
+
+def test_a_noisy_mujoco_log_gives_the_lengths_within_2_percent_in_their_intervals():
+    """The MuJoCo plant (tyres, contact), a trailer of 0.35 and 0.45 m, v and omega with 20 dB
+    of noise (three seeds). Unaveraged, the noise on the inputs biases the fit (errors in the
+    variables: L 9.9 % short); the fit sees the noise (estimated 20.0 dB), averages the inputs
+    over 40 ms, and gives each length within 0.5 % (the goal: 2 %), in its interval."""
+    scenario = Scenario(traj="s_curve", params={"L": 0.35, "L0": 0.45}, eta=-1 / 7)
+    ts = simulate(scenario).timeseries
+    guess = Scenario(eta=-1 / 7).plant_params()
+    truth = np.array([0.35, 0.45])
+    for seed in range(3):
+        rng = np.random.default_rng(seed)
+        v, omega = _noisy(ts["v"], rng), _noisy(ts["omega"], rng)
+        fit = identify.fit_train(ts["t"], v, omega, ts["phi"][:, None], guess)
+        assert fit.input_snr_db == pytest.approx(20.0, abs=1.0)
+        assert fit.inputs_smoothed_s == identify.INPUT_WINDOW_S
+        assert np.all(np.abs(fit.estimates / truth - 1.0) < 0.02), fit.estimates
+        assert np.all(np.abs(fit.estimates - truth) <= fit.half_widths), (seed, fit.estimates)
+
+
+def test_a_noisy_mujoco_log_of_two_trailers_gives_each_length_within_2_percent():
+    """Two trailers of other lengths, 20 dB on v and omega, three seeds: every length within
+    0.7 % (the goal: 2 %); of the twelve 95 % intervals at least ten hold the truth (measured:
+    eleven, the twelfth missing by a hair)."""
+    truth_scenario = Scenario(
+        traj="s_curve", trailers=2, params={"L": 0.35, "L0": 0.45}, train=[{"L": 0.3, "L0": 0.5}]
+    )
+    ts = simulate(truth_scenario).timeseries
+    p = truth_scenario.plant_params()
+    guess = Scenario(trailers=2).plant_params().with_etas(p.etas)
+    phis = np.column_stack([ts["phi"], ts["phi_2"]])
+    truth = np.array([0.35, 0.45, 0.3, 0.5])
+    held = 0
+    for seed in range(3):
+        rng = np.random.default_rng(seed)
+        fit = identify.fit_train(
+            ts["t"], _noisy(ts["v"], rng), _noisy(ts["omega"], rng), phis, guess
+        )
+        assert np.all(np.abs(fit.estimates / truth - 1.0) < 0.02), fit.estimates
+        held += int(np.sum(np.abs(fit.estimates - truth) <= fit.half_widths))
+    assert held >= 10, held
