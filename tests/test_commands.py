@@ -55,3 +55,24 @@ def test_a_bug_of_ours_is_one_line_and_exit_70(name, monkeypatch, tmp_path, caps
     assert str(crash) in err
     text = crash.read_text()
     assert "Traceback" in text and "RuntimeError: a bug planted by the test" in text
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_an_unknown_option_is_one_line_and_exit_2_with_nothing_written(
+    name, monkeypatch, tmp_path, capsys
+):
+    """Every command parses its options with tt_mujoco.cliargs.Parser, whose errors the guard
+    says in one line (argparse's own would print the usage over several), before any work."""
+    module = importlib.import_module(name)
+    monkeypatch.chdir(tmp_path)
+    code = module.main(["x", "--no-such-option"])
+    err = capsys.readouterr().err
+    assert code == 2, err
+    assert len(err.strip().splitlines()) == 1 and "--no-such-option" in err, err
+    assert not any(tmp_path.iterdir())
+
+
+def test_no_command_parses_with_argparse_itself():
+    root = Path(tt_mujoco.__file__).parent
+    for path in root.rglob("*.py"):
+        assert "argparse.ArgumentParser(" not in path.read_text(), path

@@ -26,7 +26,6 @@ Rows are written at ``rate`` (Hz; the run's own rate at most), each at its simul
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from pathlib import Path
@@ -34,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from tt_mujoco import guard
+from tt_mujoco.cliargs import Parser
 from tt_mujoco.outputs import publish_new, temporary_beside
 from tt_mujoco.runfolder import check_out, default_out, read_run
 
@@ -442,7 +442,7 @@ def main(argv: list[str] | None = None) -> int:
 
     Exit codes: 0 written; 2 bad input (not a run's folder, the file exists, no mcap extra).
     """
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="python -m tt_mujoco.bag",
         description="Write a finished run (RUN_DIR/timeseries.parquet or .csv, metrics.json) "
         "as an MCAP file of ROS 2 messages, for Foxglove and ROS 2's bag tools. Never "

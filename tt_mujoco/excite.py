@@ -17,7 +17,6 @@ Exit codes: 0 written; 2 bad input (a parameter not fittable, an --out in use, n
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from pathlib import Path
@@ -25,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from tt_mujoco import guard
+from tt_mujoco.cliargs import Parser
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_OK
 
 __all__ = ["CANDIDATES", "JACKKNIFE_MARGIN", "Candidate", "main", "rank"]
@@ -161,7 +161,7 @@ def main(argv: list[str] | None = None) -> int:
     from tt_mujoco.outputs import atomic_write, claim_folder, release_folder
     from tt_mujoco.sim import Scenario
 
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="python -m tt_mujoco.excite",
         description="Which run to log so that a fit tells the chosen parameters apart.",
     )

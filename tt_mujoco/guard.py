@@ -24,7 +24,7 @@ import signal
 import sys
 import threading
 
-from tt_mujoco.defaults import EXIT_BUG
+from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_BUG
 
 __all__ = [
     "command",
@@ -139,9 +139,13 @@ def crash_file(err: BaseException) -> str:
 
 
 def command(main):
-    """A command's ``main(argv) -> int``, guarded: a bug of ours (anything it raises but
-    ``SystemExit`` and ``KeyboardInterrupt``) is one line naming the file its traceback is in,
-    and :data:`~tt_mujoco.defaults.EXIT_BUG`."""
+    """A command's ``main(argv) -> int``, guarded: bad input it raises
+    (:class:`~tt_mujoco.cliargs.BadInputError`, an unknown or malformed option from
+    :class:`~tt_mujoco.cliargs.Parser` included) is one line and exit code 2; a bug of ours
+    (anything else it raises but ``SystemExit`` and ``KeyboardInterrupt``) is one line naming
+    the file its traceback is in, and :data:`~tt_mujoco.defaults.EXIT_BUG`."""
+
+    from tt_mujoco.cliargs import BadInputError
 
     @functools.wraps(main)
     def guarded(argv=None):
@@ -149,6 +153,9 @@ def command(main):
             return main(argv)
         except (SystemExit, KeyboardInterrupt):
             raise
+        except BadInputError as err:  # what a command leaves to be said: one line, exit 2
+            print(f"error: {' '.join(str(err).split())}", file=sys.stderr)
+            return EXIT_BAD_INPUT
         except BaseException as err:
             try:
                 where = crash_file(err)

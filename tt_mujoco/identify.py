@@ -29,7 +29,6 @@ and the row.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import math
 import sys
@@ -38,6 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from tt_mujoco import guard
+from tt_mujoco.cliargs import Parser
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_OK
 from tt_mujoco.vehicle.params import Params
 
@@ -430,7 +430,7 @@ def main(argv: list[str] | None = None) -> int:
     from tt_mujoco.outputs import atomic_write, claim_folder, release_folder, write_json
     from tt_mujoco.runfolder import check_out
 
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="python -m tt_mujoco.identify",
         description="Fit the trailers' L, L0 and eta to a log (t, v, omega, phi, phi_2, ...).",
     )

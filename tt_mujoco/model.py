@@ -8,11 +8,11 @@ over files.
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
 from tt_mujoco import guard
+from tt_mujoco.cliargs import Parser
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_OK
 from tt_mujoco.outputs import OutputError, atomic_write, claim_folder, release_folder
 from tt_mujoco.sim.scenario import SCHEMA
@@ -35,7 +35,7 @@ def write_models(p: Params | None = None, directory: Path = MODELS_DIR) -> list[
 @guard.command
 def main(argv: list[str] | None = None) -> int:
     """Exit 0 written, 2 bad input (a parameter, or an ``--out`` with files in it)."""
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="python -m tt_mujoco.model",
         description="Write the vehicle's MJCF (tractor_trailer.xml), scene.xml and URDF. "
         "Without --out: regenerate models/ from the default parameters.",

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
 from tt_mujoco import guard
+from tt_mujoco.cliargs import Parser
 from tt_mujoco.runfolder import check_out, default_out, read_run
 from tt_mujoco.viz.render import CAMERAS, RenderUnavailable, render_video, run_labels
 
@@ -18,7 +18,7 @@ def main(argv: list[str] | None = None) -> int:
     Exit codes: 0 written; 2 bad input (missing files, bad options, output exists); 1 no
     OpenGL backend works here.
     """
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="python -m tt_mujoco.render",
         description="Re-render a finished run (RUN_DIR/timeseries.parquet or .csv and "
         "RUN_DIR/metrics.json) "

@@ -18,7 +18,6 @@ Checks (docs/model.md Sections 2-5):
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from collections.abc import Callable
@@ -29,6 +28,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from tt_mujoco import guard
+from tt_mujoco.cliargs import Parser
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_OK
 from tt_mujoco.outputs import (
     OutputError,
@@ -447,7 +447,7 @@ def validation_markdown(results: dict, trailers: int = 1) -> str:
 def main(argv: list[str] | None = None) -> int:
     """Exit 0 written and every bound holds, 1 written but a bound does not hold, 2 a used or
     unwritable ``--out`` (refused before the checks run)."""
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="python -m tt_mujoco.validate",
         description="Check the MuJoCo model against the analytic reduced model. Writes "
         "report.md and report.json into a new folder (never into one with files in it).",
