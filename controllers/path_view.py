@@ -8,7 +8,7 @@ The law is given two more arguments:
   :func:`path_pose_at` and :func:`path_nearest`, never by index;
 - ``vehicle``: the vehicle as the controller knows it (its nominal parameters), by name
   (:data:`VEHICLE_FIELDS`): the first trailer's ``L``, ``L0`` and ``eta``, the last
-  trailer's ``L_last``, ``L0_last`` and ``eta_last``, the wheels' radius ``r`` and half track
+  trailer's ``L_last``, ``L0_last`` and ``eta_last``, the wheels' radius ``r`` and track
   ``d`` (m), ``n_trailers``, and the run's ``direction`` of travel (+1 forward, -1 backing up).
 
 Both functions are plain numbers on arrays: the kernel compiles them with the law (it

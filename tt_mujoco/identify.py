@@ -4,11 +4,13 @@ log of the vehicle, with confidence intervals and what the log cannot tell apart
 A log is a CSV or Parquet file, or a run's folder (its time series), with the columns ``t`` (s,
 strictly increasing), ``v`` (m/s) and ``omega`` (rad/s) of the tractor's axle, and ``phi``,
 ``phi_2``, ... (rad) of the hitches (``--columns phi=hitch_deg`` maps another name; a name
-ending in ``_deg`` is read in degrees); or an MCAP file of ROS 2 messages (the mcap extra):
-``t``, ``v`` and ``omega`` from the odometry topic, the hitch angles from the joint states'
-``hitch_1``, ``hitch_2``, ... (``--topics odom=/my/odom``, ``--columns phi=my_hitch_joint``),
-each topic at its own rate (:func:`tt_mujoco.bag.read_bag_log`). Each hitch angle moves by the
-train's kinematics (docs/model.md Section 2, paper eq. 13 for one trailer;
+ending in ``_deg`` is read in degrees; without ``v`` and ``omega``, they come from the wheels'
+rates ``wheel_rate_r``, ``wheel_rate_l`` and ``--wheel RADIUS,TRACK``, or from the axle's pose
+``x``, ``y``, ``theta``); or an MCAP file of ROS 2 messages (the mcap extra): ``t``, ``v`` and
+``omega`` from the odometry topic, the hitch angles from the joint states' ``hitch_1``,
+``hitch_2``, ... (``--topics odom=/my/odom``, ``--columns phi=my_hitch_joint``), each topic at
+its own rate (:func:`tt_mujoco.bag.read_bag_log`). Each hitch angle moves by the train's
+kinematics (docs/model.md Section 2, paper eq. 13 for one trailer;
 :func:`tt_mujoco.vehicle.train.trailer_rates_of` for N): its rate is a function of the hitch
 angles, ``v`` and ``omega``, and of each trailer's ``L``, ``L0`` and ``eta``. The fit (scipy's
 ``least_squares``) makes each logged step of the hitch angles the one the kinematics predict
@@ -60,6 +62,11 @@ CORRELATED = 0.95
 FIT_ROWS = 4000
 #: A step in ``t`` longer than this many times the median is a gap in the log.
 GAP = 5.0
+#: A log's columns of the tractor's wheels' rates (rad/s), right and left, where it has no
+#: ``v`` and ``omega``.
+WHEEL_RATES = ("wheel_rate_r", "wheel_rate_l")
+#: A log's columns of the tractor axle's pose (m, m, rad), where it has neither.
+POSE = ("x", "y", "theta")
 #: The window (s) a noisy log's ``v`` and ``omega`` are averaged over before the fit.
 INPUT_WINDOW_S = 0.04
 #: Below this estimated signal-to-noise ratio (dB) ``v`` or ``omega`` counts as noisy.
@@ -75,10 +82,17 @@ def read_log(
     columns: dict[str, str] | None = None,
     trailers: int | None = None,
     topics: dict[str, str] | None = None,
+    wheel: tuple[float, float] | None = None,
 ):
     """``(t, v, omega, phis)`` of a log (see the module): ``phis`` is ``(rows, N)``, N the
     number of ``phi`` columns found (or ``trailers``); ``topics`` names an MCAP log's odometry
-    and joint-state topics (:data:`tt_mujoco.bag.LOG_TOPICS`). Raises :class:`LogError`."""
+    and joint-state topics (:data:`tt_mujoco.bag.LOG_TOPICS`). A log without ``v`` and
+    ``omega`` gives them from its wheels' rates (:data:`WHEEL_RATES`, with ``wheel`` the
+    wheels' radius and track, m; default the project's vehicle's) or from the axle's pose
+    (:data:`POSE`). Raises :class:`LogError`."""
+    if wheel is None:
+        default = Params()
+        wheel = (default.r, default.d)
     from tt_mujoco.outputs import read_timeseries, run_timeseries_file
 
     path = Path(path)
@@ -108,7 +122,18 @@ def read_log(
     count = trailers or 1
     while trailers is None and (f"phi_{count + 1}" in table or f"phi_{count + 1}" in mapping):
         count += 1
-    names = ["t", "v", "omega", "phi", *(f"phi_{k}" for k in range(2, count + 1))]
+
+    def has(*names) -> bool:
+        return all(mapping.get(n, n) in table for n in names)
+
+    # the tractor's speed and yaw rate, from what the log has: themselves, the wheels' rates,
+    # or the pose of the tractor's axle
+    speeds = ["v", "omega"]
+    if not has(*speeds) and has(*WHEEL_RATES):
+        speeds = list(WHEEL_RATES)
+    elif not has(*speeds) and has(*POSE):
+        speeds = list(POSE)
+    names = ["t", *speeds, "phi", *(f"phi_{k}" for k in range(2, count + 1))]
     data = {}
     for name in names:
         column = mapping.get(name, name)
@@ -140,8 +165,24 @@ def read_log(
             f"{file}: a gap in column 't' at row {i + 2}: {steps[i - 1]:.6g} s after "
             f"{t[i - 1]!r}, more than {GAP:g} times the log's period ({median:.6g} s)"
         )
-    phis = np.column_stack([data[n] for n in names[3:]])
-    return t, data["v"], data["omega"], phis
+    phis = np.column_stack([data[n] for n in names[len(speeds) + 1 :]])
+    v, omega = _speeds(data, t, wheel)
+    return t, v, omega, phis
+
+
+def _speeds(data: dict, t: np.ndarray, wheel: tuple[float, float]):
+    """``(v, omega)`` of the tractor's axle from what ``data`` has: themselves; the wheels'
+    rates (rad/s) with ``wheel = (radius, track)`` in m (docs/model.md Section 2); or the
+    axle's pose, by central differences (its heading unwrapped)."""
+    if "v" in data:
+        return data["v"], data["omega"]
+    if WHEEL_RATES[0] in data:
+        r, d = wheel
+        right, left = data[WHEEL_RATES[0]], data[WHEEL_RATES[1]]
+        return r * (right + left) / 2.0, r * (right - left) / d
+    x, y, theta = data["x"], data["y"], np.unwrap(data["theta"])
+    vx, vy = np.gradient(x, t), np.gradient(y, t)
+    return vx * np.cos(theta) + vy * np.sin(theta), np.gradient(theta, t)
 
 
 def _with(p: Params, values: dict[tuple[int, str], float]) -> Params:
@@ -447,6 +488,13 @@ def main(argv: list[str] | None = None) -> int:
         metavar="KIND=TOPIC",
         help="an MCAP log's topics: odom=/tractor/odom, joints=/joint_states (the defaults)",
     )
+    parser.add_argument(
+        "--wheel",
+        default=None,
+        metavar="RADIUS,TRACK",
+        help="the tractor's wheel radius and track (m), for a log of wheel rates "
+        "(default the project's vehicle's)",
+    )
     parser.add_argument("--out", type=Path, default=None, help="a new folder")
     args = parser.parse_args(argv)
 
@@ -468,7 +516,15 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.out is not None:
             check_out(args.out / "identified.toml")
-        t, v, omega, phis = read_log(args.log, mapping, topics=topics)
+        wheel = None
+        if args.wheel is not None:
+            try:
+                wheel = tuple(float(x) for x in args.wheel.split(","))
+            except ValueError:
+                wheel = ()
+            if len(wheel) != 2 or not all(math.isfinite(x) and x > 0 for x in wheel):
+                return fail(f"--wheel {args.wheel!r} is not allowed: give RADIUS,TRACK in m")
+        t, v, omega, phis = read_log(args.log, mapping, topics=topics, wheel=wheel)
         from tt_mujoco.sim import Scenario
 
         p = Scenario(eta=args.eta, trailers=phis.shape[1]).plant_params()
