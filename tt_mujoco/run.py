@@ -498,6 +498,7 @@ def _main(argv: list[str] | None) -> int:
     except KeyboardInterrupt:
         return _interrupted(out, created, live)
     finally:
+        watchdog.disarm()  # the outputs that follow are not the simulation's time
         if bar is not None:
             bar.close()
     try:

@@ -25,6 +25,7 @@ file (:func:`read_hangs`) and records that run as failed there instead of runnin
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import select
 import signal
@@ -39,6 +40,7 @@ __all__ = [
     "INTERRUPT_GRACE_S",
     "armed",
     "available",
+    "disarm",
     "grace_for",
     "hang_site",
     "read_hangs",
@@ -98,19 +100,42 @@ def supervise(
     # where the child writes its traceback when asked: a file with no name, never an output
     fd, name = tempfile.mkstemp(prefix="tt_mujoco-watch-", suffix=".txt")
     os.unlink(name)
+    done_read, done_write = os.pipe()  # the child says there when its simulation is over
     pid = os.fork()
     if pid == 0:  # the child: the run
+        global _DONE
+        os.close(done_read)
+        _DONE = done_write
         _die_with_parent()
         dump = os.fdopen(fd, "w")  # held open: the signal handler writes into it
         faulthandler.register(signal.SIGUSR1, file=dump, all_threads=True)
         return
+    os.close(done_write)
     try:
-        code = _wait(pid, grace_for(limit_s), fd, on_expiry, on_killed)
+        code = _wait(pid, grace_for(limit_s), fd, done_read, on_expiry, on_killed)
     finally:
         os.close(fd)
+        os.close(done_read)
     for stream in (sys.stdout, sys.stderr):
         stream.flush()
     os._exit(code)  # the child ran the process's exit handlers; the parent runs none
+
+
+_DONE: int | None = None  # in a watched child: where it says its simulation is over
+
+
+def disarm() -> None:
+    """In a watched child: the simulation is over (it ended, stopped or failed), and what
+    follows (metrics, figures, a video) is not bound by the run's time limit; the parent goes
+    on waiting for it without a deadline. Nothing elsewhere."""
+    global _DONE
+    if _DONE is not None:
+        try:
+            os.write(_DONE, b"d")
+            os.close(_DONE)
+        except OSError:
+            pass
+        _DONE = None
 
 
 def _die_with_parent() -> None:
@@ -128,7 +153,7 @@ def _die_with_parent() -> None:
         os._exit(1)
 
 
-def _wait(pid, seconds, traceback_fd, on_expiry, on_killed) -> int:
+def _wait(pid, seconds, traceback_fd, done_fd, on_expiry, on_killed) -> int:
     deadline = [time.monotonic() + seconds, False]  # when, and whether an interrupt set it
 
     def interrupted(signum, frame):
@@ -143,13 +168,19 @@ def _wait(pid, seconds, traceback_fd, on_expiry, on_killed) -> int:
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, interrupted)
     exited = os.pidfd_open(pid)  # readable once the child has exited
+    watching = [exited, done_fd]
     try:
         while (left := deadline[0] - time.monotonic()) > 0.0:
             # woken at least every 0.25 s: an interrupt may bring the deadline forward
-            if select.select([exited], [], [], min(left, 0.25))[0]:
+            ready = select.select(watching, [], [], min(left, 0.25))[0]
+            if exited in ready:
                 _, status = os.waitpid(pid, 0)
                 code = os.waitstatus_to_exitcode(status)
                 return code if code >= 0 else on_killed(-code)
+            if done_fd in ready:  # the simulation is over: no deadline but an interrupt's
+                watching.remove(done_fd)
+                if not deadline[1]:
+                    deadline[0] = math.inf
     finally:
         os.close(exited)
     return on_expiry(_ask_and_kill(pid, traceback_fd), deadline[1])
