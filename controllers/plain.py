@@ -137,12 +137,17 @@ class PlainLawController(Controller):
         model = Nominal(*setup.model(m.phis if self._train else m.phi, m.v, m.omega))
         r = reference
         ref = LawReference(t, r.s, r.kappa, r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot, *r.pose)
-        law = type(self).LAW
-        if self.SEES_PATH:
-            return law(m, ref, model, self.gain_record, self.law_state, setup.control_dt,
-                       setup.torque_limit, self.path_table, self.vehicle_record)  # fmt: skip
-        return law(m, ref, model, self.gain_record, self.law_state, setup.control_dt,
-                   setup.torque_limit)  # fmt: skip
+        return self.call_law(m, ref, model, self.law_state)
+
+    def call_law(self, m, r, model, state):
+        """The law called in Python as the loops call it: with its gains, ``state``, the
+        control period and the torque limit, and, a law that sees the path, its path and
+        vehicle (the one call :meth:`compute` and a compiled law's failure replayed make)."""
+        setup = self.setup
+        path = (self.path_table, self.vehicle_record) if self.SEES_PATH else ()
+        return type(self).LAW(
+            m, r, model, self.gain_record, state, setup.control_dt, setup.torque_limit, *path
+        )
 
 
 def plain_law(

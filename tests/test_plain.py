@@ -184,15 +184,20 @@ FAILURES = {
 }
 
 
+@pytest.mark.parametrize("sees_path", [False, True], ids=["plain", "sees-path"])
 @pytest.mark.parametrize("failure", FAILURES)
-def test_a_law_that_fails_mid_run_stops_alike_on_both_routes(monkeypatch, tmp_path, failure):
+def test_a_law_that_fails_mid_run_stops_alike_on_both_routes(
+    monkeypatch, tmp_path, failure, sees_path
+):
     """The compiled law stops where the Python loop stops, with the same status, message and
-    rows, and the traceback kept: what its Python form raises at that step."""
+    rows, and the traceback kept: what its Python form raises at that step, called as the loop
+    calls it (a law that sees the path with its path and vehicle too)."""
     law = tmp_path / "failing_law.py"
+    extra = ", path, vehicle" if sees_path else ""
     law.write_text(
         "import math\n\nfrom tt_mujoco.controllers import plain_law\n\n"
-        "@plain_law(state=('n',))\n"
-        "def failing_law(m, r, model, k, s, dt, torque_limit):\n"
+        f"@plain_law(state=('n',), path={sees_path})\n"
+        f"def failing_law(m, r, model, k, s, dt, torque_limit{extra}):\n"
         "    s.n += 1.0\n"
         "    x = 0.0\n"
         "    if s.n >= 2500.0:\n"

@@ -553,12 +553,9 @@ def raised_again(stepper, controller, t: float) -> tuple[str, str] | None:
     state = LawState(controller.STATE)
     for name, value in zip(controller.STATE, _floats(law.user_state), strict=False):
         setattr(state, name, value)
-    setup = controller.setup
     who = usercode.controller_label(stepper.built)
     try:
-        type(controller).LAW(
-            m, r, model, controller.gain_record, state, setup.control_dt, setup.torque_limit
-        )
+        controller.call_law(m, r, model, state)
     except BaseException as err:
         if not users_failure(err):
             raise
