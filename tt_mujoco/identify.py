@@ -330,7 +330,10 @@ def fit_train(t, v, omega, phis, p: Params, fit=("L", "L0"), smooth_s: float | N
     plain = design * float(result.fun @ result.fun) / dof
     # the intervals: the wider of the plain and the time-correlated estimate; what the log
     # tells apart (the correlations): the design's alone
-    spread = np.sqrt(np.maximum(np.diag(plain), np.diag(_covariance(result.jac, result.fun, n))))
+    robust = (
+        _covariance(design, result.jac, result.fun, n) if np.all(np.isfinite(design)) else design
+    )
+    spread = np.sqrt(np.maximum(np.diag(plain), np.diag(robust)))
     cov = design
     with np.errstate(invalid="ignore", divide="ignore"):
         scale = np.sqrt(np.abs(np.diag(cov)))
@@ -350,15 +353,12 @@ def fit_train(t, v, omega, phis, p: Params, fit=("L", "L0"), smooth_s: float | N
     )
 
 
-def _covariance(jac: np.ndarray, residuals: np.ndarray, n: int) -> np.ndarray:
+def _covariance(bread: np.ndarray, jac: np.ndarray, residuals: np.ndarray, n: int) -> np.ndarray:
     """The estimates' covariance, robust to residuals correlated in time (Newey-West): the
     residuals of a log are not independent where the model is not the vehicle (a tyre's creep)
     or the inputs were smoothed, and the plain ``sigma^2 (J^T J)^-1`` then gives intervals
-    too narrow to hold the truth. ``n`` residuals per logged step (one per hitch)."""
-    try:
-        bread = np.linalg.inv(jac.T @ jac)
-    except np.linalg.LinAlgError:
-        return np.full((jac.shape[1], jac.shape[1]), np.inf)
+    too narrow to hold the truth. ``bread`` is ``(J^T J)^-1``; ``n`` residuals per logged step
+    (one per hitch)."""
     scores = (jac * residuals[:, None]).reshape(-1, n, jac.shape[1]).sum(axis=1)  # per step
     rows = scores.shape[0]
     lags = max(1, math.ceil(4.0 * (rows / 100.0) ** (2.0 / 9.0)))  # Newey and West's rule
@@ -405,19 +405,11 @@ def replay(t, v, omega, phi0, p: Params) -> np.ndarray:
     the log's steps, the inputs linear between samples); NaN from a singularity on."""
     phis = np.full((len(t), len(phi0)), np.nan)
     phis[0] = phi0
-
-    def f(phi, i, w):
-        vi = (1 - w) * v[i] + w * v[min(i + 1, len(v) - 1)]
-        oi = (1 - w) * omega[i] + w * omega[min(i + 1, len(v) - 1)]
-        return _rates(p, phi[None, :], np.array([vi]), np.array([oi]))[0]
-
     for i in range(len(t) - 1):
-        h, y = t[i + 1] - t[i], phis[i]
-        k1 = f(y, i, 0.0)
-        k2 = f(y + 0.5 * h * k1, i, 0.5)
-        k3 = f(y + 0.5 * h * k2, i, 0.5)
-        k4 = f(y + h * k3, i, 1.0)
-        nxt = y + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+        nxt = _steps(
+            p, phis[i][None, :], t[i + 1] - t[i], v[i : i + 1], omega[i : i + 1],
+            v[i + 1 : i + 2], omega[i + 1 : i + 2],
+        )[0]  # fmt: skip
         if not np.all(np.isfinite(nxt)):
             break
         phis[i + 1] = nxt
