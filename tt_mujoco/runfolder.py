@@ -224,23 +224,26 @@ def _read_series(path: Path, params: Params, steps) -> dict[str, np.ndarray]:
 
 
 def _world(folder: Path, metrics: Mapping):
-    from tt_mujoco.world.builtin import KEPT_WORLD, run_world
-    from tt_mujoco.world.world import WorldError
+    from tt_mujoco.world.builtin import KEPT_WORLD, parse_world
+    from tt_mujoco.world.world import WorldError, world_from_table
 
     name = lookup(metrics, "config.scenario.world", "none")
     kept = folder / KEPT_WORLD
-    if name != "none" and kept.is_file():
+    if name != "none" and kept.is_file():  # the copy the run kept, read once
         try:
             table = read_toml(kept, "the kept world")
         except ValueError as err:
             raise RunFolderError(str(err)) from None
         if not isinstance(table.get("name"), str):
             raise RunFolderError(f"{kept} is not the world a run kept: it has no name")
-    try:
-        return run_world(folder, name)
+        try:
+            return world_from_table(table, kept.stem)
+        except WorldError as err:
+            raise RunFolderError(f"{kept}: {err}") from None
+    try:  # a run from before runs kept their world: what its name names now
+        return parse_world(name)
     except (OSError, WorldError) as err:
-        where = kept if kept.is_file() else f"{folder / METRICS_FILE}: config.scenario.world"
-        raise RunFolderError(f"{where}: {err}") from None
+        raise RunFolderError(f"{folder / METRICS_FILE}: config.scenario.world: {err}") from None
 
 
 def check_out(out: Path) -> None:

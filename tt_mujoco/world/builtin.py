@@ -13,7 +13,7 @@ from pathlib import Path
 
 from tt_mujoco.world.world import World, WorldError, read_world, world_from_table
 
-__all__ = ["KEPT_WORLD", "NO_WORLD", "WORLDS", "kept_world_toml", "parse_world", "run_world"]
+__all__ = ["KEPT_WORLD", "NO_WORLD", "WORLDS", "kept_world_toml", "parse_world"]
 
 #: ``Scenario.world`` of a run with no world.
 NO_WORLD = "none"
@@ -90,8 +90,9 @@ def _world(text: str) -> World | None:
     )
 
 
-#: The copy of its world a run keeps in its folder: what re-renders and conversions read,
-#: whatever has become of the world file (or of a named world) since.
+#: The copy of its world a run keeps in its folder: what re-renders and conversions read
+#: (:func:`tt_mujoco.runfolder.read_run`), whatever has become of the world file (or of a
+#: named world) since.
 KEPT_WORLD = "world.toml"
 
 
@@ -100,15 +101,6 @@ def kept_world_toml(world: World) -> str:
     import tomli_w
 
     return tomli_w.dumps({**(world.table or {}), "name": world.name})
-
-
-def run_world(run_dir, value) -> World | None:
-    """A finished run's world: the copy it kept (:data:`KEPT_WORLD`), else what its
-    ``Scenario.world`` ``value`` names now."""
-    kept = Path(run_dir) / KEPT_WORLD
-    if value != NO_WORLD and kept.is_file():
-        return read_world(kept)
-    return parse_world(value)
 
 
 def parse_world(value) -> World | None:
