@@ -412,6 +412,21 @@ def parse_strict_json(text: str):
         raise ValueError("it is nested too deeply") from None
 
 
+def read_utf8(path, shown: str) -> str:
+    """The text of file ``path``; a ValueError naming it as ``shown`` when it cannot be read or
+    is not UTF-8 (with the first bad byte): the one way a text file read back is opened."""
+    try:
+        data = Path(path).read_bytes()
+    except OSError as err:
+        raise ValueError(f"{shown} cannot be read: {err.strerror}") from None
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise ValueError(
+            f"{shown} cannot be read: it is not UTF-8 text (byte {err.start})"
+        ) from None
+
+
 def read_strict_json(path):
     """The strict JSON file ``path`` (:func:`parse_strict_json`).
 
@@ -420,12 +435,7 @@ def read_strict_json(path):
     ValueError
         Naming the file: unreadable, not UTF-8, or not strict JSON.
     """
-    try:
-        text = Path(path).read_bytes().decode("utf-8")
-    except UnicodeDecodeError as err:
-        raise ValueError(f"{path} is not UTF-8 text (byte {err.start})") from None
-    except OSError as err:
-        raise ValueError(f"{path} cannot be read: {err.strerror}") from None
+    text = read_utf8(path, str(path))
     try:
         return parse_strict_json(text)
     except json.JSONDecodeError as err:
@@ -447,16 +457,7 @@ def read_toml(path, what: str) -> dict:
     import tomllib
 
     shown = f"{what} {str(path)!r}"
-    try:
-        data = Path(path).read_bytes()
-    except OSError as err:
-        raise ValueError(f"{shown} cannot be read: {err.strerror}") from None
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as err:
-        raise ValueError(
-            f"{shown} cannot be read: it is not UTF-8 text (byte {err.start})"
-        ) from None
+    text = read_utf8(path, shown)
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
