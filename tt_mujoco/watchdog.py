@@ -33,11 +33,13 @@ import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import NamedTuple
 
 __all__ = [
     "GRACE_FRACTION",
     "GRACE_S",
     "INTERRUPT_GRACE_S",
+    "Hang",
     "armed",
     "available",
     "disarm",
@@ -234,26 +236,35 @@ def grace_for(limit_s: float) -> float:
     return limit_s * (1.0 + GRACE_FRACTION) + GRACE_S
 
 
-_HANG_FILE = None  # this worker's hang file, opened at its first run
+_HANG_FILE = None  # this worker's hang file and its folder, opened at its first run there
+
+
+class Hang(NamedTuple):
+    """A run a sweep's worker was ended for: its time limit (s) and the worker's traceback."""
+
+    limit_s: float
+    traceback: str
 
 
 @contextlib.contextmanager
-def armed(limit_s: float, hang_dir, label: str):
+def armed(limit_s: float, hang_dir, run_id: str):
     """Around one run in a sweep's worker: should it outlive :func:`grace_for` its limit,
-    write ``label`` and every thread's traceback into this worker's file in ``hang_dir`` and
-    end the process (faulthandler's timer, a C thread). ``hang_dir`` None: no watch."""
+    write ``run_id``, the limit and every thread's traceback into this worker's file in
+    ``hang_dir`` and end the process (faulthandler's timer, a C thread); :func:`read_hangs`
+    reads it back. ``hang_dir`` None: no watch."""
     import faulthandler
 
     global _HANG_FILE
     if hang_dir is None:
         yield
         return
-    if _HANG_FILE is None:
-        _HANG_FILE = open(Path(hang_dir) / f"worker-{os.getpid()}.txt", "w+")  # held open
-    f = _HANG_FILE
+    if _HANG_FILE is None or _HANG_FILE[0] != Path(hang_dir):
+        path = Path(hang_dir) / f"worker-{os.getpid()}.txt"
+        _HANG_FILE = (Path(hang_dir), open(path, "w+"))  # held open
+    f = _HANG_FILE[1]
     f.seek(0)
     f.truncate()
-    f.write(f"{label}\n")
+    f.write(f"{run_id} {limit_s!r}\n")
     f.flush()
     faulthandler.dump_traceback_later(grace_for(limit_s), exit=True, file=f)
     try:
@@ -265,8 +276,8 @@ def armed(limit_s: float, hang_dir, label: str):
         f.flush()
 
 
-def read_hangs(hang_dir) -> dict[str, str]:
-    """The runs a worker ended for hanging: label -> its traceback (each file read is
+def read_hangs(hang_dir) -> dict[str, Hang]:
+    """The runs a worker was ended for hanging (:func:`armed`), by run id (each file read is
     emptied, so a run is told once)."""
     found = {}
     for file in sorted(Path(hang_dir).glob("worker-*.txt")):
@@ -275,7 +286,8 @@ def read_hangs(hang_dir) -> dict[str, str]:
         except OSError:
             continue
         label, _, traceback = text.partition("\n")
-        if label and "most recent call first" in traceback:
-            found[label] = traceback
+        run_id, _, limit = label.partition(" ")
+        if run_id and "most recent call first" in traceback:
+            found[run_id] = Hang(float(limit), traceback)
             file.write_text("")
     return found

@@ -333,22 +333,20 @@ def _recover(executors, broken, inflight, todo, crashes, journal, done, hung) ->
     """A worker process died (segfault, out of memory, or ended by its watch for a run that
     hung): every run in flight is suspect.
 
-    A run its worker's watch names (``hung``: label -> traceback) is recorded as failed where
-    it hung, never run again. The other suspects run again one at a time; a run that was alone
-    in flight when a worker died (or in flight at two deaths) is recorded as an error.
+    A run its worker's watch names (``hung``: run id -> :class:`~tt_mujoco.watchdog.Hang`) is
+    recorded as failed where it hung, never run again, and the others, only in flight beside
+    it, run again. Otherwise the suspects run again one at a time; a run that was alone in
+    flight when a worker died (or in flight at two deaths) is recorded as an error.
     """
-    inflight_runs = list(inflight.values())
-    suspects = broken + inflight_runs
+    suspects = broken + list(inflight.values())
     inflight.clear()
-    for label, traceback in hung.items():
-        run_id, _, limit = label.partition(" ")
-        run = next((r for r in suspects if r["run_id"] == run_id), None)
-        if run is None:
-            continue
+    named = [run for run in suspects if run["run_id"] in hung]
+    for run in named:
+        run_id, hang = run["run_id"], hung[run["run_id"]]
         suspects.remove(run)
         message = (
-            f"the run passed its time limit of {float(limit):g} s in code that never returned to "
-            f"Python, at {watchdog.hang_site(traceback)}: its worker was ended"
+            f"the run passed its time limit of {hang.limit_s:g} s in code that never returned "
+            f"to Python, at {watchdog.hang_site(hang.traceback)}: its worker was ended"
         )
         record = {
             **{"run_id": run_id, "index": run["index"], "status": "failed"},
@@ -357,8 +355,8 @@ def _recover(executors, broken, inflight, todo, crashes, journal, done, hung) ->
         journal.write(_json_line(record))
         journal.flush()
         done[run_id] = record
-    if len(suspects) < len(broken) + len(inflight_runs):  # the watch named the cause
-        todo.extendleft(reversed(suspects))  # the others were only in flight with it
+    if named:  # the watch named the cause: the others were only in flight beside it
+        todo.extendleft(reversed(suspects))
         return executors.reopen()
     alone = len(suspects) == 1
     for run in reversed(suspects):

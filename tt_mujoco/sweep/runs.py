@@ -235,7 +235,7 @@ def _flatten_metrics(value, prefix: str = "", out: dict | None = None) -> dict:
     return out
 
 
-def run_one(options: Mapping, hang_dir=None, label: str = "") -> dict:
+def run_one(options: Mapping, hang_dir=None, run_id: str = "") -> dict:
     """Simulate one run; never raises for a run's failure (worker entry point).
 
     Parameters
@@ -244,9 +244,9 @@ def run_one(options: Mapping, hang_dir=None, label: str = "") -> dict:
         One run's options (see :func:`expand`).
     hang_dir : path, optional
         The sweep's folder for hang files: the run is watched there
-        (:func:`tt_mujoco.watchdog.armed`) under ``label`` (its run id), so that one that
-        never returns to Python ends its worker, and the sweep records it.
-    label : str
+        (:func:`tt_mujoco.watchdog.armed`) under ``run_id``, so that one that never returns
+        to Python ends its worker, and the sweep records it.
+    run_id : str
 
     Returns
     -------
@@ -264,7 +264,7 @@ def run_one(options: Mapping, hang_dir=None, label: str = "") -> dict:
         # configuration, before the sweep started; simulate(Scenario) would try it again.
         built = build(build_scenario(options))
         limit = built.wall_limit
-        with watchdog.armed(limit, hang_dir, f"{label} {limit!r}"):
+        with watchdog.armed(limit, hang_dir, run_id):
             result = simulate(built)
         metrics = _flatten_metrics({k: v for k, v in result.metrics.items() if k != "status"})
         out = {"status": result.status, "message": result.message, "error": "", "metrics": metrics}
