@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from documents import key_paths, nested, parent_of
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -242,21 +243,11 @@ def test_a_run_keeps_its_world_and_converts_without_the_file(tmp_path, monkeypat
     assert channels["/world/goal"][1] == 1
 
 
-_JSON = st.recursive(
+_JSON = nested(
     st.none() | st.booleans() | st.integers(-(10**9), 10**9) | st.floats() | st.text(max_size=6),
-    lambda inner: (
-        st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=5), inner, max_size=3)
-    ),
+    key_size=5,
     max_leaves=6,
 )
-
-
-def _json_paths(doc, prefix=()):
-    items = doc.items() if isinstance(doc, dict) else enumerate(doc)
-    for key, value in items:
-        yield (*prefix, key)
-        if isinstance(value, dict | list) and len(prefix) < 3:
-            yield from _json_paths(value, (*prefix, key))
 
 
 @settings(
@@ -277,11 +268,8 @@ def test_an_edited_metrics_json_is_converted_or_refused_in_one_line(
     shutil.copy(bay_run / "timeseries.parquet", folder / "timeseries.parquet")
     shutil.copy(bay_run / "reference_path.parquet", folder / "reference_path.parquet")
     doc = json.loads((folder / "metrics.json").read_text())
-    path = data.draw(st.sampled_from(list(_json_paths(doc["config"], ("config",)))))
-    parent = doc
-    for key in path[:-1]:
-        parent = parent[key]
-    parent[path[-1]] = data.draw(_JSON)
+    path = data.draw(st.sampled_from(list(key_paths(doc["config"], ("config",), depth=3))))
+    parent_of(doc, path)[path[-1]] = data.draw(_JSON)
     (folder / "metrics.json").write_text(json.dumps(doc))
     code = bag.main([str(folder), "--rate", "2"])
     assert code in (0, 2), path

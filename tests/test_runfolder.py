@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from documents import key_paths, nested, parent_of
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -277,25 +278,13 @@ def test_a_reader_is_the_only_one_that_opens_a_run_folder():
 
 # --- property-based: any metrics.json, any journal line -------------------------------------
 
-_JSON = st.recursive(
+_JSON = nested(
     st.none()
     | st.booleans()
     | st.integers(-(10**30), 10**30)
     | st.floats(allow_nan=False, allow_infinity=False)
-    | st.text(max_size=8),
-    lambda inner: (
-        st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=6), inner, max_size=3)
-    ),
-    max_leaves=8,
+    | st.text(max_size=8)
 )
-
-
-def _paths(doc, prefix=()):
-    items = doc.items() if isinstance(doc, dict) else enumerate(doc)
-    for key, value in items:
-        yield (*prefix, key)
-        if isinstance(value, dict | list) and len(prefix) < 3:
-            yield from _paths(value, (*prefix, key))
 
 
 @settings(
@@ -311,11 +300,8 @@ def test_any_edit_of_metrics_json_is_read_or_refused_in_one_line(finished, tmp_p
     shutil.copytree(finished["parquet"], folder)
     doc = _metrics(folder)
     if data.draw(st.booleans()):
-        path = data.draw(st.sampled_from(list(_paths(doc))))
-        parent = doc
-        for key in path[:-1]:
-            parent = parent[key]
-        parent[path[-1]] = data.draw(_JSON)
+        path = data.draw(st.sampled_from(list(key_paths(doc, depth=3))))
+        parent_of(doc, path)[path[-1]] = data.draw(_JSON)
         (folder / runfolder.METRICS_FILE).write_text(json.dumps(doc))
     else:
         raw = data.draw(st.binary(max_size=200))

@@ -8,6 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 import tomli_w
+from documents import key_paths, nested, parent_of
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -283,26 +284,14 @@ def test_mujoco_contacts_are_the_geometric_check(trailers):
 # --- the reader against what a file can hold (property-based) -------------------------------
 
 #: Anything a TOML file can give a key: numbers of every kind, text, booleans, lists, tables.
-_ANY = st.recursive(
+_ANY = nested(
     st.none().map(lambda _: "none")
     | st.booleans()
     | st.integers(-(10**30), 10**30)
     | st.floats(allow_nan=True, allow_infinity=True)
     | st.text(max_size=8),
-    lambda inner: (
-        st.lists(inner, max_size=4) | st.dictionaries(st.text(max_size=6), inner, max_size=4)
-    ),
-    max_leaves=8,
+    max_size=4,
 )
-
-
-def _paths(table, prefix=()):
-    """Every key path of a nested table (lists by index)."""
-    items = table.items() if isinstance(table, dict) else enumerate(table)
-    for key, value in items:
-        yield (*prefix, key)
-        if isinstance(value, dict | list):
-            yield from _paths(value, (*prefix, key))
 
 
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -313,11 +302,8 @@ def test_a_world_table_with_any_value_anywhere_is_a_world_or_one_world_error(dat
     import copy
 
     table = copy.deepcopy(WORLDS[name])
-    paths = list(_paths(table))
-    path = data.draw(st.sampled_from(paths))
-    parent = table
-    for key in path[:-1]:
-        parent = parent[key]
+    path = data.draw(st.sampled_from(list(key_paths(table))))
+    parent = parent_of(table, path)
     action = data.draw(st.sampled_from(["replace", "remove", "add"]))
     if action == "replace":
         parent[path[-1]] = data.draw(_ANY)
