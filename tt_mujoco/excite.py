@@ -70,7 +70,7 @@ class Candidate:
 
 
 def _predicted(scenario, fit, rate_hz, noise_deg) -> Candidate | None:
-    from tt_mujoco.identify import step_errors
+    from tt_mujoco.identify import fitted_values, step_errors
     from tt_mujoco.sim import simulate
     from tt_mujoco.vehicle.params import jackknife_phi_deg
 
@@ -85,9 +85,7 @@ def _predicted(scenario, fit, rate_hz, noise_deg) -> Candidate | None:
         return None
     stride = max(1, round(1.0 / (rate_hz * scenario.control_dt)))
     t, v, omega, phis = ts["t"][::stride], ts["v"][::stride], ts["omega"][::stride], phis[::stride]
-    keys = [(k, field) for k in range(1, p.n_trailers + 1) for field in fit]
-    names = [f"{field}_{k}" if p.n_trailers > 1 else field for k, field in keys]
-    x = np.array([getattr(p.trailers[k - 1], field) for k, field in keys], dtype=float)
+    keys, names, x = fitted_values(p, fit)
     residuals = step_errors(p, keys, t, v, omega, phis)
     jac = np.empty((residuals(x).size, x.size))
     for j in range(x.size):

@@ -49,6 +49,7 @@ __all__ = [
     "Fit",
     "LogError",
     "fit_train",
+    "fitted_values",
     "main",
     "read_log",
     "step_errors",
@@ -314,10 +315,7 @@ def fit_train(t, v, omega, phis, p: Params, fit=("L", "L0"), smooth_s: float | N
     unknown = [f for f in fit if f not in FITTABLE]
     if unknown or not fit:
         raise LogError(f"fit={','.join(fit)!r} is not allowed: choose from {', '.join(FITTABLE)}")
-    keys = [(k, field) for k in range(1, n + 1) for field in fit]
-    names = [f"{field}_{k}" if n > 1 else field for k, field in keys]
-    trailers = p.trailers
-    x0 = np.array([getattr(trailers[k - 1], field) for k, field in keys], dtype=float)
+    keys, names, x0 = fitted_values(p, fit)
     residuals = step_errors(p, keys, t, v, omega, phis)
 
     lower = [-np.inf if f == "eta" else 1e-3 for _, f in keys]
@@ -369,6 +367,16 @@ def _covariance(bread: np.ndarray, jac: np.ndarray, residuals: np.ndarray, n: in
         meat += weight * (cross + cross.T)
     dof = rows / max(rows - jac.shape[1], 1)
     return bread @ meat @ bread * dof
+
+
+def fitted_values(p: Params, fit) -> tuple[list, list[str], np.ndarray]:
+    """What a fit of ``fit`` (of :data:`FITTABLE`) takes of train ``p``: the ``(trailer,
+    field)`` keys, their names (``L``, or ``L_2`` in a train) and their values in ``p``."""
+    n = p.n_trailers
+    keys = [(k, field) for k in range(1, n + 1) for field in fit]
+    names = [f"{field}_{k}" if n > 1 else field for k, field in keys]
+    values = np.array([getattr(p.trailers[k - 1], field) for k, field in keys], dtype=float)
+    return keys, names, values
 
 
 def step_errors(p: Params, keys, t, v, omega, phis):
