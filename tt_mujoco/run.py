@@ -621,14 +621,8 @@ def _killed(out: Path, signum: int) -> int:
 
 def _interrupted(out: Path, created: bool, live) -> int:
     """Ctrl-C or SIGTERM during the simulation: keep the rows computed, say where they are."""
-    from tt_mujoco.sim.checkpoint import read_checkpoint
-
     partial = out / CHECKPOINT_FILE
-    try:
-        rows = read_checkpoint(partial)
-    except (OSError, ValueError):
-        rows = {}
-    t = rows.get("t", ())
+    t = _kept_rows(out).get("t", ())
     if len(t) == 0:
         return _abandon(out, created, live, "interrupted before the first row", EXIT_INTERRUPTED)
     if live is not None:
