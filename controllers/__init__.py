@@ -32,6 +32,7 @@ from tt_mujoco.controllers.lqr import LqrController
 from tt_mujoco.controllers.nmpc import NmpcController
 from tt_mujoco.controllers.pid import PidController
 from tt_mujoco.controllers.plain import PlainLawController, plain_law
+from tt_mujoco.controllers.pure_pursuit import pure_pursuit
 from tt_mujoco.controllers.smc import SmcController
 from tt_mujoco.controllers.stanley import StanleyController
 
@@ -69,6 +70,7 @@ CONTROLLERS.register("pid", PidController)
 CONTROLLERS.register("fbl", FblController)
 CONTROLLERS.register("smc", SmcController)
 CONTROLLERS.register("stanley", StanleyController)
+CONTROLLERS.register("pure_pursuit", pure_pursuit)
 CONTROLLERS.register("lqr", LqrController)
 CONTROLLERS.register("nmpc", NmpcController)
 

@@ -31,8 +31,10 @@ The law's arguments, each read by field name:
 - ``dt``: the control period (s); ``torque_limit``: the wheel torque limit (N m).
 
 It returns the two wheel torques ``(T_r, T_l)`` (N m); the loop clips them at the limit. The
-body may use arithmetic, ``math`` functions, ``if`` and ``for``: what numba compiles in
-nopython mode. A train's measurement carries trailer 1 only in ``m``; the model is the train's.
+body may use arithmetic, ``math`` functions, ``if`` and ``for``: what numba compiles in nopython
+mode. ``math.hypot`` is compiled as CPython computes it (numba's own differs in the last bit now
+and then), so both loops give the same numbers. A train's measurement carries trailer 1 only in
+``m``; the model is the train's.
 
 A law declared with ``plain_law(..., path=True)`` takes two more arguments, ``path`` and
 ``vehicle`` (:mod:`tt_mujoco.controllers.path_view`): the run's path, read by

@@ -8,8 +8,11 @@ import time
 
 import numpy as np
 import pytest
+from tt_mujoco.controllers import CONTROLLERS
 
+from tt_mujoco.reference.paths import PATHS
 from tt_mujoco.sim import Scenario, build, compiled, simulate
+from tt_mujoco.sim.disturbances import DISTURBANCES
 from tt_mujoco.sim.simulate import run_episode
 from tt_mujoco.sim.stepper import Stepper
 
@@ -182,6 +185,12 @@ CASES = [
         duration=3.0,
     ),
 ]
+
+# Every registered controller, path and disturbance, so that a new one joins the matrix by
+# being registered.
+CASES += [dict(traj="s_curve", controller=name, duration=2.0) for name in CONTROLLERS]
+CASES += [dict(traj=name, duration=2.0) for name in PATHS]
+CASES += [dict(traj="s_curve", disturbance_model=name, duration=2.0) for name in DISTURBANCES]
 
 
 def _both(monkeypatch, scenario):

@@ -5,16 +5,27 @@ clamped outside the path), :class:`Pose`, and the checks shared by the path modu
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
 __all__ = [
+    "ARCS_PATH",
+    "CYCLOID_PATH",
     "DEFAULT_MAX_CURVATURE",
+    "HOOKED_PATH",
+    "SPLINE_PATH",
     "Pose",
     "ReferencePath",
     "positive_number",
+    "read_from_tables",
 ]
+
+
+#: How the step reads a path (a path class's :attr:`ReferencePath.STEP_KIND`): arcs of
+#: constant curvature, the cycloid, fine cells of cubic curvature and Hermite poses (a spline,
+#: a clothoid; ``closed_form`` gives their tables), or a path it calls back (a user's).
+ARCS_PATH, CYCLOID_PATH, SPLINE_PATH, HOOKED_PATH = 0, 1, 2, 3
 
 
 #: Largest |kappa| (1/m) a user path may have by default: a turn radius of 0.5 m. With the
@@ -80,6 +91,12 @@ class ReferencePath:
 
     def _curvature_rate(self, s: np.ndarray) -> np.ndarray:
         raise NotImplementedError
+
+    #: How the step reads this class's paths from tables, without calling them back (one of
+    #: :data:`ARCS_PATH`, :data:`CYCLOID_PATH`, :data:`SPLINE_PATH`, with ``closed_form``
+    #: giving the tables). Only a class that declares it itself is read so: a subclass that
+    #: does not may compute something else, and is called back (:data:`HOOKED_PATH`).
+    STEP_KIND: ClassVar[int] = HOOKED_PATH
 
     def _pose_at(self, s: float) -> tuple[float, float, float]:
         raise NotImplementedError
@@ -164,6 +181,12 @@ class ReferencePath:
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(name={self.name!r}, length={self.length:.4f})"
+
+
+def read_from_tables(path) -> bool:
+    """Whether the step reads ``path`` from its tables: its class declares its own
+    :attr:`~ReferencePath.STEP_KIND`."""
+    return type(path).__dict__.get("STEP_KIND", HOOKED_PATH) != HOOKED_PATH
 
 
 def arc_segment(s: float, bounds) -> int:

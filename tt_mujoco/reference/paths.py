@@ -25,19 +25,29 @@ arithmetic (about 1 microsecond), because the targets call them at every control
 
 from __future__ import annotations
 
+import inspect
 import math
 
 import numpy as np
 
 from tt_mujoco.guard import users_failure
 from tt_mujoco.reference.path_base import (
+    ARCS_PATH,
+    CYCLOID_PATH,
     DEFAULT_MAX_CURVATURE,
+    SPLINE_PATH,
     Pose,
     ReferencePath,
     arc_segment,
     positive_number,
 )
-from tt_mujoco.reference.spline import SplinePath, from_csv, from_waypoints
+from tt_mujoco.reference.spline import (
+    SplinePath,
+    from_csv,
+    from_waypoints,
+    spline_curvature_of,
+    spline_pose_of,
+)
 from tt_mujoco.registry import HookError, Registry, describe_failure, is_hook, load_hook
 
 __all__ = [
@@ -47,14 +57,17 @@ __all__ = [
     "PATHS",
     "PATH_NAMES",
     "ArcsPath",
+    "ClothoidPath",
     "CycloidPath",
     "Pose",
     "ReferencePath",
     "SplinePath",
     "check_options",
     "circle",
+    "clothoid",
     "cycloid",
     "cycloid_arc_length",
+    "factory_options",
     "from_csv",
     "from_waypoints",
     "get_path",
@@ -98,6 +111,8 @@ class CycloidPath(ReferencePath):
     paper's unsigned |kappa(s)| with the sign restored, docs/model.md Section 7). ``dkappa/ds =
     u (16 - u^2)^(-3/2)``.
     """
+
+    STEP_KIND = CYCLOID_PATH
 
     def __init__(self, initial_pose=None):
         super().__init__("cycloid", CYCLOID_LENGTH, initial_pose=initial_pose)
@@ -172,6 +187,8 @@ class ArcsPath(ReferencePath):
         Segment i covers ``s in [s_i, s_i + length_i)``; at a boundary the next segment's
         curvature applies. The curvature rate is 0 everywhere (jumps carry no rate).
     """
+
+    STEP_KIND = ARCS_PATH
 
     def __init__(self, name: str, start, segments, initial_pose=None, period=None):
         lengths = np.array([float(seg[0]) for seg in segments])
@@ -281,13 +298,205 @@ def circle(R: float = 1.0, length: float | None = None) -> ArcsPath:
     return ArcsPath("circle", (R, 0.0, math.pi / 2.0), [(length, 1.0 / R)], period=period)
 
 
+# --- linear curvature (clothoid) ----------------------------------------------------------------
+# Gauss-Legendre nodes and weights on [0, 1], 8 points: exact for polynomials of degree 15, so
+# cos and sin of a quadratic heading over a centimetre come out to rounding.
+_GAUSS_NODES, _GAUSS_WEIGHTS = (
+    0.5 * (a + b) for a, b in zip(np.polynomial.legendre.leggauss(8), (1.0, 0.0), strict=True)
+)
+#: Longest fine cell of a clothoid's tables (m).
+CLOTHOID_CELL = 0.01
+
+
+class ClothoidPath(ReferencePath):
+    """Segments whose curvature runs linearly in arc length: clothoids (Euler spirals), and
+    arcs and straights as their special cases.
+
+    The heading is a quadratic in s on each segment, ``h(s) = h_i + kappa_i u + c_i u^2 / 2``
+    (``u`` from the segment's start, ``c_i`` its curvature rate); the position is its
+    integral, the Fresnel integrals, taken by 8-point Gauss-Legendre quadrature cell by cell.
+    The step reads it as it reads a spline (``SPLINE_PATH``): fine cells of at most
+    :data:`CLOTHOID_CELL` with the curvature's line (exact) and cubic Hermite poses (within
+    about 1e-11 m of the quadrature).
+
+    Parameters
+    ----------
+    name : str
+    start : (x, y, heading)
+        Pose at s = 0.
+    segments : sequence of (length, kappa_start, kappa_end)
+        Segment i covers ``s in [s_i, s_i + length_i)``; its curvature runs linearly from
+        ``kappa_start`` to ``kappa_end``. Consecutive segments should meet in curvature (a
+        jump is allowed, as between arcs).
+    """
+
+    STEP_KIND = SPLINE_PATH
+
+    def __init__(self, name: str, start, segments, initial_pose=None):
+        rows = np.array([[float(v) for v in seg] for seg in segments], dtype=float)
+        if rows.ndim != 2 or rows.shape[1] != 3 or rows.shape[0] == 0:
+            raise ValueError(f"segments={segments!r}: give (length, kappa_start, kappa_end) rows")
+        if not np.all(np.isfinite(rows)) or np.any(rows[:, 0] <= 0.0):
+            raise ValueError(
+                f"segments={segments!r}: every length must be finite and > 0, every "
+                "curvature finite"
+            )
+        super().__init__(name, float(rows[:, 0].sum()), initial_pose=initial_pose)
+        self._lengths, self._k0 = rows[:, 0], rows[:, 1]
+        self._rates = (rows[:, 2] - rows[:, 1]) / rows[:, 0]
+        self._bounds = np.concatenate([[0.0], np.cumsum(self._lengths)])
+        # the fine grid: each segment in equal cells, its ends among the grid's points
+        grid = [np.zeros(1)]
+        for i, length in enumerate(self._lengths):
+            n = max(1, math.ceil(length / CLOTHOID_CELL))
+            grid.append(self._bounds[i] + length * np.arange(1, n + 1) / n)
+        self._grid = np.concatenate(grid)
+        self._grid[-1] = self.length
+        # the segments' start headings, then the grid's poses by quadrature, cell by cell
+        x0, y0, h0 = (float(v) for v in start)
+        turns = self._k0 * self._lengths + 0.5 * self._rates * self._lengths**2
+        self._h0 = h0 + np.concatenate([[0.0], np.cumsum(turns)[:-1]])
+        heading = self._heading(self._grid)
+        dx, dy = self._advance(self._grid[:-1], self._grid[1:])
+        self._grid_x = x0 + np.concatenate([[0.0], np.cumsum(dx)])
+        self._grid_y = y0 + np.concatenate([[0.0], np.cumsum(dy)])
+        kappa, rate = self._curvature(self._grid), self._curvature_rate(self._grid[:-1])
+        h = np.diff(self._grid)
+        self._tables = (
+            self._grid.copy(),
+            np.column_stack([self._grid[:-1], kappa[:-1], rate, np.zeros((h.size, 2))]),
+            np.column_stack(
+                [
+                    *(self._grid[:-1], h, self._grid_x[:-1], self._grid_y[:-1], heading[:-1]),
+                    *(kappa[:-1], self._grid_x[1:], self._grid_y[1:], heading[1:], kappa[1:]),
+                ]
+            ),
+            np.array([kappa[0], kappa[-1]]),
+        )
+        self._bound_list = [float(b) for b in self._grid]
+        self._cell_list = [tuple(map(float, row)) for row in self._tables[1]]
+        self._pose_cell_list = [tuple(map(float, row)) for row in self._tables[2]]
+        self._kappa_ends = (float(kappa[0]), float(kappa[-1]))
+
+    def _segment(self, s):
+        idx = np.searchsorted(self._bounds[1:-1], s, side="right")
+        return idx, s - self._bounds[idx]
+
+    def _heading(self, s):
+        idx, u = self._segment(s)
+        return self._h0[idx] + self._k0[idx] * u + 0.5 * self._rates[idx] * u * u
+
+    def _advance(self, a, b):
+        """The displacement from ``s = a`` to ``s = b`` within one segment (arrays)."""
+        u = a[..., None] + (b - a)[..., None] * _GAUSS_NODES
+        h = self._heading_in(u, self._segment(a)[0][..., None])
+        width = b - a
+        return width * (np.cos(h) @ _GAUSS_WEIGHTS), width * (np.sin(h) @ _GAUSS_WEIGHTS)
+
+    def _heading_in(self, s, idx):
+        u = s - self._bounds[idx]
+        return self._h0[idx] + self._k0[idx] * u + 0.5 * self._rates[idx] * u * u
+
+    def _pose(self, s):
+        s = np.asarray(s, dtype=float)
+        cell = np.clip(np.searchsorted(self._grid, s, side="right") - 1, 0, self._grid.size - 2)
+        dx, dy = self._advance(self._grid[cell], s)
+        return self._grid_x[cell] + dx, self._grid_y[cell] + dy, self._heading(s)
+
+    def _curvature(self, s):
+        idx, u = self._segment(s)
+        return self._k0[idx] + self._rates[idx] * u
+
+    def _curvature_rate(self, s):
+        return self._rates[self._segment(s)[0]]
+
+    def _pose_at(self, s):
+        return spline_pose_of(s, self._bound_list, self._pose_cell_list)
+
+    def curvature_and_rate(self, s: float) -> tuple[float, float]:
+        return spline_curvature_of(
+            s, self.length, self._kappa_ends, self._bound_list, self._cell_list
+        )
+
+    @property
+    def closed_form(self) -> tuple:
+        """The tables the step takes, as a spline's (:attr:`SplinePath.closed_form`)."""
+        return tuple(table.copy() for table in self._tables)
+
+
+def clothoid(
+    R: float = 1.5, angle_deg: float = 90.0, transition: float = 1.0, straight: float = 1.0
+) -> ClothoidPath:
+    """A turn with clothoid transitions: a straight, a clothoid from 0 to the curvature 1/R,
+    an arc of radius R, a clothoid back to 0 and a straight, from the origin heading 0 (+x).
+
+    Each clothoid turns ``transition / (2 R)``, the arc the rest of ``angle_deg`` (positive
+    left, negative right). Unlike the S-curve's and the circle's steps, the curvature is
+    continuous, so the yaw rate the target asks has no jump.
+
+    Parameters
+    ----------
+    R : float
+        The arc's radius (m), > 0.
+    angle_deg : float
+        The whole turn (deg), nonzero and within +-360.
+    transition : float
+        Each clothoid's length (m), >= 0 (0: a plain arc between the straights); the two
+        together may not turn more than ``angle_deg``.
+    straight : float
+        Each straight's length (m), >= 0.
+    """
+    R = positive_number("R", R)
+    for key, value in (
+        ("angle_deg", angle_deg),
+        ("transition", transition),
+        ("straight", straight),
+    ):
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int | float)
+            or not math.isfinite(value)
+        ):
+            raise ValueError(f"{key}={value!r} is not allowed: it must be a finite number")
+    if angle_deg == 0.0 or abs(angle_deg) > 360.0:
+        raise ValueError(
+            f"angle_deg={angle_deg!r} is not allowed: use a nonzero angle within +-360"
+        )
+    if transition < 0.0 or straight < 0.0:
+        raise ValueError(
+            f"transition={transition!r}, straight={straight!r} are not allowed: use lengths >= 0"
+        )
+    turn, side = math.radians(abs(angle_deg)), math.copysign(1.0, angle_deg)
+    arc = R * turn - transition  # each clothoid turns transition / (2 R)
+    if arc < 0.0:
+        raise ValueError(
+            f"transition={transition!r} is not allowed for R={R!r}, angle_deg={angle_deg!r}: the "
+            f"two clothoids would turn more than the angle; use transition <= {R * turn:.6g}"
+        )
+    k = side / R
+    segments = [
+        (straight, 0.0, 0.0),
+        (transition, 0.0, k),
+        (arc, k, k),
+        (transition, k, 0.0),
+        (straight, 0.0, 0.0),
+    ]
+    return ClothoidPath("clothoid", (0.0, 0.0, 0.0), [seg for seg in segments if seg[0] > 0.0])
+
+
 # --- dispatch --------------------------------------------------------------------------------
-_FACTORY_OPTIONS = {
-    "cycloid": ("start",),
-    "s_curve": ("R",),
-    "circle": ("R", "length"),
-    "csv": ("max_curvature", "smoothing"),
-}
+def factory_options(key: str) -> tuple[str, ...] | None:
+    """The options the path ``key`` (a :func:`path_kind`) takes: a CSV file's, or the keyword
+    parameters of a registered factory, read from its signature (None for a hook, whose
+    factory checks its own)."""
+    if key == "csv":
+        return ("max_curvature", "smoothing")
+    if key == "hook":
+        return None
+    factory = PATHS[key]
+    if not callable(factory):
+        return ()
+    return tuple(inspect.signature(factory).parameters)
 
 
 #: Path name -> factory returning a :class:`ReferencePath`. ``PATHS.register`` adds one; a
@@ -303,6 +512,9 @@ PATHS.register("s_curve", s_curve)
 
 
 PATHS.register("circle", circle)
+
+
+PATHS.register("clothoid", clothoid)
 
 
 def path_kind(name_or_csv) -> str:
@@ -364,7 +576,7 @@ def get_path(name_or_csv, **kw) -> ReferencePath:
     text = str(name_or_csv).strip()
     if key == "hook":
         return _from_hook(text, **kw)
-    check_options(text, kw, _FACTORY_OPTIONS.get(key))
+    check_options(text, kw, factory_options(key))
     if key == "csv":
         return from_csv(text, **kw)
     return PATHS[key](**kw)

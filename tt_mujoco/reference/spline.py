@@ -12,6 +12,7 @@ import numpy as np
 from tt_mujoco.defaults import MAX_CSV_ROWS, MAX_SPEED
 from tt_mujoco.reference.path_base import (
     DEFAULT_MAX_CURVATURE,
+    SPLINE_PATH,
     ReferencePath,
     arc_segment,
     positive_number,
@@ -40,6 +41,8 @@ class SplinePath(ReferencePath):
     Hermite polynomial through the exact end values and one-sided slopes, so its rate is the
     exact derivative of its kappa and both agree with the vectorised methods to ~1e-6.
     """
+
+    STEP_KIND = SPLINE_PATH
 
     def __init__(self, name, spline, u_fine, s_fine, heading_fine, station_speeds=None):
         super().__init__(name, float(s_fine[-1]), station_speeds=station_speeds)

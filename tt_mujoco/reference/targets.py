@@ -37,6 +37,7 @@ from tt_mujoco.reference.paths import (
     circle,
     cycloid,
     cycloid_arc_length,
+    factory_options,
     get_path,
     path_kind,
     positive_number,  # one check for both modules
@@ -534,12 +535,21 @@ class TargetSetup(NamedTuple):
     initial_pose: Pose
 
 
+#: The options of the paths whose targets are made apart (the cycloid's speed profiles, the
+#: circle's length made from the run's); any other takes these and its factory's own.
 _TARGET_OPTIONS = {
     "cycloid": ("start", "speed_profile"),
-    "s_curve": ("start", "R", "cruise", "ramp_time"),
     "circle": ("start", "R", "cruise", "ramp_time"),
-    "csv": ("start", "max_curvature", "smoothing", "cruise", "ramp_time"),
 }
+_RAMP_OPTIONS = ("start", "cruise", "ramp_time")
+
+
+def _target_options(key: str) -> tuple[str, ...] | None:
+    if key in _TARGET_OPTIONS:
+        return _TARGET_OPTIONS[key]
+    own = factory_options(key)
+    return None if own is None else (*_RAMP_OPTIONS, *own)
+
 
 _CYCLOID_SPEEDS = ("paper", "static", "dynamic")
 _STARTS = ("on_path", "paper")
@@ -599,7 +609,7 @@ def make_target(
         duration = positive_number("duration", duration)
     text = str(path_name_or_csv).strip()
     key = path_kind(text)
-    check_options(text, kw, _TARGET_OPTIONS.get(key))
+    check_options(text, kw, _target_options(key))
     ramp = {k: kw.pop(k) for k in ("cruise", "ramp_time") if k in kw}
     start = kw.pop("start", "on_path")
     if start not in _STARTS:

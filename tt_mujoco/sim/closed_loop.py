@@ -27,6 +27,7 @@ import numpy as np
 from tt_mujoco.compiled_form import compiled_form
 from tt_mujoco.controllers import backing, base, compiled_laws
 from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
+from tt_mujoco.reference.path_base import ARCS_PATH, HOOKED_PATH, SPLINE_PATH
 from tt_mujoco.sim import (
     disturbances,
     faults,
@@ -39,7 +40,6 @@ from tt_mujoco.sim import (
     step,
     wind,
 )
-from tt_mujoco.sim.records import ARCS_PATH, HOOKED_PATH, SPLINE_PATH
 from tt_mujoco.vehicle import path_schedule, reduced, train
 from tt_mujoco.vehicle import steering as steering_math
 from tt_mujoco.world import contact

@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import math
 import os
 import sys
 from pathlib import Path
@@ -598,6 +599,46 @@ def compile_law(cls):
 _LAWS: dict = {}
 
 
+def _exact_math():
+    """A ``math`` module for the compiled law whose ``hypot`` is CPython's to the last bit (the
+    kernel's form of :func:`tt_mujoco.exact.hypot_of`): numba's own, the C library's, differs."""
+    import types
+
+    from tt_mujoco.sim import _kernel
+
+    module = types.ModuleType("math")
+    module.__dict__.update(math.__dict__)
+    module.hypot = _kernel._hypot
+    return module
+
+
+def _as_compiled(fn, done: dict):
+    """``fn`` as numba compiles it for a law: the same code, with ``math`` and ``math.hypot``
+    among its globals read as :func:`_exact_math` gives them, and the plain functions of its
+    own module that it calls registered for numba, each the same way. So the law's compiled
+    loop gives the numbers of its Python loop."""
+    import types
+
+    from numba.extending import register_jitable
+
+    if fn in done:
+        return done[fn]
+    exact = done.setdefault("math", _exact_math())
+    names = dict(fn.__globals__)
+    copy = types.FunctionType(fn.__code__, names, fn.__name__, fn.__defaults__, fn.__closure__)
+    copy.__qualname__, copy.__module__ = fn.__qualname__, fn.__module__
+    done[fn] = copy
+    for name in fn.__code__.co_names:
+        value = fn.__globals__.get(name)
+        if value is math:
+            names[name] = exact
+        elif value is math.hypot:
+            names[name] = exact.hypot
+        elif isinstance(value, types.FunctionType) and value.__module__ == fn.__module__:
+            names[name] = register_jitable(_as_compiled(value, done))
+    return copy
+
+
 def _register_helpers(fn, seen=None) -> set:
     """Let numba compile the plain functions a law calls from its own module (and theirs);
     the functions registered."""
@@ -701,6 +742,7 @@ def _law_digest(cls, helpers) -> str:
             if inspect.isfunction(used):
                 files.add(inspect.getsourcefile(used))
         files.add(inspect.getsourcefile(fn))
+    files.add(__file__)  # how a law is compiled (_as_compiled) is part of its code
     for file in sorted(f for f in files if f):
         try:
             digest.update(Path(file).read_bytes())
@@ -722,7 +764,9 @@ def _compile_law(cls):
 
     k_mod = kernel()
     helpers = _register_helpers(cls.LAW)
-    law = njit(error_model="numpy", cache=True)(cls.LAW)
+    # not cached on its own: numba's cache of a function ignores its globals, which
+    # _as_compiled changes; the entry below, cached, holds the law's code
+    law = njit(error_model="numpy")(_as_compiled(cls.LAW, {}))
     gain_names = tuple(cls.PRESETS[cls.DEFAULT_PRESET]) or ("unused",)
     dtypes = {
         "VEHICLE": records.record_dtype(VEHICLE_FIELDS),

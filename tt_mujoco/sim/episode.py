@@ -81,13 +81,11 @@ def model_of(controller):
 
 
 def has_closed_form(path) -> bool:
-    """Whether the step reads ``path`` from its own tables (the arcs, the cycloid, a spline),
-    not by calling it (:data:`~tt_mujoco.sim.records.HOOKED_PATH`; a subclass may change
-    what it computes)."""
-    from tt_mujoco.reference.paths import ArcsPath, CycloidPath
-    from tt_mujoco.reference.spline import SplinePath
+    """Whether the step reads ``path`` from its own tables (its class declares its
+    :attr:`~tt_mujoco.reference.path_base.ReferencePath.STEP_KIND`), not by calling it."""
+    from tt_mujoco.reference.path_base import read_from_tables
 
-    return type(path) in (ArcsPath, CycloidPath, SplinePath)
+    return read_from_tables(path)
 
 
 def users_disturbance(built) -> bool:
@@ -334,9 +332,8 @@ def _law_record(controller, nominal, user, steering, python):
 def _target_record(built, steps: int):
     from tt_mujoco.controllers.backing import CascadeConstants, HitchCascade
     from tt_mujoco.reference.feedback import PathFeedback
-    from tt_mujoco.reference.paths import ArcsPath
+    from tt_mujoco.reference.path_base import ARCS_PATH, HOOKED_PATH, SPLINE_PATH
     from tt_mujoco.reference.reverse import ReverseTarget
-    from tt_mujoco.reference.spline import SplinePath
     from tt_mujoco.reference.targets import DynamicTarget, StaticTarget
 
     target, path, outer = inner_target(built.target), built.path, built.target
@@ -355,16 +352,15 @@ def _target_record(built, steps: int):
     kappas, starts = np.zeros(0), np.zeros((0, 3))
     cells, pose_cells, kappa_ends = np.zeros((0, 5)), np.zeros((0, 10)), np.zeros(2)
     bounds, hook = np.zeros(0), None
-    if not has_closed_form(path):  # a user's path: the step calls it, guarded and checked
+    kind = path.STEP_KIND if has_closed_form(path) else HOOKED_PATH
+    if kind == HOOKED_PATH:  # a user's path: the step calls it, guarded and checked
         from tt_mujoco.sim.usercode import CheckedPath, path_label
 
-        kind, hook = records.HOOKED_PATH, CheckedPath(path, path_label(built))
-    elif type(path) is ArcsPath:
-        kind, (bounds, kappas, starts) = records.ARCS_PATH, path.closed_form
-    elif type(path) is SplinePath:
-        kind, (bounds, cells, pose_cells, kappa_ends) = records.SPLINE_PATH, path.closed_form
-    else:
-        kind = records.CYCLOID_PATH
+        hook = CheckedPath(path, path_label(built))
+    elif kind == ARCS_PATH:
+        bounds, kappas, starts = path.closed_form
+    elif kind == SPLINE_PATH:
+        bounds, cells, pose_cells, kappa_ends = path.closed_form
     return records.TargetRecord(
         dynamic=target.kind == "dynamic",
         profile=_profile_table(target, built.control_dt, steps),

@@ -305,20 +305,16 @@ class LawRecord(NamedTuple):
     measurement_rows: np.ndarray
 
 
-#: ``TargetRecord.path_kind``, what the step reads the path from: arcs of constant curvature,
-#: the cycloid, a spline (each from its closed form), or a path without one, called
-ARCS_PATH, CYCLOID_PATH, SPLINE_PATH, HOOKED_PATH = 0, 1, 2, 3
-
-
 class TargetRecord(NamedTuple):
     """The tracking target: its speed profile tabulated per step and a closed-form path."""
 
     dynamic: bool
     #: per control step, the speed profile's (s_ref, v_ref, a_ref)
     profile: np.ndarray
-    #: :data:`ARCS_PATH` (``bounds``, ``kappas``, ``starts``), :data:`CYCLOID_PATH`,
-    #: :data:`SPLINE_PATH` (``bounds`` of its fine cells, their ``cells``, ``pose_cells`` and
-    #: ``kappa_ends``) or :data:`HOOKED_PATH` (``path_hook``)
+    #: the path class's ``STEP_KIND`` (:mod:`tt_mujoco.reference.path_base`): ``ARCS_PATH``
+    #: (``bounds``, ``kappas``, ``starts``), ``CYCLOID_PATH``, ``SPLINE_PATH`` (``bounds`` of
+    #: its fine cells, their ``cells``, ``pose_cells`` and ``kappa_ends``) or ``HOOKED_PATH``
+    #: (``path_hook``)
     path_kind: int
     length: float
     bounds: np.ndarray

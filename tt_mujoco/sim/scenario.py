@@ -226,7 +226,8 @@ class Scenario:
     traj: str = option(
         "s_curve",
         text,
-        "reference path: cycloid, s_curve, circle, plan (planned from the --world's start to "
+        "reference path: cycloid, s_curve, circle, clothoid (or another registered one), plan "
+        "(planned from the --world's start to "
         "its goal), a CSV file with header x,y[,v], or a hook package.module:NAME / "
         "path/to/file.py:NAME (a ReferencePath or a factory)",
         file=True,
@@ -440,9 +441,10 @@ class Scenario:
     #: :func:`tt_mujoco.reference.targets.make_target`; for a path hook, its keyword arguments).
     path_options: dict = option(
         parse=table(_path_option),
-        help="a shape option of the path (s_curve/circle: R, cruise, ramp_time; CSV: "
-        "max_curvature, smoothing, cruise, ramp_time; a hook: its keyword arguments); "
-        "repeatable",
+        help="a shape option of the path (s_curve/circle: R, cruise, ramp_time; clothoid: R, "
+        "angle_deg, transition, straight, cruise, ramp_time; CSV: max_curvature, smoothing, "
+        "cruise, ramp_time; a registered path: its factory's keywords; a hook: its keyword "
+        "arguments); repeatable",
         default_factory=dict,
         flags=("--path-option",),
         form="table",
