@@ -272,18 +272,28 @@ def _python_law(law):
     return call_back
 
 
+def _dispatch(functions, args: str):
+    """``run(kind, ARGS)`` calling ``functions[kind](ARGS)``: a test of ``kind`` for each,
+    written out (numba cannot index a tuple of functions at run time)."""
+    lines = [f"def run(kind, {args}):"]
+    for i in range(len(functions) - 1):
+        lines += [f"    if kind == {i}:", f"        return FUNCTION_{i}({args})"]
+    lines.append(f"    return FUNCTION_{len(functions) - 1}({args})")
+    scope = {f"FUNCTION_{i}": function for i, function in enumerate(functions)}
+    exec("\n".join(lines), scope)
+    return scope["run"]
+
+
 @compiled_form_of(closed_loop.run_law)
 def _run_law(kind, dt, tracking, model, state, gains, saturation):
-    """The built-in law of index ``kind``: a test of ``kind`` for each law of :data:`LAWS`,
-    written out here (numba cannot index a tuple of functions at run time)."""
-    args = "dt, tracking, model, state, gains, saturation"
-    lines = [f"def run_law(kind, {args}):"]
-    for i in range(len(LAWS) - 1):
-        lines += [f"    if kind == {i}:", f"        return LAW_{i}({args})"]
-    lines.append(f"    return LAW_{len(LAWS) - 1}({args})")
-    scope = {f"LAW_{i}": law for i, law in enumerate(LAWS)}
-    exec("\n".join(lines), scope)
-    return scope["run_law"]
+    """The built-in law of index ``kind`` in :data:`LAWS`."""
+    return _dispatch(LAWS, "dt, tracking, model, state, gains, saturation")
+
+
+@compiled_form_of(closed_loop.run_disturbance)
+def _run_disturbance(kind, t, v, omega, params):
+    """The built-in disturbance of index ``kind`` in ``closed_loop.DISTURBANCE_FORMS``."""
+    return _dispatch(closed_loop.DISTURBANCE_FORMS, "t, v, omega, params")
 
 
 @compiled_form_of(feedback.feedback_curvature)

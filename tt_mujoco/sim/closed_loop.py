@@ -21,6 +21,7 @@ import ctypes
 import functools
 import math
 import os
+from typing import NamedTuple
 
 import numpy as np
 
@@ -65,6 +66,10 @@ __all__ = [
 #: LawStep``, those of :func:`tt_mujoco.controllers.compiled_laws` in their registration
 #: order; a law's index here is its ``kind`` in the law record.
 LAWS = tuple(cls.LAW for cls in compiled_laws().values())
+#: The built-in disturbances' forms, ``form(t, v, omega, params) -> (a_v, a_w)``, in their
+#: registration order (:func:`tt_mujoco.sim.disturbances.builtin_forms`); a form's index here
+#: is its ``disturbance_kind`` in the loop record.
+DISTURBANCE_FORMS = disturbances.builtin_forms()
 
 RUNNING, FINISHED, BLEW_UP, JACKKNIFE = step.RUNNING, step.FINISHED, step.BLEW_UP, step.JACKKNIFE
 WARNING, LAW_FAILED, SINGULAR = step.WARNING, step.LAW_FAILED, step.SINGULAR
@@ -87,10 +92,28 @@ NOMINAL_SINGULAR = -1.0
 PATH_SCHEDULE, CURVATURE_SCHEDULE = schedule.PATH_SCHEDULE, schedule.CURVATURE_SCHEDULE
 #: where trailer 1's axle and the bodies' motion are in the measurement, and a trailer's gain
 #: in a train's row
-X0, Y0, THETA0, V0, V, THETA, BETA, PHI, OMEGA = (
+X, Y, X0, Y0, THETA0, V0, V, THETA, BETA, PHI, OMEGA = (
     measure.Measurement._fields.index(name)
-    for name in ("x0", "y0", "theta0", "v0", "v", "theta", "beta", "phi", "omega")
+    for name in ("x", "y", "x0", "y0", "theta0", "v0", "v", "theta", "beta", "phi", "omega")
 )
+#: where a trailer's axle pose, hitch and steering are in a train's measured row
+ROW_X, ROW_Y, ROW_THETA, ROW_PHI, ROW_BETA = (
+    measure.TRAIN_FIELDS.index(name) for name in ("x0", "y0", "theta0", "phi", "beta")
+)
+
+
+class Push(NamedTuple):
+    """What a control period applies besides the wheel torques: the matched disturbance's
+    wheel torques, or (``wrench``) the disturbance's force and moment on the chassis."""
+
+    dist_r: float
+    dist_l: float
+    wrench: bool
+    fx: float
+    fy: float
+    mz: float
+
+
 WHEEL_RATES = tuple(measure.Measurement._fields.index(f"theta_{w}_dot") for w in ("r", "l"))
 ETA_COLUMN = train.TRAILER_ROW.index("eta")
 
@@ -179,10 +202,21 @@ def hooked_disturbance_at(loop, t):
     return loop.disturbance_hook(t)
 
 
-def disturbance_at(loop, t):
-    """``(a_v, a_w)`` of the disturbance at ``t``: the paper's, or a user's."""
+@compiled_form(
+    "a test of kind for each built-in disturbance, written out (numba cannot index a tuple of "
+    "functions)"
+)
+def run_disturbance(kind: int, t, v, omega, params):
+    """The built-in disturbance ``DISTURBANCE_FORMS[kind]`` at ``t`` and the tractor's true
+    ``v`` and ``omega``."""
+    return DISTURBANCE_FORMS[kind](t, v, omega, params)
+
+
+def disturbance_at(loop, t, v, omega):
+    """``(a_v, a_w)`` of the disturbance at ``t`` and the tractor's true ``v``, ``omega``: a
+    built-in's, or a user's (called back with ``t``)."""
     if not loop.hooked_disturbance:
-        return disturbances.paper_disturbance_of(t)
+        return run_disturbance(loop.disturbance_kind, t, v, omega, loop.disturbance_params)
     return hooked_disturbance_at(loop, t)
 
 
@@ -375,23 +409,23 @@ def _blow(mj, wrench, gusts):
 
 
 def _advance(plant, T_r, T_l, push, weather, stop):
-    """Apply the torques, the disturbance ``push = (dist_r, dist_l, wrench?, fx, fy, mz)`` and
-    the wind (``weather.wrenches`` of this step, when there is a wind) and advance the plant one
-    control period; the stop code."""
-    dist_r, dist_l = push[0], push[1]
+    """Apply the torques, the disturbance ``push`` (:class:`Push`) and the wind
+    (``weather.wrenches`` of this step, when there is a wind) and advance the plant one control
+    period; the stop code."""
+    dist_r, dist_l = push.dist_r, push.dist_l
     if plant.mujoco:
         mj = plant.mj
         a = mj.addresses
         mj.ctrl[a.act_right] = T_r
         mj.ctrl[a.act_left] = T_l
-        if push[2] != 0.0:
+        if push.wrench:
             xfrc = mj.xfrc_applied[mj.tractor_body]
-            xfrc[0], xfrc[1], xfrc[5] = push[3], push[4], push[5]
+            xfrc[0], xfrc[1], xfrc[5] = push.fx, push.fy, push.mz
         else:
             mj.qfrc_applied[a.wheel_right_v] = dist_r
             mj.qfrc_applied[a.wheel_left_v] = dist_l
         if len(weather.speeds):
-            _blow(mj, push[2] != 0.0, weather.wrenches)
+            _blow(mj, push.wrench, weather.wrenches)
         steering = plant.steering
         for _ in range(plant.substeps):
             if steering.actuated:  # the axles' targets follow the hitches every physics step
@@ -437,7 +471,7 @@ def advance_after_payload(plant, weather, stop_record):
     """The step a payload on the reduced plant interrupted (:data:`PAYLOAD`), advanced on the
     plant's new constants with the torques and disturbance in ``stop_record``; the stop code."""
     stop = stop_record[0]
-    push = (stop.dist_r, stop.dist_l, 0.0, 0.0, 0.0, 0.0)
+    push = Push(stop.dist_r, stop.dist_l, False, 0.0, 0.0, 0.0)
     return _advance(plant, stop.T_r, stop.T_l, push, weather, stop)
 
 
@@ -455,13 +489,13 @@ def _offer_path(steering, target, me, rows, n):
     ``steering.offered``."""
     offered, arcs, driven = steering.offered, steering.arcs, steering.driven
     if driven.gain != 0.0:
-        path_schedule.record_driven_of(target, driven, me[0], me[1])
+        path_schedule.record_driven_of(target, driven, me[X], me[Y])
     for k in range(n):
         if k == 0:
-            x, y, heading, phi = me[X0], me[Y0], me[THETA0], me[3]
+            x, y, heading, phi = me[X0], me[Y0], me[THETA0], me[PHI]
         else:
             row = rows[k - 1]
-            x, y, heading, phi = row[0], row[1], row[2], row[3]
+            x, y, heading, phi = row[ROW_X], row[ROW_Y], row[ROW_THETA], row[ROW_PHI]
         arcs[k], offered[k] = path_schedule.axle_gain_of(
             target, arcs[k], (x, y), heading, phi, steering.tables[k], steering.bounds, driven
         )
@@ -550,11 +584,11 @@ def _touch(world, k, me, rows, n, stop):
     ``world.clearance``; COLLISION (the unit, obstacle and gap in ``stop``) when one touches,
     else RUNNING."""
     poses = world.poses
-    poses[0, 0], poses[0, 1], poses[0, 2] = me[0], me[1], me[2]
+    poses[0, 0], poses[0, 1], poses[0, 2] = me[X], me[Y], me[THETA]
     poses[1, 0], poses[1, 1], poses[1, 2] = me[X0], me[Y0], me[THETA0]
     for i in range(n - 1):
         row = rows[i]
-        poses[i + 2, 0], poses[i + 2, 1], poses[i + 2, 2] = row[0], row[1], row[2]
+        poses[i + 2, 0], poses[i + 2, 1], poses[i + 2, 2] = row[ROW_X], row[ROW_Y], row[ROW_THETA]
     gap, unit, obstacle = contact.clearance_of(
         poses, world.boxes, world.polygons, world.sizes, world.circles, world.corners, math.inf
     )
@@ -589,7 +623,7 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
     t = k * dt
     rows = log.train[row]
     me = _sense(plant, n, rows)
-    x, y, phi, beta, v, omega = me[0], me[1], me[3], me[4], me[5], me[6]
+    x, y, phi, beta, v, omega = me[X], me[Y], me[PHI], me[BETA], me[V], me[OMEGA]
     code = step.stop_code(x, v, omega, phi, beta, lim)
     if code != RUNNING:
         stop.v, stop.phi, stop.beta, stop.x, stop.y, stop.hitch = v, phi, beta, x, y, 1.0
@@ -597,7 +631,8 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
     if n > 1:
         i = step.hitch_stop(rows, loop.hitch_limits, lim.jackknife_beta)
         if i >= 0:
-            stop.v, stop.phi, stop.beta, stop.x, stop.y = v, rows[i][3], rows[i][4], x, y
+            stop.v, stop.x, stop.y = v, x, y
+            stop.phi, stop.beta = rows[i][ROW_PHI], rows[i][ROW_BETA]
             stop.hitch, stop.eta = i + 2.0, law.nominal_train.trailers[i + 1][2]
             return JACKKNIFE
     if len(loop.world.sizes):  # a world: no unit may touch an obstacle
@@ -624,7 +659,7 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
         sensed, sensed_rows, phi_m, v_m, w_m = _delayed(loop.delay, k, me, rows, readings)
     phis[0] = sensed[3]  # the hitch angles as sensed (trailers 2..N are never held)
     for i in range(n - 1):
-        phis[i + 1] = sensed_rows[i][3]
+        phis[i + 1] = sensed_rows[i][ROW_PHI]
     pose = (sensed[0], sensed[1], sensed[2])
     r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot = _update_target(target, k, v_m, dt, pose)
     if target.cascade:  # HitchCascade.update: the hitches set the yaw rate
@@ -711,25 +746,25 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
         omegas = (me[WHEEL_RATES[0]], me[WHEEL_RATES[1]])
         T_r, T_l = motors.deliver_of(loop.motor, loop.motor_torques, (T_r, T_l), omegas)
     mass = (got.M11, got.M12, got.M22)
-    phi = me[3]
+    phi = me[PHI]
     depth = len(loop.delay.seen)
     moved = law.kind == PYTHON or _model_steered(steering.kind, law.follows_steering)
     moved = moved or _has_delay(depth) or phi_m != phi
     if moved and (loop.disturbed or loop.wrench):
         phis[0] = phi  # the disturbance acts at the true hitch angles
         for i in range(n - 1):
-            phis[i + 1] = rows[i][3]
+            phis[i + 1] = rows[i][ROW_PHI]
         mass = _nominal_mass(law, n, phi, phis, v_m, w_m)
     if loop.disturbed:
-        a_v, a_w = disturbance_at(loop, t)
+        a_v, a_w = disturbance_at(loop, t, me[V], me[OMEGA])
         dist_r, dist_l = reduced.torque_for_force_of(mass, a_v, a_w, c.r, c.d)
         # What a disturbance of motor size can apply, per wheel: beyond it the paper's
         # g^-1 Delta (unbounded as g nears singular) would itself drive a jackknife.
         dist_r, dist_l, clipped = step.clip_pair(dist_r, dist_l, lim.disturbance_bound)
     elif loop.wrench:
-        a_v, a_w = disturbance_at(loop, t)
+        a_v, a_w = disturbance_at(loop, t, me[V], me[OMEGA])
         force, torque = disturbances.wrench_of(mass, a_v, a_w)
-        fx, fy, mz = plant_mujoco.chassis_wrench_of(force, torque, me[2])
+        fx, fy, mz = plant_mujoco.chassis_wrench_of(force, torque, me[THETA])
     if stop.raised:  # the disturbance, called back, raised: this row is not logged
         return RAISED
     out = log.loop[row]
@@ -759,7 +794,7 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
         state.kappa, steering.lengths, steering.offered
     ):
         _steer(plant, law)
-    push = (dist_r, dist_l, 1.0 if loop.wrench else 0.0, fx, fy, mz)
+    push = Push(dist_r, dist_l, loop.wrench, fx, fy, mz)
     if len(loop.wind.speeds):
         _gusts(loop.wind, k, me)
     if loop.ground.geoms.size:  # logged for step k; a failed advance is not handed back

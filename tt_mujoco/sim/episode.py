@@ -89,11 +89,11 @@ def has_closed_form(path) -> bool:
 
 
 def users_disturbance(built) -> bool:
-    """Whether the run's disturbance is a user's, which the step calls, rather than none or the
-    paper's, which it computes itself."""
-    from tt_mujoco.sim.disturbances import PaperDisturbance
+    """Whether the run's disturbance is a user's, which the step calls, rather than none or a
+    built-in, which it computes itself (:func:`tt_mujoco.sim.disturbances.form_of`)."""
+    from tt_mujoco.sim.disturbances import form_of
 
-    return built.disturbance is not None and type(built.disturbance) is not PaperDisturbance
+    return built.disturbance is not None and form_of(built.disturbance) is None
 
 
 def is_law_class(controller) -> bool:

@@ -271,12 +271,16 @@ class FaultSchedule:
         return {
             int(row[-1]): row[acted]
             for row in self.payload_rows
-            if row[0] == 0.0 and not math.isnan(row[acted])
+            if row[TIMED] == 0.0 and not math.isnan(row[acted])
         }
 
 
 #: What a dropout holds: whether a sample was received, its (phi, v, omega), and the steps held.
 HELD = ("received", "phi", "v", "omega", "steps")
+RECEIVED, HELD_PHI, HELD_V, HELD_OMEGA, HELD_STEPS = range(len(HELD))
+#: An actuator fault's row: its first and end step, and its torque scale on each wheel.
+ACTUATOR_ROW = ("k0", "k1", "scale_right", "scale_left")
+ACT_K0, ACT_K1, ACT_SCALE_R, ACT_SCALE_L = range(len(ACTUATOR_ROW))
 
 
 def _scale(fault: Fault, wheel: str) -> float:
@@ -298,11 +302,11 @@ def sensor_of(k: int, dropouts, held, phi: float, v: float, omega: float):
     received before it (the first one, for a dropout from the first step), else the sample,
     which ``held`` (:data:`HELD`) keeps (the compiled episode shares it)."""
     if dropped_of(k, dropouts):
-        if held[0] == 0.0:
-            held[0], held[1], held[2], held[3] = 1.0, phi, v, omega
-        held[4] += 1.0
-        return held[1], held[2], held[3]
-    held[0], held[1], held[2], held[3] = 1.0, phi, v, omega
+        if held[RECEIVED] == 0.0:
+            held[RECEIVED], held[HELD_PHI], held[HELD_V], held[HELD_OMEGA] = 1.0, phi, v, omega
+        held[HELD_STEPS] += 1.0
+        return held[HELD_PHI], held[HELD_V], held[HELD_OMEGA]
+    held[RECEIVED], held[HELD_PHI], held[HELD_V], held[HELD_OMEGA] = 1.0, phi, v, omega
     return phi, v, omega
 
 
@@ -311,15 +315,16 @@ def fault_torque_of(k: int, actuators, T_r: float, T_l: float) -> tuple[float, f
     k1, scale right, scale left), in their order (the compiled episode shares it)."""
     for i in range(len(actuators)):
         row = actuators[i]
-        if row[0] <= k < row[1]:
-            T_r *= row[2]
-            T_l *= row[3]
+        if row[ACT_K0] <= k < row[ACT_K1]:
+            T_r *= row[ACT_SCALE_R]
+            T_l *= row[ACT_SCALE_L]
     return T_r, T_l
 
 
 #: A payload's row: at a time (1) or a place (0), its step, its arc length, the trailer, the
 #: factor, when it acted (s; NaN before) and its index among the faults.
 PAYLOAD_ROW = ("timed", "k0", "s", "trailer", "factor", "acted", "index")
+TIMED, K0, AT_S, TRAILER, FACTOR, ACTED = range(len(PAYLOAD_ROW) - 1)
 
 
 def payloads_of(k: int, s: float, rows, state, out) -> int:
@@ -330,9 +335,9 @@ def payloads_of(k: int, s: float, rows, state, out) -> int:
     count, placed = 0, False
     for i in range(len(rows)):
         row = rows[i]
-        if row[0] == 1.0:
-            if row[1] == k:
-                out[count][0], out[count][1] = row[3], row[4]
+        if row[TIMED] == 1.0:
+            if row[K0] == k:
+                out[count][0], out[count][1] = row[TRAILER], row[FACTOR]
                 count += 1
         else:
             placed = True
@@ -342,12 +347,13 @@ def payloads_of(k: int, s: float, rows, state, out) -> int:
     state[0] = s
     for i in range(len(rows)):
         row = rows[i]
-        if row[0] == 1.0 or not math.isnan(row[5]):
+        if row[TIMED] == 1.0 or not math.isnan(row[ACTED]):
             continue
-        reached = s == row[2] if math.isnan(prev) else min(prev, s) <= row[2] <= max(prev, s)
+        at = row[AT_S]
+        reached = s == at if math.isnan(prev) else min(prev, s) <= at <= max(prev, s)
         if reached:
-            row[5] = k * state[1]
-            out[count][0], out[count][1] = row[3], row[4]
+            row[ACTED] = k * state[1]
+            out[count][0], out[count][1] = row[TRAILER], row[FACTOR]
             count += 1
     return count
 

@@ -96,7 +96,14 @@ def discover(roots, step=()) -> tuple[tuple, tuple]:
 #: call on its path, :data:`tt_mujoco.controllers.path_view.LAW_LIBRARY`), and the functions
 #: whose compiled form it gives itself (:func:`tt_mujoco.compiled_form.compiled_form`).
 SHARED, COMPILED_FORMS = discover(
-    (*STEP, closed_loop.run_steps, *LAWS, nearest.nearest_segments_of, *path_view.LAW_LIBRARY),
+    (
+        *STEP,
+        closed_loop.run_steps,
+        *LAWS,
+        *closed_loop.DISTURBANCE_FORMS,
+        nearest.nearest_segments_of,
+        *path_view.LAW_LIBRARY,
+    ),
     step=(*STEP, closed_loop.run_steps),
 )
 

@@ -449,8 +449,12 @@ class LoopRecord(NamedTuple):
     delay: DelayRecord
     ground: GroundRecord
     world: WorldRecord
+    #: a built-in disturbance's index in :data:`~tt_mujoco.sim.closed_loop.DISTURBANCE_FORMS`
+    #: and the numbers its form reads (:func:`tt_mujoco.sim.disturbances.form_of`)
+    disturbance_kind: int
+    disturbance_params: np.ndarray
     #: whether the disturbance is a user's, ``disturbance_hook``: ``t -> (a_v, a_w)`` with its
-    #: checks (else None: the paper's); the kernel's record holds a C function that calls it
+    #: checks (else None: a built-in's); the kernel's record holds a C function that calls it
     #: back and writes what it computed into ``hook_out``
     hooked_disturbance: bool
     disturbance_hook: Any

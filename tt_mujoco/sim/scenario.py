@@ -284,7 +284,8 @@ class Scenario:
     disturbance_model: str = option(
         DISTURBANCE_MODEL,
         text,
-        "the disturbance Delta(t): paper, or a hook package.module:Name / file.py:Name",
+        "the disturbance Delta(t): paper, rolling (the wheels' rolling resistance, c_rr = "
+        "0.015), another registered one, or a hook package.module:Name / file.py:Name",
         file=True,
     )
     #: Bound on each wheel's matched disturbance torque (N m): "actuator" (the nominal torque

@@ -29,10 +29,10 @@ import numpy as np
 from tt_mujoco.controllers import Reference
 from tt_mujoco.defaults import JACKKNIFE_DEG, MAX_SPEED
 from tt_mujoco.guard import users_failure
-from tt_mujoco.sim import closed_loop, episode, records, usercode
+from tt_mujoco.sim import closed_loop, disturbances, episode, records, usercode
 from tt_mujoco.sim.build import Build
 from tt_mujoco.sim.checkpoint import Checkpoint
-from tt_mujoco.sim.faults import HELD, PAYLOAD_ROW
+from tt_mujoco.sim.faults import ACTUATOR_ROW, HELD, PAYLOAD_ROW
 from tt_mujoco.sim.measure import TRAIN_FIELDS, Measurement, TrainMeasurement
 from tt_mujoco.sim.motors import DcMotors, MotorConstants
 from tt_mujoco.sim.plant import StopRun
@@ -309,6 +309,7 @@ class Stepper:
     def loop_record(self) -> LoopRecord:
         """The episode's constants and noise as the step reads them (after :meth:`reset`)."""
         dist = self.built.disturbance is not None
+        form = disturbances.form_of(self.built.disturbance)  # None: none, or a user's
         mode = self.built.scenario.disturbance
         noise, faults = self._noise, self.faults
         rows = faults.payload_rows if faults else []
@@ -325,7 +326,9 @@ class Stepper:
             hitch_limits=np.array(self._train_limits, dtype=float),
             faults=FaultRecord(
                 dropouts=np.array(faults.dropouts if faults else [], dtype=float).reshape(-1, 2),
-                actuators=np.array(faults.actuators if faults else [], dtype=float).reshape(-1, 4),
+                actuators=np.array(faults.actuators if faults else [], dtype=float).reshape(
+                    -1, len(ACTUATOR_ROW)
+                ),
                 held=np.array(faults.held if faults else [0.0] * len(HELD), dtype=float),
                 payloads=np.array(rows, dtype=float).reshape(-1, len(PAYLOAD_ROW)),
                 payload_state=np.array(faults.payload_state if faults else [0.0, 0.0]),
@@ -347,6 +350,8 @@ class Stepper:
             ),
             ground=self._ground_record(),
             world=self._world,
+            disturbance_kind=form[0] if form else 0,
+            disturbance_params=np.array(form[1] if form else (), dtype=float),
             hooked_disturbance=episode.users_disturbance(self.built),
             disturbance_hook=self._disturbance_hook(),
             hook_out=np.zeros(2),
