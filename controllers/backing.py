@@ -264,16 +264,9 @@ class HitchCascade(TargetWrapper):
     gains : dict
         See :data:`DEFAULT_GAINS`.
 
-    Attributes
-    ----------
-    lateral_error, heading_error : float
-        The leading axle's e_y (m) and e_psi (rad) at the last update.
-    hitch_targets : list of float
-        phi_k,d (rad), trailer 1 first, at the last update.
+    The step computes the yaw-rate target from the target's record (:func:`cascade_of`: the
+    leading axle's arc length, its e_y and e_psi, the hitches' wanted angles phi_k,d).
     """
-
-    #: The stepper passes the whole measurement to :meth:`update`.
-    uses_measurement = True
 
     def __init__(self, target, params: Params, **gains):
         g = check_config(gains)
@@ -303,48 +296,13 @@ class HitchCascade(TargetWrapper):
             etas=tuple(self.etas),
             ends=tuple(inverse.ends for inverse in self._inverse),
         )
-        self._rates = [[0.0, 0.0, 0.0] for _ in self.lengths]
-        self.reset()
+
+    @property
+    def leading_start_s(self) -> float:
+        """The leading axle's arc length where a run starts: the train stands on the path
+        behind the tractor's start."""
+        return float(self.target.start_s) - sum(L + L0 for L, L0 in self.lengths)
 
     @classmethod
     def from_config(cls, target, params: Params, config: dict | None) -> HitchCascade:
         return cls(target, params, **check_config(config))
-
-    def reset(self) -> None:
-        self.target.reset()
-        n = len(self.lengths)
-        behind = sum(L + L0 for L, L0 in self.lengths)
-        self.leading_arc_length = float(self.target.arc_length) - behind
-        self.lateral_error = self.heading_error = 0.0
-        self.hitch_targets = [0.0] * n
-        self.reference_omega_d = 0.0
-
-    def set_state(self, leading_s: float, errors, wanted, omega_ref: float) -> None:
-        """Take the state a compiled episode's updates left: the leading axle's arc length,
-        its ``errors = (e_y, e_psi)``, the hitches' wanted angles and the reverse target's
-        own omega_d (the wrapped target's state is handed back to it)."""
-        self.leading_arc_length = leading_s
-        self.lateral_error, self.heading_error = errors
-        self.hitch_targets = list(wanted)
-        self.reference_omega_d = omega_ref
-
-    def update(self, t: float, dt: float, v_measured: float, me) -> tuple:
-        """``(v_d, omega_d, v_d_dot, omega_d_dot)`` for measurement ``me`` (omega_d_dot = 0:
-        the cascade's yaw-rate target moves with the state, not on a schedule)."""
-        v_d, w_d, v_d_dot, _ = self.target.update(t, dt, v_measured)
-        self.reference_omega_d = w_d
-        rows = getattr(me, "train", ())
-        lead = (me.x0, me.y0, me.theta0) if not rows else tuple(rows[-1][:3])
-        s, e_y, e_psi, omega_d = cascade_of(
-            self.constants,
-            self.path,
-            me.phis,
-            lead,
-            (float(v_measured), me.omega),
-            self.leading_arc_length,
-            self.hitch_targets,
-            self._rates,
-        )
-        self.leading_arc_length = s
-        self.lateral_error, self.heading_error = e_y, e_psi
-        return v_d, omega_d, v_d_dot, 0.0

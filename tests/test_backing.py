@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 from scipy.optimize import brentq
+from target_steps import SteppedTarget
 from tt_mujoco.controllers.backing import (
     DEFAULT_GAINS,
     HitchCascade,
@@ -19,7 +20,7 @@ from tt_mujoco.controllers.backing import (
 )
 
 from tt_mujoco import run
-from tt_mujoco.sim import Scenario, build, simulate
+from tt_mujoco.sim import Scenario, build, closed_loop, simulate
 from tt_mujoco.vehicle import train
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.rolling import hitch_rates
@@ -79,16 +80,17 @@ def test_hitch_rates_equal_the_train_model(n):
 
 
 def test_the_hitch_loop_sets_the_rate_it_asks_for():
-    # The yaw rate the cascade returns makes phi_1_dot what hitch 1's loop asks for.
-    built = build(Scenario(traj="s_curve", reverse=True))
-    cascade = built.target
+    # The yaw rate the cascade's step returns makes phi_1_dot what hitch 1's loop asks for.
+    stepped = SteppedTarget(traj="s_curve", reverse=True)
+    cascade = stepped.target
     assert isinstance(cascade, HitchCascade)
-    me = built.new_plant().measure()
+    me = stepped.built.new_plant().measure()
     me = me._replace(phi=me.phi + 0.1, v=-0.5, omega=0.2)
-    _, omega_d, _, _ = cascade.update(0.5, 0.001, -0.5, me)
+    omega_d, _ = closed_loop.cascade_step_of(stepped.record, me, (), [me.phi], -0.5)
     phi_dot = hitch_rates([me.phi], -0.5, omega_d, cascade.lengths, cascade.etas)[0][0]
     gain = DEFAULT_GAINS["k_phi"]
-    assert phi_dot == pytest.approx(-gain * 0.5 * (me.phi - cascade.hitch_targets[0]), rel=1e-9)
+    wanted = stepped.record.wanted[0]
+    assert phi_dot == pytest.approx(-gain * 0.5 * (me.phi - wanted), rel=1e-9)
 
 
 def test_the_cascade_is_the_default_only_reversing_without_path_feedback():

@@ -723,30 +723,6 @@ def test_a_schedule_hands_its_state_back(monkeypatch, plant, eta):
     assert states[0][1] > 10  # the gains did change along the cycloid
 
 
-@pytest.mark.parametrize("options", [dict(trailers=2), dict(path_feedback={}, eta="paper")])
-def test_backing_up_hands_its_targets_state_back(monkeypatch, options):
-    # After a compiled reversing episode the reverse target, the hitch cascade or the path
-    # feedback around it stand where the Python loop leaves them.
-    def state_of(stepper, controller):
-        outer = stepper.built.target
-        inner = outer.target
-        return (
-            inner.arc_length,
-            inner.curvature,
-            inner._v_prev,
-            outer.lateral_error,
-            outer.heading_error,
-            outer.reference_omega_d,
-            getattr(outer, "leading_arc_length", None),
-            getattr(outer, "hitch_targets", None),
-            getattr(outer, "path_arc_length", None),
-        )
-
-    scenario = Scenario(traj="s_curve", reverse=True, duration=3.0, **options)
-    states = _states_after_both_loops(monkeypatch, scenario, state_of)
-    assert states[0] == states[1]
-
-
 def test_a_background_compile_that_fails_is_told_once_and_not_retried(monkeypatch, tmp_path):
     # the compile's program records what failed beside the cache, and the lock is released;
     # a later run says why in its notes and starts no new compile for the same sources

@@ -6,27 +6,30 @@ import math
 
 import numpy as np
 import pytest
+from target_steps import SteppedTarget
 
-from tt_mujoco.reference.feedback import DEFAULT_GAINS, PathFeedback, check_config
+from tt_mujoco.reference.feedback import DEFAULT_GAINS, PathFeedback, check_config, path_errors_of
 from tt_mujoco.reference.reverse import ReverseTarget
 from tt_mujoco.reference.targets import make_target
 from tt_mujoco.sim import Scenario, simulate
 
 
-def _drive(target, pose, duration, dt=0.001, **gains):
-    """A unicycle that tracks omega_d and v_ref exactly (a perfect inner loop).
+def _drive(pose, duration, dt=0.001, reverse=False, **gains):
+    """A unicycle on the circle that tracks omega_d and v_ref exactly (a perfect inner loop),
+    the path feedback's step the run's own.
 
     Midpoint heading per step: second order, so the integration drift (< 1e-7 m over the run)
     is far below what the tests resolve.
     """
-    fb = PathFeedback(target, **gains)
+    stepped = SteppedTarget(traj="circle", reverse=reverse, path_feedback=gains)
+    assert isinstance(stepped.target, PathFeedback)
     x, y, th = pose
     s, rows = 0.0, []
     for k in range(round(duration / dt) + 1):
         t = k * dt
-        v = target.reference_speed(t)
-        _, w_d, _, w_d_dot = fb.update(t, dt, v, x, y, th)
-        rows.append((t, s, fb.lateral_error, fb.heading_error, w_d, w_d_dot))
+        v = stepped.target.reference_speed(t)
+        _, w_d, _, w_d_dot = stepped.step(t, dt, v, (x, y, th))
+        rows.append((t, s, stepped.state.e_y, stepped.state.e_psi, w_d, w_d_dot))
         mid = th + 0.5 * w_d * dt
         x, y, th = x + v * math.cos(mid) * dt, y + v * math.sin(mid) * dt, th + w_d * dt
         s += abs(v) * dt
@@ -48,16 +51,15 @@ def test_config_defaults_and_bad_values():
 
 
 def test_errors_have_the_path_sign_conventions():
-    _, target, _ = make_target("circle")  # counter-clockwise, centre (0, 0), R = 1
-    fb = PathFeedback(target)
+    path = make_target("circle").path  # counter-clockwise, centre (0, 0), R = 1
     # 0.1 m outside at the start is right of the direction of travel (+y): e_y = -0.1.
-    e_y, e_psi = fb.errors(1.1, 0.0, math.pi / 2 + 0.2)
+    s, e_y, e_psi = path_errors_of(path, 0.0, 1.1, 0.0, math.pi / 2 + 0.2)
     assert e_y == pytest.approx(-0.1, abs=1e-9)
     assert e_psi == pytest.approx(0.2, abs=1e-12)
     # Warm-started Newton: from s* = 0 to a point a quarter lap on, in a few calls.
     for _ in range(5):
-        e_y, _ = fb.errors(0.0, 0.95, math.pi)
-    assert fb.path_arc_length == pytest.approx(math.pi / 2, abs=1e-9)
+        s, e_y, _ = path_errors_of(path, s, 0.0, 0.95, math.pi)
+    assert s == pytest.approx(math.pi / 2, abs=1e-9)
     assert e_y == pytest.approx(0.05, abs=1e-9)
 
 
@@ -65,10 +67,9 @@ def test_errors_have_the_path_sign_conventions():
 def test_offset_decays_over_distance_in_both_directions(reverse):
     _, target, pose = make_target("circle")
     if reverse:
-        target = ReverseTarget(target)
-        pose = target.initial_pose
+        pose = ReverseTarget(target).initial_pose
     start = (pose[0] * 1.1, pose[1] * 1.1, pose[2])  # 0.1 m outside the unit circle
-    rows = _drive(target, start, 10.0)
+    rows = _drive(start, 10.0, reverse=reverse)
     s, e_y = rows[:, 1], rows[:, 2]
     # Linear prediction (critically damped in arc length, sqrt(k_y) = 2 1/m):
     # e_y = -0.1 (1 + 2 s) exp(-2 s): -0.0406 m at s = 1 m. Measured -0.0304 (the curvature
@@ -80,8 +81,7 @@ def test_offset_decays_over_distance_in_both_directions(reverse):
 
 
 def test_omega_d_dot_is_the_derivative_of_omega_d():
-    _, target, _ = make_target("circle")
-    rows = _drive(target, (1.1, 0.0, math.pi / 2 + 0.1), 9.9)
+    rows = _drive((1.1, 0.0, math.pi / 2 + 0.1), 9.9)
     t, w_d, w_d_dot = rows[:, 0], rows[:, 4], rows[:, 5]
     numeric = np.gradient(w_d, t)
     inner = (t > 0.2) & (t < 9.8)  # away from the one-sided ends of np.gradient
@@ -91,11 +91,9 @@ def test_omega_d_dot_is_the_derivative_of_omega_d():
 
 
 def test_curvature_correction_is_clipped():
-    _, target, _ = make_target("circle")
-    fb = PathFeedback(target, c_max=0.5)
-    fb.target.reset()
+    stepped = SteppedTarget(traj="circle", path_feedback={"c_max": 0.5})
     # 1 m off the path: -k_y e_y alone would ask for 4 1/m on top of the path's 1 1/m.
-    _, w_d, _, _ = fb.update(0.0, 0.001, 0.5, 2.0, 0.0, math.pi / 2)
+    _, w_d, _, _ = stepped.step(0.0, 0.001, 0.5, (2.0, 0.0, math.pi / 2))
     assert w_d == pytest.approx(0.5 * (1.0 + 0.5))
 
 

@@ -7,13 +7,14 @@ import math
 import mujoco
 import numpy as np
 import pytest
+from target_steps import SteppedTarget
 
 from tt_mujoco.analysis.metrics import follower_offtrack, trailer_offtrack
 from tt_mujoco.reference.reverse import ReverseTarget
 from tt_mujoco.reference.targets import make_target
 from tt_mujoco.sim import Scenario, simulate
 from tt_mujoco.sim.plant_reduced import ReducedPlant
-from tt_mujoco.sim.schedule import EtaScheduler
+from tt_mujoco.sim.schedule import EtaScheduler, curvature_gains_of, gains_moved
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.steering import (
@@ -86,19 +87,23 @@ def test_exact_gain_rejects_impossible_curvatures():
 def test_scheduler_on_the_reduced_plant_swaps_params_and_logs_eta():
     adapter = ReducedPlant(Params(), (0.0, 0.0, 0.0), 0.0, 0.001)
     sched = EtaScheduler(adapter, adapter.params)
-    assert sched.update(1.0, step=0) == pytest.approx(exact_same_path_eta(1.0, L, L0))
-    assert adapter.params.eta == adapter.ode.params.eta == sched.eta
-    assert sched.update(1.0, step=1) == sched.eta and sched.updates == 1  # same kappa: no work
+    # the step's own schedule: the exact gain at kappa = 1, applied if it moved enough
+    etas = [0.0]
+    assert curvature_gains_of(1.0, sched.lengths, etas)
+    assert etas[0] == pytest.approx(exact_same_path_eta(1.0, L, L0))
+    assert gains_moved(etas, sched.etas, sched.tolerance)
     # A change below the tolerance (1e-5) is not applied.
-    tiny = 1e-3  # eta(kappa) - eta(1) ~ 1e-6 here
-    assert abs(exact_same_path_eta(1.0 + tiny, L, L0) - sched.eta) < 1e-5
-    sched.update(1.0 + tiny, step=2)
-    assert sched.updates == 1
-    sched.update(0.0, step=4)
+    near = [0.0]
+    assert curvature_gains_of(1.0 + 1e-3, sched.lengths, near)  # eta moves ~1e-6 here
+    assert not gains_moved(near, etas, sched.tolerance)
+    # what a run did, taken back: the gains in force and where each change began
+    sched.restore(tuple(etas), [(1, etas[0])], 1)
+    assert adapter.params.eta == adapter.ode.params.eta == sched.eta == etas[0]
+    sched.restore((-1.0 / 7.0,), [(5, -1.0 / 7.0)], 1)
     series = sched.eta_series(7)
-    assert series[0] == pytest.approx(-1.0 / 7.0)  # before the first update: the params' eta
+    assert series[0] == pytest.approx(-1.0 / 7.0)  # before the first change: the params' eta
     assert np.all(series[1:5] == pytest.approx(exact_same_path_eta(1.0, L, L0)))
-    assert np.all(series[5:] == pytest.approx(-1.0 / 7.0))
+    assert np.all(series[5:] == pytest.approx(-1.0 / 7.0)) and sched.updates == 2
     with pytest.raises(ValueError, match="plant"):
         EtaScheduler(object(), Params())
 
@@ -126,7 +131,7 @@ def test_scheduler_writes_the_steering_equality_polycoef():
     sched = EtaScheduler(plant, vehicle.params)
     row = vehicle.model.eq_data[vehicle.model.equality("steering").id]
     assert row[1] == pytest.approx(1.0 / 7.0)  # polycoef = (0, -eta, 0, 0, 0)
-    sched.update(2.0)
+    sched.restore((exact_same_path_eta(2.0, L, L0),), [(1, exact_same_path_eta(2.0, L, L0))], 1)
     assert row[1] == pytest.approx(-exact_same_path_eta(2.0, L, L0))
     assert row[0] == row[2] == 0.0
 
@@ -230,15 +235,16 @@ def test_reverse_target_runs_the_path_backwards():
     assert rev.s_end == pytest.approx(forward.path.length)
     pose = rev.initial_pose
     assert (pose.x, pose.y) == pytest.approx(forward.path.pose_at(rev.s_end)[:2])
-    # Feed it v = -v_ref: s runs back by the profile's distance (trapezoid error < 1e-6 m).
+    # Feed the step v = -v_ref: s runs back by the profile's distance (trapezoid error < 1e-6 m).
+    stepped = SteppedTarget(traj="circle", reverse=True, hitch_feedback=None)
+    assert isinstance(stepped.target, ReverseTarget) and stepped.state.s == rev.s_end
     dt, t = 0.001, 0.0
-    rev.reset()
     for k in range(5001):
         t = k * dt
-        v_d, w_d, _, _ = rev.update(t, dt, -forward.reference_speed(t))
+        v_d, w_d, _, _ = stepped.step(t, dt, -forward.reference_speed(t))
         assert v_d == pytest.approx(-forward.reference_speed(t))
-        assert w_d == pytest.approx(rev.curvature * v_d)
-    assert rev.arc_length == pytest.approx(rev.s_end - forward.profile.distance(t), abs=1e-6)
+        assert w_d == pytest.approx(stepped.state.kappa * v_d)
+    assert stepped.state.s == pytest.approx(rev.s_end - forward.profile.distance(t), abs=1e-6)
     ts = np.array([0.0, 2.5, 5.0])
     xs, ys = rev.reference_point(ts)
     for i, ti in enumerate(ts):

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 from scipy.integrate import quad
+from target_steps import SteppedTarget
 
 from tt_mujoco.reference import paths, targets
 from tt_mujoco.reference.targets import (
@@ -150,14 +151,16 @@ def test_profiles_hold_after_their_end():
     assert static.state(-1.0) == pytest.approx((-static.speed(0.0), static.speed(0.0), 0.0))
 
 
-# --- static target ---------------------------------------------------------------------------
+# --- static target --------------------------------------------------------------------------
+# The targets' steps are the run's own (closed_loop.target_step_of), on the scenario's record.
 def test_static_cycloid_target_is_eq_32_with_the_sign_restored():
     _, target, _ = make_target("cycloid", "static")
     assert isinstance(target, StaticTarget) and target.kind == "static"
     assert isinstance(target.profile, CycloidStaticSpeed)
     assert target.duration == pytest.approx(T_CYCLOID)
+    stepped = SteppedTarget(traj="cycloid", target="static")
     for t in np.linspace(0.0, T_CYCLOID + 1.0, 211):
-        v_d, omega_d, v_d_dot, omega_d_dot = target.update(float(t), 1e-3, 123.0)
+        v_d, omega_d, v_d_dot, omega_d_dot = stepped.step(float(t), 1e-3, 123.0)
         tau_half = (min(t, T_CYCLOID) + math.pi / 4.0) / 2.0
         assert v_d == pytest.approx(2.0 * math.sin(tau_half), abs=1e-14)
         # omega = kappa(s(t)) v(t) = -1/(4 sin(tau/2)) * 2 sin(tau/2) = -1/2 (paper prints +1/2)
@@ -165,16 +168,16 @@ def test_static_cycloid_target_is_eq_32_with_the_sign_restored():
         assert omega_d_dot == pytest.approx(0.0, abs=1e-14)
         if t <= T_CYCLOID:
             assert v_d_dot == pytest.approx(math.cos(tau_half), abs=1e-14)
-            assert target.arc_length == pytest.approx(paths.cycloid_arc_length(t), abs=1e-13)
+            assert stepped.state.s == pytest.approx(paths.cycloid_arc_length(t), abs=1e-13)
 
 
 def test_static_target_on_s_curve_and_circle():
-    _, target, _ = make_target("s_curve", "static")
+    stepped = SteppedTarget(traj="s_curve", target="static")
     R = 1.5
-    prof = target.profile
+    prof = stepped.profile
     t_jump = None
-    for t in np.arange(0.0, target.duration + 1e-9, 0.01):
-        v_d, omega_d, v_d_dot, omega_d_dot = target.update(float(t), 0.01, -5.0)
+    for t in np.arange(0.0, stepped.target.duration + 1e-9, 0.01):
+        v_d, omega_d, v_d_dot, omega_d_dot = stepped.step(float(t), 0.01, -5.0)
         s_ref, v_ref, a_ref = prof.state(float(t))
         sign = 1.0 if s_ref < math.pi * R else -1.0
         if sign < 0 and t_jump is None:
@@ -183,33 +186,37 @@ def test_static_target_on_s_curve_and_circle():
         assert omega_d == pytest.approx(sign * v_ref / R, abs=1e-15)
         assert omega_d_dot == pytest.approx(sign * a_ref / R, abs=1e-15)
     # the inflection is reached at half the duration (symmetric profile)
-    assert t_jump == pytest.approx(target.duration / 2.0, abs=0.011)
-    _, circ, _ = make_target("circle", "static")
-    v_d, omega_d, _, _ = circ.update(5.0, 1e-3, 0.0)
+    assert t_jump == pytest.approx(stepped.target.duration / 2.0, abs=0.011)
+    v_d, omega_d, _, _ = SteppedTarget(traj="circle", target="static").step(5.0, 1e-3, 0.0)
     assert (v_d, omega_d) == pytest.approx((0.8, 0.8))
 
 
 def test_static_target_derivative_matches_finite_differences():
     """omega_d_dot = kappa' v_ref^2 + kappa v_ref_dot (cycloid path with the eq. 34 speed)."""
-    _, target, _ = make_target("cycloid", "static", speed_profile="dynamic")
-    assert isinstance(target.profile, CycloidDynamicSpeed)
+    stepped = SteppedTarget(
+        traj="cycloid", target="static", path_options={"speed_profile": "dynamic"}
+    )
+    assert isinstance(stepped.profile, CycloidDynamicSpeed)
     h = 1e-6
     for t in np.linspace(0.1, T_CYCLOID - 0.1, 37):
-        _, w1, _, _ = target.update(t + h, h, 0.0)
-        _, w0, _, _ = target.update(t - h, h, 0.0)
-        v_d, omega_d, _, omega_d_dot = target.update(t, h, 0.0)
+        _, w1, _, _ = stepped.step(t + h, h, 0.0)
+        _, w0, _, _ = stepped.step(t - h, h, 0.0)
+        v_d, omega_d, _, omega_d_dot = stepped.step(t, h, 0.0)
         # central FD error ~ h^2 |omega'''| + 1e-16 / h < 1e-9
         assert omega_d_dot == pytest.approx((w1 - w0) / (2 * h), abs=1e-8)
-        s_ref = target.profile.distance(t)
-        assert omega_d == pytest.approx(target.path.curvature(s_ref) * v_d, abs=1e-15)
+        s_ref = stepped.profile.distance(t)
+        assert omega_d == pytest.approx(stepped.target.path.curvature(s_ref) * v_d, abs=1e-15)
 
 
 # --- dynamic target --------------------------------------------------------------------------
+def _dynamic(traj="cycloid", **kw):
+    stepped = SteppedTarget(traj=traj, target="dynamic", **kw)
+    assert isinstance(stepped.target, DynamicTarget) and stepped.target.kind == "dynamic"
+    return stepped
+
+
 def test_dynamic_target_integrates_the_measured_speed():
     """omega_d = kappa(s) v with s the trapezoidal integral of a given v history."""
-    _, target, _ = make_target("cycloid", "dynamic")
-    assert isinstance(target, DynamicTarget) and target.kind == "dynamic"
-    path = target.path
     dt = 1e-3
 
     def v_meas(t):
@@ -218,82 +225,83 @@ def test_dynamic_target_integrates_the_measured_speed():
     def s_exact(t):
         return 0.6 * t + 0.3 / 1.7 * (1.0 - math.cos(1.7 * t))
 
-    target.reset()
+    stepped = _dynamic()
+    path = stepped.target.path
     n = round(T_CYCLOID / dt)
     for k in range(n + 1):
         t = k * dt
         v = v_meas(t)
-        v_d, omega_d, v_d_dot, omega_d_dot = target.update(t, dt, v)
+        v_d, omega_d, v_d_dot, omega_d_dot = stepped.step(t, dt, v)
         if k == 0:
-            assert target.arc_length == 0.0
+            assert stepped.state.s == 0.0
         # trapezoidal rule: error <= T dt^2 max|v''| / 12 = 4.7 * 1e-6 * 0.87 / 12 = 3.4e-7
-        assert target.arc_length == pytest.approx(s_exact(t), abs=4e-7)
-        s = target.arc_length
+        assert stepped.state.s == pytest.approx(s_exact(t), abs=4e-7)
+        s = stepped.state.s
         kappa = path.curvature(s)
         assert omega_d == pytest.approx(kappa * v, rel=1e-14)
-        assert v_d == pytest.approx(target.profile.speed(t), abs=1e-15)
-        assert v_d_dot == pytest.approx(target.profile.accel(t), abs=1e-15)
+        assert v_d == pytest.approx(stepped.profile.speed(t), abs=1e-15)
+        assert v_d_dot == pytest.approx(stepped.profile.accel(t), abs=1e-15)
         expected_dot = path.curvature_rate(s) * v * v + kappa * v_d_dot
         assert omega_d_dot == pytest.approx(expected_dot, rel=1e-12, abs=1e-15)
-    # same history after reset: same numbers (deterministic)
-    first = target.arc_length
-    target.reset()
-    assert target.arc_length == 0.0
+    # the same history from a new record: the same numbers (deterministic)
+    first = stepped.state.s
+    again = _dynamic()
     for k in range(n + 1):
-        target.update(k * dt, dt, v_meas(k * dt))
-    assert target.arc_length == first
+        again.step(k * dt, dt, v_meas(k * dt))
+    assert again.state.s == first
 
 
 def test_dynamic_target_ignores_the_reference_speed_for_omega():
     """Standing still the yaw target is 0 whatever v_ref says; curvature error = e_omega / v."""
-    _, target, _ = make_target("s_curve", "dynamic")
+    stepped = _dynamic("s_curve")
     for k in range(3000):
-        v_d, omega_d, _, _ = target.update(k * 1e-3, 1e-3, 0.0)
+        v_d, omega_d, _, _ = stepped.step(k * 1e-3, 1e-3, 0.0)
         assert omega_d == 0.0
     assert v_d > 0.5
-    assert target.arc_length == 0.0
-    target.reset()
-    target.update(0.0, 1e-3, 0.4)
-    _, omega_d, _, _ = target.update(1e-3, 1e-3, 0.4)
+    assert stepped.state.s == 0.0
+    stepped = _dynamic("s_curve")
+    stepped.step(0.0, 1e-3, 0.4)
+    _, omega_d, _, _ = stepped.step(1e-3, 1e-3, 0.4)
     assert omega_d == pytest.approx(0.4 / 1.5)
     # a measured speed that drives past the inflection flips the sign of omega_d
-    target.reset()
+    stepped = _dynamic("s_curve")
     for k in range(int(round(math.pi * 1.5 / 0.8 / 1e-3)) + 2):
-        _, omega_d, _, _ = target.update(k * 1e-3, 1e-3, 0.8)
-    assert target.arc_length > math.pi * 1.5
+        _, omega_d, _, _ = stepped.step(k * 1e-3, 1e-3, 0.8)
+    assert stepped.state.s > math.pi * 1.5
     assert omega_d == pytest.approx(-0.8 / 1.5)
 
 
 def test_dynamic_target_with_perfect_speed_tracking_follows_the_reference():
     """If v = v_ref, s follows s_ref and omega_d = kappa(s_ref) v_ref (the static target)."""
-    _, dyn, _ = make_target("cycloid", "dynamic", speed_profile="static")
-    _, sta, _ = make_target("cycloid", "static")
+    dyn = _dynamic(path_options={"speed_profile": "static"})
+    sta = SteppedTarget(traj="cycloid", target="static")
     dt = 1e-3
     worst = 0.0
     for k in range(round(T_CYCLOID / dt) + 1):
         t = k * dt
         v = sta.profile.speed(t)
-        _, w_dyn, _, _ = dyn.update(t, dt, v)
-        _, w_sta, _, _ = sta.update(t, dt, v)
+        _, w_dyn, _, _ = dyn.step(t, dt, v)
+        _, w_sta, _, _ = sta.step(t, dt, v)
         worst = max(worst, abs(w_dyn - w_sta))
     # trapezoid on v = 2 sin(tau/2): s error <= 4.7 * 1e-6 * 0.5 / 12 = 2e-7, times kappa' ~ 1
-    assert dyn.arc_length == pytest.approx(sta.arc_length, abs=3e-7)
+    assert dyn.state.s == pytest.approx(sta.state.s, abs=3e-7)
     assert worst < 1e-6
 
 
 def test_logged_curvature_and_scalar_reference_point():
-    _, target, _ = make_target("s_curve", "dynamic")
-    assert target.curvature == pytest.approx(1 / 1.5)  # before the first update: kappa(0)
-    target.update(0.0, 1e-3, 0.0)
-    target.update(1e-3, 1e-3, 20.0)  # s = 0.01 m
-    assert target.curvature == pytest.approx(1 / 1.5)
+    stepped = _dynamic("s_curve")
+    assert stepped.state.kappa == pytest.approx(1 / 1.5)  # before the first step: kappa(0)
+    stepped.step(0.0, 1e-3, 0.0)
+    stepped.step(1e-3, 1e-3, 20.0)  # s = 0.01 m
+    assert stepped.state.kappa == pytest.approx(1 / 1.5)
     for k in range(800):
-        target.update(2e-3 + k * 1e-3, 1e-3, 20.0)
-    assert target.arc_length > math.pi * 1.5
-    assert target.curvature == pytest.approx(-1 / 1.5)
-    _, sta, _ = make_target("cycloid", "static")
-    sta.update(1.0, 1e-3, 0.0)
-    assert sta.curvature == sta.path.curvature(sta.profile.distance(1.0))
+        stepped.step(2e-3 + k * 1e-3, 1e-3, 20.0)
+    assert stepped.state.s > math.pi * 1.5
+    assert stepped.state.kappa == pytest.approx(-1 / 1.5)
+    stepped = SteppedTarget(traj="cycloid", target="static")
+    stepped.step(1.0, 1e-3, 0.0)
+    assert stepped.state.kappa == stepped.target.path.curvature(stepped.profile.distance(1.0))
+    sta = stepped.target
     t = np.linspace(0.0, sta.duration + 1.0, 101)
     xs, ys = sta.reference_point(t)
     for ti, xi, yi in zip(t, xs, ys, strict=True):

@@ -297,7 +297,7 @@ class TractorTrailerEnv(gymnasium.Env):
         # None: the scenario's own start (backing up, the trailers on the path)
         self._stepper.reset(self.np_random, phi0_deg=None if phi0_deg == s.phi0_deg else phi0_deg)
         # Each unit's nearest path point, warm-started from the target's start.
-        self._unit_s = [float(self.target.arc_length)] * (1 + self.n_trailers)
+        self._unit_s = [float(self.target.start_s)] * (1 + self.n_trailers)
         self.close()  # a new plant: the renderer is made again for its model
         obs = self._sense()
         return obs, self._info("running")

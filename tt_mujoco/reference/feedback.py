@@ -168,12 +168,12 @@ def check_config(config: dict | None) -> dict[str, float]:
 
 class TargetWrapper:
     """A target around another (``self.target``): the Target interface the simulation loop and
-    the metrics use, passed through; subclasses replace :meth:`update`."""
+    the metrics use, passed through; a subclass adds what the step does to its yaw-rate
+    target."""
 
     kind = property(lambda self: self.target.kind)
     duration = property(lambda self: self.target.duration)
-    arc_length = property(lambda self: self.target.arc_length)
-    curvature = property(lambda self: self.target.curvature)
+    start_s = property(lambda self: self.target.start_s)
 
     def reference_point(self, t):
         return self.target.reference_point(t)
@@ -203,13 +203,9 @@ class PathFeedback(TargetWrapper):
     c_max : float
         Bound on the added curvature |c| (1/m), > 0.
 
-    Attributes
-    ----------
-    lateral_error, heading_error : float
-        e_y (m) and e_psi (rad) at the last update.
-    path_arc_length : float
-        s* (m), the nearest path point at the last update (may run past either end, where the
-        path continues along its end tangent).
+    The step computes the correction from the target's record (the nearest path point s*,
+    which may run past either end, where the path continues along its end tangent, and e_y,
+    e_psi there: :func:`path_errors_of`, then :func:`feedback_of`).
     """
 
     def __init__(self, target, k_y: float = 4.0, k_psi: float = 4.0, c_max: float = 2.0):
@@ -217,52 +213,13 @@ class PathFeedback(TargetWrapper):
         self.target = target
         self.path = target.path
         self.k_y, self.k_psi, self.c_max = gains["k_y"], gains["k_psi"], gains["c_max"]
-        self.reset()
 
     @classmethod
     def from_config(cls, target, config: dict | None) -> PathFeedback:
         """Build from a ``Scenario.path_feedback`` dict (keys k_y, k_psi, c_max; {} = defaults)."""
         return cls(target, **check_config(config))
 
-    def reset(self) -> None:
-        self.target.reset()
-        self.path_arc_length = float(self.target.arc_length)
-        self.lateral_error = 0.0
-        self.heading_error = 0.0
-        self._kappa_near = feedback_curvature(self.path, self.path_arc_length)[0]
-
-    # --- the loop ------------------------------------------------------------------------
-    def errors(self, x: float, y: float, theta: float) -> tuple[float, float]:
-        """Update s* (Newton, warm-started) and return ``(e_y, e_psi)`` for pose (x, y, theta)."""
-        s, e_y, e_psi = path_errors_of(self.path, self.path_arc_length, x, y, theta)
-        self.path_arc_length = s
-        self._kappa_near = feedback_curvature(self.path, s)[0]
-        self.lateral_error, self.heading_error = e_y, e_psi
-        return e_y, e_psi
-
-    def update(
-        self, t: float, dt: float, v_measured: float, x: float, y: float, theta: float
-    ) -> tuple[float, float, float, float]:
-        """``(v_d, omega_d, v_d_dot, omega_d_dot)``: the target's, with the correction added
-        (:func:`feedback_of`)."""
-        v_d, w_d, v_d_dot, w_d_dot = self.target.update(t, dt, v_measured)
-        self.reference_omega_d = w_d  # the path's own target, before the correction
-        errors = self.errors(x, y, theta)
-        omega_d, omega_d_dot = feedback_of(
-            self.gains, (w_d, v_d_dot, w_d_dot), float(v_measured), errors, self._kappa_near
-        )
-        return v_d, omega_d, v_d_dot, omega_d_dot
-
     @property
     def gains(self) -> tuple[float, float, float]:
         """``(k_y, k_psi, c_max)``."""
         return self.k_y, self.k_psi, self.c_max
-
-    def set_state(self, s_near: float, errors, omega_ref: float) -> None:
-        """Take the state a compiled episode's updates left: the nearest path point's arc
-        length, ``errors = (e_y, e_psi)`` and the path's own omega_d (the wrapped target's
-        state is handed back to it)."""
-        self.path_arc_length = s_near
-        self._kappa_near = feedback_curvature(self.path, s_near)[0]
-        self.lateral_error, self.heading_error = errors
-        self.reference_omega_d = omega_ref

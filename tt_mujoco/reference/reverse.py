@@ -2,10 +2,8 @@
 
 from __future__ import annotations
 
-import math
-
 from tt_mujoco.reference.paths import Pose
-from tt_mujoco.reference.targets import Target, travelled
+from tt_mujoco.reference.targets import Target
 
 __all__ = ["ReverseTarget", "reverse_targets_of"]
 
@@ -36,7 +34,6 @@ class ReverseTarget(Target):
     def __init__(self, target):
         self.forward = target
         self.kind = target.kind
-        # Set before Target.__init__, whose reset() starts the run at the path's far end.
         self.s_end = min(target.path.length, target.profile.distance(target.duration))
         super().__init__(target.path, target.profile, target.duration)
 
@@ -45,29 +42,10 @@ class ReverseTarget(Target):
         """Start pose: the path at ``s_end``, heading along the path (the vehicle backs up)."""
         return Pose(*self.path.pose_at(self.s_end))
 
-    def reset(self) -> None:
-        self._s = self.s_end
-        self._kappa = self._curvature_and_rate(self.s_end)[0]
-        self._v_prev: float | None = None
-
-    def update(self, t: float, dt: float, v_measured: float) -> tuple[float, float, float, float]:
-        """``(v_d, omega_d, v_d_dot, omega_d_dot)``, all for reversing (v_d <= 0)."""
-        s_ref, v_ref, a_ref = self._profile_state(t)
-        if self.kind == "dynamic":
-            v = float(v_measured)
-            if self._v_prev is not None:
-                self._s = travelled(self._s, self._v_prev, v, dt)
-            self._v_prev = v
-        else:
-            v = -v_ref
-            self._s = self.s_end - s_ref
-        kappa, rate = self._curvature_and_rate(self._s)
-        self._kappa = kappa
-        return reverse_targets_of(kappa, rate, v, v_ref, a_ref)
-
-    def set_state(self, s: float, v_prev: float, kappa: float) -> None:
-        super().set_state(s, v_prev, kappa)
-        self._v_prev = None if math.isnan(v_prev) else v_prev
+    @property
+    def start_s(self) -> float:
+        """Backing up, a run starts at the path's far end, ``s_end``."""
+        return self.s_end
 
     def reference_speed(self, t):
         return -self.forward.reference_speed(t)

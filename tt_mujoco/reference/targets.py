@@ -15,9 +15,12 @@ and a :class:`SpeedProfile` into ``z_d`` and ``z_d_dot`` at every control step:
 ("static ... defined in (32)", "dynamic ... defined in (34)", "Equations (37)-(39)"); the text
 extraction lost the labels themselves (see docs/paper-notes.md).
 
-``update`` runs every control step (1 ms), so it is plain float arithmetic: the speed profiles
-and paths each have a scalar fast path (``state``, ``curvature_and_rate``) next to their
-vectorised methods, and tests keep the two equal.
+A target object is the run's configuration (its path, speed profile, kind and duration) and
+its noise-free reference; the step computes ``z_d`` from the target's record
+(:func:`tt_mujoco.sim.closed_loop.target_step_of`, with :func:`yaw_rate_targets` and
+:func:`travelled` here), so the speed profiles and paths each have a scalar fast path
+(``state``, ``curvature_and_rate``) next to their vectorised methods, and tests keep the two
+equal.
 """
 
 from __future__ import annotations
@@ -353,11 +356,9 @@ class StationSpeed(SpeedProfile):
 
 # --- targets --------------------------------------------------------------------------------
 class Target:
-    """Common interface of the tracking targets.
-
-    Call :meth:`reset` before a run, then :meth:`update` once per control step with the time,
-    the time since the previous update and the measured forward speed. ``kind`` is
-    ``"static"`` or ``"dynamic"``.
+    """Common interface of the tracking targets: the path, the speed profile, the kind
+    (``"static"`` or ``"dynamic"``) and the duration of a run, and the noise-free reference.
+    The step reads it as a record (:func:`tt_mujoco.sim.closed_loop.target_step_of`).
 
     Parameters
     ----------
@@ -377,35 +378,14 @@ class Target:
         self.duration = (
             profile.duration if duration is None else positive_number("duration", duration)
         )
-        # Bound methods looked up once: update() runs every millisecond.
+        # Bound methods looked up once: the reference is asked at every logged step.
         self._profile_state = profile.state
         self._curvature_and_rate = path.curvature_and_rate
-        self._s = 0.0
-        self.reset()
-
-    def reset(self) -> None:
-        """Forget the run so far (arc length back to 0)."""
-        self._s = 0.0
-        self._kappa = self._curvature_and_rate(0.0)[0]
-
-    def set_state(self, s: float, v_prev: float, kappa: float) -> None:
-        """Take the state an update left (arc length, previous measured speed or NaN, and
-        curvature): the compiled episode hands it back this way after its steps."""
-        self._s, self._kappa = s, kappa
 
     @property
-    def arc_length(self) -> float:
-        """The arc length s (m) used at the last update."""
-        return self._s
-
-    @property
-    def curvature(self) -> float:
-        """The path curvature kappa(s) (1/m) used at the last update."""
-        return self._kappa
-
-    def update(self, t: float, dt: float, v_measured: float) -> tuple[float, float, float, float]:
-        """``(v_d, omega_d, v_d_dot, omega_d_dot)`` at time t."""
-        raise NotImplementedError
+    def start_s(self) -> float:
+        """The path's arc length (m) where a run starts: 0, the path's start."""
+        return 0.0
 
     def reference_speed(self, t):
         """The noise-free reference speed v_ref(t) (m/s; float or array t)."""
@@ -458,14 +438,6 @@ class StaticTarget(Target):
 
     kind = "static"
 
-    def update(self, t: float, dt: float, v_measured: float) -> tuple[float, float, float, float]:
-        s_ref, v_ref, a_ref = self._profile_state(t)
-        kappa, rate = self._curvature_and_rate(s_ref)
-        self._s = s_ref
-        self._kappa = kappa
-        omega_d, omega_d_dot = yaw_rate_targets(kappa, rate, v_ref, a_ref)
-        return v_ref, omega_d, a_ref, omega_d_dot
-
 
 class DynamicTarget(Target):
     """The curvature-consistent target of paper eqs. (33)-(34).
@@ -480,37 +452,6 @@ class DynamicTarget(Target):
     """
 
     kind = "dynamic"
-
-    def reset(self) -> None:
-        super().reset()
-        self._v_prev: float | None = None
-
-    def set_state(self, s: float, v_prev: float, kappa: float) -> None:
-        super().set_state(s, v_prev, kappa)
-        self._v_prev = None if math.isnan(v_prev) else v_prev
-
-    def update(self, t: float, dt: float, v_measured: float) -> tuple[float, float, float, float]:
-        """Advance s and return ``(v_d, omega_d, v_d_dot, omega_d_dot)``.
-
-        Parameters
-        ----------
-        t : float
-            Time (s).
-        dt : float
-            Time since the previous update (s); ignored on the first call after :meth:`reset`,
-            where s = 0.
-        v_measured : float
-            Measured forward speed of P (m/s).
-        """
-        v = float(v_measured)
-        if self._v_prev is not None:
-            self._s = travelled(self._s, self._v_prev, v, dt)
-        self._v_prev = v
-        _, v_ref, a_ref = self._profile_state(t)
-        kappa, rate = self._curvature_and_rate(self._s)
-        self._kappa = kappa
-        omega_d, omega_d_dot = yaw_rate_targets(kappa, rate, v, a_ref)
-        return v_ref, omega_d, a_ref, omega_d_dot
 
 
 def yaw_rate_targets(kappa: float, rate: float, speed: float, accel: float):

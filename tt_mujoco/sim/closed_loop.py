@@ -51,15 +51,18 @@ __all__ = [
     "LAWS",
     "actuate_step",
     "advance_after_payload",
+    "cascade_step_of",
     "floats",
     "law_step",
     "mj_step",
     "path_at",
     "pointer",
     "pose_at",
+    "run_disturbance",
     "run_law",
     "run_steps",
     "sense_step",
+    "target_step_of",
 ]
 
 #: The built-in laws the loop runs, ``law(dt, tracking, model, state, gains, saturation) ->
@@ -293,12 +296,20 @@ def _first_singular(phis, c, stop):
 
 
 def _update_target(target, k, v_m, dt, pose):
-    """The target's update at step ``k`` (StaticTarget / DynamicTarget / ReverseTarget.update,
-    and PathFeedback.update at the measured ``pose``): ``(v_d, omega_d, v_d_dot,
-    omega_d_dot)``, its state updated in place."""
+    """The target's step ``k``: :func:`target_step_of` on the speed profile's row ``k``."""
+    return target_step_of(target, target.profile[k], v_m, dt, pose)
+
+
+def target_step_of(target, reference, v_m, dt, pose):
+    """One step of the target (:class:`~tt_mujoco.reference.targets.StaticTarget`, eq. 32;
+    :class:`~tt_mujoco.reference.targets.DynamicTarget`, eqs. 33-34; backing up,
+    :class:`~tt_mujoco.reference.reverse.ReverseTarget`; with
+    :class:`~tt_mujoco.reference.feedback.PathFeedback` at the measured ``pose``) for the
+    speed profile's ``reference = (s_ref, v_ref, a_ref)`` and the measured speed ``v_m``, the
+    control period ``dt`` after the last: ``(v_d, omega_d, v_d_dot, omega_d_dot)``, the
+    target record's state updated in place."""
     state = target.state[0]
-    row = target.profile[k]
-    s_ref, v_ref, a_ref = row[0], row[1], row[2]
+    s_ref, v_ref, a_ref = reference[0], reference[1], reference[2]
     if target.reverse:
         v = -v_ref
         if target.dynamic:
@@ -345,14 +356,15 @@ def _update_target(target, k, v_m, dt, pose):
     return v_ref, omega_d, a_ref, omega_d_dot
 
 
-def _cascade(target, me, rows, phis, v_m):
-    """HitchCascade.update's ``(omega_d, omega_d_dot)`` at the measured hitch angles
-    ``phis``; its state updated in place."""
+def cascade_step_of(target, me, rows, phis, v_m):
+    """One step of the hitch cascade (:class:`~tt_mujoco.controllers.backing.HitchCascade`):
+    ``(omega_d, omega_d_dot)`` at the measurement ``me``, the train's ``rows`` and the measured
+    hitch angles ``phis``; the target record's state updated in place."""
     n = len(phis)
     if n == 1:
         lead = (me[X0], me[Y0], me[THETA0])
     else:
-        lead = (rows[n - 2][0], rows[n - 2][1], rows[n - 2][2])
+        lead = (rows[n - 2][ROW_X], rows[n - 2][ROW_Y], rows[n - 2][ROW_THETA])
     state = target.state[0]
     s, e_y, e_psi, omega_d = backing.cascade_of(
         target.cascade_constants, target, phis, lead, (v_m, me[OMEGA]), state.s_lead,
@@ -663,7 +675,7 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
     pose = (sensed[0], sensed[1], sensed[2])
     r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot = _update_target(target, k, v_m, dt, pose)
     if target.cascade:  # HitchCascade.update: the hitches set the yaw rate
-        r.omega_d, r.omega_d_dot = _cascade(target, sensed, sensed_rows, phis, v_m)
+        r.omega_d, r.omega_d_dot = cascade_step_of(target, sensed, sensed_rows, phis, v_m)
     state = target.state[0]
     r.t, r.s, r.kappa = t, state.s, state.kappa
     seen_by_law.phi, seen_by_law.v, seen_by_law.omega = phi_m, v_m, w_m
@@ -850,7 +862,8 @@ BORROWING = (
     _ode,
     _first_singular,
     _update_target,
-    _cascade,
+    target_step_of,
+    cascade_step_of,
     law_step,
     _blow,
     _advance,

@@ -33,6 +33,7 @@ __all__ = [
     "model_of",
     "outcome",
     "runs_built_in",
+    "target_record",
 ]
 
 
@@ -143,7 +144,7 @@ def episode_records(stepper, controller, user, python=None) -> tuple:
         stepper.loop_record(),
         plant,
         law,
-        _target_record(stepper.built, stepper.steps),
+        target_record(stepper.built, stepper.steps),
         records.new_record(records.STOP_FIELDS),
     )
 
@@ -329,7 +330,9 @@ def _law_record(controller, nominal, user, steering, python):
     )
 
 
-def _target_record(built, steps: int):
+def target_record(built, steps: int):
+    """The step's record of the run's target (its path's tables, its speed profile per
+    step, its state at the start)."""
     from tt_mujoco.controllers.backing import CascadeConstants, HitchCascade
     from tt_mujoco.reference.feedback import PathFeedback
     from tt_mujoco.reference.path_base import ARCS_PATH, HOOKED_PATH, SPLINE_PATH
@@ -375,10 +378,10 @@ def _target_record(built, steps: int):
         state=records.new_record(
             records.TARGET_FIELDS,
             v_prev=math.nan,
-            kappa=target.curvature,
-            s=target.arc_length,
-            s_near=outer.path_arc_length if fed else built.start_s,
-            s_lead=outer.leading_arc_length if cascade else 0.0,
+            kappa=path.curvature_and_rate(target.start_s)[0],
+            s=target.start_s,
+            s_near=target.start_s if fed else built.start_s,
+            s_lead=outer.leading_start_s if cascade else 0.0,
         ),
         feedback=fed,
         feedback_gains=outer.gains if fed else (0.0, 0.0, 0.0),
@@ -387,7 +390,7 @@ def _target_record(built, steps: int):
         along_gain=built.along_track_gain,
         cascade=cascade,
         cascade_constants=constants,
-        wanted=np.array(outer.hitch_targets if cascade else [0.0] * n, dtype=float),
+        wanted=np.zeros(n),
         rates=np.zeros((n, 3)),
         path_hook=hook,
         hook_out=np.zeros(3),
@@ -395,22 +398,14 @@ def _target_record(built, steps: int):
 
 
 def hand_back(stepper, controller, status, k, episode_records, changes) -> None:
-    """Give the state at step ``k`` back: to the stepper, the target, the controller, the
-    faults, the friction patches and the schedule (``changes``: ``(first row, gains)`` of each
-    change of the scheduled gains). The motors' torques are the record's own
+    """Give the state at step ``k`` back: to the stepper, the controller, the faults, the
+    friction patches and the schedule (``changes``: ``(first row, gains)`` of each change of
+    the scheduled gains). The motors' torques are the record's own
     (:meth:`~tt_mujoco.sim.stepper.Stepper.begin`); the stepper syncs the reduced ODE."""
 
-    loop, plant, law, target, _ = episode_records
+    loop, plant, law, _, _ = episode_records
     stepper.k = k
     stepper.finished = status == step.FINISHED
-    state = records.values_of(target.state)
-    inner_target(stepper.built.target).set_state(state["s"], state["v_prev"], state["kappa"])
-    errors, omega_ref = (state["e_y"], state["e_psi"]), state["omega_ref"]
-    if target.feedback:
-        stepper.built.target.set_state(state["s_near"], errors, omega_ref)
-    elif target.cascade:
-        wanted = [float(goal) for goal in target.wanted]
-        stepper.built.target.set_state(state["s_lead"], errors, wanted, omega_ref)
     if law.kind == USER:
         for name, value in zip(controller.STATE, law.user_state.tolist(), strict=False):
             setattr(controller.law_state, name, value)

@@ -13,7 +13,6 @@ from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.path_schedule import (
     PathSchedule,
     driven_path,
-    record_driven_of,
 )
 from tt_mujoco.vehicle.steering import (
     SCHEDULE_TOLERANCE,
@@ -50,7 +49,10 @@ class EtaScheduler:
 
     Notes
     -----
-    Every change reaches the controller through
+    The step schedules the gains from its steering record (:func:`curvature_gains_of` and
+    :func:`gains_moved`, in :func:`tt_mujoco.sim.closed_loop.actuate_step`); the scheduler
+    applies the first gains and takes back what the run did (:meth:`restore`). Every change
+    reaches the controller through
     :meth:`~tt_mujoco.controllers.base.Controller.steering_changed` (the loop calls it), and the
     built-in laws rebuild their nominal model with the gains in force: eta enters Mbar through
     the trailer wheels (docs/model.md Section 4). With the curvature schedule the gains stay
@@ -66,7 +68,6 @@ class EtaScheduler:
         self.eta = params.eta
         self.etas = params.etas
         self.updates = 0
-        self._kappa: float | None = None
         # (first sample, eta) for every change: sample j was reached under the eta in force
         # during the step before it.
         self._changes: list[tuple[int, float]] = [(0, self.eta)]
@@ -75,26 +76,6 @@ class EtaScheduler:
                 f"plant={type(plant).__name__} is not allowed: use a tt_mujoco.sim.plant.Plant"
             )
         self._plant = plant
-
-    def update(self, kappa: float, step: int = 0, measurement=None) -> float:
-        """Schedule eta for curvature ``kappa`` (1/m) before the step after sample ``step``.
-
-        Returns the eta now in force (it governs the plant from sample ``step + 1`` on).
-        ``measurement`` is not used (:class:`PathEtaScheduler` takes the same arguments).
-        """
-        if kappa == self._kappa:  # arcs: constant curvature, nothing to recompute
-            return self.eta
-        self._kappa = kappa
-        etas = [0.0] * len(self.lengths)
-        if curvature_gains_of(kappa, self.lengths, etas):
-            self._offer(tuple(etas), step)
-        return self.eta
-
-    def _offer(self, etas: tuple, step: int) -> None:
-        """Apply ``etas`` if any moved by more than the tolerance."""
-        if gains_moved(etas, self.etas, self.tolerance):
-            self._apply(etas)
-            self._changes.append((step + 1, self.eta))
 
     def eta_series(self, n: int) -> np.ndarray:
         """The eta in force at each of ``n`` logged samples (for ``beta - eta phi``)."""
@@ -184,22 +165,6 @@ class PathEtaScheduler(EtaScheduler):
         plant.steer_by_actuator()
         self._apply(start)
         self._changes = [(0, self.eta)]
-
-    def update(self, kappa: float, step: int = 0, measurement=None) -> float:
-        """Schedule every trailer's gain from where its axle is in ``measurement``
-        (:class:`~tt_mujoco.sim.measure.Measurement`), driving forward towards the path the
-        tractor drove; ``kappa`` is not used."""
-        schedule, arcs, driven, me = self.schedule, self.arc_lengths, self.driven, measurement
-        if driven.gain != 0.0:
-            record_driven_of(schedule.path, driven, me.x, me.y)
-        etas = []
-        phis = me.phis
-        headings = (me.theta0, *(row[2] for row in getattr(me, "train", ())))
-        for k, point in enumerate(_axle_positions(me)):
-            arcs[k], eta = schedule.axle_gain(k, arcs[k], point, headings[k], phis[k], driven)
-            etas.append(eta)
-        self._offer(tuple(etas), step)
-        return self.eta
 
 
 def curvature_gains_of(kappa: float, lengths, out) -> bool:

@@ -287,7 +287,6 @@ class Stepper:
         self._world = world_record(b.world, b.plant_params, self.steps)
         self.collision = None  # (unit, obstacle, t, gap) of the contact that stopped the episode
         self.scheduler = b.new_scheduler(self.plant)
-        b.target.reset()
         self.k = 0
         self.finished = False
         self.stop_details = None  # the traceback of user code that stopped the episode
