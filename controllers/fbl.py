@@ -23,8 +23,9 @@ def fbl_law(dt, tracking, model, state, gains, saturation):
     :func:`tt_mujoco.controllers.ismc_sta.ismc_sta_law` (the compiled episode shares it);
     ``gains`` is ``(k_v, k_omega, 0, 0, 0, 0, 0)`` and ``state`` is passed through."""
     z, f = tracking, model
-    r1 = z.v_d_dot - f.f1 - gains[0] * (z.v - z.v_d)
-    r2 = z.omega_d_dot - f.f2 - gains[1] * (z.omega - z.omega_d)
+    k_v, k_omega, _, _, _, _, _ = gains
+    r1 = z.v_d_dot - f.f1 - k_v * (z.v - z.v_d)
+    r2 = z.omega_d_dot - f.f2 - k_omega * (z.omega - z.omega_d)
     status, T_r, T_l, u1, u2, s1, s2, _, _, _, _ = torques_of(
         f.g11, f.g12, f.g21, f.g22, r1, r2, saturation.limit
     )

@@ -52,6 +52,11 @@ __all__ = ["IsmcStaController", "ismc_sta_law"]
 _sqrt = math.sqrt
 
 
+#: Where each of the law's state values is in its ``state`` (the integrators of e and of the
+#: super-twisting term, then the integrands held from the last step).
+INT_E_V, INT_E_OMEGA, STA_V, STA_OMEGA, RATE_E_V, RATE_E_OMEGA, RATE_W_V, RATE_W_OMEGA = range(8)
+
+
 def ismc_sta_law(dt, tracking, model, state, gains, saturation):
     """One step of the law (module docstring) from plain numbers: the one implementation,
     which :meth:`IsmcStaController.step` and the compiled episode (:mod:`tt_mujoco.sim.compiled`)
@@ -82,10 +87,10 @@ def ismc_sta_law(dt, tracking, model, state, gains, saturation):
     lam1, lam2, k11, k12, k21, k22, eps = gains
     z, f = tracking, model
     # Explicit Euler over the elapsed interval with the integrands of the previous call.
-    I1 = state[0] + dt * state[4]
-    I2 = state[1] + dt * state[5]
-    W1 = state[2] + dt * state[6]
-    W2 = state[3] + dt * state[7]
+    I1 = state[INT_E_V] + dt * state[RATE_E_V]
+    I2 = state[INT_E_OMEGA] + dt * state[RATE_E_OMEGA]
+    W1 = state[STA_V] + dt * state[RATE_W_V]
+    W2 = state[STA_OMEGA] + dt * state[RATE_W_OMEGA]
 
     e1 = z.v - z.v_d
     e2 = z.omega - z.omega_d
@@ -188,6 +193,6 @@ class IsmcStaController(VelocityController):
         )
 
     def set_law_state(self, state, S_v: float = 0.0, S_omega: float = 0.0) -> None:
-        self.int_e_v, self.int_e_omega, self.sta_v, self.sta_omega = state[:4]
-        self._rate_e1, self._rate_e2, self._rate_w1, self._rate_w2 = state[4:]
+        self.int_e_v, self.int_e_omega, self.sta_v, self.sta_omega = state[INT_E_V : STA_OMEGA + 1]
+        self._rate_e1, self._rate_e2, self._rate_w1, self._rate_w2 = state[RATE_E_V:]
         self.S_v, self.S_omega = S_v, S_omega

@@ -33,6 +33,11 @@ from tt_mujoco.controllers.base import (
 __all__ = ["PidController", "pid_law"]
 
 
+#: Where each of the law's state values is in its ``state`` (the integrators, the previous
+#: errors and whether there is one, the integrands held from the last step; one unused).
+INT_E_V, INT_E_OMEGA, PREV_E_V, PREV_E_OMEGA, HAS_PREV, RATE_V, RATE_OMEGA = range(7)
+
+
 def pid_law(dt, tracking, model, state, gains, saturation):
     """One step of the PID law (module docstring) from plain numbers, in the form of
     :func:`tt_mujoco.controllers.ismc_sta.ismc_sta_law` (the compiled episode shares it).
@@ -42,22 +47,22 @@ def pid_law(dt, tracking, model, state, gains, saturation):
     """
     kp1, kp2, ki1, ki2, kd1, kd2, _ = gains
     z, f = tracking, model
-    I1 = state[0] + dt * state[5]
-    I2 = state[1] + dt * state[6]
+    I1 = state[INT_E_V] + dt * state[RATE_V]
+    I2 = state[INT_E_OMEGA] + dt * state[RATE_OMEGA]
     e1 = z.v - z.v_d
     e2 = z.omega - z.omega_d
-    if state[4] == 0.0:
+    if state[HAS_PREV] == 0.0:
         de1 = de2 = 0.0
     else:
-        de1 = (e1 - state[2]) / dt
-        de2 = (e2 - state[3]) / dt
+        de1 = (e1 - state[PREV_E_V]) / dt
+        de2 = (e2 - state[PREV_E_OMEGA]) / dt
     r1 = z.v_d_dot - f.f1 - kp1 * e1 - ki1 * I1 - kd1 * de1
     r2 = z.omega_d_dot - f.f2 - kp2 * e2 - ki2 * I2 - kd2 * de2
     status, T_r, T_l, u1, u2, s1, s2, a11, a12, a21, a22 = torques_of(
         f.g11, f.g12, f.g21, f.g22, r1, r2, saturation.limit
     )
     if status != LAW_OK:
-        held = (I1, I2, e1, e2, 1.0, state[5], state[6], 0.0)
+        held = (I1, I2, e1, e2, 1.0, state[RATE_V], state[RATE_OMEGA], 0.0)
         return LawStep(status, T_r, T_l, u1, u2, saturation.saturated, 0.0, 0.0, held)
     saturated = s1 != 0.0 or s2 != 0.0
     rate1, rate2 = e1, e2
@@ -113,11 +118,11 @@ class PidController(VelocityController):
         )
 
     def set_law_state(self, state, aux1: float = 0.0, aux2: float = 0.0) -> None:
-        self.int_e_v, self.int_e_omega = state[0], state[1]
-        has_prev = state[4] != 0.0
-        self._prev_e1 = state[2] if has_prev else None
-        self._prev_e2 = state[3] if has_prev else None
-        self._rate1, self._rate2 = state[5], state[6]
+        self.int_e_v, self.int_e_omega = state[INT_E_V], state[INT_E_OMEGA]
+        has_prev = state[HAS_PREV] != 0.0
+        self._prev_e1 = state[PREV_E_V] if has_prev else None
+        self._prev_e2 = state[PREV_E_OMEGA] if has_prev else None
+        self._rate1, self._rate2 = state[RATE_V], state[RATE_OMEGA]
 
     def reset(self):
         self.int_e_v = self.int_e_omega = 0.0

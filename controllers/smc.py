@@ -37,12 +37,13 @@ def smc_law(dt, tracking, model, state, gains, saturation):
     ``gains`` is ``(k_v, k_omega, phi_v, phi_omega, 0, 0, 0)`` and ``state`` is passed
     through."""
     z, f = tracking, model
+    k_v, k_omega, phi_v, phi_omega, _, _, _ = gains
     # sat() written out, so that NaN stays NaN (min and max would drop it) and the loop stops
-    x_v, x_omega = (z.v - z.v_d) / gains[2], (z.omega - z.omega_d) / gains[3]
+    x_v, x_omega = (z.v - z.v_d) / phi_v, (z.omega - z.omega_d) / phi_omega
     sat_v = 1.0 if x_v > 1.0 else (-1.0 if x_v < -1.0 else x_v)
     sat_omega = 1.0 if x_omega > 1.0 else (-1.0 if x_omega < -1.0 else x_omega)
-    r1 = z.v_d_dot - f.f1 - gains[0] * sat_v
-    r2 = z.omega_d_dot - f.f2 - gains[1] * sat_omega
+    r1 = z.v_d_dot - f.f1 - k_v * sat_v
+    r2 = z.omega_d_dot - f.f2 - k_omega * sat_omega
     status, T_r, T_l, u1, u2, s1, s2, _, _, _, _ = torques_of(
         f.g11, f.g12, f.g21, f.g22, r1, r2, saturation.limit
     )

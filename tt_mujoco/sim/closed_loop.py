@@ -100,9 +100,8 @@ X, Y, X0, Y0, THETA0, V0, V, THETA, BETA, PHI, OMEGA = (
     for name in ("x", "y", "x0", "y0", "theta0", "v0", "v", "theta", "beta", "phi", "omega")
 )
 #: where a trailer's axle pose, hitch and steering are in a train's measured row
-ROW_X, ROW_Y, ROW_THETA, ROW_PHI, ROW_BETA = (
-    measure.TRAIN_FIELDS.index(name) for name in ("x0", "y0", "theta0", "phi", "beta")
-)
+ROW_X, ROW_Y, ROW_THETA = measure.ROW_X0, measure.ROW_Y0, measure.ROW_THETA0
+ROW_PHI, ROW_BETA = measure.ROW_PHI, measure.ROW_BETA
 
 
 class Push(NamedTuple):

@@ -140,7 +140,7 @@ def episode_records(stepper, controller, user, python=None) -> tuple:
 
     plant = _plant_record(stepper, stepper.built.nominal)
     law = _law_record(controller, stepper.built.nominal, user, plant.steering, python)
-    return (
+    return records.EpisodeRecords(
         stepper.loop_record(),
         plant,
         law,
@@ -421,7 +421,7 @@ def hand_back(stepper, controller, status, k, episode_records, changes) -> None:
         faults.payload_rows[:] = np.asarray(loop.faults.payloads).tolist()
         faults.payload_state[:] = np.asarray(loop.faults.payload_state).tolist()
     if status == step.COLLISION:
-        stop = records.values_of(episode_records[4])
+        stop = records.values_of(episode_records.stop)
         unit, obstacle = int(stop["unit"]), int(stop["obstacle"])
         stepper.collision = (unit, obstacle, k * stepper.dt, stop["gap"])
     if loop.ground.geoms.size:  # one mask per advance: k of them
@@ -537,7 +537,7 @@ def raised_again(stepper, controller, t: float) -> tuple[str, str] | None:
     from tt_mujoco.sim import usercode
     from tt_mujoco.sim.measure import Measurement
 
-    law = stepper._episode[2]
+    law = stepper._episode.law
     m = Measurement(*_floats(law.measurement_values))
     r = LawReference(*_floats(law.reference))
     model = Nominal(*_floats(law.model))

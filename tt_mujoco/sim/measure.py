@@ -27,6 +27,8 @@ __all__ = [
 
 #: What is measured of each trailer k >= 2, in order (time-series columns ``<name>_k``).
 TRAIN_FIELDS = ("x0", "y0", "theta0", "phi", "beta", "v0")
+#: Where each field is in a train's row.
+ROW_X0, ROW_Y0, ROW_THETA0, ROW_PHI, ROW_BETA, ROW_V0 = range(len(TRAIN_FIELDS))
 
 
 class Addresses(NamedTuple):
@@ -228,7 +230,7 @@ class TrainMeasurement(Measurement):
     @property
     def phis(self) -> tuple:
         """The hitch angles phi_1..phi_N (phi_1 as measured, faults and noise included)."""
-        return (self.phi, *(row[3] for row in self.train))
+        return (self.phi, *(row[ROW_PHI] for row in self.train))
 
     def _replace(self, **changes):
         out = super()._replace(**changes)
@@ -253,6 +255,12 @@ def measure_train(qpos, qvel, lay: Layout) -> TrainMeasurement:
     return _new_train_measurement(first, tuple(tuple(row) for row in rows))
 
 
+#: Where trailer 1's fields are in a :class:`Measurement`'s values.
+_THETA, _OMEGA, _X0, _Y0, _THETA0 = (
+    Measurement._fields.index(name) for name in ("theta", "omega", "x0", "y0", "theta0")
+)
+
+
 def train_rows_of(qpos, qvel, a: Addresses, n: Lengths, first, train, out) -> None:
     """Trailers 2..N of :func:`measure_train` into ``out[k - 2]`` (:data:`TRAIN_FIELDS`), from
     trailer 1's measurement ``first`` (the :class:`Measurement` fields) and ``train``, one row
@@ -260,12 +268,12 @@ def train_rows_of(qpos, qvel, a: Addresses, n: Lengths, first, train, out) -> No
     shares it)."""
     # Trailer 1's body: axle midpoint, its rigid velocity, heading and heading rate.
     j = a.root_v
-    theta, omega = first[2], first[6]
+    theta, omega = first[_THETA], first[_OMEGA]
     vx, vy = qvel[j], qvel[j + 1]
     s, c = math.sin(theta), math.cos(theta)
-    fth = first[9]
+    fth = first[_THETA0]
     fw = omega + qvel[a.hitch_v]
-    fx, fy = first[7], first[8]
+    fx, fy = first[_X0], first[_Y0]
     fvx = vx + omega * n.L * s + fw * n.L0 * math.sin(fth)
     fvy = vy - omega * n.L * c - fw * n.L0 * math.cos(fth)
     for k in range(len(train)):

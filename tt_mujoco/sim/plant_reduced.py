@@ -4,7 +4,16 @@ from __future__ import annotations
 
 import dataclasses
 
-from tt_mujoco.sim.measure import Measurement, TrainMeasurement
+from tt_mujoco.sim.measure import (
+    ROW_BETA,
+    ROW_PHI,
+    ROW_THETA0,
+    ROW_V0,
+    ROW_X0,
+    ROW_Y0,
+    Measurement,
+    TrainMeasurement,
+)
 from tt_mujoco.sim.plant import Plant
 from tt_mujoco.vehicle import reduced, train
 from tt_mujoco.vehicle.params import Params
@@ -94,8 +103,9 @@ def reduced_train_rows_of(state, c, places, speeds, out) -> None:
     train.trailer_rates_of(phis, state[5 + n], state[6 + n], c, speeds)
     for k in range(1, n):
         row, place = out[k - 1], places[k]
-        row[0], row[1], row[2] = place[2], place[3], place[4]
-        row[3], row[4], row[5] = phis[k], c.trailers[k][2] * phis[k], speeds[k][1]
+        row[ROW_X0], row[ROW_Y0], row[ROW_THETA0] = place[2], place[3], place[4]
+        row[ROW_PHI], row[ROW_BETA] = phis[k], c.trailers[k][2] * phis[k]
+        row[ROW_V0] = speeds[k][1]
 
 
 def reduced_measure_values(state, c: reduced.ModelConstants) -> tuple:

@@ -461,6 +461,17 @@ class LoopRecord(NamedTuple):
     hook_out: np.ndarray
 
 
+class EpisodeRecords(NamedTuple):
+    """An episode's records, as the step takes them (with the log of the chunk it runs)."""
+
+    loop: LoopRecord
+    plant: PlantRecord
+    law: LawRecord
+    target: TargetRecord
+    #: :data:`STOP_FIELDS`
+    stop: np.ndarray
+
+
 class LogRecord(NamedTuple):
     """Where a chunk logs its rows: the Measurement fields and the loop's own values."""
 

@@ -10,6 +10,8 @@ from __future__ import annotations
 
 import math
 
+from tt_mujoco.sim.measure import ROW_BETA, ROW_PHI
+
 __all__ = [
     "BLEW_UP",
     "COLLISION",
@@ -52,11 +54,11 @@ def stop_code(x: float, v: float, omega: float, phi: float, beta: float, limits)
 
 def hitch_stop(rows, hitch_limits, jackknife_beta: float) -> int:
     """The index of the first trailer k >= 2 (row ``k - 2`` of ``rows``, with ``phi_k`` and
-    ``beta_k`` in columns 3 and 4) whose hitch reached its limit ``hitch_limits[k - 2]`` or
-    whose axle reached ``jackknife_beta`` (rad), or -1."""
+    ``beta_k`` in its columns ``ROW_PHI`` and ``ROW_BETA``) whose hitch reached its limit
+    ``hitch_limits[k - 2]`` or whose axle reached ``jackknife_beta`` (rad), or -1."""
     for i in range(len(rows)):
         row = rows[i]
-        if abs(row[3]) >= hitch_limits[i] or abs(row[4]) >= jackknife_beta:
+        if abs(row[ROW_PHI]) >= hitch_limits[i] or abs(row[ROW_BETA]) >= jackknife_beta:
             return i
     return -1
 

@@ -91,7 +91,7 @@ def reference_of(law, path) -> Reference:
 TARGET_FIELDS = ("t", "s", "kappa", "v_d", "omega_d", "v_d_dot", "omega_d_dot")
 
 
-def _called_back(stepper, made: tuple, kernel) -> tuple:
+def _called_back(stepper, made, kernel):
     """The kernel's records with the Python they hold (a law, a path without closed form, a
     user's disturbance) as C functions it calls back (:class:`tt_mujoco.sim._kernel.
     CalledBack`), each given the records it reads and writes; placeholders where there is
@@ -127,10 +127,10 @@ def _called_back(stepper, made: tuple, kernel) -> tuple:
             hook.stop_record = stop
     if isinstance(law.user, kernel.PythonLawCallback):
         law.user.law_record = law
-    return loop, plant, law, target, stop
+    return records.EpisodeRecords(loop, plant, law, target, stop)
 
 
-def _listed(made: tuple) -> tuple:
+def _listed(made):
     """The interpreted records with the arrays the step reads element by element every step as
     lists of floats (a NumPy element is a NumPy scalar, whose arithmetic is slower)."""
     loop, plant, law, target, stop = made
@@ -173,7 +173,7 @@ def _listed(made: tuple) -> tuple:
             }
         ),
     )
-    return loop, plant, law, target, stop
+    return records.EpisodeRecords(loop, plant, law, target, stop)
 
 
 def _listed_train(constants):
@@ -428,14 +428,14 @@ class Stepper:
                 records.interpreted(episode.episode_records(self, controller, None, python))
             )
         if python is not None:
-            python.steering = made[1].steering
+            python.steering = made.plant.steering
         self._episode, self._log = made, None
         self._controller = controller
         self._interpreted = kernel is None
-        etas = tuple(np.asarray(made[1].steering.etas).tolist())
+        etas = tuple(np.asarray(made.plant.steering.etas).tolist())
         self._changes = [(0, etas)]  # (first row, gains) of each change
         if self.motors is not None:  # the motors' torques as the step delivers them
-            self.motors.torques = made[0].motor_torques
+            self.motors.torques = made.loop.motor_torques
         return made
 
     # --- the episode, run to its end ------------------------------------------------------
@@ -480,16 +480,16 @@ class Stepper:
             self._end(None, self._fold())
             raise
         self._end(status, k)
-        return episode.outcome(status, self._episode[4], self, self._controller, k)
+        return episode.outcome(status, self._episode.stop, self, self._controller, k)
 
     def _after_payloads(self, status, k, advance) -> tuple[int, int]:
         """The payload changes a step made to the reduced plant's constants, and the step
         they interrupted (:data:`~tt_mujoco.sim.step.PAYLOAD`) advanced: ``(status, k)``."""
-        loop, plant, law, target, stop = self._episode
+        loop, plant, stop = self._episode.loop, self._episode.plant, self._episode.stop
         if not records.value_of(stop, "payloads"):
             return status, k
         plant = episode.carry_payloads(self, plant, loop.faults, stop)
-        self._episode = (loop, plant, law, target, stop)
+        self._episode = self._episode._replace(plant=plant)
         if status == PAYLOAD:
             status = advance(plant, loop.wind, stop)
             k += 1 if status == RUNNING else 0
@@ -503,7 +503,7 @@ class Stepper:
 
     def _sync_plant(self, k: int) -> None:
         """The reduced plant's ODE state at step ``k``, for an ``on_step`` hook or the end."""
-        plant = self._episode[1]
+        plant = self._episode.plant
         if not plant.mujoco:
             self.plant.ode.state = plant.ode_state.copy()
             self.plant.ode.time = k * self.dt
@@ -514,7 +514,7 @@ class Stepper:
         log = self._log
         if log is None or not self._interpreted or len(log.loop) != size:
             n, n_trailers = size, self.built.plant_params.n_trailers
-            scheduled = self._episode[1].steering.kind != 0
+            scheduled = self._episode.plant.steering.kind != 0
             log = LogRecord(
                 measurement=np.empty((n, len(records.MEASUREMENT_DTYPE))),
                 loop=np.empty(n, dtype=records.LOG_DTYPE),
@@ -558,7 +558,7 @@ class Stepper:
             measured = log.measurement[first:rows]
             trains = log.train[first:rows].reshape(rows - first, -1)
         self.add_block(measured, loop, trains)
-        if self._episode[1].steering.kind:
+        if self._episode.plant.steering.kind:
             new = episode.changes_of(etas, self._changes, self.samples - rows + first)
             self._changes.extend(new)
 
@@ -642,7 +642,7 @@ class Stepper:
         """End the episode at step ``k`` with the stop ``code``: raise its StopRun."""
         self._fold()
         self._end(code, k)
-        status, message = episode.outcome(code, self._episode[4], self, self._controller, k)
+        status, message = episode.outcome(code, self._episode.stop, self, self._controller, k)
         raise StopRun(status, message)
 
     # --- what the episode logged -----------------------------------------------------------
@@ -650,8 +650,8 @@ class Stepper:
     def plant_etas(self) -> tuple:
         """The trailers' steering gains eta_1..eta_N in force (a scheduler's, else the plant's
         constant ones)."""
-        if self._episode is not None and self._episode[1].steering.kind:
-            return tuple(np.asarray(self._episode[1].steering.etas).tolist())
+        if self._episode is not None and self._episode.plant.steering.kind:
+            return tuple(np.asarray(self._episode.plant.steering.etas).tolist())
         if self.scheduler is not None:
             return self.scheduler.etas
         return self.built.plant_params.etas
