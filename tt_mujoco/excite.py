@@ -46,17 +46,18 @@ class Candidate:
     """What a fit of one candidate run's log would know."""
 
     def __init__(
-        self, traj, options, reverse, names, values, half_widths, correlation, phi_max_deg
+        self, traj, options, reverse, names, values, half_widths, correlation, phi_max_deg, scales
     ):
         self.traj, self.options, self.reverse = traj, options, reverse
-        self.names, self.values = names, values
+        self.names, self.values, self.scales = names, values, scales
         self.half_widths, self.correlation = half_widths, correlation
         self.phi_max_deg = phi_max_deg
 
     @property
     def worst(self) -> float:
-        """The largest half width relative to its parameter's value."""
-        return float(np.max(self.half_widths / np.abs(self.values)))
+        """The largest half width relative to its parameter's scale (its value; the log's
+        period for the hitch lag, whose value is 0)."""
+        return float(np.max(self.half_widths / self.scales))
 
     @property
     def max_correlation(self) -> float:
@@ -70,7 +71,7 @@ class Candidate:
 
 
 def _predicted(scenario, fit, rate_hz, noise_deg) -> Candidate | None:
-    from tt_mujoco.identify import fitted_values, step_errors
+    from tt_mujoco.identify import HITCH_LAG, fitted_values, step_errors
     from tt_mujoco.sim import simulate
     from tt_mujoco.vehicle.params import jackknife_phi_deg
 
@@ -104,8 +105,18 @@ def _predicted(scenario, fit, rate_hz, noise_deg) -> Candidate | None:
     spread = np.sqrt(np.abs(np.diag(cov)))
     correlation = cov / np.outer(spread, spread)
     options = dict(scenario.path_options)
+    scales = [1.0 / rate_hz if n == HITCH_LAG else abs(v) for n, v in zip(names, x, strict=True)]
+    scales = np.array(scales)
     return Candidate(
-        scenario.traj, options, scenario.reverse, names, x, 1.96 * spread, correlation, phi_max
+        scenario.traj,
+        options,
+        scenario.reverse,
+        names,
+        x,
+        1.96 * spread,
+        correlation,
+        phi_max,
+        scales,
     )
 
 
@@ -163,7 +174,12 @@ def main(argv: list[str] | None = None) -> int:
         prog="python -m tt_mujoco.excite",
         description="Which run to log so that a fit tells the chosen parameters apart.",
     )
-    parser.add_argument("--fit", default="L,L0,eta", help="of L, L0, eta (default all three)")
+    parser.add_argument(
+        "--fit",
+        default="L,L0,eta",
+        help="of L, L0, eta and hitch_lag (the log's, judged against its period) "
+        "(default L,L0,eta)",
+    )
     parser.add_argument("--eta", default="same_path", help="the vehicle's eta")
     parser.add_argument("--trailers", type=int, default=1)
     parser.add_argument("--rate", type=float, default=50.0, help="the log's rate (Hz)")

@@ -16,9 +16,11 @@ angles, ``v`` and ``omega``, and of each trailer's ``L``, ``L0`` and ``eta``. Th
 ``least_squares``) makes each logged step of the hitch angles the one the kinematics predict
 from the step before (RK4 under the logged inputs; not rates by differences, whose bias a log
 at 25 Hz feels), over the parameters chosen with ``--fit`` (default ``L,L0``: each trailer's;
-``eta`` too where the log can tell it). Then the fitted train is replayed open loop (its hitch
-angles integrated from the first logged ones under the logged ``v``, ``omega``) and its hitch
-angles compared with the log.
+``eta`` too where the log can tell it; ``hitch_lag``, how late the hitch angles are logged
+after the inputs they answer, an encoder's filter or a bus's latency, which left unfitted
+biases the lengths). Then the fitted train is replayed open loop (its hitch angles integrated
+from the first logged ones under the logged ``v``, ``omega``) and its hitch angles compared
+with the log.
 
 Written into ``--out`` (a new folder): ``identified.toml`` (the fitted vehicle, a scenario file
 every command takes: ``python -m tt_mujoco.run --config identified.toml``), ``identify.json``
@@ -55,8 +57,13 @@ __all__ = [
     "step_errors",
 ]
 
-#: The parameters a fit can take, per trailer.
-FITTABLE = ("L", "L0", "eta")
+#: The parameters a fit can take: each trailer's, and the log's own ``hitch_lag``.
+FITTABLE = ("L", "L0", "eta", "hitch_lag")
+#: How late (s) the hitch angles are logged after the inputs they answer: an encoder's
+#: filter or a bus's latency. The log's own, one for every hitch; fitted where asked.
+HITCH_LAG = "hitch_lag"
+#: The largest hitch lag a fit looks for (s); the rows within it of either end stay out.
+LAG_MAX = 0.5
 #: Above this |correlation| two estimates are not told apart by the log.
 CORRELATED = 0.95
 #: At most this many rows enter the fit (the log is thinned evenly beyond it).
@@ -188,7 +195,8 @@ def _speeds(data: dict, t: np.ndarray, wheel: tuple[float, float]):
 
 def _with(p: Params, values: dict[tuple[int, str], float]) -> Params:
     """``p`` with trailer k's field set for each ``(k, field)`` (k from 1; a gain stays the
-    number it is, whatever the lengths become)."""
+    number it is, whatever the lengths become; the log's hitch lag, key 0, is not ``p``'s)."""
+    values = {key: value for key, value in values.items() if key[0] > 0}
     first = {field: float(value) for (k, field), value in values.items() if k == 1}
     train = list(p.train)
     for (k, field), value in values.items():
@@ -318,8 +326,9 @@ def fit_train(t, v, omega, phis, p: Params, fit=("L", "L0"), smooth_s: float | N
     keys, names, x0 = fitted_values(p, fit)
     residuals = step_errors(p, keys, t, v, omega, phis)
 
-    lower = [-np.inf if f == "eta" else 1e-3 for _, f in keys]
-    result = least_squares(residuals, x0, bounds=(lower, np.inf), x_scale="jac")
+    lower = [{"eta": -np.inf, HITCH_LAG: -LAG_MAX}.get(f, 1e-3) for _, f in keys]
+    upper = [LAG_MAX if f == HITCH_LAG else np.inf for _, f in keys]
+    result = least_squares(residuals, x0, bounds=(lower, upper), x_scale="jac")
     try:
         design = np.linalg.inv(result.jac.T @ result.jac)
     except np.linalg.LinAlgError:
@@ -336,9 +345,12 @@ def fit_train(t, v, omega, phis, p: Params, fit=("L", "L0"), smooth_s: float | N
     with np.errstate(invalid="ignore", divide="ignore"):
         scale = np.sqrt(np.abs(np.diag(cov)))
         correlation = cov / np.outer(scale, scale)
-    fitted = _with(p, dict(zip(keys, result.x, strict=True)))
-    replayed = replay(t, v, omega, phis[0], fitted)
-    errors = replayed - phis
+    values = dict(zip(keys, result.x, strict=True))
+    fitted = _with(p, values)
+    v, omega = _met(t, v, omega, values.get((0, HITCH_LAG), 0.0))
+    start = int(np.flatnonzero(np.isfinite(v))[0])
+    errors = np.full_like(phis, np.nan)
+    errors[start:] = replay(t[start:], v[start:], omega[start:], phis[start], fitted) - phis[start:]
     return Fit(
         names,
         result.x,
@@ -371,12 +383,31 @@ def _covariance(bread: np.ndarray, jac: np.ndarray, residuals: np.ndarray, n: in
 
 def fitted_values(p: Params, fit) -> tuple[list, list[str], np.ndarray]:
     """What a fit of ``fit`` (of :data:`FITTABLE`) takes of train ``p``: the ``(trailer,
-    field)`` keys, their names (``L``, or ``L_2`` in a train) and their values in ``p``."""
+    field)`` keys, their names (``L``, or ``L_2`` in a train) and their values in ``p``; the
+    log's :data:`HITCH_LAG` last, key ``(0, "hitch_lag")``, from 0."""
     n = p.n_trailers
-    keys = [(k, field) for k in range(1, n + 1) for field in fit]
+    own = [field for field in fit if field != HITCH_LAG]
+    keys = [(k, field) for k in range(1, n + 1) for field in own]
     names = [f"{field}_{k}" if n > 1 else field for k, field in keys]
-    values = np.array([getattr(p.trailers[k - 1], field) for k, field in keys], dtype=float)
-    return keys, names, values
+    values = [getattr(p.trailers[k - 1], field) for k, field in keys]
+    if HITCH_LAG in fit:
+        keys, names, values = [*keys, (0, HITCH_LAG)], [*names, HITCH_LAG], [*values, 0.0]
+    return keys, names, np.array(values, dtype=float)
+
+
+def _met(t, v, omega, lag: float) -> tuple[np.ndarray, np.ndarray]:
+    """The inputs that the hitch angles logged at each ``t`` answer, for a log whose hitch
+    angles come ``lag`` (s) late: ``v`` and ``omega`` at ``t - lag``, a cubic spline between
+    their samples (the inputs, not the hitch angles: interpolating a noisy encoder would
+    average its noise between samples, and the fit would favour lags of half a sample); NaN
+    where that is outside the log."""
+    if lag == 0.0:
+        return v, omega
+    from scipy.interpolate import CubicSpline
+
+    at = t - lag
+    inside = (at >= t[0]) & (at <= t[-1])
+    return tuple(np.where(inside, CubicSpline(t, x)(at), np.nan) for x in (v, omega))
 
 
 def step_errors(p: Params, keys, t, v, omega, phis):
@@ -385,13 +416,28 @@ def step_errors(p: Params, keys, t, v, omega, phis):
     before (RK4, the inputs linear between samples), less the logged one, as a rate (rad/s),
     at most :data:`FIT_ROWS` steps. A derivative taken by differences instead would carry a
     bias of the third derivative times h^2 / 6, which a log at 25 Hz feels."""
-    keep = np.unique(np.linspace(0, len(t) - 2, min(FIT_ROWS, len(t) - 1)).astype(int))
+    lagged = (0, HITCH_LAG) in keys
+    rows = np.arange(len(t) - 1)
+    if lagged:  # the rows whose hitch angles lie in the log for any lag the fit may take
+        rows = rows[(t[rows] - LAG_MAX >= t[0]) & (t[rows + 1] + LAG_MAX <= t[-1])]
+        if rows.size < 2:
+            raise LogError(f"the log is too short to fit {HITCH_LAG} (up to {LAG_MAX} s)")
+    keep = rows[np.unique(np.linspace(0, rows.size - 1, min(FIT_ROWS, rows.size)).astype(int))]
     h = (t[keep + 1] - t[keep])[:, None]
     ahead = v[keep], omega[keep], v[keep + 1], omega[keep + 1]
+    if lagged:
+        from scipy.interpolate import CubicSpline
+
+        speeds, rates = CubicSpline(t, v), CubicSpline(t, omega)
+        lag_index = keys.index((0, HITCH_LAG))
 
     def residuals(x):
         train = _with(p, dict(zip(keys, x, strict=True)))
-        error = ((_steps(train, phis[keep], h, *ahead) - phis[keep + 1]) / h).ravel()
+        inputs = ahead
+        if lagged:  # the inputs the logged hitch angles answer (:func:`_met`)
+            at, after = t[keep] - x[lag_index], t[keep + 1] - x[lag_index]
+            inputs = speeds(at), rates(at), speeds(after), rates(after)
+        error = ((_steps(train, phis[keep], h, *inputs) - phis[keep + 1]) / h).ravel()
         return np.where(np.isfinite(error), error, 10.0)  # singular: far off
 
     return residuals
@@ -447,6 +493,12 @@ def _markdown(fit: Fit, log: Path) -> str:
     ]
     for n, e, h in zip(fit.names, fit.estimates, fit.half_widths, strict=True):
         lines.append(f"| {n} | {e:.6g} | {e - h:.6g} .. {e + h:.6g} |")
+    if HITCH_LAG in fit.names:
+        lines += [
+            "",
+            f"{HITCH_LAG} (s) is the log's: how late its hitch angles come after the inputs "
+            "they answer. It is not the vehicle's, and identified.toml does not carry it.",
+        ]
     lines += ["", "Replayed open loop: hitch angle rms error "]
     lines[-1] += ", ".join(f"{math.degrees(r):.3g} deg" for r in fit.replay_rms) + "."
     if fit.inputs_smoothed_s > 0.0:
@@ -476,7 +528,11 @@ def main(argv: list[str] | None = None) -> int:
         description="Fit the trailers' L, L0 and eta to a log (t, v, omega, phi, phi_2, ...).",
     )
     parser.add_argument("log", type=Path, metavar="LOG", help="a CSV or Parquet log, or a run")
-    parser.add_argument("--fit", default="L,L0", help="of L, L0, eta (default L,L0)")
+    parser.add_argument(
+        "--fit",
+        default="L,L0",
+        help="of L, L0, eta (each trailer's) and hitch_lag (the log's) (default L,L0)",
+    )
     parser.add_argument("--eta", default="same_path", help="the initial or fixed eta")
     parser.add_argument(
         "--columns", action="append", default=[], metavar="NAME=COLUMN", help="map a column"
