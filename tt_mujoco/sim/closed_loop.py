@@ -99,6 +99,8 @@ X, Y, X0, Y0, THETA0, V0, V, THETA, BETA, PHI, OMEGA = (
     measure.Measurement._fields.index(name)
     for name in ("x", "y", "x0", "y0", "theta0", "v0", "v", "theta", "beta", "phi", "omega")
 )
+#: where the speed profile's arc length, speed and acceleration are in a target's profile row
+S_REF, V_REF, A_REF = 0, 1, 2
 #: where a trailer's axle pose, hitch and steering are in a train's measured row
 ROW_X, ROW_Y, ROW_THETA = measure.ROW_X0, measure.ROW_Y0, measure.ROW_THETA0
 ROW_PHI, ROW_BETA = measure.ROW_PHI, measure.ROW_BETA
@@ -295,8 +297,10 @@ def _first_singular(phis, c, stop):
 
 
 def _update_target(target, k, v_m, dt, pose):
-    """The target's step ``k``: :func:`target_step_of` on the speed profile's row ``k``."""
-    return target_step_of(target, target.profile[k], v_m, dt, pose)
+    """The target's step ``k``: :func:`target_step_of` on the speed profile's row ``k`` (its
+    three numbers, not the row: a view of the table, passed on, is made at every step)."""
+    row = target.profile[k]
+    return target_step_of(target, (row[S_REF], row[V_REF], row[A_REF]), v_m, dt, pose)
 
 
 def target_step_of(target, reference, v_m, dt, pose):
@@ -308,7 +312,7 @@ def target_step_of(target, reference, v_m, dt, pose):
     control period ``dt`` after the last: ``(v_d, omega_d, v_d_dot, omega_d_dot)``, the
     target record's state updated in place."""
     state = target.state[0]
-    s_ref, v_ref, a_ref = reference[0], reference[1], reference[2]
+    s_ref, v_ref, a_ref = reference
     if target.reverse:
         v = -v_ref
         if target.dynamic:
