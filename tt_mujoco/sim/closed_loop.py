@@ -99,6 +99,8 @@ X, Y, X0, Y0, THETA0, V0, V, THETA, BETA, PHI, OMEGA = (
     measure.Measurement._fields.index(name)
     for name in ("x", "y", "x0", "y0", "theta0", "v0", "v", "theta", "beta", "phi", "omega")
 )
+#: where the hitch angle, speed and yaw rate the law saw are in a row of the delay's line
+SEEN_PHI, SEEN_V, SEEN_OMEGA = 0, 1, 2
 #: where the speed profile's arc length, speed and acceleration are in a target's profile row
 S_REF, V_REF, A_REF = 0, 1, 2
 #: where a trailer's axle pose, hitch and steering are in a train's measured row
@@ -266,12 +268,12 @@ def _sense(plant, n, rows):
     if plant.mujoco:
         mj = plant.mj
         qpos, qvel = floats(mj.qpos), floats(mj.qvel)
-        me = measure.measure_values(qpos, qvel, mj.addresses, mj.lengths)
+        measurement = measure.measure_values(qpos, qvel, mj.addresses, mj.lengths)
         if n > 1:
             measure.train_rows_of(
-                qpos, qvel, mj.addresses, mj.lengths, me, plant.train_joints, rows
+                qpos, qvel, mj.addresses, mj.lengths, measurement, plant.train_joints, rows
             )
-        return me
+        return measurement
     y, ode = floats(plant.ode_state), _ode(plant)
     if n == 1:
         return plant_reduced.reduced_measure_values(y, ode)
@@ -359,18 +361,18 @@ def target_step_of(target, reference, v_m, dt, pose):
     return v_ref, omega_d, a_ref, omega_d_dot
 
 
-def cascade_step_of(target, me, rows, phis, v_m):
+def cascade_step_of(target, measurement, rows, phis, v_m):
     """One step of the hitch cascade (:class:`~tt_mujoco.controllers.backing.HitchCascade`):
-    ``(omega_d, omega_d_dot)`` at the measurement ``me``, the train's ``rows`` and the measured
+    ``(omega_d, omega_d_dot)`` at the ``measurement``, the train's ``rows`` and the measured
     hitch angles ``phis``; the target record's state updated in place."""
     n = len(phis)
     if n == 1:
-        lead = (me[X0], me[Y0], me[THETA0])
+        lead = (measurement[X0], measurement[Y0], measurement[THETA0])
     else:
         lead = (rows[n - 2][ROW_X], rows[n - 2][ROW_Y], rows[n - 2][ROW_THETA])
     state = target.state[0]
     s, e_y, e_psi, omega_d = backing.cascade_of(
-        target.cascade_constants, target, phis, lead, (v_m, me[OMEGA]), state.s_lead,
+        target.cascade_constants, target, phis, lead, (v_m, measurement[OMEGA]), state.s_lead,
         target.wanted, target.rates,
     )  # fmt: skip
     state.s_lead, state.e_y, state.e_psi = s, e_y, e_psi
@@ -382,7 +384,7 @@ def law_step(law, v_m, w_m, dt, limit):
     ``law``; its state updated in place."""
     if law.kind == PYTHON:
         return python_law(law)
-    r, nm, flags = law.reference[0], law.model[0], law.flags[0]
+    r, nominal, flags = law.reference[0], law.model[0], law.flags[0]
     if law.kind == USER:
         out = law.torques
         law.user(
@@ -398,7 +400,7 @@ def law_step(law, v_m, w_m, dt, limit):
     s = law.state
     state = (s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7])
     tracking = base.Tracking(v_m, w_m, r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot)
-    model = base.Nominal(nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22)
+    model = base.Nominal(nominal.f1, nominal.f2, nominal.g11, nominal.g12, nominal.g21, nominal.g22)
     saturation = base.Saturation(limit, flags.saturated != 0.0, law.anti_windup)
     out = run_law(law.kind, dt, tracking, model, state, law.gains, saturation)
     status, T_r, T_l, u1, u2, saturated, aux1, aux2, state = out
@@ -499,15 +501,20 @@ def _nominal_mass(law, n, phi, phis, v_m, w_m):
     return train.mass_and_bias_of(phis, v_m, w_m, law.nominal_train, law.rates)[1]
 
 
-def _offer_path(steering, target, me, rows, n):
+def _offer_path(steering, target, measurement, rows, n):
     """PathEtaScheduler.update: every axle projected onto the path and its gain there, into
     ``steering.offered``."""
     offered, arcs, driven = steering.offered, steering.arcs, steering.driven
     if driven.gain != 0.0:
-        path_schedule.record_driven_of(target, driven, me[X], me[Y])
+        path_schedule.record_driven_of(target, driven, measurement[X], measurement[Y])
     for k in range(n):
         if k == 0:
-            x, y, heading, phi = me[X0], me[Y0], me[THETA0], me[PHI]
+            x, y, heading, phi = (
+                measurement[X0],
+                measurement[Y0],
+                measurement[THETA0],
+                measurement[PHI],
+            )
         else:
             row = rows[k - 1]
             x, y, heading, phi = row[ROW_X], row[ROW_Y], row[ROW_THETA], row[ROW_PHI]
@@ -548,25 +555,25 @@ def _follow_train(law, etas, phis, phi_m, v_m, w_m) -> bool:
     return True
 
 
-def _delayed(delay, k, me, rows, seen):
-    """The sensor delay's line: step ``k``'s measurement ``me``, its train ``rows`` and the
+def _delayed(delay, k, measurement, rows, seen):
+    """The sensor delay's line: step ``k``'s ``measurement``, its train ``rows`` and the
     ``seen = (phi, v, omega)`` stored, and those of the delay's steps ago returned (the first
     step's until there are that many): ``(measurement, rows, phi, v, omega)``."""
     depth = len(delay.seen)
     slot = k % depth
     store = delay.measurements[slot]
     for i in range(len(store)):
-        store[i] = me[i]
+        store[i] = measurement[i]
     stored = delay.rows[slot]  # element by element: a slice copy may allocate
     for i in range(len(rows)):
         row, stored_row = rows[i], stored[i]
         for j in range(len(row)):
             stored_row[j] = row[j]
     slot_seen = delay.seen[slot]
-    slot_seen[0], slot_seen[1], slot_seen[2] = seen
+    slot_seen[SEEN_PHI], slot_seen[SEEN_V], slot_seen[SEEN_OMEGA] = seen
     read = max(0, k - depth + 1) % depth
-    got = delay.seen[read]
-    return delay.measurements[read], delay.rows[read], got[0], got[1], got[2]
+    was = delay.seen[read]
+    return delay.measurements[read], delay.rows[read], was[SEEN_PHI], was[SEEN_V], was[SEEN_OMEGA]
 
 
 def _ground(patches, target):
@@ -582,25 +589,31 @@ def _ground(patches, target):
     return mask
 
 
-def _gusts(weather, k, me):
+def _gusts(weather, k, measurement):
     """The wind's wrenches on the tractor and the trailer over step ``k``, at the
     measured motion, into ``weather.wrenches``."""
     speed = weather.speeds[k]
     air = (speed * weather.direction[0], speed * weather.direction[1])
-    motion = (me[V], me[THETA], me[V0], me[THETA0], me[BETA])
+    motion = (
+        measurement[V],
+        measurement[THETA],
+        measurement[V0],
+        measurement[THETA0],
+        measurement[BETA],
+    )
     wrenches = wind.wind_wrenches_of(air, motion, weather.drag)
     for i in range(6):
         weather.wrenches[i] = wrenches[i]
 
 
-def _touch(world, k, me, rows, n, stop):
-    """The world's contact check at step ``k``: every unit's pose from the measurement ``me``
+def _touch(world, k, measurement, rows, n, stop):
+    """The world's contact check at step ``k``: every unit's pose from the ``measurement``
     and the train's ``rows``, their least gap to the obstacles logged in
     ``world.clearance``; COLLISION (the unit, obstacle and gap in ``stop``) when one touches,
     else RUNNING."""
     poses = world.poses
-    poses[0, 0], poses[0, 1], poses[0, 2] = me[X], me[Y], me[THETA]
-    poses[1, 0], poses[1, 1], poses[1, 2] = me[X0], me[Y0], me[THETA0]
+    poses[0, 0], poses[0, 1], poses[0, 2] = measurement[X], measurement[Y], measurement[THETA]
+    poses[1, 0], poses[1, 1], poses[1, 2] = measurement[X0], measurement[Y0], measurement[THETA0]
     for i in range(n - 1):
         row = rows[i]
         poses[i + 2, 0], poses[i + 2, 1], poses[i + 2, 2] = row[ROW_X], row[ROW_Y], row[ROW_THETA]
@@ -632,13 +645,20 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
     law's reference and nominal model; what the law sees into ``law.reading``. RUNNING, or the
     stop code (its details in ``stop``)."""
     lim, dt, noise, fault = loop.limits, loop.dt, loop.noise, loop.faults
-    r, nm, seen_by_law = law.reference[0], law.model[0], law.reading[0]
+    r, nominal, seen_by_law = law.reference[0], law.model[0], law.reading[0]
     n, phis = loop.n_trailers, law.phis
     steering = plant.steering
     t = k * dt
     rows = log.train[row]
-    me = _sense(plant, n, rows)
-    x, y, phi, beta, v, omega = me[X], me[Y], me[PHI], me[BETA], me[V], me[OMEGA]
+    measurement = _sense(plant, n, rows)
+    x, y, phi, beta, v, omega = (
+        measurement[X],
+        measurement[Y],
+        measurement[PHI],
+        measurement[BETA],
+        measurement[V],
+        measurement[OMEGA],
+    )
     code = step.stop_code(x, v, omega, phi, beta, lim)
     if code != RUNNING:
         stop.v, stop.phi, stop.beta, stop.x, stop.y, stop.hitch = v, phi, beta, x, y, 1.0
@@ -651,7 +671,7 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
             stop.hitch, stop.eta = i + 2.0, law.nominal_train.trailers[i + 1][2]
             return JACKKNIFE
     if len(loop.world.sizes):  # a world: no unit may touch an obstacle
-        code = _touch(loop.world, k, me, rows, n, stop)
+        code = _touch(loop.world, k, measurement, rows, n, stop)
         if code != RUNNING:
             stop.v, stop.x, stop.y = v, x, y
             return code
@@ -665,13 +685,13 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
         phi_m, v_m, w_m = faults.sensor_of(k, fault.dropouts, fault.held, phi, v_m, w_m)
     measured = log.measurement[row]
     for i in range(len(measured)):  # the Measurement tuple, in its field order
-        measured[i] = me[i]
+        measured[i] = measurement[i]
     # What the outer loops (sensed: no noise, no fault) and the law read: the readings of the
     # sensor delay's steps ago, or this step's
     sensed, sensed_rows = measured, rows
     if _has_delay(len(loop.delay.seen)):
         readings = (phi_m, v_m, w_m)
-        sensed, sensed_rows, phi_m, v_m, w_m = _delayed(loop.delay, k, me, rows, readings)
+        sensed, sensed_rows, phi_m, v_m, w_m = _delayed(loop.delay, k, measurement, rows, readings)
     phis[0] = sensed[3]  # the hitch angles as sensed (trailers 2..N are never held)
     for i in range(n - 1):
         phis[i + 1] = sensed_rows[i][ROW_PHI]
@@ -725,7 +745,9 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
             stop.law_status = NOMINAL_SINGULAR
             _first_singular(phis, model_train, stop)
             return LAW_FAILED
-    nm.f1, nm.f2, nm.g11, nm.g12, nm.g21, nm.g22 = reduced.solve_dynamics_of(mass, bias, c.r, c.d)
+    nominal.f1, nominal.f2, nominal.g11, nominal.g12, nominal.g21, nominal.g22 = (
+        reduced.solve_dynamics_of(mass, bias, c.r, c.d)
+    )
     seen_by_law.M11, seen_by_law.M12, seen_by_law.M22 = mass[0], mass[1], mass[2]
     return RUNNING
 
@@ -737,12 +759,12 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
     FINISHED, PAYLOAD (the caller changes the reduced plant's constants, then advances) or the
     advance's stop code."""
     lim, dt, fault, c = loop.limits, loop.dt, loop.faults, law.nominal
-    r, got = law.reference[0], law.reading[0]
+    r, reading = law.reference[0], law.reading[0]
     n, phis, steering, state = loop.n_trailers, law.phis, plant.steering, target.state[0]
-    t, v_m, w_m, phi_m = k * dt, got.v, got.omega, got.phi
-    me, rows = log.measurement[row], log.train[row]
-    T_r = step.clip(got.T_r, lim.torque_limit)
-    T_l = step.clip(got.T_l, lim.torque_limit)
+    t, v_m, w_m, phi_m = k * dt, reading.v, reading.omega, reading.phi
+    measurement, rows = log.measurement[row], log.train[row]
+    T_r = step.clip(reading.T_r, lim.torque_limit)
+    T_l = step.clip(reading.T_l, lim.torque_limit)
     dist_r = dist_l = clipped = fx = fy = mz = 0.0
     if len(fault.actuators):  # FaultSchedule.torque
         T_r, T_l = faults.fault_torque_of(k, fault.actuators, T_r, T_l)
@@ -758,10 +780,10 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
         else:
             pending = count
     if loop.dc_motor:  # what the motors deliver of the command, over this step
-        omegas = (me[WHEEL_RATES[0]], me[WHEEL_RATES[1]])
+        omegas = (measurement[WHEEL_RATES[0]], measurement[WHEEL_RATES[1]])
         T_r, T_l = motors.deliver_of(loop.motor, loop.motor_torques, (T_r, T_l), omegas)
-    mass = (got.M11, got.M12, got.M22)
-    phi = me[PHI]
+    mass = (reading.M11, reading.M12, reading.M22)
+    phi = measurement[PHI]
     depth = len(loop.delay.seen)
     moved = law.kind == PYTHON or _model_steered(steering.kind, law.follows_steering)
     moved = moved or _has_delay(depth) or phi_m != phi
@@ -771,15 +793,15 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
             phis[i + 1] = rows[i][ROW_PHI]
         mass = _nominal_mass(law, n, phi, phis, v_m, w_m)
     if loop.disturbed:
-        a_v, a_w = disturbance_at(loop, t, me[V], me[OMEGA])
+        a_v, a_w = disturbance_at(loop, t, measurement[V], measurement[OMEGA])
         dist_r, dist_l = reduced.torque_for_force_of(mass, a_v, a_w, c.r, c.d)
         # What a disturbance of motor size can apply, per wheel: beyond it the paper's
         # g^-1 Delta (unbounded as g nears singular) would itself drive a jackknife.
         dist_r, dist_l, clipped = step.clip_pair(dist_r, dist_l, lim.disturbance_bound)
     elif loop.wrench:
-        a_v, a_w = disturbance_at(loop, t, me[V], me[OMEGA])
+        a_v, a_w = disturbance_at(loop, t, measurement[V], measurement[OMEGA])
         force, torque = disturbances.wrench_of(mass, a_v, a_w)
-        fx, fy, mz = plant_mujoco.chassis_wrench_of(force, torque, me[THETA])
+        fx, fy, mz = plant_mujoco.chassis_wrench_of(force, torque, measurement[THETA])
     if stop.raised:  # the disturbance, called back, raised: this row is not logged
         return RAISED
     out = log.loop[row]
@@ -790,7 +812,7 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
         v_m,
         w_m,
     )
-    out.T_r, out.T_l, out.T_r_cmd, out.T_l_cmd = T_r, T_l, got.u1, got.u2
+    out.T_r, out.T_l, out.T_r_cmd, out.T_l_cmd = T_r, T_l, reading.u1, reading.u2
     out.dist_T_r, out.dist_T_l, out.kappa_d = dist_r, dist_l, state.kappa
     out.omega_d_tracked, out.dist_clipped = r.omega_d, clipped
     if steering.kind != 0:
@@ -801,7 +823,7 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
     if k == loop.steps:
         return FINISHED
     if steering.kind == PATH_SCHEDULE:
-        _offer_path(steering, target, me, rows, n)
+        _offer_path(steering, target, measurement, rows, n)
         if stop.raised:  # the path, called back, raised
             return RAISED
         _steer(plant, law)
@@ -811,7 +833,7 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
         _steer(plant, law)
     push = Push(dist_r, dist_l, loop.wrench, fx, fy, mz)
     if len(loop.wind.speeds):
-        _gusts(loop.wind, k, me)
+        _gusts(loop.wind, k, measurement)
     if loop.ground.geoms.size:  # logged for step k; a failed advance is not handed back
         loop.ground.masks[k] = _ground(loop.ground, target)
     if stop.raised:  # the path, called back, raised: the plant does not advance
@@ -828,7 +850,7 @@ def run_steps(k, k_end, loop, plant, law, target, log, stop_record):
     Rows go to ``log`` from its row 0. The one loop of every episode: the kernel's chunk
     (:func:`tt_mujoco.sim._kernel.run_chunk`) is this, compiled."""
     dt, limit = loop.dt, loop.limits.torque_limit
-    stop, nm, got = stop_record[0], law.model[0], law.reading[0]
+    stop, nominal, reading = stop_record[0], law.model[0], law.reading[0]
     row = 0
     while k <= k_end:
         code = sense_step(k, row, loop, plant, law, target, log, stop)
@@ -836,15 +858,20 @@ def run_steps(k, k_end, loop, plant, law, target, log, stop_record):
             return RAISED, k
         if code != RUNNING:
             return code, k
-        status, T_r, T_l, u1, u2 = law_step(law, got.v, got.omega, dt, limit)
+        status, T_r, T_l, u1, u2 = law_step(law, reading.v, reading.omega, dt, limit)
         if stop.raised:
             return RAISED, k
         if status != LAW_OK:
             stop.law_status = status
-            stop.g11, stop.g12, stop.g21, stop.g22 = nm.g11, nm.g12, nm.g21, nm.g22
+            stop.g11, stop.g12, stop.g21, stop.g22 = (
+                nominal.g11,
+                nominal.g12,
+                nominal.g21,
+                nominal.g22,
+            )
             stop.u1, stop.u2 = u1, u2
             return LAW_FAILED, k
-        got.T_r, got.T_l, got.u1, got.u2 = T_r, T_l, u1, u2
+        reading.T_r, reading.T_l, reading.u1, reading.u2 = T_r, T_l, u1, u2
         code = actuate_step(k, row, loop, plant, law, target, log, stop)
         row += 1
         if code != RUNNING:
