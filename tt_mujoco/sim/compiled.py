@@ -612,18 +612,18 @@ def _exact_math():
     return module
 
 
-def _as_compiled(fn, done: dict):
+def _as_compiled(fn, done: dict, exact):
     """``fn`` as numba compiles it for a law: the same code, with ``math`` and ``math.hypot``
-    among its globals read as :func:`_exact_math` gives them, and the plain functions of its
-    own module that it calls registered for numba, each the same way. So the law's compiled
-    loop gives the numbers of its Python loop."""
+    among its globals read as ``exact`` (:func:`_exact_math`) gives them, and the plain
+    functions of its own module that it calls registered for numba, each the same way (into
+    ``done``: function -> its copy). So the law's compiled loop gives the numbers of its Python
+    loop."""
     import types
 
     from numba.extending import register_jitable
 
     if fn in done:
         return done[fn]
-    exact = done.setdefault("math", _exact_math())
     names = dict(fn.__globals__)
     copy = types.FunctionType(fn.__code__, names, fn.__name__, fn.__defaults__, fn.__closure__)
     copy.__qualname__, copy.__module__ = fn.__qualname__, fn.__module__
@@ -635,29 +635,8 @@ def _as_compiled(fn, done: dict):
         elif value is math.hypot:
             names[name] = exact.hypot
         elif isinstance(value, types.FunctionType) and value.__module__ == fn.__module__:
-            names[name] = register_jitable(_as_compiled(value, done))
+            names[name] = register_jitable(_as_compiled(value, done, exact))
     return copy
-
-
-def _register_helpers(fn, seen=None) -> set:
-    """Let numba compile the plain functions a law calls from its own module (and theirs);
-    the functions registered."""
-    import types
-
-    from numba.extending import register_jitable
-
-    seen = set() if seen is None else seen
-    for name in fn.__code__.co_names:
-        helper = fn.__globals__.get(name)
-        if (
-            isinstance(helper, types.FunctionType)
-            and helper.__module__ == fn.__module__
-            and helper not in seen
-        ):
-            seen.add(helper)
-            register_jitable(helper)
-            _register_helpers(helper, seen)
-    return seen
 
 
 #: The C entry of a plain-number law, written into the cache folder once per law and version
@@ -763,10 +742,11 @@ def _compile_law(cls):
     from tt_mujoco.sim import records
 
     k_mod = kernel()
-    helpers = _register_helpers(cls.LAW)
+    copies: dict = {}
     # not cached on its own: numba's cache of a function ignores its globals, which
     # _as_compiled changes; the entry below, cached, holds the law's code
-    law = njit(error_model="numpy")(_as_compiled(cls.LAW, {}))
+    law = njit(error_model="numpy")(_as_compiled(cls.LAW, copies, _exact_math()))
+    helpers = set(copies) - {cls.LAW}  # the plain functions of its module it calls
     gain_names = tuple(cls.PRESETS[cls.DEFAULT_PRESET]) or ("unused",)
     dtypes = {
         "VEHICLE": records.record_dtype(VEHICLE_FIELDS),
