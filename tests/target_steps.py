@@ -1,10 +1,10 @@
-"""The step's own target code (``closed_loop.target_step_of``) on the record of a scenario's
+"""The step's own target code (``target_step.target_step_of``) on the record of a scenario's
 target, driven by hand: the tests of the targets, the path feedback and backing up call what
 the run calls."""
 
 from __future__ import annotations
 
-from tt_mujoco.sim import Scenario, build, closed_loop, episode, records
+from tt_mujoco.sim import Scenario, build, episode, records, target_step
 
 
 class SteppedTarget:
@@ -26,4 +26,4 @@ class SteppedTarget:
         """``(v_d, omega_d, v_d_dot, omega_d_dot)`` at ``t``, the measured speed ``v`` and
         ``pose`` (x, y, theta), ``dt`` after the last step."""
         reference = self.profile.state(float(t))
-        return closed_loop.target_step_of(self.record, reference, float(v), dt, pose)
+        return target_step.target_step_of(self.record, reference, float(v), dt, pose)

@@ -20,7 +20,7 @@ from tt_mujoco.controllers.backing import (
 )
 
 from tt_mujoco import run
-from tt_mujoco.sim import Scenario, build, closed_loop, simulate
+from tt_mujoco.sim import Scenario, build, simulate, target_step
 from tt_mujoco.vehicle import train
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.rolling import hitch_rates
@@ -86,7 +86,7 @@ def test_the_hitch_loop_sets_the_rate_it_asks_for():
     assert isinstance(cascade, HitchCascade)
     me = stepped.built.new_plant().measure()
     me = me._replace(phi=me.phi + 0.1, v=-0.5, omega=0.2)
-    omega_d, _ = closed_loop.cascade_step_of(stepped.record, me, (), [me.phi], -0.5)
+    omega_d, _ = target_step.cascade_step_of(stepped.record, me, (), [me.phi], -0.5)
     phi_dot = hitch_rates([me.phi], -0.5, omega_d, cascade.lengths, cascade.etas)[0][0]
     gain = DEFAULT_GAINS["k_phi"]
     wanted = stepped.record.wanted[0]

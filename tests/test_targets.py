@@ -152,7 +152,7 @@ def test_profiles_hold_after_their_end():
 
 
 # --- static target --------------------------------------------------------------------------
-# The targets' steps are the run's own (closed_loop.target_step_of), on the scenario's record.
+# The targets' steps are the run's own (target_step.target_step_of), on the scenario's record.
 def test_static_cycloid_target_is_eq_32_with_the_sign_restored():
     _, target, _ = make_target("cycloid", "static")
     assert isinstance(target, StaticTarget) and target.kind == "static"

@@ -65,7 +65,7 @@ def curvature_and_rate_at(path, s: float) -> tuple[float, float]:
     return feedback_curvature(path, s) if 0.0 <= s <= path.length else (0.0, 0.0)
 
 
-@compiled_form("the target record's path (closed_loop.path_at), not a path object")
+@compiled_form("the target record's path (target_step.path_at), not a path object")
 def feedback_curvature(path, s: float) -> tuple[float, float]:
     """The path's ``(kappa, dkappa/ds)`` at ``s`` as the feedback reads it (the compiled
     episode gives its path record's)."""

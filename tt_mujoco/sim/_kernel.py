@@ -25,7 +25,7 @@ from tt_mujoco import exact
 from tt_mujoco.analysis import nearest
 from tt_mujoco.compiled_form import compiled_form_reason
 from tt_mujoco.reference import feedback
-from tt_mujoco.sim import closed_loop
+from tt_mujoco.sim import closed_loop, target_step
 from tt_mujoco.sim.closed_loop import LAWS
 from tt_mujoco.sim.kernel_sources import SHARED
 from tt_mujoco.vehicle import path_schedule
@@ -92,7 +92,7 @@ def no_user_law(m, r, model, gains, state, out, dt, limit):  # the built-in laws
 
 
 #: A Python hook the kernel calls back (:class:`HookCallback`): what to compute
-#: (:data:`~tt_mujoco.sim.closed_loop.HOOK_CURVATURE` and the others), at which value (s or t),
+#: (:data:`~tt_mujoco.sim.target_step.HOOK_CURVATURE` and the others), at which value (s or t),
 #: and where to write it.
 HOOK = types.void(types.float64, types.float64, _P)
 
@@ -210,17 +210,17 @@ def project_points(points, window, extend, table, out):
 @compiled_form_of(path_schedule.path_pose)
 def _path_pose(target, s):
     """The path schedule's projection and the path feedback read the target record's path
-    (:func:`~tt_mujoco.sim.closed_loop.pose_at`)."""
-    return lambda target, s: closed_loop.pose_at(target, s)
+    (:func:`~tt_mujoco.sim.target_step.pose_at`)."""
+    return lambda target, s: target_step.pose_at(target, s)
 
 
 # A path without closed form and a user's disturbance are Python, called back (HookCallback),
 # asked what closed_loop.HOOK_* name.
-@compiled_form_of(closed_loop.hooked_curvature)
+@compiled_form_of(target_step.hooked_curvature)
 def _hooked_curvature(target, s):
     def call_back(target, s):
         out = target.hook_out
-        target.path_hook(closed_loop.HOOK_CURVATURE, s, _pointer(out))
+        target.path_hook(target_step.HOOK_CURVATURE, s, _pointer(out))
         return out[0], out[1]
 
     return call_back
@@ -237,14 +237,14 @@ def _pose_called_back(what: float):
     return call_back
 
 
-@compiled_form_of(closed_loop.hooked_pose)
+@compiled_form_of(target_step.hooked_pose)
 def _hooked_pose(target, s):
-    return _pose_called_back(closed_loop.HOOK_POSE)
+    return _pose_called_back(target_step.HOOK_POSE)
 
 
-@compiled_form_of(closed_loop.hooked_law_pose)
+@compiled_form_of(target_step.hooked_law_pose)
 def _hooked_law_pose(target, s):
-    return _pose_called_back(closed_loop.HOOK_LAW_POSE)
+    return _pose_called_back(target_step.HOOK_LAW_POSE)
 
 
 @compiled_form_of(closed_loop.hooked_disturbance_at)
@@ -299,8 +299,8 @@ def _run_disturbance(kind, t, v, omega, params):
 @compiled_form_of(feedback.feedback_curvature)
 def _feedback_curvature(target, s):
     """The path feedback reads the target record's path
-    (:func:`~tt_mujoco.sim.closed_loop.path_at`)."""
-    return lambda target, s: closed_loop.path_at(target, s)
+    (:func:`~tt_mujoco.sim.target_step.path_at`)."""
+    return lambda target, s: target_step.path_at(target, s)
 
 
 #: C's IEEE remainder (exact, as Python's ``math.remainder``), which numba does not provide.

@@ -26,9 +26,7 @@ from typing import NamedTuple
 import numpy as np
 
 from tt_mujoco.compiled_form import compiled_form
-from tt_mujoco.controllers import backing, base, compiled_laws
-from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
-from tt_mujoco.reference.path_base import ARCS_PATH, HOOKED_PATH, SPLINE_PATH
+from tt_mujoco.controllers import base, compiled_laws
 from tt_mujoco.sim import (
     disturbances,
     faults,
@@ -39,6 +37,7 @@ from tt_mujoco.sim import (
     plant_reduced,
     schedule,
     step,
+    target_step,
     wind,
 )
 from tt_mujoco.vehicle import path_schedule, reduced, train
@@ -51,18 +50,14 @@ __all__ = [
     "LAWS",
     "actuate_step",
     "advance_after_payload",
-    "cascade_step_of",
     "floats",
     "law_step",
     "mj_step",
-    "path_at",
     "pointer",
-    "pose_at",
     "run_disturbance",
     "run_law",
     "run_steps",
     "sense_step",
-    "target_step_of",
 ]
 
 #: The built-in laws the loop runs, ``law(dt, tracking, model, state, gains, saturation) ->
@@ -87,9 +82,9 @@ COS_BETA_MIN = reduced.COS_BETA_MIN
 USER = len(LAWS)
 PYTHON = USER + 1
 #: What the kernel asks of a hook it calls back (:mod:`tt_mujoco.sim._kernel`, ``HOOK``): a
-#: path's curvature and its rate, its pose, its pose as a plain-number law's reference; a
-#: disturbance's answer
-HOOK_CURVATURE, HOOK_POSE, HOOK_LAW_POSE, HOOK_DISTURBANCE = 0.0, 1.0, 2.0, 3.0
+#: path's (:mod:`tt_mujoco.sim.target_step`), or a disturbance's answer
+HOOK_CURVATURE, HOOK_POSE = target_step.HOOK_CURVATURE, target_step.HOOK_POSE
+HOOK_LAW_POSE, HOOK_DISTURBANCE = target_step.HOOK_LAW_POSE, 3.0
 #: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
 NOMINAL_SINGULAR = -1.0
 PATH_SCHEDULE, CURVATURE_SCHEDULE = schedule.PATH_SCHEDULE, schedule.CURVATURE_SCHEDULE
@@ -101,8 +96,6 @@ X, Y, X0, Y0, THETA0, V0, V, THETA, BETA, PHI, OMEGA = (
 )
 #: where the hitch angle, speed and yaw rate the law saw are in a row of the delay's line
 SEEN_PHI, SEEN_V, SEEN_OMEGA = 0, 1, 2
-#: where the speed profile's arc length, speed and acceleration are in a target's profile row
-S_REF, V_REF, A_REF = 0, 1, 2
 #: where a trailer's axle pose, hitch and steering are in a train's measured row
 ROW_X, ROW_Y, ROW_THETA = measure.ROW_X0, measure.ROW_Y0, measure.ROW_THETA0
 ROW_PHI, ROW_BETA = measure.ROW_PHI, measure.ROW_BETA
@@ -173,34 +166,6 @@ def pointer(array):
     return array.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
 
 
-@compiled_form("the path's Python code called back through a C function (HookCallback)")
-def hooked_curvature(target, s):
-    """``(kappa, dkappa/ds)`` of a path without closed form (:data:`HOOKED_PATH`), from the
-    path object itself (the kernel calls it back: ``stop.raised`` says when it raised)."""
-    return target.path_hook.curvature_and_rate(s)
-
-
-@compiled_form("the path's Python code called back through a C function (HookCallback)")
-def hooked_pose(target, s):
-    """The pose of a path without closed form at ``s`` (ReferencePath.pose_at)."""
-    return target.path_hook.pose_at(s)
-
-
-@compiled_form("the path's Python code called back through a C function (HookCallback)")
-def hooked_law_pose(target, s):
-    """:func:`hooked_pose` asked for a plain-number law's reference: when the path fails there,
-    the law fails, as its Python form does when it asks the path itself (only the kernel runs
-    a plain-number law from the step's records)."""
-    return target.path_hook.pose_at(s)
-
-
-def law_pose_at(target, s):
-    """The path's pose at ``s`` as a plain-number law's reference (:func:`pose_at`)."""
-    if target.path_kind == HOOKED_PATH:
-        return hooked_law_pose(target, s)
-    return pose_at(target, s)
-
-
 @compiled_form("the disturbance's Python code called back through a C function (HookCallback)")
 def hooked_disturbance_at(loop, t):
     """``(a_v, a_w)`` of a user's disturbance at ``t``, with its checks (the kernel calls it
@@ -236,33 +201,6 @@ def python_law(law):
     return law.user(law)
 
 
-def path_at(target, s):
-    """``(kappa, dkappa/ds)`` of the target's path at ``s``."""
-    if target.path_kind == ARCS_PATH:
-        return paths.arcs_curvature_of(s, target.bounds, target.kappas)
-    if target.path_kind == SPLINE_PATH:
-        bounds, cells = target.bounds, target.cells
-        return spline.spline_curvature_of(s, target.length, target.kappa_ends, bounds, cells)
-    if target.path_kind == HOOKED_PATH:
-        return hooked_curvature(target, s)
-    return paths.cycloid_curvature_and_rate(s)
-
-
-def pose_at(target, s):
-    """The path's pose at ``s`` (ReferencePath.pose_at)."""
-    if target.path_kind == HOOKED_PATH:
-        return hooked_pose(target, s)
-    bounds = target.bounds
-    clipped = min(max(s, 0.0), target.length)
-    if target.path_kind == ARCS_PATH:
-        x, y, heading = paths.arcs_pose_of(clipped, bounds, target.kappas, target.starts)
-    elif target.path_kind == SPLINE_PATH:
-        x, y, heading = spline.spline_pose_of(clipped, bounds, target.pose_cells)
-    else:
-        x, y, heading = paths.cycloid_pose_of(clipped)
-    return path_base.continued_pose(s, clipped, x, y, heading)
-
-
 def _sense(plant, n, rows):
     """The Measurement fields of the plant's state; trailers 2..N of ``n`` into ``rows``."""
     if plant.mujoco:
@@ -296,87 +234,6 @@ def _first_singular(phis, c, stop):
         if math.cos(eta * phis[k]) < COS_BETA_MIN:
             stop.phi, stop.eta = phis[k], eta
             return
-
-
-def _update_target(target, k, v_m, dt, pose):
-    """The target's step ``k``: :func:`target_step_of` on the speed profile's row ``k`` (its
-    three numbers, not the row: a view of the table, passed on, is made at every step)."""
-    row = target.profile[k]
-    return target_step_of(target, (row[S_REF], row[V_REF], row[A_REF]), v_m, dt, pose)
-
-
-def target_step_of(target, reference, v_m, dt, pose):
-    """One step of the target (:class:`~tt_mujoco.reference.targets.StaticTarget`, eq. 32;
-    :class:`~tt_mujoco.reference.targets.DynamicTarget`, eqs. 33-34; backing up,
-    :class:`~tt_mujoco.reference.reverse.ReverseTarget`; with
-    :class:`~tt_mujoco.reference.feedback.PathFeedback` at the measured ``pose``) for the
-    speed profile's ``reference = (s_ref, v_ref, a_ref)`` and the measured speed ``v_m``, the
-    control period ``dt`` after the last: ``(v_d, omega_d, v_d_dot, omega_d_dot)``, the
-    target record's state updated in place."""
-    state = target.state[0]
-    s_ref, v_ref, a_ref = reference
-    if target.reverse:
-        v = -v_ref
-        if target.dynamic:
-            v = v_m
-            if not math.isnan(state.v_prev):
-                state.s = targets.travelled(state.s, state.v_prev, v, dt)
-            state.v_prev = v
-        else:
-            state.s = target.s_end - s_ref
-        kappa, rate = path_at(target, state.s)
-        v_ref, omega_d, a_ref, omega_d_dot = reverse.reverse_targets_of(
-            kappa, rate, v, v_ref, a_ref
-        )
-    elif target.dynamic:
-        if not math.isnan(state.v_prev):
-            state.s = targets.travelled(state.s, state.v_prev, v_m, dt)
-        state.v_prev = v_m
-        kappa, rate = path_at(target, state.s)
-        omega_d, omega_d_dot = targets.yaw_rate_targets(kappa, rate, v_m, a_ref)
-    else:
-        kappa, rate = path_at(target, s_ref)
-        state.s = s_ref
-        omega_d, omega_d_dot = targets.yaw_rate_targets(kappa, rate, v_ref, a_ref)
-    state.kappa = kappa
-    state.omega_ref = omega_d
-    if target.feedback or target.along_gain > 0.0:
-        s_near, e_y, e_psi = feedback.path_errors_of(
-            target, state.s_near, pose[0], pose[1], pose[2]
-        )
-        state.s_near, state.e_y, state.e_psi = s_near, e_y, e_psi
-    if target.along_gain > 0.0:  # where the profile puts the tractor, less where it is
-        nominal = target.s_end - s_ref if target.reverse else s_ref
-        v_ref += target.along_gain * (nominal - state.s_near)
-    if target.feedback:
-        state.kappa_near = path_at(target, state.s_near)[0]
-        e_y, e_psi = state.e_y, state.e_psi
-        omega_d, omega_d_dot = feedback.feedback_of(
-            target.feedback_gains,
-            (omega_d, a_ref, omega_d_dot),
-            v_m,
-            (e_y, e_psi),
-            state.kappa_near,
-        )
-    return v_ref, omega_d, a_ref, omega_d_dot
-
-
-def cascade_step_of(target, measurement, rows, phis, v_m):
-    """One step of the hitch cascade (:class:`~tt_mujoco.controllers.backing.HitchCascade`):
-    ``(omega_d, omega_d_dot)`` at the ``measurement``, the train's ``rows`` and the measured
-    hitch angles ``phis``; the target record's state updated in place."""
-    n = len(phis)
-    if n == 1:
-        lead = (measurement[X0], measurement[Y0], measurement[THETA0])
-    else:
-        lead = (rows[n - 2][ROW_X], rows[n - 2][ROW_Y], rows[n - 2][ROW_THETA])
-    state = target.state[0]
-    s, e_y, e_psi, omega_d = backing.cascade_of(
-        target.cascade_constants, target, phis, lead, (v_m, measurement[OMEGA]), state.s_lead,
-        target.wanted, target.rates,
-    )  # fmt: skip
-    state.s_lead, state.e_y, state.e_psi = s, e_y, e_psi
-    return omega_d, 0.0
 
 
 def law_step(law, v_m, w_m, dt, limit):
@@ -696,9 +553,11 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
     for i in range(n - 1):
         phis[i + 1] = sensed_rows[i][ROW_PHI]
     pose = (sensed[0], sensed[1], sensed[2])
-    r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot = _update_target(target, k, v_m, dt, pose)
+    r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot = target_step.update_target(target, k, v_m, dt, pose)
     if target.cascade:  # HitchCascade.update: the hitches set the yaw rate
-        r.omega_d, r.omega_d_dot = cascade_step_of(target, sensed, sensed_rows, phis, v_m)
+        r.omega_d, r.omega_d_dot = target_step.cascade_step_of(
+            target, sensed, sensed_rows, phis, v_m
+        )
     state = target.state[0]
     r.t, r.s, r.kappa = t, state.s, state.kappa
     seen_by_law.phi, seen_by_law.v, seen_by_law.omega = phi_m, v_m, w_m
@@ -716,7 +575,7 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
                 for j in range(len(seen_row)):
                     seen_row[j] = sensed_row[j]
             return RUNNING
-        r.x_ref, r.y_ref, r.theta_ref = law_pose_at(target, state.s)
+        r.x_ref, r.y_ref, r.theta_ref = target_step.law_pose_at(target, state.s)
     # The nominal model at the measurement, for the law and the matched disturbance (a
     # built-in law's model takes the scheduled gains; the disturbance keeps the nominal's).
     c, model_train = law.nominal, law.nominal_train
@@ -884,16 +743,16 @@ def run_steps(k, k_end, loop, plant, law, target, log, stop_record):
 #: :mod:`tt_mujoco.sim._kernel`), called as functions.
 BORROWING = (
     advance_after_payload,
-    path_at,
-    pose_at,
-    law_pose_at,
+    target_step.path_at,
+    target_step.pose_at,
+    target_step.law_pose_at,
     disturbance_at,
     _sense,
     _ode,
     _first_singular,
-    _update_target,
-    target_step_of,
-    cascade_step_of,
+    target_step.update_target,
+    target_step.target_step_of,
+    target_step.cascade_step_of,
     law_step,
     _blow,
     _advance,

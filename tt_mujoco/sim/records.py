@@ -349,14 +349,14 @@ class TargetRecord(NamedTuple):
     # What a path offers the path feedback and the path schedule, run by CPython (the kernel
     # overloads the functions that call these).
     def pose_at(self, s: float) -> tuple[float, float, float]:
-        """The path's pose at ``s`` (:func:`tt_mujoco.sim.closed_loop.pose_at`)."""
-        from tt_mujoco.sim.closed_loop import pose_at
+        """The path's pose at ``s`` (:func:`tt_mujoco.sim.target_step.pose_at`)."""
+        from tt_mujoco.sim.target_step import pose_at
 
         return pose_at(self, s)
 
     def curvature_and_rate(self, s: float) -> tuple[float, float]:
-        """``(kappa, dkappa/ds)`` at ``s`` (:func:`tt_mujoco.sim.closed_loop.path_at`)."""
-        from tt_mujoco.sim.closed_loop import path_at
+        """``(kappa, dkappa/ds)`` at ``s`` (:func:`tt_mujoco.sim.target_step.path_at`)."""
+        from tt_mujoco.sim.target_step import path_at
 
         return path_at(self, s)
 

@@ -29,7 +29,7 @@ import numpy as np
 from tt_mujoco.controllers import Reference
 from tt_mujoco.defaults import JACKKNIFE_DEG, MAX_SPEED
 from tt_mujoco.guard import users_failure
-from tt_mujoco.sim import closed_loop, disturbances, episode, records, usercode
+from tt_mujoco.sim import closed_loop, disturbances, episode, records, target_step, usercode
 from tt_mujoco.sim.build import Build
 from tt_mujoco.sim.checkpoint import Checkpoint
 from tt_mujoco.sim.faults import ACTUATOR_ROW, HELD, PAYLOAD_ROW
@@ -101,9 +101,9 @@ def _called_back(stepper, made, kernel):
     who = usercode.controller_label(stepper.built)
 
     def path_answer(what: float, s: float) -> tuple:
-        if what == closed_loop.HOOK_CURVATURE:
+        if what == target_step.HOOK_CURVATURE:
             return path.curvature_and_rate(s)
-        if what == closed_loop.HOOK_POSE:
+        if what == target_step.HOOK_POSE:
             return path.pose_at(s)
         try:  # the reference pose of a plain-number law: its Python form asks the path itself
             return path.path.pose_at(s)

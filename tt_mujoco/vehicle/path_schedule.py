@@ -220,7 +220,7 @@ class PathSchedule:
         return axle_gain_of(self.path, s_guess, point, heading, phi, self.tables[k], bounds, driven)
 
 
-@compiled_form("the target record's path (closed_loop.pose_at), not a path object")
+@compiled_form("the target record's path (target_step.pose_at), not a path object")
 def path_pose(path, s: float) -> tuple[float, float, float]:
     """The path's pose at ``s`` (:meth:`~tt_mujoco.reference.path_base.ReferencePath.pose_at`),
     as the path schedule and the path feedback read it; the compiled episode gives it the same
