@@ -70,6 +70,11 @@ CASES = {
         "--controller",
         f"{ROOT}/examples/backing_law.py:backing_law",
     ],
+    # the built-ins added as a module or class and a registry line (docs/extending.md): a law
+    # that sees the path, a path read from fine cells, a disturbance's form the step computes
+    "pure_pursuit": ["--traj", "s_curve", "--controller", "pure_pursuit"],
+    "clothoid": ["--traj", "clothoid"],
+    "rolling": ["--traj", "s_curve", "--disturbance-model", "rolling"],
     "reduced": ["--traj", "s_curve", "--plant", "reduced"],
     "path": ["--traj", "s_curve", "--eta", "path"],
     "reverse": ["--traj", "s_curve", "--reverse", "--trailers", "2"],
