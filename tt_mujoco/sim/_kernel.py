@@ -25,7 +25,7 @@ from tt_mujoco import exact
 from tt_mujoco.analysis import nearest
 from tt_mujoco.compiled_form import compiled_form_reason
 from tt_mujoco.reference import feedback
-from tt_mujoco.sim import closed_loop, target_step
+from tt_mujoco.sim import closed_loop, disturbances, target_step
 from tt_mujoco.sim.closed_loop import LAWS
 from tt_mujoco.sim.kernel_sources import SHARED
 from tt_mujoco.vehicle import path_schedule
@@ -247,11 +247,11 @@ def _hooked_law_pose(target, s):
     return _pose_called_back(target_step.HOOK_LAW_POSE)
 
 
-@compiled_form_of(closed_loop.hooked_disturbance_at)
+@compiled_form_of(disturbances.hooked_disturbance_at)
 def _hooked_disturbance_at(loop, t):
     def call_back(loop, t):
         out = loop.hook_out
-        loop.disturbance_hook(closed_loop.HOOK_DISTURBANCE, t, _pointer(out))
+        loop.disturbance_hook(disturbances.HOOK_DISTURBANCE, t, _pointer(out))
         return out[0], out[1]
 
     return call_back
@@ -290,10 +290,10 @@ def _run_law(kind, dt, tracking, model, state, gains, saturation):
     return _dispatch(LAWS, "dt, tracking, model, state, gains, saturation")
 
 
-@compiled_form_of(closed_loop.run_disturbance)
+@compiled_form_of(disturbances.run_disturbance)
 def _run_disturbance(kind, t, v, omega, params):
-    """The built-in disturbance of index ``kind`` in ``closed_loop.DISTURBANCE_FORMS``."""
-    return _dispatch(closed_loop.DISTURBANCE_FORMS, "t, v, omega, params")
+    """The built-in disturbance of index ``kind`` in ``disturbances.DISTURBANCE_FORMS``."""
+    return _dispatch(disturbances.DISTURBANCE_FORMS, "t, v, omega, params")
 
 
 @compiled_form_of(feedback.feedback_curvature)

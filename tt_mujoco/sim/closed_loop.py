@@ -54,7 +54,6 @@ __all__ = [
     "law_step",
     "mj_step",
     "pointer",
-    "run_disturbance",
     "run_law",
     "run_steps",
     "sense_step",
@@ -64,10 +63,6 @@ __all__ = [
 #: LawStep``, those of :func:`tt_mujoco.controllers.compiled_laws` in their registration
 #: order; a law's index here is its ``kind`` in the law record.
 LAWS = tuple(cls.LAW for cls in compiled_laws().values())
-#: The built-in disturbances' forms, ``form(t, v, omega, params) -> (a_v, a_w)``, in their
-#: registration order (:func:`tt_mujoco.sim.disturbances.builtin_forms`); a form's index here
-#: is its ``disturbance_kind`` in the loop record.
-DISTURBANCE_FORMS = disturbances.builtin_forms()
 
 RUNNING, FINISHED, BLEW_UP, JACKKNIFE = step.RUNNING, step.FINISHED, step.BLEW_UP, step.JACKKNIFE
 WARNING, LAW_FAILED, SINGULAR = step.WARNING, step.LAW_FAILED, step.SINGULAR
@@ -84,7 +79,7 @@ PYTHON = USER + 1
 #: What the kernel asks of a hook it calls back (:mod:`tt_mujoco.sim._kernel`, ``HOOK``): a
 #: path's (:mod:`tt_mujoco.sim.target_step`), or a disturbance's answer
 HOOK_CURVATURE, HOOK_POSE = target_step.HOOK_CURVATURE, target_step.HOOK_POSE
-HOOK_LAW_POSE, HOOK_DISTURBANCE = target_step.HOOK_LAW_POSE, 3.0
+HOOK_LAW_POSE, HOOK_DISTURBANCE = target_step.HOOK_LAW_POSE, disturbances.HOOK_DISTURBANCE
 #: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
 NOMINAL_SINGULAR = -1.0
 PATH_SCHEDULE, CURVATURE_SCHEDULE = schedule.PATH_SCHEDULE, schedule.CURVATURE_SCHEDULE
@@ -164,31 +159,6 @@ def pointer(array):
         element = array[0]
         array = np.array([getattr(element, name) for name in element.__slots__], dtype=float)
     return array.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
-
-
-@compiled_form("the disturbance's Python code called back through a C function (HookCallback)")
-def hooked_disturbance_at(loop, t):
-    """``(a_v, a_w)`` of a user's disturbance at ``t``, with its checks (the kernel calls it
-    back: ``stop.raised`` says when it raised)."""
-    return loop.disturbance_hook(t)
-
-
-@compiled_form(
-    "a test of kind for each built-in disturbance, written out (numba cannot index a tuple of "
-    "functions)"
-)
-def run_disturbance(kind: int, t, v, omega, params):
-    """The built-in disturbance ``DISTURBANCE_FORMS[kind]`` at ``t`` and the tractor's true
-    ``v`` and ``omega``."""
-    return DISTURBANCE_FORMS[kind](t, v, omega, params)
-
-
-def disturbance_at(loop, t, v, omega):
-    """``(a_v, a_w)`` of the disturbance at ``t`` and the tractor's true ``v``, ``omega``: a
-    built-in's, or a user's (called back with ``t``)."""
-    if not loop.hooked_disturbance:
-        return run_disturbance(loop.disturbance_kind, t, v, omega, loop.disturbance_params)
-    return hooked_disturbance_at(loop, t)
 
 
 @compiled_form(
@@ -652,13 +622,13 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
             phis[i + 1] = rows[i][ROW_PHI]
         mass = _nominal_mass(law, n, phi, phis, v_m, w_m)
     if loop.disturbed:
-        a_v, a_w = disturbance_at(loop, t, measurement[V], measurement[OMEGA])
+        a_v, a_w = disturbances.disturbance_at(loop, t, measurement[V], measurement[OMEGA])
         dist_r, dist_l = reduced.torque_for_force_of(mass, a_v, a_w, c.r, c.d)
         # What a disturbance of motor size can apply, per wheel: beyond it the paper's
         # g^-1 Delta (unbounded as g nears singular) would itself drive a jackknife.
         dist_r, dist_l, clipped = step.clip_pair(dist_r, dist_l, lim.disturbance_bound)
     elif loop.wrench:
-        a_v, a_w = disturbance_at(loop, t, measurement[V], measurement[OMEGA])
+        a_v, a_w = disturbances.disturbance_at(loop, t, measurement[V], measurement[OMEGA])
         force, torque = disturbances.wrench_of(mass, a_v, a_w)
         fx, fy, mz = plant_mujoco.chassis_wrench_of(force, torque, measurement[THETA])
     if stop.raised:  # the disturbance, called back, raised: this row is not logged
@@ -746,7 +716,7 @@ BORROWING = (
     target_step.path_at,
     target_step.pose_at,
     target_step.law_pose_at,
-    disturbance_at,
+    disturbances.disturbance_at,
     _sense,
     _ode,
     _first_singular,

@@ -21,16 +21,19 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable
 from typing import ClassVar
 
+from tt_mujoco.compiled_form import compiled_form
 from tt_mujoco.registry import Registry, call_hook
 from tt_mujoco.sim.terrain import GRAVITY
 
 __all__ = [
     "DISTURBANCES",
+    "DISTURBANCE_FORMS",
     "Disturbance",
     "PaperDisturbance",
     "RollingResistance",
     "builtin_forms",
     "disturbance",
+    "disturbance_at",
     "form_of",
     "make_disturbance",
 ]
@@ -170,3 +173,38 @@ def wrench_of(mass, a_v: float, a_w: float) -> tuple[float, float]:
     shares it)."""
     M11, M12, M22 = mass
     return M11 * a_v + M12 * a_w, M12 * a_v + M22 * a_w
+
+
+#: The built-in disturbances' forms, ``form(t, v, omega, params) -> (a_v, a_w)``, in their
+#: registration order (:func:`builtin_forms`); a form's index here is its
+#: ``disturbance_kind`` in the loop record.
+DISTURBANCE_FORMS = builtin_forms()
+#: What the kernel asks of a user's disturbance it calls back (``tt_mujoco.sim._kernel``)
+HOOK_DISTURBANCE = 3.0
+
+
+# --- the disturbance's part of the step (plain numbers and the loop record; the closed loop,
+# tt_mujoco.sim.closed_loop, calls it and numba compiles it) ---------------------------------
+@compiled_form("the disturbance's Python code called back through a C function (HookCallback)")
+def hooked_disturbance_at(loop, t):
+    """``(a_v, a_w)`` of a user's disturbance at ``t``, with its checks (the kernel calls it
+    back: ``stop.raised`` says when it raised)."""
+    return loop.disturbance_hook(t)
+
+
+@compiled_form(
+    "a test of kind for each built-in disturbance, written out (numba cannot index a tuple of "
+    "functions)"
+)
+def run_disturbance(kind: int, t, v, omega, params):
+    """The built-in disturbance ``DISTURBANCE_FORMS[kind]`` at ``t`` and the tractor's true
+    ``v`` and ``omega``."""
+    return DISTURBANCE_FORMS[kind](t, v, omega, params)
+
+
+def disturbance_at(loop, t, v, omega):
+    """``(a_v, a_w)`` of the disturbance at ``t`` and the tractor's true ``v``, ``omega``: a
+    built-in's, or a user's (called back with ``t``)."""
+    if not loop.hooked_disturbance:
+        return run_disturbance(loop.disturbance_kind, t, v, omega, loop.disturbance_params)
+    return hooked_disturbance_at(loop, t)

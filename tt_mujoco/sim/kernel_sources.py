@@ -21,7 +21,7 @@ import types
 from tt_mujoco.analysis import nearest
 from tt_mujoco.compiled_form import compiled_form_reason
 from tt_mujoco.controllers import backing, path_view
-from tt_mujoco.sim import closed_loop, measure, motors, records, wind
+from tt_mujoco.sim import closed_loop, disturbances, measure, motors, records, wind
 from tt_mujoco.vehicle import reduced, train
 from tt_mujoco.world import part
 
@@ -100,7 +100,7 @@ SHARED, COMPILED_FORMS = discover(
         *STEP,
         closed_loop.run_steps,
         *LAWS,
-        *closed_loop.DISTURBANCE_FORMS,
+        *disturbances.DISTURBANCE_FORMS,
         nearest.nearest_segments_of,
         *path_view.LAW_LIBRARY,
     ),

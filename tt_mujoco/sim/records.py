@@ -449,7 +449,7 @@ class LoopRecord(NamedTuple):
     delay: DelayRecord
     ground: GroundRecord
     world: WorldRecord
-    #: a built-in disturbance's index in :data:`~tt_mujoco.sim.closed_loop.DISTURBANCE_FORMS`
+    #: a built-in disturbance's index in :data:`~tt_mujoco.sim.disturbances.DISTURBANCE_FORMS`
     #: and the numbers its form reads (:func:`tt_mujoco.sim.disturbances.form_of`)
     disturbance_kind: int
     disturbance_params: np.ndarray
