@@ -290,8 +290,8 @@ def test_dynamic_target_with_perfect_speed_tracking_follows_the_reference():
 
 def test_logged_curvature_and_scalar_reference_point():
     stepped = _dynamic("s_curve")
-    assert stepped.state.kappa == pytest.approx(1 / 1.5)  # before the first step: kappa(0)
     stepped.step(0.0, 1e-3, 0.0)
+    assert stepped.state.kappa == pytest.approx(1 / 1.5)  # at rest at the start: kappa(0)
     stepped.step(1e-3, 1e-3, 20.0)  # s = 0.01 m
     assert stepped.state.kappa == pytest.approx(1 / 1.5)
     for k in range(800):

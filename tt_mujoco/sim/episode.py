@@ -378,7 +378,7 @@ def target_record(built, steps: int):
         state=records.new_record(
             records.TARGET_FIELDS,
             v_prev=math.nan,
-            kappa=path.curvature_and_rate(target.start_s)[0],
+            kappa=0.0,  # set by the first step before any reads it: no call of a user's path
             s=target.start_s,
             s_near=target.start_s if fed else built.start_s,
             s_lead=outer.leading_start_s if cascade else 0.0,
