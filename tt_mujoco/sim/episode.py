@@ -3,8 +3,10 @@
 The closed loop's step (:mod:`tt_mujoco.sim.closed_loop`) reads and writes the named records of
 :mod:`tt_mujoco.sim.records`; :func:`episode_records` makes them from a reset
 :class:`~tt_mujoco.sim.stepper.Stepper` (the plant, the target, the faults, the schedule) and
-the controller, and :func:`hand_back` gives their state back to those objects when the episode
-ends, whichever loop ran it (the kernel's, or CPython's over the same source).
+the controller, and :func:`hand_back` gives what the run did back to the objects that report
+it (the controller's state, the faults, the friction patches, the schedule's changes) when the
+episode ends, whichever loop ran it (the kernel's, or CPython's over the same source). The
+target, the path feedback and the hitch cascade keep no state: nothing goes back to them.
 :func:`outcome` words why it ended, as :func:`tt_mujoco.sim.simulate.run_episode` reports it.
 """
 
