@@ -29,7 +29,7 @@ from collections import defaultdict
 import mujoco
 import numpy as np
 
-from tt_mujoco.sim import Scenario, Stepper, build
+from tt_mujoco.sim import Scenario, Stepper, build, target_step
 from tt_mujoco.sim import closed_loop as closed_loop_module
 from tt_mujoco.sim.simulate import run_episode
 
@@ -167,15 +167,16 @@ def parts(scenario: Scenario) -> dict[str, float]:
     ctrl = built.new_controller()
     ctrl.reset()
     spent = defaultdict(float)
+    # (the module the step reaches it through, its name): label
     names = {
-        "sense_step": "sense (total)",
-        "_sense": "  the measurement",
-        "_update_target": "  the target",
-        "law_step": "law",
-        "actuate_step": "actuate (total)",
-        "mj_step": "  mj_step",
+        (closed_loop_module, "sense_step"): "sense (total)",
+        (closed_loop_module, "_sense"): "  the measurement",
+        (target_step, "update_target"): "  the target",
+        (closed_loop_module, "law_step"): "law",
+        (closed_loop_module, "actuate_step"): "actuate (total)",
+        (closed_loop_module, "mj_step"): "  mj_step",
     }
-    originals = {name: getattr(closed_loop_module, name) for name in names}
+    originals = {key: getattr(*key) for key in names}
 
     def timed(label, fn):
         def wrapper(*args):
@@ -187,15 +188,15 @@ def parts(scenario: Scenario) -> dict[str, float]:
 
         return wrapper
 
-    for name, label in names.items():
-        setattr(closed_loop_module, name, timed(label, originals[name]))
+    for (module, name), label in names.items():
+        setattr(module, name, timed(label, originals[module, name]))
     try:
         t0 = time.perf_counter()
         run_episode(stepper, ctrl)
         spent["whole control step"] = time.perf_counter() - t0
     finally:
-        for name, fn in originals.items():
-            setattr(closed_loop_module, name, fn)
+        for (module, name), fn in originals.items():
+            setattr(module, name, fn)
     n = stepper.steps
     return {k: 1e6 * v / n for k, v in spent.items()}
 
