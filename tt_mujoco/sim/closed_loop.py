@@ -329,7 +329,8 @@ def _nominal_mass(law, n, phi, phis, v_m, w_m):
 
 
 def _offer_path(steering, target, measurement, rows, n):
-    """PathEtaScheduler.update: every axle projected onto the path and its gain there, into
+    """The path schedule (:class:`~tt_mujoco.sim.schedule.PathEtaScheduler`): every axle
+    projected onto the path and its gain there, into
     ``steering.offered``."""
     offered, arcs, driven = steering.offered, steering.arcs, steering.driven
     if driven.gain != 0.0:
@@ -508,7 +509,7 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
     else:
         v_m, w_m = v, omega
     phi_m = phi
-    if len(fault.dropouts):  # FaultSchedule.sensor
+    if len(fault.dropouts):  # the sensor dropouts hold the last sample
         phi_m, v_m, w_m = faults.sensor_of(k, fault.dropouts, fault.held, phi, v_m, w_m)
     measured = log.measurement[row]
     for i in range(len(measured)):  # the Measurement tuple, in its field order
@@ -524,7 +525,7 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
         phis[i + 1] = sensed_rows[i][ROW_PHI]
     pose = (sensed[0], sensed[1], sensed[2])
     r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot = target_step.update_target(target, k, v_m, dt, pose)
-    if target.cascade:  # HitchCascade.update: the hitches set the yaw rate
+    if target.cascade:  # backing up with the hitch cascade: the hitches set the yaw rate
         r.omega_d, r.omega_d_dot = target_step.cascade_step_of(
             target, sensed, sensed_rows, phis, v_m
         )
@@ -595,10 +596,10 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
     T_r = step.clip(reading.T_r, lim.torque_limit)
     T_l = step.clip(reading.T_l, lim.torque_limit)
     dist_r = dist_l = clipped = fx = fy = mz = 0.0
-    if len(fault.actuators):  # FaultSchedule.torque
+    if len(fault.actuators):  # the actuator faults scale the torques
         T_r, T_l = faults.fault_torque_of(k, fault.actuators, T_r, T_l)
     pending = 0  # payload changes the caller makes to the reduced plant's constants
-    if len(fault.payloads):  # FaultSchedule.payloads
+    if len(fault.payloads):  # the payloads placed at a time or an arc length
         changes = fault.payload_changes
         count = faults.payloads_of(k, state.s, fault.payloads, fault.payload_state, changes)
         if plant.mujoco:
