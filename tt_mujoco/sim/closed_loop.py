@@ -40,6 +40,24 @@ from tt_mujoco.sim import (
     target_step,
     wind,
 )
+from tt_mujoco.sim.measure import (
+    BETA,
+    OMEGA,
+    PHI,
+    ROW_BETA,
+    ROW_PHI,
+    ROW_THETA0,
+    ROW_X0,
+    ROW_Y0,
+    THETA,
+    THETA0,
+    V0,
+    X0,
+    Y0,
+    V,
+    X,
+    Y,
+)
 from tt_mujoco.vehicle import path_schedule, reduced, train
 from tt_mujoco.vehicle import steering as steering_math
 from tt_mujoco.world import contact
@@ -83,17 +101,8 @@ HOOK_LAW_POSE, HOOK_DISTURBANCE = target_step.HOOK_LAW_POSE, disturbances.HOOK_D
 #: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
 NOMINAL_SINGULAR = -1.0
 PATH_SCHEDULE, CURVATURE_SCHEDULE = schedule.PATH_SCHEDULE, schedule.CURVATURE_SCHEDULE
-#: where trailer 1's axle and the bodies' motion are in the measurement, and a trailer's gain
-#: in a train's row
-X, Y, X0, Y0, THETA0, V0, V, THETA, BETA, PHI, OMEGA = (
-    measure.Measurement._fields.index(name)
-    for name in ("x", "y", "x0", "y0", "theta0", "v0", "v", "theta", "beta", "phi", "omega")
-)
 #: where the hitch angle, speed and yaw rate the law saw are in a row of the delay's line
 SEEN_PHI, SEEN_V, SEEN_OMEGA = 0, 1, 2
-#: where a trailer's axle pose, hitch and steering are in a train's measured row
-ROW_X, ROW_Y, ROW_THETA = measure.ROW_X0, measure.ROW_Y0, measure.ROW_THETA0
-ROW_PHI, ROW_BETA = measure.ROW_PHI, measure.ROW_BETA
 
 
 class Push(NamedTuple):
@@ -108,6 +117,7 @@ class Push(NamedTuple):
     mz: float
 
 
+#: where the wheels' rates are in the measurement, and a trailer's gain in a train's row
 WHEEL_RATES = tuple(measure.Measurement._fields.index(f"theta_{w}_dot") for w in ("r", "l"))
 ETA_COLUMN = train.TRAILER_ROW.index("eta")
 
@@ -345,7 +355,7 @@ def _offer_path(steering, target, measurement, rows, n):
             )
         else:
             row = rows[k - 1]
-            x, y, heading, phi = row[ROW_X], row[ROW_Y], row[ROW_THETA], row[ROW_PHI]
+            x, y, heading, phi = row[ROW_X0], row[ROW_Y0], row[ROW_THETA0], row[ROW_PHI]
         arcs[k], offered[k] = path_schedule.axle_gain_of(
             target, arcs[k], (x, y), heading, phi, steering.tables[k], steering.bounds, driven
         )
@@ -444,7 +454,11 @@ def _touch(world, k, measurement, rows, n, stop):
     poses[1, 0], poses[1, 1], poses[1, 2] = measurement[X0], measurement[Y0], measurement[THETA0]
     for i in range(n - 1):
         row = rows[i]
-        poses[i + 2, 0], poses[i + 2, 1], poses[i + 2, 2] = row[ROW_X], row[ROW_Y], row[ROW_THETA]
+        poses[i + 2, 0], poses[i + 2, 1], poses[i + 2, 2] = (
+            row[ROW_X0],
+            row[ROW_Y0],
+            row[ROW_THETA0],
+        )
     gap, unit, obstacle = contact.clearance_of(
         poses, world.boxes, world.polygons, world.sizes, world.circles, world.corners, math.inf
     )

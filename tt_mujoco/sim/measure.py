@@ -255,9 +255,11 @@ def measure_train(qpos, qvel, lay: Layout) -> TrainMeasurement:
     return _new_train_measurement(first, tuple(tuple(row) for row in rows))
 
 
-#: Where trailer 1's fields are in a :class:`Measurement`'s values.
-_THETA, _OMEGA, _X0, _Y0, _THETA0 = (
-    Measurement._fields.index(name) for name in ("theta", "omega", "x0", "y0", "theta0")
+#: Where the tractor's and trailer 1's fields are in a :class:`Measurement`'s values (the step
+#: reads a measurement as an array of them).
+X, Y, THETA, PHI, BETA, V, OMEGA, X0, Y0, THETA0, V0 = (
+    Measurement._fields.index(name)
+    for name in ("x", "y", "theta", "phi", "beta", "v", "omega", "x0", "y0", "theta0", "v0")
 )
 
 
@@ -268,12 +270,12 @@ def train_rows_of(qpos, qvel, a: Addresses, n: Lengths, first, train, out) -> No
     shares it)."""
     # Trailer 1's body: axle midpoint, its rigid velocity, heading and heading rate.
     j = a.root_v
-    theta, omega = first[_THETA], first[_OMEGA]
+    theta, omega = first[THETA], first[OMEGA]
     vx, vy = qvel[j], qvel[j + 1]
     s, c = math.sin(theta), math.cos(theta)
-    fth = first[_THETA0]
+    fth = first[THETA0]
     fw = omega + qvel[a.hitch_v]
-    fx, fy = first[_X0], first[_Y0]
+    fx, fy = first[X0], first[Y0]
     fvx = vx + omega * n.L * s + fw * n.L0 * math.sin(fth)
     fvy = vy - omega * n.L * c - fw * n.L0 * math.cos(fth)
     for k in range(len(train)):

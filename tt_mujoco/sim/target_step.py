@@ -17,7 +17,7 @@ from tt_mujoco.compiled_form import compiled_form
 from tt_mujoco.controllers import backing
 from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
 from tt_mujoco.reference.path_base import ARCS_PATH, HOOKED_PATH, SPLINE_PATH
-from tt_mujoco.sim import measure
+from tt_mujoco.sim.measure import OMEGA, ROW_THETA0, ROW_X0, ROW_Y0, THETA0, X0, Y0
 
 __all__ = [
     "HOOK_CURVATURE",
@@ -36,12 +36,6 @@ __all__ = [
 HOOK_CURVATURE, HOOK_POSE, HOOK_LAW_POSE = 0.0, 1.0, 2.0
 #: where the speed profile's arc length, speed and acceleration are in a target's profile row
 S_REF, V_REF, A_REF = 0, 1, 2
-#: where trailer 1's axle and the tractor's yaw rate are in the measurement, and a trailer's
-#: axle pose in a train's measured row
-X0, Y0, THETA0, OMEGA = (
-    measure.Measurement._fields.index(name) for name in ("x0", "y0", "theta0", "omega")
-)
-ROW_X, ROW_Y, ROW_THETA = measure.ROW_X0, measure.ROW_Y0, measure.ROW_THETA0
 
 
 def path_at(target, s):
@@ -170,7 +164,7 @@ def cascade_step_of(target, measurement, rows, phis, v_m):
     if n == 1:
         lead = (measurement[X0], measurement[Y0], measurement[THETA0])
     else:
-        lead = (rows[n - 2][ROW_X], rows[n - 2][ROW_Y], rows[n - 2][ROW_THETA])
+        lead = (rows[n - 2][ROW_X0], rows[n - 2][ROW_Y0], rows[n - 2][ROW_THETA0])
     state = target.state[0]
     s, e_y, e_psi, omega_d = backing.cascade_of(
         target.cascade_constants, target, phis, lead, (v_m, measurement[OMEGA]), state.s_lead,
