@@ -383,8 +383,7 @@ class ClothoidPath(ReferencePath):
         return idx, s - self._bounds[idx]
 
     def _heading(self, s):
-        idx, u = self._segment(s)
-        return self._h0[idx] + self._k0[idx] * u + 0.5 * self._rates[idx] * u * u
+        return self._heading_in(s, self._segment(s)[0])
 
     def _advance(self, a, b):
         """The displacement from ``s = a`` to ``s = b`` within one segment (arrays)."""
@@ -394,6 +393,7 @@ class ClothoidPath(ReferencePath):
         return width * (np.cos(h) @ _GAUSS_WEIGHTS), width * (np.sin(h) @ _GAUSS_WEIGHTS)
 
     def _heading_in(self, s, idx):
+        """The heading at ``s`` on segment ``idx`` (arrays): its quadratic in arc length."""
         u = s - self._bounds[idx]
         return self._h0[idx] + self._k0[idx] * u + 0.5 * self._rates[idx] * u * u
 
