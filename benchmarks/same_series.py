@@ -47,6 +47,9 @@ SCENARIOS = [
     dict(traj="s_curve", eta="scheduled", trailers=3, plant="reduced", duration=3.0),
     dict(traj="s_curve", reverse=True, target="static", controller="pid", duration=3.0),
     dict(traj="s_curve", sensor_delay=0.01, wind="8:90:2", duration=3.0),
+    dict(traj="cycloid", controller="fbl", gains='{"k_v": 6.0}', trailers=2, duration=3.0),
+    dict(traj="s_curve", controller="smc", plant="reduced", noise_snr_db=30.0, duration=3.0),
+    dict(traj="s_curve", controller="pid", faults=["actuator:t=1,wheel=left"], duration=3.0),
 ]
 RUN = """
 import pickle, sys

@@ -429,7 +429,7 @@ class LawStep(NamedTuple):
     """One step of a plain-number law: ``status`` (:data:`LAW_OK`, :data:`LAW_SINGULAR` or
     :data:`LAW_NOT_FINITE`), the clipped torques, the unclipped request ``(u1, u2)``, whether
     it saturated, two values the law reports (ISMC-STA: its sliding variables) and its new
-    state (8 floats)."""
+    state (the law's ``STATE``)."""
 
     status: int
     T_r: float
@@ -487,9 +487,9 @@ def deepens(x: float, gi_1: float, gi_2: float, s1: float, s2: float) -> bool:
 class VelocityController(Controller):
     """The built-in laws' base: validation, the 2x2 solve, saturation and the anti-windup test.
 
-    Subclasses set :attr:`name`, :attr:`LAW`, :attr:`PRESETS` and :attr:`DEFAULT_PRESET` and
-    implement :meth:`reset` and :meth:`state` (and, for a law with memory, :meth:`law_state`
-    and :meth:`set_law_state`).
+    Subclasses set :attr:`name`, :attr:`LAW`, :attr:`PRESETS`, :attr:`DEFAULT_PRESET`, the
+    law's gains and memory by name (:attr:`GAINS`, :attr:`STATE`, each a ``NamedTuple`` of
+    floats; the presets' keys are :attr:`GAINS`' fields) and implement :meth:`state`.
 
     Parameters
     ----------
@@ -536,7 +536,8 @@ class VelocityController(Controller):
         self._gains, self.preset = resolve_gains(
             self.name, self.PRESETS, self.DEFAULT_PRESET, gains
         )
-        self._set_gains(self._gains)
+        #: The law's gains by name, as its plain-number function takes them.
+        self.law_gains = self.GAINS(**self._gains)
         self.saturated = False
         #: The last unsaturated torque request (T_r, T_l), for logging saturation.
         self.command = (0.0, 0.0)
@@ -572,10 +573,6 @@ class VelocityController(Controller):
             r.omega_d_dot,
         )
 
-    def _set_gains(self, gains: dict[str, float]) -> None:
-        """Copy the gains into float attributes (attribute reads are cheaper than dict lookups)."""
-        raise NotImplementedError
-
     @property
     def gains(self) -> dict:
         """The gains in use plus the base preset's name, JSON-serialisable; accepted back as
@@ -584,7 +581,11 @@ class VelocityController(Controller):
 
     def reset(self) -> None:
         """Zero every integrator and forget the previous step."""
-        raise NotImplementedError
+        #: The law's memory by name (a :attr:`STATE`), as its function returned it last.
+        self.law_state = self.STATE()
+        #: What the law reports besides (:class:`LawStep`'s ``aux1``, ``aux2``).
+        self.aux = (0.0, 0.0)
+        self.saturated = False
 
     def steering_changed(self, etas) -> None:
         """The nominal model takes the plant's gains (the mechanism's ratio is known): with
@@ -659,15 +660,20 @@ class VelocityController(Controller):
     #: The plain-number law :meth:`step` runs: ``law(dt, tracking, model, state, gains,
     #: saturation) -> LawStep`` (:func:`tt_mujoco.controllers.ismc_sta.ismc_sta_law`).
     LAW: ClassVar[Callable]
-    #: The law's gains as its plain-number function takes them (set by ``_set_gains``).
-    law_gains: tuple = ()
+    #: The law's gains, a ``NamedTuple`` of floats whose fields are the presets' keys.
+    GAINS: ClassVar[type]
+    #: The law's memory, a ``NamedTuple`` of floats, each 0.0 by default (may have none).
+    STATE: ClassVar[type]
 
-    def law_state(self) -> tuple:
-        """The law's memory as its plain-number function takes it (8 floats)."""
-        return (0.0,) * 8
-
-    def set_law_state(self, state, aux1: float = 0.0, aux2: float = 0.0) -> None:
-        """Take back the memory :meth:`law_state` gave, as the law returned it."""
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        gains = getattr(cls, "GAINS", None)
+        for preset, values in cls.PRESETS.items():
+            if gains is not None and tuple(values) != gains._fields:
+                raise TypeError(
+                    f"{cls.__name__}.PRESETS[{preset!r}] has the keys {tuple(values)}: they "
+                    f"must be {cls.__name__}.GAINS' fields {gains._fields}, in that order"
+                )
 
     def run_law(self, law: Callable, dt: float, phi, tracking: Tracking) -> tuple[float, float]:
         """One step of ``law`` (a plain-number law such as
@@ -675,8 +681,8 @@ class VelocityController(Controller):
         measurement, its memory and saturation flag carried over: :meth:`step`."""
         model = Nominal(*self.model(phi, tracking.v, tracking.omega))
         saturation = Saturation(self.torque_limit, self.saturated, self.anti_windup)
-        out = law(dt, tracking, model, self.law_state(), self.law_gains, saturation)
-        self.set_law_state(out.state, out.aux1, out.aux2)
+        out = law(dt, tracking, model, self.law_state, self.law_gains, saturation)
+        self.law_state, self.aux = out.state, (out.aux1, out.aux2)
         self.raise_for(out.status, model[2:], out.u1, out.u2)
         self.saturated = out.saturated
         self.command = (out.u1, out.u2)

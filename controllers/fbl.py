@@ -11,19 +11,30 @@ the paper's Delta1 mean of 3.5 m/s^2 and K_v = 8). FBL has no integrator, so not
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import ClassVar, NamedTuple
 
 from tt_mujoco.controllers.base import LAW_OK, LawStep, VelocityController, torques_of
 
-__all__ = ["FblController", "fbl_law"]
+__all__ = ["FblController", "FblGains", "FblState", "fbl_law"]
+
+
+class FblGains(NamedTuple):
+    """The error feedback's gains ``K = diag(k_v, k_omega)``."""
+
+    k_v: float
+    k_omega: float
+
+
+class FblState(NamedTuple):
+    """FBL has no memory."""
 
 
 def fbl_law(dt, tracking, model, state, gains, saturation):
     """One step of the law (module docstring) from plain numbers, in the form of
     :func:`tt_mujoco.controllers.ismc_sta.ismc_sta_law` (the compiled episode shares it);
-    ``gains`` is ``(k_v, k_omega, 0, 0, 0, 0, 0)`` and ``state`` is passed through."""
+    ``gains`` is a :class:`FblGains` and ``state`` (empty) is passed through."""
     z, f = tracking, model
-    k_v, k_omega, _, _, _, _, _ = gains
+    k_v, k_omega = gains.k_v, gains.k_omega
     r1 = z.v_d_dot - f.f1 - k_v * (z.v - z.v_d)
     r2 = z.omega_d_dot - f.f2 - k_omega * (z.omega - z.omega_d)
     status, T_r, T_l, u1, u2, s1, s2, _, _, _, _ = torques_of(
@@ -46,13 +57,8 @@ class FblController(VelocityController):
     LAW = staticmethod(fbl_law)
     PRESETS: ClassVar[dict[str, dict[str, float]]] = {"paper_6_2": {"k_v": 8.0, "k_omega": 5.0}}
     DEFAULT_PRESET = "paper_6_2"
-
-    def _set_gains(self, gains):
-        self._k1, self._k2 = gains["k_v"], gains["k_omega"]
-        self.law_gains = (self._k1, self._k2, 0.0, 0.0, 0.0, 0.0, 0.0)
-
-    def reset(self):
-        self.saturated = False
+    GAINS = FblGains
+    STATE = FblState
 
     def state(self):
         return {}

@@ -37,7 +37,7 @@ sig(S)``, which increases with S).
 from __future__ import annotations
 
 import math
-from typing import ClassVar
+from typing import ClassVar, NamedTuple
 
 from tt_mujoco.controllers.base import (
     LAW_OK,
@@ -47,14 +47,36 @@ from tt_mujoco.controllers.base import (
     torques_of,
 )
 
-__all__ = ["IsmcStaController", "ismc_sta_law"]
+__all__ = ["IsmcStaController", "IsmcStaGains", "IsmcStaState", "ismc_sta_law"]
 
 _sqrt = math.sqrt
 
 
-#: Where each of the law's state values is in its ``state`` (the integrators of e and of the
-#: super-twisting term, then the integrands held from the last step).
-INT_E_V, INT_E_OMEGA, STA_V, STA_OMEGA, RATE_E_V, RATE_E_OMEGA, RATE_W_V, RATE_W_OMEGA = range(8)
+class IsmcStaGains(NamedTuple):
+    """The law's gains: the sliding surfaces' ``lambda`` (eq. 24), the super-twisting gains
+    ``k1`` and ``k2`` (eq. 27) per channel, and the width ``eps`` of ``sig``."""
+
+    lambda_v: float
+    lambda_omega: float
+    k1_v: float
+    k1_omega: float
+    k2_v: float
+    k2_omega: float
+    eps: float
+
+
+class IsmcStaState(NamedTuple):
+    """The law's memory: the integrators of e (inside S) and of the super-twisting term, then
+    the integrands held over the coming interval (zero-order hold; 0 = frozen or first call)."""
+
+    int_e_v: float = 0.0
+    int_e_omega: float = 0.0
+    sta_v: float = 0.0
+    sta_omega: float = 0.0
+    rate_e_v: float = 0.0
+    rate_e_omega: float = 0.0
+    rate_w_v: float = 0.0
+    rate_w_omega: float = 0.0
 
 
 def ismc_sta_law(dt, tracking, model, state, gains, saturation):
@@ -70,10 +92,9 @@ def ismc_sta_law(dt, tracking, model, state, gains, saturation):
         Measured ``(v, omega)``, their targets and the targets' rates.
     model : Nominal
         The nominal model's ``f`` and ``g`` at the measurement.
-    state : tuple of 8 floats
-        ``(int_e_v, int_e_omega, sta_v, sta_omega, rate_e1, rate_e2, rate_w1, rate_w2)``.
-    gains : sequence of 7 floats
-        ``(lambda_v, lambda_omega, k1_v, k1_omega, k2_v, k2_omega, eps)``.
+    state : IsmcStaState
+        The integrators and the integrands held from the last step.
+    gains : IsmcStaGains
     saturation : Saturation
         The torque limit, whether the previous step saturated, and the anti-windup switch.
 
@@ -84,13 +105,14 @@ def ismc_sta_law(dt, tracking, model, state, gains, saturation):
         :data:`~tt_mujoco.controllers.base.LAW_OK`, ``LAW_SINGULAR`` (g cannot be inverted) or
         ``LAW_NOT_FINITE`` (the torques are not finite).
     """
-    lam1, lam2, k11, k12, k21, k22, eps = gains
+    lam1, lam2, eps = gains.lambda_v, gains.lambda_omega, gains.eps
+    k11, k12, k21, k22 = gains.k1_v, gains.k1_omega, gains.k2_v, gains.k2_omega
     z, f = tracking, model
     # Explicit Euler over the elapsed interval with the integrands of the previous call.
-    I1 = state[INT_E_V] + dt * state[RATE_E_V]
-    I2 = state[INT_E_OMEGA] + dt * state[RATE_E_OMEGA]
-    W1 = state[STA_V] + dt * state[RATE_W_V]
-    W2 = state[STA_OMEGA] + dt * state[RATE_W_OMEGA]
+    I1 = state.int_e_v + dt * state.rate_e_v
+    I2 = state.int_e_omega + dt * state.rate_e_omega
+    W1 = state.sta_v + dt * state.rate_w_v
+    W2 = state.sta_omega + dt * state.rate_w_omega
 
     e1 = z.v - z.v_d
     e2 = z.omega - z.omega_d
@@ -107,7 +129,7 @@ def ismc_sta_law(dt, tracking, model, state, gains, saturation):
         f.g11, f.g12, f.g21, f.g22, r1, r2, saturation.limit
     )
     if status != LAW_OK:
-        held = (I1, I2, W1, W2, e1, e2, w1, w2)
+        held = IsmcStaState(I1, I2, W1, W2, e1, e2, w1, w2)
         return LawStep(status, T_r, T_l, u1, u2, saturation.saturated, S1, S2, held)
     saturated = s1 != 0.0 or s2 != 0.0
     if saturated and saturation.anti_windup:
@@ -119,7 +141,8 @@ def ismc_sta_law(dt, tracking, model, state, gains, saturation):
             w1 = 0.0
         if deepens(w2, a12, a22, s1, s2):
             w2 = 0.0
-    return LawStep(LAW_OK, T_r, T_l, u1, u2, saturated, S1, S2, (I1, I2, W1, W2, e1, e2, w1, w2))
+    held = IsmcStaState(I1, I2, W1, W2, e1, e2, w1, w2)
+    return LawStep(LAW_OK, T_r, T_l, u1, u2, saturated, S1, S2, held)
 
 
 class IsmcStaController(VelocityController):
@@ -152,47 +175,16 @@ class IsmcStaController(VelocityController):
         },
     }
     DEFAULT_PRESET = "paper_6_1"
-
-    def reset(self):
-        self.int_e_v = self.int_e_omega = 0.0  # int(e), inside S
-        self.sta_v = self.sta_omega = 0.0  # int(k2 sig(S)), the super-twisting integral
-        self.S_v = self.S_omega = 0.0
-        # Integrands held over the coming interval (zero-order hold; 0 = frozen or first call).
-        self._rate_e1 = self._rate_e2 = self._rate_w1 = self._rate_w2 = 0.0
-        self.saturated = False
+    GAINS = IsmcStaGains
+    STATE = IsmcStaState
 
     def state(self):
+        s = self.law_state
         return {
-            "int_e_v": self.int_e_v,
-            "int_e_omega": self.int_e_omega,
-            "sta_int_v": self.sta_v,
-            "sta_int_omega": self.sta_omega,
-            "S_v": self.S_v,
-            "S_omega": self.S_omega,
+            "int_e_v": s.int_e_v,
+            "int_e_omega": s.int_e_omega,
+            "sta_int_v": s.sta_v,
+            "sta_int_omega": s.sta_omega,
+            "S_v": self.aux[0],
+            "S_omega": self.aux[1],
         }
-
-    def _set_gains(self, gains):
-        self._lam1, self._lam2 = gains["lambda_v"], gains["lambda_omega"]
-        self._k11, self._k12 = gains["k1_v"], gains["k1_omega"]
-        self._k21, self._k22 = gains["k2_v"], gains["k2_omega"]
-        self._eps = gains["eps"]
-        self.law_gains = (self._lam1, self._lam2, self._k11, self._k12, self._k21, self._k22)
-        self.law_gains += (self._eps,)
-
-    def law_state(self) -> tuple:
-        """The integrators and held integrands, in :func:`ismc_sta_law`'s order."""
-        return (
-            self.int_e_v,
-            self.int_e_omega,
-            self.sta_v,
-            self.sta_omega,
-            self._rate_e1,
-            self._rate_e2,
-            self._rate_w1,
-            self._rate_w2,
-        )
-
-    def set_law_state(self, state, S_v: float = 0.0, S_omega: float = 0.0) -> None:
-        self.int_e_v, self.int_e_omega, self.sta_v, self.sta_omega = state[INT_E_V : STA_OMEGA + 1]
-        self._rate_e1, self._rate_e2, self._rate_w1, self._rate_w2 = state[RATE_E_V:]
-        self.S_v, self.S_omega = S_v, S_omega

@@ -24,20 +24,32 @@ bound ``2 / dt`` of the 1 ms control period by a factor of 10.
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import ClassVar, NamedTuple
 
 from tt_mujoco.controllers.base import LAW_OK, LawStep, VelocityController, torques_of
 
-__all__ = ["SmcController", "smc_law"]
+__all__ = ["SmcController", "SmcGains", "SmcState", "smc_law"]
+
+
+class SmcGains(NamedTuple):
+    """The switching gains ``K`` and the boundary layer's half-widths ``Phi``."""
+
+    k_v: float
+    k_omega: float
+    phi_v: float
+    phi_omega: float
+
+
+class SmcState(NamedTuple):
+    """SMC has no memory."""
 
 
 def smc_law(dt, tracking, model, state, gains, saturation):
     """One step of the law (module docstring) from plain numbers, in the form of
     :func:`tt_mujoco.controllers.ismc_sta.ismc_sta_law` (the compiled episode runs it);
-    ``gains`` is ``(k_v, k_omega, phi_v, phi_omega, 0, 0, 0)`` and ``state`` is passed
-    through."""
+    ``gains`` is an :class:`SmcGains` and ``state`` (empty) is passed through."""
     z, f = tracking, model
-    k_v, k_omega, phi_v, phi_omega, _, _, _ = gains
+    k_v, k_omega, phi_v, phi_omega = gains.k_v, gains.k_omega, gains.phi_v, gains.phi_omega
     # sat() written out, so that NaN stays NaN (min and max would drop it) and the loop stops
     x_v, x_omega = (z.v - z.v_d) / phi_v, (z.omega - z.omega_d) / phi_omega
     sat_v = 1.0 if x_v > 1.0 else (-1.0 if x_v < -1.0 else x_v)
@@ -66,19 +78,9 @@ class SmcController(VelocityController):
         "default": {"k_v": 10.0, "k_omega": 10.0, "phi_v": 0.05, "phi_omega": 0.05},
     }
     DEFAULT_PRESET = "default"
-
-    def _set_gains(self, gains):
-        self.law_gains = (
-            gains["k_v"], gains["k_omega"], gains["phi_v"], gains["phi_omega"], 0.0, 0.0, 0.0,
-        )  # fmt: skip
-
-    def set_law_state(self, state, aux1: float = 0.0, aux2: float = 0.0) -> None:
-        self.sat_v, self.sat_omega = aux1, aux2
-
-    def reset(self):
-        self.saturated = False
-        self.sat_v = self.sat_omega = 0.0
+    GAINS = SmcGains
+    STATE = SmcState
 
     def state(self):
         """Where each channel is in its boundary layer: ``sat(e / phi)``, +-1 outside it."""
-        return {"sat_v": self.sat_v, "sat_omega": self.sat_omega}
+        return {"sat_v": self.aux[0], "sat_omega": self.aux[1]}

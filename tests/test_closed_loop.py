@@ -12,6 +12,7 @@ from tt_mujoco.controllers.plain import PlainLawController
 
 from tt_mujoco.reference.path_base import HOOKED_PATH
 from tt_mujoco.sim import Scenario, build, closed_loop, compiled, records
+from tt_mujoco.sim.law import PYTHON
 from tt_mujoco.sim.measure import TRAIN_FIELDS
 from tt_mujoco.sim.stepper import Stepper
 
@@ -187,7 +188,7 @@ def test_a_hooked_part_runs_the_step_as_the_built_in_one(
     stepper = Stepper(built)
     stepper.reset(np.random.default_rng(built.scenario.seed))
     loop, _, law, target, _ = stepper.begin(built.new_controller())
-    hooks = (law.kind == closed_loop.PYTHON, target.path_kind == HOOKED_PATH)
+    hooks = (law.kind == PYTHON, target.path_kind == HOOKED_PATH)
     hooks += (loop.disturbance_hook is not None,)
     assert sum(hooks) == 1  # the hook under test, and only it, is in the step's records
     built_in, user = simulate(scenario), simulate(built)

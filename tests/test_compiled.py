@@ -382,7 +382,7 @@ def test_the_compile_asked_at_exit_is_skipped_once_the_kernel_is_there(monkeypat
 def test_a_subclass_of_a_built_in_law_runs_its_compute_called_back(monkeypatch):
     from tt_mujoco.controllers.pid import PidController
 
-    from tt_mujoco.sim.closed_loop import PYTHON
+    from tt_mujoco.sim.law import PYTHON
     from tt_mujoco.sim.stepper import Stepper
 
     class Mine(PidController):  # may change what it runs: its Python compute is the law

@@ -8,14 +8,14 @@ import types
 import pytest
 
 from tt_mujoco.compiled_form import compiled_form, compiled_form_reason
-from tt_mujoco.sim import closed_loop, kernel_sources
+from tt_mujoco.sim import closed_loop, kernel_sources, law
 
 
 def test_every_function_the_step_calls_is_compiled_from_its_source():
     # the discovery over the step's bytecode finds the step's helpers, the built-in laws and
     # the metrics' search, and nothing outside the package
     shared = set(kernel_sources.SHARED)
-    assert set(closed_loop.LAWS) <= shared
+    assert set(law.LAWS) <= shared
     assert all(f.__module__.startswith("tt_mujoco") for f in shared)
     assert not shared & set(kernel_sources.STEP)
     for fn in (*kernel_sources.STEP, *shared):

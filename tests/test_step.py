@@ -102,7 +102,8 @@ def test_a_built_in_law_takes_named_records_and_returns_one():
     tracking = base.Tracking(v=1.0, omega=0.0, v_d=0.5, omega_d=0.0, v_d_dot=0.0, omega_d_dot=0.0)
     model = base.Nominal(f1=0.0, f2=0.0, g11=1.0, g12=0.0, g21=0.0, g22=1.0)
     saturation = base.Saturation(limit=15.0, saturated=False, anti_windup=True)
-    out = fbl.fbl_law(0.001, tracking, model, (0.0,) * 8, (8.0, 5.0) + (0.0,) * 5, saturation)
+    gains = fbl.FblGains(k_v=8.0, k_omega=5.0)
+    out = fbl.fbl_law(0.001, tracking, model, fbl.FblState(), gains, saturation)
     # u = g^-1 (v_d_dot - f - K e) with g = I: -8 * 0.5 on the first wheel
     assert out.status == base.LAW_OK and (out.T_r, out.T_l) == (-4.0, 0.0)
-    assert not out.saturated and out.state == (0.0,) * 8
+    assert not out.saturated and out.state == fbl.FblState()

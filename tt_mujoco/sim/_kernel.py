@@ -25,8 +25,7 @@ from tt_mujoco import exact
 from tt_mujoco.analysis import nearest
 from tt_mujoco.compiled_form import compiled_form_reason
 from tt_mujoco.reference import feedback
-from tt_mujoco.sim import closed_loop, disturbances, target_step
-from tt_mujoco.sim.closed_loop import LAWS
+from tt_mujoco.sim import closed_loop, disturbances, law, target_step
 from tt_mujoco.sim.kernel_sources import SHARED
 from tt_mujoco.vehicle import path_schedule
 
@@ -194,7 +193,7 @@ def _pointer(typingctx, array):
     return _P(array), codegen
 
 
-@compiled_form_of(closed_loop.pointer)
+@compiled_form_of(law.pointer)
 def _pointer_of(array):
     return lambda array: _pointer(array)
 
@@ -257,7 +256,7 @@ def _hooked_disturbance_at(loop, t):
     return call_back
 
 
-@compiled_form_of(closed_loop.python_law)
+@compiled_form_of(law.python_law)
 def _python_law(law):
     """A law Python computes (a controller class's ``compute``), called back: ``law.user`` is
     then a C function (:class:`PythonLawCallback`) that reads the law
@@ -284,10 +283,11 @@ def _dispatch(functions, args: str):
     return scope["run"]
 
 
-@compiled_form_of(closed_loop.run_law)
+@compiled_form_of(law.run_law)
 def _run_law(kind, dt, tracking, model, state, gains, saturation):
-    """The built-in law of index ``kind`` in :data:`LAWS`."""
-    return _dispatch(LAWS, "dt, tracking, model, state, gains, saturation")
+    """:func:`~tt_mujoco.sim.law.run_law` with a test of ``kind`` for each law, written out
+    (:func:`~tt_mujoco.sim.law.run_law_written_out`)."""
+    return law.run_law_written_out()
 
 
 @compiled_form_of(disturbances.run_disturbance)

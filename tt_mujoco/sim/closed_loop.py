@@ -9,10 +9,9 @@ the law saw and asked passes between them in ``law.reading``. The kernel's chunk
 
 These are plain functions: the compiled kernel (:mod:`tt_mujoco.sim._kernel`) compiles them
 from this source (:data:`BORROWING` and :data:`HALVES` say how), and CPython runs the same
-source. Two calls reach what only one of them has: :func:`mj_step` (MuJoCo's C step, by the
-addresses of the model and data) and :func:`pointer` (an array's address, for a compiled
-plain-number law); the kernel gives each its compiled form. Importing this module imports no
-numba.
+source. One call reaches what only one of them has: :func:`mj_step` (MuJoCo's C step, by the
+addresses of the model and data); the kernel gives it its compiled form, as it does the law's
+own (:mod:`tt_mujoco.sim.law`). Importing this module imports no numba.
 """
 
 from __future__ import annotations
@@ -26,7 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from tt_mujoco.compiled_form import compiled_form
-from tt_mujoco.controllers import base, compiled_laws
+from tt_mujoco.controllers import base
 from tt_mujoco.sim import (
     disturbances,
     faults,
@@ -40,6 +39,7 @@ from tt_mujoco.sim import (
     target_step,
     wind,
 )
+from tt_mujoco.sim.law import PYTHON, USER, law_step
 from tt_mujoco.sim.measure import (
     BETA,
     OMEGA,
@@ -65,35 +65,19 @@ from tt_mujoco.world import contact
 __all__ = [
     "BORROWING",
     "HALVES",
-    "LAWS",
     "actuate_step",
     "advance_after_payload",
     "floats",
-    "law_step",
     "mj_step",
-    "pointer",
-    "run_law",
     "run_steps",
     "sense_step",
 ]
 
-#: The built-in laws the loop runs, ``law(dt, tracking, model, state, gains, saturation) ->
-#: LawStep``, those of :func:`tt_mujoco.controllers.compiled_laws` in their registration
-#: order; a law's index here is its ``kind`` in the law record.
-LAWS = tuple(cls.LAW for cls in compiled_laws().values())
-
 RUNNING, FINISHED, BLEW_UP, JACKKNIFE = step.RUNNING, step.FINISHED, step.BLEW_UP, step.JACKKNIFE
 WARNING, LAW_FAILED, SINGULAR = step.WARNING, step.LAW_FAILED, step.SINGULAR
 PAYLOAD, RAISED, COLLISION = step.PAYLOAD, step.RAISED, step.COLLISION
-LAW_OK, LAW_SINGULAR, LAW_RAISED = base.LAW_OK, base.LAW_SINGULAR, base.LAW_RAISED
-#: Where a plain-number law's C entry says, in ``law.torques``, that the law raised (1.0):
-#: an exception cannot leave a C function (:mod:`tt_mujoco.sim.compiled`, its entry)
-USER_RAISED = 2
+LAW_OK = base.LAW_OK
 COS_BETA_MIN = reduced.COS_BETA_MIN
-#: ``law.kind`` of a user's plain-number law, and of a law that Python computes between the
-#: halves (a controller class, or a plain-number law when CPython runs the step)
-USER = len(LAWS)
-PYTHON = USER + 1
 #: What the kernel asks of a hook it calls back (:mod:`tt_mujoco.sim._kernel`, ``HOOK``): a
 #: path's (:mod:`tt_mujoco.sim.target_step`), or a disturbance's answer
 HOOK_CURVATURE, HOOK_POSE = target_step.HOOK_CURVATURE, target_step.HOOK_POSE
@@ -120,15 +104,6 @@ class Push(NamedTuple):
 #: where the wheels' rates are in the measurement, and a trailer's gain in a train's row
 WHEEL_RATES = tuple(measure.Measurement._fields.index(f"theta_{w}_dot") for w in ("r", "l"))
 ETA_COLUMN = train.TRAILER_ROW.index("eta")
-
-
-@compiled_form(
-    "a test of kind for each built-in law, written out (numba cannot index a tuple of functions)"
-)
-def run_law(kind: int, dt, tracking, model, state, gains, saturation):
-    """One step of the built-in law ``LAWS[kind]`` (the kernel compiles a test of ``kind``
-    for each law in :data:`LAWS`: a tuple of functions cannot be indexed at run time)."""
-    return LAWS[kind](dt, tracking, model, state, gains, saturation)
 
 
 def mujoco_library() -> str:
@@ -158,27 +133,6 @@ def floats(array):
     """A float array to read from: CPython reads a list of its values (a NumPy element is a
     NumPy scalar, whose arithmetic is slower than a float's); the kernel, the array itself."""
     return array.tolist() if isinstance(array, np.ndarray) else array
-
-
-@compiled_form("the array's data address as a C double pointer (an intrinsic)")
-def pointer(array):
-    """The address of a contiguous float array's data, as a C double pointer. A record as
-    CPython reads it (:func:`tt_mujoco.sim.records.interpreted`) is passed as a copy of its
-    fields: the law it goes to only reads it."""
-    if isinstance(array, list):
-        element = array[0]
-        array = np.array([getattr(element, name) for name in element.__slots__], dtype=float)
-    return array.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
-
-
-@compiled_form(
-    "the controller's Python compute called back through a C function (PythonLawCallback)"
-)
-def python_law(law):
-    """The law Python computes between the halves (:data:`PYTHON`): ``law.user``, called with
-    the law record; ``(status, T_r, T_l, u1, u2)``. The kernel calls it back through a C
-    function instead, which leaves them in ``law.torques``."""
-    return law.user(law)
 
 
 def _sense(plant, n, rows):
@@ -214,39 +168,6 @@ def _first_singular(phis, c, stop):
         if math.cos(eta * phis[k]) < COS_BETA_MIN:
             stop.phi, stop.eta = phis[k], eta
             return
-
-
-def law_step(law, v_m, w_m, dt, limit):
-    """The law's ``(status, T_r, T_l, u1, u2)`` at the reference and the nominal model in
-    ``law``; its state updated in place."""
-    if law.kind == PYTHON:
-        return python_law(law)
-    r, nominal, flags = law.reference[0], law.model[0], law.flags[0]
-    if law.kind == USER:
-        out = law.torques
-        law.user(
-            pointer(law.measurement_values), pointer(law.reference), pointer(law.model),
-            pointer(law.user_gains), pointer(law.user_state), pointer(out), dt, limit,
-        )  # fmt: skip
-        if out[USER_RAISED] != 0.0:
-            return LAW_RAISED, math.nan, math.nan, math.nan, math.nan
-        T_r, T_l = out[0], out[1]
-        if not (math.isfinite(T_r) and math.isfinite(T_l)):
-            return base.LAW_NOT_FINITE, T_r, T_l, T_r, T_l
-        return LAW_OK, T_r, T_l, T_r, T_l
-    s = law.state
-    state = (s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7])
-    tracking = base.Tracking(v_m, w_m, r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot)
-    model = base.Nominal(nominal.f1, nominal.f2, nominal.g11, nominal.g12, nominal.g21, nominal.g22)
-    saturation = base.Saturation(limit, flags.saturated != 0.0, law.anti_windup)
-    out = run_law(law.kind, dt, tracking, model, state, law.gains, saturation)
-    status, T_r, T_l, u1, u2, saturated, aux1, aux2, state = out
-    flags.aux1, flags.aux2 = aux1, aux2
-    for i in range(8):
-        s[i] = state[i]
-    if status == LAW_OK:
-        flags.saturated = 1.0 if saturated else 0.0
-    return status, T_r, T_l, u1, u2
 
 
 def _blow(mj, wrench, gusts):

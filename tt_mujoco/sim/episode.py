@@ -19,9 +19,8 @@ import numpy as np
 
 from tt_mujoco.defaults import JACKKNIFE_DEG
 from tt_mujoco.sim import closed_loop, records, schedule, step
+from tt_mujoco.sim.law import LAWS, PYTHON, hand_law_back, law_record
 from tt_mujoco.sim.scenario import jackknife_phi_deg
-
-USER = closed_loop.USER
 
 __all__ = [
     "blew_up_message",
@@ -101,9 +100,9 @@ def users_disturbance(built) -> bool:
 
 def is_law_class(controller) -> bool:
     """Whether ``controller`` is of a built-in law's own class (:data:`tt_mujoco.sim.
-    closed_loop.LAWS`; a subclass may change what it runs)."""
+    law.LAWS`; a subclass may change what it runs)."""
     law = getattr(type(controller), "LAW", None)
-    return law in closed_loop.LAWS and type(controller).__module__ == law.__module__
+    return law in LAWS and type(controller).__module__ == law.__module__
 
 
 def runs_built_in(controller) -> bool:
@@ -124,7 +123,7 @@ def carry_payloads(stepper, plant, faults, stop_record):
         stepper.plant.scale_trailer_mass(factor, int(trailer))
     records.set_value(stop_record, "payloads", 0.0)
     params = stepper.plant.params
-    train = _train_constants(params)
+    train = records.train_record(params)
     eta = TRAILER_ROW.index("eta")
     for k in range(len(train.trailers)):  # a schedule's gains in force, not the parameters'
         train.trailers[k, eta] = plant.train.trailers[k][eta]
@@ -141,7 +140,7 @@ def episode_records(stepper, controller, user, python=None) -> tuple:
     PYTHON`: a controller's :meth:`compute`, or an agent's torques)."""
 
     plant = _plant_record(stepper, stepper.built.nominal)
-    law = _law_record(controller, stepper.built.nominal, user, plant.steering, python)
+    law = law_record(controller, stepper.built.nominal, user, plant.steering, python)
     return records.EpisodeRecords(
         stepper.loop_record(),
         plant,
@@ -264,71 +263,12 @@ def _plant_record(stepper, nominal):
         ode_state=ode_state,
         ode=ode,
         timestep=timestep,
-        train=_train_constants(params),
+        train=records.train_record(params),
         train_joints=joints,
         places=np.zeros((n, 5)),
         speeds=np.zeros((n, 3)),
         slopes=np.zeros((5, len(ode_state))),
         steering=_steering_record(stepper, isinstance(plant, MujocoPlant)),
-    )
-
-
-def _train_constants(params):
-    """A train's constants with the trailers as a float array (no rows for one trailer)."""
-    from tt_mujoco.vehicle.train import TRAILER_ROW, train_constants
-
-    c = train_constants(params)
-    rows = np.array(c.trailers, dtype=float) if params.n_trailers > 1 else np.zeros(0)
-    return c._replace(trailers=rows.reshape(-1, len(TRAILER_ROW)))
-
-
-def _law_record(controller, nominal, user, steering, python):
-    from tt_mujoco.controllers.plain import PlainLawController
-    from tt_mujoco.sim.closed_loop import LAWS, PYTHON
-    from tt_mujoco.sim.measure import TRAIN_FIELDS
-    from tt_mujoco.vehicle import reduced
-
-    python_law = python is not None
-    if python_law or isinstance(controller, PlainLawController):
-        kind, gains, state, flags = len(LAWS), np.zeros(0), np.zeros(8), (0.0, 0.0, 0.0)
-        user_gains, user_state = np.zeros(0), np.zeros(0)
-        if python_law:
-            kind, user = PYTHON, python
-        else:
-            user_gains = controller.law_data()
-            user_state = np.array([getattr(controller.law_state, f) for f in controller.STATE])
-        anti_windup = False
-    else:
-        kind = LAWS.index(type(controller).LAW)
-        gains = np.array(controller.law_gains, dtype=float)
-        state = np.array(controller.law_state(), dtype=float)
-        flags = (float(controller.saturated), 0.0, 0.0)
-        user_gains, user_state = np.zeros(0), np.zeros(0)
-        anti_windup = bool(controller.anti_windup)
-    return records.LawRecord(
-        kind=kind,
-        gains=gains,
-        state=state,
-        flags=records.new_record(
-            records.LAW_FLAGS, **dict(zip(records.LAW_FLAGS, flags, strict=True))
-        ),
-        nominal=reduced.model_constants(nominal),
-        nominal_train=_train_constants(nominal),
-        phis=np.zeros(nominal.n_trailers),
-        rates=np.zeros((nominal.n_trailers, 3)),
-        anti_windup=anti_windup,
-        user=user,
-        user_gains=user_gains if user_gains.size else np.zeros(1),
-        user_state=user_state if user_state.size else np.zeros(1),
-        reference=records.new_record(records.REFERENCE_FIELDS),
-        model=records.new_record(records.NOMINAL_FIELDS),
-        measurement_values=np.zeros(len(records.MEASUREMENT_DTYPE)),
-        torques=np.zeros(5),
-        follows_steering=kind < len(LAWS),
-        steered_train=_train_constants(nominal.with_etas(tuple(steering.etas.tolist()))),
-        axle_slew_rate=float(getattr(controller, "axle_slew_rate", math.inf)),
-        reading=records.new_record(records.READING_FIELDS),
-        measurement_rows=np.zeros((nominal.n_trailers - 1, len(TRAIN_FIELDS))),
     )
 
 
@@ -408,15 +348,7 @@ def hand_back(stepper, controller, status, k, episode_records, changes) -> None:
     loop, plant, law, _, _ = episode_records
     stepper.k = k
     stepper.finished = status == step.FINISHED
-    if law.kind == USER:
-        for name, value in zip(controller.STATE, law.user_state.tolist(), strict=False):
-            setattr(controller.law_state, name, value)
-    elif law.kind < USER:
-        flags = records.values_of(law.flags)
-        controller.set_law_state(
-            tuple(np.asarray(law.state).tolist()), flags["aux1"], flags["aux2"]
-        )
-        controller.saturated = bool(flags["saturated"])
+    hand_law_back(controller, law)
     faults = stepper.faults
     if faults is not None:  # what a dropout holds, where the payloads acted
         faults.held[:] = np.asarray(loop.faults.held).tolist()
@@ -429,7 +361,7 @@ def hand_back(stepper, controller, status, k, episode_records, changes) -> None:
     if loop.ground.geoms.size:  # one mask per advance: k of them
         stepper.log_ground(loop.ground.masks[:k], loop.ground.arcs)
     if plant.steering.kind:  # a Python law has been told of every change as it came
-        told = None if law.kind == closed_loop.PYTHON else controller
+        told = None if law.kind == PYTHON else controller
         _hand_back_steering(stepper, told, plant.steering, changes)
 
 

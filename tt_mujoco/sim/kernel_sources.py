@@ -21,14 +21,14 @@ import types
 from tt_mujoco.analysis import nearest
 from tt_mujoco.compiled_form import compiled_form_reason
 from tt_mujoco.controllers import backing, path_view
-from tt_mujoco.sim import closed_loop, disturbances, measure, motors, records, wind
+from tt_mujoco.sim import closed_loop, disturbances, law, measure, motors, records, wind
 from tt_mujoco.vehicle import reduced, train
 from tt_mujoco.world import part
 
 __all__ = ["COMPILED_FORMS", "LAWS", "RECORDS", "SHARED", "STEP", "discover", "source_files"]
 
-#: The built-in laws (:data:`tt_mujoco.sim.closed_loop.LAWS`).
-LAWS = closed_loop.LAWS
+#: The built-in laws (:data:`tt_mujoco.sim.law.LAWS`).
+LAWS = law.LAWS
 
 #: The closed loop's step (:mod:`tt_mujoco.sim.closed_loop`), which the kernel registers with
 #: its own options.

@@ -50,9 +50,20 @@ __all__ = [
     "new_record",
     "record_dtype",
     "set_value",
+    "train_record",
     "value_of",
     "values_of",
 ]
+
+
+def train_record(params) -> TrainConstants:
+    """A train's constants (:func:`tt_mujoco.vehicle.train.train_constants`) with the
+    trailers' rows as a float array (no rows for one trailer)."""
+    from tt_mujoco.vehicle.train import TRAILER_ROW, train_constants
+
+    c = train_constants(params)
+    rows = np.array(c.trailers, dtype=float) if params.n_trailers > 1 else np.zeros(0)
+    return c._replace(trailers=rows.reshape(-1, len(TRAILER_ROW)))
 
 
 def record_dtype(fields) -> np.dtype:
@@ -258,13 +269,13 @@ class PlantRecord(NamedTuple):
 class LawRecord(NamedTuple):
     """The law the step runs on the controller's nominal model."""
 
-    #: a built-in law's index in :data:`tt_mujoco.sim.closed_loop.LAWS`, then
-    #: :data:`~tt_mujoco.sim.closed_loop.USER` (a user's plain-number law, compiled:
-    #: :mod:`tt_mujoco.controllers.plain`) or :data:`~tt_mujoco.sim.closed_loop.PYTHON` (a law
+    #: a built-in law's index in :data:`tt_mujoco.sim.law.LAW_CLASSES`, then
+    #: :data:`~tt_mujoco.sim.law.USER` (a user's plain-number law, compiled:
+    #: :mod:`tt_mujoco.controllers.plain`) or :data:`~tt_mujoco.sim.law.PYTHON` (a law
     #: that Python computes between the halves, ``user``)
     kind: int
+    #: a built-in law's gains and memory, in the order of its class's ``GAINS`` and ``STATE``
     gains: np.ndarray
-    #: a built-in law's state vector
     state: np.ndarray
     #: :data:`LAW_FLAGS`
     flags: np.ndarray
@@ -287,7 +298,7 @@ class LawRecord(NamedTuple):
     model: np.ndarray
     measurement_values: np.ndarray
     #: where a law the kernel calls out to writes what it computed: a plain-number law its two
-    #: torques; a Python law called back (closed_loop.python_law) its torques, its request
+    #: torques; a Python law called back (law.python_law) its torques, its request
     #: and its status
     torques: np.ndarray
     #: whether the law's model takes the scheduled gains (a built-in law's does), and a
