@@ -254,9 +254,15 @@ class Controller(ABC):
                 f"setup={setup!r} is not allowed: controllers are built with a ControllerSetup"
             )
         self.setup = setup
-        self._gains, self.preset = resolve_gains(
-            self.name, self.PRESETS, self.DEFAULT_PRESET, gains
-        )
+        self._gains, self.preset = self.resolve_gains(gains)
+
+    @classmethod
+    def resolve_gains(cls, gains: str | Mapping | None) -> tuple[dict[str, float], str]:
+        """``(values, preset)``: the class's gains for ``gains`` (a preset name, a dict of
+        overrides, or None), checked (:func:`resolve_gains`). The one place a run's
+        ``--gains`` is resolved: the controller's construction, the sweep's table and a
+        scenario file's check all call it."""
+        return resolve_gains(cls.name, cls.PRESETS, cls.DEFAULT_PRESET, gains)
 
     @classmethod
     def from_setup(cls, setup: ControllerSetup, gains: str | Mapping | None = None) -> Controller:
@@ -533,9 +539,7 @@ class VelocityController(Controller):
         self.model = model
         self.torque_limit = float(torque_limit)
         self.anti_windup = anti_windup
-        self._gains, self.preset = resolve_gains(
-            self.name, self.PRESETS, self.DEFAULT_PRESET, gains
-        )
+        self._gains, self.preset = self.resolve_gains(gains)
         #: The law's gains by name, as its plain-number function takes them.
         self.law_gains = self.GAINS(**self._gains)
         self.saturated = False

@@ -34,7 +34,6 @@ from tt_mujoco.analysis.metrics import DEFAULT_SUMMARY_KEYS, metric_name, summar
 from tt_mujoco.cliargs import BadInputError, Parser
 from tt_mujoco.config import CONFIG_FILE
 from tt_mujoco.controllers import controller_class
-from tt_mujoco.controllers.base import resolve_gains
 from tt_mujoco.defaults import (
     CAMERAS,
     CONTROLLER,
@@ -248,8 +247,7 @@ def scenario_from_argv(argv) -> Scenario:
 def _check_gains(controller: str, gains, where: str) -> None:
     """Gains from a file are checked against the controller now, so the message names the file."""
     try:
-        cls = controller_class(controller)
-        resolve_gains(cls.name, cls.PRESETS, cls.DEFAULT_PRESET, gains)
+        controller_class(controller).resolve_gains(gains)
     except ValueError as err:
         raise BadInputError(f"{where} [gains]: {err}") from None
 

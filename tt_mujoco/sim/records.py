@@ -58,11 +58,11 @@ __all__ = [
 
 def train_record(params) -> TrainConstants:
     """A train's constants (:func:`tt_mujoco.vehicle.train.train_constants`) with the
-    trailers' rows as a float array (no rows for one trailer)."""
+    trailers' rows as a float array, one row a trailer."""
     from tt_mujoco.vehicle.train import TRAILER_ROW, train_constants
 
     c = train_constants(params)
-    rows = np.array(c.trailers, dtype=float) if params.n_trailers > 1 else np.zeros(0)
+    rows = np.array(c.trailers, dtype=float)
     return c._replace(trailers=rows.reshape(-1, len(TRAILER_ROW)))
 
 
@@ -246,6 +246,9 @@ class PlantRecord(NamedTuple):
     """The plant the compiled loop advances: MuJoCo (``mj_step``) or the reduced ODE (RK4)."""
 
     mujoco: bool
+    #: the trailers N, counted once (:attr:`tt_mujoco.vehicle.params.Params.n_trailers`):
+    #: the step reads it here, never from an array's length
+    n_trailers: int
     #: plant steps per control step
     substeps: int
     mj: MujocoRecord
@@ -255,7 +258,7 @@ class PlantRecord(NamedTuple):
     ode: ModelConstants
     #: the reduced plant's RK4 step (s)
     timestep: float
-    #: a train's (true) constants, trailers as an N x 9 float array (0 rows for one trailer)
+    #: a train's (true) constants, trailers as an N x 9 float array
     train: TrainConstants
     #: MuJoCo: trailers 2..N as rows (hitch_q, hitch_v, steer_q, L_k, L0_k)
     train_joints: np.ndarray
@@ -280,7 +283,7 @@ class LawRecord(NamedTuple):
     #: :data:`LAW_FLAGS`
     flags: np.ndarray
     nominal: ModelConstants
-    #: a train's nominal constants (0 trailer rows for one trailer), its hitch angles and the
+    #: a train's nominal constants (a row per trailer), its hitch angles and the
     #: trailers' rates (scratch)
     nominal_train: TrainConstants
     phis: np.ndarray
@@ -447,7 +450,6 @@ class LoopRecord(NamedTuple):
     #: whether the disturbance enters as matched torques, or as a chassis wrench
     disturbed: bool
     wrench: bool
-    n_trailers: int
     #: the hitch limits of trailers 2..N (rad)
     hitch_limits: np.ndarray
     faults: FaultRecord

@@ -14,7 +14,6 @@ import numpy as np
 
 from tt_mujoco import watchdog
 from tt_mujoco.controllers import controller_class
-from tt_mujoco.controllers.base import resolve_gains
 from tt_mujoco.registry import is_hook
 from tt_mujoco.schema import Schema
 from tt_mujoco.sim import SCHEMA, Scenario, build, simulate
@@ -166,8 +165,7 @@ def scenario_values(options: Mapping, schema: Schema = SCHEMA) -> dict:
 
 
 def _resolved_gains(scenario: Scenario) -> tuple[str, dict]:
-    cls = controller_class(scenario.controller)
-    values, preset = resolve_gains(cls.name, cls.PRESETS, cls.DEFAULT_PRESET, scenario.gains)
+    values, preset = controller_class(scenario.controller).resolve_gains(scenario.gains)
     return preset, values
 
 
