@@ -8,7 +8,7 @@ S-curve, ISMC-STA, dynamic target, the paper's disturbance, no video, 1 ms step)
 2. replays those inputs open-loop from that state with MuJoCo's C rollout (``mujoco.rollout``,
    one thread, no Python per step): MuJoCo is deterministic, so the replay ends in exactly the
    run's final state (checked), and its cost is the physics of that episode;
-3. prints the closed loop's steps/s (the compiled loop of :mod:`tt_mujoco.sim.compiled`, and
+3. prints the closed loop's steps/s (the compiled loop of :mod:`tt_mujoco.sim.loop.compiled`, and
    the Python loop beside it), the replay's, and their ratio (issue 13's goal: >= 0.8);
 4. runs the same scenario on the reduced plant and prints its steps/s against the MuJoCo loop
    (goal: >= 5);
@@ -29,8 +29,9 @@ from collections import defaultdict
 import mujoco
 import numpy as np
 
-from tt_mujoco.sim import Scenario, Stepper, build, target_step
-from tt_mujoco.sim import closed_loop as closed_loop_module
+from tt_mujoco.sim import Scenario, Stepper, build
+from tt_mujoco.sim.loop import closed_loop as closed_loop_module
+from tt_mujoco.sim.loop import target_step
 from tt_mujoco.sim.simulate import run_episode
 
 
@@ -51,7 +52,7 @@ def python_loop():
 @contextlib.contextmanager
 def recording_mj_step(data, inputs: list):
     """Record ``data``'s ctrl, qfrc_applied and xfrc_applied before every ``mj_step`` that
-    CPython's step makes (:func:`tt_mujoco.sim.closed_loop.mj_step`; the compiled loop gives
+    CPython's step makes (:func:`tt_mujoco.sim.loop.closed_loop.mj_step`; the compiled loop gives
     the same numbers bit for bit): ``(ctrl, qfrc, xfrc, 1)`` per physics step."""
     step = closed_loop_module.mj_step
 
@@ -130,7 +131,7 @@ def compiled_replay(plant, inputs, initial) -> float:
     the compiled loop makes them: the physics share of a compiled control step."""
     from numba import njit
 
-    from tt_mujoco.sim import closed_loop, compiled
+    from tt_mujoco.sim.loop import closed_loop, compiled
 
     compiled.kernel()  # which compiles closed_loop.mj_step as a call of MuJoCo's symbol
     mj_step = closed_loop.mj_step
@@ -160,7 +161,7 @@ def compiled_replay(plant, inputs, initial) -> float:
 
 def parts(scenario: Scenario) -> dict[str, float]:
     """Microseconds per control step spent in each part of a run of CPython's step
-    (:mod:`tt_mujoco.sim.closed_loop`)."""
+    (:mod:`tt_mujoco.sim.loop.closed_loop`)."""
     built = build(scenario)
     stepper = Stepper(built)
     stepper.reset(np.random.default_rng(scenario.seed))

@@ -109,7 +109,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as folder:
         tmp = Path(folder)
         run(LONG, tmp / "warm-main")  # fills the cache if it is empty ...
-        from tt_mujoco.sim import compiled  # ... by a background compile: wait for it
+        from tt_mujoco.sim.loop import compiled  # ... by a background compile: wait for it
 
         while compiled.compile_in_progress(compiled._cache_dir()):
             time.sleep(1.0)

@@ -1,10 +1,11 @@
 """What calling the compiled step from Python costs per call: numba's unboxing of the records.
 
 Run: ``python benchmarks/bench_entry_call.py``. The Python loop could call the kernel's step
-halves (``sense_step``, ``actuate_step`` in :mod:`tt_mujoco.sim.closed_loop`) once each per step,
+halves (``sense_step``, ``actuate_step`` in :mod:`tt_mujoco.sim.loop.closed_loop`) once each per
+step,
 around a controller class; what such a call costs before any of the step runs is numba turning
 its Python arguments into native ones. This builds the records of an S-curve episode as
-:func:`tt_mujoco.sim.compiled.run_compiled` does (one trailer, then three), compiles functions
+:func:`tt_mujoco.sim.loop.compiled.run_compiled` does (one trailer, then three), compiles functions
 that take them and do nothing, calls each through its typed entry point (as the chunk loop is
 called) and prints the microseconds a call: with every record of the step, with the plant's
 record alone, and with one array.
@@ -18,10 +19,11 @@ os.environ.setdefault("TT_MUJOCO_COMPILE_NOW", "1")  # compile here, not in the 
 import numpy as np
 from numba import njit
 
-from tt_mujoco.sim import Scenario, compiled, episode, records
+from tt_mujoco.sim import Scenario
 from tt_mujoco.sim.build import build
-from tt_mujoco.sim.measure import TRAIN_FIELDS
-from tt_mujoco.sim.stepper import Stepper
+from tt_mujoco.sim.loop import compiled, episode, records
+from tt_mujoco.sim.loop.stepper import Stepper
+from tt_mujoco.sim.parts.measure import TRAIN_FIELDS
 
 CALLS = 20000
 

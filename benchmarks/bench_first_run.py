@@ -21,7 +21,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from tt_mujoco.sim import compiled
+from tt_mujoco.sim.loop import compiled
 
 ROOT = Path(__file__).resolve().parents[1]
 

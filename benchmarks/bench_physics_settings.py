@@ -32,7 +32,8 @@ import mujoco
 import numpy as np
 
 from tt_mujoco import validate
-from tt_mujoco.sim import Scenario, Stepper, build, physics, simulate
+from tt_mujoco.sim import Scenario, Stepper, build, simulate
+from tt_mujoco.sim.parts import physics
 from tt_mujoco.sim.simulate import run_episode
 from tt_mujoco.vehicle.params import Params
 

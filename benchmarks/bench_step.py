@@ -8,7 +8,7 @@ import time
 
 import mujoco
 
-from tt_mujoco.sim.physics import Vehicle
+from tt_mujoco.sim.parts.physics import Vehicle
 from tt_mujoco.vehicle.params import Params
 
 

@@ -9,7 +9,7 @@ It prints:
 
 1. Where one episode's time goes, in this process (median of ``--profile`` episodes of the sweep
    itself): setup (target, MuJoCo model, controller), the control loop (compiled, see
-   :mod:`tt_mujoco.sim.compiled`) and the metrics, beside the episode's physics floor: MuJoCo's
+   :mod:`tt_mujoco.sim.loop.compiled`) and the metrics, beside the episode's physics floor: MuJoCo's
    C rollout (``mujoco.rollout``, one thread) of its own ``mj_step`` inputs (recorded with the
    Python loop, which gives the same numbers; the rollout's final state is checked against the
    run's). The same replays are then

@@ -17,7 +17,7 @@ import numpy as np
 
 from tt_mujoco.outputs import read_timeseries, write_timeseries
 from tt_mujoco.sim import COLUMNS, Scenario, simulate
-from tt_mujoco.sim.timeseries import UNITS
+from tt_mujoco.sim.loop.timeseries import UNITS
 
 
 def six_hundred_seconds() -> dict[str, np.ndarray]:

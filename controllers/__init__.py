@@ -78,7 +78,7 @@ CONTROLLERS.register("nmpc", NmpcController)
 def compiled_laws() -> dict[str, type[VelocityController]]:
     """The built-in velocity laws, by registered name, in registration order: the registered
     classes of this package whose :attr:`~VelocityController.LAW` is a plain-number function of
-    their own module. The compiled loop runs each (:mod:`tt_mujoco.sim.kernel_sources`); adding
+    their own module. The compiled loop runs each (:mod:`tt_mujoco.sim.loop.kernel_sources`); adding
     one is its module and its line in :data:`CONTROLLERS`."""
     return {
         name: cls

@@ -3,7 +3,7 @@
 **The protocol** (:class:`Controller`). A controller is built once per run from a
 :class:`ControllerSetup` (the nominal parameters and model, the torque limit, the control period
 and the reference path) and its gains, and is then asked at every control step for the wheel
-torques ``(T_r, T_l)`` given the time, the full measurement (:class:`tt_mujoco.sim.measure.
+torques ``(T_r, T_l)`` given the time, the full measurement (:class:`tt_mujoco.sim.parts.measure.
 Measurement`, with the scenario's measurement noise and sensor faults already applied) and the
 target (:class:`Reference`: the reference point, its arc length and curvature, the velocity
 targets and their derivatives, and the path itself for nearest-point queries). The loop clips
@@ -313,7 +313,7 @@ class Controller(ABC):
         ----------
         t : float
             Time (s).
-        measurement : tt_mujoco.sim.measure.Measurement
+        measurement : tt_mujoco.sim.parts.measure.Measurement
             The vehicle as measured: tractor pose ``x, y, theta`` and velocities ``v, omega``;
             hitch and steering angles ``phi, beta``; trailer axle ``x0, y0, theta0, v0``;
             wheel angles and rates; slips. Noise and sensor faults are already applied.
@@ -395,7 +395,7 @@ def resolve_gains(
 
 #: Outcomes of a law's step from plain numbers (:func:`tt_mujoco.controllers.ismc_sta.
 #: ismc_sta_law`): done, ``g`` singular, torques not finite, and a user's compiled law that
-#: raised (its Python form says what: :func:`tt_mujoco.sim.episode.outcome`).
+#: raised (its Python form says what: :func:`tt_mujoco.sim.loop.episode.outcome`).
 LAW_OK, LAW_SINGULAR, LAW_NOT_FINITE, LAW_RAISED = 0, 1, 2, 3
 
 

@@ -81,7 +81,8 @@ class IsmcStaState(NamedTuple):
 
 def ismc_sta_law(dt, tracking, model, state, gains, saturation):
     """One step of the law (module docstring) from plain numbers: the one implementation,
-    which :meth:`IsmcStaController.step` and the compiled episode (:mod:`tt_mujoco.sim.compiled`)
+    which :meth:`IsmcStaController.step` and the compiled episode
+    (:mod:`tt_mujoco.sim.loop.compiled`)
     both run.
 
     Parameters

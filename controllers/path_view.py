@@ -12,7 +12,7 @@ The law is given two more arguments:
   ``d`` (m), ``n_trailers``, and the run's ``direction`` of travel (+1 forward, -1 backing up).
 
 Both functions are plain numbers on arrays: the kernel compiles them with the law (it
-registers them, :mod:`tt_mujoco.sim.kernel_sources`), and the Python loop runs the same text,
+registers them, :mod:`tt_mujoco.sim.loop.kernel_sources`), and the Python loop runs the same text,
 so both loops give the same numbers. Between samples the position is linear (the chord of 5
 mm of a 0.5 m radius strays 6 um from the arc), the heading and the curvature too.
 """

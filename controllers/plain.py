@@ -3,7 +3,7 @@
 A :class:`~tt_mujoco.controllers.Controller` subclass's ``compute`` is Python, which the
 compiled loop calls back at every step. A law written as one plain function of numbers and
 named records runs compiled, at the cost of the physics itself, wherever the episode has a
-compiled form (:mod:`tt_mujoco.sim.compiled`), and in the Python loop, with the same numbers,
+compiled form (:mod:`tt_mujoco.sim.loop.compiled`), and in the Python loop, with the same numbers,
 everywhere else::
 
     from tt_mujoco.controllers import plain_law
@@ -20,8 +20,8 @@ everywhere else::
 The law's arguments, each read by field name:
 
 - ``m``: the measurement as the controller sees it (the fields of
-  :class:`tt_mujoco.sim.measure.Measurement`, noise included);
-- ``r``: the reference (:data:`tt_mujoco.sim.records.REFERENCE_FIELDS`: ``t, s, kappa, v_d,
+  :class:`tt_mujoco.sim.parts.measure.Measurement`, noise included);
+- ``r``: the reference (:data:`tt_mujoco.sim.loop.records.REFERENCE_FIELDS`: ``t, s, kappa, v_d,
   omega_d, v_d_dot, omega_d_dot`` and the path's pose ``x_ref, y_ref, theta_ref`` at ``s``);
 - ``model``: the nominal model ``V_dot = f + g tau`` at the measurement (``f1, f2, g11, g12,
   g21, g22``);
@@ -67,7 +67,7 @@ from tt_mujoco.controllers.path_view import VEHICLE_FIELDS, path_table, vehicle_
 
 __all__ = ["NOMINAL_FIELDS", "REFERENCE_FIELDS", "PlainLawController", "plain_law"]
 
-#: What a law sees of the target (the same names as :mod:`tt_mujoco.sim.records`).
+#: What a law sees of the target (the same names as :mod:`tt_mujoco.sim.loop.records`).
 REFERENCE_FIELDS = (
     *("t", "s", "kappa", "v_d", "omega_d", "v_d_dot", "omega_d_dot"),
     *("x_ref", "y_ref", "theta_ref"),
@@ -99,7 +99,7 @@ class PlainLawController(Controller):
     """A plain-number law as a :class:`Controller`: the Python loop's form of it.
 
     Made by :func:`plain_law`; :attr:`LAW` is the function, :attr:`STATE` its state's field
-    names. :mod:`tt_mujoco.sim.compiled` compiles the same function for the compiled loop.
+    names. :mod:`tt_mujoco.sim.loop.compiled` compiles the same function for the compiled loop.
     """
 
     LAW: ClassVar[Callable]
@@ -124,7 +124,7 @@ class PlainLawController(Controller):
     def law_data(self) -> np.ndarray:
         """What the compiled loop hands the law as its gains: the gains, then (a law that sees
         the path) the vehicle's values, the number of the path table's samples and the table,
-        row by row (:func:`tt_mujoco.sim.compiled.compile_law` reads it back)."""
+        row by row (:func:`tt_mujoco.sim.loop.compiled_law.compile_law` reads it back)."""
         gains = np.array(list(self.gain_record) or [0.0], dtype=float)
         if not self.SEES_PATH:
             return gains

@@ -32,9 +32,9 @@ import time
 import numpy as np
 
 from tt_mujoco.sim import Scenario, build, simulate
+from tt_mujoco.sim.loop.stepper import Stepper
 from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sim.simulate import finish, run_episode
-from tt_mujoco.sim.stepper import Stepper
 
 CONTROLLERS = {
     "ISMC-STA": {"controller": "ismc_sta"},

@@ -4,7 +4,8 @@ the run calls."""
 
 from __future__ import annotations
 
-from tt_mujoco.sim import Scenario, build, episode, records, target_step
+from tt_mujoco.sim import Scenario, build
+from tt_mujoco.sim.loop import episode, records, target_step
 
 
 class SteppedTarget:

@@ -20,7 +20,8 @@ from tt_mujoco.controllers.backing import (
 )
 
 from tt_mujoco import run
-from tt_mujoco.sim import Scenario, build, simulate, target_step
+from tt_mujoco.sim import Scenario, build, simulate
+from tt_mujoco.sim.loop import target_step
 from tt_mujoco.vehicle import train
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.rolling import hitch_rates

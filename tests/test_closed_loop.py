@@ -1,4 +1,4 @@
-"""The closed loop's step (tt_mujoco.sim.closed_loop) is one source: CPython runs it on the
+"""The closed loop's step (tt_mujoco.sim.loop.closed_loop) is one source: CPython runs it on the
 records, the kernel compiles it, and both give the same numbers bit for bit."""
 
 from __future__ import annotations
@@ -11,10 +11,12 @@ import pytest
 from tt_mujoco.controllers.plain import PlainLawController
 
 from tt_mujoco.reference.path_base import HOOKED_PATH
-from tt_mujoco.sim import Scenario, build, closed_loop, compiled, records
-from tt_mujoco.sim.law import PYTHON
-from tt_mujoco.sim.measure import TRAIN_FIELDS
-from tt_mujoco.sim.stepper import Stepper
+from tt_mujoco.sim import Scenario, build
+from tt_mujoco.sim.loop import closed_loop, compiled, records
+from tt_mujoco.sim.loop.compiled_law import compile_law
+from tt_mujoco.sim.loop.law import PYTHON
+from tt_mujoco.sim.loop.stepper import Stepper
+from tt_mujoco.sim.parts.measure import TRAIN_FIELDS
 
 STEPS = 1500
 
@@ -52,7 +54,7 @@ def _records(options) -> tuple:
     controller = built.new_controller()
     controller.reset()
     plain = isinstance(controller, PlainLawController)
-    user = compiled.compile_law(type(controller)) if plain else compiled.kernel().no_user_law
+    user = compile_law(type(controller)) if plain else compiled.kernel().no_user_law
     loop, plant, law, target, stop = stepper.begin(controller, user, kernel=compiled.kernel())
     log = records.LogRecord(
         measurement=np.empty((STEPS, len(records.MEASUREMENT_DTYPE))),
@@ -121,7 +123,7 @@ USER_PARTS = textwrap.dedent(
 
     from tt_mujoco.controllers.ismc_sta import IsmcStaController
     from tt_mujoco.reference.paths import ArcsPath
-    from tt_mujoco.sim.disturbances import paper_disturbance_of
+    from tt_mujoco.sim.parts.disturbances import paper_disturbance_of
 
 
     class UsersArcs(ArcsPath):
@@ -175,7 +177,7 @@ def test_a_hooked_part_runs_the_step_as_the_built_in_one(
     tmp_path, monkeypatch, options, hooked, route
 ):
     from tt_mujoco.sim import simulate
-    from tt_mujoco.sim.stepper import Stepper
+    from tt_mujoco.sim.loop.stepper import Stepper
 
     # Both on CPython's step, or both compiled (the hook called back from the kernel).
     monkeypatch.setenv("TT_MUJOCO_COMPILED", route)

@@ -1,4 +1,4 @@
-"""The compiled episode (tt_mujoco.sim.compiled) against the Python loop: the same numbers bit
+"""The compiled episode (tt_mujoco.sim.loop.compiled) against the Python loop: the same numbers bit
 for bit, the same stops worded the same way, and the Python loop wherever it cannot run."""
 
 from __future__ import annotations
@@ -11,10 +11,11 @@ import pytest
 from tt_mujoco.controllers import CONTROLLERS
 
 from tt_mujoco.reference.paths import PATHS
-from tt_mujoco.sim import Scenario, build, compiled, simulate
-from tt_mujoco.sim.disturbances import DISTURBANCES
+from tt_mujoco.sim import Scenario, build, simulate
+from tt_mujoco.sim.loop import compiled
+from tt_mujoco.sim.loop.stepper import Stepper
+from tt_mujoco.sim.parts.disturbances import DISTURBANCES
 from tt_mujoco.sim.simulate import run_episode
-from tt_mujoco.sim.stepper import Stepper
 
 
 @pytest.fixture(autouse=True)
@@ -291,7 +292,7 @@ def test_a_csv_spline_path_runs_compiled_bit_for_bit(monkeypatch, tmp_path, plan
 
 
 def test_checkpoint_rows_are_the_same(monkeypatch, tmp_path):
-    from tt_mujoco.sim.checkpoint import read_checkpoint
+    from tt_mujoco.sim.loop.checkpoint import read_checkpoint
 
     scenario = Scenario(traj="circle", duration=3.0, noise_snr_db=25.0)
     rows = []
@@ -382,8 +383,8 @@ def test_the_compile_asked_at_exit_is_skipped_once_the_kernel_is_there(monkeypat
 def test_a_subclass_of_a_built_in_law_runs_its_compute_called_back(monkeypatch):
     from tt_mujoco.controllers.pid import PidController
 
-    from tt_mujoco.sim.law import PYTHON
-    from tt_mujoco.sim.stepper import Stepper
+    from tt_mujoco.sim.loop.law import PYTHON
+    from tt_mujoco.sim.loop.stepper import Stepper
 
     class Mine(PidController):  # may change what it runs: its Python compute is the law
         pass
@@ -541,8 +542,8 @@ def test_a_python_law_is_given_the_reference_records_leading_fields():
 
     from tt_mujoco.controllers import Reference
 
-    from tt_mujoco.sim import records
-    from tt_mujoco.sim.stepper import TARGET_FIELDS
+    from tt_mujoco.sim.loop import records
+    from tt_mujoco.sim.loop.python_law import GIVEN_REFERENCE_FIELDS as TARGET_FIELDS
 
     given = tuple(inspect.signature(Reference).parameters)
     assert records.REFERENCE_FIELDS[: len(TARGET_FIELDS)] == TARGET_FIELDS == given[:-1]
@@ -665,7 +666,7 @@ def test_the_cache_key_lists_the_sources_the_kernel_compiles():
     # it gives a form of its own (COMPILED_FORMS) are what the key hashes.
     import inspect
 
-    from tt_mujoco.sim import kernel_sources
+    from tt_mujoco.sim.loop import kernel_sources
 
     files = kernel_sources.source_files()
     shared = (
@@ -683,8 +684,8 @@ def test_the_cache_key_lists_the_sources_the_kernel_compiles():
 
 def _states_after_both_loops(monkeypatch, scenario, state_of) -> list:
     """``state_of(stepper, controller)`` after the episode on the Python loop, then compiled."""
+    from tt_mujoco.sim.loop.stepper import Stepper
     from tt_mujoco.sim.simulate import run_episode
-    from tt_mujoco.sim.stepper import Stepper
 
     built = build(scenario)
     assert compiled.unsupported(built, built.new_controller()) is None
@@ -733,7 +734,7 @@ def test_a_background_compile_that_fails_is_told_once_and_not_retried(monkeypatc
     cache.mkdir()
     lock = cache / compiled.COMPILE_LOCK
     lock.touch()
-    sabotage = "import tt_mujoco.sim.compiled as c\nc.warm_up = lambda: 1 / 0\n"
+    sabotage = "import tt_mujoco.sim.loop.compiled as c\nc.warm_up = lambda: 1 / 0\n"
     done = subprocess.run(
         [sys.executable, "-c", sabotage + compiled.compile_script(lock)],
         capture_output=True,

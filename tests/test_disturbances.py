@@ -1,4 +1,4 @@
-"""Built-in disturbances (tt_mujoco/sim/disturbances.py): their forms, which the step computes
+"""Built-in disturbances (tt_mujoco/sim/parts/disturbances.py): their forms, which the step computes
 itself, and the rolling resistance."""
 
 import math
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from tt_mujoco.sim import Scenario, simulate
-from tt_mujoco.sim.disturbances import (
+from tt_mujoco.sim.parts.disturbances import (
     DISTURBANCES,
     PaperDisturbance,
     RollingResistance,
@@ -15,7 +15,7 @@ from tt_mujoco.sim.disturbances import (
     form_of,
     paper_disturbance_of,
 )
-from tt_mujoco.sim.terrain import GRAVITY
+from tt_mujoco.sim.parts.terrain import GRAVITY
 
 
 def test_every_registered_class_of_the_module_is_a_built_in_form():

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tt_mujoco.sim import compiled
+from tt_mujoco.sim.loop import compiled
 
 
 @pytest.fixture(autouse=True)

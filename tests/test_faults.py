@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from tt_mujoco import outputs, run
-from tt_mujoco.sim import Scenario, build, faults, simulate
+from tt_mujoco.sim import Scenario, build, simulate
+from tt_mujoco.sim.parts import faults
 
 # S-curve, 4 s: the ramp (0-2 s) and 2 s of cruising on the first arc, paper disturbance on.
 S_CURVE = {"traj": "s_curve", "duration": 4.0}

@@ -12,7 +12,7 @@ websockets = pytest.importorskip("websockets")
 
 from tt_mujoco import run  # noqa: E402
 from tt_mujoco.sim import Scenario  # noqa: E402
-from tt_mujoco.sim.measure import Measurement  # noqa: E402
+from tt_mujoco.sim.parts.measure import Measurement  # noqa: E402
 from tt_mujoco.viz.foxglove_live import FoxgloveLive  # noqa: E402
 from tt_mujoco.world.builtin import parse_world  # noqa: E402
 

@@ -1,4 +1,5 @@
-"""Friction patches (tt_mujoco/sim/ground.py): where they are, what they do, on every route."""
+"""Friction patches (tt_mujoco/sim/parts/ground.py): where they are, what they do, on every
+route."""
 
 import subprocess
 import sys
@@ -10,7 +11,7 @@ from tt_mujoco.controllers import Controller
 from tt_mujoco import run
 from tt_mujoco.reference.paths import circle
 from tt_mujoco.sim import Scenario, build, simulate
-from tt_mujoco.sim.ground import GroundPatches, Patch, parse_patch
+from tt_mujoco.sim.parts.ground import GroundPatches, Patch, parse_patch
 
 
 class Push(Controller):

@@ -1,5 +1,5 @@
 """What the compiled kernel compiles is discovered from the step, and every substitution is
-declared beside the function it stands for (tt_mujoco.sim.kernel_sources,
+declared beside the function it stands for (tt_mujoco.sim.loop.kernel_sources,
 tt_mujoco.compiled_form)."""
 
 import inspect
@@ -8,7 +8,7 @@ import types
 import pytest
 
 from tt_mujoco.compiled_form import compiled_form, compiled_form_reason
-from tt_mujoco.sim import closed_loop, kernel_sources, law
+from tt_mujoco.sim.loop import closed_loop, kernel_sources, law
 
 
 def test_every_function_the_step_calls_is_compiled_from_its_source():
@@ -45,7 +45,7 @@ def test_a_helper_added_to_a_part_is_found_without_a_list(tmp_path):
 
 
 def test_the_compiled_forms_are_the_marked_functions_and_only_they():
-    kernel = pytest.importorskip("tt_mujoco.sim.compiled").kernel()
+    kernel = pytest.importorskip("tt_mujoco.sim.loop.compiled").kernel()
     given = set(kernel.COMPILED_FORMS_GIVEN)
     marked = set(kernel_sources.COMPILED_FORMS)
     assert given == marked, (
@@ -58,7 +58,7 @@ def test_the_compiled_forms_are_the_marked_functions_and_only_they():
 
 
 def test_a_compiled_form_for_an_unmarked_function_is_refused():
-    kernel = pytest.importorskip("tt_mujoco.sim.compiled").kernel()
+    kernel = pytest.importorskip("tt_mujoco.sim.loop.compiled").kernel()
 
     def unmarked(x):
         return x

@@ -1,4 +1,4 @@
-"""The law's part of the step (tt_mujoco.sim.law): built-in laws take their gains and memory by
+"""The law's part of the step (tt_mujoco.sim.loop.law): built-in laws take their gains and memory by
 name, the kernel's written-out dispatch runs each as the Python form does, and the record gives
 a controller's memory back as it took it."""
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from tt_mujoco.controllers import base, compiled_laws
 
-from tt_mujoco.sim import law
+from tt_mujoco.sim.loop import law
 from tt_mujoco.vehicle.params import Params
 
 

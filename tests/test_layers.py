@@ -82,3 +82,22 @@ def test_no_module_imports_a_layer_below_its_own():
 def test_every_subpackage_has_a_layer():
     packages = {p.name for p in (ROOT / "tt_mujoco").iterdir() if (p / "__init__.py").exists()}
     assert packages <= {*ORDER, *APPLICATIONS}, packages - {*ORDER, *APPLICATIONS}
+
+
+def test_the_simulated_parts_never_import_the_loop_or_the_run():
+    # tt_mujoco/sim/parts/ holds the physical parts; the loop (sim/loop/) and the run's setup
+    # (sim's top) compose them, never the other way round
+    wrong = []
+    for path, module in _modules():
+        if not module.startswith("tt_mujoco.sim.parts."):
+            continue
+        tree = ast.parse(path.read_text())
+        imported = _imported(tree)
+        for node in ast.walk(tree):  # "from tt_mujoco.sim import scenario" names modules
+            if isinstance(node, ast.ImportFrom) and node.module == "tt_mujoco.sim":
+                imported |= {f"tt_mujoco.sim.{a.name}" for a in node.names}
+        for name in imported:
+            inside = name.startswith("tt_mujoco.sim.") and name != "tt_mujoco.sim.parts"
+            if inside and not name.startswith("tt_mujoco.sim.parts."):
+                wrong.append(f"{module} imports {name}")
+    assert not wrong, "\n".join(wrong)

@@ -709,7 +709,7 @@ def test_projection_with_a_window_matches_brute_force():
 @pytest.fixture(scope="module")
 def compiled_projection():
     from tt_mujoco.analysis import geometry
-    from tt_mujoco.sim import compiled
+    from tt_mujoco.sim.loop import compiled
 
     compiled.kernel()  # loading it hands its projection to the geometry module
     projection = geometry._COMPILED

@@ -6,7 +6,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from tt_mujoco.sim.physics import Vehicle
+from tt_mujoco.sim.parts.physics import Vehicle
 from tt_mujoco.vehicle import mjcf as model
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params, same_path_eta
@@ -114,7 +114,7 @@ def test_scaled_params():
 
 
 def test_compiled_models_are_private_copies():
-    from tt_mujoco.sim.physics import compile_model
+    from tt_mujoco.sim.parts.physics import compile_model
 
     a = compile_model(Params())
     a.body_mass[a.body("trailer_body").id] = 99.0

@@ -1,4 +1,4 @@
-"""The DC motor actuator (tt_mujoco/sim/motors.py): its lag, its limits, on every route."""
+"""The DC motor actuator (tt_mujoco/sim/parts/motors.py): its lag, its limits, on every route."""
 
 import json
 import math
@@ -10,7 +10,7 @@ from tt_mujoco.controllers import Controller
 
 from tt_mujoco import run
 from tt_mujoco.sim import Scenario, build, simulate
-from tt_mujoco.sim.motors import DcMotors, available_torque
+from tt_mujoco.sim.parts.motors import DcMotors, available_torque
 from tt_mujoco.vehicle.params import Params
 
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from tt_mujoco import outputs, validate
-from tt_mujoco.sim.checkpoint import read_checkpoint
-from tt_mujoco.sim.stepper import CHECKPOINT_COLUMNS
+from tt_mujoco.sim.loop.checkpoint import read_checkpoint
+from tt_mujoco.sim.loop.stepper import CHECKPOINT_COLUMNS
 
 
 def test_output_folders_never_overwrite(tmp_path):

@@ -98,7 +98,7 @@ def test_a_window_keeps_the_lap_it_is_on():
 def test_the_compiled_functions_give_the_python_numbers_bit_for_bit(path):
     from numba import njit
 
-    from tt_mujoco.sim import compiled
+    from tt_mujoco.sim.loop import compiled
 
     compiled.kernel()  # registers the law library with numba
     table = path_table(path)

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from tt_mujoco.controllers import controller_class, plain_law
 
-from tt_mujoco.sim import Scenario, build, compiled, simulate
+from tt_mujoco.sim import Scenario, build, simulate
+from tt_mujoco.sim.loop import compiled
 
 LAW = "examples/kanayama.py:kanayama_law"
 CLASS = "examples/kanayama.py:KanayamaTracker"
@@ -180,7 +181,8 @@ def test_a_law_compiled_once_is_loaded_by_the_next_process_and_recompiled_when_e
     )
     script = (
         "from tt_mujoco.controllers import controller_class\n"
-        "from tt_mujoco.sim import Scenario, compiled, simulate\n"
+        "from tt_mujoco.sim import Scenario, simulate\n"
+        "from tt_mujoco.sim.loop import compiled_law as compiled\n"
         f"spec = {str(law) + ':cached_law'!r}\n"
         "entry = compiled.compile_law(controller_class(spec))\n"
         "run = simulate(Scenario(controller=spec, traj='circle', duration=2.5))\n"

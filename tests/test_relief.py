@@ -1,4 +1,4 @@
-"""A ramp and a rough ground (tt_mujoco/sim/relief.py): the scene's geoms are the height
+"""A ramp and a rough ground (tt_mujoco/sim/parts/relief.py): the scene's geoms are the height
 function, the vehicle rests on every wheel, the physics of the climb, every route."""
 
 import math
@@ -10,14 +10,14 @@ import pytest
 from tt_mujoco import run
 from tt_mujoco.sim import Scenario, build, simulate
 from tt_mujoco.sim.build import drawn_polyline
-from tt_mujoco.sim.physics import Vehicle, wheel_geoms
-from tt_mujoco.sim.relief import (
+from tt_mujoco.sim.parts.physics import Vehicle, wheel_geoms
+from tt_mujoco.sim.parts.relief import (
     MAX_RELIEF_NODES,
     SAMPLES_PER_WAVELENGTH,
     RampRelief,
     RoughRelief,
 )
-from tt_mujoco.sim.terrain import GRAVITY, Ramp, Rough, parse_terrain
+from tt_mujoco.sim.parts.terrain import GRAVITY, Ramp, Rough, parse_terrain
 from tt_mujoco.vehicle.mjcf import vehicle_xml
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.viz.scene import pose_vehicle

@@ -17,7 +17,7 @@ import pytest
 
 from tt_mujoco import render as render_cli
 from tt_mujoco import runfolder
-from tt_mujoco.sim.terrain import parse_terrain
+from tt_mujoco.sim.parts.terrain import parse_terrain
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.viz import demo, gl, render
@@ -172,7 +172,7 @@ def test_scene_draws_path_reference_point_and_traces_up_to_now(
 
 
 def test_pose_vehicle_puts_the_sites_at_P_and_P0():
-    from tt_mujoco.sim.physics import Vehicle
+    from tt_mujoco.sim.parts.physics import Vehicle
 
     p = Params(eta="paper")
     vehicle = Vehicle(p)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from tt_mujoco.sim.terrain import GRAVITY
+from tt_mujoco.sim.parts.terrain import GRAVITY
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 

@@ -8,8 +8,9 @@ import pytest
 from tt_mujoco.controllers import CONTROLLERS, compiled_laws, make_controller
 from tt_mujoco.controllers.smc import SmcController, smc_law
 
-from tt_mujoco.sim import Scenario, build, compiled, simulate
-from tt_mujoco.sim.kernel_sources import LAWS
+from tt_mujoco.sim import Scenario, build, simulate
+from tt_mujoco.sim.loop import compiled
+from tt_mujoco.sim.loop.kernel_sources import LAWS
 
 F = np.array([0.1, -0.2])
 G = np.array([[0.4, 0.3], [2.0, -3.0]])

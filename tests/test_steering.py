@@ -13,8 +13,8 @@ from tt_mujoco.analysis.metrics import follower_offtrack, trailer_offtrack
 from tt_mujoco.reference.reverse import ReverseTarget
 from tt_mujoco.reference.targets import make_target
 from tt_mujoco.sim import Scenario, simulate
-from tt_mujoco.sim.plant_reduced import ReducedPlant
-from tt_mujoco.sim.schedule import EtaScheduler, curvature_gains_of, gains_moved
+from tt_mujoco.sim.parts.plant_reduced import ReducedPlant
+from tt_mujoco.sim.parts.schedule import EtaScheduler, curvature_gains_of, gains_moved
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.steering import (
@@ -124,7 +124,7 @@ def test_scheduled_runs_hold_beta_at_the_exact_gain_on_both_plants():
 
 
 def test_scheduler_writes_the_steering_equality_polycoef():
-    from tt_mujoco.sim.plant_mujoco import MujocoPlant
+    from tt_mujoco.sim.parts.plant_mujoco import MujocoPlant
 
     plant = MujocoPlant(Params(), (0.0, 0.0, 0.0), 0.0, wrench=False)
     vehicle = plant.vehicle
@@ -160,7 +160,7 @@ def _steering_jacobian(plant):
 def _advance(plant, etas) -> None:
     """One physics step of a plant whose axles are actuated, as the loop takes it: each
     axle's target aimed from its hitch towards ``etas``, then MuJoCo's step."""
-    from tt_mujoco.sim.plant_mujoco import aim_steering_of
+    from tt_mujoco.sim.parts.plant_mujoco import aim_steering_of
 
     eq_data, ids, hitches_q, actuated, max_turn = plant.steering
     assert actuated
@@ -169,7 +169,7 @@ def _advance(plant, etas) -> None:
 
 
 def test_an_actuated_axle_holds_beta_eta_phi_and_loads_the_hitch_with_nothing():
-    from tt_mujoco.sim.plant_mujoco import MujocoPlant
+    from tt_mujoco.sim.parts.plant_mujoco import MujocoPlant
 
     linkage = MujocoPlant(Params(), (0.0, 0.0, 0.0), 0.5, wrench=False, phi0=0.2)
     lay = linkage.vehicle.layout
@@ -201,7 +201,7 @@ def test_an_actuated_axle_holds_beta_eta_phi_and_loads_the_hitch_with_nothing():
 
 
 def test_an_actuated_axle_starts_where_it_stands_and_turns_at_its_slew_rate():
-    from tt_mujoco.sim.plant_mujoco import MujocoPlant, aim_steering_of
+    from tt_mujoco.sim.parts.plant_mujoco import MujocoPlant, aim_steering_of
 
     # the pure update: at most max_turn a step, the target itself once within reach
     eq_data, qpos = np.zeros((1, 5)), np.array([-0.2])  # hitch angle -phi: phi = 0.2
@@ -303,7 +303,7 @@ def test_the_curvature_schedule_keeps_its_gains_where_no_axle_can_reach_the_path
     # The scheduler's plain form: the public functions' gains where a pose exists, and False
     # (the gains in force kept) on a path tighter than the trailer can follow, where the
     # public functions raise.
-    from tt_mujoco.sim.schedule import curvature_gains_of
+    from tt_mujoco.sim.parts.schedule import curvature_gains_of
 
     one, train = [(0.3, 0.4)], [(0.3, 0.4), (0.3, 0.4)]
     for kappa in (0.0, 1e-7, 0.5, -1.5):

@@ -1,5 +1,5 @@
-"""The step's shared checks and clips (tt_mujoco.sim.step) and the records they read
-(tt_mujoco.sim.records), which the Python and the compiled loop both run."""
+"""The step's shared checks and clips (tt_mujoco.sim.loop.step) and the records they read
+(tt_mujoco.sim.loop.records), which the Python and the compiled loop both run."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from tt_mujoco.reference.paths import arc_segment
-from tt_mujoco.sim import records, step
+from tt_mujoco.sim.loop import records, step
 
 LIMITS = records.Limits(
     torque_limit=15.0,
@@ -80,7 +80,7 @@ def test_no_function_of_the_step_takes_more_than_eight_positional_arguments():
     import ast
     from pathlib import Path
 
-    from tt_mujoco.sim import kernel_sources
+    from tt_mujoco.sim.loop import kernel_sources
 
     counts = _positional_counts(kernel_sources.SHARED)
     for name in ("closed_loop.py", "_kernel.py", "stepper.py", "episode.py", "compiled.py"):

@@ -1,4 +1,5 @@
-"""The ground's grade (tt_mujoco/sim/terrain.py): gravity in the plane's frame, on every route."""
+"""The ground's grade (tt_mujoco/sim/parts/terrain.py): gravity in the plane's frame, on every
+route."""
 
 import csv
 import json
@@ -12,7 +13,7 @@ from tt_mujoco.controllers import Controller
 
 from tt_mujoco import run
 from tt_mujoco.sim import Scenario, build, simulate
-from tt_mujoco.sim.terrain import GRAVITY, Terrain, parse_terrain
+from tt_mujoco.sim.parts.terrain import GRAVITY, Terrain, parse_terrain
 from tt_mujoco.vehicle.params import Params
 
 

@@ -12,7 +12,7 @@ import pytest
 
 from tt_mujoco import outputs, run
 from tt_mujoco.sim import Scenario, simulate
-from tt_mujoco.sim.timeseries import COLUMNS, train_columns
+from tt_mujoco.sim.loop.timeseries import COLUMNS, train_columns
 from tt_mujoco.sweep import runs as sweep_runs
 
 

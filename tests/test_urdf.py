@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import yourdfpy
 
-from tt_mujoco.sim.physics import Vehicle
+from tt_mujoco.sim.parts.physics import Vehicle
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.mjcf import AXLE_MASS, MODELS_DIR
 from tt_mujoco.vehicle.params import Params

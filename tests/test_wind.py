@@ -1,4 +1,5 @@
-"""Wind on the bodies (tt_mujoco/sim/wind.py): the drag law, the gusts, a push that physics says."""
+"""Wind on the bodies (tt_mujoco/sim/parts/wind.py): the drag law, the gusts, a push that physics
+says."""
 
 import math
 import subprocess
@@ -10,7 +11,7 @@ from tt_mujoco.controllers import Controller
 
 from tt_mujoco import run
 from tt_mujoco.sim import Scenario, build, simulate
-from tt_mujoco.sim.wind import AIR_DENSITY, GUST_TIME, Wind, drag_force, parse_wind
+from tt_mujoco.sim.parts.wind import AIR_DENSITY, GUST_TIME, Wind, drag_force, parse_wind
 from tt_mujoco.vehicle.params import Params
 
 
@@ -112,7 +113,7 @@ def test_a_negative_drag_area_is_refused_naming_it(tmp_path, capsys):
 
 
 def test_a_lever_gives_the_drag_a_yaw_moment_about_the_centre_of_mass():
-    from tt_mujoco.sim.wind import drag_moment
+    from tt_mujoco.sim.parts.wind import drag_moment
 
     assert drag_moment(0.5, 0.0, 0.0, 10.0) == pytest.approx(5.0)  # a side force ahead: +z
     assert drag_moment(0.5, math.pi / 2, 10.0, 0.0) == pytest.approx(-5.0)
@@ -121,7 +122,7 @@ def test_a_lever_gives_the_drag_a_yaw_moment_about_the_centre_of_mass():
 
 
 def test_the_wind_moment_reaches_the_bodies_and_turns_a_parked_tractor_its_way(monkeypatch):
-    from tt_mujoco.sim import closed_loop
+    from tt_mujoco.sim.loop import closed_loop
 
     seen = []
     blow = closed_loop._blow  # what CPython's step calls (the controller is a class)

@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tt_mujoco import run
-from tt_mujoco.sim.physics import Vehicle
+from tt_mujoco.sim.parts.physics import Vehicle
 from tt_mujoco.sim.scenario import Scenario
 from tt_mujoco.sim.simulate import simulate
 from tt_mujoco.vehicle.footprint import footprints

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from tt_mujoco.sim import COLUMNS, Result, Scenario
 from tt_mujoco.sim import simulate as _simulate
-from tt_mujoco.sim.timeseries import UNITS, unit_of
+from tt_mujoco.sim.loop.timeseries import UNITS, unit_of
 
 __all__ = ["Run", "load_scenario", "simulate"]
 

@@ -1,10 +1,10 @@
 """The one visible form of a substitution: a function the compiled kernel replaces.
 
 The closed loop's step is plain Python that CPython runs and numba compiles from the same
-source (:mod:`tt_mujoco.sim.kernel_sources` discovers what it calls). A few functions cannot be
+source (:mod:`tt_mujoco.sim.loop.kernel_sources` discovers what it calls). A few functions cannot be
 compiled as written: MuJoCo's C step is called by its symbol, Python's code is called back
 through C functions, Python's own ``math.hypot`` must be ported to give its last bit. Each is
-marked here, beside its Python form, with why; :mod:`tt_mujoco.sim._kernel` gives each its
+marked here, beside its Python form, with why; :mod:`tt_mujoco.sim.loop._kernel` gives each its
 compiled form, and ``tests/test_kernel_sources.py`` fails when a marked function has none or a
 compiled form stands for an unmarked one. Importing this module imports nothing.
 """

@@ -12,7 +12,7 @@ fields or of the command line's long options, ``_`` for ``-`` (``traj``, ``noise
     Mr = 7.5
     [gains]             # or gains = "paper_6_2"; as --gains
     k1_v = 12.0
-    [[faults]]          # as --fault KIND:key=value,...  (see tt_mujoco.sim.faults)
+    [[faults]]          # as --fault KIND:key=value,...  (see tt_mujoco.sim.parts.faults)
     kind = "dropout"
     t = 2.0
 

@@ -1,8 +1,8 @@
 """Float functions whose compiled form must give Python's numbers to the last bit.
 
-The shared step functions (:mod:`tt_mujoco.sim.kernel_sources`) call these instead of their
+The shared step functions (:mod:`tt_mujoco.sim.loop.kernel_sources`) call these instead of their
 :mod:`math` namesakes where numba's version differs from Python's: the compiled kernel
-(:mod:`tt_mujoco.sim._kernel`) overloads each with an exact port of CPython's algorithm, so the
+(:mod:`tt_mujoco.sim.loop._kernel`) overloads each with an exact port of CPython's algorithm, so the
 compiled and the Python loop stay bit for bit the same.
 """
 

@@ -9,7 +9,7 @@ chooses the wheel torques:
   ``Box(-1, 1, (2,))`` (``action_units="torque"``: in N m, ``Box(-torque_limit,
   torque_limit)``); the actuators saturate, so values outside are clipped, as a real motor
   driver would.
-- **observation**: the measurement layer (:class:`tt_mujoco.sim.measure.Measurement`, its 19
+- **observation**: the measurement layer (:class:`tt_mujoco.sim.parts.measure.Measurement`, its 19
   fields in order, with the scenario's measurement noise on v and omega and any sensor dropout
   applied), then for a train trailers 2..N (``x0_k, y0_k, theta0_k, phi_k, beta_k, v0_k``, as
   the time series' columns), then the path-frame errors of every unit against the reference
@@ -57,7 +57,7 @@ One step is one control period ``scenario.control_dt`` (default here 0.01 s: 10 
 steps of 1 ms). The default scenario has no disturbance (``Scenario(disturbance="none")``);
 pass any other: every scenario option works (reverse driving, the curvature-scheduled eta,
 path feedback, faults, path hooks, ...), because the environment drives the same
-:class:`~tt_mujoco.sim.stepper.Stepper` as :func:`~tt_mujoco.sim.simulate`. The noise seed is
+:class:`~tt_mujoco.sim.loop.stepper.Stepper` as :func:`~tt_mujoco.sim.simulate`. The noise seed is
 ``reset(seed=...)``; the first reset without a seed uses the scenario's, so the same seed gives
 the same episode on every route. Registered as ``tt_mujoco/TractorTrailer-v0``; vectorised
 with ``gymnasium.make_vec(ENV_ID, num_envs=N, vectorization_mode="sync")`` (or "async").
@@ -89,9 +89,9 @@ from tt_mujoco.defaults import MAX_SPEED
 from tt_mujoco.reference.feedback import path_errors
 from tt_mujoco.schema import Schema
 from tt_mujoco.sim.build import drawn_polyline
-from tt_mujoco.sim.episode import has_closed_form
-from tt_mujoco.sim.measure import Measurement
-from tt_mujoco.sim.timeseries import train_columns
+from tt_mujoco.sim.loop.episode import has_closed_form
+from tt_mujoco.sim.loop.timeseries import train_columns
+from tt_mujoco.sim.parts.measure import Measurement
 from tt_mujoco.sim.usercode import CheckedPath, path_label
 from tt_mujoco.viz.render import Offscreen
 
@@ -372,7 +372,7 @@ class TractorTrailerEnv(gymnasium.Env):
         return self._renderer.render()
 
     def last_measurement(self):
-        """The measurement of the last step (:class:`tt_mujoco.sim.measure.Measurement`: true
+        """The measurement of the last step (:class:`tt_mujoco.sim.parts.measure.Measurement`: true
         poses, the scenario's noise on v and omega)."""
         return self._me
 

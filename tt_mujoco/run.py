@@ -56,7 +56,7 @@ from tt_mujoco.outputs import (
 from tt_mujoco.progress import progress_bar
 from tt_mujoco.schema import Option, Schema, boolean, choice, number
 from tt_mujoco.sim import COLUMNS, SCHEMA, Scenario
-from tt_mujoco.sim.timeseries import UNITS, train_columns, unit_of
+from tt_mujoco.sim.loop.timeseries import UNITS, train_columns, unit_of
 
 __all__ = [
     "OUTPUTS",
@@ -567,7 +567,7 @@ def _abandon(out: Path, created: bool, live, message: str, code: int) -> int:
 
 
 def _kept_rows(out: Path) -> dict:
-    from tt_mujoco.sim.checkpoint import read_checkpoint
+    from tt_mujoco.sim.loop.checkpoint import read_checkpoint
 
     try:
         return read_checkpoint(out / CHECKPOINT_FILE)
@@ -627,7 +627,8 @@ def _interrupted(out: Path, created: bool, live) -> int:
         live.close()
     return _fail(
         f"interrupted at t={t[-1]:.3f} s: the {len(t)} rows computed are kept in {partial} "
-        "(read them with tt_mujoco.sim.checkpoint.read_checkpoint or pyarrow.ipc.open_stream); "
+        "(read them with tt_mujoco.sim.loop.checkpoint.read_checkpoint or "
+        "pyarrow.ipc.open_stream); "
         "the folder has no metrics.json, so it is labelled incomplete",
         EXIT_INTERRUPTED,
     )
@@ -649,7 +650,7 @@ def steering_shown(s: Scenario) -> str:
 
 def _print_summary(result, out: Path, written, notes) -> None:
 
-    from tt_mujoco.sim import faults
+    from tt_mujoco.sim.parts import faults
 
     s = result.scenario
     print(

@@ -9,7 +9,7 @@ one line, exit code 2) naming the file and the field, column or row. What is che
   no key given twice), an object, and each declared field of the declared type where present
   (:data:`METRICS_FIELDS`); the vehicle's parameters are ``Params`` fields with allowed values;
 - the time series (``timeseries.parquet`` or ``.csv``): readable, at least one row, every
-  column a run of that train writes (:data:`tt_mujoco.sim.timeseries.COLUMNS` and the
+  column a run of that train writes (:data:`tt_mujoco.sim.loop.timeseries.COLUMNS` and the
   trailers' columns), the states finite, time increasing, as many rows as ``steps`` says, and
   the axle spacing that ``plant_params`` implies (:func:`check_trace`);
 - ``reference_path.parquet``, when the run kept it: at least two finite rows of ``x, y``;
@@ -39,7 +39,7 @@ from tt_mujoco.outputs import (
     run_timeseries_file,
     shown_json,
 )
-from tt_mujoco.sim.timeseries import COLUMNS, train_columns
+from tt_mujoco.sim.loop.timeseries import COLUMNS, train_columns
 from tt_mujoco.vehicle.params import Params
 
 __all__ = [
@@ -87,7 +87,7 @@ METRICS_FIELDS = (
     JsonField("config.params", (dict,), "a table of the vehicle's parameters"),
 )
 #: The time-series columns the readers use (with the trailers' columns of a train): every run
-#: writes them (:data:`tt_mujoco.sim.timeseries.COLUMNS`).
+#: writes them (:data:`tt_mujoco.sim.loop.timeseries.COLUMNS`).
 READ_COLUMNS = (
     *("t", "x", "y", "theta", "phi", "beta", "v", "omega", "x0", "y0", "theta0", "v0"),
     *("theta_l", "theta_r", "T_r", "T_l", "x_ref", "y_ref", "v_d", "omega_d"),

@@ -37,7 +37,7 @@ from tt_mujoco.outputs import (
     release_folder,
     write_json,
 )
-from tt_mujoco.sim.physics import Vehicle
+from tt_mujoco.sim.parts.physics import Vehicle
 from tt_mujoco.validate_train import damped_program, run_train, torque_program_dynamics
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import MAX_TRAILERS, Params

@@ -22,7 +22,7 @@ import mujoco
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from tt_mujoco.sim.physics import Vehicle
+from tt_mujoco.sim.parts.physics import Vehicle
 from tt_mujoco.vehicle import reduced, train
 from tt_mujoco.vehicle.params import Params
 

@@ -47,7 +47,7 @@ _WINDOW_CHUNKS = 512
 
 
 #: The compiled :func:`tt_mujoco.analysis.nearest.nearest_segments_of`, once
-#: :mod:`tt_mujoco.sim.compiled` has loaded its kernel in this process (None: the vectorised
+#: :mod:`tt_mujoco.sim.loop.compiled` has loaded its kernel in this process (None: the vectorised
 #: search below serves alone).
 _COMPILED = None
 

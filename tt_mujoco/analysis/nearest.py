@@ -4,7 +4,7 @@ distance to a segment (:func:`segment_distance2_of`), and the table of segments 
 they read (:class:`SegmentTable`, made by :class:`tt_mujoco.analysis.geometry.Polyline`).
 
 Every function here takes numbers and arrays only, so that numba compiles it as it stands
-(:mod:`tt_mujoco.sim.kernel_sources` lists them) and Python runs the same text.
+(:mod:`tt_mujoco.sim.loop.kernel_sources` lists them) and Python runs the same text.
 """
 
 from __future__ import annotations

@@ -17,7 +17,7 @@ import math
 
 from tt_mujoco.paper.values import fmt, metric_of
 from tt_mujoco.reference.paths import get_path
-from tt_mujoco.sim.terrain import GRAVITY
+from tt_mujoco.sim.parts.terrain import GRAVITY
 
 __all__ = ["CONTROLLERS", "GRADE_DEG", "PATHS", "cases", "robustness_markdown", "run_key"]
 

@@ -146,7 +146,7 @@ def cycloid_pose_of(s: float) -> tuple[float, float, float]:
 
 def cycloid_curvature_and_rate(s: float) -> tuple[float, float]:
     """The cycloid's ``(kappa(s), dkappa/ds(s))`` as plain floats, held at the ends (the
-    compiled episode, :mod:`tt_mujoco.sim.compiled`, shares it)."""
+    compiled episode, :mod:`tt_mujoco.sim.loop.compiled`, shares it)."""
     u = _CYCLOID_MID - min(max(s, 0.0), CYCLOID_LENGTH)
     if s < 0.0 or s > CYCLOID_LENGTH:
         return -1.0 / math.sqrt(16.0 - u * u), 0.0

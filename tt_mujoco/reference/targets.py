@@ -17,7 +17,7 @@ extraction lost the labels themselves (see docs/paper-notes.md).
 
 A target object is the run's configuration (its path, speed profile, kind and duration) and
 its noise-free reference; the step computes ``z_d`` from the target's record
-(:func:`tt_mujoco.sim.target_step.target_step_of`, with :func:`yaw_rate_targets` and
+(:func:`tt_mujoco.sim.loop.target_step.target_step_of`, with :func:`yaw_rate_targets` and
 :func:`travelled` here), so the speed profiles and paths each have a scalar fast path
 (``state``, ``curvature_and_rate``) next to their vectorised methods, and tests keep the two
 equal.
@@ -358,7 +358,7 @@ class StationSpeed(SpeedProfile):
 class Target:
     """Common interface of the tracking targets: the path, the speed profile, the kind
     (``"static"`` or ``"dynamic"``) and the duration of a run, and the noise-free reference.
-    The step reads it as a record (:func:`tt_mujoco.sim.target_step.target_step_of`).
+    The step reads it as a record (:func:`tt_mujoco.sim.loop.target_step.target_step_of`).
 
     Parameters
     ----------

@@ -30,9 +30,9 @@ from tt_mujoco.defaults import JACKKNIFE_DEG, MAX_SPEED
 _WHERE = {
     "Build": "build",
     "build": "build",
-    "disturbance": "disturbances",
-    "Plant": "plant",
-    "StopRun": "plant",
+    "disturbance": "parts.disturbances",
+    "Plant": "parts.plant",
+    "StopRun": "parts.plant",
     "DISTURBANCE_MODES": "scenario",
     "PLANTS": "scenario",
     "SCHEMA": "scenario",
@@ -41,8 +41,8 @@ _WHERE = {
     "jackknife_phi_deg": "scenario",
     "Result": "simulate",
     "simulate": "simulate",
-    "Stepper": "stepper",
-    "COLUMNS": "timeseries",
+    "Stepper": "loop.stepper",
+    "COLUMNS": "loop.timeseries",
 }
 
 

@@ -35,15 +35,15 @@ from tt_mujoco.reference.feedback import PathFeedback
 from tt_mujoco.reference.reverse import ReverseTarget
 from tt_mujoco.reference.targets import make_target, target_on
 from tt_mujoco.registry import call_hook, is_hook
-from tt_mujoco.sim.disturbances import make_disturbance
-from tt_mujoco.sim.faults import FaultSchedule, parse_faults
-from tt_mujoco.sim.ground import GroundPatches, parse_patches
-from tt_mujoco.sim.plant import Plant
-from tt_mujoco.sim.plant_reduced import ReducedPlant
-from tt_mujoco.sim.relief import relief_of
+from tt_mujoco.sim.parts.disturbances import make_disturbance
+from tt_mujoco.sim.parts.faults import FaultSchedule, parse_faults
+from tt_mujoco.sim.parts.ground import GroundPatches, parse_patches
+from tt_mujoco.sim.parts.plant import Plant
+from tt_mujoco.sim.parts.plant_reduced import ReducedPlant
+from tt_mujoco.sim.parts.relief import relief_of
+from tt_mujoco.sim.parts.schedule import EtaScheduler, PathEtaScheduler
+from tt_mujoco.sim.parts.terrain import parse_terrain
 from tt_mujoco.sim.scenario import Scenario
-from tt_mujoco.sim.schedule import EtaScheduler, PathEtaScheduler
-from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.vehicle.params import Params, jackknife_phi_deg
 from tt_mujoco.vehicle.path_schedule import PathSchedule, axle_chain, path_schedule
 from tt_mujoco.world.builtin import parse_world
@@ -116,7 +116,7 @@ def noise_std(target, duration: float, snr_db: float) -> tuple[float, float]:
 
 def _plant_class(name: str) -> type[Plant]:
     if name == "mujoco":
-        from tt_mujoco.sim.plant_mujoco import MujocoPlant  # MuJoCo only when it is used
+        from tt_mujoco.sim.parts.plant_mujoco import MujocoPlant  # MuJoCo only when it is used
 
         return MujocoPlant
     return ReducedPlant
@@ -156,7 +156,7 @@ class Build:
     initial_hitches: tuple = ()
     #: The sensor delay in control steps (``Scenario.sensor_delay / control_dt``).
     delay_steps: int = 0
-    #: The ground's shape (a ramp, a rough ground: :mod:`tt_mujoco.sim.relief`), else None.
+    #: The ground's shape (a ramp, a rough ground: :mod:`tt_mujoco.sim.parts.relief`), else None.
     relief: Any = None
     #: The obstacles and the goal (:mod:`tt_mujoco.world`), else None.
     world: Any = None

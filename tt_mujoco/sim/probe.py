@@ -10,8 +10,8 @@ import numpy as np
 
 from tt_mujoco.guard import users_failure
 from tt_mujoco.registry import HookError, describe_failure, is_hook
-from tt_mujoco.sim.plant import StopRun
-from tt_mujoco.sim.stepper import Stepper
+from tt_mujoco.sim.loop.stepper import Stepper
+from tt_mujoco.sim.parts.plant import StopRun
 from tt_mujoco.sim.usercode import (
     checked_disturbance,
     checked_signals,

@@ -36,11 +36,11 @@ from tt_mujoco.schema import (
     table,
     text,
 )
-from tt_mujoco.sim.faults import parse_fault
-from tt_mujoco.sim.ground import parse_patch, parse_patches
-from tt_mujoco.sim.motors import ACTUATORS
-from tt_mujoco.sim.terrain import parse_terrain
-from tt_mujoco.sim.wind import parse_wind
+from tt_mujoco.sim.parts.faults import parse_fault
+from tt_mujoco.sim.parts.ground import parse_patch, parse_patches
+from tt_mujoco.sim.parts.motors import ACTUATORS
+from tt_mujoco.sim.parts.terrain import parse_terrain
+from tt_mujoco.sim.parts.wind import parse_wind
 from tt_mujoco.vehicle.params import (
     INERTIA_FIELDS,
     MASS_FIELDS,
@@ -279,7 +279,7 @@ class Scenario:
         consts=(("--no-disturbance", "none"),),
         choices=DISTURBANCE_MODES,
     )
-    #: Which disturbance Delta(t): a name in :data:`tt_mujoco.sim.disturbances.DISTURBANCES`
+    #: Which disturbance Delta(t): a name in :data:`tt_mujoco.sim.parts.disturbances.DISTURBANCES`
     #: ("paper") or a hook ``module:Name`` / ``file.py:Name``.
     disturbance_model: str = option(
         DISTURBANCE_MODEL,
@@ -374,7 +374,7 @@ class Scenario:
         flags=("--phi0-deg", "--phi0"),
         metavar="DEG",
     )
-    #: Fault specs (dicts or ``KIND:key=value,...`` strings), see :mod:`tt_mujoco.sim.faults`.
+    #: Fault specs (dicts or ``KIND:key=value,...`` strings), see :mod:`tt_mujoco.sim.parts.faults`.
     faults: list = option(
         parse=spec_list(_fault),
         help="inject a fault (repeatable; replaces a config file's faults): "
@@ -407,7 +407,8 @@ class Scenario:
         form="switch",
         entry="hitch_feedback",
     )
-    #: Scheduled passive steering (:mod:`tt_mujoco.sim.schedule`): False (the constant ``eta``),
+    #: Scheduled passive steering (:mod:`tt_mujoco.sim.parts.schedule`): False (the constant
+    #: ``eta``),
     #: ``"curvature"`` (or True: the exact same-path gain of the target's curvature) or
     #: ``"path"`` (each trailer's gain eta_k(s) from the path's geometry at its own arc length,
     #: :mod:`tt_mujoco.vehicle.path_schedule`), which replace the constant ``eta``; the
@@ -491,7 +492,8 @@ class Scenario:
         unit="s",
         flags=("--time-limit",),
     )
-    #: The ground (:mod:`tt_mujoco.sim.terrain`): ``"flat"``, ``"slope:GRADE_DEG[:HEADING_DEG]"``
+    #: The ground (:mod:`tt_mujoco.sim.parts.terrain`): ``"flat"``,
+    #: ``"slope:GRADE_DEG[:HEADING_DEG]"``
     #: (a constant grade rising along the heading), ``"ramp:START_S_M:GRADE_DEG[:LENGTH_M]"``
     #: (flat, then rising along the path's direction at its arc length START_S_M) or
     #: ``"rough:AMPLITUDE_M:WAVELENGTH_M[:SEED]"`` (a heightfield); MuJoCo plant only.
@@ -504,7 +506,7 @@ class Scenario:
         metavar="flat|slope:GRADE_DEG[:HEADING_DEG]|ramp:START_S:GRADE_DEG[:LENGTH]|"
         "rough:AMPLITUDE:WAVELENGTH[:SEED]",
     )
-    #: What turns the torque command into wheel torque (:mod:`tt_mujoco.sim.motors`):
+    #: What turns the torque command into wheel torque (:mod:`tt_mujoco.sim.parts.motors`):
     #: ``"ideal"`` (at once, the paper's) or ``"dc_motor"`` (a DC motor per wheel with its
     #: lag and its current and voltage limits, the ``motor_*`` fields of ``Params``).
     actuator: str = option(
@@ -523,7 +525,7 @@ class Scenario:
         unit="s",
         metavar="S",
     )
-    #: Wind on the bodies (:mod:`tt_mujoco.sim.wind`): ``"none"`` or
+    #: Wind on the bodies (:mod:`tt_mujoco.sim.parts.wind`): ``"none"`` or
     #: ``"SPEED[:DIRECTION_DEG[:GUST_STD]]"`` (m/s, deg, m/s). MuJoCo plant only.
     wind: str = option(
         "none",
@@ -532,7 +534,7 @@ class Scenario:
         "plant only",
         metavar="SPEED[:DIRECTION_DEG[:GUST_STD]]",
     )
-    #: Patches of other friction (:mod:`tt_mujoco.sim.ground`): ``"band:S0:S1:MU"`` along the
+    #: Patches of other friction (:mod:`tt_mujoco.sim.parts.ground`): ``"band:S0:S1:MU"`` along the
     #: path, ``"rect:X0:Y0:X1:Y1:MU"`` on the floor. MuJoCo plant only.
     ground: list = option(
         parse=spec_list(_patch),

@@ -17,8 +17,6 @@ from tt_mujoco.defaults import MAX_SPEED
 from tt_mujoco.guard import control_signal, noting_interrupts, users_failure
 from tt_mujoco.registry import describe_failure as usercode_failure
 from tt_mujoco.registry import shown
-from tt_mujoco.sim import compiled
-from tt_mujoco.sim import faults as faults_mod
 from tt_mujoco.sim.build import (
     PLAN_FORWARD_DRIVE,
     REVERSING_DRIVES,
@@ -26,12 +24,14 @@ from tt_mujoco.sim.build import (
     build,
     drawn_polyline,
 )
-from tt_mujoco.sim.ground import ground_report, parse_patches
+from tt_mujoco.sim.loop import compiled
+from tt_mujoco.sim.loop.stepper import Stepper
+from tt_mujoco.sim.parts import faults as faults_mod
+from tt_mujoco.sim.parts.ground import ground_report, parse_patches
+from tt_mujoco.sim.parts.relief import RampRelief
+from tt_mujoco.sim.parts.terrain import parse_terrain
 from tt_mujoco.sim.probe import check_user_code
-from tt_mujoco.sim.relief import RampRelief
 from tt_mujoco.sim.scenario import Scenario
-from tt_mujoco.sim.stepper import Stepper
-from tt_mujoco.sim.terrain import parse_terrain
 from tt_mujoco.world.part import world_report
 
 __all__ = ["Result", "simulate"]
@@ -148,11 +148,11 @@ def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint
         Called as ``progress(steps_done, steps_total)`` about every 1 % of the run.
     on_step : callable, optional
         Called as ``on_step(t, plant)`` after every control step, ``t`` the new time and
-        ``plant`` the running :class:`~tt_mujoco.sim.plant.Plant`; the live viewer uses it. An
+        ``plant`` the running :class:`~tt_mujoco.sim.parts.plant.Plant`; the live viewer uses it. An
         exception it raises ends the run and propagates.
     checkpoint : path, optional
         A file that receives the logged rows block by block while the run goes on (see
-        :meth:`tt_mujoco.sim.stepper.Stepper.reset`).
+        :meth:`tt_mujoco.sim.loop.stepper.Stepper.reset`).
 
     Raises
     ------

@@ -1,7 +1,7 @@
 """User code is a boundary: what a user's controller or disturbance does is checked here.
 
 During the run, :func:`failure` turns what the user's code raised (``SystemExit`` included) into
-a :class:`~tt_mujoco.sim.plant.StopRun` with status ``"failed"``, and :func:`checked_torques`,
+a :class:`~tt_mujoco.sim.parts.plant.StopRun` with status ``"failed"``, and :func:`checked_torques`,
 :func:`checked_disturbance` and :func:`checked_signals` refuse what it returned or logged if it
 is not numbers (two finite ones for torques): the run then stops there, its rows so far kept
 (exit code 3), the traceback in its ``details``. Before the run,
@@ -17,7 +17,7 @@ from numbers import Real
 
 from tt_mujoco.guard import users_failure
 from tt_mujoco.registry import describe_failure, shown
-from tt_mujoco.sim.plant import StopRun
+from tt_mujoco.sim.parts.plant import StopRun
 
 __all__ = [
     "CheckedPath",

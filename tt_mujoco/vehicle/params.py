@@ -143,7 +143,7 @@ class Trailer:
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
 
 
-#: The drive motors' constants (:mod:`tt_mujoco.sim.motors`).
+#: The drive motors' constants (:mod:`tt_mujoco.sim.parts.motors`).
 MOTOR_FIELDS = (
     "motor_kt",
     "motor_resistance",
@@ -262,7 +262,7 @@ class Params:
         the triangle inequality I_roll + I_pitch >= I_yaw, so 0.6).
     motor_kt : float
         Torque constant of each drive motor (N m/A; its back-EMF constant in V s/rad), used
-        with ``actuator="dc_motor"`` (:mod:`tt_mujoco.sim.motors`, not in the paper).
+        with ``actuator="dc_motor"`` (:mod:`tt_mujoco.sim.parts.motors`, not in the paper).
     motor_resistance : float
         Winding resistance (ohm).
     motor_voltage : float
@@ -276,7 +276,7 @@ class Params:
         Time constant (s) of the driver's current, and so the torque, following its command.
     drag_area_tractor, drag_area_trailer : float
         Drag coefficient times reference area (m^2) of the tractor's and the trailer's bodies,
-        for ``Scenario.wind`` (:mod:`tt_mujoco.sim.wind`, not in the paper).
+        for ``Scenario.wind`` (:mod:`tt_mujoco.sim.parts.wind`, not in the paper).
     drag_centre_tractor, drag_centre_trailer : float
         Where each body's drag acts (m), ahead of its centre of mass along its heading
         (negative: behind): the wind's yaw moment about the centre of mass is this lever times

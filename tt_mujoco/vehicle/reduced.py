@@ -90,7 +90,7 @@ def phi_rate(phi: float, p: Params) -> tuple[float, float]:
 
 def phi_rate_of(phi: float, eta: float, L: float, L0: float) -> tuple[float, float]:
     """:func:`phi_rate` from plain numbers (no singularity check): the form the compiled
-    episode (:mod:`tt_mujoco.sim.compiled`) shares."""
+    episode (:mod:`tt_mujoco.sim.loop.compiled`) shares."""
     cb = math.cos(eta * phi)
     psi = (eta - 1.0) * phi  # beta - phi
     return math.sin(psi) / (L0 * cb), 1.0 + L * math.cos(psi) / (L0 * cb)

@@ -23,7 +23,8 @@ The trailer axle is steered by ``beta = eta * phi`` (paper eq. 2). Three facts d
   :class:`tt_mujoco.reference.reverse.ReverseTarget` drives a path backwards, trailer first, so
   that the paper's eta = 3 can be shown doing what it is good at.
 
-:class:`tt_mujoco.sim.schedule.EtaScheduler` applies the exact gain of the local curvature to a
+:class:`tt_mujoco.sim.parts.schedule.EtaScheduler` applies the exact gain of the local curvature
+to a
 running plant.
 """
 

@@ -21,7 +21,7 @@ from matplotlib.figure import Figure
 
 from tt_mujoco.analysis import metrics
 from tt_mujoco.outputs import save_figure
-from tt_mujoco.sim.timeseries import train_columns
+from tt_mujoco.sim.loop.timeseries import train_columns
 from tt_mujoco.vehicle.params import Params
 
 __all__ = [

@@ -25,10 +25,10 @@ import numpy as np
 from tt_mujoco.analysis.geometry import Polyline
 from tt_mujoco.outputs import publish_new, temporary_beside
 from tt_mujoco.progress import progress_bar
-from tt_mujoco.sim.physics import Vehicle
-from tt_mujoco.sim.relief import relief_of
-from tt_mujoco.sim.terrain import Terrain, parse_terrain
-from tt_mujoco.sim.timeseries import train_columns
+from tt_mujoco.sim.loop.timeseries import train_columns
+from tt_mujoco.sim.parts.physics import Vehicle
+from tt_mujoco.sim.parts.relief import relief_of
+from tt_mujoco.sim.parts.terrain import Terrain, parse_terrain
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.viz.annotate import END_CARD_S, Legend, end_card
 from tt_mujoco.viz.gl import GL_BACKENDS, RenderUnavailable, gl_context, select_gl_backend

@@ -11,7 +11,7 @@ import mujoco
 import numpy as np
 
 from tt_mujoco.defaults import CAMERAS
-from tt_mujoco.sim.timeseries import COLUMNS
+from tt_mujoco.sim.loop.timeseries import COLUMNS
 from tt_mujoco.vehicle.params import Params
 
 __all__ = [
@@ -136,7 +136,8 @@ def trailer_wheel_angles(ts: Mapping, params: Params, k: int = 1) -> tuple[np.nd
 
 
 def pose_vehicle(vehicle, x, y, theta, phi, beta, wheels, train=()) -> None:
-    """Put a :class:`~tt_mujoco.sim.physics.Vehicle` in a planar pose and compute its kinematics.
+    """Put a :class:`~tt_mujoco.sim.parts.physics.Vehicle` in a planar pose and compute its
+    kinematics.
 
     Free joint at (x, y, r) with yaw ``theta`` (resting on the vehicle's relief if it has
     one); ``q_hitch = -phi``; ``q_steer = beta`` (the recorded angle, so an equality-constraint

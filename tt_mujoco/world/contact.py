@@ -5,7 +5,7 @@ Every shape is a convex polygon on the floor, its vertices counter-clockwise in 
 :func:`unit_corners_of`). :func:`gap_of` is the signed distance between two of them: their
 Euclidean distance when apart, zero when they touch, and minus the least depth of their overlap
 along an edge's normal when they overlap (the separating-axis test). The closed loop's step
-(:mod:`tt_mujoco.sim.closed_loop`) calls :func:`clearance_of` on the true state of every
+(:mod:`tt_mujoco.sim.loop.closed_loop`) calls :func:`clearance_of` on the true state of every
 control step, on either plant, and stops the run at the first step whose clearance is not
 positive; numba compiles these functions from this source.
 """

@@ -5,7 +5,8 @@ Before the run (:func:`check_world`): every obstacle, the goal and the start are
 against the run's vehicle, and a world that cannot be driven is bad input (a
 :class:`~tt_mujoco.world.world.WorldError` naming the obstacle). During it, the step checks the
 units' footprints (:mod:`tt_mujoco.vehicle.footprint`) against the obstacles at every control
-step (:func:`tt_mujoco.sim.closed_loop.sense_step`, :mod:`tt_mujoco.world.contact`) and logs the
+step (:func:`tt_mujoco.sim.loop.closed_loop.sense_step`, :mod:`tt_mujoco.world.contact`) and logs
+the
 least gap. After it, :func:`world_report` gives ``metrics.json`` its ``world`` section.
 """
 
@@ -36,7 +37,7 @@ __all__ = [
 
 class WorldRecord(NamedTuple):
     """A world's obstacles and the units' footprints, as the step reads them: the world part's
-    record (:data:`tt_mujoco.sim.records.LoopRecord` holds it as ``world``)."""
+    record (:data:`tt_mujoco.sim.loop.records.LoopRecord` holds it as ``world``)."""
 
     #: every unit's footprint (tractor first: N + 1 rows of rear, front, half width) and, as the
     #: step measures them, their poses (x, y, heading); a unit's corners (4 x 2, scratch)

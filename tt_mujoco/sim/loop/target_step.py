@@ -2,9 +2,9 @@
 cycloid, the fine cells, or a user's path called back), its speed and yaw-rate targets (paper
 eqs. 32-34; backing up), the path feedback's correction and the hitch cascade's yaw rate.
 
-Plain functions of numbers and the records (:mod:`tt_mujoco.sim.records`'s
-:class:`~tt_mujoco.sim.records.TargetRecord`), which CPython runs and numba compiles
-(:mod:`tt_mujoco.sim.closed_loop` composes them into the step). The formulas are the parts':
+Plain functions of numbers and the records (:mod:`tt_mujoco.sim.loop.records`'s
+:class:`~tt_mujoco.sim.loop.records.TargetRecord`), which CPython runs and numba compiles
+(:mod:`tt_mujoco.sim.loop.closed_loop` composes them into the step). The formulas are the parts':
 :mod:`tt_mujoco.reference.targets`, :mod:`~tt_mujoco.reference.reverse`,
 :mod:`~tt_mujoco.reference.feedback`, :mod:`tt_mujoco.controllers.backing`.
 """
@@ -17,7 +17,7 @@ from tt_mujoco.compiled_form import compiled_form
 from tt_mujoco.controllers import backing
 from tt_mujoco.reference import feedback, path_base, paths, reverse, spline, targets
 from tt_mujoco.reference.path_base import ARCS_PATH, HOOKED_PATH, SPLINE_PATH
-from tt_mujoco.sim.measure import OMEGA, ROW_THETA0, ROW_X0, ROW_Y0, THETA0, X0, Y0
+from tt_mujoco.sim.parts.measure import OMEGA, ROW_THETA0, ROW_X0, ROW_Y0, THETA0, X0, Y0
 
 __all__ = [
     "HOOK_CURVATURE",
@@ -31,7 +31,7 @@ __all__ = [
     "update_target",
 ]
 
-#: What the kernel asks of a path it calls back (:mod:`tt_mujoco.sim._kernel`, ``HOOK``): its
+#: What the kernel asks of a path it calls back (:mod:`tt_mujoco.sim.loop._kernel`, ``HOOK``): its
 #: curvature and its rate, its pose, its pose as a plain-number law's reference
 HOOK_CURVATURE, HOOK_POSE, HOOK_LAW_POSE = 0.0, 1.0, 2.0
 #: where the speed profile's arc length, speed and acceleration are in a target's profile row

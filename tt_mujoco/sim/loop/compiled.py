@@ -2,26 +2,27 @@
 
 :func:`tt_mujoco.sim.simulate.run_episode` hands an episode here when every part of it has a
 compiled form (:func:`unsupported` says why not otherwise): a built-in law
-(:data:`tt_mujoco.sim.kernel_sources.LAWS`: ISMC-STA, PID, FBL, ...) on the built-in nominal
-model, a user's plain-number law (:mod:`tt_mujoco.controllers.plain`, compiled once by
-:func:`compile_law` and cached on disk, keyed by its source), or any other controller, whose
-Python ``compute`` the kernel calls back at every step through a C function
-(:class:`tt_mujoco.sim._kernel.PythonLawCallback`); a static or dynamic target on any path (the
-S-curve, the circle, the cycloid and a CSV spline from their tables, a path without closed form
-called back), driven forwards or backing up (the reverse target, with the hitch cascade or path
-feedback), the paper's disturbance or a user's (called back), matched or as a wrench, or none,
-measurement noise, one trailer or a train, constant steering gains or either schedule
-(:mod:`tt_mujoco.sim.schedule`), path feedback, faults, DC motors, wind, a sensor delay,
-friction patches; not a per-step callback (a payload step on the reduced plant returns to
-Python, which recomputes the plant's constants and advances that step, then the kernel goes on).
-The loop then runs in numba, chunk by chunk, calling ``mj_step`` through MuJoCo's C library or
-stepping the reduced ODE, over the named records of :mod:`tt_mujoco.sim.records`.
+(:data:`tt_mujoco.sim.loop.kernel_sources.LAWS`: ISMC-STA, PID, FBL, ...) on the built-in
+nominal model, a user's plain-number law (:mod:`tt_mujoco.controllers.plain`, compiled once by
+:func:`~tt_mujoco.sim.loop.compiled_law.compile_law` and cached on disk, keyed by its source),
+or any other controller, whose Python ``compute`` the kernel calls back at every step through a
+C function (:class:`tt_mujoco.sim.loop._kernel.PythonLawCallback`); a static or dynamic target
+on any path (the S-curve, the circle, the cycloid and a CSV spline from their tables, a path
+without closed form called back), driven forwards or backing up (the reverse target, with the
+hitch cascade or path feedback), the paper's disturbance or a user's (called back), matched or
+as a wrench, or none, measurement noise, one trailer or a train, constant steering gains or
+either schedule (:mod:`tt_mujoco.sim.parts.schedule`), path feedback, faults, DC motors, wind, a
+sensor delay, friction patches; not a per-step callback (a payload step on the reduced plant
+returns to Python, which recomputes the plant's constants and advances that step, then the
+kernel goes on). The loop then runs in numba, chunk by chunk, calling ``mj_step`` through
+MuJoCo's C library or stepping the reduced ODE, over the named records of
+:mod:`tt_mujoco.sim.loop.records`.
 
-The loop it runs is :func:`tt_mujoco.sim.closed_loop.run_steps`, compiled from its source with
-every function it calls (:mod:`tt_mujoco.sim._kernel`), the one CPython runs for every other
+The loop it runs is :func:`tt_mujoco.sim.loop.closed_loop.run_steps`, compiled from its source with
+every function it calls (:mod:`tt_mujoco.sim.loop._kernel`), the one CPython runs for every other
 episode (the Python loop): both compute the same numbers bit for bit
 (``tests/test_compiled.py``, ``tests/test_plain.py``, ``tests/test_closed_loop.py``).
-:class:`~tt_mujoco.sim.stepper.Stepper` makes the records and runs the chunks either way.
+:class:`~tt_mujoco.sim.loop.stepper.Stepper` makes the records and runs the chunks either way.
 ``TT_MUJOCO_COMPILED=0`` turns it off.
 
 Compiled code is cached on disk under ``$TT_MUJOCO_CACHE`` or ``~/.cache/tt_mujoco``, in a
@@ -43,7 +44,6 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import math
 import os
 import sys
 from pathlib import Path
@@ -159,7 +159,7 @@ def compile_script(lock: Path) -> str:
         f"lock = pathlib.Path({str(lock)!r})\n"
         "try:\n"
         "    os.environ['TT_MUJOCO_COMPILE_NOW'] = '1'\n"
-        "    from tt_mujoco.sim import compiled\n"
+        "    from tt_mujoco.sim.loop import compiled\n"
         "    compiled.warm_up()\n"
         "except BaseException as err:\n"
         "    text = ' '.join(f'{type(err).__name__}: {err}'.split())[:300]\n"
@@ -334,8 +334,8 @@ def warm_up() -> None:
     """Compile the kernel for every signature a run can call it with: a short episode on
     each plant (MuJoCo's warning counts are a strided view, the reduced plant's are not)."""
     from tt_mujoco.sim.build import build
+    from tt_mujoco.sim.loop.stepper import Stepper
     from tt_mujoco.sim.scenario import Scenario
-    from tt_mujoco.sim.stepper import Stepper
 
     for plant in ("mujoco", "reduced"):
         built = build(Scenario(traj="circle", plant=plant, duration=MIN_STEPS * 0.001))
@@ -360,12 +360,12 @@ def _cache_dir() -> Path:
 def source_digest() -> str:
     """A hash of what the compiled code depends on: the interpreter, the machine, numba's,
     llvmlite's and MuJoCo's versions, every file the kernel compiles
-    (:func:`tt_mujoco.sim.kernel_sources.source_files`, that module's, this file and the
+    (:func:`tt_mujoco.sim.loop.kernel_sources.source_files`, that module's, this file and the
     kernel's) and the built-in laws in their order (a law's index is its kind)."""
     import platform
     from importlib import metadata
 
-    from tt_mujoco.sim import kernel_sources
+    from tt_mujoco.sim.loop import kernel_sources
 
     versions = [metadata.version(name) for name in ("numba", "llvmlite", "mujoco")]
     laws = [f"{law.__module__}.{law.__qualname__}" for law in kernel_sources.LAWS]
@@ -401,7 +401,7 @@ def kernel():
             numba.config.CACHE_DIR = str(cache)
         except OSError:
             copy = source  # no cache: compiled in memory, every process
-        name = "tt_mujoco.sim._kernel"
+        name = "tt_mujoco.sim.loop._kernel"
         spec = importlib.util.spec_from_file_location(name, copy)
         module = importlib.util.module_from_spec(spec)
         sys.modules[name] = module
@@ -482,7 +482,7 @@ def set_aside_cache(err: BaseException) -> str:
         where = f"left at {cache}"
     _KERNEL = None
     geometry.use_compiled_projection(None)
-    sys.modules.pop("tt_mujoco.sim._kernel", None)
+    sys.modules.pop("tt_mujoco.sim.loop._kernel", None)
     return (
         f"the compiled-code cache could not be loaded ({type(err).__name__}: {err}); it was "
         f"{where}, and a fresh one is compiled in the background"
@@ -577,219 +577,9 @@ def _user_law(k_mod, controller):
     """The compiled form of a plain-number law, the kernel's placeholder for a built-in one,
     or None for a controller whose Python ``compute`` the kernel calls back."""
     from tt_mujoco.controllers.plain import PlainLawController
-    from tt_mujoco.sim.episode import runs_built_in
+    from tt_mujoco.sim.loop.compiled_law import compile_law
+    from tt_mujoco.sim.loop.episode import runs_built_in
 
     if isinstance(controller, PlainLawController):
         return compile_law(type(controller))
     return k_mod.no_user_law if runs_built_in(controller) else None
-
-
-def compile_law(cls):
-    """The plain-number law of ``cls`` (a :class:`~tt_mujoco.controllers.plain.
-    PlainLawController` subclass) compiled with the kernel's law signature: loaded from the
-    compiled-code cache where a process compiled the same law before, once per process and
-    class."""
-    key = (cls.__module__, cls.__qualname__, cls.LAW)
-    compiled_law = _LAWS.get(key)
-    if compiled_law is None:
-        compiled_law = _LAWS[key] = _compile_law(cls)
-    return compiled_law
-
-
-_LAWS: dict = {}
-
-
-def _exact_math():
-    """A ``math`` module for the compiled law whose ``hypot`` is CPython's to the last bit (the
-    kernel's form of :func:`tt_mujoco.exact.hypot_of`): numba's own, the C library's, differs."""
-    import types
-
-    from tt_mujoco.sim import _kernel
-
-    module = types.ModuleType("math")
-    module.__dict__.update(math.__dict__)
-    module.hypot = _kernel._hypot
-    return module
-
-
-def _as_compiled(fn, done: dict, exact):
-    """``fn`` as numba compiles it for a law: the same code, with ``math`` and ``math.hypot``
-    among its globals read as ``exact`` (:func:`_exact_math`) gives them, and the plain
-    functions of its own module that it calls registered for numba, each the same way (into
-    ``done``: function -> its copy). So the law's compiled loop gives the numbers of its Python
-    loop."""
-    import types
-
-    from numba.extending import register_jitable
-
-    if fn in done:
-        return done[fn]
-    names = dict(fn.__globals__)
-    copy = types.FunctionType(fn.__code__, names, fn.__name__, fn.__defaults__, fn.__closure__)
-    copy.__qualname__, copy.__module__ = fn.__qualname__, fn.__module__
-    done[fn] = copy
-    for name in fn.__code__.co_names:
-        value = fn.__globals__.get(name)
-        if value is math:
-            names[name] = exact
-        elif value is math.hypot:
-            names[name] = exact.hypot
-        elif isinstance(value, types.FunctionType) and value.__module__ == fn.__module__:
-            names[name] = register_jitable(_as_compiled(value, done, exact))
-    return copy
-
-
-#: The C entry of a plain-number law, written into the cache folder once per law and version
-#: (:func:`_compile_law`), so that numba caches it on disk as it does the kernel: a law's second
-#: process loads it instead of compiling it. ``{...}`` are filled in per law.
-_ENTRY_SOURCE = """\
-# The C entry of the plain-number law {name} ({file}), written by tt_mujoco.sim.compiled:
-# numba caches its compiled code beside this file. The law's source digest is in the name.
-from numba import carray, cfunc
-
-
-@cfunc(USER_LAW, error_model="numpy", cache=True)
-def entry(m, r, model, gains, state, out, dt, limit):
-    torques = carray(out, 3)
-    torques[2] = 0.0
-    try:
-        T_r, T_l = law(
-            carray(m, {n_meas}).view(MEASUREMENT)[0],
-            carray(r, {n_ref}).view(REFERENCE)[0],
-            carray(model, {n_model}).view(NOMINAL)[0],
-            carray(gains, {n_gains}).view(GAINS)[0],
-            carray(state, {n_state}).view(STATE)[0],
-            dt,
-            limit,
-        )
-    except Exception:  # it cannot leave a C function: the loop stops, Python says what
-        torques[2] = 1.0
-        return
-    torques[0], torques[1] = T_r, T_l
-"""
-#: The C entry of a law that sees the path (``plain_law(..., path=True)``): what it is handed
-#: as its gains holds the gains, the vehicle's values, the number of the path table's samples
-#: and the table, row by row (:meth:`~tt_mujoco.controllers.plain.PlainLawController.law_data`).
-_PATH_ENTRY_SOURCE = """\
-# The C entry of the plain-number law {name} ({file}), which sees the path, written by
-# tt_mujoco.sim.compiled: numba caches its compiled code beside this file. The law's source
-# digest is in the name.
-from numba import carray, cfunc
-
-
-@cfunc(USER_LAW, error_model="numpy", cache=True)
-def entry(m, r, model, gains, state, out, dt, limit):
-    torques = carray(out, 3)
-    torques[2] = 0.0
-    samples = int(carray(gains, {n_head})[{n_head} - 1])
-    data = carray(gains, {n_head} + {n_rows} * samples)
-    try:
-        T_r, T_l = law(
-            carray(m, {n_meas}).view(MEASUREMENT)[0],
-            carray(r, {n_ref}).view(REFERENCE)[0],
-            carray(model, {n_model}).view(NOMINAL)[0],
-            data[:{n_gains}].view(GAINS)[0],
-            carray(state, {n_state}).view(STATE)[0],
-            dt,
-            limit,
-            data[{n_head}:].reshape(({n_rows}, samples)),
-            data[{n_gains}:{n_gains} + {n_vehicle}].view(VEHICLE)[0],
-        )
-    except Exception:  # it cannot leave a C function: the loop stops, Python says what
-        torques[2] = 1.0
-        return
-    torques[0], torques[1] = T_r, T_l
-"""
-
-
-def _law_digest(cls, helpers) -> str:
-    """What a law's compiled code depends on: its gains' and state's names, and the files of
-    the law, of its helpers and of every function they call from elsewhere (a compiled one
-    from another module of the user's): numba freezes a law's globals when it compiles."""
-    import inspect
-
-    from tt_mujoco.sim import kernel_sources
-
-    digest = hashlib.sha256()
-    names = (*cls.PRESETS[cls.DEFAULT_PRESET], "|", *cls.STATE, "|", str(cls.SEES_PATH))
-    digest.update(" ".join(names).encode())
-    # the package's functions the law reaches (the path's, and what they call)
-    files = {inspect.getsourcefile(fn) for fn in kernel_sources.discover((cls.LAW, *helpers))[0]}
-    for fn in (cls.LAW, *helpers):
-        for name in fn.__code__.co_names:
-            used = getattr(fn.__globals__.get(name), "py_func", fn.__globals__.get(name))
-            if inspect.isfunction(used):
-                files.add(inspect.getsourcefile(used))
-        files.add(inspect.getsourcefile(fn))
-    files.add(__file__)  # how a law is compiled (_as_compiled) is part of its code
-    for file in sorted(f for f in files if f):
-        try:
-            digest.update(Path(file).read_bytes())
-        except OSError:
-            digest.update(file.encode())
-    return digest.hexdigest()[:16]
-
-
-def _compile_law(cls):
-    """The law's C entry, from the cache when a process compiled it before (keyed by
-    :func:`_law_digest`), compiled and cached otherwise."""
-    import importlib.util
-    import inspect
-
-    from numba import njit
-
-    from tt_mujoco.controllers.path_view import PATH_ROWS, VEHICLE_FIELDS
-    from tt_mujoco.sim import records
-
-    k_mod = kernel()
-    copies: dict = {}
-    # not cached on its own: numba's cache of a function ignores its globals, which
-    # _as_compiled changes; the entry below, cached, holds the law's code
-    law = njit(error_model="numpy")(_as_compiled(cls.LAW, copies, _exact_math()))
-    helpers = set(copies) - {cls.LAW}  # the plain functions of its module it calls
-    gain_names = tuple(cls.PRESETS[cls.DEFAULT_PRESET]) or ("unused",)
-    dtypes = {
-        "VEHICLE": records.record_dtype(VEHICLE_FIELDS),
-        "MEASUREMENT": records.MEASUREMENT_DTYPE,
-        "REFERENCE": records.record_dtype(records.REFERENCE_FIELDS),
-        "NOMINAL": records.record_dtype(records.NOMINAL_FIELDS),
-        "GAINS": records.record_dtype(gain_names),
-        "STATE": records.record_dtype(cls.STATE or ("unused",)),
-    }
-    sizes = {
-        "n_meas": len(dtypes["MEASUREMENT"]),
-        "n_ref": len(dtypes["REFERENCE"]),
-        "n_model": len(dtypes["NOMINAL"]),
-        "n_gains": len(dtypes["GAINS"]),
-        "n_state": len(dtypes["STATE"]),
-        "n_vehicle": len(VEHICLE_FIELDS),
-        "n_head": len(gain_names) + len(VEHICLE_FIELDS) + 1,
-        "n_rows": len(PATH_ROWS),
-    }
-    name = f"law_{cls.LAW.__name__}_{_law_digest(cls, helpers)}"
-    module_name = f"tt_mujoco_{name}"
-    if module_name in sys.modules:  # the same law, of another class: compiled already
-        return sys.modules[module_name].entry
-    file = inspect.getsourcefile(cls.LAW) or "?"
-    template = _PATH_ENTRY_SOURCE if cls.SEES_PATH else _ENTRY_SOURCE
-    source = template.format(name=cls.__qualname__, file=file, **sizes)
-    path = _cache_dir() / "laws" / f"{name}.py"
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        if not path.is_file() or path.read_text() != source:
-            atomic_write(path, source)
-    except OSError:  # no cache: a file of its own for this process
-        import tempfile
-
-        path = Path(tempfile.mkdtemp(prefix="tt_mujoco-law-")) / f"{name}.py"
-        path.write_text(source)
-    spec = importlib.util.spec_from_file_location(module_name, path)
-    module = importlib.util.module_from_spec(spec)
-    module.__dict__.update(law=law, USER_LAW=k_mod.USER_LAW, **dtypes)
-    sys.modules[module_name] = module  # numba's cache finds the entry's module by its name
-    try:
-        spec.loader.exec_module(module)
-    except BaseException:
-        del sys.modules[module_name]
-        raise
-    return module.entry

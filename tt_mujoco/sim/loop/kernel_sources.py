@@ -6,8 +6,8 @@ search the metrics compile are the roots; :func:`discover` follows, through each
 code, every function of the package it names (directly, or as ``module.function`` of one of
 the package's modules), and then theirs. A function marked with
 :func:`tt_mujoco.compiled_form.compiled_form` is not followed: the kernel gives it a form of its
-own. :mod:`tt_mujoco.sim._kernel` registers each of :data:`SHARED` with numba, and
-:func:`tt_mujoco.sim.compiled.source_digest` keys the compiled-code cache by the files they are
+own. :mod:`tt_mujoco.sim.loop._kernel` registers each of :data:`SHARED` with numba, and
+:func:`tt_mujoco.sim.loop.compiled.source_digest` keys the compiled-code cache by the files they are
 defined in (:func:`source_files`): a helper a new part calls is compiled and watched with no
 list to keep. Importing this module imports no numba.
 """
@@ -21,16 +21,17 @@ import types
 from tt_mujoco.analysis import nearest
 from tt_mujoco.compiled_form import compiled_form_reason
 from tt_mujoco.controllers import backing, path_view
-from tt_mujoco.sim import closed_loop, disturbances, law, measure, motors, records, wind
+from tt_mujoco.sim.loop import closed_loop, law, records
+from tt_mujoco.sim.parts import disturbances, measure, motors, wind
 from tt_mujoco.vehicle import reduced, train
 from tt_mujoco.world import part
 
 __all__ = ["COMPILED_FORMS", "LAWS", "RECORDS", "SHARED", "STEP", "discover", "source_files"]
 
-#: The built-in laws (:data:`tt_mujoco.sim.law.LAWS`).
+#: The built-in laws (:data:`tt_mujoco.sim.loop.law.LAWS`).
 LAWS = law.LAWS
 
-#: The closed loop's step (:mod:`tt_mujoco.sim.closed_loop`), which the kernel registers with
+#: The closed loop's step (:mod:`tt_mujoco.sim.loop.closed_loop`), which the kernel registers with
 #: its own options.
 STEP = (*closed_loop.BORROWING, *closed_loop.HALVES)
 

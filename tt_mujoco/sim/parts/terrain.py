@@ -9,7 +9,7 @@ the wheels press on the ground with ``cos(a)`` of the weight and gravity pulls a
 ``sin(a)``. The reduced plant has flat ground only.
 
 A ramp (:class:`Ramp`) and a rough ground (:class:`Rough`) are shapes, not a tilt: the scene
-gets their geoms (:mod:`tt_mujoco.sim.relief` places them along the run's path) and gravity
+gets their geoms (:mod:`tt_mujoco.sim.parts.relief` places them along the run's path) and gravity
 stays vertical. Here are only their specs, checked.
 
 A free body on the grade accelerates at ``g sin(a)`` down the fall line: that is the constant

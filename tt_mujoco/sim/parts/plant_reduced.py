@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from tt_mujoco.sim.measure import (
+from tt_mujoco.sim.parts.measure import (
     ROW_BETA,
     ROW_PHI,
     ROW_THETA0,
@@ -14,7 +14,7 @@ from tt_mujoco.sim.measure import (
     Measurement,
     TrainMeasurement,
 )
-from tt_mujoco.sim.plant import Plant
+from tt_mujoco.sim.parts.plant import Plant
 from tt_mujoco.vehicle import reduced, train
 from tt_mujoco.vehicle.params import Params
 
@@ -94,7 +94,7 @@ class ReducedPlant(Plant):
 
 def reduced_train_rows_of(state, c, places, speeds, out) -> None:
     """Trailers 2..N of the reduced train's state ``(x, y, theta, phi_1..phi_N, theta_l,
-    theta_r, v, omega)`` into ``out[k - 2]`` (:data:`~tt_mujoco.sim.measure.TRAIN_FIELDS`),
+    theta_r, v, omega)`` into ``out[k - 2]`` (:data:`~tt_mujoco.sim.parts.measure.TRAIN_FIELDS`),
     with the train's constants ``c`` and scratch rows ``places`` (N x 5) and ``speeds``
     (N x 3): exact, without slip (the compiled episode shares it)."""
     n = len(c.trailers)
@@ -109,9 +109,9 @@ def reduced_train_rows_of(state, c, places, speeds, out) -> None:
 
 
 def reduced_measure_values(state, c: reduced.ModelConstants) -> tuple:
-    """The :class:`~tt_mujoco.sim.measure.Measurement` fields of the reduced plant's state
+    """The :class:`~tt_mujoco.sim.parts.measure.Measurement` fields of the reduced plant's state
     ``(x, y, theta, phi, theta_l, theta_r, v, omega)`` with the plant's constants ``c``: exact,
-    without slip (the compiled episode, :mod:`tt_mujoco.sim.compiled`, shares it)."""
+    without slip (the compiled episode, :mod:`tt_mujoco.sim.loop.compiled`, shares it)."""
     eta, L, L0, r, d = c.eta, c.L, c.L0, c.r, c.d
     x, y, theta, phi = state[0], state[1], state[2], state[3]
     th_l, th_r, v, omega = state[4], state[5], state[6], state[7]

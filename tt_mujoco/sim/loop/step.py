@@ -1,16 +1,16 @@
 """The closed-loop step's own arithmetic, written once for both loops.
 
-The closed loop's step (:mod:`tt_mujoco.sim.closed_loop`: sense, noise, target, law,
+The closed loop's step (:mod:`tt_mujoco.sim.loop.closed_loop`: sense, noise, target, law,
 saturation, disturbance, log, advance), which CPython runs and numba compiles, calls these
 plain-number functions for every check and clip in it. They take and return plain floats
-(numba compiles them from this source, :mod:`tt_mujoco.sim.kernel_sources`).
+(numba compiles them from this source, :mod:`tt_mujoco.sim.loop.kernel_sources`).
 """
 
 from __future__ import annotations
 
 import math
 
-from tt_mujoco.sim.measure import ROW_BETA, ROW_PHI
+from tt_mujoco.sim.parts.measure import ROW_BETA, ROW_PHI
 
 __all__ = [
     "BLEW_UP",

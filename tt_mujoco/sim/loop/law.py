@@ -7,14 +7,14 @@ Three kinds of law run between the step's halves (:data:`LawKind` in the record'
   and memory its class declares by name (``GAINS`` and ``STATE``, each a ``NamedTuple`` of
   floats). The record keeps their values in that order; :func:`run_law` names them again for
   the law, so the law reads ``gains.lambda_v``, never a position;
-- a **user's plain-number law** (:data:`USER`), compiled apart (:mod:`tt_mujoco.sim.compiled`)
+- a **user's plain-number law** (:data:`USER`), compiled apart (:mod:`tt_mujoco.sim.loop.compiled`)
   and called through its C entry with the record's arrays, which it reads as named records;
 - a **law Python computes** (:data:`PYTHON`): a controller's ``compute``, or an agent's
   torques, called back (:func:`python_law`).
 
 :func:`law_record` makes the record from the controller at the start of an episode, and
 :func:`hand_law_back` gives the law's memory back to it at the end. Like
-:mod:`tt_mujoco.sim.closed_loop`, this is one source that CPython runs and the kernel compiles;
+:mod:`tt_mujoco.sim.loop.closed_loop`, this is one source that CPython runs and the kernel compiles;
 :func:`run_law`, :func:`pointer` and :func:`python_law` are given compiled forms there.
 """
 
@@ -27,7 +27,7 @@ import numpy as np
 
 from tt_mujoco.compiled_form import compiled_form
 from tt_mujoco.controllers import base, compiled_laws
-from tt_mujoco.sim import records
+from tt_mujoco.sim.loop import records
 
 __all__ = [
     "LAWS",
@@ -55,7 +55,7 @@ PYTHON = USER + 1
 
 LAW_OK, LAW_RAISED, LAW_NOT_FINITE = base.LAW_OK, base.LAW_RAISED, base.LAW_NOT_FINITE
 #: Where a plain-number law's C entry says, in ``law.torques``, that the law raised (1.0):
-#: an exception cannot leave a C function (:mod:`tt_mujoco.sim.compiled`, its entry)
+#: an exception cannot leave a C function (:mod:`tt_mujoco.sim.loop.compiled`, its entry)
 USER_RAISED = 2
 
 
@@ -101,7 +101,7 @@ def run_law_written_out():
 @compiled_form("the array's data address as a C double pointer (an intrinsic)")
 def pointer(array):
     """The address of a contiguous float array's data, as a C double pointer. A record as
-    CPython reads it (:func:`tt_mujoco.sim.records.interpreted`) is passed as a copy of its
+    CPython reads it (:func:`tt_mujoco.sim.loop.records.interpreted`) is passed as a copy of its
     fields: the law it goes to only reads it."""
     if isinstance(array, list):
         element = array[0]
@@ -154,7 +154,7 @@ def law_record(controller, nominal, user, steering, python) -> records.LawRecord
     records, or the law Python computes (``python``, the call back). ``nominal``: the
     controller's nominal parameters; ``steering``: the plant's steering record."""
     from tt_mujoco.controllers.plain import PlainLawController
-    from tt_mujoco.sim.measure import TRAIN_FIELDS
+    from tt_mujoco.sim.parts.measure import TRAIN_FIELDS
     from tt_mujoco.vehicle import reduced
 
     gains, state, flags = np.zeros(0), np.zeros(0), (0.0, 0.0, 0.0)

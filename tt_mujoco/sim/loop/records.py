@@ -1,6 +1,6 @@
 """The named records the closed-loop step reads and writes: one schema for both loops.
 
-Every bundle the compiled chunk loop (:mod:`tt_mujoco.sim._kernel`) takes is a
+Every bundle the compiled chunk loop (:mod:`tt_mujoco.sim.loop._kernel`) takes is a
 :class:`~typing.NamedTuple` or a NumPy structured array defined here, so a field is read by
 its name, never by a bare index: the limits, the plant's arrays, the law's state, the target's
 state, the log row and why a run stopped. CPython runs the same step on them as plain objects
@@ -17,10 +17,10 @@ import numpy as np
 # What a law sees of the target and of the nominal model: the plain-number law's records.
 from tt_mujoco.controllers.backing import CascadeConstants
 from tt_mujoco.controllers.plain import NOMINAL_FIELDS, REFERENCE_FIELDS
-from tt_mujoco.sim.measure import Addresses, Lengths, Measurement
-from tt_mujoco.sim.motors import MotorConstants
-from tt_mujoco.sim.timeseries import LOOP_COLUMNS
-from tt_mujoco.sim.wind import DragConstants
+from tt_mujoco.sim.loop.timeseries import LOOP_COLUMNS
+from tt_mujoco.sim.parts.measure import Addresses, Lengths, Measurement
+from tt_mujoco.sim.parts.motors import MotorConstants
+from tt_mujoco.sim.parts.wind import DragConstants
 from tt_mujoco.vehicle.reduced import ModelConstants
 from tt_mujoco.vehicle.train import TrainConstants
 from tt_mujoco.world.part import WorldRecord
@@ -47,6 +47,7 @@ __all__ = [
     "TargetRecord",
     "WindRecord",
     "interpreted",
+    "listed",
     "new_record",
     "record_dtype",
     "set_value",
@@ -74,7 +75,7 @@ def record_dtype(fields) -> np.dtype:
 #: The measurement, field by field.
 MEASUREMENT_DTYPE = record_dtype(Measurement._fields)
 
-#: One logged row of the loop's own values (:data:`tt_mujoco.sim.timeseries.LOOP_COLUMNS`).
+#: One logged row of the loop's own values (:data:`tt_mujoco.sim.loop.timeseries.LOOP_COLUMNS`).
 LOG_DTYPE = record_dtype(LOOP_COLUMNS)
 
 #: The target's state between steps: arc length, the previous measured speed (NaN before the
@@ -210,8 +211,8 @@ class MujocoRecord(NamedTuple):
 class SteeringRecord(NamedTuple):
     """The trailers' steering gains and how the compiled loop schedules them."""
 
-    #: 0 constant gains, or :data:`~tt_mujoco.sim.schedule.PATH_SCHEDULE` or
-    #: :data:`~tt_mujoco.sim.schedule.CURVATURE_SCHEDULE`
+    #: 0 constant gains, or :data:`~tt_mujoco.sim.parts.schedule.PATH_SCHEDULE` or
+    #: :data:`~tt_mujoco.sim.parts.schedule.CURVATURE_SCHEDULE`
     kind: int
     #: the gains eta_1..eta_N in force: the plant's, and a built-in law's model's
     etas: np.ndarray
@@ -272,9 +273,9 @@ class PlantRecord(NamedTuple):
 class LawRecord(NamedTuple):
     """The law the step runs on the controller's nominal model."""
 
-    #: a built-in law's index in :data:`tt_mujoco.sim.law.LAW_CLASSES`, then
-    #: :data:`~tt_mujoco.sim.law.USER` (a user's plain-number law, compiled:
-    #: :mod:`tt_mujoco.controllers.plain`) or :data:`~tt_mujoco.sim.law.PYTHON` (a law
+    #: a built-in law's index in :data:`tt_mujoco.sim.loop.law.LAW_CLASSES`, then
+    #: :data:`~tt_mujoco.sim.loop.law.USER` (a user's plain-number law, compiled:
+    #: :mod:`tt_mujoco.controllers.plain`) or :data:`~tt_mujoco.sim.loop.law.PYTHON` (a law
     #: that Python computes between the halves, ``user``)
     kind: int
     #: a built-in law's gains and memory, in the order of its class's ``GAINS`` and ``STATE``
@@ -315,7 +316,7 @@ class LawRecord(NamedTuple):
     #: :data:`READING_FIELDS`: what the law saw and asked this step (scratch)
     reading: np.ndarray
     #: trailers 2..N as a Python law sees them (the delay included), in
-    #: :data:`~tt_mujoco.sim.measure.TRAIN_FIELDS` order
+    #: :data:`~tt_mujoco.sim.parts.measure.TRAIN_FIELDS` order
     measurement_rows: np.ndarray
 
 
@@ -355,7 +356,7 @@ class TargetRecord(NamedTuple):
     wanted: np.ndarray
     rates: np.ndarray
     #: the path object of a path without closed form (``path_kind`` 3), else None; the kernel's
-    #: record holds a C function that calls it back (:mod:`tt_mujoco.sim._kernel`), and it
+    #: record holds a C function that calls it back (:mod:`tt_mujoco.sim.loop._kernel`), and it
     #: writes what it computed into ``hook_out``
     path_hook: Any
     hook_out: np.ndarray
@@ -363,27 +364,27 @@ class TargetRecord(NamedTuple):
     # What a path offers the path feedback and the path schedule, run by CPython (the kernel
     # overloads the functions that call these).
     def pose_at(self, s: float) -> tuple[float, float, float]:
-        """The path's pose at ``s`` (:func:`tt_mujoco.sim.target_step.pose_at`)."""
-        from tt_mujoco.sim.target_step import pose_at
+        """The path's pose at ``s`` (:func:`tt_mujoco.sim.loop.target_step.pose_at`)."""
+        from tt_mujoco.sim.loop.target_step import pose_at
 
         return pose_at(self, s)
 
     def curvature_and_rate(self, s: float) -> tuple[float, float]:
-        """``(kappa, dkappa/ds)`` at ``s`` (:func:`tt_mujoco.sim.target_step.path_at`)."""
-        from tt_mujoco.sim.target_step import path_at
+        """``(kappa, dkappa/ds)`` at ``s`` (:func:`tt_mujoco.sim.loop.target_step.path_at`)."""
+        from tt_mujoco.sim.loop.target_step import path_at
 
         return path_at(self, s)
 
 
 class FaultRecord(NamedTuple):
-    """The sensor and actuator faults (:class:`~tt_mujoco.sim.faults.FaultSchedule`)."""
+    """The sensor and actuator faults (:class:`~tt_mujoco.sim.parts.faults.FaultSchedule`)."""
 
     #: dropout windows (k0, k1) and actuator faults (k0, k1, scale right, scale left), per row
     dropouts: np.ndarray
     actuators: np.ndarray
-    #: :data:`~tt_mujoco.sim.faults.HELD`: what a dropout holds
+    #: :data:`~tt_mujoco.sim.parts.faults.HELD`: what a dropout holds
     held: np.ndarray
-    #: :data:`~tt_mujoco.sim.faults.PAYLOAD_ROW` per payload, their state (last s, dt), and
+    #: :data:`~tt_mujoco.sim.parts.faults.PAYLOAD_ROW` per payload, their state (last s, dt), and
     #: scratch for the changes of a step
     payloads: np.ndarray
     payload_state: np.ndarray
@@ -391,7 +392,7 @@ class FaultRecord(NamedTuple):
 
 
 class WindRecord(NamedTuple):
-    """The wind (:mod:`tt_mujoco.sim.wind`) on the MuJoCo plant's tractor and trailer."""
+    """The wind (:mod:`tt_mujoco.sim.parts.wind`) on the MuJoCo plant's tractor and trailer."""
 
     #: the wind's speed along its direction at each control step (m/s; empty: calm)
     speeds: np.ndarray
@@ -409,21 +410,21 @@ class DelayRecord(NamedTuple):
 
     #: the measurement, field by field (depth x Measurement fields)
     measurements: np.ndarray
-    #: trailers 2..N (depth x (N - 1) x :data:`~tt_mujoco.sim.measure.TRAIN_FIELDS`)
+    #: trailers 2..N (depth x (N - 1) x :data:`~tt_mujoco.sim.parts.measure.TRAIN_FIELDS`)
     rows: np.ndarray
     #: (phi, v, omega) as the law sees them: noise and sensor faults included (depth x 3)
     seen: np.ndarray
 
 
 class GroundRecord(NamedTuple):
-    """Friction patches (:mod:`tt_mujoco.sim.ground`) under the MuJoCo plant's wheels."""
+    """Friction patches (:mod:`tt_mujoco.sim.parts.ground`) under the MuJoCo plant's wheels."""
 
     #: the wheels' contact geoms (empty: no patches), ``MjData.geom_xpos`` and
     #: ``MjModel.geom_friction``
     geoms: np.ndarray
     geom_xpos: np.ndarray
     geom_friction: np.ndarray
-    #: the patches as :func:`~tt_mujoco.sim.ground.wheel_frictions_of` takes them: kinds,
+    #: the patches as :func:`~tt_mujoco.sim.parts.ground.wheel_frictions_of` takes them: kinds,
     #: bounds (P x 4), friction coefficients; the coefficient off them
     kinds: np.ndarray
     bounds: np.ndarray
@@ -453,7 +454,7 @@ class LoopRecord(NamedTuple):
     #: the hitch limits of trailers 2..N (rad)
     hitch_limits: np.ndarray
     faults: FaultRecord
-    #: the DC motors (:mod:`tt_mujoco.sim.motors`; ``dc_motor`` False: ideal actuators), and
+    #: the DC motors (:mod:`tt_mujoco.sim.parts.motors`; ``dc_motor`` False: ideal actuators), and
     #: the torques they deliver now (right, left)
     dc_motor: bool
     motor: MotorConstants
@@ -462,8 +463,8 @@ class LoopRecord(NamedTuple):
     delay: DelayRecord
     ground: GroundRecord
     world: WorldRecord
-    #: a built-in disturbance's index in :data:`~tt_mujoco.sim.disturbances.DISTURBANCE_FORMS`
-    #: and the numbers its form reads (:func:`tt_mujoco.sim.disturbances.form_of`)
+    #: a built-in disturbance's index in :data:`~tt_mujoco.sim.parts.disturbances.DISTURBANCE_FORMS`
+    #: and the numbers its form reads (:func:`tt_mujoco.sim.parts.disturbances.form_of`)
     disturbance_kind: int
     disturbance_params: np.ndarray
     #: whether the disturbance is a user's, ``disturbance_hook``: ``t -> (a_v, a_w)`` with its
@@ -491,7 +492,58 @@ class LogRecord(NamedTuple):
     measurement: np.ndarray
     #: :data:`LOG_DTYPE`
     loop: np.ndarray
-    #: trailers 2..N per row: (N - 1) x :data:`~tt_mujoco.sim.measure.TRAIN_FIELDS`
+    #: trailers 2..N per row: (N - 1) x :data:`~tt_mujoco.sim.parts.measure.TRAIN_FIELDS`
     train: np.ndarray
     #: the gains eta_1..eta_N in force at each row (a schedule's)
     etas: np.ndarray
+
+
+def listed(made):
+    """The interpreted records with the arrays the step reads element by element every step as
+    lists of floats (a NumPy element is a NumPy scalar, whose arithmetic is slower)."""
+    loop, plant, law, target, stop = made
+    delay, faults = loop.delay, loop.faults
+    loop = loop._replace(
+        noise=loop.noise.tolist(),
+        wind=loop.wind._replace(speeds=loop.wind.speeds.tolist()),
+        delay=delay._replace(**{name: getattr(delay, name).tolist() for name in delay._fields}),
+        faults=faults._replace(**{name: getattr(faults, name).tolist() for name in faults._fields}),
+        motor_torques=loop.motor_torques.tolist(),
+    )
+    law = law._replace(
+        measurement_values=law.measurement_values.tolist(),
+        measurement_rows=law.measurement_rows.tolist(),
+        state=law.state.tolist(),
+        gains=law.gains.tolist(),
+        phis=law.phis.tolist(),
+        rates=law.rates.tolist(),
+        nominal_train=_listed_train(law.nominal_train),
+    )
+    steering = plant.steering
+    scheduled = ("etas", "offered", "lengths", "arcs", "tables")
+    plant = plant._replace(
+        train=_listed_train(plant.train),
+        train_joints=plant.train_joints.tolist(),
+        steering=steering._replace(
+            **{name: getattr(steering, name).tolist() for name in scheduled}
+        ),
+    )
+    if not plant.mujoco:  # the reduced ODE's state and its scratch rows
+        lists = {name: getattr(plant, name).tolist() for name in ("places", "speeds", "slopes")}
+        plant = plant._replace(ode_state=plant.ode_state.tolist(), **lists)
+    tables = ("profile", "bounds", "kappas", "starts", "cells", "pose_cells", "kappa_ends")
+    target = target._replace(
+        **{name: getattr(target, name).tolist() for name in (*tables, "wanted", "rates")},
+        cascade_constants=target.cascade_constants._replace(
+            **{
+                name: getattr(target.cascade_constants, name).tolist()
+                for name in ("lengths", "etas", "ends")
+            }
+        ),
+    )
+    return EpisodeRecords(loop, plant, law, target, stop)
+
+
+def _listed_train(constants):
+    """A train's constants with its trailers' rows as lists of floats."""
+    return constants._replace(trailers=constants.trailers.tolist())

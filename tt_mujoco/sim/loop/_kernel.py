@@ -1,11 +1,12 @@
-"""The numba side of :mod:`tt_mujoco.sim.compiled`: imported only when an episode runs compiled.
+"""The numba side of :mod:`tt_mujoco.sim.loop.compiled`: imported only when an episode runs
+compiled.
 
 It is imported from a copy of this file inside the compiled-code cache
-(:func:`tt_mujoco.sim.compiled.kernel`), so that numba's own cache, which checks the source
+(:func:`tt_mujoco.sim.loop.compiled.kernel`), so that numba's own cache, which checks the source
 file's path and time stamp, stays valid for every checkout of the same sources.
 
-The closed loop's step (:mod:`tt_mujoco.sim.closed_loop`) and the plain-number functions it
-calls (:data:`tt_mujoco.sim.kernel_sources.SHARED`) are registered with numba here, so the
+The closed loop's step (:mod:`tt_mujoco.sim.loop.closed_loop`) and the plain-number functions it
+calls (:data:`tt_mujoco.sim.loop.kernel_sources.SHARED`) are registered with numba here, so the
 entry points below compile them from their own source; what only compiled code has (MuJoCo's
 ``mj_step`` by its symbol, an array's address, exact ``hypot`` and ``remainder``) is given to
 them by overloads.
@@ -25,8 +26,9 @@ from tt_mujoco import exact
 from tt_mujoco.analysis import nearest
 from tt_mujoco.compiled_form import compiled_form_reason
 from tt_mujoco.reference import feedback
-from tt_mujoco.sim import closed_loop, disturbances, law, target_step
-from tt_mujoco.sim.kernel_sources import SHARED
+from tt_mujoco.sim.loop import closed_loop, law, target_step
+from tt_mujoco.sim.loop.kernel_sources import SHARED
+from tt_mujoco.sim.parts import disturbances
 from tt_mujoco.vehicle import path_schedule
 
 for _fn in SHARED:
@@ -91,7 +93,7 @@ def no_user_law(m, r, model, gains, state, out, dt, limit):  # the built-in laws
 
 
 #: A Python hook the kernel calls back (:class:`HookCallback`): what to compute
-#: (:data:`~tt_mujoco.sim.target_step.HOOK_CURVATURE` and the others), at which value (s or t),
+#: (:data:`~tt_mujoco.sim.loop.target_step.HOOK_CURVATURE` and the others), at which value (s or t),
 #: and where to write it.
 HOOK = types.void(types.float64, types.float64, _P)
 
@@ -105,7 +107,7 @@ class CalledBack(types.WrapperAddressProtocol):
     """Python code as a C function the kernel calls back, of the type ``signature`` (a numba
     first-class function, like a compiled law: the kernel compiles once for either). What the
     code raises cannot leave a C callback: it sets the stop record's ``raised``, which stops
-    the step where CPython's would have stopped (:func:`~tt_mujoco.sim.closed_loop.run_steps`),
+    the step where CPython's would have stopped (:func:`~tt_mujoco.sim.loop.closed_loop.run_steps`),
     and waits in :attr:`raised` for the kernel's caller to raise it; once it is set, nothing
     is called back again."""
 
@@ -209,7 +211,7 @@ def project_points(points, window, extend, table, out):
 @compiled_form_of(path_schedule.path_pose)
 def _path_pose(target, s):
     """The path schedule's projection and the path feedback read the target record's path
-    (:func:`~tt_mujoco.sim.target_step.pose_at`)."""
+    (:func:`~tt_mujoco.sim.loop.target_step.pose_at`)."""
     return lambda target, s: target_step.pose_at(target, s)
 
 
@@ -285,8 +287,8 @@ def _dispatch(functions, args: str):
 
 @compiled_form_of(law.run_law)
 def _run_law(kind, dt, tracking, model, state, gains, saturation):
-    """:func:`~tt_mujoco.sim.law.run_law` with a test of ``kind`` for each law, written out
-    (:func:`~tt_mujoco.sim.law.run_law_written_out`)."""
+    """:func:`~tt_mujoco.sim.loop.law.run_law` with a test of ``kind`` for each law, written out
+    (:func:`~tt_mujoco.sim.loop.law.run_law_written_out`)."""
     return law.run_law_written_out()
 
 
@@ -299,7 +301,7 @@ def _run_disturbance(kind, t, v, omega, params):
 @compiled_form_of(feedback.feedback_curvature)
 def _feedback_curvature(target, s):
     """The path feedback reads the target record's path
-    (:func:`~tt_mujoco.sim.target_step.path_at`)."""
+    (:func:`~tt_mujoco.sim.loop.target_step.path_at`)."""
     return lambda target, s: target_step.path_at(target, s)
 
 
@@ -370,7 +372,7 @@ def _hypot_of(x, y):
 
 
 def _with_halves(fn):
-    """``fn`` (:func:`~tt_mujoco.sim.closed_loop.run_steps`) reading the inlined halves where
+    """``fn`` (:func:`~tt_mujoco.sim.loop.closed_loop.run_steps`) reading the inlined halves where
     its source names the plain ones."""
     names = {**fn.__globals__, "sense_step": _sense_step, "actuate_step": _actuate_step}
     return pytypes.FunctionType(fn.__code__, names, fn.__name__, fn.__defaults__)
@@ -381,12 +383,12 @@ _run_steps = njit(_nrt=False, inline="always")(_with_halves(closed_loop.run_step
 
 @njit(cache=True, nogil=True, _nrt=False)  # without the counting: see closed_loop.BORROWING
 def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
-    """:func:`tt_mujoco.sim.closed_loop.run_steps`, compiled: control steps ``k..k_end``;
+    """:func:`tt_mujoco.sim.loop.closed_loop.run_steps`, compiled: control steps ``k..k_end``;
     ``(status, k)``."""
     return _run_steps(k, k_end, loop, plant, law, target, log, stop_record)
 
 
 @njit(cache=True)
 def advance_after_payload(plant, weather, stop_record):
-    """:func:`tt_mujoco.sim.closed_loop.advance_after_payload`, compiled; the stop code."""
+    """:func:`tt_mujoco.sim.loop.closed_loop.advance_after_payload`, compiled; the stop code."""
     return closed_loop.advance_after_payload(plant, weather, stop_record)

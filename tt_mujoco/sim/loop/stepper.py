@@ -2,15 +2,15 @@
 
 :func:`tt_mujoco.sim.simulate.simulate`, the Gymnasium environment and the live viewer all use
 :class:`Stepper`; only who computes the torques differs (a built-in law, a user's law or
-controller, an agent). Its step is :mod:`tt_mujoco.sim.closed_loop`'s, the only one, over the
-episode's records (:mod:`tt_mujoco.sim.episode`):
+controller, an agent). Its step is :mod:`tt_mujoco.sim.loop.closed_loop`'s, the only one, over the
+episode's records (:mod:`tt_mujoco.sim.loop.episode`):
 
 - :meth:`Stepper.run` runs the episode to its end chunk by chunk, with the kernel's compiled
-  loop (:mod:`tt_mujoco.sim.compiled`) or CPython's over the same source
-  (:func:`tt_mujoco.sim.closed_loop.run_steps`), a controller's Python ``compute`` called
+  loop (:mod:`tt_mujoco.sim.loop.compiled`) or CPython's over the same source
+  (:func:`tt_mujoco.sim.loop.closed_loop.run_steps`), a controller's Python ``compute`` called
   between the halves of every step;
 - :meth:`Stepper.sense` and :meth:`Stepper.actuate` run one step's halves
-  (:func:`~tt_mujoco.sim.closed_loop.sense_step`, :func:`~tt_mujoco.sim.closed_loop.
+  (:func:`~tt_mujoco.sim.loop.closed_loop.sense_step`, :func:`~tt_mujoco.sim.loop.closed_loop.
   actuate_step`) for an agent that computes the torques in between.
 
 A control step ``k`` (time ``t = k dt``) measures the plant, stops on a blow-up or jackknife,
@@ -29,14 +29,12 @@ import numpy as np
 from tt_mujoco.controllers import Reference
 from tt_mujoco.defaults import JACKKNIFE_DEG, MAX_SPEED
 from tt_mujoco.guard import users_failure
-from tt_mujoco.sim import closed_loop, disturbances, episode, records, target_step, usercode
+from tt_mujoco.sim import usercode
 from tt_mujoco.sim.build import Build
-from tt_mujoco.sim.checkpoint import Checkpoint
-from tt_mujoco.sim.faults import ACTUATOR_ROW, HELD, PAYLOAD_ROW
-from tt_mujoco.sim.measure import TRAIN_FIELDS, Measurement, TrainMeasurement
-from tt_mujoco.sim.motors import DcMotors, MotorConstants
-from tt_mujoco.sim.plant import StopRun
-from tt_mujoco.sim.records import (
+from tt_mujoco.sim.loop import closed_loop, episode, records, target_step
+from tt_mujoco.sim.loop.checkpoint import Checkpoint
+from tt_mujoco.sim.loop.python_law import PythonLaw, law_failure, reference_of, seen_measurement
+from tt_mujoco.sim.loop.records import (
     DelayRecord,
     FaultRecord,
     GroundRecord,
@@ -45,10 +43,15 @@ from tt_mujoco.sim.records import (
     LoopRecord,
     WindRecord,
 )
+from tt_mujoco.sim.loop.step import FINISHED, PAYLOAD, RUNNING, SINGULAR, WARNING
+from tt_mujoco.sim.loop.timeseries import LOOP_COLUMNS, assemble_columns, train_columns
+from tt_mujoco.sim.parts import disturbances
+from tt_mujoco.sim.parts.faults import ACTUATOR_ROW, HELD, PAYLOAD_ROW
+from tt_mujoco.sim.parts.measure import TRAIN_FIELDS, Measurement, TrainMeasurement
+from tt_mujoco.sim.parts.motors import DcMotors, MotorConstants
+from tt_mujoco.sim.parts.plant import StopRun
+from tt_mujoco.sim.parts.wind import DragConstants, parse_wind
 from tt_mujoco.sim.scenario import jackknife_phi_deg
-from tt_mujoco.sim.step import FINISHED, PAYLOAD, RUNNING, SINGULAR, WARNING
-from tt_mujoco.sim.timeseries import LOOP_COLUMNS, assemble_columns, train_columns
-from tt_mujoco.sim.wind import DragConstants, parse_wind
 from tt_mujoco.world.part import world_record
 
 __all__ = ["CHECKPOINT_COLUMNS", "Stepper"]
@@ -63,37 +66,9 @@ LOGGING_STOPS = (FINISHED, WARNING, SINGULAR, PAYLOAD)
 _LOOP_VALUES = operator.attrgetter(*LOOP_COLUMNS)
 
 
-def seen_measurement(law) -> Measurement:
-    """The measurement as a Python law sees it at this step (``law.measurement_values``,
-    ``law.measurement_rows``: noise, faults and the delay included), in floats from either
-    kind of record (CPython's lists, or the kernel's arrays)."""
-    values, rows = law.measurement_values, law.measurement_rows
-    if isinstance(values, np.ndarray):
-        values, rows = values.tolist(), rows.tolist()
-    if not len(rows):
-        return Measurement._make(values)
-    out = TrainMeasurement._make(values)
-    out.train = tuple(tuple(row) for row in rows)
-    return out
-
-
-def reference_of(law, path) -> Reference:
-    """The target at this step as a Python law sees it (``law.reference``) on ``path``, in
-    floats from either kind of record."""
-    r = law.reference[0]
-    if isinstance(r, np.void):  # the kernel's record, as floats: its leading fields
-        return Reference(*r.tolist()[: len(TARGET_FIELDS)], path)
-    return Reference(r.t, r.s, r.kappa, r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot, path)
-
-
-#: What a Python law is given of the reference record: its leading fields, in
-#: :class:`Reference`'s order (``tests/test_compiled.py`` checks both orders).
-TARGET_FIELDS = ("t", "s", "kappa", "v_d", "omega_d", "v_d_dot", "omega_d_dot")
-
-
 def _called_back(stepper, made, kernel):
     """The kernel's records with the Python they hold (a law, a path without closed form, a
-    user's disturbance) as C functions it calls back (:class:`tt_mujoco.sim._kernel.
+    user's disturbance) as C functions it calls back (:class:`tt_mujoco.sim.loop._kernel.
     CalledBack`), each given the records it reads and writes; placeholders where there is
     none."""
     loop, plant, law, target, stop = made
@@ -128,103 +103,6 @@ def _called_back(stepper, made, kernel):
     if isinstance(law.user, kernel.PythonLawCallback):
         law.user.law_record = law
     return records.EpisodeRecords(loop, plant, law, target, stop)
-
-
-def _listed(made):
-    """The interpreted records with the arrays the step reads element by element every step as
-    lists of floats (a NumPy element is a NumPy scalar, whose arithmetic is slower)."""
-    loop, plant, law, target, stop = made
-    delay, faults = loop.delay, loop.faults
-    loop = loop._replace(
-        noise=loop.noise.tolist(),
-        wind=loop.wind._replace(speeds=loop.wind.speeds.tolist()),
-        delay=delay._replace(**{name: getattr(delay, name).tolist() for name in delay._fields}),
-        faults=faults._replace(**{name: getattr(faults, name).tolist() for name in faults._fields}),
-        motor_torques=loop.motor_torques.tolist(),
-    )
-    law = law._replace(
-        measurement_values=law.measurement_values.tolist(),
-        measurement_rows=law.measurement_rows.tolist(),
-        state=law.state.tolist(),
-        gains=law.gains.tolist(),
-        phis=law.phis.tolist(),
-        rates=law.rates.tolist(),
-        nominal_train=_listed_train(law.nominal_train),
-    )
-    steering = plant.steering
-    scheduled = ("etas", "offered", "lengths", "arcs", "tables")
-    plant = plant._replace(
-        train=_listed_train(plant.train),
-        train_joints=plant.train_joints.tolist(),
-        steering=steering._replace(
-            **{name: getattr(steering, name).tolist() for name in scheduled}
-        ),
-    )
-    if not plant.mujoco:  # the reduced ODE's state and its scratch rows
-        lists = {name: getattr(plant, name).tolist() for name in ("places", "speeds", "slopes")}
-        plant = plant._replace(ode_state=plant.ode_state.tolist(), **lists)
-    tables = ("profile", "bounds", "kappas", "starts", "cells", "pose_cells", "kappa_ends")
-    target = target._replace(
-        **{name: getattr(target, name).tolist() for name in (*tables, "wanted", "rates")},
-        cascade_constants=target.cascade_constants._replace(
-            **{
-                name: getattr(target.cascade_constants, name).tolist()
-                for name in ("lengths", "etas", "ends")
-            }
-        ),
-    )
-    return records.EpisodeRecords(loop, plant, law, target, stop)
-
-
-def _listed_train(constants):
-    """A train's constants with its trailers' rows as lists of floats."""
-    return constants._replace(trailers=constants.trailers.tolist())
-
-
-def law_failure(who: str, t: float, err: BaseException) -> StopRun:
-    """What a law's failure at ``t`` stops the run with."""
-    if isinstance(err, FloatingPointError):  # a built-in law's own failure
-        return StopRun("diverged", f"controller failed at t={t:.3f} s: {err}")
-    return usercode.failure(who, t, err)
-
-
-class _PythonLaw:
-    """A controller's Python ``compute`` as the step's law (:data:`~tt_mujoco.sim.closed_loop.
-    PYTHON`), with the checks of user code: called with the law record by CPython's step, or
-    back from the kernel's (:class:`tt_mujoco.sim._kernel.PythonLawCallback`), it returns
-    ``(status, T_r, T_l, u1, u2)`` or raises :class:`~tt_mujoco.sim.plant.StopRun`.
-    """
-
-    def __init__(self, stepper, controller):
-        self.stepper, self.controller = stepper, controller
-        self.who = usercode.controller_label(stepper.built)
-        self.path, self.dt = stepper.built.path, stepper.dt
-        self.steering = None  # the plant record's (Stepper.begin)
-        self.told = -1  # the schedule's updates the controller has been told of
-        self.steering_changed = getattr(controller, "steering_changed", None)
-
-    def __call__(self, law):
-        controller, who, steering = self.controller, self.who, self.steering
-        seen, ref = seen_measurement(law), reference_of(law, self.path)
-        t = ref.t
-        try:
-            if self.steering_changed is not None and steering.kind:
-                if steering.updates[0] != self.told:
-                    self.told = int(steering.updates[0])
-                    self.steering_changed(tuple(map(float, steering.etas)))
-            out = controller.compute(t, seen, ref)
-        except BaseException as err:
-            if not users_failure(err):
-                raise
-            raise law_failure(who, t, err) from None
-        T_r, T_l = usercode.checked_torques(out, who, t)
-        signals = controller.take_signals()
-        if signals:
-            k = round(t / self.dt)
-            self.stepper.record_signals(usercode.checked_signals(signals, who, t), k)
-        command = controller.command
-        u1, u2 = (T_r, T_l) if command is None else command
-        return closed_loop.LAW_OK, T_r, T_l, u1, u2
 
 
 class Stepper:
@@ -269,7 +147,7 @@ class Stepper:
         same numbers as drawing them step by step).
 
         ``checkpoint``, a file path, receives every block of logged rows as it is kept (an
-        Arrow IPC stream of the raw logged columns, :class:`~tt_mujoco.sim.checkpoint.
+        Arrow IPC stream of the raw logged columns, :class:`~tt_mujoco.sim.loop.checkpoint.
         Checkpoint`): a run killed after an hour keeps what it computed there. :meth:`close`
         writes the rows not yet kept.
         """
@@ -401,14 +279,14 @@ class Stepper:
 
     def begin(self, controller=None, compiled_law=None, kernel=None) -> tuple:
         """Make the (reset) episode's records for ``controller``: ``(loop, plant, law, target,
-        stop)`` (:func:`tt_mujoco.sim.episode.episode_records`).
+        stop)`` (:func:`tt_mujoco.sim.loop.episode.episode_records`).
 
-        With the compiled ``kernel`` (:mod:`tt_mujoco.sim._kernel`), the records are NumPy's,
+        With the compiled ``kernel`` (:mod:`tt_mujoco.sim.loop._kernel`), the records are NumPy's,
         for its loop, with ``compiled_law`` a plain-number law compiled for it (its placeholder
         for a built-in law), or None for a controller whose Python ``compute`` the kernel calls
         back, as it calls back a path without closed form and a user's disturbance (C functions
         of the kernel's). Otherwise CPython runs the step on the records as plain objects
-        (:func:`tt_mujoco.sim.records.interpreted`): a built-in law's own function, or any
+        (:func:`tt_mujoco.sim.loop.records.interpreted`): a built-in law's own function, or any
         other controller's Python ``compute`` between the halves (None: an agent's torques,
         :meth:`sense` and :meth:`actuate`).
         """
@@ -416,14 +294,14 @@ class Stepper:
         if kernel is not None:
             callback = None
             if compiled_law is None:  # a controller's compute, called back from the kernel
-                python = _PythonLaw(self, controller)
+                python = PythonLaw(self, controller)
                 callback = kernel.PythonLawCallback(python)
             made = episode.episode_records(self, controller, compiled_law, callback)
             made = _called_back(self, made, kernel)
         else:
             if controller is None or not episode.runs_built_in(controller):
-                python = _PythonLaw(self, controller)
-            made = _listed(
+                python = PythonLaw(self, controller)
+            made = records.listed(
                 records.interpreted(episode.episode_records(self, controller, None, python))
             )
         if python is not None:
@@ -445,9 +323,9 @@ class Stepper:
         Parameters
         ----------
         run_chunk, advance : callable, optional
-            The kernel's chunk loop and payload advance (:mod:`tt_mujoco.sim.compiled`);
-            default: CPython's, :func:`~tt_mujoco.sim.closed_loop.run_steps` and
-            :func:`~tt_mujoco.sim.closed_loop.advance_after_payload`.
+            The kernel's chunk loop and payload advance (:mod:`tt_mujoco.sim.loop.compiled`);
+            default: CPython's, :func:`~tt_mujoco.sim.loop.closed_loop.run_steps` and
+            :func:`~tt_mujoco.sim.loop.closed_loop.advance_after_payload`.
         progress, on_step : callable, optional
             As for :func:`tt_mujoco.sim.simulate.simulate`.
         """
@@ -483,7 +361,7 @@ class Stepper:
 
     def _after_payloads(self, status, k, advance) -> tuple[int, int]:
         """The payload changes a step made to the reduced plant's constants, and the step
-        they interrupted (:data:`~tt_mujoco.sim.step.PAYLOAD`) advanced: ``(status, k)``."""
+        they interrupted (:data:`~tt_mujoco.sim.loop.step.PAYLOAD`) advanced: ``(status, k)``."""
         loop, plant, stop = self._episode.loop, self._episode.plant, self._episode.stop
         if not records.value_of(stop, "payloads"):
             return status, k
@@ -576,7 +454,7 @@ class Stepper:
 
     def sense(self) -> tuple[Measurement, Reference]:
         """The measurement as the law sees it (noise, faults and the delay included) and the
-        target, at the current step (:func:`~tt_mujoco.sim.closed_loop.sense_step`).
+        target, at the current step (:func:`~tt_mujoco.sim.loop.closed_loop.sense_step`).
 
         Raises
         ------
@@ -611,7 +489,7 @@ class Stepper:
 
     def actuate(self, T_r: float, T_l: float, command: tuple[float, float] | None = None) -> bool:
         """Apply the torques of the current step and advance; False when the episode is over
-        (:func:`~tt_mujoco.sim.closed_loop.actuate_step`).
+        (:func:`~tt_mujoco.sim.loop.closed_loop.actuate_step`).
 
         Parameters
         ----------
@@ -705,7 +583,7 @@ class Stepper:
         return sum(len(b[0]) for b in self._blocks)
 
     def timeseries(self, release: bool = False) -> dict[str, np.ndarray]:
-        """The episode's time series so far, in :data:`tt_mujoco.sim.timeseries.COLUMNS` order.
+        """The episode's time series so far, in :data:`tt_mujoco.sim.loop.timeseries.COLUMNS` order.
 
         ``release``: the episode is over and the caller takes the rows; the logged blocks are
         dropped as they are gathered, so that a long run's rows are held about once, not

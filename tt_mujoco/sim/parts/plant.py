@@ -1,7 +1,8 @@
 """The plant protocol: what the stepper needs of a simulated vehicle.
 
-Two plants implement it: :class:`tt_mujoco.sim.plant_mujoco.MujocoPlant` (contact physics) and
-:class:`tt_mujoco.sim.plant_reduced.ReducedPlant` (the reduced ODE of docs/model.md Section 4).
+Two plants implement it: :class:`tt_mujoco.sim.parts.plant_mujoco.MujocoPlant` (contact physics) and
+:class:`tt_mujoco.sim.parts.plant_reduced.ReducedPlant` (the reduced ODE of docs/model.md Section
+4).
 Nothing outside a plant reaches into its members: options a plant cannot honour are refused by
 :meth:`Plant.check_supported` before any work.
 """
@@ -53,7 +54,7 @@ class Plant(ABC):
 
     @abstractmethod
     def measure(self):
-        """The vehicle's state now, a :class:`tt_mujoco.sim.measure.Measurement`."""
+        """The vehicle's state now, a :class:`tt_mujoco.sim.parts.measure.Measurement`."""
 
     @abstractmethod
     def scale_trailer_mass(self, factor: float, trailer: int = 1) -> None:

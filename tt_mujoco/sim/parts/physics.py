@@ -13,7 +13,7 @@ import math
 import mujoco
 import numpy as np
 
-from tt_mujoco.sim.measure import Layout, Measurement, measure, measure_train
+from tt_mujoco.sim.parts.measure import Layout, Measurement, measure, measure_train
 from tt_mujoco.vehicle import reduced, train
 from tt_mujoco.vehicle.mjcf import FLOOR_XML, VEHICLE_FILE, scene_xml, trailer_suffix, vehicle_xml
 from tt_mujoco.vehicle.params import Params
@@ -29,7 +29,7 @@ _COMPILED_MAX = 16
 
 def compile_model(p: Params, relief=None, world=None) -> mujoco.MjModel:
     """Compile the scene for ``p`` from the generated XML (no files are read or written), on
-    the ground ``relief`` (:mod:`tt_mujoco.sim.relief`; None: the flat floor), among the
+    the ground ``relief`` (:mod:`tt_mujoco.sim.parts.relief`; None: the flat floor), among the
     obstacles of ``world`` (:mod:`tt_mujoco.world`; None: none).
 
     Returns a private copy: callers may change it (faults edit ``body_mass``, the steering
@@ -136,7 +136,7 @@ class Vehicle:
     params : Params
         Parameters the MJCF is built from (the *plant's* parameters).
     relief : RampRelief or RoughRelief, optional
-        The ground's shape (:mod:`tt_mujoco.sim.relief`): the vehicle is placed resting on it.
+        The ground's shape (:mod:`tt_mujoco.sim.parts.relief`): the vehicle is placed resting on it.
     world : World, optional
         Obstacles (:mod:`tt_mujoco.world`), collision geoms of the scene.
     """

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import math
 
-from tt_mujoco.sim.measure import measure, measure_train
-from tt_mujoco.sim.physics import Vehicle, wheel_geoms
-from tt_mujoco.sim.plant import Plant
+from tt_mujoco.sim.parts.measure import measure, measure_train
+from tt_mujoco.sim.parts.physics import Vehicle, wheel_geoms
+from tt_mujoco.sim.parts.plant import Plant
 from tt_mujoco.vehicle.params import Params
 
 __all__ = ["MujocoPlant"]
@@ -61,10 +61,10 @@ class MujocoPlant(Plant):
     phi0 : float or tuple of float
         Initial articulation (rad), with beta = eta phi: phi_1, or phi_1..phi_N of a train.
     gravity : (gx, gy, gz) or None
-        Gravity in the ground's frame (m/s^2): a grade (:mod:`tt_mujoco.sim.terrain`); None
+        Gravity in the ground's frame (m/s^2): a grade (:mod:`tt_mujoco.sim.parts.terrain`); None
         keeps the model's flat-ground gravity.
     relief : RampRelief or RoughRelief, optional
-        The ground's shape (:mod:`tt_mujoco.sim.relief`), the vehicle resting on it.
+        The ground's shape (:mod:`tt_mujoco.sim.parts.relief`), the vehicle resting on it.
     world : World, optional
         The obstacles (:mod:`tt_mujoco.world`), collision geoms of the scene.
     """
@@ -122,7 +122,7 @@ class MujocoPlant(Plant):
 
     @property
     def layout(self):
-        """The model's addresses and lengths (:class:`tt_mujoco.sim.measure.Layout`) that a
+        """The model's addresses and lengths (:class:`tt_mujoco.sim.parts.measure.Layout`) that a
         measurement reads."""
         return self._layout
 
@@ -173,7 +173,7 @@ class MujocoPlant(Plant):
             row[1] = -eta
 
     def set_ground(self, ground) -> None:
-        """Friction patches (:class:`tt_mujoco.sim.ground.GroundPatches`): from now on each
+        """Friction patches (:class:`tt_mujoco.sim.parts.ground.GroundPatches`): from now on each
         step sets every wheel's contact friction from where it touches the floor."""
         m = self.model
         self._ground = ground

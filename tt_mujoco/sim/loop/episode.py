@@ -1,8 +1,8 @@
 """An episode's records, made from the run's Python objects and handed back to them.
 
-The closed loop's step (:mod:`tt_mujoco.sim.closed_loop`) reads and writes the named records of
-:mod:`tt_mujoco.sim.records`; :func:`episode_records` makes them from a reset
-:class:`~tt_mujoco.sim.stepper.Stepper` (the plant, the target, the faults, the schedule) and
+The closed loop's step (:mod:`tt_mujoco.sim.loop.closed_loop`) reads and writes the named records of
+:mod:`tt_mujoco.sim.loop.records`; :func:`episode_records` makes them from a reset
+:class:`~tt_mujoco.sim.loop.stepper.Stepper` (the plant, the target, the faults, the schedule) and
 the controller, and :func:`hand_back` gives what the run did back to the objects that report
 it (the controller's state, the faults, the friction patches, the schedule's changes) when the
 episode ends, whichever loop ran it (the kernel's, or CPython's over the same source). The
@@ -18,8 +18,9 @@ import pickle
 import numpy as np
 
 from tt_mujoco.defaults import JACKKNIFE_DEG
-from tt_mujoco.sim import closed_loop, records, schedule, step
-from tt_mujoco.sim.law import LAWS, PYTHON, hand_law_back, law_record
+from tt_mujoco.sim.loop import closed_loop, records, step
+from tt_mujoco.sim.loop.law import LAWS, PYTHON, hand_law_back, law_record
+from tt_mujoco.sim.parts import schedule
 from tt_mujoco.sim.scenario import jackknife_phi_deg
 
 __all__ = [
@@ -92,15 +93,15 @@ def has_closed_form(path) -> bool:
 
 def users_disturbance(built) -> bool:
     """Whether the run's disturbance is a user's, which the step calls, rather than none or a
-    built-in, which it computes itself (:func:`tt_mujoco.sim.disturbances.form_of`)."""
-    from tt_mujoco.sim.disturbances import form_of
+    built-in, which it computes itself (:func:`tt_mujoco.sim.parts.disturbances.form_of`)."""
+    from tt_mujoco.sim.parts.disturbances import form_of
 
     return built.disturbance is not None and form_of(built.disturbance) is None
 
 
 def is_law_class(controller) -> bool:
     """Whether ``controller`` is of a built-in law's own class (:data:`tt_mujoco.sim.
-    law.LAWS`; a subclass may change what it runs)."""
+    loop.law.LAWS`; a subclass may change what it runs)."""
     law = getattr(type(controller), "LAW", None)
     return law in LAWS and type(controller).__module__ == law.__module__
 
@@ -134,9 +135,9 @@ def carry_payloads(stepper, plant, faults, stop_record):
 
 def episode_records(stepper, controller, user, python=None) -> tuple:
     """The records of the (reset) ``stepper``'s episode as the step reads them
-    (:mod:`tt_mujoco.sim.closed_loop`): ``(loop, plant, law, target, stop)``, with ``user`` the
+    (:mod:`tt_mujoco.sim.loop.closed_loop`): ``(loop, plant, law, target, stop)``, with ``user`` the
     compiled form of a plain-number law (any placeholder for a built-in one), or ``python``,
-    the law that Python computes between the halves (:data:`~tt_mujoco.sim.closed_loop.
+    the law that Python computes between the halves (:data:`~tt_mujoco.sim.loop.closed_loop.
     PYTHON`: a controller's :meth:`compute`, or an agent's torques)."""
 
     plant = _plant_record(stepper, stepper.built.nominal)
@@ -182,7 +183,7 @@ def _hand_back_steering(stepper, controller, steering, changes) -> None:
 
 def _steering_record(stepper, mujoco_plant: bool):
     """The scheduler's gains and tables, and where the plant's couplings are."""
-    from tt_mujoco.sim.schedule import EtaScheduler, PathEtaScheduler
+    from tt_mujoco.sim.parts.schedule import EtaScheduler, PathEtaScheduler
     from tt_mujoco.vehicle.path_schedule import BLEND_PHI, driven_path
 
     scheduler, n = stepper.scheduler, stepper.built.plant_params.n_trailers
@@ -220,8 +221,8 @@ def _steering_record(stepper, mujoco_plant: bool):
 
 
 def _plant_record(stepper, nominal):
-    from tt_mujoco.sim.measure import Addresses, Lengths
-    from tt_mujoco.sim.plant_mujoco import MujocoPlant
+    from tt_mujoco.sim.parts.measure import Addresses, Lengths
+    from tt_mujoco.sim.parts.plant_mujoco import MujocoPlant
     from tt_mujoco.vehicle import reduced
 
     plant, substeps = stepper.plant, stepper.built.substeps
@@ -344,7 +345,7 @@ def hand_back(stepper, controller, status, k, episode_records, changes) -> None:
     """Give the state at step ``k`` back: to the stepper, the controller, the faults, the
     friction patches and the schedule (``changes``: ``(first row, gains)`` of each change of
     the scheduled gains). The motors' torques are the record's own
-    (:meth:`~tt_mujoco.sim.stepper.Stepper.begin`); the stepper syncs the reduced ODE."""
+    (:meth:`~tt_mujoco.sim.loop.stepper.Stepper.begin`); the stepper syncs the reduced ODE."""
 
     loop, plant, law, _, _ = episode_records
     stepper.k = k
@@ -386,11 +387,11 @@ def _profile_table(target, dt: float, steps: int) -> np.ndarray:
 
 def outcome(status, stop_record, stepper, controller, k) -> tuple[str, str]:
     """``(status, message)`` of an episode that ended at step ``k`` with ``status`` (a stop
-    code of :mod:`tt_mujoco.sim.step`), from the ``stop`` record."""
+    code of :mod:`tt_mujoco.sim.loop.step`), from the ``stop`` record."""
     from tt_mujoco.controllers.base import LAW_NOT_FINITE, LAW_RAISED, LAW_SINGULAR
     from tt_mujoco.controllers.plain import PlainLawController
     from tt_mujoco.sim import usercode
-    from tt_mujoco.sim.plant import StopRun
+    from tt_mujoco.sim.parts.plant import StopRun
     from tt_mujoco.vehicle.reduced import SingularityError
 
     t = k * stepper.dt
@@ -417,7 +418,7 @@ def outcome(status, stop_record, stepper, controller, k) -> tuple[str, str]:
     if status == step.WARNING:
         import mujoco
 
-        from tt_mujoco.sim.plant_mujoco import warning_message
+        from tt_mujoco.sim.parts.plant_mujoco import warning_message
 
         return "diverged", warning_message(mujoco.mjtWarning(int(value["warning"])).name, t)
     if status == step.SINGULAR:
@@ -470,7 +471,7 @@ def raised_again(stepper, controller, t: float) -> tuple[str, str] | None:
     from tt_mujoco.controllers.plain import LawReference, LawState
     from tt_mujoco.guard import users_failure
     from tt_mujoco.sim import usercode
-    from tt_mujoco.sim.measure import Measurement
+    from tt_mujoco.sim.parts.measure import Measurement
 
     law = stepper._episode.law
     m = Measurement(*_floats(law.measurement_values))

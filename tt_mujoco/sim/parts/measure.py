@@ -159,7 +159,7 @@ def measure(qpos, qvel, lay: Layout) -> Measurement:
 def measure_values(qpos, qvel, a: Addresses, n: Lengths) -> tuple:
     """:func:`measure` from the state vectors, the addresses and the lengths: the
     :class:`Measurement` fields as a tuple, the form the compiled episode
-    (:mod:`tt_mujoco.sim.compiled`) shares."""
+    (:mod:`tt_mujoco.sim.loop.compiled`) shares."""
     L, L0, r, d = n.L, n.L0, n.r, n.d
     hitch_q, hitch_v, steer_q = a.hitch_q, a.hitch_v, a.steer_q
     i = a.root_q

@@ -3,15 +3,15 @@
 A control step is :func:`sense_step` (measure, check, noise, faults, delay, target, the law's
 reference and nominal model), the law (:func:`law_step` runs a compiled one) and
 :func:`actuate_step` (saturation, faults, motors, disturbance, log, schedule, advance), over the
-records of :mod:`tt_mujoco.sim.records`, each taking the step, its row and the records; what
+records of :mod:`tt_mujoco.sim.loop.records`, each taking the step, its row and the records; what
 the law saw and asked passes between them in ``law.reading``. The kernel's chunk loop
-(:func:`tt_mujoco.sim._kernel.run_chunk`) sequences them over a stretch of steps.
+(:func:`tt_mujoco.sim.loop._kernel.run_chunk`) sequences them over a stretch of steps.
 
-These are plain functions: the compiled kernel (:mod:`tt_mujoco.sim._kernel`) compiles them
+These are plain functions: the compiled kernel (:mod:`tt_mujoco.sim.loop._kernel`) compiles them
 from this source (:data:`BORROWING` and :data:`HALVES` say how), and CPython runs the same
 source. One call reaches what only one of them has: :func:`mj_step` (MuJoCo's C step, by the
 addresses of the model and data); the kernel gives it its compiled form, as it does the law's
-own (:mod:`tt_mujoco.sim.law`). Importing this module imports no numba.
+own (:mod:`tt_mujoco.sim.loop.law`). Importing this module imports no numba.
 """
 
 from __future__ import annotations
@@ -26,7 +26,9 @@ import numpy as np
 
 from tt_mujoco.compiled_form import compiled_form
 from tt_mujoco.controllers import base
-from tt_mujoco.sim import (
+from tt_mujoco.sim.loop import step, target_step
+from tt_mujoco.sim.loop.law import PYTHON, USER, law_step
+from tt_mujoco.sim.parts import (
     disturbances,
     faults,
     ground,
@@ -35,12 +37,9 @@ from tt_mujoco.sim import (
     plant_mujoco,
     plant_reduced,
     schedule,
-    step,
-    target_step,
     wind,
 )
-from tt_mujoco.sim.law import PYTHON, USER, law_step
-from tt_mujoco.sim.measure import (
+from tt_mujoco.sim.parts.measure import (
     BETA,
     OMEGA,
     PHI,
@@ -78,8 +77,8 @@ WARNING, LAW_FAILED, SINGULAR = step.WARNING, step.LAW_FAILED, step.SINGULAR
 PAYLOAD, RAISED, COLLISION = step.PAYLOAD, step.RAISED, step.COLLISION
 LAW_OK = base.LAW_OK
 COS_BETA_MIN = reduced.COS_BETA_MIN
-#: What the kernel asks of a hook it calls back (:mod:`tt_mujoco.sim._kernel`, ``HOOK``): a
-#: path's (:mod:`tt_mujoco.sim.target_step`), or a disturbance's answer
+#: What the kernel asks of a hook it calls back (:mod:`tt_mujoco.sim.loop._kernel`, ``HOOK``): a
+#: path's (:mod:`tt_mujoco.sim.loop.target_step`), or a disturbance's answer
 HOOK_CURVATURE, HOOK_POSE = target_step.HOOK_CURVATURE, target_step.HOOK_POSE
 HOOK_LAW_POSE, HOOK_DISTURBANCE = target_step.HOOK_LAW_POSE, disturbances.HOOK_DISTURBANCE
 #: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
@@ -260,7 +259,7 @@ def _nominal_mass(law, n, phi, phis, v_m, w_m):
 
 
 def _offer_path(steering, target, measurement, rows, n):
-    """The path schedule (:class:`~tt_mujoco.sim.schedule.PathEtaScheduler`): every axle
+    """The path schedule (:class:`~tt_mujoco.sim.parts.schedule.PathEtaScheduler`): every axle
     projected onto the path and its gain there, into
     ``steering.offered``."""
     offered, arcs, driven = steering.offered, steering.arcs, steering.driven
@@ -612,7 +611,7 @@ def run_steps(k, k_end, loop, plant, law, target, log, stop_record):
     """Control steps ``k..k_end``: :func:`sense_step`, the law (:func:`law_step`),
     :func:`actuate_step`; ``(status, k)``: the step it stopped at, or ``k_end + 1`` to go on.
     Rows go to ``log`` from its row 0. The one loop of every episode: the kernel's chunk
-    (:func:`tt_mujoco.sim._kernel.run_chunk`) is this, compiled."""
+    (:func:`tt_mujoco.sim.loop._kernel.run_chunk`) is this, compiled."""
     dt, limit = loop.dt, loop.limits.torque_limit
     stop, nominal, reading = stop_record[0], law.model[0], law.reading[0]
     row = 0
@@ -645,7 +644,7 @@ def run_steps(k, k_end, loop, plant, law, target, log, stop_record):
 
 
 #: The step's functions that the kernel compiles without numba's reference counting (see
-#: :mod:`tt_mujoco.sim._kernel`), called as functions.
+#: :mod:`tt_mujoco.sim.loop._kernel`), called as functions.
 BORROWING = (
     advance_after_payload,
     target_step.path_at,

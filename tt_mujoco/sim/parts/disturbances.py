@@ -23,7 +23,7 @@ from typing import ClassVar
 
 from tt_mujoco.compiled_form import compiled_form
 from tt_mujoco.registry import Registry, call_hook
-from tt_mujoco.sim.terrain import GRAVITY
+from tt_mujoco.sim.parts.terrain import GRAVITY
 
 __all__ = [
     "DISTURBANCES",
@@ -78,7 +78,7 @@ class PaperDisturbance(Disturbance):
 
 def paper_disturbance_of(t: float) -> tuple[float, float]:
     """The paper's Delta(t) (:class:`PaperDisturbance`) as plain floats (the compiled episode,
-    :mod:`tt_mujoco.sim.compiled`, shares it)."""
+    :mod:`tt_mujoco.sim.loop.compiled`, shares it)."""
     return (
         3.5 + math.sin(0.3 * t) + 0.5 * math.cos(2.0 * t),
         1.5 * math.sin(0.3 * t) + 0.5 * math.cos(5.0 * t),
@@ -179,12 +179,12 @@ def wrench_of(mass, a_v: float, a_w: float) -> tuple[float, float]:
 #: registration order (:func:`builtin_forms`); a form's index here is its
 #: ``disturbance_kind`` in the loop record.
 DISTURBANCE_FORMS = builtin_forms()
-#: What the kernel asks of a user's disturbance it calls back (``tt_mujoco.sim._kernel``)
+#: What the kernel asks of a user's disturbance it calls back (``tt_mujoco.sim.loop._kernel``)
 HOOK_DISTURBANCE = 3.0
 
 
 # --- the disturbance's part of the step (plain numbers and the loop record; the closed loop,
-# tt_mujoco.sim.closed_loop, calls it and numba compiles it) ---------------------------------
+# tt_mujoco.sim.loop.closed_loop, calls it and numba compiles it) ---------------------------------
 @compiled_form("the disturbance's Python code called back through a C function (HookCallback)")
 def hooked_disturbance_at(loop, t):
     """``(a_v, a_w)`` of a user's disturbance at ``t``, with its checks (the kernel calls it

@@ -1,7 +1,8 @@
 """Ground shapes placed along the run's path: a ramp and a rough ground (docs/model.md
 Section 16).
 
-A :class:`~tt_mujoco.sim.terrain.Ramp` or :class:`~tt_mujoco.sim.terrain.Rough` spec says what
+A :class:`~tt_mujoco.sim.parts.terrain.Ramp` or :class:`~tt_mujoco.sim.parts.terrain.Rough` spec
+says what
 the ground is relative to the path; :func:`relief_of` places it in the world from the run's
 reference polyline (the one every run keeps as ``reference_path.parquet``), so the physics and
 a video drawn later from the run's folder build the very same ground. A relief gives the
@@ -21,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tt_mujoco.sim.terrain import Ramp, Rough
+from tt_mujoco.sim.parts.terrain import Ramp, Rough
 from tt_mujoco.vehicle.mjcf import floor_xml
 
 __all__ = ["MAX_RELIEF_NODES", "RampRelief", "RoughRelief", "ground_margin", "relief_of"]

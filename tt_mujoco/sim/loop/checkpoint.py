@@ -2,7 +2,7 @@
 
 The stream (``timeseries.partial.arrows`` in a run folder) holds one record batch per block of
 logged rows, every column float64, in the stepper's raw logged order
-(:data:`tt_mujoco.sim.stepper.CHECKPOINT_COLUMNS`). A process killed part way leaves the schema
+(:data:`tt_mujoco.sim.loop.stepper.CHECKPOINT_COLUMNS`). A process killed part way leaves the schema
 and every block written before it; :func:`read_checkpoint` reads those and stops at a
 truncated last block. Any Arrow reader opens it too (``pyarrow.ipc.open_stream``, ``polars.
 read_ipc_stream``).

@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from tt_mujoco.defaults import DRIVEN_PATH_GAIN
-from tt_mujoco.sim.plant import Plant
+from tt_mujoco.sim.parts.plant import Plant
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.path_schedule import (
     PathSchedule,
@@ -40,8 +40,8 @@ class EtaScheduler:
 
     Parameters
     ----------
-    plant : tt_mujoco.sim.plant.Plant
-        The running plant; its :meth:`~tt_mujoco.sim.plant.Plant.set_eta` applies the gain.
+    plant : tt_mujoco.sim.parts.plant.Plant
+        The running plant; its :meth:`~tt_mujoco.sim.parts.plant.Plant.set_eta` applies the gain.
     params : Params
         The plant's parameters (L, L0 and the initial eta).
     tolerance : float
@@ -50,7 +50,7 @@ class EtaScheduler:
     Notes
     -----
     The step schedules the gains from its steering record (:func:`curvature_gains_of` and
-    :func:`gains_moved`, in :func:`tt_mujoco.sim.closed_loop.actuate_step`); the scheduler
+    :func:`gains_moved`, in :func:`tt_mujoco.sim.loop.closed_loop.actuate_step`); the scheduler
     applies the first gains and takes back what the run did (:meth:`restore`). Every change
     reaches the controller through
     :meth:`~tt_mujoco.controllers.base.Controller.steering_changed` (the loop calls it), and the
@@ -73,7 +73,8 @@ class EtaScheduler:
         self._changes: list[tuple[int, float]] = [(0, self.eta)]
         if not isinstance(plant, Plant):
             raise ValueError(
-                f"plant={type(plant).__name__} is not allowed: use a tt_mujoco.sim.plant.Plant"
+                f"plant={type(plant).__name__} is not allowed: use a "
+                "tt_mujoco.sim.parts.plant.Plant"
             )
         self._plant = plant
 
@@ -106,7 +107,7 @@ class PathEtaScheduler(EtaScheduler):
 
     Parameters
     ----------
-    plant : tt_mujoco.sim.plant.Plant
+    plant : tt_mujoco.sim.parts.plant.Plant
         The running plant.
     params : Params
         The plant's parameters.
@@ -135,7 +136,7 @@ class PathEtaScheduler(EtaScheduler):
     ``atan(gain e)`` where it stands ``e`` beside that path. The plant starts on
     the gains of where its axles stand (before the first step). A gain that sweeps [-3, 3] and
     changes sign along the path is no fixed linkage ratio, so the plant's axles are steered by
-    an actuator (:meth:`~tt_mujoco.sim.plant.Plant.steer_by_actuator`).
+    an actuator (:meth:`~tt_mujoco.sim.parts.plant.Plant.steer_by_actuator`).
     """
 
     def __init__(

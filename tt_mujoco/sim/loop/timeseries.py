@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tt_mujoco.sim.measure import TRAIN_FIELDS, Measurement
+from tt_mujoco.sim.parts.measure import TRAIN_FIELDS, Measurement
 
 __all__ = ["COLUMNS", "LOOP_COLUMNS", "UNITS", "assemble_columns", "train_columns", "unit_of"]
 
