@@ -59,8 +59,8 @@ def _records(options) -> tuple:
     log = records.LogRecord(
         measurement=np.empty((STEPS, len(records.MEASUREMENT_DTYPE))),
         loop=np.empty(STEPS, dtype=records.LOG_DTYPE),
-        train=np.empty((STEPS, plant.n_trailers - 1, len(TRAIN_FIELDS))),
-        etas=np.empty((STEPS if plant.steering.kind else 0, plant.n_trailers)),
+        train=np.empty((STEPS, loop.n_trailers - 1, len(TRAIN_FIELDS))),
+        etas=np.empty((STEPS if plant.steering.kind else 0, loop.n_trailers)),
     )
     return stepper, (loop, plant, law, target, log, stop)
 

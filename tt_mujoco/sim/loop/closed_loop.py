@@ -218,7 +218,7 @@ def _advance(plant, T_r, T_l, push, weather, stop):
                 return WARNING
         return RUNNING
     y = plant.ode_state
-    n = plant.n_trailers
+    n = len(plant.train.trailers)
     if n > 1:
         inputs = (T_r + dist_r, T_l + dist_l, 0.0, 0.0)
         for _ in range(plant.substeps):
@@ -285,7 +285,7 @@ def _steer(plant, law):
     """EtaScheduler._offer: the offered gains applied when one moved by more than the
     tolerance, into the plant (a linkage's ratio, a reduced train's rows) and the law's
     train model."""
-    steering, n = plant.steering, plant.n_trailers
+    steering, n = plant.steering, len(plant.train.trailers)
     if not schedule.gains_moved(steering.offered, steering.etas, steering.tolerance):
         return
     etas = steering.etas
@@ -296,6 +296,9 @@ def _steer(plant, law):
             steering.eq_data[steering.ids[k], 1] = -etas[k]
         if n > 1:  # one trailer: the ODE's constants take the gain (_ode)
             plant.train.trailers[k][ETA_COLUMN] = etas[k]
+        # a test of its own: merged into the one above, the compiled reduced loop's code came
+        # out markedly slower (bench_cli's reduced case)
+        if law.steered_train.trailers.shape[0] > 1:
             law.steered_train.trailers[k, ETA_COLUMN] = etas[k]
 
 
@@ -407,7 +410,7 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
     stop code (its details in ``stop``)."""
     lim, dt, noise, fault = loop.limits, loop.dt, loop.noise, loop.faults
     r, nominal, seen_by_law = law.reference[0], law.model[0], law.reading[0]
-    n, phis = plant.n_trailers, law.phis
+    n, phis = loop.n_trailers, law.phis
     steering = plant.steering
     t = k * dt
     rows = log.train[row]
@@ -523,7 +526,7 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
     advance's stop code."""
     lim, dt, fault, c = loop.limits, loop.dt, loop.faults, law.nominal
     r, reading = law.reference[0], law.reading[0]
-    n, phis, steering, state = plant.n_trailers, law.phis, plant.steering, target.state[0]
+    n, phis, steering, state = loop.n_trailers, law.phis, plant.steering, target.state[0]
     t, v_m, w_m, phi_m = k * dt, reading.v, reading.omega, reading.phi
     measurement, rows = log.measurement[row], log.train[row]
     T_r = step.clip(reading.T_r, lim.torque_limit)

@@ -259,7 +259,6 @@ def _plant_record(stepper, nominal):
     n = params.n_trailers
     return records.PlantRecord(
         mujoco=isinstance(plant, MujocoPlant),
-        n_trailers=n,
         substeps=substeps,
         mj=mj,
         ode_state=ode_state,

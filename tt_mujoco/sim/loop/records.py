@@ -247,9 +247,6 @@ class PlantRecord(NamedTuple):
     """The plant the compiled loop advances: MuJoCo (``mj_step``) or the reduced ODE (RK4)."""
 
     mujoco: bool
-    #: the trailers N, counted once (:attr:`tt_mujoco.vehicle.params.Params.n_trailers`):
-    #: the step reads it here, never from an array's length
-    n_trailers: int
     #: plant steps per control step
     substeps: int
     mj: MujocoRecord
@@ -451,6 +448,9 @@ class LoopRecord(NamedTuple):
     #: whether the disturbance enters as matched torques, or as a chassis wrench
     disturbed: bool
     wrench: bool
+    #: the trailers N (:attr:`tt_mujoco.vehicle.params.Params.n_trailers`); every train
+    #: record has as many rows
+    n_trailers: int
     #: the hitch limits of trailers 2..N (rad)
     hitch_limits: np.ndarray
     faults: FaultRecord

@@ -199,6 +199,7 @@ class Stepper:
             noise=np.zeros(0) if noise is None else noise,
             disturbed=dist and mode == "matched",
             wrench=dist and mode == "wrench",
+            n_trailers=self.built.plant_params.n_trailers,
             hitch_limits=np.array(self._train_limits, dtype=float),
             faults=FaultRecord(
                 dropouts=np.array(faults.dropouts if faults else [], dtype=float).reshape(-1, 2),
