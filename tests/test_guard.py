@@ -10,8 +10,9 @@ import json
 import textwrap
 
 import pytest
+from hooked_runs import run_hooked
 
-from tt_mujoco import guard, run
+from tt_mujoco import guard
 from tt_mujoco.registry import describe_failure
 
 #: Ways a user's code fails: (name, statement that fails, what the message shows)
@@ -123,12 +124,7 @@ def test_every_hook_failing_every_way_ends_as_promised(
     statement, shown = FAILURES[failure]
     file = tmp_path / f"user_{abs(hash((hook, failure, loop)))}.py"
     file.write_text(PRELUDE.replace("FAIL", statement) + "\n" + textwrap.dedent(code))
-    monkeypatch.setenv("TT_MUJOCO_COMPILED", "1" if loop == "compiled" else "0")
-    out = tmp_path / "out"
-    argv = [o.format(file=file) for o in options]
-    argv += ["--plant", "reduced", "--traj", "circle"] if "--traj" not in argv else []
-    argv += ["--duration", "2", "--no-video", "--no-plots", "--quiet", "--out", str(out)]
-    exit_code = run.main(argv)
+    exit_code, out = run_hooked(tmp_path, monkeypatch, file, options, loop)
     err = capsys.readouterr().err
     assert "Traceback" not in err
     if when == "before":

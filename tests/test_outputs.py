@@ -280,3 +280,13 @@ def test_a_dangling_symlink_as_out_is_named_as_a_link(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "is a symbolic link" in err and "which does not exist" in err
     assert not (tmp_path / "missing").exists()
+
+
+def test_an_integer_beyond_a_float_is_neither_read_nor_written():
+    # what the strict reader refuses, the writer never writes: a metric's 10**400 is None
+    from tt_mujoco.outputs import json_safe, parse_strict_json
+
+    with pytest.raises(ValueError, match="beyond a float"):
+        parse_strict_json('{"m": 1' + "0" * 400 + "}")
+    assert parse_strict_json('{"m": 12345678901234567890}') == {"m": 12345678901234567890}
+    assert json_safe({"m": 10**400, "n": -(10**400), "k": 3}) == {"m": None, "n": None, "k": 3}

@@ -446,3 +446,34 @@ def test_default_curvature_bound_keeps_the_trailer_clear():
     assert abs(residual) < 1e-12
     assert math.isnan(steering.steady_articulation(1.0, Params(eta=1.0)))
     assert steering.steady_articulation(0.0) == 0.0
+
+
+def test_a_path_class_that_leaves_a_hook_to_the_base_is_refused_naming_it(tmp_path):
+    # the base's own hooks only raise NotImplementedError: such a class would fail mid-build
+    # as if the bug were ours; it is refused when the factory gives it, naming what is missing
+    from tt_mujoco.reference.path_base import PATH_HOOKS, ReferencePath, missing_hooks
+
+    for name in paths.PATHS:  # every built-in gives every hook
+        assert missing_hooks(type(paths.get_path(name))) == [], name
+    assert missing_hooks(ReferencePath) == [hook for _, hook in PATH_HOOKS]
+    file = tmp_path / "p.py"
+    file.write_text(
+        "from tt_mujoco.reference.paths import ReferencePath\n\n"
+        "class Half(ReferencePath):\n"
+        "    def pose_at(self, s):\n        return (s, 0.0, 0.0)\n\n"
+        "    def curvature_and_rate(self, s):\n        return (0.0, 0.0)\n\n"
+        "def p():\n    return Half('half', 10.0)\n"
+    )
+    with pytest.raises(ValueError, match=r"class Half does not implement _pose, _curvature, _cur"):
+        paths.get_path(f"{file}:p")
+
+
+def test_a_factory_that_raises_a_type_error_inside_is_its_failure_not_a_bad_option(tmp_path):
+    from tt_mujoco.registry import HookError
+
+    file = tmp_path / "p.py"
+    file.write_text("def p(R=1.0):\n    return len(5)\n")
+    with pytest.raises(HookError, match=r"line 2: TypeError: object of type 'int' has no len"):
+        paths.get_path(f"{file}:p", R=2.0)
+    with pytest.raises(ValueError, match=r"does not take the options \{'nope': 1\}"):
+        paths.get_path(f"{file}:p", nope=1)

@@ -78,3 +78,16 @@ def test_a_users_name_takes_its_part_again_and_refuses_another(restored, label):
     other = lambda *args: None  # noqa: E731 - a part defined elsewhere
     with pytest.raises(ValueError, match="is taken by"):
         registry.register("users-part", other)  # the same name, spelled otherwise
+
+
+def test_finite_number_is_the_one_test_of_a_number():
+    import math
+
+    import numpy as np
+
+    from tt_mujoco.registry import finite_number
+
+    for good in (0, -3, 2.5, np.float32(1.5), np.int64(7), 1e308):
+        assert finite_number(good) == float(good)
+    for bad in (True, np.bool_(False), math.nan, -math.inf, 10**400, "1", 1j, None, [1.0], b"1"):
+        assert finite_number(bad) is None, bad

@@ -16,6 +16,7 @@ import io
 import json
 import math
 import os
+import sys
 import tempfile
 import warnings
 from collections.abc import Mapping
@@ -234,7 +235,8 @@ def json_default(obj):
 
 
 def json_safe(value):
-    """``value`` with numpy types made plain and non-finite floats made None (strict JSON)."""
+    """``value`` with numpy types made plain, and non-finite floats and integers beyond a float
+    made None (strict JSON that :func:`parse_strict_json` reads back)."""
     if isinstance(value, Mapping):
         return {str(k): json_safe(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
@@ -245,7 +247,13 @@ def json_safe(value):
         return value if isinstance(value, bool) else int(value)
     if isinstance(value, float | np.floating):
         return float(value) if np.isfinite(value) else None
+    if isinstance(value, int) and abs(value) > _FLOAT_MAX:  # what the strict reader refuses
+        return None
     return value
+
+
+#: The largest float: an integer beyond it is not read back (:func:`parse_strict_json`).
+_FLOAT_MAX = sys.float_info.max
 
 
 def timeseries_csv(ts: Mapping[str, np.ndarray], columns) -> str:
@@ -394,6 +402,14 @@ def parse_strict_json(text: str):
             raise ValueError(f"the number {number[:40]} is beyond a float")
         return value
 
+    def strict_int(number: str) -> int:
+        value = int(number)
+        try:
+            float(value)
+        except OverflowError:
+            raise ValueError(f"the number {number[:40]}... is beyond a float") from None
+        return value
+
     def no_constant(name: str):
         raise ValueError(f"{name} is not JSON (strict JSON has no NaN or infinities)")
 
@@ -406,7 +422,11 @@ def parse_strict_json(text: str):
 
     try:
         return json.loads(
-            text, parse_float=strict_float, parse_constant=no_constant, object_pairs_hook=unique
+            text,
+            parse_float=strict_float,
+            parse_int=strict_int,
+            parse_constant=no_constant,
+            object_pairs_hook=unique,
         )
     except RecursionError:
         raise ValueError("it is nested too deeply") from None

@@ -24,6 +24,7 @@ import importlib.util
 import math
 import sys
 from collections.abc import Callable, Iterator
+from numbers import Real
 from pathlib import Path
 
 from tt_mujoco.guard import shown_error, users_failure
@@ -36,6 +37,7 @@ __all__ = [
     "closest",
     "describe_failure",
     "existing_file",
+    "finite_number",
     "is_hook",
     "load_hook",
     "normalise_hook",
@@ -81,6 +83,19 @@ def shown(value, limit: int = 80) -> str:
     if len(text) <= limit:
         return text
     return f"{text[: limit - 30]}... ({len(text)} characters)"
+
+
+def finite_number(value) -> float | None:
+    """``value`` as a float if it is a finite real number (a NumPy scalar included), else
+    None: the one test of "a number" for what a user's code returns. A bool, a string, a
+    complex, a NaN or an infinity, an integer beyond a float and any container are not."""
+    if isinstance(value, bool) or not isinstance(value, Real) or type(value).__name__ == "bool_":
+        return None
+    try:
+        number = float(value)
+    except (OverflowError, TypeError, ValueError):
+        return None
+    return number if math.isfinite(number) else None
 
 
 def closest(word: str, choices) -> str | None:

@@ -17,6 +17,7 @@ __all__ = [
     "SPLINE_PATH",
     "Pose",
     "ReferencePath",
+    "missing_hooks",
     "positive_number",
     "read_from_tables",
 ]
@@ -47,6 +48,28 @@ class Pose(NamedTuple):
 
 def _out(a: np.ndarray, scalar: bool):
     return float(a) if scalar else a
+
+
+#: What a path class must give: each public method the run calls, and the subclass hook
+#: through which the base computes it (either overridden is enough).
+PATH_HOOKS = (
+    ("pose", "_pose"),
+    ("pose_at", "_pose_at"),
+    ("curvature", "_curvature"),
+    ("curvature_rate", "_curvature_rate"),
+    ("curvature_and_rate", "curvature_and_rate"),
+)
+
+
+def missing_hooks(cls: type) -> list[str]:
+    """The hooks of :data:`PATH_HOOKS` a :class:`ReferencePath` subclass leaves to the base
+    (whose own only raise ``NotImplementedError``), by the subclass hook's name."""
+    return [
+        hook
+        for public, hook in PATH_HOOKS
+        if getattr(cls, public) is getattr(ReferencePath, public)
+        and getattr(cls, hook) is getattr(ReferencePath, hook)
+    ]
 
 
 class ReferencePath:

@@ -39,6 +39,7 @@ from tt_mujoco.reference.path_base import (
     Pose,
     ReferencePath,
     arc_segment,
+    missing_hooks,
     positive_number,
 )
 from tt_mujoco.reference.spline import (
@@ -548,9 +549,13 @@ def _from_hook(spec: str, **kw) -> ReferencePath:
         if not callable(obj):
             raise ValueError(f"path {spec!r} is not allowed: {obj!r} is not a ReferencePath")
         try:
-            obj = obj(**kw)
+            inspect.signature(obj).bind(**kw)
         except TypeError as err:
             raise ValueError(f"path {spec!r} does not take the options {kw}: {err}") from None
+        except ValueError:  # a callable without a signature: it is called as it is
+            pass
+        try:
+            obj = obj(**kw)
         except BaseException as err:  # the user's factory: its failure is bad input
             if not users_failure(err):
                 raise
@@ -561,6 +566,12 @@ def _from_hook(spec: str, **kw) -> ReferencePath:
         raise ValueError(
             f"path {spec!r} is not allowed: it gave {type(obj).__name__}, not a "
             "tt_mujoco.reference.paths.ReferencePath"
+        )
+    missing = missing_hooks(type(obj))
+    if missing:
+        raise ValueError(
+            f"path {spec!r} is not allowed: its class {type(obj).__name__} does not implement "
+            f"{', '.join(missing)} (see tt_mujoco.reference.path_base.ReferencePath)"
         )
     return obj
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-import math
 import signal
 import threading
 import time
@@ -16,7 +15,7 @@ from tt_mujoco.analysis.metrics import compute_metrics
 from tt_mujoco.defaults import MAX_SPEED
 from tt_mujoco.guard import control_signal, noting_interrupts, users_failure
 from tt_mujoco.registry import describe_failure as usercode_failure
-from tt_mujoco.registry import shown
+from tt_mujoco.registry import finite_number, shown
 from tt_mujoco.sim.build import (
     PLAN_FORWARD_DRIVE,
     REVERSING_DRIVES,
@@ -210,9 +209,10 @@ def controller_report(controller) -> tuple[dict, str | None]:
         for key, value in report.items():
             if value is not None and not (isinstance(value, Real) and not isinstance(value, bool)):
                 raise TypeError(f"report() value {key}={shown(value)} is not a number or None")
-            finite = value is not None and math.isfinite(value)
-            number = int(value) if isinstance(value, Integral) else float(value)
-            clean[str(key)] = number if finite else None
+            number = None if value is None else finite_number(value)  # NaN, inf: None
+            if number is not None and isinstance(value, Integral):
+                number = int(value)
+            clean[str(key)] = number
         return clean, None
     except BaseException as err:  # the user's code: kept as an error, never raised
         if not users_failure(err):
@@ -236,11 +236,20 @@ def user_metric(fn, ts: dict, path) -> tuple[float | None, str | None]:
         if not users_failure(err):
             raise
         return None, usercode_failure(err)
-    if value is None or isinstance(value, int | float):
-        return value, None
-    if isinstance(value, Real):  # a NumPy scalar
-        return float(value), None
-    return None, f"it returned {shown(value, 60)}: a metric returns a number or None"
+    return metric_value(value)
+
+
+def metric_value(value) -> tuple[float | int | None, str | None]:
+    """``(value, error)`` of what a user's metric returned: a finite real number (a NumPy
+    scalar made plain; an integer kept whole) or None; anything else (a bool, a string, a
+    NaN or an infinity, an integer beyond a float) is None and the error says what it was,
+    so that every ``metrics.json`` reads back as strict JSON."""
+    if value is None:
+        return None, None
+    number = finite_number(value)
+    if number is None:
+        return None, f"it returned {shown(value, 60)}: a metric returns a number or None (finite)"
+    return (int(value) if isinstance(value, int | np.integer) else number), None
 
 
 def reference_polylines(built: Build) -> tuple[np.ndarray, np.ndarray]:

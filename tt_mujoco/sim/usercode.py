@@ -11,12 +11,11 @@ failure is bad input (exit code 2).
 
 from __future__ import annotations
 
-import math
 import traceback
 from numbers import Real
 
 from tt_mujoco.guard import users_failure
-from tt_mujoco.registry import describe_failure, shown
+from tt_mujoco.registry import describe_failure, finite_number, shown
 from tt_mujoco.sim.parts.plant import StopRun
 
 __all__ = [
@@ -35,23 +34,52 @@ def failure(who: str, t: float, err: BaseException) -> StopRun:
 
 
 def _two_numbers(out, who: str, what: str, t: float, names: tuple[str, str]):
-    try:
-        a, b = out
-    except (TypeError, ValueError):
-        a = b = None
-    if not (isinstance(a, Real) and isinstance(b, Real)):
+    pair = _sequence_of(out, 2)
+    if pair is None or not all(_real(v) for v in pair):
         raise StopRun(
             "failed",
             f"{who} returned {shown(out)} at t={t:.3f} s: {what} must return two numbers "
             f"({names[0]}, {names[1]})",
         )
-    if not (math.isfinite(a) and math.isfinite(b)):
+    numbers = [finite_number(v) for v in pair]
+    if None in numbers:
+        said = ", ".join(f"{name}={_said(v)}" for name, v in zip(names, pair, strict=True))
         raise StopRun(
-            "failed",
-            f"{who} returned {names[0]}={float(a)!r}, {names[1]}={float(b)!r} at t={t:.3f} s: "
-            "both must be finite numbers",
+            "failed", f"{who} returned {said} at t={t:.3f} s: both must be finite numbers"
         )
-    return float(a), float(b)
+    return numbers[0], numbers[1]
+
+
+def _real(value) -> bool:
+    """A real number, finite or not, and not a bool (Python's or NumPy's)."""
+    return (
+        isinstance(value, Real) and not isinstance(value, bool) and type(value).__name__ != "bool_"
+    )
+
+
+def _said(value) -> str:
+    """A real number for a message: as a float where it is one, else cut short."""
+    try:
+        return repr(float(value))
+    except OverflowError:
+        return shown(value, 40)
+
+
+def _sequence_of(out, n: int):
+    """``out`` as a tuple if it is a sequence (a tuple, list or array) of ``n`` items, else
+    None: a generator or a string is not what a hook returns."""
+    if (
+        isinstance(out, str | bytes)
+        or not hasattr(out, "__len__")
+        or not hasattr(out, "__getitem__")
+    ):
+        return None
+    try:
+        return tuple(out) if len(out) == n else None
+    except BaseException as err:
+        if not users_failure(err):
+            raise
+        return None
 
 
 def checked_torques(out, who: str, t: float) -> tuple[float, float]:
@@ -75,12 +103,16 @@ def checked_signals(signals: dict, who: str, t: float) -> dict[str, float]:
                 f"{who} logged a signal named {shown(name)} at t={t:.3f} s: a name is letters, "
                 "digits and _, starting with a letter",
             )
-        if not isinstance(value, Real):
+        try:
+            number = float(value) if _real(value) else None
+        except OverflowError:
+            number = None
+        if number is None:
             raise StopRun(
                 "failed",
                 f"{who} logged {name}={shown(value)} at t={t:.3f} s: a logged signal is a number",
             )
-        out[name] = float(value)
+        out[name] = number
     return out
 
 
@@ -101,11 +133,9 @@ class CheckedPath:
             details = "".join(traceback.format_exception(err))
             message = f"{self.who} failed at s={s:.3f} m: {describe_failure(err)}"
             raise StopRun("failed", message, details) from None
-        try:
-            values = tuple(float(v) for v in out) if len(out) == len(names) else None
-        except (TypeError, ValueError):
-            values = None
-        if values is None or not all(math.isfinite(v) for v in values):
+        items = _sequence_of(out, len(names))
+        values = None if items is None else tuple(finite_number(v) for v in items)
+        if values is None or None in values:
             raise StopRun(
                 "failed",
                 f"{self.who} returned {shown(out)} from {method}({s:.6g}): it must return "
