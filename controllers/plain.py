@@ -59,6 +59,7 @@ from __future__ import annotations
 import math
 from collections import namedtuple
 from collections.abc import Callable, Mapping, Sequence
+from numbers import Integral
 from typing import ClassVar
 
 import numpy as np
@@ -139,7 +140,7 @@ class PlainLawController(Controller):
         model = Nominal(*setup.model(m.phis if self._train else m.phi, m.v, m.omega))
         r = reference
         ref = LawReference(t, r.s, r.kappa, r.v_d, r.omega_d, r.v_d_dot, r.omega_d_dot, *r.pose)
-        return self.call_law(m, ref, model, self.law_state)
+        return _as_stored(self.call_law(m, ref, model, self.law_state))
 
     def call_law(self, m, r, model, state):
         """The law called in Python as the loops call it: with its gains, ``state``, the
@@ -150,6 +151,20 @@ class PlainLawController(Controller):
         return type(self).LAW(
             m, r, model, self.gain_record, state, setup.control_dt, setup.torque_limit, *path
         )
+
+
+def _as_stored(out):
+    """A law's two torques as its compiled form's C entry stores them: a bool or an integer
+    (within 64 bits, numba's) as a float, so that both loops take the same torques; anything
+    else as returned, for the loop's check to refuse."""
+    if type(out) is not tuple or len(out) != 2:
+        return out
+    return tuple(
+        float(v)
+        if (isinstance(v, Integral) and -(2**63) <= v < 2**63) or type(v).__name__ == "bool_"
+        else v
+        for v in out
+    )
 
 
 def plain_law(

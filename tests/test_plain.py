@@ -115,6 +115,26 @@ def test_a_law_that_calls_math_hypot_gives_the_python_numbers(monkeypatch, tmp_p
     _same(_run(monkeypatch, "0", **kw), fast)
 
 
+def test_a_law_that_returns_a_bool_or_an_int_takes_the_same_torques_on_both_loops(
+    monkeypatch, tmp_path
+):
+    # the compiled law's C entry stores them as floats; the Python loop takes them so too,
+    # where it had refused a bool that the compiled loop drove on
+    law = tmp_path / "bool_law.py"
+    law.write_text(
+        "from tt_mujoco.controllers import plain_law\n\n"
+        "@plain_law(gains={'k': 5.0})\n"
+        "def bool_law(m, r, model, k, s, dt, torque_limit):\n"
+        "    if r.t > 1.0:\n"
+        "        return r.t > 1.5, 1\n"
+        "    return k.k * (r.v_d - m.v), 0.0\n"
+    )
+    kw = dict(controller=f"{law}:bool_law", traj="circle", duration=2.5, plant="reduced")
+    fast = _run(monkeypatch, "1", **kw)
+    assert fast.notes == []  # no note: the compiled loop ran it
+    _same(_run(monkeypatch, "0", **kw), fast)
+
+
 def test_a_law_numba_cannot_compile_runs_in_the_python_loop(monkeypatch, tmp_path, capsys):
     law = tmp_path / "dict_law.py"
     law.write_text(
