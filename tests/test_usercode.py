@@ -326,3 +326,50 @@ def test_a_bad_logged_signal_is_named(tmp_path, capsys, call, said):
     later.mkdir()
     code, out, err = cli(later, capsys, "--controller", controller(later, call, 0.2))
     assert code == 3 and said in err and "t=0.200 s" in err, err
+
+
+def test_what_user_code_changes_in_the_path_it_is_given_changes_nothing_of_the_run(
+    tmp_path, capsys
+):
+    # the controller (at the check before the run and in it) and each metric get copies
+    path = tmp_path / "breaks.py"
+    path.write_text(
+        "from tt_mujoco.controllers import Controller\n\n"
+        "class C(Controller):\n"
+        "    def compute(self, t, m, r):\n"
+        "        r.path.length, r.path.name = 0.0, 'broken'\n"
+        "        return 0.1, 0.1\n\n"
+        "def m(ts, path):\n"
+        "    path.length = 0.0\n"
+        "    return 1.0\n"
+    )
+    code, out, err = cli(tmp_path, capsys, "--controller", f"{path}:C", "--metric", f"{path}:m")
+    assert code == 0, err
+    clean, clean_out, _ = cli(tmp_path / "clean", capsys, "--controller", f"{path}:C")
+    assert clean == 0
+    kept = read_timeseries(out / "reference_path.parquet")
+    again = read_timeseries(clean_out / "reference_path.parquet")
+    assert all(np.array_equal(kept[k], again[k]) for k in kept)
+    assert json.loads((out / "metrics.json").read_text())["m"] == 1.0
+
+
+def test_the_check_before_the_run_leaves_a_stateful_disturbance_as_it_was(tmp_path, capsys):
+    # the command checks the disturbance at t = 0 before the run (on a copy): the run's calls
+    # are those of the Python API's run all the same
+    from tt_mujoco.sim import Scenario, simulate
+
+    path = tmp_path / "counting.py"
+    path.write_text(
+        "class Counting:\n"
+        "    def __init__(self):\n        self.calls = 0\n\n"
+        "    def __call__(self, t):\n"
+        "        self.calls += 1\n"
+        "        return 0.01 * min(self.calls, 50), 0.0\n"
+    )
+    spec = f"{path}:Counting"
+    code, out, err = cli(tmp_path, capsys, "--disturbance-model", spec)
+    assert code == 0, err
+    cli_series = read_timeseries(out / "timeseries.parquet")
+    options = {"disturbance_model": spec, "plant": "reduced", "traj": "circle", "duration": 1.0}
+    api = simulate(Scenario(**options)).timeseries
+    assert np.array_equal(cli_series["dist_T_r"], api["dist_T_r"])

@@ -31,6 +31,7 @@ import numpy as np
 from tt_mujoco.analysis.metrics import RUN_KEYS, merge_metrics
 from tt_mujoco.sim.build import Build, LegStart, build
 from tt_mujoco.sim.simulate import Result, drive_leg, driven_leg, finish, user_metric
+from tt_mujoco.sim.usercode import users_copy
 from tt_mujoco.world.part import world_report
 
 __all__ = ["drive", "final_state"]
@@ -112,7 +113,7 @@ def _joined(asked, plan, driven, stop: str | None = None) -> Result:
         [{k: v for k, v in result.metrics.items() if k not in own} for _, _, result in driven]
     ) or {"steps": 0, "finite_samples": 0, "sim_time_s": 0.0}
     for name, fn in last_built.extra_metrics.items():
-        metrics[name], error = user_metric(fn, ts, last_built.path)
+        metrics[name], error = user_metric(fn, ts, users_copy(last_built.path))
         if error is not None:
             metrics.setdefault("metric_errors", {})[name] = error
     clearance = np.concatenate(

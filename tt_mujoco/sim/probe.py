@@ -1,4 +1,6 @@
-"""Before the run: a user's controller and disturbance are tried once on throwaway copies.
+"""Before the run: a user's controller and disturbance are tried once on throwaway copies
+(a controller of its own, a copy of the disturbance: a stateful one is called by the run as if
+the check had not been).
 
 What fails here is bad input (:class:`tt_mujoco.registry.HookError`, exit code 2), before any
 output exists; the same checks during the run are :mod:`tt_mujoco.sim.usercode`'s.
@@ -18,6 +20,7 @@ from tt_mujoco.sim.usercode import (
     checked_torques,
     controller_label,
     disturbance_label,
+    users_copy,
 )
 
 __all__ = ["check_user_code"]
@@ -66,7 +69,7 @@ def check_user_code(built) -> None:
     if built.disturbance is not None and is_hook(s.disturbance_model):
         who = disturbance_label(built)
         try:
-            checked_disturbance(built.disturbance(0.0), who, 0.0)
+            checked_disturbance(users_copy(built.disturbance)(0.0), who, 0.0)
         except StopRun as stop:
             raise HookError(stop.message) from None
         except BaseException as err:

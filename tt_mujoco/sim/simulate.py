@@ -31,6 +31,7 @@ from tt_mujoco.sim.parts.relief import RampRelief
 from tt_mujoco.sim.parts.terrain import parse_terrain
 from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sim.scenario import Scenario
+from tt_mujoco.sim.usercode import users_copy
 from tt_mujoco.world.part import world_report
 
 __all__ = ["Result", "simulate"]
@@ -302,7 +303,7 @@ def finish(built: Build, stepper: Stepper, controller, status, message, wall) ->
     else:  # stopped before its first sample was logged
         metrics = {"steps": 0, "finite_samples": 0, "sim_time_s": 0.0}
     for name, fn in built.extra_metrics.items():
-        metrics[name], error = user_metric(fn, ts, built.path)
+        metrics[name], error = user_metric(fn, ts, users_copy(built.path))
         if error is not None:
             metrics.setdefault("metric_errors", {})[name] = error
     terrain = parse_terrain(scenario.terrain)

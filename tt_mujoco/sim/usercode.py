@@ -11,6 +11,7 @@ failure is bad input (exit code 2).
 
 from __future__ import annotations
 
+import copy
 import traceback
 from numbers import Real
 
@@ -24,7 +25,20 @@ __all__ = [
     "checked_signals",
     "checked_torques",
     "failure",
+    "users_copy",
 ]
+
+
+def users_copy(obj):
+    """A deep copy of what the run keeps using (its path) for a user's code to be given: what
+    that code changes in it changes nothing of the run. An object that cannot be copied (a
+    user's path holding a lock, say) is given as it is."""
+    try:
+        return copy.deepcopy(obj)
+    except BaseException as err:
+        if not users_failure(err):
+            raise
+        return obj
 
 
 def failure(who: str, t: float, err: BaseException) -> StopRun:

@@ -165,6 +165,7 @@ class Stepper:
         self._world = world_record(b.world, b.plant_params, self.steps)
         self.collision = None  # (unit, obstacle, t, gap) of the contact that stopped the episode
         self.scheduler = b.new_scheduler(self.plant)
+        self._given_path = None  # a copy for the code sense() is for, made on first use
         self.k = 0
         self.finished = False
         self.stop_details = None  # the traceback of user code that stopped the episode
@@ -474,7 +475,15 @@ class Stepper:
         )
         if code != RUNNING:
             self._stop(code, k)
-        return seen_measurement(law), reference_of(law, self.built.path)
+        return seen_measurement(law), reference_of(law, self.given_path)
+
+    @property
+    def given_path(self):
+        """The path as the code that :meth:`sense` is for sees it (an agent, a check before
+        the run): a copy for the episode, so that what it changes stays with it."""
+        if self._given_path is None:
+            self._given_path = usercode.users_copy(self.built.path)
+        return self._given_path
 
     @property
     def measurement(self) -> Measurement:
