@@ -34,7 +34,7 @@ from tt_mujoco.defaults import (
 from tt_mujoco.reference.feedback import PathFeedback
 from tt_mujoco.reference.reverse import ReverseTarget
 from tt_mujoco.reference.targets import make_target, target_on
-from tt_mujoco.registry import call_hook, is_hook
+from tt_mujoco.registry import call_hook, is_hook, shown
 from tt_mujoco.sim.parts.disturbances import make_disturbance
 from tt_mujoco.sim.parts.faults import FaultSchedule, parse_faults
 from tt_mujoco.sim.parts.ground import GroundPatches, parse_patches
@@ -339,7 +339,14 @@ def build(scenario: Scenario, leg: LegStart | None = None) -> Build:
     ------
     ValueError
         Naming the first bad option and what is allowed.
+    TypeError
+        ``scenario`` is not a :class:`~tt_mujoco.sim.scenario.Scenario`.
     """
+    if not isinstance(scenario, Scenario):
+        hint = f", e.g. Scenario(traj={scenario!r})" if isinstance(scenario, str) else ""
+        raise TypeError(
+            f"scenario={shown(scenario)} is not allowed: give a tt_mujoco.sim.Scenario{hint}"
+        )
     scenario.validate()
     world = parse_world(scenario.world)
     if scenario.traj == PLAN and leg is None:
