@@ -61,6 +61,16 @@ USER_CODE = textwrap.dedent(
                 import os, signal
                 os.kill(os.getpid(), signal.SIGKILL)
             return 0.5, 0.5
+
+
+    class HardExit(Controller):
+        def compute(self, t, measurement, reference):
+            if t > 0.3:
+                import os
+                os._exit(int(self.gains["code"]))  # gains are > 0: code + 0.5
+            return 0.5, 0.5
+
+        PRESETS = {"default": {"code": 0.5}}
     """
 )
 BASE = ["--plant", "reduced", "--no-video", "--no-plots", "--quiet"]
@@ -157,6 +167,18 @@ def test_a_run_killed_by_a_signal_is_one_line_and_exit_70(tmp_path):
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == EXIT_BUG, err
     assert "killed by SIGKILL" in err and len(err.strip().splitlines()) == 1, err
+
+
+@pytest.mark.parametrize("code", [0, 7])
+def test_a_run_whose_process_exits_by_itself_is_not_taken_for_its_end(tmp_path, code):
+    # os._exit in a user's code (or exit() in a library's C) ends the run's process, past
+    # every handler: the parent, which the simulation never told it was over, says so
+    gains = f'{{"code": {code + 0.5}}}'
+    proc = _start(tmp_path, "--controller", "user.py:HardExit", "--gains", gains, duration="1")
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == EXIT_DIVERGED, err
+    assert f"ended by itself with exit code {code} before the run was over" in err, err
+    assert len(err.strip().splitlines()) == 1 and not (tmp_path / "o" / "metrics.json").exists()
 
 
 def test_a_run_that_ends_passes_its_exit_code_and_output_through(tmp_path):

@@ -481,6 +481,7 @@ def _main(argv: list[str] | None) -> int:
                 out, limit, scenario.controller, traceback, interrupt
             ),
             lambda signum: _killed(out, signum),
+            lambda code: _exited_early(out, code),
         )
     update, bar = _progress_bar("simulating", shown["quiet"] or shown["viewer"])
     try:
@@ -614,6 +615,21 @@ def _killed(out: Path, signum: int) -> int:
         f"machine ran out of memory): the {len(t)} rows that reached the disk are kept in "
         f"{out / CHECKPOINT_FILE}; if it happens again, please report it",
         EXIT_BUG,
+    )
+
+
+def _exited_early(out: Path, code: int) -> int:
+    """The run's process ended by itself while the simulation went on, with exit ``code``:
+    not through any of the project's ways out (a user's code calling ``os._exit``, a library
+    calling ``exit()`` in C); the rows kept, exit 3."""
+    t = _kept_rows(out).get("t", ())
+    release_folder(out)
+    return _fail(
+        f"the simulation's process ended by itself with exit code {code} before the run was "
+        f"over (user code calling os._exit, or a library calling exit() in C): the {len(t)} "
+        f"rows that reached the disk are kept in {out / CHECKPOINT_FILE}; the folder has no "
+        "metrics.json, so it is labelled incomplete",
+        EXIT_DIVERGED,
     )
 
 

@@ -71,6 +71,7 @@ def supervise(
     limit_s: float,
     on_expiry: Callable[[str, bool], int],
     on_killed: Callable[[int], int],
+    on_early_exit: Callable[[int], int] | None = None,
 ) -> None:
     """Fork; return in the child (the run goes on there), never return in the parent.
 
@@ -93,6 +94,11 @@ def supervise(
     on_killed : callable
         Called in the parent with the signal number when something else killed the child (a
         crash in C, the kernel's out-of-memory killer); returns the exit code.
+    on_early_exit : callable, optional
+        Called in the parent with the child's exit code when the child exited before its
+        simulation was over (:func:`disarm`, which every way out of the simulation passes):
+        not the project's code, but a user's ``os._exit`` or a library's ``exit()`` in C;
+        returns the exit code. None: the child's code stands.
     """
     import faulthandler
     import tempfile
@@ -114,7 +120,7 @@ def supervise(
         return
     os.close(done_write)
     try:
-        code = _wait(pid, grace_for(limit_s), fd, done_read, on_expiry, on_killed)
+        code = _wait(pid, grace_for(limit_s), fd, done_read, on_expiry, on_killed, on_early_exit)
     finally:
         os.close(fd)
         os.close(done_read)
@@ -155,7 +161,7 @@ def _die_with_parent() -> None:
         os._exit(1)
 
 
-def _wait(pid, seconds, traceback_fd, done_fd, on_expiry, on_killed) -> int:
+def _wait(pid, seconds, traceback_fd, done_fd, on_expiry, on_killed, on_early_exit) -> int:
     deadline = [time.monotonic() + seconds, False]  # when, and whether an interrupt set it
 
     def interrupted(signum, frame):
@@ -175,14 +181,19 @@ def _wait(pid, seconds, traceback_fd, done_fd, on_expiry, on_killed) -> int:
         while (left := deadline[0] - time.monotonic()) > 0.0:
             # woken at least every 0.25 s: an interrupt may bring the deadline forward
             ready = select.select(watching, [], [], min(left, 0.25))[0]
+            if done_fd in watching and (done_fd in ready or exited in ready):
+                # the simulation is over (a child that said so and exited: both are ready)
+                if select.select([done_fd], [], [], 0.0)[0] and os.read(done_fd, 1):
+                    watching.remove(done_fd)
+                    if not deadline[1]:  # no deadline but an interrupt's
+                        deadline[0] = math.inf
             if exited in ready:
                 _, status = os.waitpid(pid, 0)
                 code = os.waitstatus_to_exitcode(status)
-                return code if code >= 0 else on_killed(-code)
-            if done_fd in ready:  # the simulation is over: no deadline but an interrupt's
-                watching.remove(done_fd)
-                if not deadline[1]:
-                    deadline[0] = math.inf
+                if code < 0:
+                    return on_killed(-code)
+                early = done_fd in watching and on_early_exit is not None
+                return on_early_exit(code) if early else code
     finally:
         os.close(exited)
     return on_expiry(_ask_and_kill(pid, traceback_fd), deadline[1])
