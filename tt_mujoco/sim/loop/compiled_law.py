@@ -183,7 +183,9 @@ def _compile_law(cls):
     copies: dict = {}
     # not cached on its own: numba's cache of a function ignores its globals, which
     # _as_compiled changes; the entry below, cached, holds the law's code
-    law = njit(error_model="numpy")(_as_compiled(cls.LAW, copies, _exact_math()))
+    # Python's error model: a division by zero raises, as it does in the law's Python form
+    # (numpy's gives inf, or 0 for integers, and the run would drive on where Python's stops)
+    law = njit(error_model="python")(_as_compiled(cls.LAW, copies, _exact_math()))
     helpers = set(copies) - {cls.LAW}  # the plain functions of its module it calls
     gain_names = tuple(cls.PRESETS[cls.DEFAULT_PRESET]) or ("unused",)
     dtypes = {
