@@ -57,7 +57,7 @@ LAW_OK = closed_loop.LAW_OK
 #: :func:`run_chunk`'s Python caller holds for the whole call, and nothing in the step allocates
 #: (numba refuses to compile an allocation without the counting) or returns a new array.
 for _fn in closed_loop.BORROWING:
-    register_jitable(_nrt=False)(_fn)
+    register_jitable(_nrt=False, inline="always" if _fn in closed_loop.INLINED else "never")(_fn)
 # The halves are inlined into the chunk loop: called, each would take every record it is given
 # by value, at every step. They are inlined before typing (a dispatcher's inlining), which
 # types the loop once, not each half again where it is inlined (an overload's).

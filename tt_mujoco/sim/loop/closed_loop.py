@@ -27,7 +27,16 @@ import numpy as np
 from tt_mujoco.compiled_form import compiled_form
 from tt_mujoco.controllers import base
 from tt_mujoco.sim.loop import step, target_step
-from tt_mujoco.sim.loop.law import PYTHON, USER, law_step
+from tt_mujoco.sim.loop.law import (
+    ETA_COLUMN,
+    PYTHON,
+    USER,
+    follow_train,
+    law_step,
+    model_steered,
+    nominal_mass,
+    nominal_model_step,
+)
 from tt_mujoco.sim.parts import (
     disturbances,
     faults,
@@ -58,7 +67,6 @@ from tt_mujoco.sim.parts.measure import (
     Y,
 )
 from tt_mujoco.vehicle import path_schedule, reduced, train
-from tt_mujoco.vehicle import steering as steering_math
 from tt_mujoco.world import contact
 
 __all__ = [
@@ -76,13 +84,10 @@ RUNNING, FINISHED, BLEW_UP, JACKKNIFE = step.RUNNING, step.FINISHED, step.BLEW_U
 WARNING, LAW_FAILED, SINGULAR = step.WARNING, step.LAW_FAILED, step.SINGULAR
 PAYLOAD, RAISED, COLLISION = step.PAYLOAD, step.RAISED, step.COLLISION
 LAW_OK = base.LAW_OK
-COS_BETA_MIN = reduced.COS_BETA_MIN
 #: What the kernel asks of a hook it calls back (:mod:`tt_mujoco.sim.loop._kernel`, ``HOOK``): a
 #: path's (:mod:`tt_mujoco.sim.loop.target_step`), or a disturbance's answer
 HOOK_CURVATURE, HOOK_POSE = target_step.HOOK_CURVATURE, target_step.HOOK_POSE
 HOOK_LAW_POSE, HOOK_DISTURBANCE = target_step.HOOK_LAW_POSE, disturbances.HOOK_DISTURBANCE
-#: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
-NOMINAL_SINGULAR = -1.0
 PATH_SCHEDULE, CURVATURE_SCHEDULE = schedule.PATH_SCHEDULE, schedule.CURVATURE_SCHEDULE
 #: where the hitch angle, speed and yaw rate the law saw are in a row of the delay's line
 SEEN_PHI, SEEN_V, SEEN_OMEGA = 0, 1, 2
@@ -102,7 +107,6 @@ class Push(NamedTuple):
 
 #: where the wheels' rates are in the measurement, and a trailer's gain in a train's row
 WHEEL_RATES = tuple(measure.Measurement._fields.index(f"theta_{w}_dot") for w in ("r", "l"))
-ETA_COLUMN = train.TRAILER_ROW.index("eta")
 
 
 def mujoco_library() -> str:
@@ -153,20 +157,25 @@ def _sense(plant, n, rows):
     return plant_reduced.reduced_measure_values(first, ode)
 
 
+def _place_payloads(k, s, fault, plant) -> int:
+    """The payloads placed at step ``k`` (arc length ``s``): into MuJoCo's bodies at once; for
+    the reduced plant, how many changes its caller makes to the constants."""
+    changes = fault.payload_changes
+    count = faults.payloads_of(k, s, fault.payloads, fault.payload_state, changes)
+    if not plant.mujoco:
+        return count
+    mj = plant.mj
+    for i in range(count):
+        body = mj.trailer_bodies[int(changes[i][0]) - 1]
+        plant_mujoco.scale_body_of(mj.body_mass, mj.body_inertia, body, changes[i][1])
+    return 0
+
+
 def _ode(plant):
     """The reduced plant's constants with trailer 1's gain in force."""
     if plant.steering.kind == 0:
         return plant.ode
     return reduced.with_eta_of(plant.ode, plant.steering.etas[0])
-
-
-def _first_singular(phis, c, stop):
-    """The first trailer at cos(eta_k phi_k) < COS_BETA_MIN into ``stop`` (phi, eta)."""
-    for k in range(len(c.trailers)):
-        eta = c.trailers[k][2]
-        if math.cos(eta * phis[k]) < COS_BETA_MIN:
-            stop.phi, stop.eta = phis[k], eta
-            return
 
 
 def _blow(mj, wrench, gusts):
@@ -225,7 +234,7 @@ def _advance(plant, T_r, T_l, push, weather, stop):
             if not train.train_rk4_step_of(
                 y, inputs, plant.train, plant.timestep, plant.speeds, plant.slopes
             ):
-                _first_singular(plant.slopes[4][3 : 3 + n], plant.train, stop)
+                step.first_singular_of(plant.slopes[4][3 : 3 + n], plant.train, stop)
                 return SINGULAR
         return RUNNING
     ode = _ode(plant)
@@ -247,15 +256,6 @@ def advance_after_payload(plant, weather, stop_record):
     stop = stop_record[0]
     push = Push(stop.dist_r, stop.dist_l, False, 0.0, 0.0, 0.0)
     return _advance(plant, stop.T_r, stop.T_l, push, weather, stop)
-
-
-def _nominal_mass(law, n, phi, phis, v_m, w_m):
-    """The nominal model's mass matrix at the measured hitches (the disturbance's, when the
-    law's model takes scheduled gains)."""
-    if n == 1:
-        c = law.nominal
-        return reduced.coriolis_of(reduced.inertia_terms_of(phi, c), c.gamma, v_m, w_m)[0]
-    return train.mass_and_bias_of(phis, v_m, w_m, law.nominal_train, law.rates)[1]
 
 
 def _offer_path(steering, target, measurement, rows, n):
@@ -300,19 +300,6 @@ def _steer(plant, law):
         # out markedly slower (bench_cli's reduced case)
         if law.steered_train.trailers.shape[0] > 1:
             law.steered_train.trailers[k, ETA_COLUMN] = etas[k]
-
-
-def _follow_train(law, etas, phis, phi_m, v_m, w_m) -> bool:
-    """The train model's gains set to those its actuated axles can follow at the hitch rates
-    the scheduled ``etas`` give (reduced_model's train model); False where those are singular."""
-    rows = law.steered_train.trailers
-    for k in range(len(etas)):
-        rows[k, ETA_COLUMN] = etas[k]
-    phis[0] = phi_m  # what the law sees
-    if not train.trailer_rates_of(phis, v_m, w_m, law.steered_train, law.rates):
-        return False
-    steering_math.followed_gains_of(etas, law.rates, law.axle_slew_rate, rows[:, ETA_COLUMN])
-    return True
 
 
 def _delayed(delay, k, measurement, rows, seen):
@@ -391,12 +378,6 @@ def _touch(world, k, measurement, rows, n, stop):
     return COLLISION
 
 
-def _model_steered(steering_kind: int, follows_steering: bool) -> bool:
-    """Whether the law's nominal model takes the scheduled gains: the plant's steering is
-    scheduled (``plant.steering.kind``) and the law follows it (a built-in law's model does)."""
-    return steering_kind != 0 and follows_steering
-
-
 def _has_delay(depth: int) -> bool:
     """Whether the sensors are delayed: the delay line (``loop.delay``, ``depth`` slots) holds
     more than this step's slot."""
@@ -409,7 +390,7 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
     law's reference and nominal model; what the law sees into ``law.reading``. RUNNING, or the
     stop code (its details in ``stop``)."""
     lim, dt, noise, fault = loop.limits, loop.dt, loop.noise, loop.faults
-    r, nominal, seen_by_law = law.reference[0], law.model[0], law.reading[0]
+    r, seen_by_law = law.reference[0], law.reading[0]
     n, phis = loop.n_trailers, law.phis
     steering = plant.steering
     t = k * dt
@@ -483,38 +464,8 @@ def sense_step(k, row, loop, plant, law, target, log, stop):
                     seen_row[j] = sensed_row[j]
             return RUNNING
         r.x_ref, r.y_ref, r.theta_ref = target_step.law_pose_at(target, state.s)
-    # The nominal model at the measurement, for the law and the matched disturbance (a
-    # built-in law's model takes the scheduled gains; the disturbance keeps the nominal's).
-    c, model_train = law.nominal, law.nominal_train
-    if _model_steered(steering.kind, law.follows_steering):
-        c, model_train = reduced.with_eta_of(c, steering.etas[0]), law.steered_train
-        if law.axle_slew_rate < math.inf:  # reduced_model: the gains the axles can follow
-            if n == 1:
-                eta = steering_math.trailer_followed_gain_of(
-                    phi_m, v_m, w_m, c.eta, c.L, c.L0, law.axle_slew_rate
-                )
-                c = reduced.with_eta_of(c, eta)
-            elif not _follow_train(law, steering.etas, phis, phi_m, v_m, w_m):
-                stop.law_status = NOMINAL_SINGULAR
-                _first_singular(phis, model_train, stop)
-                return LAW_FAILED
-    if n == 1:
-        if math.cos(c.eta * phi_m) < COS_BETA_MIN:
-            stop.law_status, stop.phi, stop.eta = NOMINAL_SINGULAR, phi_m, c.eta
-            return LAW_FAILED
-        terms = reduced.inertia_terms_of(phi_m, c)
-        mass, bias = reduced.coriolis_of(terms, c.gamma, v_m, w_m)
-    else:
-        phis[0] = phi_m  # what the law sees
-        ok, mass, bias = train.mass_and_bias_of(phis, v_m, w_m, model_train, law.rates)
-        if not ok:
-            stop.law_status = NOMINAL_SINGULAR
-            _first_singular(phis, model_train, stop)
-            return LAW_FAILED
-    nominal.f1, nominal.f2, nominal.g11, nominal.g12, nominal.g21, nominal.g22 = (
-        reduced.solve_dynamics_of(mass, bias, c.r, c.d)
-    )
-    seen_by_law.M11, seen_by_law.M12, seen_by_law.M22 = mass[0], mass[1], mass[2]
+    # The nominal model at the measurement, for the law and the matched disturbance
+    return nominal_model_step(law, steering, phis, phi_m, v_m, w_m, n, stop)
     return RUNNING
 
 
@@ -534,30 +485,22 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
     dist_r = dist_l = clipped = fx = fy = mz = 0.0
     if len(fault.actuators):  # the actuator faults scale the torques
         T_r, T_l = faults.fault_torque_of(k, fault.actuators, T_r, T_l)
-    pending = 0  # payload changes the caller makes to the reduced plant's constants
-    if len(fault.payloads):  # the payloads placed at a time or an arc length
-        changes = fault.payload_changes
-        count = faults.payloads_of(k, state.s, fault.payloads, fault.payload_state, changes)
-        if plant.mujoco:
-            for i in range(count):
-                mj = plant.mj
-                body = mj.trailer_bodies[int(changes[i][0]) - 1]
-                plant_mujoco.scale_body_of(mj.body_mass, mj.body_inertia, body, changes[i][1])
-        else:
-            pending = count
+    # the payloads placed at a time or an arc length; what the caller changes in the reduced
+    # plant's constants
+    pending = _place_payloads(k, state.s, fault, plant) if len(fault.payloads) else 0
     if loop.dc_motor:  # what the motors deliver of the command, over this step
         omegas = (measurement[WHEEL_RATES[0]], measurement[WHEEL_RATES[1]])
         T_r, T_l = motors.deliver_of(loop.motor, loop.motor_torques, (T_r, T_l), omegas)
     mass = (reading.M11, reading.M12, reading.M22)
     phi = measurement[PHI]
     depth = len(loop.delay.seen)
-    moved = law.kind == PYTHON or _model_steered(steering.kind, law.follows_steering)
+    moved = law.kind == PYTHON or model_steered(steering.kind, law.follows_steering)
     moved = moved or _has_delay(depth) or phi_m != phi
     if moved and (loop.disturbed or loop.wrench):
         phis[0] = phi  # the disturbance acts at the true hitch angles
         for i in range(n - 1):
             phis[i + 1] = rows[i][ROW_PHI]
-        mass = _nominal_mass(law, n, phi, phis, v_m, w_m)
+        mass = nominal_mass(law, n, phi, phis, v_m, w_m)
     if loop.disturbed:
         a_v, a_w = disturbances.disturbance_at(loop, t, measurement[V], measurement[OMEGA])
         dist_r, dist_l = reduced.torque_for_force_of(mass, a_v, a_w, c.r, c.d)
@@ -656,24 +599,29 @@ BORROWING = (
     disturbances.disturbance_at,
     _sense,
     _ode,
-    _first_singular,
     target_step.update_target,
     target_step.target_step_of,
     target_step.cascade_step_of,
     law_step,
+    nominal_model_step,
+    _place_payloads,
+    follow_train,
+    nominal_mass,
+    model_steered,
+    step.first_singular_of,
     _blow,
     _advance,
-    _nominal_mass,
     _offer_path,
     _steer,
-    _follow_train,
     _delayed,
     _ground,
     _gusts,
     _touch,
-    _model_steered,
     _has_delay,
 )
+#: The parts' step functions the kernel inlines where the step calls them (numba's inlining,
+#: before typing): called, each would take the records it is given by value, at every step.
+INLINED = (nominal_model_step, _place_payloads)
 #: The step's halves, which the kernel inlines into its chunk loop (:func:`run_steps`):
 #: called, each would take every record it is given by value, at every step.
 HALVES = (sense_step, actuate_step)

@@ -18,7 +18,8 @@ import pickle
 import numpy as np
 
 from tt_mujoco.defaults import JACKKNIFE_DEG
-from tt_mujoco.sim.loop import closed_loop, records, step
+from tt_mujoco.sim.loop import law as law_part
+from tt_mujoco.sim.loop import records, step
 from tt_mujoco.sim.loop.law import LAWS, PYTHON, hand_law_back, law_record
 from tt_mujoco.sim.parts import schedule
 from tt_mujoco.sim.scenario import jackknife_phi_deg
@@ -492,4 +493,4 @@ def raised_again(stepper, controller, t: float) -> tuple[str, str] | None:
 
 
 #: ``stop.law_status`` of the nominal model's own singularity
-NOMINAL_SINGULAR = int(closed_loop.NOMINAL_SINGULAR)
+NOMINAL_SINGULAR = int(law_part.NOMINAL_SINGULAR)

@@ -27,7 +27,9 @@ import numpy as np
 
 from tt_mujoco.compiled_form import compiled_form
 from tt_mujoco.controllers import base, compiled_laws
-from tt_mujoco.sim.loop import records
+from tt_mujoco.sim.loop import records, step
+from tt_mujoco.vehicle import reduced, train
+from tt_mujoco.vehicle import steering as steering_math
 
 __all__ = [
     "LAWS",
@@ -37,6 +39,9 @@ __all__ = [
     "hand_law_back",
     "law_record",
     "law_step",
+    "model_steered",
+    "nominal_mass",
+    "nominal_model_step",
     "pointer",
     "python_law",
     "run_law",
@@ -54,6 +59,10 @@ USER = len(LAWS)
 PYTHON = USER + 1
 
 LAW_OK, LAW_RAISED, LAW_NOT_FINITE = base.LAW_OK, base.LAW_RAISED, base.LAW_NOT_FINITE
+#: ``stop.law_status`` when the nominal model itself is singular at the measured hitch
+NOMINAL_SINGULAR = -1.0
+#: where a trailer's gain is in a train's row
+ETA_COLUMN = train.TRAILER_ROW.index("eta")
 #: Where a plain-number law's C entry says, in ``law.torques``, that the law raised (1.0):
 #: an exception cannot leave a C function (:mod:`tt_mujoco.sim.loop.compiled`, its entry)
 USER_RAISED = 2
@@ -146,6 +155,74 @@ def law_step(law, v_m, w_m, dt, limit):
     if status == LAW_OK:
         flags.saturated = 1.0 if saturated else 0.0
     return status, T_r, T_l, u1, u2
+
+
+def model_steered(steering_kind: int, follows_steering: bool) -> bool:
+    """Whether the law's nominal model takes the scheduled gains: the plant's steering is
+    scheduled (``plant.steering.kind``) and the law follows it (a built-in law's model does)."""
+    return steering_kind != 0 and follows_steering
+
+
+def nominal_model_step(law, steering, phis, phi_m, v_m, w_m, n, stop):
+    """The law's nominal model at what it sees (``phi_m``, ``v_m``, ``w_m``; ``phis`` the
+    hitches of a train) into ``law.model`` and its mass matrix into ``law.reading``: for the
+    law and the matched disturbance (a built-in law's model takes the plant's scheduled gains,
+    ``steering.etas``, and those its actuated axles can follow; the disturbance keeps the
+    nominal's). RUNNING, or LAW_FAILED where the model is singular (``stop`` says where)."""
+    nominal, seen_by_law, etas = law.model[0], law.reading[0], steering.etas
+    c, model_train = law.nominal, law.nominal_train
+    if model_steered(steering.kind, law.follows_steering):
+        c, model_train = reduced.with_eta_of(c, etas[0]), law.steered_train
+        if law.axle_slew_rate < math.inf:  # reduced_model: the gains the axles can follow
+            if n == 1:
+                eta = steering_math.trailer_followed_gain_of(
+                    phi_m, v_m, w_m, c.eta, c.L, c.L0, law.axle_slew_rate
+                )
+                c = reduced.with_eta_of(c, eta)
+            elif not follow_train(law, etas, phis, phi_m, v_m, w_m):
+                stop.law_status = NOMINAL_SINGULAR
+                step.first_singular_of(phis, model_train, stop)
+                return step.LAW_FAILED
+    if n == 1:
+        if math.cos(c.eta * phi_m) < reduced.COS_BETA_MIN:
+            stop.law_status, stop.phi, stop.eta = NOMINAL_SINGULAR, phi_m, c.eta
+            return step.LAW_FAILED
+        terms = reduced.inertia_terms_of(phi_m, c)
+        mass, bias = reduced.coriolis_of(terms, c.gamma, v_m, w_m)
+    else:
+        phis[0] = phi_m  # what the law sees
+        ok, mass, bias = train.mass_and_bias_of(phis, v_m, w_m, model_train, law.rates)
+        if not ok:
+            stop.law_status = NOMINAL_SINGULAR
+            step.first_singular_of(phis, model_train, stop)
+            return step.LAW_FAILED
+    nominal.f1, nominal.f2, nominal.g11, nominal.g12, nominal.g21, nominal.g22 = (
+        reduced.solve_dynamics_of(mass, bias, c.r, c.d)
+    )
+    seen_by_law.M11, seen_by_law.M12, seen_by_law.M22 = mass[0], mass[1], mass[2]
+    return step.RUNNING
+
+
+def follow_train(law, etas, phis, phi_m, v_m, w_m) -> bool:
+    """The train model's gains set to those its actuated axles can follow at the hitch rates
+    the scheduled ``etas`` give (reduced_model's train model); False where those are singular."""
+    rows = law.steered_train.trailers
+    for k in range(len(etas)):
+        rows[k, ETA_COLUMN] = etas[k]
+    phis[0] = phi_m  # what the law sees
+    if not train.trailer_rates_of(phis, v_m, w_m, law.steered_train, law.rates):
+        return False
+    steering_math.followed_gains_of(etas, law.rates, law.axle_slew_rate, rows[:, ETA_COLUMN])
+    return True
+
+
+def nominal_mass(law, n, phi, phis, v_m, w_m):
+    """The nominal model's mass matrix at the measured hitches (the disturbance's, when the
+    law's model takes scheduled gains)."""
+    if n == 1:
+        c = law.nominal
+        return reduced.coriolis_of(reduced.inertia_terms_of(phi, c), c.gamma, v_m, w_m)[0]
+    return train.mass_and_bias_of(phis, v_m, w_m, law.nominal_train, law.rates)[1]
 
 
 def law_record(controller, nominal, user, steering, python) -> records.LawRecord:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 
 from tt_mujoco.sim.parts.measure import ROW_BETA, ROW_PHI
+from tt_mujoco.vehicle.reduced import COS_BETA_MIN
 
 __all__ = [
     "BLEW_UP",
@@ -71,6 +72,16 @@ def noisy(value: float, std: float, noise, index: int) -> float:
 def clip(value: float, limit: float) -> float:
     """``value`` held within ``[-limit, limit]``."""
     return -limit if value < -limit else (limit if value > limit else value)
+
+
+def first_singular_of(phis, c, stop) -> None:
+    """The first trailer of the train ``c`` at cos(eta_k phi_k) < COS_BETA_MIN (the model's
+    singularity) into ``stop`` (phi, eta)."""
+    for k in range(len(c.trailers)):
+        eta = c.trailers[k][2]
+        if math.cos(eta * phis[k]) < COS_BETA_MIN:
+            stop.phi, stop.eta = phis[k], eta
+            return
 
 
 def clip_pair(first: float, second: float, bound: float) -> tuple[float, float, float]:
