@@ -349,68 +349,18 @@ def build(scenario: Scenario, leg: LegStart | None = None) -> Build:
         )
     scenario.validate()
     world = parse_world(scenario.world)
-    if scenario.traj == PLAN and leg is None:
-        if world is None:
-            raise ValueError("traj='plan' is not allowed without a world: give --world")
-        deadline = time.monotonic() + scenario.time_limit_s
-        plan = planned(
-            world, scenario.plant_params(), scenario.seed, bool(scenario.reverse), deadline
-        )
-        leg = LegStart(plan, 0)
     backs_up = scenario.reverse  # a leg of a maneuver that backs up may not
-    if leg is not None and leg.plan.cusps and parse_faults(scenario.faults):
-        raise ValueError(
-            f"faults={scenario.faults!r} is not allowed here: this start's plan has "
-            f"{leg.plan.cusps} cusp(s), each leg a run from rest, and a fault is timed within "
-            "one run (give a start the train backs in from directly, or no faults)"
-        )
-    if leg is not None:
-        scenario = dataclasses.replace(scenario, reverse=leg.plan.legs[leg.index].reverse)
+    scenario, leg = _leg_of(scenario, world, leg)
     nominal = scenario.nominal_params()
     plant_p = scenario.plant_params()
     _plant_class(scenario.plant).check_supported(scenario.disturbance)
-    cls = controller_class(scenario.controller)
-    if backs_up and not getattr(cls, "REVERSE", True):
-        backing = ", ".join(n for n in CONTROLLERS if getattr(CONTROLLERS[n], "REVERSE", True))
-        raise ValueError(
-            f"controller={scenario.controller!r} with reverse=True is not allowed: it tracks the "
-            f"path driving forward only (these back up: {backing})"
-        )
+    cls = _controller_class(scenario.controller, backs_up)
     reversing = reversing_drive(scenario, cls)
-    plan = None
-    if leg is not None:
-        plan = leg.plan
-        ramp = {k: v for k, v in scenario.path_options.items() if k in ("cruise", "ramp_time")}
-        leg_path = plan.legs[leg.index].path
-        duration = scenario.duration
-        if duration is not None and plan.cusps:  # each leg its share, by its length
-            whole = sum(one.path.length for one in plan.legs)
-            steps = round(duration * leg_path.length / whole / scenario.control_dt)
-            duration = max(steps, 1) * scenario.control_dt
-        path, target, pose = target_on(leg_path, scenario.target, duration, **ramp)
-    else:
-        path, target, pose = make_target(
-            scenario.traj,
-            kind=scenario.target,
-            duration=scenario.duration,
-            start=scenario.start,
-            **scenario.path_options,
-        )
+    path, target, pose, start_s = _path_and_target(scenario, leg)
     duration = float(target.duration)
     _check_size(scenario, duration)
-    start_s = 0.0
-    if scenario.reverse:
-        target = ReverseTarget(target)
-        pose = target.initial_pose
-        start_s = target.s_end
-    if leg is not None and leg.pose is not None:
-        pose = leg.pose  # where the last leg stopped
-    if scenario.path_feedback is not None:
-        target = PathFeedback.from_config(target, scenario.path_feedback)
-    elif reversing == "hitch_cascade":
-        target = HitchCascade.from_config(target, nominal, scenario.hitch_feedback)
-    elif plan is not None and not scenario.reverse:
-        target = PathFeedback.from_config(target, {})  # see PLAN_FORWARD_DRIVE
+    plan = None if leg is None else leg.plan
+    target = _outer_target(scenario, target, nominal, reversing, plan)
     dt = scenario.control_dt
     # "on_path": the vehicle starts in the reference's initial state, pose *and* speed (paper
     # Section 6.3). The paper's static cycloid target starts at 0.765 m/s while its vehicle is
@@ -420,18 +370,6 @@ def build(scenario: Scenario, leg: LegStart | None = None) -> Build:
         noise = noise_std(target, duration, float(scenario.noise_snr_db))
     else:
         noise = (0.0, 0.0)
-    setup = ControllerSetup(
-        params=nominal,
-        model=reduced_model(nominal),
-        torque_limit=nominal.torque_limit,
-        control_dt=dt,
-        path=path,
-        reverse=bool(scenario.reverse),
-        # the path schedule steers the axles by actuators (PathEtaScheduler)
-        axle_slew_rate=(
-            nominal.axle_slew_rate if scenario.eta_schedule_kind == "path" else math.inf
-        ),
-    )
     result = Build(
         scenario=scenario,
         nominal=nominal,
@@ -450,7 +388,7 @@ def build(scenario: Scenario, leg: LegStart | None = None) -> Build:
         ),
         disturbance_limit=_disturbance_limit(scenario, nominal),
         controller_class=cls,
-        controller_setup=setup,
+        controller_setup=_controller_setup(scenario, nominal, path),
         extra_metrics=resolve_metrics(scenario.metrics),
         path_schedule=(
             path_schedule(path, [(t.L, t.L0) for t in plant_p.trailers])
@@ -475,3 +413,98 @@ def build(scenario: Scenario, leg: LegStart | None = None) -> Build:
     result.new_faults()  # a fault after the end of the run is refused now
     result.new_controller()  # bad gains, and a user's __init__ that fails, before any work
     return result
+
+
+def _leg_of(scenario: Scenario, world, leg: LegStart | None):
+    """``(scenario, leg)``: a planned run's first leg planned now (``traj="plan"``), and the
+    scenario driving the leg's direction; a run without a plan as it is."""
+    if scenario.traj == PLAN and leg is None:
+        if world is None:
+            raise ValueError("traj='plan' is not allowed without a world: give --world")
+        deadline = time.monotonic() + scenario.time_limit_s
+        plan = planned(
+            world, scenario.plant_params(), scenario.seed, bool(scenario.reverse), deadline
+        )
+        leg = LegStart(plan, 0)
+    if leg is None:
+        return scenario, None
+    if leg.plan.cusps and parse_faults(scenario.faults):
+        raise ValueError(
+            f"faults={scenario.faults!r} is not allowed here: this start's plan has "
+            f"{leg.plan.cusps} cusp(s), each leg a run from rest, and a fault is timed within "
+            "one run (give a start the train backs in from directly, or no faults)"
+        )
+    return dataclasses.replace(scenario, reverse=leg.plan.legs[leg.index].reverse), leg
+
+
+def _controller_class(spec: str, backs_up: bool) -> type:
+    """The controller's class, refused for a run that backs up when it cannot."""
+    cls = controller_class(spec)
+    if backs_up and not getattr(cls, "REVERSE", True):
+        backing = ", ".join(n for n in CONTROLLERS if getattr(CONTROLLERS[n], "REVERSE", True))
+        raise ValueError(
+            f"controller={spec!r} with reverse=True is not allowed: it tracks the "
+            f"path driving forward only (these back up: {backing})"
+        )
+    return cls
+
+
+def _path_and_target(scenario: Scenario, leg: LegStart | None):
+    """``(path, target, initial pose, start arc length)``: the scenario's path (or the leg's,
+    its share of the duration by its length) and its target, backing up when it does, from
+    where the last leg stopped when there was one."""
+    if leg is not None:
+        plan = leg.plan
+        ramp = {k: v for k, v in scenario.path_options.items() if k in ("cruise", "ramp_time")}
+        leg_path = plan.legs[leg.index].path
+        duration = scenario.duration
+        if duration is not None and plan.cusps:  # each leg its share, by its length
+            whole = sum(one.path.length for one in plan.legs)
+            steps = round(duration * leg_path.length / whole / scenario.control_dt)
+            duration = max(steps, 1) * scenario.control_dt
+        path, target, pose = target_on(leg_path, scenario.target, duration, **ramp)
+    else:
+        path, target, pose = make_target(
+            scenario.traj,
+            kind=scenario.target,
+            duration=scenario.duration,
+            start=scenario.start,
+            **scenario.path_options,
+        )
+    start_s = 0.0
+    if scenario.reverse:
+        target = ReverseTarget(target)
+        pose = target.initial_pose
+        start_s = target.s_end
+    if leg is not None and leg.pose is not None:
+        pose = leg.pose  # where the last leg stopped
+    return path, target, pose, start_s
+
+
+def _outer_target(scenario: Scenario, target, nominal, reversing: str, plan):
+    """The target with what sets its yaw-rate target from the errors: path feedback, the
+    hitch cascade backing up, or a plan's forward legs' feedback."""
+    if scenario.path_feedback is not None:
+        return PathFeedback.from_config(target, scenario.path_feedback)
+    if reversing == "hitch_cascade":
+        return HitchCascade.from_config(target, nominal, scenario.hitch_feedback)
+    if plan is not None and not scenario.reverse:
+        return PathFeedback.from_config(target, {})  # see PLAN_FORWARD_DRIVE
+    return target
+
+
+def _controller_setup(scenario: Scenario, nominal, path) -> ControllerSetup:
+    """What the controller is built with: the nominal parameters and model, the limits, the
+    control period, the path and the direction."""
+    return ControllerSetup(
+        params=nominal,
+        model=reduced_model(nominal),
+        torque_limit=nominal.torque_limit,
+        control_dt=scenario.control_dt,
+        path=path,
+        reverse=bool(scenario.reverse),
+        # the path schedule steers the axles by actuators (PathEtaScheduler)
+        axle_slew_rate=(
+            nominal.axle_slew_rate if scenario.eta_schedule_kind == "path" else math.inf
+        ),
+    )
