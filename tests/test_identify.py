@@ -201,7 +201,7 @@ def test_a_log_without_a_column_or_with_a_bad_fit_is_exit_2(tmp_path, capsys):
     assert identify.main([str(path)]) == 2
     assert "no column 'omega'" in capsys.readouterr().err
     assert identify.main([str(_log(tmp_path)), "--fit", "mass", "--out", str(tmp_path / "o")]) == 2
-    assert "fit='mass' is not allowed" in capsys.readouterr().err
+    assert "--fit 'mass' is not allowed" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
 
 
@@ -517,3 +517,21 @@ def test_a_bad_wheel_option_is_exit_2(tmp_path, capsys):
     )
     assert "--wheel '0.02' is not allowed" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        ("L,L", "'L' is given twice"),
+        ("L0, eta,L0", "'L0' is given twice"),
+        ("", "choose from L, L0, eta, hitch_lag"),
+        ("L,,eta", "choose from"),
+        ("mass", "choose from"),
+    ],
+)
+def test_fit_names_are_fittable_and_given_once(text, said):
+    from tt_mujoco.identify import LogError, fit_names
+
+    with pytest.raises(LogError, match=f"--fit {text!r} is not allowed: {said}"):
+        fit_names(text)
+    assert fit_names(" L , eta") == ("L", "eta")

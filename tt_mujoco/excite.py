@@ -166,7 +166,7 @@ def _table(ranked: list[Candidate]) -> str:
 @guard.command
 def main(argv: list[str] | None = None) -> int:
     """``python -m tt_mujoco.excite``: see the module."""
-    from tt_mujoco.identify import FITTABLE
+    from tt_mujoco.identify import LogError, fit_names
     from tt_mujoco.outputs import atomic_write, claim_folder, release_folder
     from tt_mujoco.sim import Scenario
 
@@ -193,9 +193,10 @@ def main(argv: list[str] | None = None) -> int:
         print(f"tt_mujoco.excite: {message}", file=sys.stderr)
         return EXIT_BAD_INPUT
 
-    fit = tuple(f.strip() for f in args.fit.split(","))
-    if not fit or any(f not in FITTABLE for f in fit):
-        return fail(f"--fit {args.fit!r} is not allowed: choose from {', '.join(FITTABLE)}")
+    try:
+        fit = fit_names(args.fit)
+    except LogError as err:
+        return fail(str(err))
     for name, value in (("--rate", args.rate), ("--encoder-noise-deg", args.encoder_noise_deg)):
         if not (math.isfinite(value) and value > 0):
             return fail(f"{name} {value!r} is not allowed: give a positive number")

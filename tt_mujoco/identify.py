@@ -50,6 +50,7 @@ __all__ = [
     "FITTABLE",
     "Fit",
     "LogError",
+    "fit_names",
     "fit_train",
     "fitted_values",
     "main",
@@ -300,6 +301,22 @@ def _smoothed(x: np.ndarray, t: np.ndarray, seconds: float) -> np.ndarray:
     return np.convolve(padded, np.ones(width) / width, mode="valid")
 
 
+def fit_names(text: str) -> tuple[str, ...]:
+    """The parameters a ``--fit`` text names, each of :data:`FITTABLE` once.
+
+    Raises
+    ------
+    LogError
+        Naming the text: empty, a name not fittable, or a name given twice.
+    """
+    names = tuple(name.strip() for name in str(text).split(","))
+    twice = sorted({name for name in names if names.count(name) > 1})
+    if not all(name in FITTABLE for name in names) or twice:
+        why = f"{twice[0]!r} is given twice" if twice else f"choose from {', '.join(FITTABLE)}"
+        raise LogError(f"--fit {text!r} is not allowed: {why}")
+    return names
+
+
 def fit_train(t, v, omega, phis, p: Params, fit=("L", "L0"), smooth_s: float | None = None) -> Fit:
     """Fit ``fit`` (of :data:`FITTABLE`, every trailer's) of train ``p`` (its initial guess)
     to a log's ``t, v, omega, phis`` (see the module).
@@ -320,9 +337,7 @@ def fit_train(t, v, omega, phis, p: Params, fit=("L", "L0"), smooth_s: float | N
     n = phis.shape[1]
     if n != p.n_trailers:
         raise LogError(f"the log has {n} hitch angle column(s); the vehicle has {p.n_trailers}")
-    unknown = [f for f in fit if f not in FITTABLE]
-    if unknown or not fit:
-        raise LogError(f"fit={','.join(fit)!r} is not allowed: choose from {', '.join(FITTABLE)}")
+    fit = fit_names(",".join(fit))
     keys, names, x0 = fitted_values(p, fit)
     residuals = step_errors(p, keys, t, v, omega, phis)
 
@@ -584,7 +599,7 @@ def main(argv: list[str] | None = None) -> int:
         from tt_mujoco.sim import Scenario
 
         p = Scenario(eta=args.eta, trailers=phis.shape[1]).plant_params()
-        fit = fit_train(t, v, omega, phis, p, tuple(f.strip() for f in args.fit.split(",")))
+        fit = fit_train(t, v, omega, phis, p, fit_names(args.fit))
         out, _ = claim_folder(args.out, Path("renders") / f"identify-{args.log.stem}")
     except ValueError as err:  # LogError, a bad --eta, an --out in use
         return fail(str(err))
