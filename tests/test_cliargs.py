@@ -59,3 +59,22 @@ def test_a_duration_that_is_not_whole_control_periods_is_refused():
     with pytest.raises(ValueError, match=r"duration=1.04 is not allowed: .* would last 1.05 s"):
         Scenario(duration=1.04, control_dt=0.05).validate()
     Scenario(duration=0.3, control_dt=0.01).validate()  # 30 periods, whatever the rounding
+
+
+def _table_options():
+    from tt_mujoco.sim.scenario import SCHEMA
+
+    return [opt for opt in SCHEMA.options if opt.form == "table" and opt.cli]
+
+
+@pytest.mark.parametrize("opt", _table_options(), ids=lambda opt: opt.cli_flags[0])
+def test_a_table_option_setting_one_name_twice_is_refused(opt):
+    # every NAME=VALUE option of the schema (--param, --path-option, ...): the last one won
+    # in silence; the same value again stays no conflict
+    from tt_mujoco import run
+    from tt_mujoco.cliargs import BadInputError
+
+    flag = opt.cli_flags[0]
+    with pytest.raises((BadInputError, ValueError), match=r"both set 'x'.*give it once") as info:
+        run.options_from_argv([flag, "x=1", flag, "x=2"])
+    assert f"{flag} x=1.0" in str(info.value) and f"{flag} x=2.0" in str(info.value)

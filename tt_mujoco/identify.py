@@ -43,6 +43,7 @@ import numpy as np
 from tt_mujoco import guard
 from tt_mujoco.cliargs import Parser
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_OK
+from tt_mujoco.schema import table_of
 from tt_mujoco.vehicle.params import Params
 
 __all__ = [
@@ -573,14 +574,15 @@ def main(argv: list[str] | None = None) -> int:
         print(f"tt_mujoco.identify: {message}", file=sys.stderr)
         return EXIT_BAD_INPUT
 
-    try:
-        mapping = dict(item.split("=", 1) for item in args.columns)
-    except ValueError:
+    if not all("=" in item for item in args.columns):
         return fail(f"--columns {args.columns!r} is not allowed: give NAME=COLUMN")
-    try:
-        topics = dict(item.split("=", 1) for item in args.topics)
-    except ValueError:
+    if not all("=" in item for item in args.topics):
         return fail(f"--topics {args.topics!r} is not allowed: give odom=TOPIC or joints=TOPIC")
+    try:
+        mapping = table_of((item.split("=", 1) for item in args.columns), "--columns")
+        topics = table_of((item.split("=", 1) for item in args.topics), "--topics")
+    except ValueError as err:
+        return fail(str(err))
     unknown = sorted(set(topics) - {"odom", "joints"})
     if unknown:
         return fail(f"--topics {unknown[0]}=... is not allowed: use odom=TOPIC or joints=TOPIC")

@@ -37,11 +37,33 @@ __all__ = [
     "optional_table",
     "spec_list",
     "table",
+    "table_of",
     "text",
 ]
 
 #: The forms an option takes on the command line.
 FORMS = ("value", "switch", "repeat", "table")
+
+
+def table_of(pairs, flag: str) -> dict:
+    """``NAME=VALUE`` entries of a repeatable option (``--param``, ``--path-option``, ...) as a
+    table: a name given again with another value is refused, naming both, rather than the
+    last one winning in silence (the same value again is allowed, as for any option).
+
+    Raises
+    ------
+    ValueError
+        The name set twice.
+    """
+    table = {}
+    for name, value in pairs:
+        if name in table and table[name] != value:
+            raise ValueError(
+                f"{flag} {name}={table[name]!r} and {flag} {name}={value!r} both set {name!r}, "
+                "which cannot be both: give it once"
+            )
+        table[name] = value
+    return table
 
 
 def _refuse(label: str, value, allowed: str) -> ValueError:
@@ -538,7 +560,7 @@ class Schema:
             opt = self[name]
             label = opt.cli_flags[0]
             if opt.form == "table":
-                value = dict(value)
+                value = table_of(value, label)
             if opt.form in ("repeat", "table"):
                 value = opt.parse(value, label)
             if opt.file:
