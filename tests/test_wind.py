@@ -122,17 +122,17 @@ def test_a_lever_gives_the_drag_a_yaw_moment_about_the_centre_of_mass():
 
 
 def test_the_wind_moment_reaches_the_bodies_and_turns_a_parked_tractor_its_way(monkeypatch):
-    from tt_mujoco.sim.loop import closed_loop
+    from tt_mujoco.sim.parts import wind
 
     seen = []
-    blow = closed_loop._blow  # what CPython's step calls (the controller is a class)
+    blow = wind.blow_of  # what CPython's step calls (the controller is a class)
 
     def watched(mj, wrench, gusts):
         blow(mj, wrench, gusts)
         tractor, trailer = gusts[:3].tolist(), gusts[3:].tolist()
         seen.append((tractor, trailer, mj.xfrc_applied[mj.tractor_body, 5]))
 
-    monkeypatch.setattr(closed_loop, "_blow", watched)
+    monkeypatch.setattr(wind, "blow_of", watched)
     base = {  # the wind blows across the circle's start heading (+y)
         "controller": f"{__file__}:Zero", "traj": "circle", "start": "paper",
         "disturbance": "none", "duration": 0.5, "wind": "20:0",

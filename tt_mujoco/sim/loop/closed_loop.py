@@ -59,7 +59,6 @@ from tt_mujoco.sim.parts.measure import (
     ROW_Y0,
     THETA,
     THETA0,
-    V0,
     X0,
     Y0,
     V,
@@ -178,19 +177,6 @@ def _ode(plant):
     return reduced.with_eta_of(plant.ode, plant.steering.etas[0])
 
 
-def _blow(mj, wrench, gusts):
-    """The wind's ``gusts`` (``F_x, F_y, M_z``) on the tractor, then on the
-    trailer, added to the tractor's chassis wrench when the disturbance is one."""
-    tractor, trailer = mj.xfrc_applied[mj.tractor_body], mj.xfrc_applied[mj.trailer_bodies[0]]
-    if wrench:
-        tractor[0] += gusts[0]
-        tractor[1] += gusts[1]
-        tractor[5] += gusts[2]
-    else:
-        tractor[0], tractor[1], tractor[5] = gusts[0], gusts[1], gusts[2]
-    trailer[0], trailer[1], trailer[5] = gusts[3], gusts[4], gusts[5]
-
-
 def _advance(plant, T_r, T_l, push, weather, stop):
     """Apply the torques, the disturbance ``push`` (:class:`Push`) and the wind
     (``weather.wrenches`` of this step, when there is a wind) and advance the plant one control
@@ -208,7 +194,7 @@ def _advance(plant, T_r, T_l, push, weather, stop):
             mj.qfrc_applied[a.wheel_right_v] = dist_r
             mj.qfrc_applied[a.wheel_left_v] = dist_l
         if len(weather.speeds):
-            _blow(mj, push.wrench, weather.wrenches)
+            wind.blow_of(mj, push.wrench, weather.wrenches)
         steering = plant.steering
         for _ in range(plant.substeps):
             if steering.actuated:  # the axles' targets follow the hitches every physics step
@@ -321,36 +307,6 @@ def _delayed(delay, k, measurement, rows, seen):
     read = max(0, k - depth + 1) % depth
     was = delay.seen[read]
     return delay.measurements[read], delay.rows[read], was[SEEN_PHI], was[SEEN_V], was[SEEN_OMEGA]
-
-
-def _ground(patches, target):
-    """The friction patches: each wheel's friction set from where it stands
-    (GroundPatches.frictions); the bit mask of the patches some wheel is on."""
-    points, xpos = patches.points, patches.geom_xpos
-    for i in range(patches.geoms.size):
-        points[i, 0], points[i, 1] = xpos[patches.geoms[i], 0], xpos[patches.geoms[i], 1]
-    table = (patches.kinds, patches.bounds, patches.mus, patches.base_mu)
-    mask = ground.wheel_frictions_of(target, points, patches.arcs, table, patches.frictions)
-    for i in range(patches.geoms.size):
-        patches.geom_friction[patches.geoms[i], 0] = patches.frictions[i]
-    return mask
-
-
-def _gusts(weather, k, measurement):
-    """The wind's wrenches on the tractor and the trailer over step ``k``, at the
-    measured motion, into ``weather.wrenches``."""
-    speed = weather.speeds[k]
-    air = (speed * weather.direction[0], speed * weather.direction[1])
-    motion = (
-        measurement[V],
-        measurement[THETA],
-        measurement[V0],
-        measurement[THETA0],
-        measurement[BETA],
-    )
-    wrenches = wind.wind_wrenches_of(air, motion, weather.drag)
-    for i in range(6):
-        weather.wrenches[i] = wrenches[i]
 
 
 def _touch(world, k, measurement, rows, n, stop):
@@ -542,9 +498,9 @@ def actuate_step(k, row, loop, plant, law, target, log, stop):
         _steer(plant, law)
     push = Push(dist_r, dist_l, loop.wrench, fx, fy, mz)
     if len(loop.wind.speeds):
-        _gusts(loop.wind, k, measurement)
+        wind.gusts_step(loop.wind, k, measurement)
     if loop.ground.geoms.size:  # logged for step k; a failed advance is not handed back
-        loop.ground.masks[k] = _ground(loop.ground, target)
+        loop.ground.masks[k] = ground.ground_step(loop.ground, target)
     if stop.raised:  # the path, called back, raised: the plant does not advance
         return RAISED
     if pending:  # the caller changes the reduced plant's constants, then advances
@@ -609,13 +565,13 @@ BORROWING = (
     nominal_mass,
     model_steered,
     step.first_singular_of,
-    _blow,
+    wind.blow_of,
     _advance,
     _offer_path,
     _steer,
     _delayed,
-    _ground,
-    _gusts,
+    ground.ground_step,
+    wind.gusts_step,
     _touch,
     _has_delay,
 )

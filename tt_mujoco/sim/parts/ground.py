@@ -27,6 +27,7 @@ __all__ = [
     "GroundPatches",
     "Patch",
     "ground_report",
+    "ground_step",
     "parse_patch",
     "parse_patches",
     "patch_contains_of",
@@ -215,3 +216,16 @@ def ground_report(patches, masks, ts) -> list[dict]:
             entry[key] = float(max(v.max() for v in values)) if on.any() and values else None
         report.append(entry)
     return report
+
+
+def ground_step(patches, target) -> int:
+    """The friction patches: each wheel's friction set from where it stands
+    (GroundPatches.frictions); the bit mask of the patches some wheel is on."""
+    points, xpos = patches.points, patches.geom_xpos
+    for i in range(patches.geoms.size):
+        points[i, 0], points[i, 1] = xpos[patches.geoms[i], 0], xpos[patches.geoms[i], 1]
+    table = (patches.kinds, patches.bounds, patches.mus, patches.base_mu)
+    mask = wheel_frictions_of(target, points, patches.arcs, table, patches.frictions)
+    for i in range(patches.geoms.size):
+        patches.geom_friction[patches.geoms[i], 0] = patches.frictions[i]
+    return mask

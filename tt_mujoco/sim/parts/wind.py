@@ -22,14 +22,17 @@ import numpy as np
 
 from tt_mujoco.exact import hypot_of
 from tt_mujoco.registry import check_finite_fields
+from tt_mujoco.sim.parts import measure
 
 __all__ = [
     "AIR_DENSITY",
     "GUST_TIME",
     "DragConstants",
     "Wind",
+    "blow_of",
     "drag_force",
     "drag_moment",
+    "gusts_step",
     "parse_wind",
     "wind_wrenches_of",
 ]
@@ -153,3 +156,33 @@ def wind_wrenches_of(wind, motion, drag):
     tractor_moment = drag_moment(drag.drag_centre_tractor, theta, tx, ty)
     trailer_moment = drag_moment(drag.drag_centre_trailer, theta0, rx, ry)
     return tx, ty, tractor_moment, rx, ry, trailer_moment
+
+
+def gusts_step(weather, k, measurement) -> None:
+    """The wind's wrenches on the tractor and the trailer over step ``k``, at the
+    measured motion, into ``weather.wrenches``."""
+    speed = weather.speeds[k]
+    air = (speed * weather.direction[0], speed * weather.direction[1])
+    motion = (
+        measurement[measure.V],
+        measurement[measure.THETA],
+        measurement[measure.V0],
+        measurement[measure.THETA0],
+        measurement[measure.BETA],
+    )
+    wrenches = wind_wrenches_of(air, motion, weather.drag)
+    for i in range(6):
+        weather.wrenches[i] = wrenches[i]
+
+
+def blow_of(mj, wrench, gusts) -> None:
+    """The wind's ``gusts`` (``F_x, F_y, M_z``) on the tractor, then on the
+    trailer, added to the tractor's chassis wrench when the disturbance is one."""
+    tractor, trailer = mj.xfrc_applied[mj.tractor_body], mj.xfrc_applied[mj.trailer_bodies[0]]
+    if wrench:
+        tractor[0] += gusts[0]
+        tractor[1] += gusts[1]
+        tractor[5] += gusts[2]
+    else:
+        tractor[0], tractor[1], tractor[5] = gusts[0], gusts[1], gusts[2]
+    trailer[0], trailer[1], trailer[5] = gusts[3], gusts[4], gusts[5]
