@@ -395,7 +395,7 @@ def resolve_gains(
 
 #: Outcomes of a law's step from plain numbers (:func:`tt_mujoco.controllers.ismc_sta.
 #: ismc_sta_law`): done, ``g`` singular, torques not finite, and a user's compiled law that
-#: raised (its Python form says what: :func:`tt_mujoco.sim.loop.episode.outcome`).
+#: raised (its Python form says what: :func:`tt_mujoco.sim.loop.outcome.outcome`).
 LAW_OK, LAW_SINGULAR, LAW_NOT_FINITE, LAW_RAISED = 0, 1, 2, 3
 
 

@@ -17,55 +17,34 @@ import pickle
 
 import numpy as np
 
-from tt_mujoco.defaults import JACKKNIFE_DEG
-from tt_mujoco.sim.loop import law as law_part
+from tt_mujoco.guard import users_failure
+from tt_mujoco.sim import usercode
 from tt_mujoco.sim.loop import records, step
 from tt_mujoco.sim.loop.law import LAWS, PYTHON, hand_law_back, law_record
-from tt_mujoco.sim.parts import schedule
-from tt_mujoco.sim.scenario import jackknife_phi_deg
+from tt_mujoco.sim.loop.records import (
+    DelayRecord,
+    FaultRecord,
+    GroundRecord,
+    LoopRecord,
+    WindRecord,
+)
+from tt_mujoco.sim.parts import disturbances, schedule
+from tt_mujoco.sim.parts.faults import ACTUATOR_ROW, HELD, PAYLOAD_ROW
+from tt_mujoco.sim.parts.measure import TRAIN_FIELDS, Measurement
+from tt_mujoco.sim.parts.motors import MotorConstants
 
 __all__ = [
-    "blew_up_message",
     "carry_payloads",
     "changes_of",
     "episode_records",
     "hand_back",
     "inner_target",
     "is_law_class",
-    "jackknife_message",
+    "loop_record",
     "model_of",
-    "outcome",
     "runs_built_in",
     "target_record",
 ]
-
-
-def blew_up_message(t: float, v: float) -> str:
-    return f"state blew up at t={t:.3f} s: v={v!r}"
-
-
-def jackknife_message(t, phi, beta, eta, x, y, v, hitch: int = 1) -> str:
-    """Which limit the hitch reached, and why it is one."""
-    phi_deg, beta_deg = math.degrees(phi), math.degrees(beta)
-    if abs(beta_deg) >= JACKKNIFE_DEG:
-        why = (
-            f"|beta| = {abs(beta_deg):.1f} deg reached {JACKKNIFE_DEG:g} deg: the steered axle "
-            f"nears 90 deg, where it would roll across the trailer (phi={phi_deg:.1f} deg)"
-        )
-    else:
-        limit = jackknife_phi_deg(eta)
-        reason = (
-            "the trailer stands across the tractor"
-            if limit >= 90.0
-            else f"with eta={eta:g} the axle's beta = eta phi would reach {JACKKNIFE_DEG:g} deg"
-        )
-        why = (
-            f"|phi| = {abs(phi_deg):.1f} deg reached {limit:.4g} deg: {reason} "
-            f"(beta={beta_deg:.1f} deg)"
-        )
-    return (
-        f"jackknife at t={t:.3f} s, hitch {hitch}: {why}; x={x:.3f} m, y={y:.3f} m, v={v:.3f} m/s"
-    )
 
 
 def inner_target(target):
@@ -144,7 +123,7 @@ def episode_records(stepper, controller, user, python=None) -> tuple:
     plant = _plant_record(stepper, stepper.built.nominal)
     law = law_record(controller, stepper.built.nominal, user, plant.steering, python)
     return records.EpisodeRecords(
-        stepper.loop_record(),
+        loop_record(stepper),
         plant,
         law,
         target_record(stepper.built, stepper.steps),
@@ -385,112 +364,100 @@ def _profile_table(target, dt: float, steps: int) -> np.ndarray:
     return table
 
 
-def outcome(status, stop_record, stepper, controller, k) -> tuple[str, str]:
-    """``(status, message)`` of an episode that ended at step ``k`` with ``status`` (a stop
-    code of :mod:`tt_mujoco.sim.loop.step`), from the ``stop`` record."""
-    from tt_mujoco.controllers.base import LAW_NOT_FINITE, LAW_RAISED, LAW_SINGULAR
-    from tt_mujoco.controllers.plain import PlainLawController
-    from tt_mujoco.sim import usercode
-    from tt_mujoco.sim.parts.plant import StopRun
-    from tt_mujoco.vehicle.reduced import SingularityError
+def loop_record(stepper) -> LoopRecord:
+    """The episode's constants and noise as the step reads them (after the stepper's
+    :meth:`~tt_mujoco.sim.loop.stepper.Stepper.reset`)."""
+    dist = stepper.built.disturbance is not None
+    form = disturbances.form_of(stepper.built.disturbance)  # None: none, or a user's
+    mode = stepper.built.scenario.disturbance
+    noise, faults = stepper.noise, stepper.faults
+    rows = faults.payload_rows if faults else []
+    motors = stepper.motors
+    depth = stepper.built.delay_steps + 1
+    return LoopRecord(
+        limits=stepper.limits,
+        dt=stepper.dt,
+        steps=stepper.steps,
+        noise=np.zeros(0) if noise is None else noise,
+        disturbed=dist and mode == "matched",
+        wrench=dist and mode == "wrench",
+        n_trailers=stepper.built.plant_params.n_trailers,
+        hitch_limits=np.array(stepper.train_limits, dtype=float),
+        faults=FaultRecord(
+            dropouts=np.array(faults.dropouts if faults else [], dtype=float).reshape(-1, 2),
+            actuators=np.array(faults.actuators if faults else [], dtype=float).reshape(
+                -1, len(ACTUATOR_ROW)
+            ),
+            held=np.array(faults.held if faults else [0.0] * len(HELD), dtype=float),
+            payloads=np.array(rows, dtype=float).reshape(-1, len(PAYLOAD_ROW)),
+            payload_state=np.array(faults.payload_state if faults else [0.0, 0.0]),
+            payload_changes=np.zeros((len(rows), 2)),
+        ),
+        dc_motor=motors is not None,
+        motor=motors.constants if motors else MotorConstants(*[0.0] * 6),
+        motor_torques=np.array(motors.torques if motors else [0.0, 0.0]),
+        wind=WindRecord(
+            np.zeros(0) if stepper.wind_speeds is None else stepper.wind_speeds,
+            stepper.wind_direction,
+            stepper.drag,
+            np.zeros(6),
+        ),
+        delay=DelayRecord(
+            measurements=np.zeros((depth, len(Measurement._fields))),
+            rows=np.zeros((depth, len(stepper.train_limits), len(TRAIN_FIELDS))),
+            seen=np.zeros((depth, 3)),
+        ),
+        ground=_ground_record(stepper),
+        world=stepper.world,
+        disturbance_kind=form[0] if form else 0,
+        disturbance_params=np.array(form[1] if form else (), dtype=float),
+        hooked_disturbance=users_disturbance(stepper.built),
+        disturbance_hook=_disturbance_hook(stepper.built),
+        hook_out=np.zeros(2),
+    )
 
-    t = k * stepper.dt
-    value = records.values_of(stop_record)
-    if status == step.FINISHED:
-        return "ok", f"completed {stepper.built.duration:.3f} s"
-    if status == step.BLEW_UP:
-        return "diverged", blew_up_message(t, value["v"])
-    if status == step.JACKKNIFE:
-        phi, beta, x, y, v = (value[name] for name in ("phi", "beta", "x", "y", "v"))
-        hitch = int(value["hitch"])
-        eta = stepper.eta if hitch == 1 else value["eta"]
-        return "jackknife", jackknife_message(t, phi, beta, eta, x, y, v, hitch=hitch)
-    if status == step.COLLISION:
-        from tt_mujoco.vehicle.footprint import unit_names
 
-        unit = unit_names(stepper.built.plant_params.n_trailers)[int(value["unit"])]
-        obstacle = stepper.built.world.all_obstacles[int(value["obstacle"])].name
-        return "collision", (
-            f"collision at t={t:.3f} s: the {unit} touched obstacle {obstacle!r} "
-            f"({-1000 * value['gap']:.1f} mm deep; the tractor at x={value['x']:.3f}, "
-            f"y={value['y']:.3f} m)"
-        )
-    if status == step.WARNING:
-        import mujoco
+def _disturbance_hook(built):
+    """A user's disturbance with its checks, as CPython's step calls it (None: none, or
+    the paper's, which the step computes itself)."""
+    if not users_disturbance(built):
+        return None
+    dist = built.disturbance
+    who = usercode.disturbance_label(built)
 
-        from tt_mujoco.sim.parts.plant_mujoco import warning_message
-
-        return "diverged", warning_message(mujoco.mjtWarning(int(value["warning"])).name, t)
-    if status == step.SINGULAR:
-        err = SingularityError(value["phi"], value["eta"])
-        return "jackknife", f"jackknife at t={t + stepper.dt:.3f} s: {err}"
-    # LAW_FAILED: the nominal model's singularity, or the law's own failure
-    law_status = int(value["law_status"])
-    if law_status in (LAW_RAISED, LAW_NOT_FINITE) and isinstance(controller, PlainLawController):
-        # what its Python form raises there, as the Python loop would have stopped it (numba's
-        # error model gives inf where Python raises ZeroDivisionError)
-        again = raised_again(stepper, controller, t)
-        if again is not None:
-            return again
-        if law_status == LAW_RAISED:
-            return "failed", (
-                f"{usercode.controller_label(stepper.built)} failed at t={t:.3f} s: its compiled "
-                "form raised where its Python form does not (numba's semantics differ from "
-                "Python's there: integer width, an error model)"
-            )
-    u1, u2 = value["u1"], value["u2"]
-    if isinstance(controller, PlainLawController):  # the user's law returned no torques
+    def disturbance(t: float) -> tuple[float, float]:
         try:
-            usercode.checked_torques((u1, u2), usercode.controller_label(stepper.built), t)
-        except StopRun as stop_run:
-            if law_status == LAW_NOT_FINITE:
-                return stop_run.status, stop_run.message
-    try:
-        if law_status == NOMINAL_SINGULAR:
-            raise SingularityError(value["phi"], value["eta"])
-        g = tuple(value[name] for name in ("g11", "g12", "g21", "g22"))
-        controller.raise_for(law_status, g if law_status == LAW_SINGULAR else (), u1, u2)
-    except FloatingPointError as err:
-        return "diverged", f"controller failed at t={t:.3f} s: {err}"
-    raise AssertionError(f"unknown status {status}")  # pragma: no cover
+            out = dist(t)
+        except BaseException as err:
+            if not users_failure(err):
+                raise
+            raise usercode.failure(who, t, err) from None
+        return usercode.checked_disturbance(out, who, t)
+
+    return disturbance
 
 
-def _floats(record) -> list[float]:
-    """A record's values in field order (a structured array's first row, or a plain array)."""
-    values = np.asarray(record)
-    if values.dtype.names:
-        return [float(values.reshape(-1)[0][name]) for name in values.dtype.names]
-    return [float(v) for v in values.reshape(-1)]
-
-
-def raised_again(stepper, controller, t: float) -> tuple[str, str] | None:
-    """``(status, message)`` of a compiled plain-number law that failed at time ``t``, as the
-    Python loop stops it (the traceback kept): its Python form called with what the compiled
-    law was given at that step raises what it raised; None where it does not raise."""
-    from tt_mujoco.controllers.base import Nominal
-    from tt_mujoco.controllers.plain import LawReference, LawState
-    from tt_mujoco.guard import users_failure
-    from tt_mujoco.sim import usercode
-    from tt_mujoco.sim.parts.measure import Measurement
-
-    law = stepper._episode.law
-    m = Measurement(*_floats(law.measurement_values))
-    r = LawReference(*_floats(law.reference))
-    model = Nominal(*_floats(law.model))
-    state = LawState(controller.STATE)
-    for name, value in zip(controller.STATE, _floats(law.user_state), strict=False):
-        setattr(state, name, value)
-    who = usercode.controller_label(stepper.built)
-    try:
-        controller.call_law(m, r, model, state)
-    except BaseException as err:
-        if not users_failure(err):
-            raise
-        stop = usercode.failure(who, t, err)
-        stepper.stop_details = stop.details
-        return stop.status, stop.message
-    return None
-
-
-#: ``stop.law_status`` of the nominal model's own singularity
-NOMINAL_SINGULAR = int(law_part.NOMINAL_SINGULAR)
+def _ground_record(stepper) -> GroundRecord:
+    """The friction patches under the wheels, as the step reads them."""
+    ground = getattr(stepper.plant, "ground", None)
+    if ground is None:
+        none, no_ints = np.zeros(0), np.zeros(0, dtype=np.int64)
+        return GroundRecord(
+            no_ints, np.zeros((1, 3)), np.zeros((1, 3)), no_ints, np.zeros((0, 4)), none,
+            0.0, none, np.zeros((0, 2)), none, no_ints,
+        )  # fmt: skip
+    patches, geoms, xpos, friction = ground
+    points = np.array(xpos[geoms, :2], dtype=float)
+    return GroundRecord(
+        geoms=np.array(geoms, dtype=np.int64),
+        geom_xpos=xpos,
+        geom_friction=friction,
+        kinds=patches.kinds,
+        bounds=patches.bounds,
+        mus=patches.mus,
+        base_mu=patches.base_mu,
+        arcs=patches.start(points),
+        points=points,
+        frictions=np.zeros(len(geoms)),
+        masks=np.zeros(stepper.steps + 1, dtype=np.int64),
+    )

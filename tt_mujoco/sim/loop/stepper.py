@@ -31,24 +31,17 @@ from tt_mujoco.defaults import JACKKNIFE_DEG, MAX_SPEED
 from tt_mujoco.guard import users_failure
 from tt_mujoco.sim import usercode
 from tt_mujoco.sim.build import Build
-from tt_mujoco.sim.loop import closed_loop, episode, records, target_step
+from tt_mujoco.sim.loop import closed_loop, episode, outcome, records, target_step
 from tt_mujoco.sim.loop.checkpoint import Checkpoint
 from tt_mujoco.sim.loop.python_law import PythonLaw, law_failure, reference_of, seen_measurement
 from tt_mujoco.sim.loop.records import (
-    DelayRecord,
-    FaultRecord,
-    GroundRecord,
     Limits,
     LogRecord,
-    LoopRecord,
-    WindRecord,
 )
 from tt_mujoco.sim.loop.step import FINISHED, PAYLOAD, RUNNING, SINGULAR, WARNING
 from tt_mujoco.sim.loop.timeseries import LOOP_COLUMNS, assemble_columns, train_columns
-from tt_mujoco.sim.parts import disturbances
-from tt_mujoco.sim.parts.faults import ACTUATOR_ROW, HELD, PAYLOAD_ROW
 from tt_mujoco.sim.parts.measure import TRAIN_FIELDS, Measurement, TrainMeasurement
-from tt_mujoco.sim.parts.motors import DcMotors, MotorConstants
+from tt_mujoco.sim.parts.motors import DcMotors
 from tt_mujoco.sim.parts.plant import StopRun
 from tt_mujoco.sim.parts.wind import DragConstants, parse_wind
 from tt_mujoco.sim.scenario import jackknife_phi_deg
@@ -131,7 +124,7 @@ class Stepper:
         )
         # Trailers 2..N: their hitch limits, and their logged columns after the usual ones.
         etas = built.plant_params.etas
-        self._train_limits = [math.radians(jackknife_phi_deg(e)) for e in etas[1:]]
+        self.train_limits = [math.radians(jackknife_phi_deg(e)) for e in etas[1:]]
         self.train_columns = train_columns(len(etas))
         self.checkpoint_columns = (*CHECKPOINT_COLUMNS, *self.train_columns)
         self.plant = None
@@ -162,7 +155,7 @@ class Stepper:
             DcMotors(b.plant_params, b.control_dt) if b.scenario.actuator == "dc_motor" else None
         )
         self._ground_masks = [] if b.scenario.ground else None  # the patches under the wheels
-        self._world = world_record(b.world, b.plant_params, self.steps)
+        self.world = world_record(b.world, b.plant_params, self.steps)
         self.collision = None  # (unit, obstacle, t, gap) of the contact that stopped the episode
         self.scheduler = b.new_scheduler(self.plant)
         self._given_path = None  # a copy for the code sense() is for, made on first use
@@ -172,113 +165,18 @@ class Stepper:
         self.loop_note = None  # why the Python loop ran it, as the run's note (run_episode)
         self._signals: dict[str, np.ndarray] = {}  # what the controller logged, by name
         noise_v, noise_w = b.noise_std
-        self._noise = rng.standard_normal(2 * (self.steps + 1)) if noise_v or noise_w else None
+        self.noise = rng.standard_normal(2 * (self.steps + 1)) if noise_v or noise_w else None
         wind = parse_wind(b.scenario.wind)
         # the gusts are drawn after the noise, so that a wind leaves the noise as it was
-        self._wind = None if wind.calm else wind.speeds(rng, self.steps, self.dt)
+        self.wind_speeds = None if wind.calm else wind.speeds(rng, self.steps, self.dt)
         direction = math.radians(wind.direction_deg)
-        self._wind_direction = (math.cos(direction), math.sin(direction))
-        self._drag = DragConstants(*(getattr(b.plant_params, f) for f in DragConstants._fields))
+        self.wind_direction = (math.cos(direction), math.sin(direction))
+        self.drag = DragConstants(*(getattr(b.plant_params, f) for f in DragConstants._fields))
         self._blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self._episode = None  # the records: begin()
         self._log = None  # the log of the rows being computed, from step _log_k; _taken kept
 
     # --- the records ---------------------------------------------------------------------
-    def loop_record(self) -> LoopRecord:
-        """The episode's constants and noise as the step reads them (after :meth:`reset`)."""
-        dist = self.built.disturbance is not None
-        form = disturbances.form_of(self.built.disturbance)  # None: none, or a user's
-        mode = self.built.scenario.disturbance
-        noise, faults = self._noise, self.faults
-        rows = faults.payload_rows if faults else []
-        motors = self.motors
-        depth = self.built.delay_steps + 1
-        return LoopRecord(
-            limits=self.limits,
-            dt=self.dt,
-            steps=self.steps,
-            noise=np.zeros(0) if noise is None else noise,
-            disturbed=dist and mode == "matched",
-            wrench=dist and mode == "wrench",
-            n_trailers=self.built.plant_params.n_trailers,
-            hitch_limits=np.array(self._train_limits, dtype=float),
-            faults=FaultRecord(
-                dropouts=np.array(faults.dropouts if faults else [], dtype=float).reshape(-1, 2),
-                actuators=np.array(faults.actuators if faults else [], dtype=float).reshape(
-                    -1, len(ACTUATOR_ROW)
-                ),
-                held=np.array(faults.held if faults else [0.0] * len(HELD), dtype=float),
-                payloads=np.array(rows, dtype=float).reshape(-1, len(PAYLOAD_ROW)),
-                payload_state=np.array(faults.payload_state if faults else [0.0, 0.0]),
-                payload_changes=np.zeros((len(rows), 2)),
-            ),
-            dc_motor=motors is not None,
-            motor=motors.constants if motors else MotorConstants(*[0.0] * 6),
-            motor_torques=np.array(motors.torques if motors else [0.0, 0.0]),
-            wind=WindRecord(
-                np.zeros(0) if self._wind is None else self._wind,
-                self._wind_direction,
-                self._drag,
-                np.zeros(6),
-            ),
-            delay=DelayRecord(
-                measurements=np.zeros((depth, len(Measurement._fields))),
-                rows=np.zeros((depth, len(self._train_limits), len(TRAIN_FIELDS))),
-                seen=np.zeros((depth, 3)),
-            ),
-            ground=self._ground_record(),
-            world=self._world,
-            disturbance_kind=form[0] if form else 0,
-            disturbance_params=np.array(form[1] if form else (), dtype=float),
-            hooked_disturbance=episode.users_disturbance(self.built),
-            disturbance_hook=self._disturbance_hook(),
-            hook_out=np.zeros(2),
-        )
-
-    def _disturbance_hook(self):
-        """A user's disturbance with its checks, as CPython's step calls it (None: none, or
-        the paper's, which the step computes itself)."""
-        if not episode.users_disturbance(self.built):
-            return None
-        dist = self.built.disturbance
-        who = usercode.disturbance_label(self.built)
-
-        def disturbance(t: float) -> tuple[float, float]:
-            try:
-                out = dist(t)
-            except BaseException as err:
-                if not users_failure(err):
-                    raise
-                raise usercode.failure(who, t, err) from None
-            return usercode.checked_disturbance(out, who, t)
-
-        return disturbance
-
-    def _ground_record(self) -> GroundRecord:
-        """The friction patches under the wheels, as the step reads them."""
-        ground = getattr(self.plant, "ground", None)
-        if ground is None:
-            none, no_ints = np.zeros(0), np.zeros(0, dtype=np.int64)
-            return GroundRecord(
-                no_ints, np.zeros((1, 3)), np.zeros((1, 3)), no_ints, np.zeros((0, 4)), none,
-                0.0, none, np.zeros((0, 2)), none, no_ints,
-            )  # fmt: skip
-        patches, geoms, xpos, friction = ground
-        points = np.array(xpos[geoms, :2], dtype=float)
-        return GroundRecord(
-            geoms=np.array(geoms, dtype=np.int64),
-            geom_xpos=xpos,
-            geom_friction=friction,
-            kinds=patches.kinds,
-            bounds=patches.bounds,
-            mus=patches.mus,
-            base_mu=patches.base_mu,
-            arcs=patches.start(points),
-            points=points,
-            frictions=np.zeros(len(geoms)),
-            masks=np.zeros(self.steps + 1, dtype=np.int64),
-        )
-
     def begin(self, controller=None, compiled_law=None, kernel=None) -> tuple:
         """Make the (reset) episode's records for ``controller``: ``(loop, plant, law, target,
         stop)`` (:func:`tt_mujoco.sim.loop.episode.episode_records`).
@@ -359,7 +257,7 @@ class Stepper:
             self._end(None, self._fold())
             raise
         self._end(status, k)
-        return episode.outcome(status, self._episode.stop, self, self._controller, k)
+        return outcome.outcome(status, self._episode.stop, self, self._controller, k)
 
     def _after_payloads(self, status, k, advance) -> tuple[int, int]:
         """The payload changes a step made to the reduced plant's constants, and the step
@@ -491,7 +389,7 @@ class Stepper:
         read), after :meth:`sense`."""
         row = self.k - self._log_k
         values = [float(value) for value in self._log.measurement[row]]
-        if len(self._train_limits) == 0:
+        if len(self.train_limits) == 0:
             return Measurement._make(values)
         out = TrainMeasurement._make(values)
         out.train = tuple(tuple(float(value) for value in r) for r in self._log.train[row])
@@ -529,7 +427,7 @@ class Stepper:
         """End the episode at step ``k`` with the stop ``code``: raise its StopRun."""
         self._fold()
         self._end(code, k)
-        status, message = episode.outcome(code, self._episode.stop, self, self._controller, k)
+        status, message = outcome.outcome(code, self._episode.stop, self, self._controller, k)
         raise StopRun(status, message)
 
     # --- what the episode logged -----------------------------------------------------------
@@ -547,7 +445,7 @@ class Stepper:
     def world_clearance(self) -> np.ndarray:
         """Per control step, the least gap between a unit and the world's obstacles (m; inf
         for the steps not run, empty without obstacles)."""
-        return self._world.clearance
+        return self.world.clearance
 
     @property
     def ground_masks(self) -> list[int]:
