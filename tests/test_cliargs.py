@@ -78,3 +78,24 @@ def test_a_table_option_setting_one_name_twice_is_refused(opt):
     with pytest.raises((BadInputError, ValueError), match=r"both set 'x'.*give it once") as info:
         run.options_from_argv([flag, "x=1", flag, "x=2"])
     assert f"{flag} x=1.0" in str(info.value) and f"{flag} x=2.0" in str(info.value)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["tt_mujoco.render", "no_such_run"],
+        ["tt_mujoco.identify", "no_such_log.csv"],
+        ["tt_mujoco.excite", "--fit", "L,L"],
+        ["tt_mujoco.bag", "no_such_run"],
+        ["tt_mujoco.compare", "no_such_run"],
+        ["tt_mujoco.run", "--trailers", "0"],
+    ],
+    ids=lambda argv: argv[0],
+)
+def test_every_command_says_its_errors_alike(tmp_path, argv):
+    # one style whichever check refuses: argparse's, the command guard's or the command's own
+    proc = subprocess.run(
+        [sys.executable, "-m", *argv], capture_output=True, text=True, timeout=120, cwd=tmp_path
+    )
+    lines = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2 and len(lines) == 1 and lines[0].startswith("error: "), lines

@@ -464,7 +464,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
 
     def fail(message: str) -> int:
-        print(f"tt_mujoco.bag: {message}", file=sys.stderr)
+        print(f"error: {message}", file=sys.stderr)
         return 2
 
     run_dir: Path = args.run_dir

@@ -571,7 +571,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
 
     def fail(message: str) -> int:
-        print(f"tt_mujoco.identify: {message}", file=sys.stderr)
+        print(f"error: {message}", file=sys.stderr)
         return EXIT_BAD_INPUT
 
     if not all("=" in item for item in args.columns):

@@ -39,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
 
     def fail(message: str, code: int = 2) -> int:
-        print(f"tt_mujoco.render: {message}", file=sys.stderr)
+        print(f"error: {message}", file=sys.stderr)
         return code
 
     run_dir: Path = args.run_dir
