@@ -90,15 +90,14 @@ class EtaScheduler:
     def restore(self, etas: tuple, changes: list[tuple[int, float]], updates: int) -> None:
         """Take the state a compiled episode left: the gains in force (applied to the plant),
         the changes it made, ``(first sample, eta_1)`` each, and how many."""
-        self._plant.set_etas(etas)
-        self.etas, self.eta = etas, etas[0]
+        self._apply(etas, updates)
         self._changes.extend(changes)
-        self.updates += updates
 
-    def _apply(self, etas: tuple) -> None:
+    def _apply(self, etas: tuple, updates: int = 1) -> None:
+        """The gains ``etas`` in force in the plant, after ``updates`` more changes."""
         self._plant.set_etas(etas)
         self.etas, self.eta = etas, etas[0]
-        self.updates += 1
+        self.updates += updates
 
 
 class PathEtaScheduler(EtaScheduler):
