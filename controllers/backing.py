@@ -272,29 +272,28 @@ class HitchCascade(TargetWrapper):
         g = check_config(gains)
         self.target = target
         self.path = target.path
-        self.k_y, self.k_psi, self.k_phi, self.c_max = g["k_y"], g["k_psi"], g["k_phi"], g["c_max"]
-        self.phi_max = math.radians(g["phi_max_deg"])
         self.lengths = [(t.L, t.L0) for t in params.trailers]
-        self.etas = list(params.etas)
+        etas = tuple(params.etas)
+        phi_max = math.radians(g["phi_max_deg"])
         # A wanted hitch angle stays within 80 % of where a run stops as a jackknife (|beta| =
         # |eta phi| = 85 deg: 22.7 deg for the paper's eta = 3).
-        self._inverse = [
+        inverses = [
             SteadyInverse(
                 L,
                 L0,
                 eta,
-                min(self.phi_max, 0.8 * math.radians(jackknife_phi_deg(eta))),
+                min(phi_max, 0.8 * math.radians(jackknife_phi_deg(eta))),
                 curvature=steady_axle_curvature,
             )
-            for (L, L0), eta in zip(self.lengths, self.etas, strict=True)
+            for (L, L0), eta in zip(self.lengths, etas, strict=True)
         ]
-        self.preview = g["preview"] * (len(self.lengths) - 1)
+        #: What the step reads (:func:`tt_mujoco.sim.loop.target_step.cascade_step_of`)
         self.constants = CascadeConstants(
-            gains=(self.k_y, self.k_psi, self.k_phi, self.c_max),
-            preview=self.preview,
+            gains=(g["k_y"], g["k_psi"], g["k_phi"], g["c_max"]),
+            preview=g["preview"] * (len(self.lengths) - 1),
             lengths=tuple(self.lengths),
-            etas=tuple(self.etas),
-            ends=tuple(inverse.ends for inverse in self._inverse),
+            etas=etas,
+            ends=tuple(inverse.ends for inverse in inverses),
         )
 
     @property

@@ -88,7 +88,7 @@ def test_the_hitch_loop_sets_the_rate_it_asks_for():
     me = stepped.built.new_plant().measure()
     me = me._replace(phi=me.phi + 0.1, v=-0.5, omega=0.2)
     omega_d, _ = target_step.cascade_step_of(stepped.record, me, (), [me.phi], -0.5)
-    phi_dot = hitch_rates([me.phi], -0.5, omega_d, cascade.lengths, cascade.etas)[0][0]
+    phi_dot = hitch_rates([me.phi], -0.5, omega_d, cascade.lengths, cascade.constants.etas)[0][0]
     gain = DEFAULT_GAINS["k_phi"]
     wanted = stepped.record.wanted[0]
     assert phi_dot == pytest.approx(-gain * 0.5 * (me.phi - wanted), rel=1e-9)
