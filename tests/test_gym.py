@@ -311,3 +311,11 @@ def test_a_users_path_that_fails_mid_episode_ends_it_as_failed(tmp_path):
         if terminated or truncated:
             break
     assert terminated and info["status"] == "failed" and "no pose here" in info["message"]
+
+
+def test_reset_refuses_an_option_it_does_not_know():
+    # a misspelt option was dropped in silence: the episode started as if it had not been given
+    env = gym_env.TractorTrailerEnv(plant="reduced", duration=1.0)
+    with pytest.raises(ValueError, match=r"'phi0' is not a reset option \(allowed: phi0_deg\)"):
+        env.reset(seed=0, options={"phi0": 20.0})
+    env.reset(seed=0, options={"phi0_deg": 5.0})  # the one it takes

@@ -132,3 +132,8 @@ def test_made_by_its_id():
     assert set(obs) == {"observation", "achieved_goal", "desired_goal"}
     assert "is_success" in info
     env.close()
+
+
+def test_reset_refuses_options_it_does_not_take(env):
+    with pytest.raises(ValueError, match=r"options=\{'phi0_deg': 5\} is not allowed: this env's"):
+        env.reset(seed=1, options={"phi0_deg": 5})

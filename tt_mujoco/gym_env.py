@@ -87,6 +87,7 @@ import mujoco
 from tt_mujoco import sim
 from tt_mujoco.defaults import MAX_SPEED
 from tt_mujoco.reference.feedback import path_errors
+from tt_mujoco.registry import shown
 from tt_mujoco.schema import Schema
 from tt_mujoco.sim.build import drawn_polyline
 from tt_mujoco.sim.loop.episode import has_closed_form
@@ -100,6 +101,7 @@ __all__ = [
     "ENV_ID",
     "OBSERVATION_NAMES",
     "PATH_TASK_SCALES",
+    "RESET_OPTIONS",
     "TASKS",
     "TractorTrailerEnv",
     "observation_bounds",
@@ -107,6 +109,9 @@ __all__ = [
 ]
 
 ENV_ID = "tt_mujoco/TractorTrailer-v0"
+
+#: What ``reset(options=...)`` may hold.
+RESET_OPTIONS = ("phi0_deg",)
 
 
 def observation_names(n_trailers: int = 1) -> tuple[str, ...]:
@@ -288,6 +293,12 @@ class TractorTrailerEnv(gymnasium.Env):
         ``phi0_deg``, the initial articulation (default the scenario's)."""
         if seed is None and not self._seeded:
             seed = self.scenario.seed
+        unknown = sorted(set(options or {}) - set(RESET_OPTIONS))
+        if unknown:
+            raise ValueError(
+                f"options={shown(options)} is not allowed: {unknown[0]!r} is not a reset "
+                f"option (allowed: {', '.join(RESET_OPTIONS)})"
+            )
         super().reset(seed=seed)
         self._seeded = True
         s = self.scenario

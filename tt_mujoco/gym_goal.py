@@ -52,6 +52,7 @@ from tt_mujoco.gym_env import (
     observation_names,
     scenario_overrides,
 )
+from tt_mujoco.registry import shown
 from tt_mujoco.world.builtin import parse_world
 from tt_mujoco.world.plan import PLAN, PlanError, train_length
 
@@ -156,7 +157,13 @@ class TractorTrailerGoalEnv(gymnasium.Env):
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Start an episode: at the start of ``seed`` (a run's of that seed) where the planner
         finds a one-leg plan from it, else, as without a seed, at the next start drawn from
-        the env's random stream that has one (``info["seed"]`` names it)."""
+        the env's random stream that has one (``info["seed"]`` names it). It takes no
+        ``options``."""
+        if options:
+            raise ValueError(
+                f"options={shown(options)} is not allowed: this env's reset takes none (its start "
+                "is drawn in the world, by the seed)"
+            )
         if seed is None and not self._seeded:
             seed = self.scenario.seed
         super().reset(seed=seed)
