@@ -134,6 +134,41 @@ def test_a_full_disk_is_one_message_and_the_written_files_stay_complete(tmp_path
     assert len(outputs.read_timeseries(out / "timeseries.parquet")["t"]) == 501
 
 
+@pytest.mark.parametrize("full_after", [0, 2])
+def test_a_disk_that_fills_during_the_run_is_one_message_and_keeps_the_rows_that_fit(
+    tmp_path, capsys, full_after
+):
+    # the rows' background writer raised at the end and the command took it for a bug of its
+    # own (exit 70); a disk full before the first block leaves nothing behind
+    import errno
+
+    from tt_mujoco import run
+    from tt_mujoco.sim.loop import checkpoint
+
+    real = checkpoint.Checkpoint.append
+    calls = []
+
+    def fills(self, *parts):
+        calls.append(1)
+        if len(calls) > full_after:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real(self, *parts)
+
+    out = tmp_path / "run"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(checkpoint.Checkpoint, "append", fills)
+        argv = ["--duration", "30", "--plant", "reduced", "--no-video", "--no-plots"]
+        code = run.main([*argv, "--quiet", "--out", str(out)])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "No space left on device" in err, err
+    if full_after == 0:
+        assert "none reached it; nothing was written" in err and not out.exists()
+    else:
+        rows = checkpoint.read_checkpoint(out / "timeseries.partial.arrows")
+        assert f"the {len(rows['t'])} rows that reached it are kept" in err
+        assert len(rows["t"]) > 0 and not (out / "metrics.json").exists()
+
+
 def test_a_killed_run_keeps_the_rows_it_computed(tmp_path):
     # A long run streams its rows to timeseries.partial.arrows block by block; SIGKILL it part
     # way and the folder keeps those rows, labelled by the claim file as incomplete.

@@ -496,6 +496,8 @@ def _main(argv: list[str] | None) -> int:
         return _abandon(out, created, live, f"{err}: run abandoned", EXIT_INTERRUPTED)
     except KeyboardInterrupt:
         return _interrupted(out, created, live)
+    except OSError as err:  # the rows on their way to the disk: a full disk, a quota
+        return _rows_unwritable(out, created, live, err)
     finally:
         watchdog.disarm()  # the outputs that follow are not the simulation's time
         if bar is not None:
@@ -565,6 +567,23 @@ def _abandon(out: Path, created: bool, live, message: str, code: int) -> int:
         remove_if_empty(out)
     nothing = "nothing was written" if not out.exists() or not any(out.iterdir()) else ""
     return _fail(f"{message}{'; ' + nothing if nothing else ''}", code)
+
+
+def _rows_unwritable(out: Path, created: bool, live, err: OSError) -> int:
+    """The rows the run wrote as it went could not reach the disk (it is full, a quota): one
+    line, exit 2, the rows that did kept; none reached it: nothing left behind."""
+    t = _kept_rows(out).get("t", ())
+    why = f"the run's rows cannot be written to {out}/: {err.strerror}"
+    if len(t) == 0:
+        return _abandon(out, created, live, f"{why}; none reached it", EXIT_BAD_INPUT)
+    if live is not None:
+        live.close()
+    release_folder(out)
+    kept = f"the {len(t)} rows that reached it are kept in {out / CHECKPOINT_FILE}"
+    return _fail(
+        f"{why}; {kept}; the folder has no metrics.json, so it is labelled incomplete",
+        EXIT_BAD_INPUT,
+    )
 
 
 def _kept_rows(out: Path) -> dict:
