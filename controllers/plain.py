@@ -154,9 +154,9 @@ class PlainLawController(Controller):
 
 
 def _as_stored(out):
-    """A law's two torques as its compiled form's C entry stores them: a bool or an integer
-    (within 64 bits, numba's) as a float, so that both loops take the same torques; anything
-    else as returned, for the loop's check to refuse."""
+    """A law's two torques as its compiled form's C entry stores them: a bool (Python's, an
+    ``Integral``, or NumPy's) or an integer within numba's 64 bits as a float, so that both
+    loops take the same torques; anything else as returned, for the loop's check to refuse."""
     if type(out) is not tuple or len(out) != 2:
         return out
     return tuple(

@@ -41,6 +41,7 @@ __all__ = [
     "is_hook",
     "load_hook",
     "normalise_hook",
+    "real_number",
     "shown",
 ]
 
@@ -85,11 +86,17 @@ def shown(value, limit: int = 80) -> str:
     return f"{text[: limit - 30]}... ({len(text)} characters)"
 
 
+def real_number(value) -> bool:
+    """Whether ``value`` is a real number, finite or not (a NumPy scalar included; a bool,
+    Python's or NumPy's, is not: NumPy's is no ``Real`` at all)."""
+    return isinstance(value, Real) and not isinstance(value, bool)
+
+
 def finite_number(value) -> float | None:
-    """``value`` as a float if it is a finite real number (a NumPy scalar included), else
-    None: the one test of "a number" for what a user's code returns. A bool, a string, a
-    complex, a NaN or an infinity, an integer beyond a float and any container are not."""
-    if isinstance(value, bool) or not isinstance(value, Real) or type(value).__name__ == "bool_":
+    """``value`` as a float if it is a finite real number (:func:`real_number`), else None:
+    the one test of "a number" for what a user's code returns. A bool, a string, a complex,
+    a NaN or an infinity, an integer beyond a float and any container are not."""
+    if not real_number(value):
         return None
     try:
         number = float(value)

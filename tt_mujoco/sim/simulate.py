@@ -7,7 +7,7 @@ import signal
 import threading
 import time
 from dataclasses import dataclass, field
-from numbers import Integral, Real
+from numbers import Integral
 
 import numpy as np
 
@@ -15,7 +15,7 @@ from tt_mujoco.analysis.metrics import compute_metrics
 from tt_mujoco.defaults import MAX_SPEED
 from tt_mujoco.guard import control_signal, noting_interrupts, users_failure
 from tt_mujoco.registry import describe_failure as usercode_failure
-from tt_mujoco.registry import finite_number, shown
+from tt_mujoco.registry import finite_number, real_number, shown
 from tt_mujoco.sim.build import (
     PLAN_FORWARD_DRIVE,
     REVERSING_DRIVES,
@@ -208,7 +208,7 @@ def controller_report(controller) -> tuple[dict, str | None]:
             raise TypeError(f"report() returned {shown(report)}, not a dict")
         clean = {}
         for key, value in report.items():
-            if value is not None and not (isinstance(value, Real) and not isinstance(value, bool)):
+            if value is not None and not real_number(value):
                 raise TypeError(f"report() value {key}={shown(value)} is not a number or None")
             number = None if value is None else finite_number(value)  # NaN, inf: None
             if number is not None and isinstance(value, Integral):

@@ -13,10 +13,9 @@ from __future__ import annotations
 
 import copy
 import traceback
-from numbers import Real
 
 from tt_mujoco.guard import users_failure
-from tt_mujoco.registry import describe_failure, finite_number, shown
+from tt_mujoco.registry import describe_failure, finite_number, real_number, shown
 from tt_mujoco.sim.parts.plant import StopRun
 
 __all__ = [
@@ -63,7 +62,7 @@ def _two_numbers(out, who: str, what: str, t: float, names: tuple[str, str]):
     if fast is not None:
         return fast
     pair = _sequence_of(out, 2)
-    if pair is None or not all(_real(v) for v in pair):
+    if pair is None or not all(real_number(v) for v in pair):
         raise StopRun(
             "failed",
             f"{who} returned {shown(out)} at t={t:.3f} s: {what} must return two numbers "
@@ -76,13 +75,6 @@ def _two_numbers(out, who: str, what: str, t: float, names: tuple[str, str]):
             "failed", f"{who} returned {said} at t={t:.3f} s: both must be finite numbers"
         )
     return numbers[0], numbers[1]
-
-
-def _real(value) -> bool:
-    """A real number, finite or not, and not a bool (Python's or NumPy's)."""
-    return (
-        isinstance(value, Real) and not isinstance(value, bool) and type(value).__name__ != "bool_"
-    )
 
 
 def _said(value) -> str:
@@ -132,7 +124,7 @@ def checked_signals(signals: dict, who: str, t: float) -> dict[str, float]:
                 "digits and _, starting with a letter",
             )
         try:
-            number = float(value) if _real(value) else None
+            number = float(value) if real_number(value) else None
         except OverflowError:
             number = None
         if number is None:

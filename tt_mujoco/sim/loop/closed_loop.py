@@ -104,7 +104,7 @@ class Push(NamedTuple):
     mz: float
 
 
-#: where the wheels' rates are in the measurement, and a trailer's gain in a train's row
+#: where the wheels' rates are in the measurement
 WHEEL_RATES = tuple(measure.Measurement._fields.index(f"theta_{w}_dot") for w in ("r", "l"))
 
 

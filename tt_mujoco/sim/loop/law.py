@@ -1,6 +1,6 @@
 """The law's part of the step: its record, its step, and what it gives back to the controller.
 
-Three kinds of law run between the step's halves (:data:`LawKind` in the record's ``kind``):
+Three kinds of law run between the step's halves (the record's ``kind``):
 
 - a **built-in law** (:data:`LAW_CLASSES`: ISMC-STA, PID, FBL, SMC) is a plain-number function
   of its module, ``LAW(dt, tracking, model, state, gains, saturation) -> LawStep``, whose gains
@@ -32,10 +32,13 @@ from tt_mujoco.vehicle import reduced, train
 from tt_mujoco.vehicle import steering as steering_math
 
 __all__ = [
+    "ETA_COLUMN",
     "LAWS",
     "LAW_CLASSES",
+    "NOMINAL_SINGULAR",
     "PYTHON",
     "USER",
+    "follow_train",
     "hand_law_back",
     "law_record",
     "law_step",
@@ -232,7 +235,6 @@ def law_record(controller, nominal, user, steering, python) -> records.LawRecord
     controller's nominal parameters; ``steering``: the plant's steering record."""
     from tt_mujoco.controllers.plain import PlainLawController
     from tt_mujoco.sim.parts.measure import TRAIN_FIELDS
-    from tt_mujoco.vehicle import reduced
 
     gains, state, flags = np.zeros(0), np.zeros(0), (0.0, 0.0, 0.0)
     user_gains, user_state, anti_windup = np.zeros(1), np.zeros(1), False

@@ -73,8 +73,8 @@ class PythonLaw:
     def __init__(self, stepper, controller):
         self.stepper, self.controller = stepper, controller
         self.who = usercode.controller_label(stepper.built)
-        # the controller is given its own copy: what it changes in it stays with it
-        self.path, self.dt = usercode.users_copy(stepper.built.path), stepper.dt
+        # the episode's copy of the path (Stepper.given_path): what it changes stays with it
+        self.path, self.dt = stepper.given_path, stepper.dt
         self.steering = None  # the plant record's (Stepper.begin)
         self.told = -1  # the schedule's updates the controller has been told of
         self.steering_changed = getattr(controller, "steering_changed", None)
