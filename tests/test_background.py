@@ -1,4 +1,5 @@
-"""tt_mujoco.background: a call in a forked process hands back its value or its exception."""
+"""tt_mujoco.background: a worker forked ahead of its call hands back its value or its
+exception, and never outlives its caller."""
 
 from __future__ import annotations
 
@@ -9,7 +10,9 @@ import time
 import numpy as np
 import pytest
 
-from tt_mujoco.background import BackgroundCall, BackgroundError
+from tt_mujoco.background import BackgroundError, Worker
+
+_PREPARED = []
 
 
 def _total(values, scale=1.0):
@@ -24,31 +27,94 @@ def _pid():
     return os.getpid()
 
 
+def _prepare():
+    _PREPARED.append(os.getpid())
+
+
+def _prepared():
+    return list(_PREPARED)
+
+
+def _prepare_fails():
+    raise RuntimeError("no matplotlib here")
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
 @pytest.mark.parametrize("forked", [True, False])
 def test_the_value_comes_back_from_either_route(forked):
-    values = np.arange(10.0)  # not pickled on the way in: the child has the caller's memory
-    assert BackgroundCall(_total, values, scale=2.0, forked=forked).result() == 90.0
-    runs_here = BackgroundCall(_pid, forked=forked).result() == os.getpid()
-    assert runs_here is not forked
+    worker = Worker(forked=forked)
+    worker.call(_total, np.arange(10.0), scale=2.0)  # pickled on the way in
+    assert worker.result() == 90.0
+    worker = Worker(forked=forked)
+    worker.call(_pid)
+    assert (worker.result() == os.getpid()) is not forked
+    assert worker.forked is forked
+
+
+def test_prepare_runs_in_the_worker_before_the_call():
+    worker = Worker(_prepare, forked=True)
+    worker.call(_prepared)
+    assert worker.result() not in ([], [os.getpid()])  # the worker's own pid
+    assert _PREPARED == []  # not in the caller
 
 
 @pytest.mark.parametrize("forked", [True, False])
 def test_the_exception_is_raised_in_the_caller(forked):
-    call = BackgroundCall(_fails, "bad value 3", forked=forked)
+    worker = Worker(forked=forked)
+    worker.call(_fails, "bad value 3")
     with pytest.raises(ValueError, match="bad value 3"):
-        call.result()
+        worker.result()
 
 
-def test_a_child_that_dies_without_answering_says_so():
-    call = BackgroundCall(time.sleep, 60.0, forked=True)
-    os.kill(call._process.pid, signal.SIGKILL)
-    with pytest.raises(BackgroundError, match="without an answer"):
-        call.result()
+def test_a_prepare_that_fails_answers_the_call_with_its_error():
+    worker = Worker(_prepare_fails, forked=True)
+    worker.call(_total, [1.0])
+    with pytest.raises(RuntimeError, match="no matplotlib here"):
+        worker.result()
 
 
-def test_cancel_ends_a_running_child():
-    call = BackgroundCall(time.sleep, 60.0, forked=True)
-    process = call._process
-    call.cancel()
-    assert not process.is_alive()
-    call.cancel()  # twice is harmless
+def test_a_worker_takes_one_call_and_an_answer_needs_a_call():
+    worker = Worker(forked=False)
+    with pytest.raises(RuntimeError, match="before call"):
+        worker.result()
+    worker.call(_pid)
+    with pytest.raises(RuntimeError, match="one call"):
+        worker.call(_pid)
+
+
+def test_a_worker_that_dies_without_answering_says_so():
+    worker = Worker(forked=True)
+    worker.call(time.sleep, 60.0)
+    os.kill(worker._process, signal.SIGKILL)
+    with pytest.raises(BackgroundError, match=r"without an answer.*signal 9"):
+        worker.result()
+
+
+def test_cancel_ends_a_running_worker():
+    worker = Worker(forked=True)
+    pid = worker._process
+    worker.call(time.sleep, 60.0)
+    worker.cancel()
+    assert not _alive(pid)
+    worker.cancel()  # twice is harmless
+
+
+def test_a_worker_whose_caller_goes_away_ends_itself():
+    """The caller's end of the pipe closing (its process ending) ends a waiting worker."""
+    worker = Worker(forked=True)
+    pid = worker._process
+    worker._channel.close()  # as the caller's exit would
+    deadline = time.monotonic() + 10.0
+    while time.monotonic() < deadline:
+        done, _ = os.waitpid(pid, os.WNOHANG)
+        if done:
+            break
+        time.sleep(0.01)
+    assert done == pid

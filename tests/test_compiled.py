@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -776,3 +777,41 @@ def test_a_run_the_python_loop_takes_sooner_judges_no_cache_during_the_run(monke
     (tmp_path / compiled.COMPILE_FAILED).unlink()
     compiled._compile_at_exit()
     assert started == [1] and judged == [1]
+
+
+def test_the_digest_is_found_by_the_sources_stamp_without_reading_the_sources(
+    monkeypatch, tmp_path
+):
+    """A process that exits judges the cache by its folder, keyed by source_digest: worked
+    out once per version of the files, then found by their stamp (sizes and times)."""
+    stamps = tmp_path / "stamps"
+    compiled._digest_by_stamp.cache_clear()
+    first = compiled._digest_by_stamp(stamps)
+    assert first == compiled.source_digest()
+    assert (stamps / compiled.sources_stamp()).read_text().strip() == first
+
+    def unread():
+        raise AssertionError("the sources were read again")
+
+    monkeypatch.setattr(compiled, "source_digest", unread)
+    compiled._digest_by_stamp.cache_clear()
+    assert compiled._digest_by_stamp(stamps) == first
+    (stamps / compiled.sources_stamp()).write_text("not a digest\n")  # damaged: worked out again
+    monkeypatch.setattr(compiled, "source_digest", lambda: "0123456789abcdef")
+    compiled._digest_by_stamp.cache_clear()
+    assert compiled._digest_by_stamp(stamps) == "0123456789abcdef"
+    compiled._digest_by_stamp.cache_clear()
+
+
+def test_the_sources_stamp_changes_with_a_file_of_the_package():
+    import tt_mujoco.viz
+
+    path = Path(tt_mujoco.viz.__file__)
+    before = path.stat()
+    stamp = compiled.sources_stamp.__wrapped__()
+    try:
+        os.utime(path, ns=(before.st_atime_ns, before.st_mtime_ns + 1_000_000))
+        assert compiled.sources_stamp.__wrapped__() != stamp
+    finally:
+        os.utime(path, ns=(before.st_atime_ns, before.st_mtime_ns))
+    assert compiled.sources_stamp.__wrapped__() == stamp

@@ -199,7 +199,7 @@ def test_interrupted_output_leaves_no_metrics(tmp_path, monkeypatch, capsys):
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(plots, "plot_run", interrupted)
+    monkeypatch.setattr(plots, "run_pngs", interrupted)
     out = tmp_path / "run"
     code = run.main(["--duration", "1", "--no-video", "--quiet", "--out", str(out)])
     assert code == run.EXIT_INTERRUPTED
@@ -217,11 +217,10 @@ def test_exception_inside_write_outputs_after_the_csv(tmp_path, monkeypatch):
     def broken(*args, **kwargs):
         raise RuntimeError("disk on fire")
 
-    monkeypatch.setattr(plots, "plot_run", broken)
+    monkeypatch.setattr(plots, "run_pngs", broken)
     result = simulate(Scenario(duration=0.5))
     with pytest.raises(RuntimeError, match="disk on fire"):
-        run.write_outputs(result, tmp_path, video=False, plots=True, camera="follow", fps=30,
-                          quiet=True)  # fmt: skip
+        run.write_outputs(result, tmp_path, {"video": False, "plots": True, "quiet": True})
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         "reference_path.parquet",
         "timeseries.parquet",

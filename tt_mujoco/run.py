@@ -25,6 +25,7 @@ import signal
 import sys
 import tempfile
 import time
+from collections.abc import Mapping
 from pathlib import Path
 from typing import NamedTuple
 
@@ -265,14 +266,9 @@ def _output_dir(out: Path | None, scenario: Scenario) -> tuple[Path, bool]:
 def write_outputs(
     result,
     out: Path,
-    video: bool,
-    plots: bool,
-    camera: str,
-    fps: float,
-    quiet,
+    shown: Mapping | None = None,
     config_toml: str | None = None,
-    timeseries_format: str = "parquet",
-    mcap: bool = False,
+    figures=None,
 ):
     """Write ``config.toml`` (if given), the time series, figures, video and, last,
     ``metrics.json`` into ``out``.
@@ -280,94 +276,58 @@ def write_outputs(
     Every file appears complete or not at all: text files through a temporary file and a
     rename; figures and video are made in a hidden staging folder and renamed into ``out``.
     An interruption therefore leaves complete files and no ``metrics.json``.
+
+    Parameters
+    ----------
+    result : Result
+        The run's (:func:`tt_mujoco.sim.simulate`).
+    out : Path
+        Its folder, claimed.
+    shown : mapping, optional
+        The output options by name (:data:`OUTPUTS`: ``video``, ``plots``, ``camera``, ...);
+        those not given take their defaults.
+    config_toml : str, optional
+        The run's ``config.toml``.
+    figures : RunFigures, optional
+        Workers forked for the figures when the run started
+        (:class:`tt_mujoco.viz.run_figures.RunFigures`); made here if not given.
+
+    Returns
+    -------
+    (list of Path, list of str)
+        The files written and the run's notes.
     """
-    written = []
+    shown = {**OUTPUTS.defaults(), **(shown or {})}
     notes = list(result.notes)  # how the run ran (the loop, backing up), then the outputs'
-    if config_toml is not None:
-        atomic_write(out / CONFIG_FILE, config_toml)
-        written.append(out / CONFIG_FILE)
-    if result.details is not None:  # the traceback of the user code that stopped the run
-        atomic_write(out / ERROR_LOG, result.details)
-        written.append(out / ERROR_LOG)
-    # The run's own reference path: render and compare read it, not a file that may change.
-    line = result.reference_polyline
-    write_timeseries(out / REFERENCE_FILE, {"x": line[:, 0], "y": line[:, 1]}, ("x", "y"), UNITS)
-    written.append(out / REFERENCE_FILE)
-    ts_file = out / f"timeseries.{timeseries_format}"
-    extra = train_columns(result.scenario.plant_params().n_trailers)
-    extra += tuple(name for name in result.timeseries if name.startswith("ctrl_"))
-    units = {**UNITS, **{name: unit_of(name) or "" for name in extra}}
-    write_timeseries(ts_file, result.timeseries, (*COLUMNS, *extra), units)
-    (out / CHECKPOINT_FILE).unlink(missing_ok=True)  # the complete file replaces it
-    written.append(ts_file)
-    world = None
-    if result.scenario.world != "none":  # its copy: re-rendering reads it, not the file
-        from tt_mujoco.world.builtin import KEPT_WORLD, kept_world_toml, parse_world
-
-        world = parse_world(result.scenario.world)
-        atomic_write(out / KEPT_WORLD, kept_world_toml(world))
-        written.append(out / KEPT_WORLD)
-    if mcap:
-        from tt_mujoco.bag import BAG_FILE, write_bag
-
-        scenario = result.scenario
-        written.append(
-            write_bag(
-                result.timeseries,
-                result.reference_polyline,
-                scenario.plant_params(),
-                out / BAG_FILE,
-                bool(scenario.reverse),
-                world,
-            )
-        )
+    written, world = _write_data_files(result, out, shown, config_toml)
+    plots, video = shown["plots"], shown["video"]
     if len(result.timeseries["t"]) < 2 and (plots or video):
         # A run that stopped at its first step has one sample: nothing to draw.
         notes.append("figures and video skipped: the run has fewer than 2 samples")
         plots = video = False
-    from tt_mujoco.background import BackgroundCall
-    from tt_mujoco.viz import render
-
+    if not plots and figures is not None:
+        figures.cancel()
+        figures = None
     staging = Path(tempfile.mkdtemp(dir=out, prefix=STAGING))  # this run's own
-    figures = None
     try:
-        if plots:  # drawn in a forked process while the video renders here
-            from tt_mujoco.viz import plots as plots_mod  # matplotlib: only where it draws
+        if plots:  # drawn by a forked worker while the video renders here
+            if figures is None:
+                from tt_mujoco.viz.run_figures import RunFigures
 
-            figures = BackgroundCall(
-                plots_mod.plot_run,
-                result.timeseries,
-                result.reference_polyline,
-                staging,
-                params=result.scenario.plant_params(),
-                world=world,
-                forked=None if video else False,  # nothing to overlap without a video
-            )
+                figures = RunFigures()
+            if not figures.asked:
+                params = result.scenario.plant_params()
+                figures.draw(result.timeseries, result.reference_polyline, params, world)
         if video:
-            try:
-                info, outcome = render.run_labels(
-                    result.config["scenario"], result.status, result.message
-                )
-                path = render.render_video(
-                    result.timeseries,
-                    result.scenario.plant_params(),
-                    result.reference_polyline,
-                    staging / "video.mp4",
-                    camera=camera,
-                    fps=fps,
-                    progress=not quiet,
-                    info=info,
-                    outcome=outcome,
-                    terrain=result.scenario.terrain,
-                    world=world,
-                )
-                written.append(publish_new(Path(path), out / "video.mp4"))
-            except render.RenderUnavailable as err:  # no GL must not lose the results
-                notes.append(f"video skipped: {err}")
+            made, note = _render_video(result, staging, shown, world)
+            written += [publish_new(made, out / "video.mp4")] if made is not None else []
+            notes += [note] if note is not None else []
         if figures is not None:
-            made = figures.result()
+            pngs = figures.result()
             figures = None
-            written += [publish_new(Path(f), out / Path(f).name) for f in made]
+            for name, png in pngs.items():
+                (staging / name).write_bytes(png)
+                written.append(publish_new(staging / name, out / name))
     finally:
         if figures is not None:
             figures.cancel()
@@ -381,6 +341,76 @@ def write_outputs(
     write_json(out / "metrics.json", doc, strict=True)
     written.append(out / "metrics.json")
     return written, notes
+
+
+def _write_data_files(result, out: Path, shown: Mapping, config_toml: str | None):
+    """``config.toml``, the error log, the reference path, the time series, the world and the
+    MCAP file: ``(written, world)``."""
+    written = []
+    if config_toml is not None:
+        atomic_write(out / CONFIG_FILE, config_toml)
+        written.append(out / CONFIG_FILE)
+    if result.details is not None:  # the traceback of the user code that stopped the run
+        atomic_write(out / ERROR_LOG, result.details)
+        written.append(out / ERROR_LOG)
+    # The run's own reference path: render and compare read it, not a file that may change.
+    line = result.reference_polyline
+    write_timeseries(out / REFERENCE_FILE, {"x": line[:, 0], "y": line[:, 1]}, ("x", "y"), UNITS)
+    written.append(out / REFERENCE_FILE)
+    ts_file = out / f"timeseries.{shown['timeseries_format']}"
+    extra = train_columns(result.scenario.plant_params().n_trailers)
+    extra += tuple(name for name in result.timeseries if name.startswith("ctrl_"))
+    units = {**UNITS, **{name: unit_of(name) or "" for name in extra}}
+    write_timeseries(ts_file, result.timeseries, (*COLUMNS, *extra), units)
+    (out / CHECKPOINT_FILE).unlink(missing_ok=True)  # the complete file replaces it
+    written.append(ts_file)
+    world = None
+    if result.scenario.world != "none":  # its copy: re-rendering reads it, not the file
+        from tt_mujoco.world.builtin import KEPT_WORLD, kept_world_toml, parse_world
+
+        world = parse_world(result.scenario.world)
+        atomic_write(out / KEPT_WORLD, kept_world_toml(world))
+        written.append(out / KEPT_WORLD)
+    if shown["mcap"]:
+        from tt_mujoco.bag import BAG_FILE, write_bag
+
+        scenario = result.scenario
+        written.append(
+            write_bag(
+                result.timeseries,
+                result.reference_polyline,
+                scenario.plant_params(),
+                out / BAG_FILE,
+                bool(scenario.reverse),
+                world,
+            )
+        )
+    return written, world
+
+
+def _render_video(result, staging: Path, shown: Mapping, world):
+    """The run's video into ``staging``: ``(path, None)``, or ``(None, note)`` where no
+    OpenGL renders it (the results are not lost for it)."""
+    from tt_mujoco.viz import render
+
+    try:
+        info, outcome = render.run_labels(result.config["scenario"], result.status, result.message)
+        path = render.render_video(
+            result.timeseries,
+            result.scenario.plant_params(),
+            result.reference_polyline,
+            staging / "video.mp4",
+            camera=shown["camera"],
+            fps=shown["fps"],
+            progress=not shown["quiet"],
+            info=info,
+            outcome=outcome,
+            terrain=result.scenario.terrain,
+            world=world,
+        )
+    except render.RenderUnavailable as err:
+        return None, f"video skipped: {err}"
+    return Path(path), None
 
 
 def _progress_bar(total_label: str, quiet: bool):
@@ -483,11 +513,21 @@ def _main(argv: list[str] | None) -> int:
             lambda signum: _killed(out, signum),
             lambda code: _exited_early(out, code),
         )
+    # Forked now (before any thread starts), the figures' worker imports matplotlib while the
+    # simulation runs, and draws while the metrics are computed.
+    figures, on_rows = _figure_worker(built) if shown["plots"] and live is None else (None, None)
     update, bar = _progress_bar("simulating", shown["quiet"] or shown["viewer"])
     try:
         # Rows reach the disk every 8192 steps while the run goes on: a killed run keeps them.
         checkpoint = out / CHECKPOINT_FILE
-        result = sim.simulate(built, progress=update, on_step=live, checkpoint=checkpoint)
+        try:
+            result = sim.simulate(
+                built, progress=update, on_step=live, checkpoint=checkpoint, on_rows=on_rows
+            )
+        except BaseException:
+            if figures is not None:  # no figures to draw: the workers end
+                figures.cancel()
+            raise
     except (BadInputError, ValueError, reduced.SingularityError) as err:
         return _abandon(out, created, live, str(err), EXIT_BAD_INPUT)
     except viewer_mod.ViewerUnavailable as err:
@@ -503,18 +543,7 @@ def _main(argv: list[str] | None) -> int:
         if bar is not None:
             bar.close()
     try:
-        written, notes = write_outputs(
-            result,
-            out,
-            video=shown["video"],
-            plots=shown["plots"],
-            camera=shown["camera"],
-            fps=shown["fps"],
-            quiet=shown["quiet"],
-            config_toml=config_toml,
-            timeseries_format=shown["timeseries_format"],
-            mcap=shown["mcap"],
-        )
+        written, notes = write_outputs(result, out, shown, config_toml, figures)
     except OSError as err:  # a full disk, a quota, a vanished folder
         if live is not None:
             live.close()
@@ -540,6 +569,26 @@ def _main(argv: list[str] | None) -> int:
     if not result.ok:
         return _fail(f"the run stopped: {result.message}", EXIT_DIVERGED)
     return EXIT_OK
+
+
+def _figure_worker(built):
+    """The run's figure worker (:class:`tt_mujoco.viz.run_figures.RunFigures`), forked before
+    the simulation, and the ``on_rows`` that hands it the time series as the run ends (a run
+    of fewer than 2 samples has none to draw)."""
+    from tt_mujoco.viz.run_figures import RunFigures
+
+    figures = RunFigures()
+    world = None
+    if built.scenario.world != "none":
+        from tt_mujoco.world.builtin import parse_world
+
+        world = parse_world(built.scenario.world)
+
+    def on_rows(ts, reference_polyline) -> None:
+        if len(ts["t"]) >= 2:
+            figures.draw(ts, reference_polyline, built.plant_params, world)
+
+    return figures, on_rows
 
 
 def _check_mcap() -> None:

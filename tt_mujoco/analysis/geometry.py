@@ -21,6 +21,7 @@ __all__ = [
     "Polyline",
     "PolylineProjection",
     "distance_to_polyline",
+    "prepare_search",
     "signed_lateral_error",
     "trailer_offtrack",
     "use_compiled_projection",
@@ -59,6 +60,12 @@ def use_compiled_projection(project_points) -> None:
     None: none."""
     global _COMPILED
     _COMPILED = project_points
+
+
+def prepare_search() -> None:
+    """Import what the vectorised search needs (SciPy's k-d tree): a worker forked ahead of
+    its work (the run's figures) pays for it before the work comes."""
+    from scipy.spatial import cKDTree  # noqa: F401
 
 
 class _Best:

@@ -135,7 +135,9 @@ def python_loop_note(slower: str | None = None, sooner: str | None = None) -> st
     return None
 
 
-def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint=None) -> Result:
+def simulate(
+    scenario: Scenario | Build, progress=None, on_step=None, checkpoint=None, on_rows=None
+) -> Result:
     """Run one scenario. Never raises for a diverging run: see ``Result.status``.
 
     Parameters
@@ -153,6 +155,10 @@ def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint
     checkpoint : path, optional
         A file that receives the logged rows block by block while the run goes on (see
         :meth:`tt_mujoco.sim.loop.stepper.Stepper.reset`).
+    on_rows : callable, optional
+        Called as ``on_rows(timeseries, reference_polyline)`` once the run is over, before its
+        metrics are computed (those of ``Result``; the CLI's figures are drawn meanwhile). It
+        must not change them.
 
     Raises
     ------
@@ -170,10 +176,13 @@ def simulate(scenario: Scenario | Build, progress=None, on_step=None, checkpoint
     if built.plan is not None and built.plan.cusps:
         from tt_mujoco.sim.maneuver import drive  # a maneuver: its legs one after the other
 
-        return drive(built, progress, on_step, checkpoint)
+        result = drive(built, progress, on_step, checkpoint)
+        if on_rows is not None:
+            on_rows(result.timeseries, result.reference_polyline)
+        return result
     rng = np.random.default_rng(built.scenario.seed)
     leg = drive_leg(built, rng, built.scenario.time_limit_s, progress, on_step, checkpoint)
-    return finish(built, *leg)
+    return finish(built, *leg, on_rows=on_rows)
 
 
 def drive_leg(built: Build, rng, time_limit: float, progress=None, on_step=None, checkpoint=None):
@@ -291,12 +300,16 @@ def driven_leg(leg: dict, reverse: bool, metrics: dict, t, status: str, offset=0
     leg["leading_cross_track_rms"] = metrics.get(leading)
 
 
-def finish(built: Build, stepper: Stepper, controller, status, message, wall) -> Result:
+def finish(
+    built: Build, stepper: Stepper, controller, status, message, wall, on_rows=None
+) -> Result:
     """The :class:`Result` of an episode: time series, metrics (built-in and the scenario's
-    extra ones) and the configuration."""
+    extra ones) and the configuration; ``on_rows`` as :func:`simulate`'s."""
     scenario = built.scenario
     ts = stepper.timeseries(release=True)
     polyline, measured_against = reference_polylines(built)
+    if on_rows is not None:
+        on_rows(ts, polyline)
     limit = built.nominal.torque_limit
     if len(ts["t"]):
         metrics = compute_metrics(ts, measured_against, limit, reverse=scenario.reverse)

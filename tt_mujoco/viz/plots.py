@@ -12,8 +12,9 @@ its direction of travel (:func:`distance_to_polyline`).
 
 from __future__ import annotations
 
+import io
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -23,16 +24,17 @@ from tt_mujoco.analysis import metrics
 from tt_mujoco.outputs import save_figure
 from tt_mujoco.sim.loop.timeseries import train_columns
 from tt_mujoco.vehicle.params import Params
+from tt_mujoco.viz import FIGURES
 
 __all__ = [
     "FIGURES",
     "plot_comparison",
     "plot_run",
+    "run_pngs",
     "tracking_errors",
+    "warm_up",
 ]
 
-#: The files :func:`plot_run` writes, in order.
-FIGURES = ("path.png", "errors.png", "torques.png", "articulation.png")
 
 DPI = 120
 TRACTOR_COLOR = "tab:orange"
@@ -284,9 +286,15 @@ def _articulation_figure(c: dict, params: Params) -> Figure:
 
 
 def plot_run(
-    ts: Mapping, reference_polyline, out_dir, params: Params | None = None, world=None
+    ts: Mapping,
+    reference_polyline,
+    out_dir,
+    params: Params | None = None,
+    world=None,
+    names: Sequence[str] = FIGURES,
 ) -> list[Path]:
-    """Write the run's figures (:data:`FIGURES`) into ``out_dir`` (created if missing).
+    """Write the run's figures (:data:`FIGURES`, or those of them in ``names``) into
+    ``out_dir`` (created if missing).
 
     - ``path.png``: reference path, tractor P and trailer P0, equal axes, start (circle) and
       end (square) markers (paper Figs. 2a, 7a, 8a).
@@ -306,19 +314,51 @@ def plot_run(
         The run's parameters (torque limit, eta); ``Params()`` if not given.
     world : World, optional
         The run's obstacles and goal (:mod:`tt_mujoco.world`), drawn in ``path.png``.
+    names : sequence of str, optional
+        The figures to draw (default all of :data:`FIGURES`).
 
     Returns
     -------
     list of Path
         The files written, in :data:`FIGURES` order.
     """
+    figures = _run_figures(ts, reference_polyline, params, world, names)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    return [save_figure(make(), out / name, DPI) for name, make in figures.items()]
+
+
+def run_pngs(
+    ts: Mapping,
+    reference_polyline,
+    params: Params | None = None,
+    world=None,
+    names: Sequence[str] = FIGURES,
+) -> dict[str, bytes]:
+    """The figures :func:`plot_run` writes, as PNG files' bytes by file name (in
+    :data:`FIGURES` order): what a worker drawing them hands back
+    (:mod:`tt_mujoco.viz.run_figures`). The arguments are :func:`plot_run`'s."""
+    pngs = {}
+    for name, make in _run_figures(ts, reference_polyline, params, world, names).items():
+        buffer = io.BytesIO()
+        make().savefig(buffer, format="png", dpi=DPI)
+        pngs[name] = buffer.getvalue()
+    return pngs
+
+
+def _run_figures(ts, reference_polyline, params, world, names) -> dict:
+    """File name -> a function making that figure, for ``names`` in :data:`FIGURES` order;
+    the time series checked first."""
+    unknown = sorted(set(names) - set(FIGURES))
+    if unknown:
+        raise ValueError(f"names={unknown!r} is not allowed: the figures are {FIGURES}")
     p = Params() if params is None else params
     ref = _reference(reference_polyline)
     if ref is None:
         raise ValueError("reference_polyline=None is not allowed: plot_run needs the path")
-    names = ("t", "x", "y", "x0", "y0", "v", "v_d", "omega", "omega_d", "phi", "beta")
-    names += ("T_r", "T_l", "T_r_cmd", "T_l_cmd")
-    c = _columns(ts, names)
+    drawn = ("t", "x", "y", "x0", "y0", "v", "v_d", "omega", "omega_d", "phi", "beta")
+    drawn += ("T_r", "T_l", "T_r_cmd", "T_l_cmd")
+    c = _columns(ts, drawn)
     c.update(
         _columns(ts, tuple(n for n in ("dist_T_r", "dist_T_l") if n in ts))
         if "dist_T_r" in ts
@@ -326,16 +366,24 @@ def plot_run(
     )
     n_trailers = 1 + sum(1 for name in ts if name.startswith("x0_"))
     c.update(_columns(ts, train_columns(n_trailers)) if n_trailers > 1 else {})
-    err = tracking_errors(ts, ref)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    figures = (
-        _path_figure(c, ref, world, p),
-        _errors_figure(c, err),
-        _torques_figure(c, p.torque_limit),
-        _articulation_figure(c, p),
-    )
-    return [save_figure(fig, out / name, DPI) for fig, name in zip(figures, FIGURES, strict=True)]
+    makers = {
+        "path.png": lambda: _path_figure(c, ref, world, p),
+        "errors.png": lambda: _errors_figure(c, tracking_errors(ts, ref)),
+        "torques.png": lambda: _torques_figure(c, p.torque_limit),
+        "articulation.png": lambda: _articulation_figure(c, p),
+    }
+    return {name: makers[name] for name in FIGURES if name in names}
+
+
+def warm_up() -> None:
+    """Draw a small figure with text into memory: matplotlib loads its fonts and renderer on
+    the first draw, which a worker forked ahead of the run's figures does before they come."""
+    fig = Figure(figsize=(2, 1.5), layout="constrained")
+    ax = fig.add_subplot()
+    ax.plot([0.0, 1.0], [0.0, 1.0], label="warm")
+    ax.set_title("warm up")
+    ax.legend(fontsize=8)
+    fig.savefig(io.BytesIO(), format="png", dpi=DPI)
 
 
 def plot_comparison(

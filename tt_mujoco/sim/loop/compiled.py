@@ -353,7 +353,53 @@ def warm_up() -> None:
 def _cache_dir() -> Path:
     """A cache folder per version of every source the kernel compiles."""
     root = os.environ.get("TT_MUJOCO_CACHE", str(Path.home() / ".cache" / "tt_mujoco"))
-    return Path(root) / "numba" / source_digest()
+    return Path(root) / "numba" / _digest_by_stamp(Path(root) / "numba" / "stamps")
+
+
+@functools.cache
+def _digest_by_stamp(stamps: Path) -> str:
+    """:func:`source_digest`, looked up by :func:`sources_stamp` in ``stamps`` where a process
+    has worked it out for the same files before: working it out imports every module the
+    kernel compiles and reads their code (a tenth of a second, paid by every single run as it
+    exits, :func:`_compile_at_exit`), where the stamp only lists the files' sizes and times."""
+    known = stamps / sources_stamp()
+    try:
+        digest = known.read_text().strip()
+    except OSError:
+        digest = ""
+    if len(digest) == 16 and all(c in "0123456789abcdef" for c in digest):
+        return digest
+    digest = source_digest()
+    try:
+        stamps.mkdir(parents=True, exist_ok=True)
+        atomic_write(known, digest + "\n")
+    except OSError:
+        pass  # a read-only cache: worked out again next time
+    return digest
+
+
+@functools.cache
+def sources_stamp() -> str:
+    """A key of every file :func:`source_digest` reads, by name, size and modification time:
+    every Python file of the package and its controllers (a superset of the kernel's), and the
+    interpreter, the machine and the installed numba, llvmlite and MuJoCo. An edit changes
+    it, and the digest is worked out again."""
+    import platform
+    from importlib.util import find_spec
+
+    parts = [sys.version, platform.machine()]
+    for name in ("numba", "llvmlite", "mujoco"):
+        spec = find_spec(name)  # found, not imported
+        parts.append(_file_key(Path(spec.origin)) if spec and spec.origin else f"{name}: none")
+    for package in ("tt_mujoco", "tt_mujoco.controllers"):
+        for folder in find_spec(package).submodule_search_locations:
+            parts += [_file_key(f) for f in sorted(Path(folder).rglob("*.py"))]
+    return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:32]
+
+
+def _file_key(path: Path) -> str:
+    stat = path.stat()
+    return f"{path.resolve()} {stat.st_size} {stat.st_mtime_ns}"
 
 
 @functools.cache

@@ -1,0 +1,88 @@
+"""The run's figures, drawn by a worker forked before its simulation.
+
+A single run's figures took longer than its simulation: importing matplotlib and drawing four
+figures one after the other, after the run. :class:`RunFigures` forks its worker when the run
+starts (:class:`tt_mujoco.background.Worker`); the worker imports matplotlib (and the search
+its errors figure projects with) and draws a first small figure while the simulation runs on
+its own core. Handed the time series as soon as the episode ends, it forks a second worker
+from that warmed state, and the two draw their halves of the figures at once, while the run
+computes its metrics, writes its files and renders its video; the figures come back as PNG
+bytes, which the run writes into its folder.
+This module imports no matplotlib itself: the run's own process never pays for it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from tt_mujoco.background import Worker
+from tt_mujoco.viz import FIGURES
+
+__all__ = ["GROUPS", "RunFigures"]
+
+#: The run's figures (:data:`~tt_mujoco.viz.FIGURES`) in groups of about equal drawing
+#: time, one per process: the errors figure (four panels, and the path errors computed for
+#: them) takes as long as the three others.
+GROUPS = (("errors.png",), ("path.png", "torques.png", "articulation.png"))
+
+
+def _prepare() -> None:
+    from tt_mujoco.analysis import geometry
+    from tt_mujoco.viz import plots
+
+    plots.warm_up()
+    geometry.prepare_search()
+
+
+def _draw(names, ts, reference_polyline, params, world) -> dict[str, bytes]:
+    from tt_mujoco.viz import plots
+
+    return plots.run_pngs(ts, reference_polyline, params=params, world=world, names=names)
+
+
+def _draw_groups(ts, reference_polyline, params, world) -> dict[str, bytes]:
+    """In the warmed worker: the other groups in workers forked from it, the first here."""
+    others = [Worker() for _ in GROUPS[1:]]
+    try:
+        for worker, names in zip(others, GROUPS[1:], strict=True):
+            worker.call(_draw, names, ts, reference_polyline, params, world)
+        pngs = _draw(GROUPS[0], ts, reference_polyline, params, world)
+        for worker in others:
+            pngs.update(worker.result())
+        return pngs
+    finally:
+        for worker in others:
+            worker.cancel()
+
+
+class RunFigures:
+    """The worker for one run's figures, forked now.
+
+    Parameters
+    ----------
+    forked : bool, optional
+        As :class:`~tt_mujoco.background.Worker`'s (default: forked where a core is spare).
+    """
+
+    def __init__(self, forked: bool | None = None):
+        self._worker = Worker(_prepare, forked=forked)
+        self.asked = False
+
+    def draw(self, ts: Mapping, reference_polyline, params=None, world=None) -> None:
+        """Hand the worker this time series (once); returns at once. The arguments are
+        :func:`tt_mujoco.viz.plots.run_pngs`'."""
+        self._worker.call(_draw_groups, ts, reference_polyline, params, world)
+        self.asked = True
+
+    def result(self) -> dict[str, bytes]:
+        """The figures as PNG files' bytes by file name, in :data:`~tt_mujoco.viz.FIGURES`
+        order."""
+        try:
+            pngs = self._worker.result()
+        finally:
+            self.cancel()
+        return {name: pngs[name] for name in FIGURES if name in pngs}
+
+    def cancel(self) -> None:
+        """End the worker if it still runs (the run gave up, or the figures are done)."""
+        self._worker.cancel()
