@@ -13,7 +13,7 @@ from tt_mujoco.controllers import CONTROLLERS
 
 from tt_mujoco.reference.paths import PATHS
 from tt_mujoco.sim import Scenario, build, simulate
-from tt_mujoco.sim.loop import compiled
+from tt_mujoco.sim.loop import cache_key, compiled
 from tt_mujoco.sim.loop.stepper import Stepper
 from tt_mujoco.sim.parts.disturbances import DISTURBANCES
 from tt_mujoco.sim.simulate import run_episode
@@ -785,22 +785,22 @@ def test_the_digest_is_found_by_the_sources_stamp_without_reading_the_sources(
     """A process that exits judges the cache by its folder, keyed by source_digest: worked
     out once per version of the files, then found by their stamp (sizes and times)."""
     stamps = tmp_path / "stamps"
-    compiled._digest_by_stamp.cache_clear()
-    first = compiled._digest_by_stamp(stamps)
-    assert first == compiled.source_digest()
-    assert (stamps / compiled.sources_stamp()).read_text().strip() == first
+    cache_key.digest_by_stamp.cache_clear()
+    first = cache_key.digest_by_stamp(stamps)
+    assert first == cache_key.source_digest()
+    assert (stamps / cache_key.sources_stamp()).read_text().strip() == first
 
     def unread():
         raise AssertionError("the sources were read again")
 
-    monkeypatch.setattr(compiled, "source_digest", unread)
-    compiled._digest_by_stamp.cache_clear()
-    assert compiled._digest_by_stamp(stamps) == first
-    (stamps / compiled.sources_stamp()).write_text("not a digest\n")  # damaged: worked out again
-    monkeypatch.setattr(compiled, "source_digest", lambda: "0123456789abcdef")
-    compiled._digest_by_stamp.cache_clear()
-    assert compiled._digest_by_stamp(stamps) == "0123456789abcdef"
-    compiled._digest_by_stamp.cache_clear()
+    monkeypatch.setattr(cache_key, "source_digest", unread)
+    cache_key.digest_by_stamp.cache_clear()
+    assert cache_key.digest_by_stamp(stamps) == first
+    (stamps / cache_key.sources_stamp()).write_text("not a digest\n")  # damaged: worked out again
+    monkeypatch.setattr(cache_key, "source_digest", lambda: "0123456789abcdef")
+    cache_key.digest_by_stamp.cache_clear()
+    assert cache_key.digest_by_stamp(stamps) == "0123456789abcdef"
+    cache_key.digest_by_stamp.cache_clear()
 
 
 def test_the_sources_stamp_changes_with_a_file_of_the_package():
@@ -808,10 +808,10 @@ def test_the_sources_stamp_changes_with_a_file_of_the_package():
 
     path = Path(tt_mujoco.viz.__file__)
     before = path.stat()
-    stamp = compiled.sources_stamp.__wrapped__()
+    stamp = cache_key.sources_stamp.__wrapped__()
     try:
         os.utime(path, ns=(before.st_atime_ns, before.st_mtime_ns + 1_000_000))
-        assert compiled.sources_stamp.__wrapped__() != stamp
+        assert cache_key.sources_stamp.__wrapped__() != stamp
     finally:
         os.utime(path, ns=(before.st_atime_ns, before.st_mtime_ns))
-    assert compiled.sources_stamp.__wrapped__() == stamp
+    assert cache_key.sources_stamp.__wrapped__() == stamp

@@ -26,13 +26,13 @@ episode (the Python loop): both compute the same numbers bit for bit
 ``TT_MUJOCO_COMPILED=0`` turns it off.
 
 Compiled code is cached on disk under ``$TT_MUJOCO_CACHE`` or ``~/.cache/tt_mujoco``, in a
-folder keyed by :func:`source_digest` (the interpreter, numba, llvmlite and MuJoCo versions and
-every file the kernel compiles: numba's own cache only watches the file of the function it
-caches). Compiling takes seconds, so it never happens in the user's run: the first episode that
-could run compiled finds no whole cache (:func:`not_ready`), starts one background process that
-compiles it, and runs the Python loop (same numbers); later episodes load it, once per process.
-Loading costs about half a second, so a process's first episode, when short
-(:data:`COLD_MIN_STEPS`), runs in the Python loop, which finishes it sooner
+folder keyed by :func:`~tt_mujoco.sim.loop.cache_key.source_digest` (the interpreter, numba,
+llvmlite and MuJoCo versions and every file the kernel compiles: numba's own cache only watches
+the file of the function it caches). Compiling takes seconds, so it never happens in the
+user's run: the first episode that could run compiled finds no whole cache (:func:`not_ready`),
+starts one background process that compiles it, and runs the Python loop (same numbers); later
+episodes load it, once per process. Loading costs about half a second, so a process's first
+episode, when short (:data:`COLD_MIN_STEPS`), runs in the Python loop, which finishes it sooner
 (:func:`loading_pays`). Every episode the Python loop runs says why in the run's notes.
 The kernel runs from a copy of its source inside that folder, so every checkout of the same
 sources shares one cache, and a manifest of the folder's files lets a damaged cache be set
@@ -42,7 +42,6 @@ run itself (the tests and benchmarks).
 
 from __future__ import annotations
 
-import functools
 import hashlib
 import os
 import sys
@@ -52,6 +51,7 @@ import numpy as np
 
 from tt_mujoco.analysis import geometry
 from tt_mujoco.outputs import atomic_write
+from tt_mujoco.sim.loop.cache_key import digest_by_stamp, source_digest
 
 __all__ = [
     "Fallback",
@@ -353,75 +353,7 @@ def warm_up() -> None:
 def _cache_dir() -> Path:
     """A cache folder per version of every source the kernel compiles."""
     root = os.environ.get("TT_MUJOCO_CACHE", str(Path.home() / ".cache" / "tt_mujoco"))
-    return Path(root) / "numba" / _digest_by_stamp(Path(root) / "numba" / "stamps")
-
-
-@functools.cache
-def _digest_by_stamp(stamps: Path) -> str:
-    """:func:`source_digest`, looked up by :func:`sources_stamp` in ``stamps`` where a process
-    has worked it out for the same files before: working it out imports every module the
-    kernel compiles and reads their code (a tenth of a second, paid by every single run as it
-    exits, :func:`_compile_at_exit`), where the stamp only lists the files' sizes and times."""
-    known = stamps / sources_stamp()
-    try:
-        digest = known.read_text().strip()
-    except OSError:
-        digest = ""
-    if len(digest) == 16 and all(c in "0123456789abcdef" for c in digest):
-        return digest
-    digest = source_digest()
-    try:
-        stamps.mkdir(parents=True, exist_ok=True)
-        atomic_write(known, digest + "\n")
-    except OSError:
-        pass  # a read-only cache: worked out again next time
-    return digest
-
-
-@functools.cache
-def sources_stamp() -> str:
-    """A key of every file :func:`source_digest` reads, by name, size and modification time:
-    every Python file of the package and its controllers (a superset of the kernel's), and the
-    interpreter, the machine and the installed numba, llvmlite and MuJoCo. An edit changes
-    it, and the digest is worked out again."""
-    import platform
-    from importlib.util import find_spec
-
-    parts = [sys.version, platform.machine()]
-    for name in ("numba", "llvmlite", "mujoco"):
-        spec = find_spec(name)  # found, not imported
-        parts.append(_file_key(Path(spec.origin)) if spec and spec.origin else f"{name}: none")
-    for package in ("tt_mujoco", "tt_mujoco.controllers"):
-        for folder in find_spec(package).submodule_search_locations:
-            parts += [_file_key(f) for f in sorted(Path(folder).rglob("*.py"))]
-    return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:32]
-
-
-def _file_key(path: Path) -> str:
-    stat = path.stat()
-    return f"{path.resolve()} {stat.st_size} {stat.st_mtime_ns}"
-
-
-@functools.cache
-def source_digest() -> str:
-    """A hash of what the compiled code depends on: the interpreter, the machine, numba's,
-    llvmlite's and MuJoCo's versions, every file the kernel compiles
-    (:func:`tt_mujoco.sim.loop.kernel_sources.source_files`, that module's, this file and the
-    kernel's) and the built-in laws in their order (a law's index is its kind)."""
-    import platform
-    from importlib import metadata
-
-    from tt_mujoco.sim.loop import kernel_sources
-
-    versions = [metadata.version(name) for name in ("numba", "llvmlite", "mujoco")]
-    laws = [f"{law.__module__}.{law.__qualname__}" for law in kernel_sources.LAWS]
-    digest = hashlib.sha256(" ".join([sys.version, platform.machine(), *versions]).encode())
-    digest.update(" ".join(laws).encode())
-    here = Path(__file__).parent
-    sources = (*kernel_sources.source_files(), kernel_sources.__file__, __file__)
-    for name in (*sources, here / "_kernel.py"):
-        digest.update(Path(name).read_bytes())
-    return digest.hexdigest()[:16]
+    return Path(root) / "numba" / digest_by_stamp(Path(root) / "numba" / "stamps")
 
 
 def kernel():

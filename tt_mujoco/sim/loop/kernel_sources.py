@@ -7,8 +7,8 @@ code, every function of the package it names (directly, or as ``module.function`
 the package's modules), and then theirs. A function marked with
 :func:`tt_mujoco.compiled_form.compiled_form` is not followed: the kernel gives it a form of its
 own. :mod:`tt_mujoco.sim.loop._kernel` registers each of :data:`SHARED` with numba, and
-:func:`tt_mujoco.sim.loop.compiled.source_digest` keys the compiled-code cache by the files they are
-defined in (:func:`source_files`): a helper a new part calls is compiled and watched with no
+:func:`tt_mujoco.sim.loop.cache_key.source_digest` keys the compiled-code cache by the files they
+are defined in (:func:`source_files`): a helper a new part calls is compiled and watched with no
 list to keep. Importing this module imports no numba.
 """
 
