@@ -9,7 +9,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from tt_mujoco import outputs, run
+from tt_mujoco import outputs, run, run_outputs
 from tt_mujoco.outputs import read_timeseries
 
 ARGV = ["--plant", "reduced", "--traj", "circle", "--duration", "1", "--no-video", "--no-plots"]
@@ -90,9 +90,9 @@ def test_a_controller_that_fails_during_the_run_keeps_its_rows(tmp_path, capsys,
     assert metrics["status"] == "failed" and metrics["sim_time_s"] == pytest.approx(0.3)
     assert metrics["cross_track_rms"] is not None
     assert not (out / outputs.CLAIM_FILE).exists()
-    assert not (out / run.CHECKPOINT_FILE).exists()
+    assert not (out / run_outputs.CHECKPOINT_FILE).exists()
     if body.startswith(("raise", "sys")):
-        log = (out / run.ERROR_LOG).read_text()
+        log = (out / run_outputs.ERROR_LOG).read_text()
         assert "Traceback" in log and "broken.py" in log
 
 
@@ -228,7 +228,7 @@ def test_a_hung_controller_is_stopped_at_the_time_limit_with_its_rows(tmp_path, 
     assert code == 3 and "passed its time limit of 1.5 s" in err and "broken.py, line 10" in err
     ts = read_timeseries(out / "timeseries.parquet")
     assert len(ts["t"]) == 200
-    assert "TimeLimitExceeded" in (out / run.ERROR_LOG).read_text()
+    assert "TimeLimitExceeded" in (out / run_outputs.ERROR_LOG).read_text()
 
 
 def test_a_sweep_run_that_hangs_is_a_failed_row(tmp_path):
