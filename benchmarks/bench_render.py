@@ -62,7 +62,9 @@ def main() -> None:
     kept = None
     for camera in render.CAMERAS:
         with render.RunRenderer(
-            ts, Params(), polyline, args.width, args.height, 30, camera
+            ts,
+            render.RunScene(Params(), polyline),
+            render.VideoFormat(args.width, args.height, 30, camera),
         ) as renderer:
             frames = min(args.frames, renderer.n_frames)
             ms = time_frames(renderer, frames, args.rounds)
@@ -110,13 +112,9 @@ def main() -> None:
         start = time.perf_counter()
         video = render.render_video(
             ts,
-            Params(),
-            polyline,
+            render.RunScene(Params(), polyline),
             Path(tmp) / "full.mp4",
-            args.width,
-            args.height,
-            30,
-            "follow",
+            render.VideoFormat(args.width, args.height, 30, "follow"),
             progress=False,
         )
         seconds = time.perf_counter() - start

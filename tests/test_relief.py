@@ -189,8 +189,9 @@ def test_the_video_builds_the_run_s_ground_and_draws_the_vehicle_on_it():
     result = simulate(Scenario(traj="s_curve", terrain=terrain, duration=4.0))
     ts, line, params = result.timeseries, result.reference_polyline, result.scenario.plant_params()
     try:
-        flat = render.RunRenderer(ts, params, line, 160, 120, 10.0, "overview")
-        ramp = render.RunRenderer(ts, params, line, 160, 120, 10.0, "overview", terrain=terrain)
+        video = render.VideoFormat(160, 120, 10.0, "overview")
+        flat = render.RunRenderer(ts, render.RunScene(params, line), video)
+        ramp = render.RunRenderer(ts, render.RunScene(params, line, terrain=terrain), video)
     except render.RenderUnavailable as exc:
         pytest.skip(str(exc))
     with flat as f, ramp as r:

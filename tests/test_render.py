@@ -25,6 +25,10 @@ from tt_mujoco.viz import demo, gl, render
 WIDTH, HEIGHT, FPS, DURATION = 160, 120, 30, 2.0
 
 
+def SCENE(polyline):  # the tests' scene: the default vehicle on the path
+    return render.RunScene(Params(), polyline)
+
+
 def decode(path) -> tuple[dict, list[np.ndarray]]:
     frames = imageio_ffmpeg.read_frames(str(path))
     meta = next(frames)
@@ -43,7 +47,13 @@ def overview_video(series, tmp_path_factory):
     ts, polyline = series
     out = tmp_path_factory.mktemp("video") / "overview.mp4"
     try:
-        render.render_video(ts, Params(), polyline, out, WIDTH, HEIGHT, FPS, "overview", False)
+        render.render_video(
+            ts,
+            SCENE(polyline),
+            out,
+            render.VideoFormat(WIDTH, HEIGHT, FPS, "overview"),
+            progress=False,
+        )
     except render.RenderUnavailable as exc:  # a machine without any OpenGL: nothing to test
         pytest.skip(str(exc))
     return out
@@ -70,7 +80,9 @@ def test_vehicle_is_where_the_series_puts_it_and_moves(series, overview_video):
     _, frames = decode(overview_video)
     first, last = frames[0].astype(float), frames[-1].astype(float)
     diff = np.abs(first - last).mean(axis=2)
-    with render.RunRenderer(ts, Params(), polyline, WIDTH, HEIGHT, FPS, "overview") as r:
+    with render.RunRenderer(
+        ts, SCENE(polyline), render.VideoFormat(WIDTH, HEIGHT, FPS, "overview")
+    ) as r:
         fovy = float(r.model.vis.global_.fovy)
         camera = r.camera_at(0)  # the overview camera does not move
         start_i, end_i = r.index[0], r.index[-1]
@@ -100,7 +112,9 @@ def test_reused_user_geoms_render_exactly_like_rebuilt_ones(series, monkeypatch,
     monkeypatch.setattr(render, "MAX_TRACE_POINTS", max_trace_points)
     ts, polyline = series
     try:
-        renderer = render.RunRenderer(ts, Params(), polyline, WIDTH, HEIGHT, FPS, "follow")
+        renderer = render.RunRenderer(
+            ts, SCENE(polyline), render.VideoFormat(WIDTH, HEIGHT, FPS, "follow")
+        )
     except render.RenderUnavailable as exc:
         pytest.skip(str(exc))
     with renderer as r:
@@ -139,7 +153,9 @@ def test_scene_draws_path_reference_point_and_traces_up_to_now(
     monkeypatch.setattr(render, "MAX_TRACE_POINTS", max_trace_points)
     ts, polyline = series
     try:
-        renderer = render.RunRenderer(ts, Params(), polyline, WIDTH, HEIGHT, FPS, "overview")
+        renderer = render.RunRenderer(
+            ts, SCENE(polyline), render.VideoFormat(WIDTH, HEIGHT, FPS, "overview")
+        )
     except render.RenderUnavailable as exc:
         pytest.skip(str(exc))
     with renderer as r:
@@ -202,7 +218,9 @@ def test_a_diverged_run_is_shown_up_to_where_it_stopped(series):
     diverged = {name: np.array(col, dtype=float) for name, col in ts.items()}
     diverged["phi"][100:] = np.nan  # stopped after t = 0.99 s
     try:
-        renderer = render.RunRenderer(diverged, Params(), polyline, WIDTH, HEIGHT, FPS)
+        renderer = render.RunRenderer(
+            diverged, SCENE(polyline), render.VideoFormat(WIDTH, HEIGHT, FPS)
+        )
     except render.RenderUnavailable as exc:
         pytest.skip(str(exc))
     with renderer as r:
@@ -245,7 +263,9 @@ def test_overview_camera_frames_every_point():
 def test_bad_arguments_raise_value_error(series, tmp_path, kwargs, match):
     ts, polyline = series
     with pytest.raises(ValueError, match=match):
-        render.render_video(ts, Params(), polyline, tmp_path / "v.mp4", progress=False, **kwargs)
+        render.render_video(
+            ts, SCENE(polyline), tmp_path / "v.mp4", render.VideoFormat(**kwargs), progress=False
+        )
 
 
 def test_bad_series_raises_value_error(series, tmp_path):
@@ -253,7 +273,7 @@ def test_bad_series_raises_value_error(series, tmp_path):
     broken = dict(ts)
     del broken["phi"]
     with pytest.raises(ValueError, match="'phi'"):
-        render.render_video(broken, Params(), polyline, tmp_path / "v.mp4", progress=False)
+        render.render_video(broken, SCENE(polyline), tmp_path / "v.mp4", progress=False)
 
 
 def test_render_video_never_overwrites(series, tmp_path):
@@ -261,7 +281,9 @@ def test_render_video_never_overwrites(series, tmp_path):
     out = tmp_path / "video.mp4"
     out.write_bytes(b"keep me")
     with pytest.raises(FileExistsError):
-        render.render_video(ts, Params(), polyline, out, WIDTH, HEIGHT, FPS, progress=False)
+        render.render_video(
+            ts, SCENE(polyline), out, render.VideoFormat(WIDTH, HEIGHT, FPS), progress=False
+        )
     assert out.read_bytes() == b"keep me"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["video.mp4"]  # no temporary left
 
@@ -383,10 +405,10 @@ def test_osmesa_fallback_renders_when_egl_fails():
         "gl._probe = lambda backend: 'EGL made to fail by the test' if backend == 'egl' else None\n"
         "print(gl.select_gl_backend())\n"
         "from tt_mujoco.viz.demo import open_loop_timeseries\n"
-        "from tt_mujoco.viz.render import RunRenderer\n"
+        "from tt_mujoco.viz.render import RunRenderer, RunScene, VideoFormat\n"
         "from tt_mujoco.vehicle.params import Params\n"
         "ts, poly = open_loop_timeseries(duration=0.5, dt=0.01)\n"
-        "with RunRenderer(ts, Params(), poly, 320, 240) as r:\n"
+        "with RunRenderer(ts, RunScene(Params(), poly), VideoFormat(320, 240)) as r:\n"
         "    img = r.render_frame(10)\n"
         "print(img.shape, int(img.std() > 5))\n"
     )
@@ -451,9 +473,13 @@ def test_a_grade_is_drawn_as_a_slope_the_whole_scene_turned_alike(series):
     grade = "slope:20:90"  # rising along +y
     tilt = np.array(parse_terrain(grade).world_rotation)
     try:
-        flat = render.RunRenderer(ts, Params(), polyline, WIDTH, HEIGHT, FPS, "overview")
+        flat = render.RunRenderer(
+            ts, SCENE(polyline), render.VideoFormat(WIDTH, HEIGHT, FPS, "overview")
+        )
         sloped = render.RunRenderer(
-            ts, Params(), polyline, WIDTH, HEIGHT, FPS, "overview", terrain=grade
+            ts,
+            render.RunScene(Params(), polyline, terrain=grade),
+            render.VideoFormat(WIDTH, HEIGHT, FPS, "overview"),
         )
     except render.RenderUnavailable as exc:
         pytest.skip(str(exc))
@@ -494,7 +520,9 @@ def test_lines_drawn_as_chords_within_the_tolerance_look_as_every_segment_does(s
     for tolerance in (default, 0.0):
         monkeypatch.setattr(render, "DRAW_TOLERANCE", tolerance)
         try:
-            renderer = render.RunRenderer(ts, Params(), polyline, WIDTH, HEIGHT, FPS, "follow")
+            renderer = render.RunRenderer(
+                ts, SCENE(polyline), render.VideoFormat(WIDTH, HEIGHT, FPS, "follow")
+            )
         except render.RenderUnavailable as exc:
             pytest.skip(str(exc))
         with renderer as r:

@@ -117,13 +117,14 @@ def test_bad_train_options_exit_2_naming_the_value(tmp_path, capsys, argv, fragm
 
 
 def test_video_shows_every_trailer_and_trace(tmp_path):
-    from tt_mujoco.viz.render import RunRenderer
+    from tt_mujoco.viz.render import RunRenderer, RunScene, VideoFormat
 
     result = simulate(
         Scenario(traj="s_curve", trailers=3, plant="reduced", disturbance="none", duration=2.0)
     )
     params = result.scenario.plant_params()
-    with RunRenderer(result.timeseries, params, result.reference_polyline, 160, 120) as r:
+    scene = RunScene(params, result.reference_polyline)
+    with RunRenderer(result.timeseries, scene, VideoFormat(160, 120)) as r:
         frame = r.n_frames - 1
         r.render_frame(frame)
         # One trace per axle (P, P0, P0_2, P0_3), in four colours.

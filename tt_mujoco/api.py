@@ -104,16 +104,17 @@ class Run:
         return Path(
             render.render_video(
                 self.result.timeseries,
-                self.scenario.plant_params(),
-                self.result.reference_polyline,
+                render.RunScene(
+                    self.scenario.plant_params(),
+                    self.result.reference_polyline,
+                    info=info,
+                    terrain=self.scenario.terrain,
+                    world=self.scenario.world,
+                ),
                 path,
-                camera=camera,
-                fps=fps,
+                render.VideoFormat(fps=fps, camera=camera),
+                outcome,
                 progress=False,
-                info=info,
-                outcome=outcome,
-                terrain=self.scenario.terrain,
-                world=self.scenario.world,
             )
         )
 

@@ -94,7 +94,7 @@ from tt_mujoco.sim.loop.episode import has_closed_form
 from tt_mujoco.sim.loop.timeseries import train_columns
 from tt_mujoco.sim.parts.measure import Measurement
 from tt_mujoco.sim.usercode import CheckedPath, path_label
-from tt_mujoco.viz.render import Offscreen
+from tt_mujoco.viz.offscreen import Offscreen
 
 __all__ = [
     "ACTION_UNITS",

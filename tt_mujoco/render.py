@@ -8,7 +8,14 @@ from pathlib import Path
 from tt_mujoco import guard
 from tt_mujoco.cliargs import Parser
 from tt_mujoco.runfolder import check_out, default_out, read_run
-from tt_mujoco.viz.render import CAMERAS, RenderUnavailable, render_video, run_labels
+from tt_mujoco.viz.render import (
+    CAMERAS,
+    RenderUnavailable,
+    RunScene,
+    VideoFormat,
+    render_video,
+    run_labels,
+)
 
 
 @guard.command
@@ -52,21 +59,15 @@ def main(argv: list[str] | None = None) -> int:
         run = read_run(run_dir)
         print(f"reference path: {run.reference_source}", file=sys.stderr)
         info, outcome = run_labels(run.scenario, run.status, run.message)
-        render_video(
-            run.timeseries,
+        scene = RunScene(
             run.params,
             run.reference,
-            out,
-            width=args.width,
-            height=args.height,
-            fps=args.fps,
-            camera=args.camera,
-            progress=not args.no_progress,
             info=info,
-            outcome=outcome,
             terrain=run.scenario.get("terrain", "flat"),
             world=run.world,
         )
+        video = VideoFormat(args.width, args.height, args.fps, args.camera)
+        render_video(run.timeseries, scene, out, video, outcome, progress=not args.no_progress)
     except (ValueError, FileExistsError) as exc:  # RunFolderError and BadInputError included
         return fail(str(exc))
     except OSError as exc:  # an --out the file system refuses

@@ -231,18 +231,16 @@ def _render_video(result, staging: Path, shown: Mapping, world):
 
     try:
         info, outcome = render.run_labels(result.config["scenario"], result.status, result.message)
-        path = render.render_video(
-            result.timeseries,
+        scene = render.RunScene(
             result.scenario.plant_params(),
             result.reference_polyline,
-            staging / "video.mp4",
-            camera=shown["camera"],
-            fps=shown["fps"],
-            progress=not shown["quiet"],
             info=info,
-            outcome=outcome,
             terrain=result.scenario.terrain,
             world=world,
+        )
+        video = render.VideoFormat(fps=shown["fps"], camera=shown["camera"])
+        path = render.render_video(
+            result.timeseries, scene, staging / "video.mp4", video, outcome, not shown["quiet"]
         )
     except render.RenderUnavailable as err:
         return None, f"video skipped: {err}"

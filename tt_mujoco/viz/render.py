@@ -15,7 +15,6 @@ re-renders a finished run.
 from __future__ import annotations
 
 import math
-import textwrap
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -31,7 +30,8 @@ from tt_mujoco.sim.parts.relief import relief_of
 from tt_mujoco.sim.parts.terrain import Terrain, parse_terrain
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.viz.annotate import END_CARD_S, Legend, end_card
-from tt_mujoco.viz.gl import GL_BACKENDS, RenderUnavailable, gl_context, select_gl_backend
+from tt_mujoco.viz.gl import GL_BACKENDS, RenderUnavailable, select_gl_backend
+from tt_mujoco.viz.offscreen import Offscreen
 from tt_mujoco.viz.scene import (
     CAMERAS,
     FOLLOW_AZIMUTH,
@@ -41,7 +41,6 @@ from tt_mujoco.viz.scene import (
     VIDEO_COLUMNS,
     CompactOverlay,
     decimate,
-    font_scale,
     frame_schedule,
     overview_camera,
     pose_vehicle,
@@ -50,6 +49,7 @@ from tt_mujoco.viz.scene import (
     trailer_wheel_angles,
     validated_columns,
 )
+from tt_mujoco.viz.video_spec import RunScene, VideoFormat, run_labels
 from tt_mujoco.world.builtin import parse_world
 
 __all__ = [
@@ -62,6 +62,8 @@ __all__ = [
     "VIDEO_COLUMNS",
     "RenderUnavailable",
     "RunRenderer",
+    "RunScene",
+    "VideoFormat",
     "frame_schedule",
     "overview_camera",
     "pose_vehicle",
@@ -119,11 +121,6 @@ REFERENCE_POINT_RGBA = np.array([0.1, 0.9, 0.2, 1.0], dtype=np.float32)
 REFERENCE_POINT_RADIUS = 0.015  # m
 
 
-# Multisample anti-aliasing of the offscreen buffer. On Mesa's llvmpipe, 4 samples make
-# mjr_readPixels resolve the buffer in software, several times the cost of the frame itself.
-OFFSCREEN_SAMPLES = 0
-
-
 #: The encoder's constant quantiser (mediapy's own default for frames up to 640x480) and x264's
 #: preset: "veryfast" encodes with half the CPU of the default "medium" at the same quantiser,
 #: the picture within 0.3 dB and the file within 6 % (``benchmarks/bench_render.py``); the
@@ -134,72 +131,6 @@ _ZERO3 = np.zeros(3)
 
 
 _EYE9 = np.eye(3).ravel()
-
-
-class Offscreen:
-    """An OpenGL context, MuJoCo's render context (offscreen buffer) and a scene."""
-
-    def __init__(self, model: mujoco.MjModel, width: int, height: int, maxgeom: int):
-        backend, cls = gl_context()
-        # The model belongs to our own Vehicle, so its visual settings are ours to change.
-        model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
-        model.vis.global_.offheight = max(model.vis.global_.offheight, height)
-        model.vis.quality.offsamples = OFFSCREEN_SAMPLES
-        self._gl = None
-        self.context = None
-        try:
-            self._gl = cls(width, height)
-            self._gl.make_current()
-            self.context = mujoco.MjrContext(model, font_scale(height))
-        except Exception as exc:
-            self.close()
-            raise RenderUnavailable(
-                f"the {backend} OpenGL backend could not create a {width}x{height} render "
-                f"context: {type(exc).__name__}: {exc}"
-            ) from exc
-        mujoco.mjr_setBuffer(mujoco.mjtFramebuffer.mjFB_OFFSCREEN, self.context)
-        self.scene = mujoco.MjvScene(model, maxgeom=maxgeom)
-        # Shadows and reflections off: together they cost more than the rest of a frame. The
-        # skybox too: both cameras look down steeply enough never to see the sky.
-        self.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
-        self.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
-        self.scene.flags[mujoco.mjtRndFlag.mjRND_SKYBOX] = False
-        self.rect = mujoco.MjrRect(0, 0, width, height)
-        self._pixels = np.empty((height, width, 3), dtype=np.uint8)
-
-    def render(self, labels: str = "", values: str = "", info: str = "") -> np.ndarray:
-        """Render the scene, with MuJoCo's top-left text overlay if ``labels`` is not empty
-        and ``info`` in the top-right corner; a new (H, W, 3) uint8 image."""
-        self._gl.make_current()
-        mujoco.mjr_render(self.rect, self.scene, self.context)
-        if info:
-            mujoco.mjr_overlay(
-                mujoco.mjtFont.mjFONT_NORMAL,
-                mujoco.mjtGridPos.mjGRID_TOPRIGHT,
-                self.rect,
-                info,
-                "",
-                self.context,
-            )
-        if labels:
-            mujoco.mjr_overlay(
-                mujoco.mjtFont.mjFONT_NORMAL,
-                mujoco.mjtGridPos.mjGRID_TOPLEFT,
-                self.rect,
-                labels,
-                values,
-                self.context,
-            )
-        mujoco.mjr_readPixels(self._pixels, None, self.rect, self.context)
-        return np.flipud(self._pixels).copy()  # OpenGL's rows run bottom-up
-
-    def close(self) -> None:
-        if self.context is not None:
-            self.context.free()
-            self.context = None
-        if self._gl is not None:
-            self._gl.free()
-            self._gl = None
 
 
 class RunRenderer:
@@ -214,43 +145,20 @@ class RunRenderer:
     ts : mapping of str to 1-D arrays
         The run's time series; needs :data:`VIDEO_COLUMNS`; ``x_ref``/``y_ref`` are optional.
         Only the samples before the first non-finite value are shown.
-    params : Params
-        Parameters the vehicle is built from.
-    reference_polyline : array_like, shape (M, 2)
-        The reference path (m); may be empty (shape (0, 2)).
-    width, height : int
-        Frame size in pixels, even (H.264's 4:2:0 chroma), 16 to 4096.
-    fps : float
-        Frames per second of the video the frames are for (see :func:`frame_schedule`).
-    camera : {"follow", "overview"}
-    info : str
-        Shown in the top-right corner (e.g. "ismc_sta | mujoco plant | dynamic target").
-    terrain : str
-        The run's ground (``Scenario.terrain``): a grade is drawn as a slope, the whole scene
-        turned from the plane's frame, where the run is computed, into the world's; a ramp or
-        a rough ground is placed along ``reference_polyline`` as the run placed it, the
-        vehicle resting on it in every frame.
-    world : str or World
-        The run's obstacles (``Scenario.world``, or the :class:`~tt_mujoco.world.World` a run
-        kept: :mod:`tt_mujoco.world`), drawn in the scene.
+    scene : RunScene
+        The vehicle's parameters, the reference path, the corner's text, the ground and the
+        obstacles (:class:`~tt_mujoco.viz.video_spec.RunScene`); a ramp or a rough ground is
+        placed along the path as the run placed it, the vehicle resting on it in every frame.
+    video : VideoFormat, optional
+        Frame size, frames per second (see :func:`frame_schedule`) and camera
+        (:class:`~tt_mujoco.viz.video_spec.VideoFormat`).
     """
 
-    def __init__(
-        self,
-        ts: Mapping,
-        params: Params,
-        reference_polyline,
-        width: int = 640,
-        height: int = 480,
-        fps: float = 30.0,
-        camera: str = "follow",
-        info: str = "",
-        terrain: str = "flat",
-        world="none",
-    ):
-        _check_video_args(width, height, fps, camera)
-        self.info = info
-        ground = parse_terrain(terrain)
+    def __init__(self, ts: Mapping, scene: RunScene, video: VideoFormat | None = None):
+        video = VideoFormat() if video is None else video
+        params, polyline = scene.params, scene.reference_polyline
+        self.info = scene.info
+        ground = parse_terrain(scene.terrain)
         #: Plane frame to world (None: no grade, nothing to turn).
         graded = isinstance(ground, Terrain) and not ground.flat
         self.tilt = np.array(ground.world_rotation) if graded else None
@@ -258,24 +166,52 @@ class RunRenderer:
         extra = ("x_ref", "y_ref") if self.has_reference_point else ()
         extra += train_columns(params.n_trailers)
         self.cols = validated_columns(ts, VIDEO_COLUMNS + extra)
-        polyline = np.asarray(reference_polyline, dtype=float).reshape(-1, 2)
-        if not np.all(np.isfinite(polyline)):
-            raise ValueError("reference_polyline has non-finite values")
         if len(polyline) > 1:
             polyline_drawn = polyline[simplified(polyline, DRAW_TOLERANCE)]
             self.path = decimate(polyline_drawn, MAX_PATH_SEGMENTS)
         else:
             self.path = polyline
-        self.width, self.height, self.fps, self.camera_mode = width, height, fps, camera
+        self.width, self.height, self.fps = video.width, video.height, video.fps
+        self.camera_mode = video.camera
         self.params = params
         #: A ramp or a rough ground, placed along the run's reference as the run placed it.
         self.relief = relief_of(ground, polyline, params) if len(polyline) > 1 else None
+        world = scene.world
         self.vehicle = Vehicle(
             params, self.relief, parse_world(world) if isinstance(world, str) else world
         )
         self.model = self.vehicle.model
-        self.times, self.index = frame_schedule(self.cols["t"], fps)
+        self.times, self.index = frame_schedule(self.cols["t"], video.fps)
         self.n_frames = len(self.times)
+        self._pose_columns(params)
+        self._traces(params, polyline)
+        self._place_camera(params)
+        self._mjv_camera = mujoco.MjvCamera()
+        self._mjv_camera.type = mujoco.mjtCamera.mjCAMERA_FREE
+        self._mjv_camera.distance = self.camera["distance"]
+        self._mjv_camera.azimuth = self.camera["azimuth"]
+        self._mjv_camera.elevation = self.camera["elevation"]
+        self._option = mujoco.MjvOption()
+        # The wheels' collision spheres (group 3) stay hidden: their visual tyres are drawn.
+        self._option.geomgroup[3] = 0
+        self._perturb = mujoco.MjvPerturb()
+        self._line_px = max(1.0, round(video.height / 200))
+        self._compact = (
+            CompactOverlay(video.height) if video.height < MUJOCO_OVERLAY_MIN_HEIGHT else None
+        )
+        self._legend = (
+            Legend(self._legend_entries(), video.height) if self._compact is None else None
+        )
+        # Room for the model's geoms twice over (mjv_updateScene may add decor) plus ours.
+        n_user = self._n_fixed + 1 + len(self._units) * (len(self.trace_frames) + 1)
+        maxgeom = 2 * self.model.ngeom + 100 + n_user
+        self._off = Offscreen(self.model, video.width, video.height, maxgeom)
+        self._geoms = self._off.scene.geoms  # the tuple is rebuilt on each attribute access
+        self._base = -1  # geoms mjv_updateScene wrote in the previous frame
+        self._committed = 0  # trace points already in the scene after the fixed geoms
+
+    def _pose_columns(self, params: Params) -> None:
+        """The wheels' angles and trailers 2..N's ``(phi_k, beta_k)`` at every sample."""
         trailers = range(1, params.n_trailers + 1)
         self._wheels = np.column_stack(
             [
@@ -284,12 +220,14 @@ class RunRenderer:
                 *(a for k in trailers for a in trailer_wheel_angles(self.cols, params, k)),
             ]
         )
-        # (phi_k, beta_k) of trailers 2..N at every sample.
         self._train = np.zeros((len(self.cols["t"]), params.n_trailers - 1, 2))
         for j, k in enumerate(trailers[1:]):
             self._train[:, j, 0] = self.cols[f"phi_{k}"]
             self._train[:, j, 1] = self.cols[f"beta_{k}"]
 
+    def _traces(self, params: Params, polyline: np.ndarray) -> None:
+        """Every axle's trace at the frames, their colours, the frames that commit a trace
+        point, and P's cross-track error at each frame."""
         self._tractor_xy = np.column_stack([self.cols["x"], self.cols["y"]])[self.index]
         # P's cross-track error at each frame, against the full path (docs/metrics.md).
         self._cross = (
@@ -298,7 +236,7 @@ class RunRenderer:
             else np.full(self.n_frames, np.nan)
         )
         # Every axle's trace: P, P0, then P0_k of trailers k = 2..N.
-        sfx = ["" if k == 1 else f"_{k}" for k in trailers]
+        sfx = ["" if k == 1 else f"_{k}" for k in range(1, params.n_trailers + 1)]
         self._units = [self._tractor_xy] + [
             np.column_stack([self.cols[f"x0{s}"], self.cols[f"y0{s}"]])[self.index] for s in sfx
         ]
@@ -310,18 +248,17 @@ class RunRenderer:
         # more than DRAW_TOLERANCE are committed, and a live segment runs to "now".
         kept = np.unique(np.concatenate([simplified(xy, DRAW_TOLERANCE) for xy in self._units]))
         self.trace_frames = decimate(kept[:, None], MAX_TRACE_POINTS - 1)[:, 0].astype(int)
-        max_committed = len(self.trace_frames)
         self._n_fixed = max(len(self.path) - 1, 0)
-        n_user = self._n_fixed + 1 + len(self._units) * (max_committed + 1)
-        # Room for the model's geoms twice over (mjv_updateScene may add decor) plus ours.
-        maxgeom = 2 * self.model.ngeom + 100 + n_user
 
+    def _place_camera(self, params: Params) -> None:
+        """The camera (over the whole run, or following the vehicle), and a far clipping plane
+        beyond everything drawn."""
         fovy = float(self.model.vis.global_.fovy)
         drawn = np.vstack([*self._units, self.path])
-        if camera == "overview":
+        if self.camera_mode == "overview":
             # The bodies reach past P and P0 (the tractor's chassis 0.75 L ahead of P).
             pad = 0.75 * params.L + 0.5 * params.d
-            self.camera = overview_camera(drawn, fovy, width / height, pad)
+            self.camera = overview_camera(drawn, fovy, self.width / self.height, pad)
         else:
             # A train is longer than the paper's vehicle: back off by the extra length.
             extra_length = sum(t.L + t.L0 for t in params.train)
@@ -331,23 +268,12 @@ class RunRenderer:
                 "azimuth": FOLLOW_AZIMUTH,
                 "elevation": FOLLOW_ELEVATION,
             }
-        # Far clipping plane beyond everything drawn (MuJoCo's zfar is relative to the extent).
+        # MuJoCo's zfar is relative to the model's extent.
         far = 2.0 * (self.camera["distance"] + np.ptp(drawn, axis=0).max())
         extent = float(self.model.stat.extent)
         self.model.vis.map.zfar = max(float(self.model.vis.map.zfar), far / extent)
 
-        self._mjv_camera = mujoco.MjvCamera()
-        self._mjv_camera.type = mujoco.mjtCamera.mjCAMERA_FREE
-        self._mjv_camera.distance = self.camera["distance"]
-        self._mjv_camera.azimuth = self.camera["azimuth"]
-        self._mjv_camera.elevation = self.camera["elevation"]
-        self._option = mujoco.MjvOption()
-        # The wheels' collision spheres (group 3) stay hidden: their visual tyres are drawn.
-        self._option.geomgroup[3] = 0
-        self._perturb = mujoco.MjvPerturb()
-        self._line_px = max(1.0, round(height / 200))
-
-        self._compact = CompactOverlay(height) if height < MUJOCO_OVERLAY_MIN_HEIGHT else None
+    def _legend_entries(self) -> list:
         entries = [
             ("tractor trace (axle P)", TRACTOR_TRACE_RGBA),
             ("trailer trace (axle P0)", TRAILER_TRACE_RGBA),
@@ -360,11 +286,7 @@ class RunRenderer:
         if self.has_reference_point:
             entries.append(("reference point", REFERENCE_POINT_RGBA))
         entries.append(("hitch rods, hinges O and P0", np.array([0.95, 0.8, 0.15, 1.0])))
-        self._legend = Legend(entries, height) if self._compact is None else None
-        self._off = Offscreen(self.model, width, height, maxgeom)
-        self._geoms = self._off.scene.geoms  # the tuple is rebuilt on each attribute access
-        self._base = -1  # geoms mjv_updateScene wrote in the previous frame
-        self._committed = 0  # trace points already in the scene after the fixed geoms
+        return entries
 
     # --- context management -----------------------------------------------------------------------
     def __enter__(self) -> RunRenderer:
@@ -533,54 +455,13 @@ class RunRenderer:
         return cam
 
 
-def _check_video_args(width, height, fps, camera) -> None:
-    for name, value in (("width", width), ("height", height)):
-        if isinstance(value, bool) or not isinstance(value, int | np.integer):
-            raise ValueError(f"{name}={value!r} is not allowed: it must be an even integer")
-        if not (16 <= value <= 4096 and value % 2 == 0):
-            raise ValueError(
-                f"{name}={value!r} is not allowed: it must be even (H.264 4:2:0) and in [16, 4096]"
-            )
-    if isinstance(fps, bool) or not isinstance(fps, int | float) or not 0 < fps <= 240:
-        raise ValueError(f"fps={fps!r} is not allowed: it must be a number in (0, 240]")
-    if camera not in CAMERAS:
-        raise ValueError(f"camera={camera!r} is not allowed: use one of {', '.join(CAMERAS)}")
-
-
-_TITLES = {"ok": "COMPLETED", "jackknife": "JACKKNIFE", "diverged": "DIVERGED"}
-
-
-def run_labels(scenario: Mapping, status: str | None, message: str) -> tuple[str, tuple | None]:
-    """The top-right line and the end card of a run's video, from its scenario and outcome."""
-    info = " | ".join(
-        f"{scenario.get(k, '?')}{suffix}"
-        for k, suffix in (("controller", ""), ("plant", " plant"), ("target", " target"))
-    )
-    terrain = scenario.get("terrain", "flat")
-    if terrain.startswith("slope:"):  # drawn as a slope too; the line says how steep, which way
-        grade, _, heading = terrain.removeprefix("slope:").partition(":")
-        info += f" | grade {grade}@{heading or 0} deg"
-    elif terrain != "flat":
-        info += f" | {terrain}"
-    if status is None:
-        return info, None
-    return info, (_TITLES.get(status, status.upper()), textwrap.wrap(message, 58))
-
-
 def render_video(
     ts: Mapping,
-    params: Params,
-    reference_polyline,
+    scene: RunScene,
     out_path,
-    width: int = 640,
-    height: int = 480,
-    fps: float = 30,
-    camera: str = "follow",
-    progress: bool = True,
-    info: str = "",
+    video: VideoFormat | None = None,
     outcome: tuple[str, list[str]] | None = None,
-    terrain: str = "flat",
-    world="none",
+    progress: bool = True,
 ) -> Path:
     """Render a run to an H.264 MP4 (see :class:`RunRenderer` for what is drawn).
 
@@ -590,17 +471,16 @@ def render_video(
 
     Parameters
     ----------
-    ts, params, reference_polyline, width, height, fps, camera, terrain, world
-        As for :class:`RunRenderer`.
+    ts, scene, video
+        As for :class:`RunRenderer` (``video`` default ``VideoFormat()``).
     out_path : str or Path
         The ``.mp4`` to write, in an existing folder; never overwritten.
+    outcome : (title, lines), optional
+        How the run ended ("COMPLETED", "JACKKNIFE", ...: :func:`run_labels`): an end card
+        over the last frame, held for :data:`~tt_mujoco.viz.annotate.END_CARD_S` after the
+        run's frames.
     progress : bool
         Show a tqdm progress bar (on stderr).
-    info : str
-        Shown in the frames' top-right corner (see :class:`RunRenderer`).
-    outcome : (title, lines), optional
-        How the run ended ("COMPLETED", "JACKKNIFE", ...): an end card over the last frame,
-        held for :data:`~tt_mujoco.viz.annotate.END_CARD_S` after the run's frames.
 
     Returns
     -------
@@ -629,19 +509,17 @@ def render_video(
         )
     if out.exists():
         raise FileExistsError(f"{out} exists; it is not overwritten")
-    _check_video_args(width, height, fps, camera)
+    video = VideoFormat() if video is None else video
     mediapy.set_ffmpeg(imageio_ffmpeg.get_ffmpeg_exe())
 
     with (
-        RunRenderer(
-            ts, params, reference_polyline, width, height, fps, camera, info, terrain, world
-        ) as renderer,
+        RunRenderer(ts, scene, video) as renderer,
         temporary_beside(out, suffix=".tmp.mp4") as tmp,
     ):
         with mediapy.VideoWriter(
             tmp,
-            shape=(height, width),
-            fps=fps,
+            shape=(video.height, video.width),
+            fps=video.fps,
             codec="h264",
             qp=H264_QP,
             ffmpeg_args=["-preset", H264_PRESET],
@@ -654,7 +532,7 @@ def render_video(
                     bar.update()
             if outcome is not None:
                 card = end_card(image, *outcome)
-                for _ in range(round(END_CARD_S * fps)):
+                for _ in range(round(END_CARD_S * video.fps)):
                     writer.add_image(card)
         publish_new(tmp, out)
     return out
