@@ -311,3 +311,72 @@ def test_a_law_sees_the_vehicle_and_the_direction_by_name():
     n_gains = len(backward.gain_record)
     assert data.size == n_gains + len(LawVehicle._fields) + 1 + backward.path_table.size
     assert data[n_gains + len(LawVehicle._fields)] == backward.path_table.shape[1]
+
+
+def test_a_constant_numba_froze_is_read_again_when_it_changes(tmp_path):
+    """numba freezes the globals a law reads into its code; a value read from the environment
+    when the law's module is imported changes with it, and a second process with another value
+    must not load the first one's code: it compiles its own, and each process's compiled run
+    gives its Python run's torques."""
+    import subprocess
+    import sys
+
+    law = tmp_path / "frozen_law.py"
+    token = __import__("uuid").uuid4().hex
+    law.write_text(
+        f"# {token}\n"
+        "import os\n"
+        "from tt_mujoco.controllers import plain_law\n\n"
+        "SCALE = float(os.environ['TT_TEST_SCALE'])\n"
+        "LIMITS = (SCALE, 2.0 * SCALE)\n\n"
+        "@plain_law(gains={'k': 5.0})\n"
+        "def frozen_law(m, r, model, k, s, dt, torque_limit):\n"
+        "    u = SCALE * k.k * (r.v_d - m.v) + LIMITS[1] * 0.0\n"
+        "    return u, u\n"
+    )
+    script = (
+        "import os\n"
+        "from tt_mujoco.sim import Scenario, simulate\n"
+        f"spec = {str(law) + ':frozen_law'!r}\n"
+        "runs = []\n"
+        "for flag in ('1', '0'):\n"
+        "    os.environ['TT_MUJOCO_COMPILED'] = flag\n"
+        "    run = simulate(Scenario(controller=spec, traj='circle', duration=2.5))\n"
+        "    runs.append((run.timeseries['T_r'][5], len(run.notes)))\n"
+        "print(*runs[0], *runs[1])\n"
+    )
+
+    def process(scale: str):
+        env = {**__import__("os").environ, "TT_MUJOCO_COMPILE_NOW": "1", "TT_TEST_SCALE": scale}
+        done = subprocess.run(
+            [sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=600
+        )
+        assert done.returncode == 0, done.stderr
+        compiled_torque, compiled_notes, python_torque, _ = done.stdout.split()
+        assert compiled_notes == "0"  # it ran compiled
+        assert float(compiled_torque) == float(python_torque)
+        return float(compiled_torque)
+
+    assert process("1.0") != process("3.0")
+
+
+def test_a_constant_changed_in_the_process_is_compiled_again():
+    import types
+
+    from tt_mujoco.sim.loop import compiled_law
+
+    module = types.ModuleType("constants_law")
+    exec(
+        "GAIN = 2.0\n"
+        "def helper(x):\n    return GAIN * x\n"
+        "def law(m, r, model, k, s, dt, torque_limit):\n    return helper(1.0), 0.0\n",
+        module.__dict__,
+    )
+    law = module.law
+    reached = compiled_law._reached(law)
+    assert reached == (law, module.helper)
+    before = compiled_law.frozen_values(reached)
+    module.GAIN = 3.0
+    assert compiled_law.frozen_values(reached) != before
+    module.GAIN = 2.0
+    assert compiled_law.frozen_values(reached) == before

@@ -19,7 +19,7 @@ from pathlib import Path
 from tt_mujoco.outputs import atomic_write
 from tt_mujoco.sim.loop.compiled import _cache_dir, kernel
 
-__all__ = ["compile_law"]
+__all__ = ["compile_law", "frozen_values"]
 
 
 def compile_law(cls):
@@ -27,11 +27,74 @@ def compile_law(cls):
     PlainLawController` subclass) compiled with the kernel's law signature: loaded from the
     compiled-code cache where a process compiled the same law before, once per process and
     class."""
-    key = (cls.__module__, cls.__qualname__, cls.LAW)
+    # the values numba freezes into the code are part of the key: a law whose module's
+    # constants changed since (a notebook cell run again) is compiled again, as its Python
+    # form would read the new ones
+    key = (cls.__module__, cls.__qualname__, cls.LAW, frozen_values(_reached(cls.LAW)))
     compiled_law = _LAWS.get(key)
     if compiled_law is None:
         compiled_law = _LAWS[key] = _compile_law(cls)
     return compiled_law
+
+
+def _own_calls(fn):
+    """``(name, function)`` of the plain functions of ``fn``'s own module that it calls: the
+    law's helpers, compiled with it."""
+    import types
+
+    for name in fn.__code__.co_names:
+        value = fn.__globals__.get(name)
+        if isinstance(value, types.FunctionType) and value.__module__ == fn.__module__:
+            yield name, value
+
+
+def _reached(law) -> tuple:
+    """The law and its helpers (:func:`_own_calls`), theirs included."""
+    seen, todo = [], [law]
+    while todo:
+        fn = todo.pop()
+        if fn not in seen:
+            seen.append(fn)
+            todo += [value for _, value in _own_calls(fn)]
+    return tuple(seen)
+
+
+def frozen_values(functions) -> str:
+    """What numba freezes into the compiled code of ``functions`` as constants when it compiles
+    them: the values of the globals they read that are data (numbers, strings, bytes, None,
+    tuples of them, NumPy arrays and scalars), and of the attributes they read of a module
+    global; a digest, which changes when one of those values does (an environment variable or
+    a file read when the module was imported, a constant edited in another module)."""
+    import types
+
+    import numpy as np
+
+    digest = hashlib.sha256()
+
+    def add(label: str, value) -> None:
+        if isinstance(value, np.ndarray):
+            digest.update(f"{label}={value.dtype.str}{value.shape}".encode())
+            digest.update(np.ascontiguousarray(value).tobytes())
+        elif isinstance(value, tuple):
+            for i, item in enumerate(value):
+                add(f"{label}[{i}]", item)
+        elif value is None or isinstance(value, bool | int | float | complex | str | bytes):
+            digest.update(f"{label}={type(value).__name__}:{value!r};".encode())
+        elif isinstance(value, np.generic):
+            digest.update(f"{label}={value.dtype.str}:{value!r};".encode())
+
+    for fn in functions:
+        names = fn.__code__.co_names
+        for name in names:
+            if name not in fn.__globals__:
+                continue
+            value = fn.__globals__[name]
+            if isinstance(value, types.ModuleType):
+                for attribute in names:
+                    add(f"{fn.__qualname__}:{name}.{attribute}", getattr(value, attribute, None))
+            else:
+                add(f"{fn.__qualname__}:{name}", value)
+    return digest.hexdigest()[:16]
 
 
 _LAWS: dict = {}
@@ -72,8 +135,8 @@ def _as_compiled(fn, done: dict, exact):
             names[name] = exact
         elif value is math.hypot:
             names[name] = exact.hypot
-        elif isinstance(value, types.FunctionType) and value.__module__ == fn.__module__:
-            names[name] = register_jitable(_as_compiled(value, done, exact))
+    for name, helper in _own_calls(fn):
+        names[name] = register_jitable(_as_compiled(helper, done, exact))
     return copy
 
 
@@ -141,9 +204,10 @@ def entry(m, r, model, gains, state, out, dt, limit):
 
 
 def _law_digest(cls, helpers) -> str:
-    """What a law's compiled code depends on: its gains' and state's names, and the files of
-    the law, of its helpers and of every function they call from elsewhere (a compiled one
-    from another module of the user's): numba freezes a law's globals when it compiles."""
+    """What a law's compiled code depends on: its gains' and state's names, the files of the
+    law, of its helpers and of every function they call from elsewhere (a compiled one from
+    another module of the user's), and the values of the globals they read, which numba
+    freezes when it compiles (:func:`frozen_values`)."""
     import inspect
 
     from tt_mujoco.sim.loop import kernel_sources
@@ -165,6 +229,7 @@ def _law_digest(cls, helpers) -> str:
             digest.update(Path(file).read_bytes())
         except OSError:
             digest.update(file.encode())
+    digest.update(frozen_values((cls.LAW, *helpers)).encode())  # the constants it froze
     return digest.hexdigest()[:16]
 
 
