@@ -131,13 +131,29 @@ def test_a_duration_is_shared_by_the_legs_by_their_length(facing_away):
     assert spans[0] / spans[1] == pytest.approx(lengths[0] / lengths[1], rel=0.01)
 
 
-def test_the_gym_env_refuses_a_plan_with_a_cusp(facing_away):
-    """The env steps one leg; a start whose plan has a cusp is one message at construction."""
+def test_the_gym_env_drives_a_plan_with_a_cusp_and_fails_a_leg_that_cannot_start(
+    facing_away, monkeypatch
+):
+    """The env steps the plan's legs one after the other (tests/test_gym_legs.py: as the run
+    does); a leg that cannot start where the last stopped ends the episode as "failed", as it
+    stops the maneuver, with the penalty of the steps left."""
     pytest.importorskip("gymnasium")
+    from tt_mujoco import gym_legs
     from tt_mujoco.gym_env import TractorTrailerEnv
 
-    with pytest.raises(ValueError, match="cusp"):
-        TractorTrailerEnv(world=facing_away, traj="plan", reverse=True, plant="reduced")
+    env = TractorTrailerEnv(world=facing_away, traj="plan", reverse=True, plant="reduced")
+    assert env.n_legs == 2
+
+    def cannot(self, index, measurement):
+        raise ValueError("leg 2 of 2 could not start: the trailer is outside the world")
+
+    monkeypatch.setattr(gym_legs.Legs, "next", cannot)
+    env.reset(seed=0)
+    terminated = truncated = False
+    while not (terminated or truncated):
+        _, reward, terminated, truncated, info = env.step([0.0, 0.0])
+    assert terminated and info["status"] == "failed" and "could not start" in info["message"]
+    assert info["leg"] == 0 and reward == -(1.0 + env._legs.steps_after(0))  # leg 2's steps
 
 
 def test_a_leg_that_cannot_start_keeps_what_was_driven(facing_away, monkeypatch):

@@ -37,18 +37,26 @@ chooses the wheel torques:
   (``info["status"]`` "failed", ``info["message"]`` why).
 - **truncated** when the scenario's duration is reached (``info["status"]`` is then "ok", as
   the finished run's ``metrics.json`` says).
-- **info**: ``t``, ``status`` ("running", "ok", "jackknife", "diverged", "collision",
-  "failed"), the errors ``e_v``, ``e_omega``, the target's derivatives ``v_d_dot``,
-  ``omega_d_dot`` (what the project's controllers also use), ``slip_longitudinal`` (m/s)
-  and ``etas``, the trailers' steering gains in force (a scheduled eta changes them; a
-  model-based agent hands them to its model, as
-  :meth:`controllers.base.Controller.steering_changed` does).
+- **info**: ``t``, ``leg`` (the leg of a planned maneuver that is driven, 0 for a run),
+  ``status`` ("running", "ok", "jackknife", "diverged", "collision", "failed"), the errors
+  ``e_v``, ``e_omega``, the target's derivatives ``v_d_dot``, ``omega_d_dot`` (what the
+  project's controllers also use), ``slip_longitudinal`` (m/s) and ``etas``, the trailers'
+  steering gains in force (a scheduled eta changes them; a model-based agent hands them to its
+  model, as :meth:`controllers.base.Controller.steering_changed` does).
 
 Every observation has finite bounds (:func:`observation_bounds`), each from a limit the
 project keeps: positions within the reach of the path in the episode (``MAX_SPEED`` times the
 duration, plus the train's length), headings wrapped to ``[-pi, pi]``, speeds within
 ``MAX_SPEED``, the yaw rate within the wheels' ``MAX_SPEED`` apart, the hitch angles within
 ``pi``. A state beyond them has blown up: the observation is clipped to them.
+
+A planned maneuver with cusps (``Scenario(world=..., traj="plan")`` from a start the planner
+reaches with a direction switch) is one episode of its legs, driven as ``python -m
+tt_mujoco.run`` drives them (:mod:`tt_mujoco.sim.maneuver`, :mod:`tt_mujoco.gym_legs`): the
+step that ends a leg returns the next leg's first observation (the train at rest where the
+leg stopped, on a fresh plant; its path and the unit that leads its motion; its target), its
+reward that of the step; the episode's time runs on; ``max_steps`` and the spaces cover every
+leg as planned, and truncation comes at the end of the last.
 
 Vectorised, the environment resets an episode that ended on the step after (gymnasium's
 ``AutoresetMode.NEXT_STEP``, ``metadata["autoreset_mode"]``).
@@ -86,12 +94,13 @@ import mujoco
 
 from tt_mujoco import sim
 from tt_mujoco.defaults import MAX_SPEED
+from tt_mujoco.gym_legs import Legs
 from tt_mujoco.reference.feedback import path_errors
 from tt_mujoco.registry import shown
 from tt_mujoco.schema import Schema
-from tt_mujoco.sim.build import drawn_polyline
 from tt_mujoco.sim.loop.episode import has_closed_form
 from tt_mujoco.sim.loop.timeseries import train_columns
+from tt_mujoco.sim.maneuver import leg_rng
 from tt_mujoco.sim.parts.measure import Measurement
 from tt_mujoco.sim.usercode import CheckedPath, path_label
 from tt_mujoco.viz.offscreen import Offscreen
@@ -252,40 +261,49 @@ class TractorTrailerEnv(gymnasium.Env):
         self.task = task
         self.scenario = scenario
         self.render_mode = render_mode
-        self._built = sim.build(scenario)
-        if self._built.plan is not None and self._built.plan.cusps:
-            raise ValueError(
-                f"seed={scenario.seed!r}: the plan from this start has a cusp; the env drives "
-                "one leg, forward or backing up (choose a seed or start the train backs in "
-                "from directly)"
-            )
-        self._stepper = sim.Stepper(self._built)
-        self.nominal = self._built.nominal
-        self.plant_params = self._built.plant_params
-        self.path, self.target = self._built.path, self._built.target
-        self.duration = self._built.duration
+        self._legs = Legs(sim.build(scenario))
+        #: The episode's legs: more than one for a planned maneuver with cusps.
+        self.n_legs = self._legs.count
+        first = self._legs.first
+        self.n_trailers = first.plant_params.n_trailers
+        self._t0 = 0.0
+        self._first_stepper = sim.Stepper(first)
+        self._use_leg(0, first, self._first_stepper)
+        self.nominal = first.nominal
+        self.plant_params = first.plant_params
+        #: The episode's length (s): a maneuver's, every leg's as planned.
+        self.duration = self._legs.duration
         limit = self.nominal.torque_limit
-        self.n_trailers = self.plant_params.n_trailers
         self.observation_names = observation_names(self.n_trailers)
         self.action_units = action_units
         self._action_scale = limit if action_units == "normalized" else 1.0
         bound = 1.0 if action_units == "normalized" else limit
         self.action_space = spaces.Box(-bound, bound, shape=(2,), dtype=np.float32)
-        reach = drawn_polyline(self.path, self.duration)
+        reach = self._legs.reach()
         self._low, self._high = observation_bounds(
             self.observation_names, self.plant_params, reach, self.duration
         )
         self.observation_space = spaces.Box(self._low, self._high, dtype=np.float64)
         self._headings = np.array([_field(n) in HEADINGS for n in self.observation_names])
-        self._reverse = bool(scenario.reverse)
-        asked = self.path
-        if not has_closed_form(asked):  # a user's path: guarded and checked, as the step asks it
-            asked = CheckedPath(asked, path_label(self._built))
-        self._pose_at, self._curvature = asked.pose_at, asked.curvature_and_rate
         self.dt = scenario.control_dt
-        self.max_steps = self._built.steps
+        #: The episode's control steps: a maneuver's, every leg's as planned.
+        self.max_steps = self._legs.steps
         self._seeded = False
         self._renderer = None
+        self._episode_seed = scenario.seed
+
+    def _use_leg(self, index: int, built, stepper) -> None:
+        """Drive leg ``index`` of the episode (``built``, with ``stepper``): its path, its
+        target, its direction (the unit that leads), the time it starts at."""
+        self._leg, self._built, self._stepper = index, built, stepper
+        self.path, self.target = built.path, built.target
+        self._reverse = bool(built.scenario.reverse)
+        asked = self.path
+        if not has_closed_form(asked):  # a user's path: guarded and checked, as the step asks it
+            asked = CheckedPath(asked, path_label(built))
+        self._pose_at, self._curvature = asked.pose_at, asked.curvature_and_rate
+        # Each unit's nearest path point, warm-started from the target's start.
+        self._unit_s = [float(self.target.start_s)] * (1 + self.n_trailers)
 
     # --- gymnasium API -----------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
@@ -301,14 +319,16 @@ class TractorTrailerEnv(gymnasium.Env):
             )
         super().reset(seed=seed)
         self._seeded = True
+        if self._legs.count > 1:  # the later legs' noise: the maneuver's of this seed
+            self._episode_seed = seed if seed is not None else int(self.np_random.integers(2**63))
+        self._use_leg(0, self._legs.first, self._first_stepper)
+        self._t0 = 0.0
         s = self.scenario
         phi0_deg = s.phi0_deg if not options else options.get("phi0_deg", s.phi0_deg)
         if phi0_deg != s.phi0_deg:
             dataclasses.replace(s, phi0_deg=phi0_deg).validate()
         # None: the scenario's own start (backing up, the trailers on the path)
         self._stepper.reset(self.np_random, phi0_deg=None if phi0_deg == s.phi0_deg else phi0_deg)
-        # Each unit's nearest path point, warm-started from the target's start.
-        self._unit_s = [float(self.target.start_s)] * (1 + self.n_trailers)
         self.close()  # a new plant: the renderer is made again for its model
         obs = self._sense()
         return obs, self._info("running")
@@ -332,17 +352,50 @@ class TractorTrailerEnv(gymnasium.Env):
         if self.action_units == "normalized":
             a = a * self._action_scale
         stepper = self._stepper
-        steps_left = self.max_steps - stepper.k - 1
+        leg_left = self._built.steps - stepper.k - 1
+        steps_left = self.steps_left()
         try:
             if not stepper.actuate(float(a[0]), float(a[1])):
                 raise RuntimeError("the episode is over: call reset()")
             obs = self._sense()
         except sim.StopRun as stop:
-            info = {"t": stepper.k * self.dt, "status": stop.status, "message": stop.message}
-            return self._last_obs, -(1.0 + steps_left), True, False, info
+            return self._stopped(stop.status, stop.message, steps_left)
         reward = self._reward()
+        if leg_left <= 0 and self._leg + 1 < self._legs.count:
+            try:  # the train at rest where this leg stopped, the next leg's target
+                obs = self._next_leg()
+            except ValueError as err:  # it cannot start there: the maneuver stops as failed
+                return self._stopped("failed", str(err), steps_left)
         truncated = steps_left <= 0
         return obs, float(reward), False, truncated, self._info("ok" if truncated else "running")
+
+    def steps_left(self) -> int:
+        """Control steps left in the episode after the coming one (every later leg's as
+        planned)."""
+        left = self._built.steps - self._stepper.k - 1
+        return left + self._legs.steps_after(self._leg)
+
+    def _stopped(self, status: str, message: str, steps_left: int):
+        """The step that ends the episode early: the last observation, the penalty."""
+        info = {"t": self._t, "status": status, "message": message, "leg": self._leg}
+        return self._last_obs, -(1.0 + steps_left), True, False, info
+
+    def _next_leg(self) -> np.ndarray:
+        """Start the maneuver's next leg where this one stopped (the maneuver's way: a fresh
+        plant at rest, the noise of the episode's seed and the leg): its first observation."""
+        index = self._leg + 1
+        built = self._legs.next(index, self._stepper.measurement)
+        self._t0 = self._t + self.dt  # the maneuver's joined time runs on
+        stepper = sim.Stepper(built)
+        self._use_leg(index, built, stepper)
+        stepper.reset(leg_rng(self._episode_seed, index))
+        self.close()  # a new plant: the renderer is made again for its model
+        return self._sense()
+
+    @property
+    def _t(self) -> float:
+        """The episode's time (s): a maneuver's runs on over its legs."""
+        return self._t0 + self._stepper.k * self.dt
 
     def render(self):
         """An RGB image (480 x 640) of the MuJoCo plant from the chase camera. Headless like
@@ -449,7 +502,8 @@ class TractorTrailerEnv(gymnasium.Env):
     def _info(self, status: str) -> dict:
         me, ref = self._me, self._ref
         return {
-            "t": self._stepper.k * self.dt,
+            "t": self._t,
+            "leg": self._leg,
             "status": status,
             "e_v": me.v - ref.v_d,
             "e_omega": me.omega - ref.omega_d,

@@ -34,7 +34,7 @@ from tt_mujoco.sim.simulate import Result, drive_leg, driven_leg, finish, user_m
 from tt_mujoco.sim.usercode import users_copy
 from tt_mujoco.world.part import world_report
 
-__all__ = ["drive", "final_state"]
+__all__ = ["drive", "final_state", "leg_rng"]
 
 #: Never less than this is left to a leg's wall-clock limit (s): an alarm of 0 is none.
 _LEAST_LIMIT = 1e-3
@@ -46,6 +46,12 @@ def final_state(ts: dict, n_trailers: int) -> tuple[tuple, tuple]:
     pose = (float(ts["x"][-1]), float(ts["y"][-1]), float(ts["theta"][-1]))
     names = ["phi", *(f"phi_{k}" for k in range(2, n_trailers + 1))]
     return pose, tuple(float(ts[name][-1]) for name in names)
+
+
+def leg_rng(seed: int, index: int) -> np.random.Generator:
+    """The noise of leg ``index`` of a maneuver of ``seed``: the run's own for the first leg,
+    one of its own for each later one."""
+    return np.random.default_rng([seed, index] if index else seed)
 
 
 def _leg_progress(progress, index: int, legs: int):
@@ -75,7 +81,7 @@ def drive(first: Build, progress=None, on_step=None, checkpoint=None) -> Result:
                 # after the run began, a stop that keeps what was driven
                 stop = f"leg {index + 1} of {len(plan.legs)} could not start: {err}"
                 break
-        rng = np.random.default_rng([asked.seed, index] if index else asked.seed)
+        rng = leg_rng(asked.seed, index)
         left = max(asked.time_limit_s - (time.perf_counter() - began), _LEAST_LIMIT)
         stepper, controller, status, message, wall = drive_leg(
             built, rng, left, _leg_progress(progress, index, len(plan.legs)), on_step, checkpoint
