@@ -7,6 +7,7 @@ import io
 import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -303,6 +304,19 @@ def _suptitle(fig, text: str) -> None:
     fig.suptitle(textwrap.fill(text, width=max(30, int(width_in * 10))))
 
 
+class _Groups(NamedTuple):
+    """How a sweep's figures colour its runs: the categorical options that vary (``by``),
+    each group's label in order and its colour."""
+
+    by: tuple
+    labels: list
+    colour: dict
+
+    def members(self, rows: Sequence[Mapping], label: str) -> np.ndarray:
+        """Which of ``rows`` are in the group ``label`` (every run, without groups)."""
+        return np.array([not self.by or group_of(r, self.by) == label for r in rows])
+
+
 def plot_summary(
     rows: Sequence[Mapping], spec: SweepSpec, out: Path, metric: str = "rmse_lateral"
 ) -> list[Path]:
@@ -310,13 +324,18 @@ def plot_summary(
     against each numeric option that varies; failed runs drawn as red crosses at the top). Runs
     are coloured by group when categorical options vary (:func:`group_options`): a pooled
     histogram or median would fall between populations."""
+    by = group_options(spec, rows)
+    labels = list(dict.fromkeys(group_of(r, by) for r in rows)) if by else [""]
+    groups = _Groups(by, labels, {label: f"C{i % 10}" for i, label in enumerate(labels)})
+    return [_histograms(rows, groups, metric, out), _scatter(rows, spec, groups, metric, out)]
+
+
+def _histograms(rows: Sequence[Mapping], groups: _Groups, metric: str, out: Path) -> Path:
+    """``histograms.png``: the key metrics and ``metric`` over the ok runs, per group."""
     from matplotlib.figure import Figure  # matplotlib only for sweeps that draw figures
 
     ok = [r for r in rows if r["status"] == "ok"]
-    failed = len(rows) - len(ok)
-    by = group_options(spec, rows)
-    labels = list(dict.fromkeys(group_of(r, by) for r in rows)) if by else [""]
-    colour = {label: f"C{i % 10}" for i, label in enumerate(labels)}
+    by, colour = groups.by, groups.colour
     names = [m for m in dict.fromkeys([*KEY_METRICS, metric]) if np.isfinite(_numeric(ok, m)).any()]
     names = names[:6]
     fig = Figure(figsize=(12, 6.5), layout="constrained")
@@ -325,7 +344,7 @@ def plot_summary(
         x = _numeric(ok, name)
         x = x[np.isfinite(x)]
         bins = np.histogram_bin_edges(x, bins=min(40, max(5, int(math.sqrt(x.size)) + 1)))
-        for label in labels:
+        for label in groups.labels:
             xg = _numeric([r for r in ok if not by or group_of(r, by) == label], name)
             xg = xg[np.isfinite(xg)]
             if xg.size:
@@ -338,8 +357,17 @@ def plot_summary(
         ax.legend(fontsize=8)
     for ax in axs[len(names) :]:
         ax.set_visible(False)
+    failed = len(rows) - len(ok)
     _suptitle(fig, f"{len(rows)} runs: {len(ok)} ok, {failed} failed (histograms of ok runs)")
-    paths = [save_figure(fig, out / "histograms.png", 120)]
+    return save_figure(fig, out / "histograms.png", 120)
+
+
+def _scatter(
+    rows: Sequence[Mapping], spec: SweepSpec, groups: _Groups, metric: str, out: Path
+) -> Path:
+    """``scatter.png``: ``metric`` against each numeric option that varies (two metrics
+    against each other where none does)."""
+    from matplotlib.figure import Figure
 
     axes = [a for a in spec.axes if a.varies and a.name != "seed" and _is_numeric(rows, a.name)]
     axes = axes[:6]
@@ -347,6 +375,7 @@ def plot_summary(
     bad = np.array([r["status"] != "ok" for r in rows])
     finite = y_all[~bad & np.isfinite(y_all)]
     top = float(finite.max()) * 1.05 if finite.size else 1.0
+    failed = int(bad.sum())
     if axes:
         n_rows, n_cols = math.ceil(len(axes) / 3), min(3, len(axes))
         fig = Figure(figsize=(4.2 * n_cols, 3.6 * n_rows), layout="constrained")
@@ -354,39 +383,14 @@ def plot_summary(
         # Fixed jitter spreads the runs of a grid value sideways (the same picture every time).
         jitter = np.random.default_rng(0).uniform(-1.0, 1.0, len(rows))
         for ax, axis in zip(panels, axes, strict=False):
-            x = np.array([float(r[axis.name]) for r in rows])
-            log = bool(np.all(x > 0) and x.max() >= 10 * x.min())
-            if log:
-                ax.set_xscale("log")
-            u = np.log(x) if log else x  # jitter and medians where the axis is uniform
-            levels = np.unique(u)
-            xs = x
-            if 1 < levels.size <= 12:
-                half = 0.3 * float(np.diff(levels).min())
-                u_jit = u + 0.5 * half * jitter
-                xs = np.exp(u_jit) if log else u_jit
-                for level in levels:  # the median of the ok runs at each value, per group
-                    ends = np.array([level - half, level + half])
-                    ends = np.exp(ends) if log else ends
-                    for label in labels:
-                        member = np.array([not by or group_of(r, by) == label for r in rows])
-                        y = y_all[(u == level) & member & ~bad & np.isfinite(y_all)]
-                        if y.size:
-                            line = colour[label] if by else "k"
-                            ax.plot(ends, [np.median(y)] * 2, color=line, lw=1.5)
-            for label in labels:
-                member = np.array([not by or group_of(r, by) == label for r in rows])
-                pick = member & ~bad
-                name = label if by else "ok"
-                ax.scatter(xs[pick], y_all[pick], s=12, alpha=0.6, color=colour[label], label=name)
-            if bad.any():
-                top_row = np.full(bad.sum(), top)
-                ax.scatter(xs[bad], top_row, marker="x", color="tab:red", label="failed")
-            ax.set_xlabel(labelled(axis.name))
+            _scatter_panel(ax, axis.name, rows, groups, (y_all, bad, top), jitter)
             ax.set_ylabel(labelled(metric))
-            ax.legend(fontsize=8)
         for ax in panels[len(axes) :]:
             ax.set_visible(False)
+        title = (
+            f"{metric} per run ({failed} failed runs drawn at the top in red; lines: median per "
+            f"value{' and group' if groups.by else ''})"
+        )
     else:  # nothing numeric varies (e.g. seeds only): two metrics against each other
         fig = Figure(figsize=(5.5, 4.5), layout="constrained")
         ax = fig.subplots()
@@ -395,15 +399,46 @@ def plot_summary(
         ax.scatter(x_all[~bad], y_all[~bad], s=12, alpha=0.6, color="tab:blue")
         ax.set_xlabel(labelled(other))
         ax.set_ylabel(labelled(metric))
-    _suptitle(
-        fig,
-        f"{metric} per run ({failed} failed runs drawn at the top in red; lines: median per "
-        f"value{' and group' if by else ''})"
-        if axes
-        else f"{metric} per run ({failed} failed runs not drawn)",
-    )
-    paths.append(save_figure(fig, out / "scatter.png", 120))
-    return paths
+        title = f"{metric} per run ({failed} failed runs not drawn)"
+    _suptitle(fig, title)
+    return save_figure(fig, out / "scatter.png", 120)
+
+
+def _scatter_panel(ax, name: str, rows, groups: _Groups, metric_of, jitter) -> None:
+    """One option's panel: the runs (jittered where the option takes few values, with each
+    value's median per group), the failed ones at the top. ``metric_of``: the metric of every
+    run, which failed, and the top."""
+    y_all, bad, top = metric_of
+    x = np.array([float(r[name]) for r in rows])
+    log = bool(np.all(x > 0) and x.max() >= 10 * x.min())
+    if log:
+        ax.set_xscale("log")
+    u = np.log(x) if log else x  # jitter and medians where the axis is uniform
+    levels = np.unique(u)
+    xs = x
+    if 1 < levels.size <= 12:
+        half = 0.3 * float(np.diff(levels).min())
+        u_jit = u + 0.5 * half * jitter
+        xs = np.exp(u_jit) if log else u_jit
+        for level in levels:  # the median of the ok runs at each value, per group
+            ends = np.array([level - half, level + half])
+            ends = np.exp(ends) if log else ends
+            for label in groups.labels:
+                member = groups.members(rows, label)
+                y = y_all[(u == level) & member & ~bad & np.isfinite(y_all)]
+                if y.size:
+                    line = groups.colour[label] if groups.by else "k"
+                    ax.plot(ends, [np.median(y)] * 2, color=line, lw=1.5)
+    for label in groups.labels:
+        pick = groups.members(rows, label) & ~bad
+        shown_as = label if groups.by else "ok"
+        ax.scatter(
+            xs[pick], y_all[pick], s=12, alpha=0.6, color=groups.colour[label], label=shown_as
+        )
+    if bad.any():
+        ax.scatter(xs[bad], np.full(bad.sum(), top), marker="x", color="tab:red", label="failed")
+    ax.set_xlabel(labelled(name))
+    ax.legend(fontsize=8)
 
 
 def _is_numeric(rows: Sequence[Mapping], name: str) -> bool:
