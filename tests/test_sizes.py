@@ -36,7 +36,6 @@ KNOWN = {
     ("function", "tt_mujoco/vehicle/mjcf.py:vehicle_xml"): 117,
     ("function", "tt_mujoco/vehicle/urdf.py:_trailer_parts"): 114,
     ("function", "tt_mujoco/vehicle/urdf.py:urdf_xml"): 132,
-    ("function", "tt_mujoco/world/plan.py:plan_path"): 92,
 }
 
 

@@ -297,6 +297,74 @@ def _with_cusp(start, goal_pose, d, base):
                 yield word.length + d + backing.path.length, exit_length, backing, word
 
 
+class _Search:
+    """One planning's bookkeeping: which candidates are clear (keeping ``margin``), the one
+    that got furthest before it was blocked, how many were tried, and the plan or the
+    message it ends in."""
+
+    def __init__(self, world: World, p: Params, margin: float):
+        self.world, self.p, self.margin = world, p, margin
+        self.record = world_record(world, p, 0)
+        self.began = time.perf_counter()
+        self.best, self.tried, self.total, self.late = 0.0, 0, 0, False
+        self.worst = {}  # where the candidate that got furthest was blocked
+
+    def next_candidate(self, deadline: float | None) -> bool:
+        """Whether another candidate may be tried (``deadline`` not passed); counts it."""
+        if deadline is not None and time.monotonic() > deadline:
+            self.late = True
+            return False
+        self.tried += 1
+        return True
+
+    def clear(self, path, word: str = "") -> bool:
+        """Whether every unit keeps the margin along ``path`` (and the bounds)."""
+        where = {}
+        gap, reached = clearance_along(
+            path, self.p, self.record, below=self.margin, bounds=self.world.bounds, blocked=where
+        )
+        if gap < self.margin and reached > self.best:  # the blocked one that got furthest
+            self.best = reached
+            self.worst.clear()
+            self.worst.update(where, word=word)
+        return gap >= self.margin
+
+    def found(self, legs, exit_length: float) -> Plan:
+        clearance = min(clearance_along(leg.path, self.p, self.record)[0] for leg in legs)
+        return Plan(
+            legs=tuple(legs),
+            exit=exit_length,
+            clearance=clearance,
+            candidates=self.tried,
+            planning_time_s=time.perf_counter() - self.began,
+        )
+
+    def failure(self, start, reverse: bool) -> PlanError:
+        """No candidate is clear (or the time ran out): what was tried, and how far the best
+        one got and what blocked it."""
+        why = "its time limit passed" if self.late else "none is clear"
+        closest, worst, margin = "", self.worst, self.margin
+        if self.tried and worst:
+            names = unit_names(self.p.n_trailers)
+            obstacles = self.world.all_obstacles
+            what = (
+                "leaves the world's bounds"
+                if worst.get("obstacle") is None
+                else f"comes within {margin:g} m of {obstacles[worst['obstacle']].name!r}"
+            )
+            closest = (
+                f"; the best ({worst['word']}) is clear for {math.floor(100 * self.best)} % of "
+                f"it, then the {names[worst['unit']]} {what} (the tractor at x={worst['x']:.2f}, "
+                f"y={worst['y']:.2f} m)"
+            )
+        return PlanError(
+            f"no path to world {self.world.name!r}'s goal from x={start[0]:.3f}, "
+            f"y={start[1]:.3f} m, heading {math.degrees(start[2]):.1f} deg "
+            f"({'backing up' if reverse else 'forward'}): {self.tried} of {self.total} "
+            f"candidates tried, {why} with a margin of {margin:g} m{closest}"
+        )
+
+
 def plan_path(
     world: World,
     p: Params,
@@ -309,90 +377,39 @@ def plan_path(
     ``(x, y, heading)`` (the train straight) to ``world``'s goal that keeps ``margin`` (m)
     from every obstacle; a :class:`PlanError` when none does (or when ``deadline``, a
     ``time.monotonic()`` value, passes first)."""
-    began = time.perf_counter()
+    search = _Search(world, p, margin)
     goal = world.goal
     if goal is None:
         raise WorldError(f"world {world.name!r} has no goal to plan a path to")
     d = train_length(p)
     goal_pose = (goal.x, goal.y, math.radians(goal.heading_deg))
     base = least_radius(p)
-    record = world_record(world, p, 0)
     direction = "reverse" if reverse else "forward"
-    best, tried, total, late = 0.0, 0, 0, False
-    worst = {}  # where the candidate that got furthest was blocked
-
-    def clear(path, word: str = "") -> bool:
-        nonlocal best
-        where = {}
-        gap, reached = clearance_along(
-            path, p, record, below=margin, bounds=world.bounds, blocked=where
-        )
-        if gap < margin and reached > best:  # the blocked candidate that got furthest
-            best = reached
-            worst.clear()
-            worst.update(where, word=word)
-        return gap >= margin
-
-    def found(legs, exit_length) -> Plan:
-        clearance = min(clearance_along(leg.path, p, record)[0] for leg in legs)
-        return Plan(
-            legs=tuple(legs),
-            exit=exit_length,
-            clearance=clearance,
-            candidates=tried,
-            planning_time_s=time.perf_counter() - began,
-        )
-
     direct = sorted(_direct(start, goal_pose, d, base, reverse), key=lambda c: c[0])
-    total += len(direct)
+    search.total += len(direct)
     for _, exit_length, origin, pieces, word in direct:
-        if deadline is not None and time.monotonic() > deadline:
-            late = True
+        if not search.next_candidate(deadline):
             break
-        tried += 1
         path = _arcs(origin, pieces)
-        if clear(path, f"{word.kinds} at {word.radius:.3g} m"):
-            return found([Leg(path, direction, word.kinds, word.radius)], exit_length)
-    if reverse and not late:
+        if search.clear(path, f"{word.kinds} at {word.radius:.3g} m"):
+            return search.found([Leg(path, direction, word.kinds, word.radius)], exit_length)
+    if reverse and not search.late:
         cusped = sorted(_with_cusp(start, goal_pose, d, base), key=lambda c: c[0])
-        total += len(cusped)
+        search.total += len(cusped)
         backing_clear: dict[int, bool] = {}
         for _, exit_length, backing, word in cusped:
-            if deadline is not None and time.monotonic() > deadline:
-                late = True
+            if not search.next_candidate(deadline):
                 break
-            tried += 1
             key = id(backing)
             if key not in backing_clear:
-                backing_clear[key] = clear(backing.path, f"backing {backing.word}")
+                backing_clear[key] = search.clear(backing.path, f"backing {backing.word}")
             if not backing_clear[key]:
                 continue
             forward = _arcs(start, [*_word_pieces(word), (d, 0.0)])
-            if clear(forward, f"forward {word.kinds} at {word.radius:.3g} m, then backing"):
-                return found(
-                    [Leg(forward, "forward", word.kinds, word.radius), backing], exit_length
-                )
-    why = "its time limit passed" if late else "none is clear"
-    closest = ""
-    if tried and worst:
-        names = unit_names(p.n_trailers)
-        obstacles = world.all_obstacles
-        what = (
-            "leaves the world's bounds"
-            if worst.get("obstacle") is None
-            else f"comes within {margin:g} m of {obstacles[worst['obstacle']].name!r}"
-        )
-        closest = (
-            f"; the best ({worst['word']}) is clear for {math.floor(100 * best)} % of it, "
-            f"then the {names[worst['unit']]} {what} (the tractor at x={worst['x']:.2f}, "
-            f"y={worst['y']:.2f} m)"
-        )
-    raise PlanError(
-        f"no path to world {world.name!r}'s goal from x={start[0]:.3f}, y={start[1]:.3f} m, "
-        f"heading {math.degrees(start[2]):.1f} deg "
-        f"({'backing up' if reverse else 'forward'}): {tried} of {total} candidates "
-        f"tried, {why} with a margin of {margin:g} m{closest}"
-    )
+            if search.clear(forward, f"forward {word.kinds} at {word.radius:.3g} m, then backing"):
+                legs = [Leg(forward, "forward", word.kinds, word.radius), backing]
+                return search.found(legs, exit_length)
+    raise search.failure(start, reverse)
 
 
 def start_pose(world: World, p: Params, seed: int) -> tuple[float, float, float]:
