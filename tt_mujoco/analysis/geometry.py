@@ -15,7 +15,12 @@ from typing import NamedTuple
 
 import numpy as np
 
-from tt_mujoco.analysis.nearest import CHUNK, SegmentTable, segment_distance2_of
+from tt_mujoco.analysis.nearest import (
+    CHUNK,
+    SegmentTable,
+    segment_distance2_of,
+    segment_windows,
+)
 
 __all__ = [
     "Polyline",
@@ -195,6 +200,51 @@ class Polyline:
         self._chunk_tree = cKDTree(self._chunk_centre)
         self._tree = cKDTree(centre)
 
+    def _compiled_search(self, pts, pending, window, extend_ends: bool, best: _Best):
+        """The compiled search of the ``pending`` points (``window``: each point's first and
+        limit segments) into ``best``; the points it left (all of them where it failed)."""
+        first, limit = window
+        # Every point searched (the usual time series): no gathers, no scatter.
+        every = pending.size == pts.shape[0]
+        at = slice(None) if every else pending
+        px, py = np.ascontiguousarray(pts[at, 0]), np.ascontiguousarray(pts[at, 1])
+        m = pending.size
+        d2, seg, t = np.empty(m), np.empty(m, np.int64), np.empty(m)
+        if not _COMPILED((px, py), (first[at], limit[at]), extend_ends, self.table, (d2, seg, t)):
+            return pending
+        if every:
+            best.d2, best.seg, best.t = d2, seg, t
+        else:
+            best.d2[pending], best.seg[pending], best.t[pending] = d2, seg, t
+        return pending[:0]
+
+    def _windowed_search(self, pts, pending, window, extend_ends: bool, best: _Best):
+        """The points of short windows searched directly (the tree holds the whole path, whose
+        other laps crowd out the window's candidates); the points left."""
+        first, limit = window
+        lo_chunk, hi_chunk = self._window_chunks(limit, first)
+        direct = pending[hi_chunk[pending] - lo_chunk[pending] <= _WINDOW_CHUNKS]
+        if not direct.size:
+            return pending
+        # The tree's nearest groups inside a point's window give it a distance to beat: the
+        # chunk tree then finds the few chunks nearer than it, where enumerating every chunk
+        # of the window would cost the window's length for every point.
+        k = min(_CANDIDATE_ROUNDS[0], self._tree.n)
+        group_dist, group_idx = self._tree.query(pts[direct], k=k)
+        group_dist = group_dist.reshape(direct.size, -1)
+        candidates = self._group_segments[group_idx].reshape(direct.size, -1)
+        self._try(pts[direct], direct, candidates, limit[direct], extend_ends, best, first[direct])
+        # The tree's bound holds for every segment, in the window or not: a point whose best
+        # usable candidate is within it is settled (the rays, which the bound does not cover,
+        # are for extend_ends, which a windowed search goes on to check).
+        if k < self._tree.n and not extend_ends:
+            bound = group_dist[:, -1] - self._group_radius_max
+            unsettled = direct[np.sqrt(best.d2[direct]) > bound]
+        else:
+            unsettled = direct
+        self._chunk_search(pts, unsettled, limit, extend_ends, best, first)
+        return np.setdiff1d(pending, direct, assume_unique=True)
+
     def _chunk_chords(self, xs: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, ...]:
         """Each chunk's chord (its first vertex to its last: start, direction, 1 / length^2, 0
         for a closed chunk) and how far its vertices, hence its segments, stray from it (a
@@ -318,31 +368,7 @@ class Polyline:
         if pts.ndim != 2 or pts.shape[1] != 2:
             raise ValueError(f"points must have shape (N, 2) or (2,), got shape {np.shape(points)}")
         n = pts.shape[0]
-        n_seg = self.n_segments
-        if segment_count is None:
-            limit = np.full(n, n_seg, dtype=np.int64)
-        else:
-            limit = np.asarray(segment_count)
-            if limit.shape != (n,) or not np.issubdtype(limit.dtype, np.integer):
-                raise ValueError(
-                    f"segment_count must be an integer array of shape ({n},), got dtype "
-                    f"{limit.dtype} and shape {limit.shape}"
-                )
-            if np.any((limit < 0) | (limit > n_seg)):
-                raise ValueError(
-                    f"segment_count must lie in [0, {n_seg}], got values in "
-                    f"[{limit.min()}, {limit.max()}]"
-                )
-            limit = limit.astype(np.int64)
-
-        first = np.zeros(n, dtype=np.int64)
-        if segment_first is not None:
-            first = np.asarray(segment_first)
-            if first.shape != (n,) or not np.issubdtype(first.dtype, np.integer):
-                raise ValueError(f"segment_first must be an integer array of shape ({n},)")
-            if np.any((first < 0) | ((first >= limit) & (limit > 0))):
-                raise ValueError("segment_first must lie in [0, segment_count)")
-            first = first.astype(np.int64)
+        limit, first = segment_windows(n, self.n_segments, segment_count, segment_first)
         best = _Best(n)
         finite = np.all(np.isfinite(pts), axis=1)
 
@@ -354,48 +380,13 @@ class Polyline:
             best.seg[only_start] = 0
 
         pending = np.flatnonzero(finite & (limit > 0))
+        window = (first, limit)
         if _COMPILED is not None and pending.size:
-            # Every point searched (the usual time series): no gathers, no scatter.
-            every = pending.size == n
-            at = slice(None) if every else pending
-            px, py = np.ascontiguousarray(pts[at, 0]), np.ascontiguousarray(pts[at, 1])
-            m = pending.size
-            d2, seg, t = np.empty(m), np.empty(m, np.int64), np.empty(m)
-            window = (first[at], limit[at])
-            if _COMPILED((px, py), window, extend_ends, self.table, (d2, seg, t)):
-                if every:
-                    best.d2, best.seg, best.t = d2, seg, t
-                else:
-                    best.d2[pending], best.seg[pending], best.t[pending] = d2, seg, t
-                pending = pending[:0]
+            pending = self._compiled_search(pts, pending, window, extend_ends, best)
         if pending.size:
             self._make_trees()
         if segment_first is not None and pending.size:
-            # A short window is searched directly: the tree holds the whole path, whose other
-            # laps crowd out the window's candidates.
-            lo_chunk, hi_chunk = self._window_chunks(limit, first)
-            direct = pending[hi_chunk[pending] - lo_chunk[pending] <= _WINDOW_CHUNKS]
-            if direct.size:
-                # The tree's nearest groups inside a point's window give it a distance to beat:
-                # the chunk tree then finds the few chunks nearer than it, where enumerating
-                # every chunk of the window would cost the window's length for every point.
-                k = min(_CANDIDATE_ROUNDS[0], self._tree.n)
-                group_dist, group_idx = self._tree.query(pts[direct], k=k)
-                group_dist = group_dist.reshape(direct.size, -1)
-                candidates = self._group_segments[group_idx].reshape(direct.size, -1)
-                self._try(
-                    pts[direct], direct, candidates, limit[direct], extend_ends, best, first[direct]
-                )
-                # The tree's bound holds for every segment, in the window or not: a point whose
-                # best usable candidate is within it is settled (the rays, which the bound does
-                # not cover, are for extend_ends, which a windowed search goes on to check).
-                if k < self._tree.n and not extend_ends:
-                    bound = group_dist[:, -1] - self._group_radius_max
-                    unsettled = direct[np.sqrt(best.d2[direct]) > bound]
-                else:
-                    unsettled = direct
-                self._chunk_search(pts, unsettled, limit, extend_ends, best, first)
-                pending = np.setdiff1d(pending, direct, assume_unique=True)
+            pending = self._windowed_search(pts, pending, window, extend_ends, best)
         for k in _CANDIDATE_ROUNDS:
             if pending.size == 0 or k >= self._tree.n:
                 break
@@ -403,7 +394,7 @@ class Polyline:
             candidates = self._group_segments[group_idx].reshape(pending.size, -1)
             if extend_ends:
                 # The rays are not covered by the tree's distance bound: always try them.
-                ends = np.broadcast_to(np.array([0, n_seg - 1]), (pending.size, 2))
+                ends = np.broadcast_to(np.array([0, self.n_segments - 1]), (pending.size, 2))
                 candidates = np.concatenate([candidates, ends], axis=1)
             self._try(
                 pts[pending], pending, candidates, limit[pending], extend_ends, best, first[pending]

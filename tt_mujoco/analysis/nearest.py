@@ -19,6 +19,7 @@ __all__ = [
     "nearest_segment_of",
     "nearest_segments_of",
     "segment_distance2_of",
+    "segment_windows",
 ]
 
 #: Segments per chunk, and chunks per group, of both searches: a time series' search mostly
@@ -201,3 +202,35 @@ def nearest_segments_of(points, window, extend, table, out):
             margin = 1e-9 * (abs(x) + abs(y) + reach + (lower if lower < np.inf else 0.0))
             at_x, at_y, searched_lo, searched_hi, nearest = x, y, a, b, seg[i]
         warm = seg[i]
+
+
+def segment_windows(
+    n: int, n_seg: int, segment_count, segment_first
+) -> tuple[np.ndarray, np.ndarray]:
+    """``(limit, first)``: the segments of ``n_seg`` that serve each of ``n`` points
+    (:meth:`tt_mujoco.analysis.geometry.Polyline.project`'s ``segment_count`` and
+    ``segment_first``), checked."""
+    if segment_count is None:
+        limit = np.full(n, n_seg, dtype=np.int64)
+    else:
+        limit = np.asarray(segment_count)
+        if limit.shape != (n,) or not np.issubdtype(limit.dtype, np.integer):
+            raise ValueError(
+                f"segment_count must be an integer array of shape ({n},), got dtype "
+                f"{limit.dtype} and shape {limit.shape}"
+            )
+        if np.any((limit < 0) | (limit > n_seg)):
+            raise ValueError(
+                f"segment_count must lie in [0, {n_seg}], got values in "
+                f"[{limit.min()}, {limit.max()}]"
+            )
+        limit = limit.astype(np.int64)
+    first = np.zeros(n, dtype=np.int64)
+    if segment_first is not None:
+        first = np.asarray(segment_first)
+        if first.shape != (n,) or not np.issubdtype(first.dtype, np.integer):
+            raise ValueError(f"segment_first must be an integer array of shape ({n},)")
+        if np.any((first < 0) | ((first >= limit) & (limit > 0))):
+            raise ValueError("segment_first must lie in [0, segment_count)")
+        first = first.astype(np.int64)
+    return limit, first
