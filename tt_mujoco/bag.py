@@ -193,17 +193,7 @@ def write_bag(
     t = np.asarray(ts["t"], dtype=float)
     period = float(np.median(np.diff(t))) if t.size > 1 else 1.0
     stride = max(1, round(1.0 / (rate * period)))
-    rows = np.arange(0, t.size, stride)
-    errors = _error_columns(ts, polyline, reverse) if t.size else {}
-    wheel_rates = [
-        np.gradient(ts[c], t) if t.size > 1 else np.zeros(t.size) for c in ("theta_r", "theta_l")
-    ]
-    n_trailers = params.n_trailers
-    units = _units(ts, n_trailers)
-    joints = [f"hitch_{k}" for k in range(1, n_trailers + 1)]
-    joints += [f"axle_{k}" for k in range(1, n_trailers + 1)] + ["wheel_right", "wheel_left"]
-    angle_columns = [f"phi{'' if k == 1 else f'_{k}'}" for k in range(1, n_trailers + 1)]
-    angle_columns += [f"beta{'' if k == 1 else f'_{k}'}" for k in range(1, n_trailers + 1)]
+    rows = _RowMessages(ts, polyline, params.n_trailers, reverse)
     with temporary_beside(out, ".mcap.tmp") as partial:
         with open(partial, "wb") as stream:
             writer = Writer(stream)
@@ -217,91 +207,92 @@ def write_bag(
                 writer.write_message(topic, schemas[kind], message, log_time=ns, publish_time=ns)
 
             start = float(t[0]) if t.size else 0.0
-            poses = [{"header": _header(start), "pose": _pose(x, y, 0.0)} for x, y in polyline]
-            for pose, heading in zip(poses, _headings(polyline), strict=True):
-                pose["pose"]["orientation"] = _pose(0.0, 0.0, heading)["orientation"]
-            write(
-                "/reference/path",
-                "nav_msgs/Path",
-                {"header": _header(start), "poses": poses},
-                start,
-            )
+            write("/reference/path", "nav_msgs/Path", _path_message(polyline, start), start)
             if world is not None:
                 _write_world(write, world, params, start)
-            for i in rows:
-                at = float(t[i])
-                transforms = []
-                for frame, x, y, heading, speed in units:
-                    pose = _pose(float(ts[x][i]), float(ts[y][i]), float(ts[heading][i]))
-                    transforms.append(
-                        {
-                            "header": _header(at),
-                            "child_frame_id": frame,
-                            "transform": {
-                                "translation": pose["position"],
-                                "rotation": pose["orientation"],
-                            },
-                        }
-                    )
-                    yaw_rate = float(ts["omega"][i]) if frame == "tractor" else 0.0
-                    write(
-                        f"/{frame}/odom",
-                        "nav_msgs/Odometry",
-                        {
-                            "header": _header(at),
-                            "child_frame_id": frame,
-                            "pose": {"pose": pose, "covariance": [0.0] * 36},
-                            "twist": {
-                                "twist": {
-                                    "linear": {"x": float(ts[speed][i]), "y": 0.0, "z": 0.0},
-                                    "angular": {"x": 0.0, "y": 0.0, "z": yaw_rate},
-                                },
-                                "covariance": [0.0] * 36,
-                            },
-                        },
-                        at,
-                    )
-                write("/tf", "tf2_msgs/TFMessage", {"transforms": transforms}, at)
-                angles = [float(ts[c][i]) for c in angle_columns]
-                write(
-                    "/joint_states",
-                    "sensor_msgs/JointState",
-                    {
-                        "header": _header(at),
-                        "name": joints,
-                        "position": [*angles, float(ts["theta_r"][i]), float(ts["theta_l"][i])],
-                        "velocity": [math.nan] * len(angles)
-                        + [float(wheel_rates[0][i]), float(wheel_rates[1][i])],
-                        "effort": [math.nan] * len(angles)
-                        + [float(ts["T_r"][i]), float(ts["T_l"][i])],
-                    },
-                    at,
-                )
-                if "theta_ref" in ts:
-                    reference = _pose(
-                        float(ts["x_ref"][i]), float(ts["y_ref"][i]), float(ts["theta_ref"][i])
-                    )
-                    write(
-                        "/reference/point",
-                        "geometry_msgs/PoseStamped",
-                        {"header": _header(at), "pose": reference},
-                        at,
-                    )
-                labels = list(errors)
-                write(
-                    "/tracking_errors",
-                    "std_msgs/Float64MultiArray",
-                    {
-                        "layout": {
-                            "dim": [{"label": name, "size": 1, "stride": 1} for name in labels],
-                            "data_offset": 0,
-                        },
-                        "data": [float(errors[name][i]) for name in labels],
-                    },
-                    at,
-                )
+            for i in range(0, t.size, stride):
+                for topic, kind, message in rows.messages(i):
+                    write(topic, kind, message, float(t[i]))
             writer.finish()
         return publish_new(partial, out)
+
+
+def _path_message(polyline: np.ndarray, start: float) -> dict:
+    """The reference path as a ``nav_msgs/Path``, each pose facing along it."""
+    poses = [{"header": _header(start), "pose": _pose(x, y, 0.0)} for x, y in polyline]
+    for pose, heading in zip(poses, _headings(polyline), strict=True):
+        pose["pose"]["orientation"] = _pose(0.0, 0.0, heading)["orientation"]
+    return {"header": _header(start), "poses": poses}
+
+
+class _RowMessages:
+    """The messages of one row of a run's time series: every unit's odometry and transform,
+    the joints, the reference point and the tracking errors."""
+
+    def __init__(self, ts: dict, polyline: np.ndarray, n_trailers: int, reverse: bool):
+        self.ts = ts
+        t = np.asarray(ts["t"], dtype=float)
+        self.errors = _error_columns(ts, polyline, reverse) if t.size else {}
+        self.wheel_rates = [
+            np.gradient(ts[c], t) if t.size > 1 else np.zeros(t.size)
+            for c in ("theta_r", "theta_l")
+        ]
+        self.units = _units(ts, n_trailers)
+        hitches = range(1, n_trailers + 1)
+        self.joints = [f"hitch_{k}" for k in hitches] + [f"axle_{k}" for k in hitches]
+        self.joints += ["wheel_right", "wheel_left"]
+        self.angles = [f"phi{'' if k == 1 else f'_{k}'}" for k in hitches]
+        self.angles += [f"beta{'' if k == 1 else f'_{k}'}" for k in hitches]
+
+    def messages(self, i: int):
+        """``(topic, message type, message)`` of row ``i``, in the order written."""
+        ts, at = self.ts, float(self.ts["t"][i])
+        transforms = []
+        for frame, x, y, heading, speed in self.units:
+            pose = _pose(float(ts[x][i]), float(ts[y][i]), float(ts[heading][i]))
+            transform = {"translation": pose["position"], "rotation": pose["orientation"]}
+            transforms.append(
+                {"header": _header(at), "child_frame_id": frame, "transform": transform}
+            )
+            yaw_rate = float(ts["omega"][i]) if frame == "tractor" else 0.0
+            twist = {
+                "linear": {"x": float(ts[speed][i]), "y": 0.0, "z": 0.0},
+                "angular": {"x": 0.0, "y": 0.0, "z": yaw_rate},
+            }
+            odometry = {
+                "header": _header(at),
+                "child_frame_id": frame,
+                "pose": {"pose": pose, "covariance": [0.0] * 36},
+                "twist": {"twist": twist, "covariance": [0.0] * 36},
+            }
+            yield f"/{frame}/odom", "nav_msgs/Odometry", odometry
+        yield "/tf", "tf2_msgs/TFMessage", {"transforms": transforms}
+        yield "/joint_states", "sensor_msgs/JointState", self._joint_state(i, at)
+        if "theta_ref" in ts:
+            reference = _pose(
+                float(ts["x_ref"][i]), float(ts["y_ref"][i]), float(ts["theta_ref"][i])
+            )
+            pose_stamped = {"header": _header(at), "pose": reference}
+            yield "/reference/point", "geometry_msgs/PoseStamped", pose_stamped
+        labels = list(self.errors)
+        layout = {
+            "dim": [{"label": name, "size": 1, "stride": 1} for name in labels],
+            "data_offset": 0,
+        }
+        data = [float(self.errors[name][i]) for name in labels]
+        yield "/tracking_errors", "std_msgs/Float64MultiArray", {"layout": layout, "data": data}
+
+    def _joint_state(self, i: int, at: float) -> dict:
+        ts = self.ts
+        angles = [float(ts[c][i]) for c in self.angles]
+        return {
+            "header": _header(at),
+            "name": self.joints,
+            "position": [*angles, float(ts["theta_r"][i]), float(ts["theta_l"][i])],
+            "velocity": [math.nan] * len(angles)
+            + [float(self.wheel_rates[0][i]), float(self.wheel_rates[1][i])],
+            "effort": [math.nan] * len(angles) + [float(ts["T_r"][i]), float(ts["T_l"][i])],
+        }
 
 
 #: The topics a log in MCAP is read from by default (what :func:`write_bag` writes, and what a
