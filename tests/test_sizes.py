@@ -22,8 +22,6 @@ KNOWN = {
     ("module", "tt_mujoco/analysis/metrics.py"): 696,
     ("function", "tt_mujoco/bag.py:read_bag_log"): 81,
     ("arguments", "tt_mujoco/excite.py:Candidate.__init__"): 9,
-    ("module", "tt_mujoco/identify.py"): 618,
-    ("function", "tt_mujoco/identify.py:read_log"): 85,
     ("function", "tt_mujoco/paper/figures.py:draw_figures"): 122,
     ("function", "tt_mujoco/paper/report.py:build_report"): 179,
     ("function", "tt_mujoco/reference/spline.py:from_waypoints"): 103,

@@ -1,0 +1,146 @@
+"""A log of a real vehicle read and checked (``python -m tt_mujoco.identify``, ``excite``).
+
+A log is a CSV or Parquet file, or a run's folder (its time series), or an MCAP file of ROS 2
+messages: :func:`read_log` gives its time, the tractor's speed and yaw rate and the hitch
+angles, from the columns (or topics) the log has, and refuses what a fit cannot use (a missing
+column, time not increasing, a gap, a value that is not a finite number) with a
+:class:`LogError` naming the column and the row.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from tt_mujoco.vehicle.params import Params
+
+__all__ = ["GAP", "POSE", "WHEEL_RATES", "LogError", "read_log"]
+
+#: A step in ``t`` longer than this many times the median is a gap in the log.
+GAP = 5.0
+#: A log's columns of the tractor's wheels' rates (rad/s), right and left, where it has no
+#: ``v`` and ``omega``.
+WHEEL_RATES = ("wheel_rate_r", "wheel_rate_l")
+#: A log's columns of the tractor axle's pose (m, m, rad), where it has neither.
+POSE = ("x", "y", "theta")
+
+
+class LogError(ValueError):
+    """A log that cannot be used: the message names the column and the row."""
+
+
+def read_log(
+    path: Path,
+    columns: dict[str, str] | None = None,
+    trailers: int | None = None,
+    topics: dict[str, str] | None = None,
+    wheel: tuple[float, float] | None = None,
+):
+    """``(t, v, omega, phis)`` of a log (see the module): ``phis`` is ``(rows, N)``, N the
+    number of ``phi`` columns found (or ``trailers``); ``topics`` names an MCAP log's odometry
+    and joint-state topics (:data:`tt_mujoco.bag.LOG_TOPICS`). A log without ``v`` and
+    ``omega`` gives them from its wheels' rates (:data:`WHEEL_RATES`, with ``wheel`` the
+    wheels' radius and track, m; default the project's vehicle's) or from the axle's pose
+    (:data:`POSE`). Raises :class:`LogError`."""
+    if wheel is None:
+        default = Params()
+        wheel = (default.r, default.d)
+    from tt_mujoco.outputs import read_timeseries, run_timeseries_file
+
+    path = Path(path)
+    file = run_timeseries_file(path) if path.is_dir() else path
+    if not file.is_file():
+        raise LogError(f"{file} not found: give a CSV, Parquet or MCAP log, or a run's folder")
+    mapping = dict(columns or {})
+    if file.suffix == ".mcap":  # ROS 2 messages: the joints are named, hitch_k for phi_k
+        from tt_mujoco.bag import read_bag_log
+
+        try:
+            table = read_bag_log(file, topics)
+        except ValueError as err:
+            raise LogError(str(err)) from None
+        except ImportError:
+            raise LogError(
+                f"{file} is MCAP: reading it needs the mcap extra (pip install 'tt-mujoco[mcap]')"
+            ) from None
+        mapping = {"phi": "hitch_1", **{f"phi_{k}": f"hitch_{k}" for k in range(2, 10)}, **mapping}
+        if trailers is None:  # as many trailers as hitch joints with positions
+            trailers = sum(1 for k in range(1, 10) if f"hitch_{k}" in table)
+    else:
+        try:
+            table = read_timeseries(file)
+        except (OSError, ValueError) as err:
+            raise LogError(f"{file}: {err}") from None
+    count = trailers or 1
+    while trailers is None and (f"phi_{count + 1}" in table or f"phi_{count + 1}" in mapping):
+        count += 1
+
+    def has(*names) -> bool:
+        return all(mapping.get(n, n) in table for n in names)
+
+    # the tractor's speed and yaw rate, from what the log has: themselves, the wheels' rates,
+    # or the pose of the tractor's axle
+    speeds = ["v", "omega"]
+    if not has(*speeds) and has(*WHEEL_RATES):
+        speeds = list(WHEEL_RATES)
+    elif not has(*speeds) and has(*POSE):
+        speeds = list(POSE)
+    names = ["t", *speeds, "phi", *(f"phi_{k}" for k in range(2, count + 1))]
+    data = {name: _log_column(file, table, mapping.get(name, name), name) for name in names}
+    t = data["t"]
+    _check_times(file, t)
+    phis = np.column_stack([data[n] for n in names[len(speeds) + 1 :]])
+    v, omega = _speeds(data, t, wheel)
+    return t, v, omega, phis
+
+
+def _log_column(file: Path, table, column: str, name: str) -> np.ndarray:
+    """The log's ``column`` (for ``name``) as finite floats, in radians where it is in
+    degrees; a :class:`LogError` naming the column and the row otherwise."""
+    if column not in table:
+        raise LogError(f"{file} has no column {column!r} (for {name}); it has {sorted(table)}")
+    values = np.asarray(table[column], dtype=float)
+    if column.endswith("_deg"):
+        values = np.radians(values)
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        raise LogError(
+            f"{file}: column {column!r} row {int(bad[0]) + 2} is {values[bad[0]]!r}, not a "
+            "finite number"
+        )
+    return values
+
+
+def _check_times(file: Path, t: np.ndarray) -> None:
+    """At least 10 rows, the time increasing, no gap of more than :data:`GAP` periods."""
+    if t.size < 10:
+        raise LogError(f"{file} has {t.size} rows: a fit needs at least 10")
+    steps = np.diff(t)
+    if np.any(steps <= 0):
+        i = int(np.flatnonzero(steps <= 0)[0]) + 1
+        raise LogError(
+            f"{file}: column 't' does not increase at row {i + 2} ({t[i]!r} after {t[i - 1]!r})"
+        )
+    median = float(np.median(steps))
+    if np.any(steps > GAP * median):
+        i = int(np.flatnonzero(steps > GAP * median)[0]) + 1
+        raise LogError(
+            f"{file}: a gap in column 't' at row {i + 2}: {steps[i - 1]:.6g} s after "
+            f"{t[i - 1]!r}, more than {GAP:g} times the log's period ({median:.6g} s)"
+        )
+
+
+def _speeds(data: dict, t: np.ndarray, wheel: tuple[float, float]):
+    """``(v, omega)`` of the tractor's axle from what ``data`` has: themselves; the wheels'
+    rates (rad/s) with ``wheel = (radius, track)`` in m (docs/model.md Section 2); or the
+    axle's pose, by central differences (its heading unwrapped)."""
+    if "v" in data:
+        return data["v"], data["omega"]
+    if WHEEL_RATES[0] in data:
+        r, d = wheel
+        right, left = data[WHEEL_RATES[0]], data[WHEEL_RATES[1]]
+        return r * (right + left) / 2.0, r * (right - left) / d
+    x, y, theta = data["x"], data["y"], np.unwrap(data["theta"])
+    vx, vy = np.gradient(x, t), np.gradient(y, t)
+    return vx * np.cos(theta) + vy * np.sin(theta), np.gradient(theta, t)
