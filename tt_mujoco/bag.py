@@ -300,6 +300,24 @@ class _RowMessages:
 LOG_TOPICS = {"odom": "/tractor/odom", "joints": "/joint_states"}
 
 
+def _stamped(path, topic: str, rows: list) -> None:
+    """A topic's messages ``rows`` (``((stamp, log time), ...)``) on their times: its header
+    stamps, or its log times where it stamps none (all zero), in place; at least two, each
+    after the last (a ValueError naming the topic and the message otherwise)."""
+    if len(rows) < 2:
+        raise ValueError(f"{path}: topic {topic!r} has {len(rows)} message(s): too few")
+    use_stamps = any(row[0][0] > 0.0 for row in rows)
+    rows[:] = [(at[0] if use_stamps else 1e-9 * at[1], *rest) for at, *rest in rows]
+    stamps = np.array([row[0] for row in rows])
+    back = np.flatnonzero(np.diff(stamps) <= 0.0)
+    if back.size:
+        k = int(back[0]) + 1
+        raise ValueError(
+            f"{path}: topic {topic!r} message {k + 1}'s stamp {float(stamps[k])!r} does not "
+            f"come after message {k}'s {float(stamps[k - 1])!r}"
+        )
+
+
 def read_bag_log(path, topics: dict[str, str] | None = None) -> dict[str, np.ndarray]:
     """A vehicle's log from an MCAP file of ROS 2 messages, as columns on the odometry's times.
 
@@ -353,19 +371,7 @@ def read_bag_log(path, topics: dict[str, str] | None = None) -> dict[str, np.nda
     except (McapError, OSError, EOFError, KeyError, AttributeError, struct.error) as err:
         raise ValueError(f"{path} cannot be read as MCAP of ROS 2 messages: {err}") from None
     for topic, rows in ((chosen["odom"], odom), (chosen["joints"], joints)):
-        if len(rows) < 2:
-            raise ValueError(f"{path}: topic {topic!r} has {len(rows)} message(s): too few")
-        # a topic's header stamps, or its log times where it stamps none (all zero)
-        use_stamps = any(row[0][0] > 0.0 for row in rows)
-        rows[:] = [(at[0] if use_stamps else 1e-9 * at[1], *rest) for at, *rest in rows]
-        stamps = np.array([row[0] for row in rows])
-        back = np.flatnonzero(np.diff(stamps) <= 0.0)
-        if back.size:
-            k = int(back[0]) + 1
-            raise ValueError(
-                f"{path}: topic {topic!r} message {k + 1}'s stamp {float(stamps[k])!r} does not "
-                f"come after message {k}'s {float(stamps[k - 1])!r}"
-            )
+        _stamped(path, topic, rows)
     table = {"t": np.array([r[0] for r in odom]), "v": np.array([r[1] for r in odom])}
     table["omega"] = np.array([r[2] for r in odom])
     for name in ("v", "omega"):
