@@ -183,6 +183,49 @@ def _fmt(value: float) -> str:
     return f"{value:.6g}"
 
 
+def _checked_waypoints(name: str, x: np.ndarray, y: np.ndarray, labels) -> np.ndarray:
+    """The steps between consecutive waypoints (m), every waypoint finite and none repeating
+    the one before (a ValueError naming it otherwise)."""
+    for col, values in (("x", x), ("y", y)):
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            i = int(bad[0])
+            raise ValueError(
+                f"{name}: {col}={float(values[i])!r} at {labels[i]} is not allowed: "
+                "waypoints must be finite numbers"
+            )
+    step = np.hypot(np.diff(x), np.diff(y))
+    repeated = np.flatnonzero(step <= 1e-9)
+    if repeated.size:
+        i = int(repeated[0])
+        raise ValueError(
+            f"{name}: {labels[i]} and {labels[i + 1]} repeat the point "
+            f"(x={_fmt(x[i])}, y={_fmt(y[i])}): consecutive waypoints must differ"
+        )
+    return step
+
+
+def _checked_speeds(name: str, v: np.ndarray, n: int, labels) -> np.ndarray:
+    """The waypoints' speeds: one per waypoint, finite, in [0, MAX_SPEED], never 0 at two
+    consecutive ones."""
+    if v.size != n:
+        raise ValueError(f"{name}: v has {v.size} values for {n} waypoints")
+    for i, value in enumerate(v):
+        if not (math.isfinite(value) and 0.0 <= value <= MAX_SPEED):
+            raise ValueError(
+                f"{name}: v={float(value)!r} at {labels[i]} is not allowed: speeds must be "
+                f"finite, >= 0 and at most {MAX_SPEED:g} m/s (forward driving only)"
+            )
+    both_zero = np.flatnonzero((v[:-1] == 0.0) & (v[1:] == 0.0))
+    if both_zero.size:
+        i = int(both_zero[0])
+        raise ValueError(
+            f"{name}: v=0 at both {labels[i]} and {labels[i + 1]} is not allowed: "
+            "the vehicle would never get from one to the other"
+        )
+    return v
+
+
 def from_waypoints(
     x,
     y,
@@ -230,39 +273,9 @@ def from_waypoints(
     max_curvature = positive_number("max_curvature", max_curvature)
     if x.size < 4:
         raise ValueError(f"{name}: {x.size} waypoints is not allowed: a path needs at least 4")
-    for col, values in (("x", x), ("y", y)):
-        bad = np.flatnonzero(~np.isfinite(values))
-        if bad.size:
-            i = int(bad[0])
-            raise ValueError(
-                f"{name}: {col}={float(values[i])!r} at {labels[i]} is not allowed: "
-                "waypoints must be finite numbers"
-            )
-    step = np.hypot(np.diff(x), np.diff(y))
-    repeated = np.flatnonzero(step <= 1e-9)
-    if repeated.size:
-        i = int(repeated[0])
-        raise ValueError(
-            f"{name}: {labels[i]} and {labels[i + 1]} repeat the point "
-            f"(x={_fmt(x[i])}, y={_fmt(y[i])}): consecutive waypoints must differ"
-        )
+    step = _checked_waypoints(name, x, y, labels)
     if v is not None:
-        v = np.asarray(v, dtype=float).ravel()
-        if v.shape != x.shape:
-            raise ValueError(f"{name}: v has {v.size} values for {x.size} waypoints")
-        for i, value in enumerate(v):
-            if not (math.isfinite(value) and 0.0 <= value <= MAX_SPEED):
-                raise ValueError(
-                    f"{name}: v={float(value)!r} at {labels[i]} is not allowed: speeds must be "
-                    f"finite, >= 0 and at most {MAX_SPEED:g} m/s (forward driving only)"
-                )
-        both_zero = np.flatnonzero((v[:-1] == 0.0) & (v[1:] == 0.0))
-        if both_zero.size:
-            i = int(both_zero[0])
-            raise ValueError(
-                f"{name}: v=0 at both {labels[i]} and {labels[i + 1]} is not allowed: "
-                "the vehicle would never get from one to the other"
-            )
+        v = _checked_speeds(name, np.asarray(v, dtype=float).ravel(), x.size, labels)
 
     from scipy.integrate import cumulative_simpson  # scipy: only for a CSV path
     from scipy.interpolate import CubicSpline, make_smoothing_spline
