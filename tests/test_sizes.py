@@ -22,7 +22,6 @@ KNOWN = {
     ("module", "tt_mujoco/analysis/metrics.py"): 696,
     ("arguments", "tt_mujoco/excite.py:Candidate.__init__"): 9,
     ("function", "tt_mujoco/paper/figures.py:draw_figures"): 122,
-    ("function", "tt_mujoco/paper/report.py:build_report"): 179,
     ("module", "tt_mujoco/schema.py"): 719,
     ("module", "tt_mujoco/sim/scenario.py"): 692,
     ("arguments", "tt_mujoco/sweep/execute.py:run_sweep"): 10,

@@ -42,6 +42,146 @@ from tt_mujoco.paper.suite import (
 from tt_mujoco.paper.values import fmt, metric_of
 
 
+def _causes_section(records, by_cause) -> list[str]:
+    """The cells that differ by more than a factor of two, grouped by their causes."""
+    md = ["## Where we differ by more than a factor of two, and why", ""]
+    for cause in CAUSES:
+        cells = by_cause[cause.code]
+        if not cells:
+            continue
+        md += [f"### {cause.code}. {cause.title} ({cause.kind})", ""]
+        md.append(cause.describe(unique_cells(cells), records))
+        listed = ", ".join(f"T{c.table} {c.case} {c.metric} ({PLANT_LABEL[p]})" for c, p in cells)
+        md += ["", f"Explains: {listed}.", ""]
+    if by_cause["unexplained"]:
+        md += ["### Not explained", ""]
+        md += [
+            f"- Table {c.table} {c.case}, {c.quantity}, {PLANT_LABEL[p]}: paper {fmt(c.paper)}, "
+            f"ours {fmt(metric_of(records, f'{c.run}@{p}', c.metric))}"
+            for c, p in by_cause["unexplained"]
+        ]
+        md.append("")
+    return md
+
+
+def _curvature_section(records, curvature, figs) -> list[str]:
+    """The static and the dynamic target's curvature errors split (eqs. 37-39)."""
+    md = ["## Static vs dynamic target: eqs. (37)-(39) measured", ""]
+    md += [
+        "Along each run the curvature error of the driven path, omega/v - kappa_d (kappa_d at "
+        "the nearest path point), is split exactly into the yaw-tracking part e_omega/v "
+        "(eq. 37) and the target's mismatch (omega_d - v kappa_d)/v (eq. 39; for the dynamic "
+        f"target only measurement noise and s drift). RMS over |v| >= {V_MIN} m/s; heading "
+        "drifts are the same parts integrated without 1/v (rad).",
+        "",
+        "| path | target | controller | plant | e_v RMSE | lateral RMSE (m) | RMS e_omega/v "
+        "(1/m) | RMS mismatch (1/m) | mismatch share | max drift int e_omega (rad) "
+        "| max drift int mismatch (rad) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in curvature:
+        md.append(
+            f"| {r['path']} | {r['target']} | {r['controller']} | {PLANT_LABEL[r['plant']]} | "
+            f"{fmt(r['rmse_v'])} | {fmt(r['rmse_lateral'])} | "
+            f"{fmt(r['rms_e_omega_over_v'])} | {fmt(r['rms_mismatch'])} | "
+            f"{fmt(r['mismatch_share'], 2)} | {fmt(r['heading_drift_e_omega_max'], 3)} | "
+            f"{fmt(r['heading_drift_mismatch_max'], 3)} |"
+        )
+    md += ["", *curvature_findings(records), ""]
+    for name, caption in (
+        ("fig_curvature_split.png", "curvature error split, ISMC-STA, MuJoCo"),
+        ("fig_curvature_split_stiff_yaw.png", "curvature error split, FBL diag(8, 50), MuJoCo"),
+    ):
+        if name in figs:
+            md += [f"![{caption}]({name})", ""]
+    return md
+
+
+def _steering_section(steering, figs) -> list[str]:
+    """The passive steering study: off-tracking by steering design."""
+    md = ["## Passive steering study", ""]
+    md += [
+        "Trailer off-tracking with each steering design, ISMC-STA (set 6.1), dynamic target, "
+        "no disturbance (off-tracking is geometry; the disturbance rows are marked). 'Off-track' "
+        "is the follower axle's distance from the leader's path (P0 from P's path forward, P "
+        "from P0's path reversing); 'steady arc' only counts samples whose follower has run "
+        f"{SETTLE_DISTANCE:g} m on constant curvature (none on the cycloid); 'analytic steady' "
+        "is the steady-turn value of `steering.steady_offtrack`; 'trailer to reference' is P0 "
+        "to the reference path.",
+        "",
+        *steering_markdown(steering),
+        "",
+    ]
+    ratio_lines = []
+    for path in ("circle", "s_curve", "cycloid"):
+        for plant in PLANTS:
+            full = steering_ratio(steering, path, plant, "offtrack_rms")
+            steady = steering_ratio(steering, path, plant, "offtrack_steady_rms")
+            if math.isfinite(full):
+                ratio_lines.append(
+                    f"- {path}, {PLANT_LABEL[plant]}: plain / same_path off-tracking "
+                    f"x{fmt(full, 3)} over the run, x{fmt(steady, 3)} on steady arcs"
+                )
+    md += ratio_lines
+    md += ["", *STEERING_NOTES, ""]
+    if "fig_steering.png" in figs:
+        md += ["![off-tracking by steering design](fig_steering.png)", ""]
+    return md
+
+
+def _feedback_section(feedback, figs) -> list[str]:
+    """Beyond the paper: the outer path feedback."""
+    md = ["## Beyond the paper: path feedback", ""]
+    md += [
+        "The outer path feedback adds v (-k_y e_y - k_psi e_psi) to the dynamic "
+        "target's omega_d (k_y = 4 1/m^2, k_psi = 4 1/m, critically damped in arc length). "
+        "Paper disturbances on; 20 dB noise unless the case says otherwise. 'Cross-track' "
+        "measures P against the path continued along its end tangents (a vehicle that "
+        "overshoots the path's end is not counted as lateral error there).",
+        "",
+        *feedback_markdown(feedback),
+        "",
+        *FEEDBACK_NOTES,
+        "",
+    ]
+    if "fig_path_feedback.png" in figs:
+        md += ["![path feedback](fig_path_feedback.png)", ""]
+    return md
+
+
+def _payload(info, rows, by_cause, checks, studies, figs, records) -> dict:
+    """``report.json``: the cells, their causes, the checks, the studies' rows (curvature
+    split, steering, feedback), the figures and every run without its series."""
+    curvature, steering, feedback = studies
+    return {
+        "command": info.get("command", COMMAND),
+        "suite": info,
+        "factor": FACTOR,
+        "cells": rows,
+        "causes": {
+            c.code: {
+                "title": c.title,
+                "kind": c.kind,
+                "cells": [
+                    {"table": x.table, "case": x.case, "metric": x.metric, "plant": p}
+                    for x, p in by_cause[c.code]
+                ],
+            }
+            for c in CAUSES
+        },
+        "unexplained": [
+            {"table": x.table, "case": x.case, "metric": x.metric, "plant": p}
+            for x, p in by_cause["unexplained"]
+        ],
+        "checks": checks,
+        "curvature_split": curvature,
+        "steering": steering,
+        "feedback": feedback,
+        "figures": figs,
+        "runs": {k: {kk: vv for kk, vv in r.items() if kk != "series"} for k, r in records.items()},
+    }
+
+
 def build_report(
     records: Mapping[str, dict],
     out_dir: str | os.PathLike,
@@ -101,96 +241,13 @@ def build_report(
     if "fig_ratios.png" in figs:
         md += ["![ours / paper for every cell](fig_ratios.png)", ""]
 
-    md += ["## Where we differ by more than a factor of two, and why", ""]
-    for cause in CAUSES:
-        cells = by_cause[cause.code]
-        if not cells:
-            continue
-        md += [f"### {cause.code}. {cause.title} ({cause.kind})", ""]
-        md.append(cause.describe(unique_cells(cells), records))
-        listed = ", ".join(f"T{c.table} {c.case} {c.metric} ({PLANT_LABEL[p]})" for c, p in cells)
-        md += ["", f"Explains: {listed}.", ""]
-    if by_cause["unexplained"]:
-        md += ["### Not explained", ""]
-        md += [
-            f"- Table {c.table} {c.case}, {c.quantity}, {PLANT_LABEL[p]}: paper {fmt(c.paper)}, "
-            f"ours {fmt(metric_of(records, f'{c.run}@{p}', c.metric))}"
-            for c, p in by_cause["unexplained"]
-        ]
-        md.append("")
+    md += _causes_section(records, by_cause)
 
-    md += ["## Static vs dynamic target: eqs. (37)-(39) measured", ""]
-    md += [
-        "Along each run the curvature error of the driven path, omega/v - kappa_d (kappa_d at "
-        "the nearest path point), is split exactly into the yaw-tracking part e_omega/v "
-        "(eq. 37) and the target's mismatch (omega_d - v kappa_d)/v (eq. 39; for the dynamic "
-        f"target only measurement noise and s drift). RMS over |v| >= {V_MIN} m/s; heading "
-        "drifts are the same parts integrated without 1/v (rad).",
-        "",
-        "| path | target | controller | plant | e_v RMSE | lateral RMSE (m) | RMS e_omega/v "
-        "(1/m) | RMS mismatch (1/m) | mismatch share | max drift int e_omega (rad) "
-        "| max drift int mismatch (rad) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
-    ]
-    for r in curvature:
-        md.append(
-            f"| {r['path']} | {r['target']} | {r['controller']} | {PLANT_LABEL[r['plant']]} | "
-            f"{fmt(r['rmse_v'])} | {fmt(r['rmse_lateral'])} | "
-            f"{fmt(r['rms_e_omega_over_v'])} | {fmt(r['rms_mismatch'])} | "
-            f"{fmt(r['mismatch_share'], 2)} | {fmt(r['heading_drift_e_omega_max'], 3)} | "
-            f"{fmt(r['heading_drift_mismatch_max'], 3)} |"
-        )
-    md += ["", *curvature_findings(records), ""]
-    for name, caption in (
-        ("fig_curvature_split.png", "curvature error split, ISMC-STA, MuJoCo"),
-        ("fig_curvature_split_stiff_yaw.png", "curvature error split, FBL diag(8, 50), MuJoCo"),
-    ):
-        if name in figs:
-            md += [f"![{caption}]({name})", ""]
+    md += _curvature_section(records, curvature, figs)
 
-    md += ["## Passive steering study", ""]
-    md += [
-        "Trailer off-tracking with each steering design, ISMC-STA (set 6.1), dynamic target, "
-        "no disturbance (off-tracking is geometry; the disturbance rows are marked). 'Off-track' "
-        "is the follower axle's distance from the leader's path (P0 from P's path forward, P "
-        "from P0's path reversing); 'steady arc' only counts samples whose follower has run "
-        f"{SETTLE_DISTANCE:g} m on constant curvature (none on the cycloid); 'analytic steady' "
-        "is the steady-turn value of `steering.steady_offtrack`; 'trailer to reference' is P0 "
-        "to the reference path.",
-        "",
-        *steering_markdown(steering),
-        "",
-    ]
-    ratio_lines = []
-    for path in ("circle", "s_curve", "cycloid"):
-        for plant in PLANTS:
-            full = steering_ratio(steering, path, plant, "offtrack_rms")
-            steady = steering_ratio(steering, path, plant, "offtrack_steady_rms")
-            if math.isfinite(full):
-                ratio_lines.append(
-                    f"- {path}, {PLANT_LABEL[plant]}: plain / same_path off-tracking "
-                    f"x{fmt(full, 3)} over the run, x{fmt(steady, 3)} on steady arcs"
-                )
-    md += ratio_lines
-    md += ["", *STEERING_NOTES, ""]
-    if "fig_steering.png" in figs:
-        md += ["![off-tracking by steering design](fig_steering.png)", ""]
+    md += _steering_section(steering, figs)
 
-    md += ["## Beyond the paper: path feedback", ""]
-    md += [
-        "The outer path feedback adds v (-k_y e_y - k_psi e_psi) to the dynamic "
-        "target's omega_d (k_y = 4 1/m^2, k_psi = 4 1/m, critically damped in arc length). "
-        "Paper disturbances on; 20 dB noise unless the case says otherwise. 'Cross-track' "
-        "measures P against the path continued along its end tangents (a vehicle that "
-        "overshoots the path's end is not counted as lateral error there).",
-        "",
-        *feedback_markdown(feedback),
-        "",
-        *FEEDBACK_NOTES,
-        "",
-    ]
-    if "fig_path_feedback.png" in figs:
-        md += ["![path feedback](fig_path_feedback.png)", ""]
+    md += _feedback_section(feedback, figs)
 
     md += ["## Runs", ""]
     md += [
@@ -207,33 +264,7 @@ def build_report(
 
     summary = _summary_markdown(rows, records, steering, feedback, checks, info)
     atomic_write(out / "summary.md", summary)
-    payload = {
-        "command": info.get("command", COMMAND),
-        "suite": info,
-        "factor": FACTOR,
-        "cells": rows,
-        "causes": {
-            c.code: {
-                "title": c.title,
-                "kind": c.kind,
-                "cells": [
-                    {"table": x.table, "case": x.case, "metric": x.metric, "plant": p}
-                    for x, p in by_cause[c.code]
-                ],
-            }
-            for c in CAUSES
-        },
-        "unexplained": [
-            {"table": x.table, "case": x.case, "metric": x.metric, "plant": p}
-            for x, p in by_cause["unexplained"]
-        ],
-        "checks": checks,
-        "curvature_split": curvature,
-        "steering": steering,
-        "feedback": feedback,
-        "figures": figs,
-        "runs": {k: {kk: vv for kk, vv in r.items() if kk != "series"} for k, r in records.items()},
-    }
+    payload = _payload(info, rows, by_cause, checks, (curvature, steering, feedback), figs, records)
     atomic_write(
         out / "report.json",
         json.dumps(json_safe(payload), indent=1, sort_keys=False, allow_nan=False),
