@@ -42,6 +42,11 @@ from tt_mujoco.paper.suite import (
 from tt_mujoco.paper.values import fmt, metric_of
 
 
+def _paper_tables(rows, records) -> list[str]:
+    """Tables 1-5 (paper, reduced model, MuJoCo), the baselines and the robustness study."""
+    return [*tables_markdown(rows), *baselines_markdown(records), *robustness_markdown(records)]
+
+
 def _causes_section(records, by_cause) -> list[str]:
     """The cells that differ by more than a factor of two, grouped by their causes."""
     md = ["## Where we differ by more than a factor of two, and why", ""]
@@ -235,9 +240,7 @@ def build_report(
         "isolate it.",
         "",
     ]
-    md += tables_markdown(rows)
-    md += baselines_markdown(records)
-    md += robustness_markdown(records)
+    md += _paper_tables(rows, records)
     if "fig_ratios.png" in figs:
         md += ["![ours / paper for every cell](fig_ratios.png)", ""]
 
@@ -328,9 +331,7 @@ def _summary_markdown(rows, records, steering, feedback, checks, info) -> str:
         "C5 yaw reference at t = 0) explained in the report.",
         "",
     ]
-    md += tables_markdown(rows)
-    md += baselines_markdown(records)
-    md += robustness_markdown(records)
+    md += _paper_tables(rows, records)
     md += ["### Passive steering: trailer off-tracking (m, rms over the run / on steady arcs)", ""]
     md += [
         "| path | plant | plain eta = 0 | half-difference -0.125 | same_path -1/7 | scheduled "
