@@ -3,6 +3,7 @@ planning takes, how closely the leading point follows the plan.
 
     python benchmarks/bench_maneuvers.py [--world loading_bay] [--trailers 1 2 3] [--seeds 200]
         [--plant mujoco] [--noise-snr-db 20] [--direction reverse] [--workers 2]
+        [--disturbance matched]
 
 Each run is ``python -m tt_mujoco.run --world WORLD --traj plan [--reverse] --trailers N
 --seed SEED`` (one process per worker, the runs of a seed in order): the start drawn from the
@@ -12,7 +13,10 @@ cusp leg by leg. Success: the run completes with no contact and no
 jackknife and ends with the last axle within the goal's tolerances (1 cm, 0.05 rad by default).
 A start the planner finds no path from counts as a failure ("no plan"). The leading point's
 rms off the plan is the worst leg's, each against its own path. Planning times are one
-core's, the medians and 95th percentiles over the seeds planned.
+core's, the medians and 95th percentiles over the seeds planned. The disturbance is the
+scenario's default (the paper's matched torque disturbance) unless ``--disturbance`` names
+another; the runs that did not reach the goal are summed up by how much of the time their
+wheel torques were saturated (the train's load and the disturbance against the motors' limit).
 """
 
 from __future__ import annotations
@@ -31,7 +35,7 @@ from tt_mujoco.world.plan import PlanError
 
 
 def one(args) -> dict:
-    world, trailers, seed, plant, snr, reverse = args
+    world, trailers, seed, plant, snr, reverse, disturbance = args
     scenario = Scenario(
         world=world,
         traj="plan",
@@ -40,6 +44,7 @@ def one(args) -> dict:
         seed=seed,
         plant=plant,
         noise_snr_db=snr,
+        **({} if disturbance is None else {"disturbance": disturbance}),
     )
     try:
         result = simulate(scenario)
@@ -62,6 +67,7 @@ def one(args) -> dict:
         ),
         "clearance_m": report["min_clearance_m"],
         "time_s": metrics["sim_time_s"],
+        "saturation": metrics.get("torque_saturation_fraction", math.nan),
     }
 
 
@@ -74,16 +80,19 @@ def main(argv=None) -> int:
     parser.add_argument("--noise-snr-db", type=float, default=20.0)
     parser.add_argument("--direction", choices=("reverse", "forward"), default="reverse")
     parser.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1))
+    parser.add_argument("--disturbance", default=None, help="default: the scenario's")
     args = parser.parse_args(argv)
     reverse = args.direction == "reverse"
+    disturbance = args.disturbance or Scenario().disturbance
     print(
         f"world {args.world}, {args.direction}, {args.plant} plant, "
-        f"{args.noise_snr_db:g} dB noise, seeds 0..{args.seeds - 1}, {args.workers} workers"
+        f"{args.noise_snr_db:g} dB noise, disturbance {disturbance}, seeds 0..{args.seeds - 1}, "
+        f"{args.workers} workers"
     )
     with ProcessPoolExecutor(args.workers) as pool:
         for n in args.trailers:
             jobs = [
-                (args.world, n, seed, args.plant, args.noise_snr_db, reverse)
+                (args.world, n, seed, args.plant, args.noise_snr_db, reverse, args.disturbance)
                 for seed in range(args.seeds)
             ]
             rows = list(pool.map(one, jobs, chunksize=4))
@@ -107,6 +116,12 @@ def main(argv=None) -> int:
                 print(
                     f"  planning time: median {np.median(times):.3f} s, 95th percentile "
                     f"{np.percentile(times, 95):.3f} s, max {times.max():.3f} s"
+                )
+            missed = [r["saturation"] for r in rows if r["outcome"] not in ("reached", "no plan")]
+            if missed:
+                print(
+                    f"  not reached: torques saturated a median {100 * np.median(missed):.1f} % "
+                    f"of the time (max {100 * np.max(missed):.1f} %)"
                 )
             if len(reached):
                 print(
