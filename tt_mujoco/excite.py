@@ -17,6 +17,7 @@ Exit codes: 0 written; 2 bad input (a parameter not fittable, an --out in use, n
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import sys
 from pathlib import Path
@@ -42,16 +43,21 @@ CANDIDATES = tuple(
 JACKKNIFE_MARGIN = 0.6
 
 
+@dataclasses.dataclass(frozen=True)
 class Candidate:
-    """What a fit of one candidate run's log would know."""
+    """What a fit of one candidate run's log would know: the run (its path, the path's
+    options, backing up or not, its largest hitch angle), and the fit's parameters, their
+    values, 95 % half widths, correlations and scales."""
 
-    def __init__(
-        self, traj, options, reverse, names, values, half_widths, correlation, phi_max_deg, scales
-    ):
-        self.traj, self.options, self.reverse = traj, options, reverse
-        self.names, self.values, self.scales = names, values, scales
-        self.half_widths, self.correlation = half_widths, correlation
-        self.phi_max_deg = phi_max_deg
+    traj: str
+    options: dict
+    reverse: bool
+    phi_max_deg: float
+    names: list
+    values: np.ndarray
+    half_widths: np.ndarray
+    correlation: np.ndarray
+    scales: np.ndarray
 
     @property
     def worst(self) -> float:
@@ -108,15 +114,15 @@ def _predicted(scenario, fit, rate_hz, noise_deg) -> Candidate | None:
     scales = [1.0 / rate_hz if n == HITCH_LAG else abs(v) for n, v in zip(names, x, strict=True)]
     scales = np.array(scales)
     return Candidate(
-        scenario.traj,
-        options,
-        scenario.reverse,
-        names,
-        x,
-        1.96 * spread,
-        correlation,
-        phi_max,
-        scales,
+        traj=scenario.traj,
+        options=options,
+        reverse=scenario.reverse,
+        phi_max_deg=phi_max,
+        names=names,
+        values=x,
+        half_widths=1.96 * spread,
+        correlation=correlation,
+        scales=scales,
     )
 
 
@@ -124,7 +130,6 @@ def rank(scenario, fit=("L", "L0", "eta"), rate_hz=50.0, noise_deg=0.05) -> list
     """Every candidate of :data:`CANDIDATES` for ``scenario``'s vehicle (a
     :class:`~tt_mujoco.sim.Scenario`), best first (the smallest largest relative half width);
     those that come too close to a jackknife are left out."""
-    import dataclasses
 
     out = []
     for traj, options, reverse in CANDIDATES:
