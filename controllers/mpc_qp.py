@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["MissingSolverError", "QpSolution", "TrackingQP"]
+__all__ = ["MissingSolverError", "QpSolution", "QpWeights", "TrackingQP"]
 
 
 class MissingSolverError(ImportError, ValueError):
@@ -51,27 +51,33 @@ class QpSolution:
     iterations: int
 
 
+@dataclass(frozen=True)
+class QpWeights:
+    """The program's weights: ``Q`` the diagonal state weights (shape (nx,)), ``r_du`` and
+    ``r_u`` the input-rate and input-size weights, ``rho`` and ``rho1`` the quadratic and
+    linear slack weights of the soft bounds."""
+
+    Q: tuple
+    r_du: float
+    r_u: float
+    rho: float
+    rho1: float
+
+
 class TrackingQP:
     """The program of the module docstring for fixed sizes and weights.
 
     Parameters
     ----------
     nx, nu, horizon : int
-    Q : array_like, shape (nx,)
-        Diagonal state weights.
-    r_du, r_u : float
-        Input-rate and input-size weights.
+    weights : QpWeights
     u_max : float
         Bound on every input's magnitude.
     bounded : sequence of int
         Indices of the states with a soft bound.
-    rho, rho1 : float
-        Quadratic and linear slack weights.
     """
 
-    def __init__(self, nx, nu, horizon, Q, r_du, r_u, u_max, bounded, rho, rho1):
-        from scipy import sparse
-
+    def __init__(self, nx, nu, horizon, weights: QpWeights, u_max, bounded):
         self.nx, self.nu, self.H = nx, nu, horizon
         self.bounded = np.asarray(bounded, dtype=int)
         nb = self.bounded.size
@@ -80,27 +86,50 @@ class TrackingQP:
         self._iu = lambda k: (H + 1) * nx + k * nu
         self._ie = lambda k: (H + 1) * nx + H * nu + (k - 1) * nb  # k = 1..H
         self.n = (H + 1) * nx + H * nu + H * nb
-        self.u_max, self.r_du, self.rho1 = float(u_max), float(r_du), float(rho1)
-        self._Q = np.asarray(Q, dtype=float)
+        self.u_max, self.r_du, self.rho1 = float(u_max), float(weights.r_du), float(weights.rho1)
+        self._Q = np.asarray(weights.Q, dtype=float)
+        P = self._cost_hessian(weights)
+        A = self._constraint_matrix()
+        self.lower = np.full(self.m, -np.inf)
+        self.upper = np.full(self.m, np.inf)
+        lo, hi = self._dyn_rows[1], self._bound_rows
+        self.lower[lo:hi], self.upper[lo:hi] = -self.u_max, self.u_max
+        self.lower[-H * nb :] = 0.0
+        self._q = np.zeros(self.n)
+        self._q[self._ie(1) :] = weights.rho1
+        self._solver = _osqp().OSQP()
+        self._solver.setup(
+            P, self._q, A, self.lower, self.upper, verbose=False, eps_abs=1e-5, eps_rel=1e-5,
+            max_iter=4000, polishing=False, warm_starting=True,
+        )  # fmt: skip
 
-        # Cost Hessian (upper triangle, as OSQP takes it).
+    def _cost_hessian(self, weights: QpWeights):
+        """The cost's Hessian (its upper triangle, as OSQP takes it)."""
+        from scipy import sparse
+
+        nx, nu, H, r_du = self.nx, self.nu, self.H, weights.r_du
         diag = np.zeros(self.n)
         for k in range(1, H + 1):
             diag[self._ix(k) : self._ix(k) + nx] = self._Q
         rate = np.full(H, 2.0 * r_du)
         rate[-1] = r_du  # the last input has no successor
         for k in range(H):
-            diag[self._iu(k) : self._iu(k) + nu] = rate[k] + r_u
-        diag[self._ie(1) :] = rho
+            diag[self._iu(k) : self._iu(k) + nu] = rate[k] + weights.r_u
+        diag[self._ie(1) :] = weights.rho
         rows, cols, vals = list(range(self.n)), list(range(self.n)), list(diag)
         for k in range(H - 1):
             for j in range(nu):
                 rows.append(self._iu(k) + j)
                 cols.append(self._iu(k + 1) + j)
                 vals.append(-r_du)
-        P = sparse.csc_matrix((vals, (rows, cols)), shape=(self.n, self.n))
+        return sparse.csc_matrix((vals, (rows, cols)), shape=(self.n, self.n))
 
-        # Constraint matrix: initial state, dynamics, input box, soft bounds, slack >= 0.
+    def _constraint_matrix(self):
+        """The constraints' matrix: initial state, dynamics (their values set per solve),
+        input box, soft bounds, slack >= 0; with the slots and rows :meth:`solve` fills."""
+        from scipy import sparse
+
+        nx, nu, H, nb = self.nx, self.nu, self.H, self.bounded.size
         rows, cols, vals = [], [], []
 
         def put(r, c, v):
@@ -150,20 +179,9 @@ class TrackingQP:
             (np.arange(1, len(vals) + 1, dtype=float), (rows, cols)), shape=(self.m, self.n)
         )
         self._perm = order.data.astype(int) - 1
-        A = sparse.csc_matrix((self._values[self._perm], order.indices, order.indptr), order.shape)
-
-        self.lower = np.full(self.m, -np.inf)
-        self.upper = np.full(self.m, np.inf)
-        lo, hi = self._dyn_rows[1], self._bound_rows
-        self.lower[lo:hi], self.upper[lo:hi] = -self.u_max, self.u_max
-        self.lower[-H * nb :] = 0.0
-        self._q = np.zeros(self.n)
-        self._q[self._ie(1) :] = rho1
-        self._solver = _osqp().OSQP()
-        self._solver.setup(
-            P, self._q, A, self.lower, self.upper, verbose=False, eps_abs=1e-5, eps_rel=1e-5,
-            max_iter=4000, polishing=False, warm_starting=True,
-        )  # fmt: skip
+        return sparse.csc_matrix(
+            (self._values[self._perm], order.indices, order.indptr), order.shape
+        )
 
     def solve(self, x0, A_list, B_list, c_list, references, u_previous, bounds) -> QpSolution:
         """Solve for initial state ``x0``, stage models ``x_(k+1) = A_k x_k + B_k u_k + c_k``,

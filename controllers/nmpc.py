@@ -39,7 +39,7 @@ from typing import ClassVar
 import numpy as np
 from tt_mujoco.controllers.backing import SteadyInverse
 from tt_mujoco.controllers.base import Controller
-from tt_mujoco.controllers.mpc_qp import TrackingQP
+from tt_mujoco.controllers.mpc_qp import QpWeights, TrackingQP
 
 from tt_mujoco.reference.feedback import curvature_and_rate_at, path_errors
 from tt_mujoco.vehicle.linearize import error_rates, jacobians
@@ -88,10 +88,10 @@ class NmpcController(Controller):
         ]
         weights = [k["q_s"], k["q_y"], k["q_psi"], *[k["q_phi"]] * n, k["q_v"], k["q_omega"]]
         self.nx = len(weights)
+        qp_weights = QpWeights(tuple(weights), k["r_du"], k["r_u"], rho=1.0e5, rho1=1.0e3)
         self._qp = TrackingQP(
-            self.nx, 2, self.horizon, weights, k["r_du"], k["r_u"], setup.torque_limit,
-            bounded=range(3, 3 + n), rho=1.0e5, rho1=1.0e3,
-        )  # fmt: skip
+            self.nx, 2, self.horizon, qp_weights, setup.torque_limit, bounded=range(3, 3 + n)
+        )
         self._behind = np.cumsum([L + L0 for L, L0 in self.lengths])
         self._phi_guard = [0.95 * math.radians(jackknife_phi_deg(eta)) for eta in self.etas]
 

@@ -8,7 +8,7 @@ import sys
 
 import numpy as np
 import pytest
-from tt_mujoco.controllers.mpc_qp import TrackingQP
+from tt_mujoco.controllers.mpc_qp import QpWeights, TrackingQP
 
 from tt_mujoco.sim import Scenario, simulate
 
@@ -48,7 +48,8 @@ def test_the_qp_equals_the_dense_least_squares_plan_when_no_bound_is_active():
     Q = np.array([10.0, 1.0, 5.0, 0.5])
     x0 = np.array([0.3, -0.1, -0.2, 0.05])
     refs = np.tile([0.0, 0.0, 0.1, 0.0], (H, 1))
-    qp = TrackingQP(4, 2, H, Q, r_du=0.3, r_u=0.01, u_max=1e3, bounded=[0], rho=1e4, rho1=1.0)
+    weights = QpWeights(tuple(Q), r_du=0.3, r_u=0.01, rho=1e4, rho1=1.0)
+    qp = TrackingQP(4, 2, H, weights, u_max=1e3, bounded=[0])
     plan = qp.solve(x0, [A] * H, [B] * H, [c] * H, refs, (0.2, -0.1), bounds=[10.0])
     assert plan.ok
     expected = _unconstrained_plan(A, B, c, x0, refs, Q, 0.3, 0.01, np.array([0.2, -0.1]), H)
@@ -59,7 +60,8 @@ def test_the_qp_equals_the_dense_least_squares_plan_when_no_bound_is_active():
 def test_the_qp_keeps_the_input_bound():
     H = 5
     A, B = np.eye(1), np.eye(1)
-    qp = TrackingQP(1, 1, H, [100.0], r_du=0.0, r_u=0.0, u_max=0.5, bounded=[0], rho=1e4, rho1=1)
+    weights = QpWeights((100.0,), r_du=0.0, r_u=0.0, rho=1e4, rho1=1.0)
+    qp = TrackingQP(1, 1, H, weights, u_max=0.5, bounded=[0])
     plan = qp.solve(
         np.zeros(1), [A] * H, [B] * H, [np.zeros(1)] * H, np.full((H, 1), 9.0), [0], [20]
     )
