@@ -301,11 +301,17 @@ def _met(t, v, omega, lag: float) -> tuple[np.ndarray, np.ndarray]:
     where that is outside the log."""
     if lag == 0.0:
         return v, omega
-    from scipy.interpolate import CubicSpline
-
     at = t - lag
     inside = (at >= t[0]) & (at <= t[-1])
-    return tuple(np.where(inside, CubicSpline(t, x)(at), np.nan) for x in (v, omega))
+    return tuple(np.where(inside, spline(at), np.nan) for spline in _input_splines(t, v, omega))
+
+
+def _input_splines(t, v, omega):
+    """``v`` and ``omega`` between their samples, for a lagged log: cubic splines of the
+    inputs (see :func:`_met`)."""
+    from scipy.interpolate import CubicSpline
+
+    return CubicSpline(t, v), CubicSpline(t, omega)
 
 
 def step_errors(p: Params, keys, t, v, omega, phis):
@@ -324,9 +330,7 @@ def step_errors(p: Params, keys, t, v, omega, phis):
     h = (t[keep + 1] - t[keep])[:, None]
     ahead = v[keep], omega[keep], v[keep + 1], omega[keep + 1]
     if lagged:
-        from scipy.interpolate import CubicSpline
-
-        speeds, rates = CubicSpline(t, v), CubicSpline(t, omega)
+        speeds, rates = _input_splines(t, v, omega)
         lag_index = keys.index((0, HITCH_LAG))
 
     def residuals(x):
