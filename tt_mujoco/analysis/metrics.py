@@ -1,4 +1,5 @@
-"""Tracking metrics of a finished run, and the registry of extra metrics.
+"""Tracking metrics of a finished run (their names, units and the registry of extra metrics:
+:mod:`tt_mujoco.analysis.metric_names`).
 
 A run is a mapping of column name -> 1-D array, one sample per control step (SI units, radians),
 as logged by the simulation loop: ``t, x, y, phi, v, omega, x0, y0, x_ref, y_ref, v_d, omega_d,
@@ -33,7 +34,18 @@ from tt_mujoco.analysis.geometry import (
     signed_lateral_error,
     trailer_offtrack,
 )
-from tt_mujoco.registry import Registry
+from tt_mujoco.analysis.metric_names import (
+    DEFAULT_SUMMARY_KEYS,
+    METRIC_UNITS,
+    METRICS,
+    RUN_KEYS,
+    TEXT_METRICS,
+    builtin_key,
+    metric_name,
+    metric_unit,
+    resolve_metrics,
+    summary_table,
+)
 
 __all__ = [
     "CORE_COLUMNS",
@@ -98,74 +110,6 @@ REQUIRED_COLUMNS = CORE_COLUMNS + DIAGNOSTIC_COLUMNS
 #: Columns used when present: the reference heading (along-track error), the yaw-rate target
 #: the controller tracked (path feedback), whether the disturbance was clipped.
 OPTIONAL_COLUMNS = ("theta_ref", "omega_d_tracked", "dist_clipped")
-
-#: Rows of the CLI's printed summary, in order.
-DEFAULT_SUMMARY_KEYS = (
-    "rmse_v",
-    "max_abs_v",
-    "rmse_omega",
-    "max_abs_omega",
-    "rmse_lateral",
-    "max_lateral",
-    "cross_track_rms",
-    "along_track_rms",
-    "rmse_position",
-    "max_position",
-    "trailer_rmse_lateral",
-    "trailer_offtrack_rms",
-    "trailer_offtrack_max",
-    "phi_max_abs_deg",
-    "eq_violation_max",
-    "slip_lateral_max",
-    "slip_longitudinal_max",
-    "torque_saturation_fraction",
-    "sim_time_s",
-    "steps",
-    "finite_samples",
-)
-
-#: The unit of every built-in metric that is a number ("" for a count or a fraction); a
-#: trailer's own metric (``trailer_2_offtrack_rms``) has its one-trailer form's unit
-#: (:func:`metric_unit`). docs/metrics.md defines each.
-METRIC_UNITS = {
-    **dict.fromkeys(("rmse_v", "max_abs_v", "slip_lateral_max", "slip_longitudinal_max"), "m/s"),
-    **dict.fromkeys(
-        ("rmse_omega", "max_abs_omega", "rmse_omega_tracked", "max_abs_omega_tracked"), "rad/s"
-    ),
-    **dict.fromkeys(
-        (
-            *("rmse_lateral", "max_lateral", "cross_track_rms", "cross_track_max"),
-            *("along_track_rms", "along_track_max", "rmse_position", "max_position"),
-            *("trailer_rmse_lateral", "trailer_max_lateral", "trailer_offtrack_rms"),
-            *("trailer_offtrack_max", "leading_cross_track_rms", "leading_cross_track_max"),
-            *("train_offtrack_rms_worst", "train_offtrack_max_worst"),
-        ),
-        "m",
-    ),
-    **dict.fromkeys(("phi_max_abs_deg", "train_phi_max_abs_deg"), "deg"),
-    "eq_violation_max": "rad",
-    **dict.fromkeys(("sample_period_s", "sim_time_s", "wall_time_s"), "s"),
-    **dict.fromkeys(
-        (
-            *("torque_saturation_fraction", "disturbance_clipped_fraction", "steps"),
-            *("finite_samples", "trailer_lateral_samples", "trailer_offtrack_samples"),
-        ),
-        "",
-    ),
-}
-
-
-def metric_unit(name: str) -> str | None:
-    """The unit of the built-in metric ``name`` ("" for a pure number), None for one that is
-    not built in (a user's metric: its unit is its author's)."""
-    if name in METRIC_UNITS:
-        return METRIC_UNITS[name]
-    parts = name.split("_")
-    if len(parts) > 2 and parts[0] == "trailer" and parts[1].isdigit():
-        rest = "_".join(parts[2:])  # trailer_2_offtrack_rms, trailer_2_phi_max_abs_deg
-        return METRIC_UNITS.get(f"trailer_{rest}", METRIC_UNITS.get(rest))
-    return None
-
 
 # Relative margin under which a commanded torque counts as saturated: a controller that clips its
 # own output to exactly the limit must count as saturated despite rounding.
@@ -573,108 +517,6 @@ def _driven_path(leader) -> Polyline | None:
 def _worst(values) -> float:
     finite = [v for v in values if math.isfinite(v)]
     return max(finite) if finite else math.nan
-
-
-def _format_value(value) -> str:
-    if isinstance(value, bool | np.bool_):
-        return str(bool(value))
-    if isinstance(value, int | np.integer):
-        return str(int(value))
-    if isinstance(value, float | np.floating):
-        return f"{float(value):.6g}"
-    return str(value)
-
-
-def summary_table(metrics: Mapping[str, object], keys: Sequence[str] = DEFAULT_SUMMARY_KEYS) -> str:
-    """Plain-text table of selected metrics, for the CLI's printed summary.
-
-    Names are left-aligned, values right-aligned; floats use 6 significant digits; then each
-    built-in metric's unit (:func:`metric_unit`).
-
-    Parameters
-    ----------
-    metrics : mapping
-        E.g. the result of :func:`compute_metrics`, possibly with more entries.
-    keys : sequence of str
-        Rows, in order.
-
-    Raises
-    ------
-    ValueError
-        If a key is not in ``metrics``.
-    """
-    keys = list(keys)
-    missing = [k for k in keys if k not in metrics]
-    if missing:
-        raise ValueError(
-            f"summary keys {missing} are not in the metrics; available: {sorted(metrics)}"
-        )
-    if not keys:
-        return ""
-    values = [_format_value(metrics[k]) for k in keys]
-    name_width = max(len(k) for k in keys)
-    value_width = max(len(v) for v in values)
-    return "\n".join(
-        f"{k:<{name_width}}  {v:>{value_width}}  {metric_unit(k) or ''}".rstrip()
-        for k, v in zip(keys, values, strict=True)
-    )
-
-
-#: Extra metric name -> function ``fn(timeseries, path) -> float | dict``. ``METRICS.register``
-#: adds one; a hook ``module:function`` or ``file.py:function`` needs no registration.
-METRICS = Registry("metric")
-
-
-#: The keys ``metrics.json`` holds beside the metrics: the run's outcome, its configuration and
-#: its parts' reports (no user's metric may take one).
-RUN_KEYS = (
-    *("status", "message", "notes", "config", "metric_errors", "reversing"),
-    *("controller", "faults", "terrain", "ground", "world"),
-)
-#: Built-in metrics that are a word, not a number.
-TEXT_METRICS = ("offtrack_follower",)
-
-
-def builtin_key(name: str) -> bool:
-    """Whether ``metrics.json`` keeps ``name`` for a built-in metric or the run's own entry."""
-    return metric_unit(name) is not None or name in TEXT_METRICS or name in RUN_KEYS
-
-
-def resolve_metrics(specs) -> dict:
-    """``{name: function}`` for the names and hooks in ``specs``.
-
-    Raises
-    ------
-    ValueError
-        A bad name or hook, or one whose key (:func:`metric_name`) is a built-in metric's, the
-        run's own (:data:`RUN_KEYS`) or another of ``specs``': its value would replace theirs,
-        or be replaced.
-    """
-    out, given = {}, {}
-    for spec in specs:
-        fn = METRICS.resolve(spec)
-        if not callable(fn):
-            raise ValueError(f"metric {spec!r} is not allowed: {fn!r} is not callable")
-        name = metric_name(spec)
-        if builtin_key(name):
-            raise ValueError(
-                f"metric {spec!r} is not allowed: it would land under {name!r} in metrics.json, "
-                "which holds the run's own value there; rename the function (or register the "
-                "metric under another name)"
-            )
-        if name in out:
-            raise ValueError(
-                f"metric {spec!r} is not allowed: metric {given[name]!r} lands under {name!r} "
-                "already; rename one of the two functions"
-            )
-        out[name], given[name] = fn, spec
-    return out
-
-
-def metric_name(spec: str) -> str:
-    """The key a metric lands under in ``metrics.json``: the registered name, or the
-    function's name of a hook."""
-    return spec.rsplit(":", 1)[-1] if ":" in spec else spec
 
 
 def follower_offtrack(ts, reverse: bool = False) -> np.ndarray:
