@@ -20,12 +20,23 @@ import argparse
 import copy
 import dataclasses
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tt_mujoco.registry import closest, is_hook, normalise_hook, shown
+from tt_mujoco.registry import closest, shown
+from tt_mujoco.schema_values import (
+    boolean,
+    choice,
+    number,
+    optional_table,
+    refuse,
+    resolve_file,
+    spec_list,
+    table,
+    text,
+)
 
 __all__ = [
     "Option",
@@ -64,10 +75,6 @@ def table_of(pairs, flag: str) -> dict:
             )
         table[name] = value
     return table
-
-
-def _refuse(label: str, value, allowed: str) -> ValueError:
-    return ValueError(f"{label}={shown(value)} is not allowed: {allowed}")
 
 
 @dataclass(frozen=True)
@@ -168,176 +175,6 @@ def option(default=None, parse=None, help="", *, default_factory=None, **details
     if default_factory is not None:
         return dataclasses.field(default_factory=default_factory, metadata=metadata)
     return dataclasses.field(default=default, metadata=metadata)
-
-
-# --- parsers -----------------------------------------------------------------------------------
-def _interval(low, high, low_open, high_open, unit) -> str:
-    if low is not None and high is not None:
-        text = f"in {'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}"
-    elif low is not None:
-        text = f"{'>' if low_open else '>='} {low:g}"
-    elif high is not None:
-        text = f"{'<' if high_open else '<='} {high:g}"
-    else:
-        return "a finite number" + (f" ({unit})" if unit else "")
-    return f"a finite number {text}" + (f" {unit}" if unit else "")
-
-
-def number(
-    low=None,
-    high=None,
-    *,
-    low_open=False,
-    high_open=False,
-    integer=False,
-    optional=False,
-    unit="",
-    words=(),
-):
-    """A parser of a number in an interval; ``optional``: "none" is None; ``words``: texts
-    allowed besides numbers (kept in lower case)."""
-    if integer:
-        allowed = f"an integer >= {low:g}" if high is None else f"an integer in [{low}, {high}]"
-    else:
-        allowed = _interval(low, high, low_open, high_open, unit)
-    if words:
-        allowed = f"{', '.join(repr(w) for w in words)} or {allowed}"
-    if optional:
-        allowed += " (or none)"
-
-    def parse(value, label):
-        if optional and (value is None or (isinstance(value, str) and value.strip() == "none")):
-            return None
-        if isinstance(value, str) and value.strip().lower() in words:
-            return value.strip().lower()
-        x = value
-        if isinstance(x, str):
-            try:
-                x = int(x) if integer else float(x)
-            except ValueError:
-                raise _refuse(label, value, f"it must be {allowed}") from None
-        if integer and isinstance(x, float) and x.is_integer():
-            x = int(x)
-        ok_type = int if integer else int | float
-        if isinstance(x, bool) or not isinstance(x, ok_type) or not math.isfinite(x):
-            raise _refuse(label, value, f"it must be {allowed}")
-        if (low is not None and (x < low or (low_open and x == low))) or (
-            high is not None and (x > high or (high_open and x == high))
-        ):
-            raise _refuse(label, value, f"it must be {allowed}")
-        return x if integer else float(x)
-
-    return parse
-
-
-def choice(*allowed):
-    """A parser of one of ``allowed`` texts, with a "did you mean" for a near miss."""
-
-    def parse(value, label):
-        if value in allowed:
-            return value
-        close = closest(str(value), [str(a) for a in allowed])
-        hint = f" (did you mean {close!r}?)" if close else ""
-        raise _refuse(label, value, f"use one of {', '.join(repr(a) for a in allowed)}{hint}")
-
-    return parse
-
-
-def text(value, label):
-    """A parser of a non-empty text (kept stripped)."""
-    if not isinstance(value, str) or not value.strip():
-        raise _refuse(label, value, "it must be a non-empty string")
-    return value.strip()
-
-
-_TRUE = ("true", "on", "yes", "1")
-_FALSE = ("false", "off", "no", "0")
-
-
-def boolean(value, label):
-    """A parser of true/false (also on/off, yes/no, 1/0 as text)."""
-    if isinstance(value, bool):
-        return value
-    key = str(value).strip().lower()
-    if key in _TRUE:
-        return True
-    if key in _FALSE:
-        return False
-    raise _refuse(label, value, "use true or false")
-
-
-def spec_list(check_one: Callable[[Any, str], Any]):
-    """A parser of a list of specs: a list, or one text with specs separated by ";" ("none"
-    for no spec); each spec through ``check_one``."""
-
-    def parse(value, label):
-        if isinstance(value, str):
-            stripped = value.strip()
-            items = [] if stripped.lower() in ("", "none") else stripped.split(";")
-        elif isinstance(value, list | tuple):
-            items = list(value)
-        else:
-            raise _refuse(label, value, "give a list of specs")
-        return [check_one(item.strip() if isinstance(item, str) else item, label) for item in items]
-
-    return parse
-
-
-def table(entry_parse, names: Sequence[str] | None = None):
-    """A parser of a table ``{NAME: value}`` (each value through ``entry_parse``; ``names``:
-    the allowed names, None for any identifier)."""
-
-    def parse(value, label):
-        if not isinstance(value, Mapping):
-            raise _refuse(label, value, "give a table of NAME = value")
-        out = {}
-        for key, item in value.items():
-            if names is not None and key not in names:
-                close = closest(str(key), list(names))
-                hint = f" (did you mean {close!r}?)" if close else ""
-                raise ValueError(
-                    f"{label}: {key!r} is not allowed{hint}: use one of {', '.join(names)}"
-                )
-            if names is None and not (isinstance(key, str) and key.isidentifier()):
-                raise ValueError(f"{label}: {key!r} is not allowed: a name is an identifier")
-            out[key] = entry_parse(item, f"{label}.{key}")
-        return out
-
-    parse.names = tuple(names) if names is not None else None  # the allowed entries
-    return parse
-
-
-def optional_table(entry_parse):
-    """A parser of a table that may be off: ``None``/false/"off" is off, true/"on" is the
-    defaults (``{}``), a table gives its entries."""
-    inner = table(entry_parse)
-
-    def parse(value, label):
-        if value is None:
-            return None
-        if isinstance(value, Mapping):
-            return inner(value, label)
-        try:
-            on = boolean(value, label)
-        except ValueError:
-            raise _refuse(label, value, "use on (the defaults), off, or a table of gains") from None
-        return {} if on else None
-
-    return parse
-
-
-def resolve_file(value, base: Path | None):
-    """A file or hook value resolved against ``base`` (None: the current folder)."""
-    if isinstance(value, list):
-        return [resolve_file(v, base) for v in value]
-    if not isinstance(value, str):
-        return value
-    if value.lower().endswith(".csv"):
-        path = Path(value)
-        return str(path if path.is_absolute() else ((base or Path.cwd()) / path).absolute())
-    if is_hook(value):
-        return normalise_hook(value, base.absolute() if base is not None else None)
-    return value
 
 
 # --- the schema --------------------------------------------------------------------------------
@@ -465,7 +302,7 @@ class Schema:
             elif boolean(value, label):
                 parsed = const
             else:
-                raise _refuse(label, value, f"use true (it means {opt.name} = {const!r})")
+                raise refuse(label, value, f"use true (it means {opt.name} = {const!r})")
             if opt.file:
                 parsed = resolve_file(parsed, base)
             out[opt.name] = parsed
