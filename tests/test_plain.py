@@ -368,8 +368,9 @@ def test_a_constant_changed_in_the_process_is_compiled_again():
     module = types.ModuleType("constants_law")
     exec(
         "GAIN = 2.0\n"
+        "OFFSET = 0.5\n"
         "def helper(x):\n    return GAIN * x\n"
-        "def law(m, r, model, k, s, dt, torque_limit):\n    return helper(1.0), 0.0\n",
+        "def law(m, r, model, k, s, dt, torque_limit):\n    return helper(1.0) + OFFSET, 0.0\n",
         module.__dict__,
     )
     law = module.law
@@ -380,3 +381,5 @@ def test_a_constant_changed_in_the_process_is_compiled_again():
     assert compiled_law.frozen_values(reached) != before
     module.GAIN = 2.0
     assert compiled_law.frozen_values(reached) == before
+    # a law's helpers come as a set (in no fixed order across processes): the key is the same
+    assert compiled_law.frozen_values(reached[::-1]) == before

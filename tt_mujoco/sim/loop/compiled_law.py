@@ -64,24 +64,26 @@ def frozen_values(functions) -> str:
     them: the values of the globals they read that are data (numbers, strings, bytes, None,
     tuples of them, NumPy arrays and scalars), and of the attributes they read of a module
     global; a digest, which changes when one of those values does (an environment variable or
-    a file read when the module was imported, a constant edited in another module)."""
+    a file read when the module was imported, a constant edited in another module). The
+    digest does not depend on the order of ``functions``: each value is labelled by its
+    function and name, and the labels are hashed in order."""
     import types
 
     import numpy as np
 
-    digest = hashlib.sha256()
+    entries: dict[str, bytes] = {}
 
     def add(label: str, value) -> None:
         if isinstance(value, np.ndarray):
-            digest.update(f"{label}={value.dtype.str}{value.shape}".encode())
-            digest.update(np.ascontiguousarray(value).tobytes())
+            head = f"{value.dtype.str}{value.shape}".encode()
+            entries[label] = head + np.ascontiguousarray(value).tobytes()
         elif isinstance(value, tuple):
             for i, item in enumerate(value):
                 add(f"{label}[{i}]", item)
         elif value is None or isinstance(value, bool | int | float | complex | str | bytes):
-            digest.update(f"{label}={type(value).__name__}:{value!r};".encode())
+            entries[label] = f"{type(value).__name__}:{value!r}".encode()
         elif isinstance(value, np.generic):
-            digest.update(f"{label}={value.dtype.str}:{value!r};".encode())
+            entries[label] = f"{value.dtype.str}:{value!r}".encode()
 
     for fn in functions:
         names = fn.__code__.co_names
@@ -91,9 +93,13 @@ def frozen_values(functions) -> str:
             value = fn.__globals__[name]
             if isinstance(value, types.ModuleType):
                 for attribute in names:
-                    add(f"{fn.__qualname__}:{name}.{attribute}", getattr(value, attribute, None))
+                    if hasattr(value, attribute):
+                        add(f"{fn.__qualname__}:{name}.{attribute}", getattr(value, attribute))
             else:
                 add(f"{fn.__qualname__}:{name}", value)
+    digest = hashlib.sha256()
+    for label in sorted(entries):
+        digest.update(f"{label}=".encode() + entries[label] + b";")
     return digest.hexdigest()[:16]
 
 
