@@ -114,9 +114,14 @@ class Worker:
         """Whether the call runs in a process of its own."""
         return self._forked
 
+    @property
+    def called(self) -> bool:
+        """Whether the worker has been handed its call."""
+        return self._call is not None
+
     def call(self, fn: Callable, *args, **kwargs) -> None:
         """Hand the worker ``fn(*args, **kwargs)`` (pickled on the way); returns at once."""
-        if self._call is not None or self._answer is not None:
+        if self.called:
             raise RuntimeError("a Worker takes one call")
         if not self._forked:
             self._call = (fn, args, kwargs)
@@ -136,7 +141,7 @@ class Worker:
             The worker ended without answering.
         """
         if self._answer is None:
-            if self._call is None:
+            if not self.called:
                 raise RuntimeError("result() before call()")
             if not self._forked:
                 fn, args, kwargs = self._call

@@ -294,7 +294,7 @@ class TractorTrailerEnv(gymnasium.Env):
 
     def _use_leg(self, index: int, built, stepper) -> None:
         """Drive leg ``index`` of the episode (``built``, with ``stepper``): its path, its
-        target, its direction (the unit that leads), the time it starts at."""
+        target, its direction (the unit that leads)."""
         self._leg, self._built, self._stepper = index, built, stepper
         self.path, self.target = built.path, built.target
         self._reverse = bool(built.scenario.reverse)
@@ -352,8 +352,8 @@ class TractorTrailerEnv(gymnasium.Env):
         if self.action_units == "normalized":
             a = a * self._action_scale
         stepper = self._stepper
-        leg_left = self._built.steps - stepper.k - 1
-        steps_left = self.steps_left()
+        leg_left = self._leg_steps_left()
+        steps_left = leg_left + self._legs.steps_after(self._leg)
         try:
             if not stepper.actuate(float(a[0]), float(a[1])):
                 raise RuntimeError("the episode is over: call reset()")
@@ -372,8 +372,11 @@ class TractorTrailerEnv(gymnasium.Env):
     def steps_left(self) -> int:
         """Control steps left in the episode after the coming one (every later leg's as
         planned)."""
-        left = self._built.steps - self._stepper.k - 1
-        return left + self._legs.steps_after(self._leg)
+        return self._leg_steps_left() + self._legs.steps_after(self._leg)
+
+    def _leg_steps_left(self) -> int:
+        """Control steps left in the leg that is driven, after the coming one."""
+        return self._built.steps - self._stepper.k - 1
 
     def _stopped(self, status: str, message: str, steps_left: int):
         """The step that ends the episode early: the last observation, the penalty."""

@@ -305,13 +305,12 @@ def _live_view(built, shown: dict):
     if not shown["live"]:
         return None
     from tt_mujoco.viz.foxglove_live import FoxgloveLive, LiveError
-    from tt_mujoco.world.builtin import parse_world
 
     try:
         live = FoxgloveLive(
             built.plant_params,
             built.path.dense(),
-            parse_world(scenario.world),
+            built.world,
             port=shown["live"],
             realtime=shown["live_realtime"],
         )

@@ -254,14 +254,9 @@ def figure_worker(built):
     from tt_mujoco.viz.run_figures import RunFigures
 
     figures = RunFigures()
-    world = None
-    if built.scenario.world != "none":
-        from tt_mujoco.world.builtin import parse_world
-
-        world = parse_world(built.scenario.world)
 
     def on_rows(ts, reference_polyline) -> None:
         if len(ts["t"]) >= 2:
-            figures.draw(ts, reference_polyline, built.plant_params, world)
+            figures.draw(ts, reference_polyline, built.plant_params, built.world)
 
     return figures, on_rows

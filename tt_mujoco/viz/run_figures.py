@@ -66,13 +66,16 @@ class RunFigures:
 
     def __init__(self, forked: bool | None = None):
         self._worker = Worker(_prepare, forked=forked)
-        self.asked = False
+
+    @property
+    def asked(self) -> bool:
+        """Whether the worker has been handed a time series."""
+        return self._worker.called
 
     def draw(self, ts: Mapping, reference_polyline, params=None, world=None) -> None:
         """Hand the worker this time series (once); returns at once. The arguments are
         :func:`tt_mujoco.viz.plots.run_pngs`'."""
         self._worker.call(_draw_groups, ts, reference_polyline, params, world)
-        self.asked = True
 
     def result(self) -> dict[str, bytes]:
         """The figures as PNG files' bytes by file name, in :data:`~tt_mujoco.viz.FIGURES`
