@@ -59,7 +59,9 @@ reward that of the step; the episode's time runs on; ``max_steps`` and the space
 leg as planned, and truncation comes at the end of the last.
 
 Vectorised, the environment resets an episode that ended on the step after (gymnasium's
-``AutoresetMode.NEXT_STEP``, ``metadata["autoreset_mode"]``).
+``AutoresetMode.NEXT_STEP``, ``metadata["autoreset_mode"]``). ``gymnasium.make_vec(ENV_ID,
+num_envs=N)`` makes :class:`tt_mujoco.gym_vector.TractorTrailerVectorEnv`, whose episodes step
+together in compiled code, the same numbers as this env's.
 
 One step is one control period ``scenario.control_dt`` (default here 0.01 s: 10 physics
 steps of 1 ms). The default scenario has no disturbance (``Scenario(disturbance="none")``);
@@ -68,7 +70,8 @@ path feedback, faults, path hooks, ...), because the environment drives the same
 :class:`~tt_mujoco.sim.loop.stepper.Stepper` as :func:`~tt_mujoco.sim.simulate`. The noise seed is
 ``reset(seed=...)``; the first reset without a seed uses the scenario's, so the same seed gives
 the same episode on every route. Registered as ``tt_mujoco/TractorTrailer-v0``; vectorised
-with ``gymnasium.make_vec(ENV_ID, num_envs=N, vectorization_mode="sync")`` (or "async").
+with ``gymnasium.make_vec(ENV_ID, num_envs=N)`` (the vector env above), or as Gymnasium's
+vectors of this env with ``vectorization_mode="sync"`` (or "async").
 
 **Rendering** needs ``render_mode="rgb_array"`` at construction (the MuJoCo plant only):
 ``render()`` then returns a 480 x 640 RGB frame of the current state. With
@@ -517,5 +520,9 @@ class TractorTrailerEnv(gymnasium.Env):
         }
 
 
-if ENV_ID not in gymnasium.registry:
-    gymnasium.register(id=ENV_ID, entry_point="tt_mujoco.gym_env:TractorTrailerEnv")
+if ENV_ID not in gymnasium.registry:  # make_vec's default: the vector env (tt_mujoco.gym_vector)
+    gymnasium.register(
+        id=ENV_ID,
+        entry_point="tt_mujoco.gym_env:TractorTrailerEnv",
+        vector_entry_point="tt_mujoco.gym_vector:TractorTrailerVectorEnv",
+    )

@@ -18,7 +18,7 @@ import ctypes
 import math
 import types as pytypes
 
-from llvmlite import binding
+from llvmlite import binding, ir
 from numba import cfunc, njit, types
 from numba.extending import intrinsic, overload, register_jitable
 
@@ -26,7 +26,7 @@ from tt_mujoco import exact
 from tt_mujoco.analysis import nearest
 from tt_mujoco.compiled_form import compiled_form_reason
 from tt_mujoco.reference import feedback
-from tt_mujoco.sim.loop import closed_loop, law, target_step
+from tt_mujoco.sim.loop import agent_step, closed_loop, law, target_step
 from tt_mujoco.sim.loop.kernel_sources import SHARED
 from tt_mujoco.sim.parts import disturbances
 from tt_mujoco.vehicle import path_schedule
@@ -195,9 +195,49 @@ def _pointer(typingctx, array):
     return _P(array), codegen
 
 
-@compiled_form_of(law.pointer)
-def _pointer_of(array):
-    return lambda array: _pointer(array)
+def address_of(function) -> int:
+    """The address of a C function the kernel calls: a callback's (:class:`CalledBack`) or a
+    compiled function's (a user's law, a placeholder). The records hold it as an integer,
+    which numba passes at no cost; a function object it would look up at every call."""
+    if isinstance(function, CalledBack):
+        return function.__wrapper_address__()
+    return function.address
+
+
+def _call_codegen(signature):
+    """Code that calls the C function at ``args[0]`` (an integer address) with the rest of
+    the arguments (a tuple's items in its place), each cast to ``signature``'s type."""
+
+    def codegen(context, builder, sig, args):
+        given = []
+        for value, kind in zip(args[1:], sig.args[1:], strict=True):
+            if isinstance(kind, types.BaseTuple):
+                given += [(builder.extract_value(value, i), t) for i, t in enumerate(kind)]
+            else:
+                given.append((value, kind))
+        wanted = signature.args
+        function_type = ir.FunctionType(ir.VoidType(), [context.get_value_type(t) for t in wanted])
+        function = builder.inttoptr(args[0], function_type.as_pointer())
+        cast = [
+            context.cast(builder, value, kind, want)
+            for (value, kind), want in zip(given, wanted, strict=True)
+        ]
+        builder.call(function, cast)
+        return context.get_dummy_value()
+
+    return codegen
+
+
+@intrinsic
+def _call_hook(typingctx, address, what, value, out):
+    """The hook (:data:`HOOK`) at ``address`` called."""
+    return types.void(address, what, value, out), _call_codegen(HOOK)
+
+
+@intrinsic
+def _call_law(typingctx, address, pointers, dt, limit):
+    """The law (:data:`USER_LAW`) at ``address`` called with its six ``pointers``."""
+    return types.void(address, pointers, dt, limit), _call_codegen(USER_LAW)
 
 
 @njit(cache=True)
@@ -221,7 +261,7 @@ def _path_pose(target, s):
 def _hooked_curvature(target, s):
     def call_back(target, s):
         out = target.hook_out
-        target.path_hook(target_step.HOOK_CURVATURE, s, _pointer(out))
+        _call_hook(target.path_hook, target_step.HOOK_CURVATURE, s, _pointer(out))
         return out[0], out[1]
 
     return call_back
@@ -232,7 +272,7 @@ def _pose_called_back(what: float):
 
     def call_back(target, s):
         out = target.hook_out
-        target.path_hook(what, s, _pointer(out))
+        _call_hook(target.path_hook, what, s, _pointer(out))
         return out[0], out[1], out[2]
 
     return call_back
@@ -252,7 +292,7 @@ def _hooked_law_pose(target, s):
 def _hooked_disturbance_at(loop, t):
     def call_back(loop, t):
         out = loop.hook_out
-        loop.disturbance_hook(disturbances.HOOK_DISTURBANCE, t, _pointer(out))
+        _call_hook(loop.disturbance_hook, disturbances.HOOK_DISTURBANCE, t, _pointer(out))
         return out[0], out[1]
 
     return call_back
@@ -261,13 +301,13 @@ def _hooked_disturbance_at(loop, t):
 @compiled_form_of(law.python_law)
 def _python_law(law):
     """A law Python computes (a controller class's ``compute``), called back: ``law.user`` is
-    then a C function (:class:`PythonLawCallback`) that reads the law
+    then the address of a C function (:class:`PythonLawCallback`) that reads the law
     record from Python and writes ``(T_r, T_l, u1, u2, status)`` into ``law.torques``."""
 
     def call_back(law):
         out = law.torques
         at = _pointer(out)
-        law.user(at, at, at, at, at, at, 0.0, 0.0)
+        _call_law(law.user, (at, at, at, at, at, at), 0.0, 0.0)
         return int(out[4]), out[0], out[1], out[2], out[3]
 
     return call_back
@@ -283,6 +323,20 @@ def _dispatch(functions, args: str):
     scope = {f"FUNCTION_{i}": function for i, function in enumerate(functions)}
     exec("\n".join(lines), scope)
     return scope["run"]
+
+
+@compiled_form_of(law.user_law)
+def _user_law(law, dt, limit):
+    """A user's compiled law called by its address (``law.user``)."""
+
+    def call(law, dt, limit):
+        pointers = (
+            _pointer(law.measurement_values), _pointer(law.reference), _pointer(law.model),
+            _pointer(law.user_gains), _pointer(law.user_state), _pointer(law.torques),
+        )  # fmt: skip
+        _call_law(law.user, pointers, dt, limit)
+
+    return call
 
 
 @compiled_form_of(law.run_law)
@@ -371,10 +425,11 @@ def _hypot_of(x, y):
     return lambda x, y: _hypot(x, y)
 
 
-def _with_halves(fn):
-    """``fn`` (:func:`~tt_mujoco.sim.loop.closed_loop.run_steps`) reading the inlined halves where
-    its source names the plain ones."""
-    names = {**fn.__globals__, "sense_step": _sense_step, "actuate_step": _actuate_step}
+def _with_halves(fn, **inlined):
+    """``fn`` (:func:`~tt_mujoco.sim.loop.closed_loop.run_steps`, an agent's step) reading the
+    inlined halves where its source names the plain ones (and the ``inlined`` functions where it
+    names them)."""
+    names = {**fn.__globals__, "sense_step": _sense_step, "actuate_step": _actuate_step, **inlined}
     return pytypes.FunctionType(fn.__code__, names, fn.__name__, fn.__defaults__)
 
 
@@ -386,6 +441,24 @@ def run_chunk(k, k_end, loop, plant, law, target, log, stop_record):
     """:func:`tt_mujoco.sim.loop.closed_loop.run_steps`, compiled: control steps ``k..k_end``;
     ``(status, k)``."""
     return _run_steps(k, k_end, loop, plant, law, target, log, stop_record)
+
+
+_sense_and_observe = njit(_nrt=False, inline="always")(_with_halves(agent_step.sense_and_observe))
+_act_then_sense = njit(_nrt=False, inline="always")(
+    _with_halves(agent_step.act_then_sense, sense_and_observe=_sense_and_observe)
+)
+
+
+@njit(cache=True, nogil=True, _nrt=False)  # without the counting: see closed_loop.BORROWING
+def agent_sense(k, episode, agent):
+    """:func:`tt_mujoco.sim.loop.agent_step.sense_and_observe`, compiled; the stop code."""
+    return _sense_and_observe(k, episode, agent)
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def agent_act(k, T_r, T_l, episode, agent):
+    """:func:`tt_mujoco.sim.loop.agent_step.act_then_sense`, compiled; the stop code."""
+    return _act_then_sense(k, T_r, T_l, episode, agent)
 
 
 @njit(cache=True)

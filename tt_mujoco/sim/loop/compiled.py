@@ -56,10 +56,12 @@ from tt_mujoco.sim.loop.cache_key import digest_by_stamp, source_digest
 __all__ = [
     "Fallback",
     "compile_failure",
+    "entry_point",
     "kernel",
     "not_ready",
     "run_compiled",
     "source_digest",
+    "unavailable",
     "unsupported",
 ]
 
@@ -88,6 +90,17 @@ class Fallback(Exception):  # noqa: N818 - a route, not an error: the Python loo
     run's notes carry (:func:`tt_mujoco.sim.simulate.run_episode`). Nothing has run."""
 
 
+def unavailable() -> str | None:
+    """Why no episode of this process runs compiled (None when it can); only a query."""
+    if not _enabled():
+        return "TT_MUJOCO_COMPILED=0 turns the compiled loop off"
+    from importlib.util import find_spec
+
+    if find_spec("numba") is None:  # not imported: a run that takes the Python loop never needs it
+        return "numba is not installed"
+    return None
+
+
 def unsupported(built, controller, on_step=None) -> str | None:
     """Why the episode has no compiled form (None when it has one); only a query."""
     reasons = [
@@ -102,11 +115,7 @@ def unsupported(built, controller, on_step=None) -> str | None:
     for failed, reason in reasons:
         if failed:
             return reason
-    from importlib.util import find_spec
-
-    if find_spec("numba") is None:  # not imported: a run that takes the Python loop never needs it
-        return "numba is not installed"
-    return None
+    return unavailable()
 
 
 def not_ready() -> str | None:
@@ -426,6 +435,16 @@ def _compiled_for(dispatcher, args):
     return entry
 
 
+def entry_point(dispatcher, args):
+    """The compiled entry point of the kernel's ``dispatcher`` for ``args``' types
+    (:func:`_compiled_for`); when it was compiled here, the cache's files are listed again."""
+    compiled_before = sum(dispatcher.stats.cache_misses.values())
+    entry = _compiled_for(dispatcher, args)
+    if sum(dispatcher.stats.cache_misses.values()) > compiled_before:
+        _write_manifest(compiled_here=True)
+    return entry
+
+
 #: Compiled entry points by (dispatcher, :func:`type_key` of their arguments).
 _ENTRIES: dict = {}
 
@@ -521,9 +540,8 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
         raise Fallback(
             f"the law {controller.name!r} has no compiled form: {compile_failure(err, source)}"
         ) from err
-    loop, _, law, target, _ = stepper.begin(controller, user, kernel=k_mod)
-    hooks = (law.user, target.path_hook, loop.disturbance_hook)
-    called_back = [hook for hook in hooks if isinstance(hook, k_mod.CalledBack)]
+    stepper.begin(controller, user, kernel=k_mod)
+    called_back = [hook for hook in stepper.hooks if isinstance(hook, k_mod.CalledBack)]
     entry = None
 
     def run_chunk(*args):

@@ -21,12 +21,21 @@ import types
 from tt_mujoco.analysis import nearest
 from tt_mujoco.compiled_form import compiled_form_reason
 from tt_mujoco.controllers import backing, path_view
-from tt_mujoco.sim.loop import closed_loop, law, records
+from tt_mujoco.sim.loop import agent_step, closed_loop, law, records
 from tt_mujoco.sim.parts import disturbances, measure, motors, wind
 from tt_mujoco.vehicle import reduced, train
 from tt_mujoco.world import part
 
-__all__ = ["COMPILED_FORMS", "LAWS", "RECORDS", "SHARED", "STEP", "discover", "source_files"]
+__all__ = [
+    "AGENT",
+    "COMPILED_FORMS",
+    "LAWS",
+    "RECORDS",
+    "SHARED",
+    "STEP",
+    "discover",
+    "source_files",
+]
 
 #: The built-in laws (:data:`tt_mujoco.sim.loop.law.LAWS`).
 LAWS = law.LAWS
@@ -34,6 +43,9 @@ LAWS = law.LAWS
 #: The closed loop's step (:mod:`tt_mujoco.sim.loop.closed_loop`), which the kernel registers with
 #: its own options.
 STEP = (*closed_loop.BORROWING, *closed_loop.HALVES)
+#: An agent's step (:mod:`tt_mujoco.sim.loop.agent_step`), which the kernel compiles as its own
+#: entry points, with the step's halves inlined.
+AGENT = (agent_step.act_then_sense, agent_step.sense_and_observe)
 
 _PACKAGE = "tt_mujoco."
 
@@ -100,12 +112,13 @@ SHARED, COMPILED_FORMS = discover(
     (
         *STEP,
         closed_loop.run_steps,
+        *AGENT,
         *LAWS,
         *disturbances.DISTURBANCE_FORMS,
         nearest.nearest_segments_of,
         *path_view.LAW_LIBRARY,
     ),
-    step=(*STEP, closed_loop.run_steps),
+    step=(*STEP, closed_loop.run_steps, *AGENT),
 )
 
 
@@ -138,6 +151,6 @@ def source_files() -> list[str]:
     """The files the shared functions and the record types are defined in, each once, in the
     order of their modules' names (so the same sources in another folder list alike); numba
     compiles the functions with their module's constants, so the whole file counts."""
-    objects = (*SHARED, *STEP, *COMPILED_FORMS, *RECORDS)
+    objects = (*SHARED, *STEP, *AGENT, *COMPILED_FORMS, *RECORDS)
     files = {obj.__module__: inspect.getsourcefile(obj) for obj in objects}
     return [files[module] for module in sorted(files)]

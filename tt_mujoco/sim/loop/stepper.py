@@ -90,11 +90,18 @@ def _called_back(stepper, made, kernel):
         if disturbance is None
         else kernel.HookCallback(lambda what, t: disturbance(t), loop.hook_out)
     )
-    for hook in (law.user, target.path_hook, loop.disturbance_hook):
+    hooks = (law.user, target.path_hook, loop.disturbance_hook)
+    for hook in hooks:
         if isinstance(hook, kernel.CalledBack):
             hook.stop_record = stop
-    if isinstance(law.user, kernel.PythonLawCallback):
-        law.user.law_record = law
+    # The kernel takes each C function by its address (an integer is passed to it at no cost;
+    # a function object is looked up again at every call); the objects stay with the stepper.
+    stepper.hooks = hooks
+    law = law._replace(user=kernel.address_of(law.user))
+    target = target._replace(path_hook=kernel.address_of(target.path_hook))
+    loop = loop._replace(disturbance_hook=kernel.address_of(loop.disturbance_hook))
+    if isinstance(hooks[0], kernel.PythonLawCallback):
+        hooks[0].law_record = law
     return records.EpisodeRecords(loop, plant, law, target, stop)
 
 
@@ -174,6 +181,9 @@ class Stepper:
         self.drag = DragConstants(*(getattr(b.plant_params, f) for f in DragConstants._fields))
         self._blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self._episode = None  # the records: begin()
+        #: The C functions the kernel's records name by address (the law, the path, the
+        #: disturbance; begin()), held while it runs.
+        self.hooks: tuple = ()
         self._log = None  # the log of the rows being computed, from step _log_k; _taken kept
 
     # --- the records ---------------------------------------------------------------------
@@ -199,6 +209,7 @@ class Stepper:
             made = episode.episode_records(self, controller, compiled_law, callback)
             made = _called_back(self, made, kernel)
         else:
+            self.hooks = ()
             if controller is None or not episode.runs_built_in(controller):
                 python = PythonLaw(self, controller)
             made = records.listed(
@@ -214,6 +225,15 @@ class Stepper:
         if self.motors is not None:  # the motors' torques as the step delivers them
             self.motors.torques = made.loop.motor_torques
         return made
+
+    def begin_agent(self, kernel=None) -> tuple:
+        """Make the (reset) episode's records for an agent's steps
+        (:mod:`tt_mujoco.sim.loop.agent_step`), for the compiled ``kernel`` or, without one,
+        for CPython: ``(loop, plant, law, target, log, stop)``, the log of two rows (step ``k``
+        in row ``k % 2``)."""
+        loop, plant, law, target, stop = self.begin(None, None, kernel=kernel)
+        self._start_log(self.k, 2)
+        return loop, plant, law, target, self._log, stop
 
     # --- the episode, run to its end ------------------------------------------------------
     def run(self, run_chunk=None, advance=None, progress=None, on_step=None) -> tuple[str, str]:
