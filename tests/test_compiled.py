@@ -397,8 +397,11 @@ def test_a_subclass_of_a_built_in_law_runs_its_compute_called_back(monkeypatch):
     stepper.reset(np.random.default_rng(0))
     kernel = compiled.kernel()
     _, _, law, _, _ = stepper.begin(controller, None, kernel=kernel)
-    assert law.kind == PYTHON and isinstance(stepper.hooks[0], kernel.PythonLawCallback)
-    assert law.user == kernel.address_of(stepper.hooks[0])  # the kernel calls it by address
+    assert law.kind == PYTHON and isinstance(law.user, kernel.PythonLawCallback)
+    assert stepper.hooks[0] is law.user  # held while the kernel calls it
+    # an agent's records name it by address
+    _, _, law, _, _ = stepper.begin(controller, None, kernel, by_address=True)
+    assert law.user == kernel.address_of(stepper.hooks[0])
 
 
 FAILING = """

@@ -195,49 +195,48 @@ def _pointer(typingctx, array):
     return _P(array), codegen
 
 
+@compiled_form_of(law.pointer)
+def _pointer_of(array):
+    return lambda array: _pointer(array)
+
+
 def address_of(function) -> int:
     """The address of a C function the kernel calls: a callback's (:class:`CalledBack`) or a
-    compiled function's (a user's law, a placeholder). The records hold it as an integer,
-    which numba passes at no cost; a function object it would look up at every call."""
+    compiled function's (a user's law, a placeholder), which an agent's records hold
+    (:func:`_call_hook`)."""
     if isinstance(function, CalledBack):
         return function.__wrapper_address__()
     return function.address
 
 
-def _call_codegen(signature):
-    """Code that calls the C function at ``args[0]`` (an integer address) with the rest of
-    the arguments (a tuple's items in its place), each cast to ``signature``'s type."""
+@intrinsic
+def _call_hook_at(typingctx, address, what, value, out):
+    """The hook (:data:`HOOK`) at ``address`` (an integer) called."""
 
     def codegen(context, builder, sig, args):
-        given = []
-        for value, kind in zip(args[1:], sig.args[1:], strict=True):
-            if isinstance(kind, types.BaseTuple):
-                given += [(builder.extract_value(value, i), t) for i, t in enumerate(kind)]
-            else:
-                given.append((value, kind))
-        wanted = signature.args
+        wanted = HOOK.args
         function_type = ir.FunctionType(ir.VoidType(), [context.get_value_type(t) for t in wanted])
         function = builder.inttoptr(args[0], function_type.as_pointer())
-        cast = [
-            context.cast(builder, value, kind, want)
-            for (value, kind), want in zip(given, wanted, strict=True)
-        ]
-        builder.call(function, cast)
+        given = zip(args[1:], sig.args[1:], wanted, strict=True)
+        builder.call(function, [context.cast(builder, v, kind, to) for v, kind, to in given])
         return context.get_dummy_value()
 
-    return codegen
+    return types.void(address, what, value, out), codegen
 
 
-@intrinsic
-def _call_hook(typingctx, address, what, value, out):
-    """The hook (:data:`HOOK`) at ``address`` called."""
-    return types.void(address, what, value, out), _call_codegen(HOOK)
+def _call_hook(hook, what, value, out):
+    """The hook (:data:`HOOK`) a record holds called: a C function object, or its address."""
 
 
-@intrinsic
-def _call_law(typingctx, address, pointers, dt, limit):
-    """The law (:data:`USER_LAW`) at ``address`` called with its six ``pointers``."""
-    return types.void(address, pointers, dt, limit), _call_codegen(USER_LAW)
+# A record names its C functions by object for the chunk loop, which takes them once a chunk,
+# and by address for an agent's step, which takes them at every call (an object is looked up
+# each time, an integer passed at no cost; the agent's step never calls the law). Inlined:
+# called, the chunk loop's code came out a third slower on the reduced plant.
+@overload(_call_hook, inline="always")
+def _call_hook_by(hook, what, value, out):
+    if isinstance(hook, types.Integer):
+        return lambda hook, what, value, out: _call_hook_at(hook, what, value, out)
+    return lambda hook, what, value, out: hook(what, value, out)
 
 
 @njit(cache=True)
@@ -301,13 +300,13 @@ def _hooked_disturbance_at(loop, t):
 @compiled_form_of(law.python_law)
 def _python_law(law):
     """A law Python computes (a controller class's ``compute``), called back: ``law.user`` is
-    then the address of a C function (:class:`PythonLawCallback`) that reads the law
+    then a C function (:class:`PythonLawCallback`) that reads the law
     record from Python and writes ``(T_r, T_l, u1, u2, status)`` into ``law.torques``."""
 
     def call_back(law):
         out = law.torques
         at = _pointer(out)
-        _call_law(law.user, (at, at, at, at, at, at), 0.0, 0.0)
+        law.user(at, at, at, at, at, at, 0.0, 0.0)
         return int(out[4]), out[0], out[1], out[2], out[3]
 
     return call_back
@@ -323,20 +322,6 @@ def _dispatch(functions, args: str):
     scope = {f"FUNCTION_{i}": function for i, function in enumerate(functions)}
     exec("\n".join(lines), scope)
     return scope["run"]
-
-
-@compiled_form_of(law.user_law)
-def _user_law(law, dt, limit):
-    """A user's compiled law called by its address (``law.user``)."""
-
-    def call(law, dt, limit):
-        pointers = (
-            _pointer(law.measurement_values), _pointer(law.reference), _pointer(law.model),
-            _pointer(law.user_gains), _pointer(law.user_state), _pointer(law.torques),
-        )  # fmt: skip
-        _call_law(law.user, pointers, dt, limit)
-
-    return call
 
 
 @compiled_form_of(law.run_law)

@@ -110,6 +110,7 @@ def run_law_written_out():
     return scope["run_law"]
 
 
+@compiled_form("the array's data address as a C double pointer (an intrinsic)")
 def pointer(array):
     """The address of a contiguous float array's data, as a C double pointer. A record as
     CPython reads it (:func:`tt_mujoco.sim.loop.records.interpreted`) is passed as a copy of its
@@ -130,26 +131,6 @@ def python_law(law):
     return law.user(law)
 
 
-@compiled_form("the user's compiled law called by its address in the law record")
-def user_law(law, dt, limit) -> None:
-    """A user's plain-number law (:data:`USER`), ``law.user``, called with pointers to the law
-    record's arrays (:data:`tt_mujoco.sim.loop._kernel.USER_LAW`); it writes its torques into
-    ``law.torques``. The kernel's records name it by its address: CPython calls it there."""
-    out, user = law.torques, law.user
-    if isinstance(user, int):
-        user = _C_LAW(user)
-    user(
-        pointer(law.measurement_values), pointer(law.reference), pointer(law.model),
-        pointer(law.user_gains), pointer(law.user_state), pointer(out), dt, limit,
-    )  # fmt: skip
-
-
-#: A user's compiled law as ctypes calls it (:data:`tt_mujoco.sim.loop._kernel.USER_LAW`).
-_C_LAW = ctypes.CFUNCTYPE(
-    None, *[ctypes.POINTER(ctypes.c_double)] * 6, ctypes.c_double, ctypes.c_double
-)
-
-
 def law_step(law, v_m, w_m, dt, limit):
     """The law's ``(status, T_r, T_l, u1, u2)`` at the reference and the nominal model in
     ``law``; its state updated in place."""
@@ -158,7 +139,10 @@ def law_step(law, v_m, w_m, dt, limit):
     r, nominal, flags = law.reference[0], law.model[0], law.flags[0]
     if law.kind == USER:
         out = law.torques
-        user_law(law, dt, limit)
+        law.user(
+            pointer(law.measurement_values), pointer(law.reference), pointer(law.model),
+            pointer(law.user_gains), pointer(law.user_state), pointer(out), dt, limit,
+        )  # fmt: skip
         if out[USER_RAISED] != 0.0:
             return LAW_RAISED, math.nan, math.nan, math.nan, math.nan
         T_r, T_l = out[0], out[1]

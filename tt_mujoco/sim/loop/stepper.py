@@ -59,7 +59,7 @@ LOGGING_STOPS = (FINISHED, WARNING, SINGULAR, PAYLOAD)
 _LOOP_VALUES = operator.attrgetter(*LOOP_COLUMNS)
 
 
-def _called_back(stepper, made, kernel):
+def _called_back(stepper, made, kernel, by_address: bool = False):
     """The kernel's records with the Python they hold (a law, a path without closed form, a
     user's disturbance) as C functions it calls back (:class:`tt_mujoco.sim.loop._kernel.
     CalledBack`), each given the records it reads and writes; placeholders where there is
@@ -94,12 +94,11 @@ def _called_back(stepper, made, kernel):
     for hook in hooks:
         if isinstance(hook, kernel.CalledBack):
             hook.stop_record = stop
-    # The kernel takes each C function by its address (an integer is passed to it at no cost;
-    # a function object is looked up again at every call); the objects stay with the stepper.
-    stepper.hooks = hooks
-    law = law._replace(user=kernel.address_of(law.user))
-    target = target._replace(path_hook=kernel.address_of(target.path_hook))
-    loop = loop._replace(disturbance_hook=kernel.address_of(loop.disturbance_hook))
+    stepper.hooks = hooks  # held while the kernel calls them
+    if by_address:  # an agent's step, one call a step: the kernel takes integers at no cost
+        law = law._replace(user=kernel.address_of(law.user))
+        target = target._replace(path_hook=kernel.address_of(target.path_hook))
+        loop = loop._replace(disturbance_hook=kernel.address_of(loop.disturbance_hook))
     if isinstance(hooks[0], kernel.PythonLawCallback):
         hooks[0].law_record = law
     return records.EpisodeRecords(loop, plant, law, target, stop)
@@ -187,7 +186,7 @@ class Stepper:
         self._log = None  # the log of the rows being computed, from step _log_k; _taken kept
 
     # --- the records ---------------------------------------------------------------------
-    def begin(self, controller=None, compiled_law=None, kernel=None) -> tuple:
+    def begin(self, controller=None, compiled_law=None, kernel=None, by_address=False) -> tuple:
         """Make the (reset) episode's records for ``controller``: ``(loop, plant, law, target,
         stop)`` (:func:`tt_mujoco.sim.loop.episode.episode_records`).
 
@@ -198,7 +197,9 @@ class Stepper:
         of the kernel's). Otherwise CPython runs the step on the records as plain objects
         (:func:`tt_mujoco.sim.loop.records.interpreted`): a built-in law's own function, or any
         other controller's Python ``compute`` between the halves (None: an agent's torques,
-        :meth:`sense` and :meth:`actuate`).
+        :meth:`sense` and :meth:`actuate`). ``by_address``: the kernel's records name their C
+        functions by address (an agent's step, :meth:`begin_agent`), else by object (the
+        chunk loop's).
         """
         python = None
         if kernel is not None:
@@ -207,7 +208,7 @@ class Stepper:
                 python = PythonLaw(self, controller)
                 callback = kernel.PythonLawCallback(python)
             made = episode.episode_records(self, controller, compiled_law, callback)
-            made = _called_back(self, made, kernel)
+            made = _called_back(self, made, kernel, by_address)
         else:
             self.hooks = ()
             if controller is None or not episode.runs_built_in(controller):
@@ -231,7 +232,7 @@ class Stepper:
         (:mod:`tt_mujoco.sim.loop.agent_step`), for the compiled ``kernel`` or, without one,
         for CPython: ``(loop, plant, law, target, log, stop)``, the log of two rows (step ``k``
         in row ``k % 2``)."""
-        loop, plant, law, target, stop = self.begin(None, None, kernel=kernel)
+        loop, plant, law, target, stop = self.begin(None, None, kernel, by_address=True)
         self._start_log(self.k, 2)
         return loop, plant, law, target, self._log, stop
 
