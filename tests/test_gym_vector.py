@@ -109,7 +109,8 @@ def test_cpython_runs_the_same_step_without_the_compiled_loop(monkeypatch):
     env, _, compiled = _episodes(2, 120, **options)
     assert env.compiled
     monkeypatch.setenv("TT_MUJOCO_COMPILED", "0")
-    env, _, interpreted = _episodes(2, 120, **options)
+    with pytest.warns(UserWarning, match=r"steps in CPython \(the same numbers, slower\)"):
+        env, _, interpreted = _episodes(2, 120, **options)
     assert not env.compiled
     for a, b in zip(compiled, interpreted, strict=True):
         assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])

@@ -347,7 +347,10 @@ def finish(
     metrics["wall_time_s"] = wall
     metrics["status"] = status
     if stepper.faults is not None:
-        metrics["faults"] = faults_mod.fault_report(stepper.faults, ts, measured_against, limit)
+        record = stepper.records.loop.faults  # the faults' state as the episode left it
+        metrics["faults"] = faults_mod.fault_report(
+            stepper.faults, record, ts, measured_against, limit
+        )
     notes = [stepper.loop_note] if stepper.loop_note else []
     if built.reversing is not None:
         notes.append(f"backing up: {REVERSING_DRIVES[built.reversing]}")

@@ -321,20 +321,16 @@ def target_record(built, steps: int):
 
 
 def hand_back(stepper, controller, status, k, episode_records, changes) -> None:
-    """Give the state at step ``k`` back: to the stepper, the controller, the faults, the
-    friction patches and the schedule (``changes``: ``(first row, gains)`` of each change of
-    the scheduled gains). The motors' torques are the record's own
-    (:meth:`~tt_mujoco.sim.loop.stepper.Stepper.begin`); the stepper syncs the reduced ODE."""
+    """Give the state at step ``k`` back: to the stepper, the controller, the friction patches
+    and the schedule (``changes``: ``(first row, gains)`` of each change of the scheduled
+    gains); the faults' state stays in the records, which the report reads. The motors'
+    torques are the record's own (:meth:`~tt_mujoco.sim.loop.stepper.Stepper.begin`); the
+    stepper syncs the reduced ODE."""
 
     loop, plant, law, _, _ = episode_records
     stepper.k = k
     stepper.finished = status == step.FINISHED
     hand_law_back(controller, law)
-    faults = stepper.faults
-    if faults is not None:  # what a dropout holds, where the payloads acted
-        faults.held[:] = np.asarray(loop.faults.held).tolist()
-        faults.payload_rows[:] = np.asarray(loop.faults.payloads).tolist()
-        faults.payload_state[:] = np.asarray(loop.faults.payload_state).tolist()
     if status == step.COLLISION:
         stop = records.values_of(episode_records.stop)
         unit, obstacle = int(stop["unit"]), int(stop["obstacle"])

@@ -236,6 +236,13 @@ class Stepper:
         self._start_log(self.k, 2)
         return loop, plant, law, target, self._log, stop
 
+    @property
+    def records(self):
+        """The episode's records (:meth:`begin`): after it ran, the state it left, which
+        what a run reports reads (the faults': :func:`~tt_mujoco.sim.parts.faults.
+        fault_report`)."""
+        return self._episode
+
     # --- the episode, run to its end ------------------------------------------------------
     def run(self, run_chunk=None, advance=None, progress=None, on_step=None) -> tuple[str, str]:
         """Run the begun episode (:meth:`begin`) from step :attr:`k` to its end or a stop;

@@ -40,9 +40,11 @@ __all__ = [
     "RECOVERY_S",
     "Fault",
     "FaultSchedule",
+    "acted_at_of",
     "dropped_of",
     "fault_report",
     "fault_torque_of",
+    "held_steps_of",
     "parse_fault",
     "parse_faults",
     "payloads_of",
@@ -254,25 +256,29 @@ class FaultSchedule:
                  for f, k0, _ in self._windows if f.kind == "payload"]  # fmt: skip
         placed = [(0.0, -1.0, f.s, f.trailer, f.factor, math.nan, i)
                   for i, f in enumerate(self.faults) if f.s is not None]  # fmt: skip
-        self.payload_rows = [list(row) for row in (*timed, *placed)]
-        self.payload_state = [math.nan, float(control_dt)]
+        self.payload_rows = tuple(tuple(row) for row in (*timed, *placed))
+        self.payload_state = (math.nan, float(control_dt))
         #: :data:`HELD`: the last sample the controller received, and the steps held so far
-        self.held = [0.0] * len(HELD)
+        self.held = (0.0,) * len(HELD)
+        # These are the first values of the episode's fault record
+        # (:class:`~tt_mujoco.sim.loop.records.FaultRecord`), whose state the step changes: what
+        # a run reports is read from that record (:func:`fault_report`), never handed back here.
 
-    @property
-    def held_steps(self) -> int:
-        """Control steps whose measurement a dropout held."""
-        return int(self.held[HELD.index("steps")])
 
-    @property
-    def acted_at(self) -> dict[int, float]:
-        """When each payload placed at an arc length acted (s), by its index in ``faults``."""
-        acted = PAYLOAD_ROW.index("acted")
-        return {
-            int(row[-1]): row[acted]
-            for row in self.payload_rows
-            if row[TIMED] == 0.0 and not math.isnan(row[acted])
-        }
+def held_steps_of(held) -> int:
+    """Control steps whose measurement a dropout held, from a fault record's ``held``."""
+    return int(held[HELD_STEPS])
+
+
+def acted_at_of(payloads) -> dict[int, float]:
+    """When each payload placed at an arc length acted (s), by its index among the faults,
+    from a fault record's ``payloads`` rows (:data:`PAYLOAD_ROW`)."""
+    acted = PAYLOAD_ROW.index("acted")
+    return {
+        int(row[-1]): row[acted]
+        for row in np.asarray(payloads, dtype=float).tolist()
+        if row[TIMED] == 0.0 and not math.isnan(row[acted])
+    }
 
 
 #: What a dropout holds: whether a sample was received, its (phi, v, omega), and the steps held.
@@ -390,10 +396,12 @@ def window_errors(ts, polyline, t_start: float, t_end: float) -> dict:
     }
 
 
-def fault_report(schedule: FaultSchedule, ts, polyline, torque_limit: float) -> list[dict]:
+def fault_report(schedule: FaultSchedule, record, ts, polyline, torque_limit: float) -> list[dict]:
     """Per fault: its spec, the window it acted in and the tracking errors over that window
     plus :data:`RECOVERY_S` (payload: to the end of the run), for ``metrics.json``; ``window``
-    is None for a fault the run never reached (``reached`` False).
+    is None for a fault the run never reached (``reached`` False). ``record`` is the episode's
+    fault record as the run left it (:class:`~tt_mujoco.sim.loop.records.FaultRecord`): where
+    the payloads acted and what the dropouts held.
 
     Kind-specific entries: dropout ``held_steps`` (all dropouts together: control steps whose
     measurement was held); actuator ``torque_shortfall_max`` (N m, largest torque asked for
@@ -401,9 +409,9 @@ def fault_report(schedule: FaultSchedule, ts, polyline, torque_limit: float) -> 
     """
     t = np.asarray(ts["t"])
     t_last = float(t[-1]) if t.size else 0.0
-    report = []
+    report, acted_at = [], acted_at_of(record.payloads)
     for i, f in enumerate(schedule.faults):
-        start = f.t if f.s is None else schedule.acted_at.get(i)
+        start = f.t if f.s is None else acted_at.get(i)
         t_end = t_last if math.isinf(f.duration) else start + f.duration
         reached = bool(t.size and start is not None and t_last >= start)
         entry = {
@@ -420,7 +428,7 @@ def fault_report(schedule: FaultSchedule, ts, polyline, torque_limit: float) -> 
         if f.s is not None:
             entry["t_acted"] = start  # where the reference reached s; None if it never did
         if f.kind == "dropout":
-            entry["held_steps"] = schedule.held_steps
+            entry["held_steps"] = held_steps_of(record.held)
         elif f.kind == "actuator":
             sel = (t >= f.t - 1e-12) & (t < t_end - 1e-12)
             asked = np.clip(
