@@ -321,22 +321,17 @@ def target_record(built, steps: int):
 
 
 def hand_back(stepper, controller, status, k, episode_records, changes) -> None:
-    """Give the state at step ``k`` back: to the stepper, the controller, the friction patches
-    and the schedule (``changes``: ``(first row, gains)`` of each change of the scheduled
-    gains); the faults' state stays in the records, which the report reads. The motors'
-    torques are the record's own (:meth:`~tt_mujoco.sim.loop.stepper.Stepper.begin`); the
-    stepper syncs the reduced ODE."""
+    """Give the state at step ``k`` back: to the stepper, the controller and the schedule
+    (``changes``: ``(first row, gains)`` of each change of the scheduled gains); the faults'
+    and the friction patches' state stays in the records, which the reports read
+    (:attr:`~tt_mujoco.sim.loop.stepper.Stepper.records`). The motors' torques are the record's
+    own (:meth:`~tt_mujoco.sim.loop.stepper.Stepper.begin`); the stepper syncs the reduced
+    ODE."""
 
-    loop, plant, law, _, _ = episode_records
+    _, plant, law, _, _ = episode_records
     stepper.k = k
     stepper.finished = status == step.FINISHED
     hand_law_back(controller, law)
-    if status == step.COLLISION:
-        stop = records.values_of(episode_records.stop)
-        unit, obstacle = int(stop["unit"]), int(stop["obstacle"])
-        stepper.collision = (unit, obstacle, k * stepper.dt, stop["gap"])
-    if loop.ground.geoms.size:  # one mask per advance: k of them
-        stepper.log_ground(loop.ground.masks[:k], loop.ground.arcs)
     if plant.steering.kind:  # a Python law has been told of every change as it came
         told = None if law.kind == PYTHON else controller
         _hand_back_steering(stepper, told, plant.steering, changes)

@@ -38,7 +38,7 @@ from tt_mujoco.sim.loop.records import (
     Limits,
     LogRecord,
 )
-from tt_mujoco.sim.loop.step import FINISHED, PAYLOAD, RUNNING, SINGULAR, WARNING
+from tt_mujoco.sim.loop.step import COLLISION, FINISHED, PAYLOAD, RUNNING, SINGULAR, WARNING
 from tt_mujoco.sim.loop.timeseries import LOOP_COLUMNS, assemble_columns, train_columns
 from tt_mujoco.sim.parts.measure import TRAIN_FIELDS, Measurement, TrainMeasurement
 from tt_mujoco.sim.parts.motors import DcMotors
@@ -160,9 +160,8 @@ class Stepper:
         self.motors = (
             DcMotors(b.plant_params, b.control_dt) if b.scenario.actuator == "dc_motor" else None
         )
-        self._ground_masks = [] if b.scenario.ground else None  # the patches under the wheels
         self.world = world_record(b.world, b.plant_params, self.steps)
-        self.collision = None  # (unit, obstacle, t, gap) of the contact that stopped the episode
+        self._end_status = None  # the stop code the episode ended with (None: not ended)
         self.scheduler = b.new_scheduler(self.plant)
         self._given_path = None  # a copy for the code sense() is for, made on first use
         self.k = 0
@@ -180,6 +179,7 @@ class Stepper:
         self.drag = DragConstants(*(getattr(b.plant_params, f) for f in DragConstants._fields))
         self._blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self._episode = None  # the records: begin()
+        self._end_status = None
         #: The C functions the kernel's records name by address (the law, the path, the
         #: disturbance; begin()), held while it runs.
         self.hooks: tuple = ()
@@ -304,7 +304,18 @@ class Stepper:
         """The episode's state at step ``k`` back to its objects (``status``: FINISHED, or
         not)."""
         self._sync_plant(k)
+        self._end_status = status
         episode.hand_back(self, self._controller, status, k, self._episode, self._changes)
+
+    @property
+    def collision(self) -> tuple | None:
+        """``(unit, obstacle, t, gap)`` of the contact that stopped the episode (the indices of
+        the unit and the world's obstacle, the time in s, the gap in m, negative: how deep),
+        from its stop record; None when no contact stopped it."""
+        if self._end_status != COLLISION:
+            return None
+        stop = records.values_of(self._episode.stop)
+        return int(stop["unit"]), int(stop["obstacle"]), self.k * self.dt, stop["gap"]
 
     def _sync_plant(self, k: int) -> None:
         """The reduced plant's ODE state at step ``k``, for an ``on_step`` hook or the end."""
@@ -477,16 +488,11 @@ class Stepper:
 
     @property
     def ground_masks(self) -> list[int]:
-        """Per step, the bit mask of the friction patches some wheel stood on."""
-        return self._ground_masks or []
-
-    def log_ground(self, masks, arc_lengths) -> None:
-        """An episode's patch masks (one per advance) and the wheels' last arc lengths (see
-        :attr:`ground_masks`)."""
-        self._ground_masks[:] = (int(m) for m in masks)
-        patches = self.plant.ground[0]
-        if len(arc_lengths):
-            patches.arc_lengths = [float(s) for s in arc_lengths]
+        """Per advance of the episode, the bit mask of the friction patches some wheel stood
+        on (from the ground record; empty without patches)."""
+        if self._episode is None or not self.built.scenario.ground:
+            return []
+        return np.asarray(self._episode.loop.ground.masks)[: self.k].tolist()
 
     def record_signals(self, signals: dict[str, float], k: int) -> None:
         """The controller's logged signals at step ``k``, columns ``ctrl_<name>`` of the time

@@ -158,7 +158,6 @@ class GroundPatches:
         self.path = path
         self.base_mu = float(base_mu)
         self._bands = any(p.kind == "band" for p in self.patches)
-        self.arc_lengths: list[float] | None = None  # each wheel's, warm start of the next
         # the path as wheel_frictions_of reads it (path_errors_of's pose and curvature)
         self._path_record = SimpleNamespace(
             pose_at=path.pose_at, curvature_and_rate=path.curvature_and_rate
@@ -169,26 +168,24 @@ class GroundPatches:
 
     def start(self, points) -> np.ndarray:
         """Each wheel's arc length to start from, for the wheels' contact ``points``: the
-        nearest point of a coarse table of the path, on the first call (empty without bands)."""
-        if self.arc_lengths is None and self._bands:
-            grid = np.linspace(0.0, self.path.length, 2001)
-            table = np.array([self.path.pose_at(s)[:2] for s in grid])
-            points = np.asarray(points, dtype=float)
-            self.arc_lengths = [
-                float(grid[np.argmin(np.hypot(*(table - point).T))]) for point in points
-            ]
-        return np.array(self.arc_lengths or [], dtype=float)
+        nearest point of a coarse table of the path (empty without bands). The episode's
+        ground record keeps them from there, step by step."""
+        if not self._bands:
+            return np.zeros(0)
+        grid = np.linspace(0.0, self.path.length, 2001)
+        table = np.array([self.path.pose_at(s)[:2] for s in grid])
+        points = np.asarray(points, dtype=float)
+        return np.array([grid[np.argmin(np.hypot(*(table - point).T))] for point in points])
 
     def frictions(self, points) -> tuple[list[float], int]:
         """``(mu of each wheel, bit mask of the patches some wheel is on)`` for the wheels'
-        contact points ``points`` (an (n, 2) array of x, y)."""
+        contact points ``points`` (an (n, 2) array of x, y), from the :meth:`start` arc
+        lengths: a query (the step reads the record, :func:`ground_step`)."""
         points = np.asarray(points, dtype=float)
         arcs = self.start(points)
         mus = np.empty(points.shape[0])
         patches = (self.kinds, self.bounds, self.mus, self.base_mu)
         mask = wheel_frictions_of(self._path_record, points, arcs, patches, mus)
-        if self._bands:
-            self.arc_lengths = arcs.tolist()
         return mus.tolist(), mask
 
 
