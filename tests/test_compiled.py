@@ -710,18 +710,17 @@ def _states_after_both_loops(monkeypatch, scenario, state_of) -> list:
 @pytest.mark.parametrize(
     ("plant", "eta"), [("mujoco", "path"), ("reduced", "path"), ("mujoco", "scheduled")]
 )
-def test_a_schedule_hands_its_state_back(monkeypatch, plant, eta):
-    # After a compiled episode the scheduler, the plant and the law's model stand where the
-    # Python loop leaves them: the gains in force, each axle's arc length, every change.
+def test_a_schedule_leaves_the_same_state_on_both_loops(monkeypatch, plant, eta):
+    # After a compiled episode the steering record stands where the Python loop leaves it: the
+    # gains in force, how many changes, each axle's arc length; and the time series reads the
+    # gain in force at each sample alike.
     def state_of(stepper, controller):
-        scheduler = stepper.scheduler
+        steering = stepper.records.plant.steering
         return (
-            scheduler.etas,
-            scheduler.updates,
-            getattr(scheduler, "arc_lengths", None),
-            scheduler.eta_series(stepper.samples).tolist(),
-            controller.model.params.etas,
             stepper.plant_etas,
+            int(steering.updates[0]),
+            np.asarray(steering.arcs).tolist(),
+            stepper.timeseries()["eq_violation"].tolist(),
         )
 
     scenario = Scenario(traj="cycloid", eta=eta, trailers=2, plant=plant, duration=3.0)

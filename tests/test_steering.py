@@ -14,7 +14,12 @@ from tt_mujoco.reference.reverse import ReverseTarget
 from tt_mujoco.reference.targets import make_target
 from tt_mujoco.sim import Scenario, simulate
 from tt_mujoco.sim.parts.plant_reduced import ReducedPlant
-from tt_mujoco.sim.parts.schedule import EtaScheduler, curvature_gains_of, gains_moved
+from tt_mujoco.sim.parts.schedule import (
+    EtaScheduler,
+    curvature_gains_of,
+    eta_series_of,
+    gains_moved,
+)
 from tt_mujoco.vehicle import reduced
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.steering import (
@@ -96,14 +101,16 @@ def test_scheduler_on_the_reduced_plant_swaps_params_and_logs_eta():
     near = [0.0]
     assert curvature_gains_of(1.0 + 1e-3, sched.lengths, near)  # eta moves ~1e-6 here
     assert not gains_moved(near, etas, sched.tolerance)
-    # what a run did, taken back: the gains in force and where each change began
-    sched.restore(tuple(etas), [(1, etas[0])], 1)
-    assert adapter.params.eta == adapter.ode.params.eta == sched.eta == etas[0]
-    sched.restore((-1.0 / 7.0,), [(5, -1.0 / 7.0)], 1)
-    series = sched.eta_series(7)
-    assert series[0] == pytest.approx(-1.0 / 7.0)  # before the first change: the params' eta
-    assert np.all(series[1:5] == pytest.approx(exact_same_path_eta(1.0, L, L0)))
-    assert np.all(series[5:] == pytest.approx(-1.0 / 7.0)) and sched.updates == 2
+    # the scheduler applies the first gains; what a run changes stays in its records, and the
+    # time series reads the gain in force at each sample from the changes the run logged
+    first = adapter.params.eta
+    assert first == adapter.ode.params.eta == sched.eta == pytest.approx(-1.0 / 7.0)
+    changes = [(0, (first,)), (1, tuple(etas)), (5, (first,))]
+    series = eta_series_of(changes, 7)
+    assert series[0] == first  # before the first change: the params' eta
+    assert np.all(series[1:5] == exact_same_path_eta(1.0, L, L0))
+    assert np.all(series[5:] == first)
+    assert eta_series_of(changes, 3).tolist() == [first, etas[0], etas[0]]
     with pytest.raises(ValueError, match="plant"):
         EtaScheduler(object(), Params())
 
@@ -131,9 +138,7 @@ def test_scheduler_writes_the_steering_equality_polycoef():
     sched = EtaScheduler(plant, vehicle.params)
     row = vehicle.model.eq_data[vehicle.model.equality("steering").id]
     assert row[1] == pytest.approx(1.0 / 7.0)  # polycoef = (0, -eta, 0, 0, 0)
-    sched.restore((exact_same_path_eta(2.0, L, L0),), [(1, exact_same_path_eta(2.0, L, L0))], 1)
-    assert row[1] == pytest.approx(-exact_same_path_eta(2.0, L, L0))
-    assert row[0] == row[2] == 0.0
+    assert row[0] == row[2] == 0.0 and sched.etas == vehicle.params.etas
 
 
 def _steering_jacobian(plant):

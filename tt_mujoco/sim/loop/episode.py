@@ -1,14 +1,14 @@
-"""An episode's records, made from the run's Python objects and handed back to them.
+"""An episode's records, made from the run's Python objects.
 
 The closed loop's step (:mod:`tt_mujoco.sim.loop.closed_loop`) reads and writes the named records of
 :mod:`tt_mujoco.sim.loop.records`; :func:`episode_records` makes them from a reset
 :class:`~tt_mujoco.sim.loop.stepper.Stepper` (the plant, the target, the faults, the schedule) and
-the controller, and :func:`hand_back` gives what the run did back to the objects that report
-it (the controller's state, the faults, the friction patches, the schedule's changes) when the
-episode ends, whichever loop ran it (the kernel's, or CPython's over the same source). The
-target, the path feedback and the hitch cascade keep no state: nothing goes back to them.
-:func:`outcome` words why it ended, as :func:`tt_mujoco.sim.simulate.run_episode` reports it.
-"""
+the controller. The objects are configuration and factories: what the run did stays in the
+records, which the reports read when the episode ends (the faults, the friction patches, the
+schedule's gains, a collision: :attr:`~tt_mujoco.sim.loop.stepper.Stepper.records`), whichever
+loop ran it (the kernel's, or CPython's over the same source). :func:`hand_back` gives the
+controller its law's memory, which it keeps between its own steps when driven by hand.
+:func:`outcome` words why it ended, as :func:`tt_mujoco.sim.simulate.run_episode` reports it."""
 
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ import numpy as np
 from tt_mujoco.guard import users_failure
 from tt_mujoco.sim import usercode
 from tt_mujoco.sim.loop import records, step
-from tt_mujoco.sim.loop.law import LAWS, PYTHON, hand_law_back, law_record
+from tt_mujoco.sim.loop.law import LAWS, hand_law_back, law_record
 from tt_mujoco.sim.loop.records import (
     DelayRecord,
     FaultRecord,
@@ -139,26 +139,6 @@ def changes_of(etas: np.ndarray, changes: list, first_row: int) -> list:
             out.append((first_row + i, row))
             last = row
     return out
-
-
-def _hand_back_steering(stepper, controller, steering, changes) -> None:
-    """The schedule's state after an episode: to the scheduler (its gains, arc lengths and
-    change log) and to ``controller``'s model (None: none to tell)."""
-
-    etas, seen = (
-        tuple(np.asarray(steering.etas).tolist()),
-        changes[-1][1],
-    )  # the last row's: the law's
-    if etas != seen:  # applied after the last logged row
-        changes.append((stepper.samples, etas))
-    scheduler = stepper.scheduler
-    if steering.kind == schedule.PATH_SCHEDULE:  # the path schedule's axles
-        scheduler.arc_lengths = np.asarray(steering.arcs).tolist()
-    logged = [(row, gains[0]) for row, gains in changes[1:]]
-    scheduler.restore(etas, logged, int(steering.updates[0]))
-    steering_changed = getattr(controller, "steering_changed", None)
-    if steering_changed is not None:
-        steering_changed(seen)
 
 
 def _steering_record(stepper, mujoco_plant: bool):
@@ -320,21 +300,16 @@ def target_record(built, steps: int):
     )
 
 
-def hand_back(stepper, controller, status, k, episode_records, changes) -> None:
-    """Give the state at step ``k`` back: to the stepper, the controller and the schedule
-    (``changes``: ``(first row, gains)`` of each change of the scheduled gains); the faults'
-    and the friction patches' state stays in the records, which the reports read
-    (:attr:`~tt_mujoco.sim.loop.stepper.Stepper.records`). The motors' torques are the record's
-    own (:meth:`~tt_mujoco.sim.loop.stepper.Stepper.begin`); the stepper syncs the reduced
-    ODE."""
-
-    _, plant, law, _, _ = episode_records
+def hand_back(stepper, controller, status, k, law) -> None:
+    """The episode's end at step ``k`` (``status``) to the stepper, and the law's memory (the
+    ``law`` record's) to ``controller``, which keeps it between its own steps. Everything else
+    stays in the episode's records, which the reports read
+    (:attr:`~tt_mujoco.sim.loop.stepper.Stepper.records`): the faults, the friction patches,
+    the schedule's gains and arc lengths; the motors' torques are the record's own
+    (:meth:`~tt_mujoco.sim.loop.stepper.Stepper.begin`); the stepper syncs the reduced ODE."""
     stepper.k = k
     stepper.finished = status == step.FINISHED
     hand_law_back(controller, law)
-    if plant.steering.kind:  # a Python law has been told of every change as it came
-        told = None if law.kind == PYTHON else controller
-        _hand_back_steering(stepper, told, plant.steering, changes)
 
 
 #: Speed-profile tables by (pickled profile, dt, steps): a sweep's episodes share their profile.

@@ -43,6 +43,7 @@ from tt_mujoco.sim.loop.timeseries import LOOP_COLUMNS, assemble_columns, train_
 from tt_mujoco.sim.parts.measure import TRAIN_FIELDS, Measurement, TrainMeasurement
 from tt_mujoco.sim.parts.motors import DcMotors
 from tt_mujoco.sim.parts.plant import StopRun
+from tt_mujoco.sim.parts.schedule import eta_series_of
 from tt_mujoco.sim.parts.wind import DragConstants, parse_wind
 from tt_mujoco.sim.scenario import jackknife_phi_deg
 from tt_mujoco.world.part import world_record
@@ -305,7 +306,7 @@ class Stepper:
         not)."""
         self._sync_plant(k)
         self._end_status = status
-        episode.hand_back(self, self._controller, status, k, self._episode, self._changes)
+        episode.hand_back(self, self._controller, status, k, self._episode.law)
 
     @property
     def collision(self) -> tuple | None:
@@ -551,7 +552,7 @@ class Stepper:
         )
         n = len(logged)
         if self.scheduler is not None:
-            ts["eq_violation"] = ts["beta"] - self.scheduler.eta_series(n) * ts["phi"]
+            ts["eq_violation"] = ts["beta"] - eta_series_of(self._changes, n) * ts["phi"]
         if n:
             ref = self.built.target.reference_pose(ts["t"])
             ts["x_ref"], ts["y_ref"], ts["theta_ref"] = (np.asarray(c, dtype=float) for c in ref)

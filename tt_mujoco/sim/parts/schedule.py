@@ -26,6 +26,7 @@ __all__ = [
     "EtaScheduler",
     "PathEtaScheduler",
     "curvature_gains_of",
+    "eta_series_of",
     "gains_moved",
 ]
 
@@ -51,7 +52,7 @@ class EtaScheduler:
     -----
     The step schedules the gains from its steering record (:func:`curvature_gains_of` and
     :func:`gains_moved`, in :func:`tt_mujoco.sim.loop.closed_loop.actuate_step`); the scheduler
-    applies the first gains and takes back what the run did (:meth:`restore`). Every change
+    applies the first gains; what the run did stays in its steering record. Every change
     reaches the controller through
     :meth:`~tt_mujoco.controllers.base.Controller.steering_changed` (the loop calls it), and the
     built-in laws rebuild their nominal model with the gains in force: eta enters Mbar through
@@ -66,11 +67,8 @@ class EtaScheduler:
         self.lengths = [(t.L, t.L0) for t in params.trailers]
         self.tolerance = float(tolerance)
         self.eta = params.eta
+        #: the first gains, which the episode's steering record starts from and changes
         self.etas = params.etas
-        self.updates = 0
-        # (first sample, eta) for every change: sample j was reached under the eta in force
-        # during the step before it.
-        self._changes: list[tuple[int, float]] = [(0, self.eta)]
         if not isinstance(plant, Plant):
             raise ValueError(
                 f"plant={type(plant).__name__} is not allowed: use a "
@@ -78,26 +76,20 @@ class EtaScheduler:
             )
         self._plant = plant
 
-    def eta_series(self, n: int) -> np.ndarray:
-        """The eta in force at each of ``n`` logged samples (for ``beta - eta phi``)."""
-        out = np.empty(n)
-        for (start, eta), (stop, _) in zip(
-            self._changes, [*self._changes[1:], (n, 0.0)], strict=True
-        ):
-            out[start : max(start, min(stop, n))] = eta
-        return out
-
-    def restore(self, etas: tuple, changes: list[tuple[int, float]], updates: int) -> None:
-        """Take the state a compiled episode left: the gains in force (applied to the plant),
-        the changes it made, ``(first sample, eta_1)`` each, and how many."""
-        self._apply(etas, updates)
-        self._changes.extend(changes)
-
-    def _apply(self, etas: tuple, updates: int = 1) -> None:
-        """The gains ``etas`` in force in the plant, after ``updates`` more changes."""
+    def _apply(self, etas: tuple) -> None:
+        """The first gains ``etas`` in force in the plant."""
         self._plant.set_etas(etas)
         self.etas, self.eta = etas, etas[0]
-        self.updates += updates
+
+
+def eta_series_of(changes, n: int) -> np.ndarray:
+    """The first trailer's gain in force at each of ``n`` logged samples, from ``changes``:
+    ``(first sample, gains)`` of every change, the first at sample 0 (sample j was reached
+    under the gains in force during the step before it)."""
+    out = np.empty(n)
+    for (start, gains), (stop, _) in zip(changes, [*changes[1:], (n, None)], strict=True):
+        out[start : max(start, min(stop, n))] = gains[0]
+    return out
 
 
 class PathEtaScheduler(EtaScheduler):
@@ -158,13 +150,13 @@ class PathEtaScheduler(EtaScheduler):
         self.schedule = schedule
         #: the path the tractor drove (steps + 1 control steps are logged at most)
         self.driven = driven_path(steps + 1, start_s, 0.0 if reverse else float(gain))
+        #: each axle's first arc length on the path (the steering record's from there)
         self.arc_lengths = schedule.arc_lengths_at(start_s)
         for k, (x, y) in enumerate(_axle_positions(plant.measure())):
             self.arc_lengths[k] = schedule.project(self.arc_lengths[k], x, y)
         start = tuple(schedule.eta(k, s) for k, s in enumerate(self.arc_lengths))
         plant.steer_by_actuator()
         self._apply(start)
-        self._changes = [(0, self.eta)]
 
 
 def curvature_gains_of(kappa: float, lengths, out) -> bool:
