@@ -19,7 +19,7 @@ import sys
 
 import numpy as np
 
-from tt_mujoco.analysis.geometry import trailer_offtrack
+from tt_mujoco.analysis.offtrack import trailer_offtrack
 from tt_mujoco.sim import Scenario, simulate
 from tt_mujoco.vehicle.steering import steady_train
 

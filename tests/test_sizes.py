@@ -16,7 +16,6 @@ LIMITS = {"module": 600, "function": 80, "arguments": 8}
 KNOWN = {
     ("module", "controllers/base.py"): 713,
     ("arguments", "controllers/pure_pursuit.py:pure_pursuit"): 9,
-    ("module", "tt_mujoco/analysis/geometry.py"): 753,
     ("module", "tt_mujoco/sim/scenario.py"): 692,
     ("arguments", "tt_mujoco/sweep/execute.py:run_sweep"): 10,
     ("arguments", "tt_mujoco/sweep/execute.py:_execute_watched"): 9,

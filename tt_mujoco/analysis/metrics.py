@@ -26,14 +26,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from tt_mujoco.analysis.geometry import (
-    Polyline,
-    PolylineProjection,
-    as_polyline,
-    distance_to_polyline,
-    signed_lateral_error,
-    trailer_offtrack,
-)
+from tt_mujoco.analysis.geometry import Polyline, PolylineProjection
 from tt_mujoco.analysis.metric_names import (
     DEFAULT_SUMMARY_KEYS,
     METRIC_UNITS,
@@ -45,6 +38,12 @@ from tt_mujoco.analysis.metric_names import (
     metric_unit,
     resolve_metrics,
     summary_table,
+)
+from tt_mujoco.analysis.offtrack import (
+    as_polyline,
+    distance_to_polyline,
+    signed_lateral_error,
+    trailer_offtrack,
 )
 
 __all__ = [

@@ -15,6 +15,8 @@ import numpy as np
 
 __all__ = [
     "CHUNK",
+    "Best",
+    "PolylineProjection",
     "SegmentTable",
     "nearest_segment_of",
     "nearest_segments_of",
@@ -234,3 +236,30 @@ def segment_windows(
             raise ValueError("segment_first must lie in [0, segment_count)")
         first = first.astype(np.int64)
     return limit, first
+
+
+class Best:
+    """Best projection found so far for each query point (mutable work arrays)."""
+
+    def __init__(self, n: int) -> None:
+        self.d2 = np.full(n, np.inf)
+        self.seg = np.full(n, -1, dtype=np.int64)
+        self.t = np.zeros(n)
+
+
+class PolylineProjection(NamedTuple):
+    """Nearest points of a set of query points on a polyline (arrays over the query points).
+
+    ``distance`` is the Euclidean distance to the foot point ``foot`` (shape (..., 2)).
+    ``signed_distance`` is ``distance`` with the sign of the side: positive left of the path's
+    direction of travel (vertex order), negative right. ``arc_length`` is the path length from the
+    first vertex to the foot. ``segment`` is the index of the segment holding the foot, in the
+    polyline's de-duplicated vertices (:attr:`Polyline.vertices`). Rows whose query point is not
+    finite hold NaN (and segment -1).
+    """
+
+    distance: np.ndarray
+    signed_distance: np.ndarray
+    arc_length: np.ndarray
+    foot: np.ndarray
+    segment: np.ndarray
