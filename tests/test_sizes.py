@@ -19,9 +19,6 @@ KNOWN = {
     ("module", "tt_mujoco/sim/scenario.py"): 692,
     ("arguments", "tt_mujoco/sweep/execute.py:run_sweep"): 10,
     ("arguments", "tt_mujoco/sweep/execute.py:_execute_watched"): 9,
-    ("function", "tt_mujoco/vehicle/mjcf.py:vehicle_xml"): 117,
-    ("function", "tt_mujoco/vehicle/urdf.py:_trailer_parts"): 114,
-    ("function", "tt_mujoco/vehicle/urdf.py:urdf_xml"): 132,
 }
 
 

@@ -64,7 +64,7 @@ ALONG_X = f"0 {math.pi / 2!r} 0"
 ALONG_Y = f"{math.pi / 2!r} 0 0"
 
 
-def _trailer_parts(p: Params, k: int, revolute_z, wheel_link, wheel_joint, hitch_limit) -> str:
+def _trailer_parts(p: Params, k: int, hitch_limit: float) -> str:
     """Trailer k's links and joints. Trailer 1 hangs from the tractor L behind P; trailer k >= 2
     from trailer k-1's frame (at O_(k-1)), L_k behind its axle midpoint, with its front rod
     fixed to trailer k-1 (as the MJCF)."""
@@ -74,10 +74,6 @@ def _trailer_parts(p: Params, k: int, revolute_z, wheel_link, wheel_joint, hitch
     tilt = p.body_tilt_inertia_ratio
     h = CHASSIS_HALF_HEIGHT
     rod_radius = 0.15 * r
-    axle_mass = AXLE_MASS
-    axle_yaw = axle_mass * d**2 / 4
-    passive = '  <dynamics damping="0" friction="0"/>\n'
-    trailer_wheel_mass = p.Mw - axle_mass / 2
     parent, origin, front = "tractor", -L, []
     if k > 1:
         parent = f"trailer{'' if k == 2 else f'_{k - 1}'}"
@@ -108,12 +104,6 @@ def _trailer_parts(p: Params, k: int, revolute_z, wheel_link, wheel_joint, hitch
         if k == 1
         else f"\n<!-- Trailer {k}: frame at its hitch O_{k}; q_hitch_{k} = -phi_{k}. -->\n"
     )
-    steer_note = (
-        "\n<!-- Steering axle at P0: q_steer = beta. AXLE_MASS is taken from the two trailer\n"
-        "     wheels, with the yaw inertia that mass had at the wheel centres (as the MJCF). -->\n"
-        if k == 1
-        else f"\n<!-- Trailer {k}'s steering axle at P0_{k}: q_steer_{k} = beta_{k}. -->\n"
-    )
     parts = [
         *front,
         head,
@@ -134,7 +124,7 @@ def _trailer_parts(p: Params, k: int, revolute_z, wheel_link, wheel_joint, hitch
             parent,
             f"trailer{sfx}",
             f"{_g(origin)} 0 0",
-            revolute_z(hitch_limit, 0.0) + passive,
+            _revolute_z(hitch_limit, 0.0) + PASSIVE,
         ),
         _link(
             f"trailer_body{sfx}",
@@ -153,6 +143,28 @@ def _trailer_parts(p: Params, k: int, revolute_z, wheel_link, wheel_joint, hitch
             f"trailer_body{sfx}",
             f"{_g(-L0)} 0 0",
         ),
+        _steering_axle(p, k),
+    ]
+    return "".join(parts)
+
+
+def _steering_axle(p: Params, k: int) -> str:
+    """Trailer k's steering axle at its P0, its steer joint (mimicking the hitch) and its two
+    wheels."""
+    t = p.trailers[k - 1]
+    sfx = "" if k == 1 else f"_{k}"
+    r, d, L0 = p.r, p.d, t.L0
+    rod_radius = 0.15 * r
+    axle_mass = AXLE_MASS
+    axle_yaw = axle_mass * d**2 / 4
+    trailer_wheel_mass = p.Mw - axle_mass / 2
+    steer_note = (
+        "\n<!-- Steering axle at P0: q_steer = beta. AXLE_MASS is taken from the two trailer\n"
+        "     wheels, with the yaw inertia that mass had at the wheel centres (as the MJCF). -->\n"
+        if k == 1
+        else f"\n<!-- Trailer {k}'s steering axle at P0_{k}: q_steer_{k} = beta_{k}. -->\n"
+    )
+    parts = [
         steer_note,
         _link(
             f"trailer_axle{sfx}",
@@ -170,15 +182,15 @@ def _trailer_parts(p: Params, k: int, revolute_z, wheel_link, wheel_joint, hitch
             f"trailer{sfx}",
             f"trailer_axle{sfx}",
             f"{_g(-L0)} 0 0",
-            revolute_z(STEER_LIMIT, 0.0)
-            + passive
+            _revolute_z(STEER_LIMIT, 0.0)
+            + PASSIVE
             + "  <!-- Kinematic only: beta = eta * phi, see the top of this file. -->\n"
             + f'  <mimic joint="hitch{sfx}" multiplier="{_g(-t.eta)}" offset="0"/>\n',
         ),
-        wheel_link(f"trailer_wheel_left{sfx}", trailer_wheel_mass),
-        wheel_joint(f"trailer_wheel_left{sfx}", f"trailer_axle{sfx}", d / 2, None),
-        wheel_link(f"trailer_wheel_right{sfx}", trailer_wheel_mass),
-        wheel_joint(f"trailer_wheel_right{sfx}", f"trailer_axle{sfx}", -d / 2, None),
+        _wheel_link(p, f"trailer_wheel_left{sfx}", trailer_wheel_mass),
+        _wheel_joint(f"trailer_wheel_left{sfx}", f"trailer_axle{sfx}", d / 2, None),
+        _wheel_link(p, f"trailer_wheel_right{sfx}", trailer_wheel_mass),
+        _wheel_joint(f"trailer_wheel_right{sfx}", f"trailer_axle{sfx}", -d / 2, None),
     ]
     return "".join(parts)
 
@@ -230,77 +242,54 @@ def _joint(name: str, kind: str, parent: str, child: str, xyz: str, extra: str =
     )
 
 
-def urdf_xml(p: Params | None = None) -> str:
-    """The vehicle's URDF (``models/tractor_trailer.urdf``) for parameters ``p``.
+#: A passive joint's dynamics, as the MJCF's: no damping, no frictionloss.
+PASSIVE = '  <dynamics damping="0" friction="0"/>\n'
 
-    Parameters
-    ----------
-    p : Params, optional
-        Vehicle parameters; ``Params()`` (paper Section 6.1 values, same-path steering) if
-        omitted.
 
-    Returns
-    -------
-    str
-        The URDF document. Links, masses, inertias and joint frames equal the MJCF's of
-        :func:`tt_mujoco.vehicle.mjcf.vehicle_xml` for the same ``p``; the steering coupling is
-        only a
-        kinematic ``<mimic>`` (see the module docstring).
+def _revolute_z(limit: float, effort: float) -> str:
+    """A revolute joint's axis (z) and limits."""
+    return (
+        '  <axis xyz="0 0 1"/>\n'
+        f'  <limit lower="{_g(-limit)}" upper="{_g(limit)}" effort="{_g(effort)}" '
+        f'velocity="{_g(VELOCITY_LIMIT)}"/>\n'
+    )
 
-    Raises
-    ------
-    ValueError
-        If ``p`` is neither ``None`` nor a :class:`~tt_mujoco.vehicle.params.Params`.
-    """
-    if p is None:
-        p = Params()
-    elif not isinstance(p, Params):
-        raise ValueError(f"p={p!r} is not allowed: pass a tt_mujoco.vehicle.params.Params or None")
-    r, d, L, L0 = p.r, p.d, p.L, p.L0
+
+def _wheel_link(p: Params, name: str, mass: float) -> str:
+    """A wheel's link: its inertia, the sphere that touches the ground, the hub the eye sees."""
+    r = p.r
+    body = (
+        _inertial(mass, p.Iwd, p.Iw, p.Iwd)
+        + _shape("visual", f'<sphere radius="{_g(r)}"/>', material="tire")
+        + _shape(
+            "visual",
+            f'<cylinder radius="{_g(0.6 * r)}" length="{_g(0.6 * r)}"/>',
+            rpy=ALONG_Y,
+            material="hub",
+        )
+        + _shape("collision", f'<sphere radius="{_g(r)}"/>')
+    )
+    return _link(name, body)
+
+
+def _wheel_joint(name: str, parent: str, y: float, effort: float | None) -> str:
+    """A wheel's spin joint (``effort`` None: passive, no limit)."""
+    limit = (
+        ""
+        if effort is None
+        else f'  <limit effort="{_g(effort)}" velocity="{_g(VELOCITY_LIMIT)}"/>\n'
+    )
+    extra = '  <axis xyz="0 1 0"/>\n' + limit + PASSIVE
+    return _joint(wheel_joint_name(name), "continuous", parent, name, f"0 {_g(y)} 0", extra)
+
+
+def _tractor_parts(p: Params) -> str:
+    """The tractor's links and joints: its body at P, its rod, its two driven wheels."""
+    r, d, L = p.r, p.d, p.L
     tilt = p.body_tilt_inertia_ratio
     h = CHASSIS_HALF_HEIGHT
     rod_radius = 0.15 * r  # the MJCF's capsule radius
-    # Hitch range: up to the singularity |eta phi| = pi/2 (docs/model.md Section 2), at most a full
-    # fold.
-    hitch_limits = [min(limit, math.pi) for limit in p.phi_singulars]
-    passive = '  <dynamics damping="0" friction="0"/>\n'  # as the MJCF: no frictionloss
-
-    def revolute_z(limit: float, effort: float) -> str:
-        return (
-            '  <axis xyz="0 0 1"/>\n'
-            f'  <limit lower="{_g(-limit)}" upper="{_g(limit)}" effort="{_g(effort)}" '
-            f'velocity="{_g(VELOCITY_LIMIT)}"/>\n'
-        )
-
-    def wheel_link(name: str, mass: float) -> str:
-        body = (
-            _inertial(mass, p.Iwd, p.Iw, p.Iwd)
-            + _shape("visual", f'<sphere radius="{_g(r)}"/>', material="tire")
-            + _shape(
-                "visual",
-                f'<cylinder radius="{_g(0.6 * r)}" length="{_g(0.6 * r)}"/>',
-                rpy=ALONG_Y,
-                material="hub",
-            )
-            + _shape("collision", f'<sphere radius="{_g(r)}"/>')
-        )
-        return _link(name, body)
-
-    def wheel_joint(name: str, parent: str, y: float, effort: float | None) -> str:
-        limit = (
-            ""
-            if effort is None
-            else f'  <limit effort="{_g(effort)}" velocity="{_g(VELOCITY_LIMIT)}"/>\n'
-        )
-        extra = '  <axis xyz="0 1 0"/>\n' + limit + passive
-        return _joint(wheel_joint_name(name), "continuous", parent, name, f"0 {_g(y)} 0", extra)
-
     parts = [
-        "<!-- Materials of the MJCF. -->\n",
-        *(
-            f'<material name="{name}"><color rgba="{rgba}"/></material>\n'
-            for name, rgba in MATERIALS.items()
-        ),
         "\n<!-- Tractor: frame at P, x forward, z up; spawn with P at height r. -->\n",
         _link(
             "tractor",
@@ -330,14 +319,53 @@ def urdf_xml(p: Params | None = None) -> str:
             ),
         ),
         _joint("tractor_rod_joint", "fixed", "tractor", "tractor_rod", f"{_g(-L / 2)} 0 0"),
-        wheel_link("tractor_wheel_left", p.Mw),
-        wheel_joint("tractor_wheel_left", "tractor", d / 2, p.torque_limit),
-        wheel_link("tractor_wheel_right", p.Mw),
-        wheel_joint("tractor_wheel_right", "tractor", -d / 2, p.torque_limit),
+        _wheel_link(p, "tractor_wheel_left", p.Mw),
+        _wheel_joint("tractor_wheel_left", "tractor", d / 2, p.torque_limit),
+        _wheel_link(p, "tractor_wheel_right", p.Mw),
+        _wheel_joint("tractor_wheel_right", "tractor", -d / 2, p.torque_limit),
+    ]
+    return "".join(parts)
+
+
+def urdf_xml(p: Params | None = None) -> str:
+    """The vehicle's URDF (``models/tractor_trailer.urdf``) for parameters ``p``.
+
+    Parameters
+    ----------
+    p : Params, optional
+        Vehicle parameters; ``Params()`` (paper Section 6.1 values, same-path steering) if
+        omitted.
+
+    Returns
+    -------
+    str
+        The URDF document. Links, masses, inertias and joint frames equal the MJCF's of
+        :func:`tt_mujoco.vehicle.mjcf.vehicle_xml` for the same ``p``; the steering coupling is
+        only a
+        kinematic ``<mimic>`` (see the module docstring).
+
+    Raises
+    ------
+    ValueError
+        If ``p`` is neither ``None`` nor a :class:`~tt_mujoco.vehicle.params.Params`.
+    """
+    if p is None:
+        p = Params()
+    elif not isinstance(p, Params):
+        raise ValueError(f"p={p!r} is not allowed: pass a tt_mujoco.vehicle.params.Params or None")
+    r, d, L, L0 = p.r, p.d, p.L, p.L0
+    # Hitch range: up to the singularity |eta phi| = pi/2 (docs/model.md Section 2), at most a full
+    # fold.
+    hitch_limits = [min(limit, math.pi) for limit in p.phi_singulars]
+
+    parts = [
+        "<!-- Materials of the MJCF. -->\n",
         *(
-            _trailer_parts(p, k, revolute_z, wheel_link, wheel_joint, hitch_limits[k - 1])
-            for k in range(1, p.n_trailers + 1)
+            f'<material name="{name}"><color rgba="{rgba}"/></material>\n'
+            for name, rgba in MATERIALS.items()
         ),
+        _tractor_parts(p),
+        *(_trailer_parts(p, k, hitch_limits[k - 1]) for k in range(1, p.n_trailers + 1)),
         "\n<!-- Gazebo: wheel-floor friction (Params.friction). -->\n",
         *(
             f'<gazebo reference="{name}"><mu1>{_g(p.friction)}</mu1>'
