@@ -49,6 +49,9 @@ from dataclasses import dataclass
 from numbers import Real
 from typing import Any, ClassVar, NamedTuple
 
+from tt_mujoco.controllers.gains import resolve_gains
+from tt_mujoco.controllers.nominal import ModelFn, reduced_model
+
 from tt_mujoco.defaults import TORQUE_LIMIT
 
 __all__ = [
@@ -65,86 +68,12 @@ __all__ = [
     "resolve_gains",
 ]
 
-#: The nominal model as the controllers see it: ``(phi, v, omega) -> (f1, f2, g11, g12, g21, g22)``.
-ModelFn = Callable[[float, float, float], tuple[float, float, float, float, float, float]]
 
 _INF = math.inf
 
 # |det g| below this fraction of |g11 g22| + |g12 g21| is treated as singular: g^-1 would then
 # amplify rounding errors in f and z_d_dot by more than 1e12.
 _SINGULAR_RTOL = 1e-12
-
-
-def reduced_model(params, axle_slew_rate: float = _INF) -> ModelFn:
-    """Wrap :func:`~tt_mujoco.vehicle.reduced.dynamics` as the controllers' plain-float model.
-
-    Parameters
-    ----------
-    params : tt_mujoco.vehicle.params.Params
-        The controller's *nominal* parameters (they may differ from the plant's).
-    axle_slew_rate : float
-        How fast the trailers' axles turn at most (rad/s), when actuators steer them (the path
-        schedule): the model then takes, at each call, the gains the axles can follow at the
-        hitch rates of ``(phi, v, omega)``
-        (:func:`~tt_mujoco.vehicle.steering.followed_gain_of`), not ``params.etas`` whole.
-        Infinite (default): a linkage, ``params.etas`` as they are.
-
-    Returns
-    -------
-    callable
-        ``model(phi, v, omega) -> (f1, f2, g11, g12, g21, g22)`` with ``V_dot = f + g tau`` and
-        ``tau = (T_r, T_l)`` (docs/model.md Section 4). Raises
-        :class:`tt_mujoco.vehicle.reduced.SingularityError` at a jackknife, like ``dynamics``.
-        It carries ``params`` and ``axle_slew_rate``, from which
-        :meth:`VelocityController.steering_changed` rebuilds it with a scheduler's gains.
-    """
-    # Imported here so that importing ``controllers`` stays free of tt_mujoco and numpy.
-    from tt_mujoco.vehicle import train
-    from tt_mujoco.vehicle.reduced import dynamics_scalar
-    from tt_mujoco.vehicle.steering import followed_gains_of, trailer_followed_gain_of
-
-    bounded = axle_slew_rate < _INF
-    if getattr(params, "n_trailers", 1) > 1:
-        # A train's model takes every hitch angle: ``phi`` is then the tuple phi_1..phi_N
-        # (``Measurement.phis``), and the built-in laws pass it whole.
-        def train_model(phi, v: float, omega: float):
-            p = params
-            if bounded:
-                rates = train.trailer_rates(phi, v, omega, params)
-                followed = list(params.etas)
-                followed_gains_of(params.etas, rates, axle_slew_rate, followed)
-                etas = tuple(followed)
-                p = params if etas == params.etas else params.with_etas(etas)
-            return train.dynamics_scalar(phi, v, omega, p)
-
-        model = train_model
-    else:
-
-        def model(phi: float, v: float, omega: float):
-            p = params
-            if bounded:
-                eta = trailer_followed_gain_of(
-                    phi, v, omega, params.eta, params.L, params.L0, axle_slew_rate
-                )
-                p = params if eta == params.eta else params.with_etas((eta,))
-            return dynamics_scalar(phi, v, omega, p)
-
-    model.builtin = True  # the compiled episode may run its closed form instead
-    model.params = params
-    model.axle_slew_rate = axle_slew_rate
-    return model
-
-
-def track_velocities(model: ModelFn, m, v_c, v_c_dot, omega_c, k_v, k_omega):
-    """Wheel torques that make ``(v, omega)`` track ``(v_c, omega_c)`` through the nominal model
-    ``V_dot = f + g tau``: ``tau = g^-1 (a - f)`` with ``a = (v_c_dot + k_v e_v, k_omega e_omega)``
-    (the inner loop of the path trackers; ``m`` the measurement)."""
-    phi = m.phis if getattr(m, "train", ()) else m.phi  # a train's model takes every hitch
-    f1, f2, g11, g12, g21, g22 = model(phi, m.v, m.omega)
-    a_v = v_c_dot + k_v * (v_c - m.v) - f1
-    a_w = k_omega * (omega_c - m.omega) - f2
-    det = g11 * g22 - g12 * g21
-    return (g22 * a_v - g12 * a_w) / det, (g11 * a_w - g21 * a_v) / det
 
 
 @dataclass(frozen=True)
@@ -319,78 +248,6 @@ class Controller(ABC):
             wheel angles and rates; slips. Noise and sensor faults are already applied.
         reference : Reference
         """
-
-
-def _check_positive(key: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, Real):
-        raise ValueError(f"gain {key}={value!r} is not allowed: it must be a finite number > 0")
-    value = float(value)
-    if not (math.isfinite(value) and value > 0.0):
-        raise ValueError(f"gain {key}={value!r} is not allowed: it must be a finite number > 0")
-    return value
-
-
-def resolve_gains(
-    controller: str,
-    presets: Mapping[str, Mapping[str, float]],
-    default_preset: str,
-    gains: str | Mapping | None,
-) -> tuple[dict[str, float], str]:
-    """Turn a ``gains`` argument into a full, validated gain dict.
-
-    Parameters
-    ----------
-    controller : str
-        Controller name, for error messages.
-    presets : mapping
-        Preset name -> complete gain dict.
-    default_preset : str
-        Preset used when ``gains`` is None or a dict without a ``"preset"`` key.
-    gains : str, dict or None
-        A preset name; or a dict overriding individual gains of a preset (the dict may name its
-        base preset under the key ``"preset"``); or None for the default preset.
-
-    Returns
-    -------
-    values : dict
-        Gain name -> float, every key of the preset.
-    preset : str
-        The base preset's name.
-    """
-    allowed_presets = ", ".join(repr(k) for k in presets)
-    overrides: Mapping = {}
-    preset = default_preset
-    if gains is None:
-        pass
-    elif isinstance(gains, str):
-        preset = gains
-    elif isinstance(gains, Mapping):
-        overrides = dict(gains)
-        preset = overrides.pop("preset", default_preset)
-        if not isinstance(preset, str):
-            raise ValueError(
-                f"gains preset={preset!r} for {controller} is not allowed: use one of "
-                f"{allowed_presets}"
-            )
-    else:
-        raise ValueError(
-            f"gains={gains!r} for {controller} is not allowed: use a preset name "
-            f"({allowed_presets}), a dict of gains or None"
-        )
-    if preset not in presets:
-        raise ValueError(
-            f"gains preset={preset!r} for {controller} is not allowed: use one of {allowed_presets}"
-        )
-    values = dict(presets[preset])
-    for key, value in overrides.items():
-        if key not in values:
-            allowed_keys = ", ".join(repr(k) for k in values)
-            raise ValueError(
-                f"gain {key!r} (value {value!r}) is not a gain of {controller}: allowed keys are "
-                f"{allowed_keys} and 'preset'"
-            )
-        values[key] = _check_positive(key, value)
-    return values, preset
 
 
 #: Outcomes of a law's step from plain numbers (:func:`tt_mujoco.controllers.ismc_sta.

@@ -12,7 +12,7 @@ for ``Q = diag(q_y, q_psi, q_phi, ...)`` and ``R = r_omega``, and
 
 Gains are kept per (curvature, speed) rounded to a grid (``kappa_step``, ``v_step``), so a run
 solves one Riccati equation per distinct arc and speed, not one per step. An inner loop tracks
-``(v_d, omega_c)`` through the nominal model (:func:`controllers.base.track_velocities`).
+``(v_d, omega_c)`` through the nominal model (:func:`controllers.nominal.track_velocities`).
 
 Driving forward only. Backing up, the same design holds the hitch on steady arcs, but a
 curvature step asks the leading trailer to swing its hitch through tens of degrees, outside the
@@ -27,7 +27,8 @@ from typing import ClassVar
 
 import numpy as np
 from tt_mujoco.controllers.backing import SteadyInverse
-from tt_mujoco.controllers.base import Controller, track_velocities
+from tt_mujoco.controllers.base import Controller
+from tt_mujoco.controllers.nominal import track_velocities
 
 from tt_mujoco.reference.feedback import curvature_and_rate_at, path_errors
 from tt_mujoco.vehicle.linearize import jacobians

@@ -25,7 +25,8 @@ from __future__ import annotations
 import math
 from typing import ClassVar
 
-from tt_mujoco.controllers.base import Controller, track_velocities
+from tt_mujoco.controllers.base import Controller
+from tt_mujoco.controllers.nominal import track_velocities
 
 from tt_mujoco.reference.feedback import path_errors
 

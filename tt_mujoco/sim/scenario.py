@@ -24,7 +24,6 @@ from tt_mujoco.defaults import (
     TIMESTEP,
 )
 from tt_mujoco.reference.feedback import check_config
-from tt_mujoco.registry import is_hook
 from tt_mujoco.schema import (
     Schema,
     boolean,
@@ -36,8 +35,8 @@ from tt_mujoco.schema import (
     table,
     text,
 )
-from tt_mujoco.sim.parts.faults import parse_fault
-from tt_mujoco.sim.parts.ground import parse_patch, parse_patches
+from tt_mujoco.sim import scenario_values as values
+from tt_mujoco.sim.parts.ground import parse_patches
 from tt_mujoco.sim.parts.motors import ACTUATORS
 from tt_mujoco.sim.parts.terrain import parse_terrain
 from tt_mujoco.sim.parts.wind import parse_wind
@@ -45,7 +44,6 @@ from tt_mujoco.vehicle.params import (
     INERTIA_FIELDS,
     MASS_FIELDS,
     MAX_TRAILERS,
-    SETTABLE_FIELDS,
     Params,
     jackknife_phi_deg,
 )
@@ -64,71 +62,16 @@ PLANTS = ("mujoco", "reduced")
 TARGETS = ("dynamic", "static")
 DISTURBANCE_MODES = ("matched", "wrench", "none")
 STARTS = ("on_path", "paper")
-#: What ``Scenario.eta_schedule`` may name besides False / True.
-ETA_SCHEDULES = ("curvature", "path")
-#: ``eta`` words that schedule the plant's gain on the same-path model (``eta_schedule``).
-ETA_WORDS = {"scheduled": "curvature", "path": "path"}
+ETA_SCHEDULES, ETA_WORDS = values.ETA_SCHEDULES, values.ETA_WORDS
 
 
-def _reraised(parse):
-    """A parser from a module's own (``parse(value) -> record``), its message after the label."""
-
-    def convert(value, label):
-        try:
-            return parse(value)
-        except ValueError as err:
-            raise ValueError(f"{label}: {err}") from None
-
-    return convert
-
-
-def _spec(parse):
-    def convert(value, label):
-        if not isinstance(value, str):
-            raise ValueError(f"{label}={value!r} is not allowed: give its text, e.g. 'flat'")
-        try:
-            return parse(value).spec()
-        except ValueError as err:
-            raise ValueError(str(err)) from None
-
-    return convert
-
-
-def _world(value, label):
-    from tt_mujoco.world.builtin import parse_world
-
-    parse_world(value)  # a WorldError (a ValueError) naming what is wrong
-    return value.strip()
-
-
-def _controller_names() -> str:
-    from tt_mujoco.controllers import CONTROLLERS  # the registry as it is when asked
-
-    return "{" + ",".join((*CONTROLLERS, "HOOK")) + "}"
-
-
-def _path_names() -> str:
-    from tt_mujoco.reference.paths import PATHS  # the registry as it is when asked
-
-    return "{" + ",".join((*PATHS, "plan", "PATH.csv", "HOOK")) + "}"
-
-
-def _controller(value, label):
-    from tt_mujoco.controllers import CONTROLLERS  # the registry as it is when asked
-
-    name = text(value, label)
-    if is_hook(name):
-        return name
-    return choice(*CONTROLLERS)(name, label)
-
-
-_finite = number()
-
-
+# --gains is parsed here, beside its option: the walk from the command line to the law's
+# use of a gain stays within scenario.py, build.py, controllers/base.py, controllers/gains.py
+# and sim/loop/law.py.
 def _gain(value, label):
     if label.endswith(".preset"):
         return text(value, label)
-    return _finite(value, label)
+    return values.finite(value, label)
 
 
 def _gains(value, label):
@@ -148,77 +91,6 @@ def _gains(value, label):
     return text(value, label)
 
 
-def _eta(value, label):
-    if isinstance(value, str):
-        key = value.strip().lower().replace("-", "_")
-        if key in ("paper", "same_path", *ETA_WORDS):
-            return key
-    return number(words=("paper", "same_path", *ETA_WORDS))(value, label)
-
-
-def _eta_schedule(value, label):
-    if isinstance(value, str) and value.strip().lower() in ETA_SCHEDULES:
-        return value.strip().lower()
-    try:
-        return boolean(value, label)
-    except ValueError:
-        raise ValueError(
-            f"{label}={value!r} is not allowed: use False, True (curvature) or one of "
-            f"{', '.join(repr(e) for e in ETA_SCHEDULES)}"
-        ) from None
-
-
-def _trailers(value, label):
-    if isinstance(value, list):  # a file's [[trailers]]: one table per trailer behind the first
-        if not all(isinstance(t, dict) for t in value):
-            raise ValueError(
-                f"{label}: trailers must be a number or an array of tables [[trailers]], one "
-                "per trailer behind the first"
-            )
-        return [dict(t) for t in value]
-    return number(1, MAX_TRAILERS, integer=True)(value, label)
-
-
-def _train(value, label):
-    if not isinstance(value, list | tuple) or not all(isinstance(t, dict) for t in value):
-        raise ValueError(f"{label}={value!r} is not allowed: give a list of tables")
-    return [dict(t) for t in value]
-
-
-def _path_option(value, label):
-    if isinstance(value, str) and value.strip():
-        try:
-            return float(value)
-        except ValueError:
-            return value.strip()
-    return _finite(value, label)
-
-
-def _fault(value, label):
-    return _reraised(lambda v: parse_fault(v).to_dict())(value, label)
-
-
-def _patch(value, label):
-    return _reraised(lambda v: parse_patch(v).spec())(value, label)
-
-
-_positive = number(0, low_open=True)
-_param_table = table(_finite, SETTABLE_FIELDS)
-
-
-def _params(value, label):
-    """Overrides of :class:`Params` fields, checked by Params itself."""
-    out = _param_table(value, label)
-    try:
-        Params(**out)
-    except ValueError as err:
-        raise ValueError(f"{label}: {err}") from None
-    return out
-
-
-_params.names = _param_table.names  # the allowed entries, as a table's parser has them
-
-
 @dataclass
 class Scenario:
     """Everything that defines a run. Defaults are the project's main run."""
@@ -231,15 +103,15 @@ class Scenario:
         "its goal), a CSV file with header x,y[,v], or a hook package.module:NAME / "
         "path/to/file.py:NAME (a ReferencePath or a factory)",
         file=True,
-        metavar=_path_names,
+        metavar=values.path_names,
     )
     controller: str = option(
         CONTROLLER,
-        _controller,
+        values.controller,
         "a registered controller (ismc_sta, pid, fbl, ...), or a hook package.module:Class / "
         "path/to/file.py:Class (a Controller subclass or a plain_law)",
         file=True,
-        metavar=_controller_names,
+        metavar=values.controller_names,
     )
     gains: str | dict | None = option(
         None,
@@ -262,7 +134,7 @@ class Scenario:
     #: ``eta_schedule``.
     eta: str | float = option(
         "same_path",
-        _eta,
+        values.eta,
         "passive steering gain: paper (3, jackknifes forward), same_path ((L-L0)/(L+L0) = "
         "-1/7), scheduled (the exact same-path gain for the local curvature, every step), path "
         "(each trailer's gain eta_k(s) from the path's geometry at its own arc length; |eta| "
@@ -308,7 +180,7 @@ class Scenario:
     )
     param_scale: float = option(
         1.0,
-        _positive,
+        values.positive,
         "scale the plant's masses and inertias (the controller keeps the nominal model)",
         metavar="F",
     )
@@ -339,10 +211,10 @@ class Scenario:
         "initial condition, at rest (on the cycloid at its pose (0, 0, pi/4))",
         choices=STARTS,
     )
-    friction: float = option(1.0, _positive, "tyre friction coefficient")
+    friction: float = option(1.0, values.positive, "tyre friction coefficient")
     #: Overrides of vehicle parameters, of the plant and the controller's model alike.
     params: dict = option(
-        parse=_params,
+        parse=values.params,
         help="override a vehicle parameter of both plant and controller model, e.g. Mr=7.5 "
         "(repeatable; see tt_mujoco.vehicle.params.Params)",
         default_factory=dict,
@@ -355,7 +227,7 @@ class Scenario:
     #: Per-field factors on the *plant's* masses and inertias only (e.g. ``{"Mr": 1.2}``), on
     #: top of ``param_scale``: a model mismatch the controller does not know about.
     plant_scale: dict = option(
-        parse=table(_positive, MASS_FIELDS + INERTIA_FIELDS),
+        parse=table(values.positive, MASS_FIELDS + INERTIA_FIELDS),
         help="scale one of the plant's masses or inertias, e.g. Mr=1.2 (the controller keeps "
         "the nominal model; repeatable)",
         default_factory=dict,
@@ -368,7 +240,7 @@ class Scenario:
     #: Initial articulation phi (deg), with beta = eta phi; must stay short of the jackknife.
     phi0_deg: float = option(
         0.0,
-        _finite,
+        values.finite,
         "initial articulation phi, short of the jackknife",
         unit="deg",
         flags=("--phi0-deg", "--phi0"),
@@ -376,7 +248,7 @@ class Scenario:
     )
     #: Fault specs (dicts or ``KIND:key=value,...`` strings), see :mod:`tt_mujoco.sim.parts.faults`.
     faults: list = option(
-        parse=spec_list(_fault),
+        parse=spec_list(values.fault),
         help="inject a fault (repeatable; replaces a config file's faults): "
         "payload:t=S[,factor=1.5,trailer=K] | dropout:t=S[,duration=0.1] | "
         "actuator:t=S[,duration=1,scale=0.3,wheel=both|right|left]",
@@ -389,7 +261,7 @@ class Scenario:
     #: a dict of gains, ``{}`` for the defaults (k_y, k_psi, c_max).
     path_feedback: dict | None = option(
         None,
-        optional_table(_finite),
+        optional_table(values.finite),
         "outer loop: lateral and heading errors feed the yaw-rate target "
         "(tt_mujoco.reference.feedback; k_y = k_psi = 4)",
         form="switch",
@@ -399,7 +271,7 @@ class Scenario:
     #: path (:class:`tt_mujoco.controllers.backing.HitchCascade`): a dict of its gains, ``{}``
     #: for the defaults, or None (the hitches left to themselves). Ignored driving forward.
     hitch_feedback: dict | None = option(
-        parse=optional_table(_finite),
+        parse=optional_table(values.finite),
         help="reversing without --path-feedback: the leading trailer's axle tracks the path "
         "and a cascade on the hitch angles sets the tractor's yaw rate "
         "(tt_mujoco.controllers.backing); --no-hitch-feedback leaves the hitches to themselves",
@@ -416,7 +288,7 @@ class Scenario:
     #: command line it is ``--eta scheduled`` / ``--eta path``.
     eta_schedule: bool | str = option(
         False,
-        _eta_schedule,
+        values.eta_schedule,
         "schedule the plant's steering gain: false, curvature (or true) or path",
         cli=False,
     )
@@ -442,7 +314,7 @@ class Scenario:
     #: Shape options of the path (``R``, ``cruise``, ``ramp_time``, ... see
     #: :func:`tt_mujoco.reference.targets.make_target`; for a path hook, its keyword arguments).
     path_options: dict = option(
-        parse=table(_path_option),
+        parse=table(values.path_option),
         help="a shape option of the path (s_curve/circle: R, cruise, ramp_time; clothoid: R, "
         "angle_deg, transition, straight, cruise, ramp_time; CSV: max_curvature, smoothing, "
         "cruise, ramp_time; a registered path: its factory's keywords; a hook: its keyword "
@@ -469,14 +341,14 @@ class Scenario:
     #: masses, and ``eta``: a preset gives each trailer its own value) ...
     trailers: int = option(
         1,
-        _trailers,
+        values.trailers,
         f"number of trailers, 1 to {MAX_TRAILERS}: trailers 2..N copy trailer 1 and steer with "
         "their own gain of the --eta preset (a config file's [[train]] tables override them)",
         metavar="N",
     )
     #: ... then take these overrides, one table of ``Trailer`` fields per trailer 2, 3, ...
     train: list = option(
-        parse=_train,
+        parse=values.train,
         help="overrides of trailers 2, 3, ...: one table of Trailer fields each",
         default_factory=list,
         cli=False,
@@ -487,7 +359,7 @@ class Scenario:
     #: process's main thread (the CLI, a sweep's process workers), by SIGALRM.
     time_limit_s: float = option(
         TIME_LIMIT_S,
-        _positive,
+        values.positive,
         "wall-clock limit of the run: a run still going then stops, its rows kept (exit code 3)",
         unit="s",
         flags=("--time-limit",),
@@ -499,7 +371,7 @@ class Scenario:
     #: ``"rough:AMPLITUDE_M:WAVELENGTH_M[:SEED]"`` (a heightfield); MuJoCo plant only.
     terrain: str = option(
         "flat",
-        _spec(parse_terrain),
+        values.spec(parse_terrain),
         "the ground: flat; a constant grade rising along HEADING_DEG (default 0, +x); a ramp "
         "rising from the path's arc length START_S (for LENGTH m, then level); or a rough "
         "ground of bumps of AMPLITUDE and about WAVELENGTH from SEED; MuJoCo plant only",
@@ -529,7 +401,7 @@ class Scenario:
     #: ``"SPEED[:DIRECTION_DEG[:GUST_STD]]"`` (m/s, deg, m/s). MuJoCo plant only.
     wind: str = option(
         "none",
-        _spec(parse_wind),
+        values.spec(parse_wind),
         "wind blowing toward DIRECTION_DEG (m/s, deg from +x, gusts' std in m/s); MuJoCo "
         "plant only",
         metavar="SPEED[:DIRECTION_DEG[:GUST_STD]]",
@@ -537,7 +409,7 @@ class Scenario:
     #: Patches of other friction (:mod:`tt_mujoco.sim.parts.ground`): ``"band:S0:S1:MU"`` along the
     #: path, ``"rect:X0:Y0:X1:Y1:MU"`` on the floor. MuJoCo plant only.
     ground: list = option(
-        parse=spec_list(_patch),
+        parse=spec_list(values.patch),
         help="a patch of other friction (repeatable): a stretch of the path or a rectangle of "
         "the floor; MuJoCo plant only",
         default_factory=list,
@@ -562,7 +434,7 @@ class Scenario:
     #: unit that touches an obstacle stops the run (status "collision", exit code 3).
     world: str = option(
         "none",
-        _world,
+        values.world,
         "obstacles and a goal: none, a named world (loading_bay, alley, yard) or a world file "
         "(TOML); a unit touching an obstacle stops the run (exit code 3)",
         metavar="none|NAME|FILE.toml",

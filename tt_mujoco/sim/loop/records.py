@@ -308,7 +308,7 @@ class LawRecord(NamedTuple):
     follows_steering: bool
     steered_train: TrainConstants
     #: how fast actuated axles turn at most (rad/s; inf: a linkage): the model takes the
-    #: gains they can follow (:func:`tt_mujoco.controllers.base.reduced_model`)
+    #: gains they can follow (:func:`tt_mujoco.controllers.nominal.reduced_model`)
     axle_slew_rate: float
     #: :data:`READING_FIELDS`: what the law saw and asked this step (scratch)
     reading: np.ndarray
