@@ -174,6 +174,12 @@ def test_a_users_path_that_fails_ends_its_episode_as_failed(tmp_path):
     assert terminated.all() and list(info["status"]) == ["failed", "failed"]
     assert "no pose here" in info["message"][0]
     assert reward[0] == -(env.max_steps - info["t"][0] / env.dt)
+    # on the step the single env stops it, with its last observation: the path fails where a
+    # unit's errors ask its pose, after the step's target read its curvature
+    env, actions, vector = _episodes(2, 60, **options)
+    for i in range(env.num_envs):
+        _assert_same(vector, _single_episodes(i, actions, **options), i)
+    assert {"failed"} <= {status for step in vector for status in step[4]}
 
 
 @pytest.mark.parametrize(

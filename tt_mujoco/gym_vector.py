@@ -161,11 +161,17 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
         return self._observations(), self._infos()
 
     def step(self, actions):
+        """Step every episode with its action (a ``(num_envs, 2)`` array, as the single env's
+        action each); an episode that ended on the last step is reset instead (NEXT_STEP).
+        ``(observations, rewards, terminated, truncated, info)``, arrays over the episodes."""
         torques = self._torques(actions)
         n, steps = self.num_envs, self._built.steps
         rewards = np.zeros(n)
         terminated, truncated = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
         started = self._ended.copy()
+        # what an episode that stops keeps: its last observation (as the single env), not
+        # the part of a new one written before the stop
+        last_raw, last_aux = self._raw.copy(), self._aux.copy()
         penalties = {}
         act, ks, args = self._act, self._k, self._args
         for i in range(n):
@@ -181,6 +187,7 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
                 if code != RUNNING:
                     self._stop(i, code, k)
             except sim.StopRun as stop:
+                self._raw[i], self._aux[i] = last_raw[i], last_aux[i]
                 self._status[i], self._message[i] = stop.status, stop.message
                 terminated[i] = True
                 penalties[i] = -float(steps - k)  # -(1 + the steps left after this one)

@@ -128,6 +128,8 @@ def sense_and_observe(k, episode, agent):
     if code != RUNNING:
         return code
     observe_into(row, law, target, log, agent)
+    if stop.raised:  # the path, called back for a unit's errors, raised
+        return RAISED
     return RUNNING
 
 
