@@ -35,6 +35,7 @@ Gymnasium's vectors of single envs instead.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from numbers import Integral
 from typing import ClassVar
@@ -148,8 +149,6 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
         s = self.scenario
         phi0_deg = s.phi0_deg if not options else options.get("phi0_deg", s.phi0_deg)
         if phi0_deg != s.phi0_deg:
-            import dataclasses
-
             dataclasses.replace(s, phi0_deg=phi0_deg).validate()
         self._phi0_deg = None if phi0_deg == s.phi0_deg else phi0_deg
         for i, one in enumerate(seeds):
