@@ -75,7 +75,7 @@ def floor(env, start_states, actions: np.ndarray) -> float:
     plant = env._steppers[0].plant
     m = plant.model
     n, substeps = env.num_envs, env._built.substeps
-    limit = env._scale
+    limit = env.torque_limit
     control = np.zeros((n, len(actions), m.nu))
     control[:, :, plant._act_r] = actions[:, :, 0].T * limit
     control[:, :, plant._act_l] = actions[:, :, 1].T * limit

@@ -116,8 +116,12 @@ __all__ = [
     "RESET_OPTIONS",
     "TASKS",
     "TractorTrailerEnv",
+    "bounded",
     "observation_bounds",
     "observation_names",
+    "reset_phi0_deg",
+    "task_reward",
+    "torques_of",
 ]
 
 ENV_ID = "tt_mujoco/TractorTrailer-v0"
@@ -211,6 +215,80 @@ def scenario_overrides(overrides: dict, schema: Schema = sim.SCHEMA) -> dict:
     return schema.values(overrides, "TractorTrailerEnv")
 
 
+def torques_of(action, shape: tuple, action_units: str, limit: float) -> np.ndarray:
+    """The agent's ``action`` (one ``(T_r, T_l)``, or a batch of them: ``shape``) as wheel
+    torques (N m), from fractions of the torque ``limit`` (``action_units="normalized"``) or
+    N m.
+
+    Raises
+    ------
+    ValueError
+        An action not of ``shape`` or not finite, named, with what is allowed.
+    """
+    try:
+        torques = np.asarray(action, dtype=float).reshape(shape)
+    except (TypeError, ValueError):
+        torques = None
+    if torques is None or not np.all(np.isfinite(torques)):
+        name, count = ("action", "two") if shape == (2,) else ("actions", str(shape))
+        units = (
+            ", fractions of the torque limit in [-1, 1]"
+            if action_units == "normalized"
+            else " in N m"
+        )
+        raise ValueError(
+            f"{name}={shown(action)} is not allowed: give {count} finite numbers (T_r, T_l)" + units
+        )
+    return torques * limit if action_units == "normalized" else torques
+
+
+def reset_phi0_deg(scenario: sim.Scenario, options: dict | None) -> float | None:
+    """The initial articulation (deg) that ``reset(options=...)`` asks, checked; None for the
+    scenario's own start (backing up: the trailers on the path).
+
+    Raises
+    ------
+    ValueError
+        An option ``reset`` does not take, or a ``phi0_deg`` the scenario refuses, named.
+    """
+    unknown = sorted(set(options or {}) - set(RESET_OPTIONS))
+    if unknown:
+        raise ValueError(
+            f"options={shown(options)} is not allowed: {unknown[0]!r} is not a reset "
+            f"option (allowed: {', '.join(RESET_OPTIONS)})"
+        )
+    phi0_deg = (options or {}).get("phi0_deg", scenario.phi0_deg)
+    if phi0_deg == scenario.phi0_deg:
+        return None
+    dataclasses.replace(scenario, phi0_deg=phi0_deg).validate()
+    return phi0_deg
+
+
+def bounded(observation, headings, low, high) -> np.ndarray:
+    """A copy of ``observation`` (one, or a batch along the leading axes) with its headings
+    (the boolean mask ``headings``) wrapped to [-pi, pi] and every value clipped to its bounds
+    ``(low, high)``: a state beyond them has blown up."""
+    out = np.array(observation, dtype=np.float64)
+    out[..., headings] = np.remainder(out[..., headings] + math.pi, 2 * math.pi) - math.pi
+    return np.clip(out, low, high)
+
+
+def task_reward(task: str, v, omega, target, lead):
+    """The reward of ``task`` after a step (see the module), of one episode (floats) or of a
+    batch (arrays, elementwise): the true ``v``, ``omega``, the ``target`` ``(v_d, omega_d)``
+    and the ``lead`` unit's ``(cross_track, heading_error)``."""
+    e_v = v - target[0]
+    if task == "velocity":
+        e_w = omega - target[1]
+        return -(e_v * e_v + e_w * e_w)
+    scales = PATH_TASK_SCALES
+    a = lead[0] / scales["cross_track"]
+    b = lead[1] / scales["heading_error"]
+    c = e_v / scales["speed"]
+    mean = (a * a + b * b + c * c) / 3
+    return -np.where(mean < 1.0, mean, 1.0)  # min(1.0, mean): an error of NaN costs 1 too
+
+
 class TractorTrailerEnv(gymnasium.Env):
     """Wheel-torque control of the tractor-trailer along a reference path.
 
@@ -279,7 +357,8 @@ class TractorTrailerEnv(gymnasium.Env):
         limit = self.nominal.torque_limit
         self.observation_names = observation_names(self.n_trailers)
         self.action_units = action_units
-        self._action_scale = limit if action_units == "normalized" else 1.0
+        #: the torque limit (N m) a normalised action is a fraction of
+        self.torque_limit = limit
         bound = 1.0 if action_units == "normalized" else limit
         self.action_space = spaces.Box(-bound, bound, shape=(2,), dtype=np.float32)
         reach = self._legs.reach()
@@ -314,24 +393,14 @@ class TractorTrailerEnv(gymnasium.Env):
         ``phi0_deg``, the initial articulation (default the scenario's)."""
         if seed is None and not self._seeded:
             seed = self.scenario.seed
-        unknown = sorted(set(options or {}) - set(RESET_OPTIONS))
-        if unknown:
-            raise ValueError(
-                f"options={shown(options)} is not allowed: {unknown[0]!r} is not a reset "
-                f"option (allowed: {', '.join(RESET_OPTIONS)})"
-            )
+        phi0_deg = reset_phi0_deg(self.scenario, options)
         super().reset(seed=seed)
         self._seeded = True
         if self._legs.count > 1:  # the later legs' noise: the maneuver's of this seed
             self._episode_seed = seed if seed is not None else int(self.np_random.integers(2**63))
         self._use_leg(0, self._legs.first, self._first_stepper)
         self._t0 = 0.0
-        s = self.scenario
-        phi0_deg = s.phi0_deg if not options else options.get("phi0_deg", s.phi0_deg)
-        if phi0_deg != s.phi0_deg:
-            dataclasses.replace(s, phi0_deg=phi0_deg).validate()
-        # None: the scenario's own start (backing up, the trailers on the path)
-        self._stepper.reset(self.np_random, phi0_deg=None if phi0_deg == s.phi0_deg else phi0_deg)
+        self._stepper.reset(self.np_random, phi0_deg=phi0_deg)
         self.close()  # a new plant: the renderer is made again for its model
         obs = self._sense()
         return obs, self._info("running")
@@ -339,21 +408,7 @@ class TractorTrailerEnv(gymnasium.Env):
     def step(self, action):
         if self._stepper.plant is None:
             raise RuntimeError("call reset() before step()")
-        try:
-            a = np.asarray(action, dtype=float).reshape(2)
-        except (TypeError, ValueError):
-            a = None
-        if a is None or not np.all(np.isfinite(a)):
-            raise ValueError(
-                f"action={action!r} is not allowed: give two finite numbers (T_r, T_l)"
-                + (
-                    ", fractions of the torque limit in [-1, 1]"
-                    if self.action_units == "normalized"
-                    else " in N m"
-                )
-            )
-        if self.action_units == "normalized":
-            a = a * self._action_scale
+        a = torques_of(action, (2,), self.action_units, self.torque_limit)
         stepper = self._stepper
         leg_left = self._leg_steps_left()
         steps_left = leg_left + self._legs.steps_after(self._leg)
@@ -470,9 +525,8 @@ class TractorTrailerEnv(gymnasium.Env):
         errors = self._path_errors(me)
         lead = errors[-2:] if self._reverse else errors[:2]
         self._lead = lead
-        obs = np.array([*seen, *train, *errors, *lead, ref.v_d, ref.omega_d], dtype=np.float64)
-        obs[self._headings] = np.remainder(obs[self._headings] + math.pi, 2 * math.pi) - math.pi
-        obs = np.clip(obs, self._low, self._high)  # beyond: the state has blown up
+        obs = [*seen, *train, *errors, *lead, ref.v_d, ref.omega_d]
+        obs = bounded(obs, self._headings, self._low, self._high)
         self._last_obs = obs
         return obs.copy()
 
@@ -493,17 +547,7 @@ class TractorTrailerEnv(gymnasium.Env):
     def _reward(self) -> float:
         """The step's reward for the env's task (see the module), after the step."""
         me, ref = self._me, self._ref
-        if self.task == "velocity":
-            e_v, e_w = me.v - ref.v_d, me.omega - ref.omega_d
-            return -(e_v * e_v + e_w * e_w)
-        scales = PATH_TASK_SCALES
-        e_y, e_psi = self._lead
-        errors = (
-            e_y / scales["cross_track"],
-            e_psi / scales["heading_error"],
-            (me.v - ref.v_d) / scales["speed"],
-        )
-        return -min(1.0, sum(e * e for e in errors) / len(errors))
+        return float(task_reward(self.task, me.v, me.omega, (ref.v_d, ref.omega_d), self._lead))
 
     def _info(self, status: str) -> dict:
         me, ref = self._me, self._ref

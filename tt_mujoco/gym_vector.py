@@ -35,8 +35,6 @@ Gymnasium's vectors of single envs instead.
 
 from __future__ import annotations
 
-import dataclasses
-import math
 from numbers import Integral
 from typing import ClassVar
 
@@ -50,7 +48,13 @@ except ImportError as err:  # pragma: no cover - depends on the optional extra
     raise ImportError("tt_mujoco.gym_vector needs gymnasium: pip install 'tt-mujoco[gym]'") from err
 
 from tt_mujoco import sim
-from tt_mujoco.gym_env import PATH_TASK_SCALES, RESET_OPTIONS, TractorTrailerEnv
+from tt_mujoco.gym_env import (
+    TractorTrailerEnv,
+    bounded,
+    reset_phi0_deg,
+    task_reward,
+    torques_of,
+)
 from tt_mujoco.registry import shown
 from tt_mujoco.sim.loop import agent_step, closed_loop, compiled, outcome
 from tt_mujoco.sim.loop.step import PAYLOAD, RAISED, RUNNING
@@ -111,7 +115,7 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.dt, self.max_steps = single.dt, single.max_steps
         self._low, self._high = single._low, single._high
-        self._headings, self._scale = single._headings, single._action_scale
+        self._headings, self.torque_limit = single._headings, single.torque_limit
         self._action_units = action_units
         self._built = single._built
         self._reverse = bool(self._built.scenario.reverse)
@@ -139,18 +143,9 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
         """Start every episode at the path start; ``seed`` an int (episode ``i`` gets
         ``seed + i``), a sequence of one per episode, or None. ``options`` may hold
         ``phi0_deg``, the initial articulation of every episode."""
+        phi0_deg = reset_phi0_deg(self.scenario, options)
         seeds = self._seeds(seed)
-        unknown = sorted(set(options or {}) - set(RESET_OPTIONS))
-        if unknown:
-            raise ValueError(
-                f"options={shown(options)} is not allowed: {unknown[0]!r} is not a reset "
-                f"option (allowed: {', '.join(RESET_OPTIONS)})"
-            )
-        s = self.scenario
-        phi0_deg = s.phi0_deg if not options else options.get("phi0_deg", s.phi0_deg)
-        if phi0_deg != s.phi0_deg:
-            dataclasses.replace(s, phi0_deg=phi0_deg).validate()
-        self._phi0_deg = None if phi0_deg == s.phi0_deg else phi0_deg
+        self._phi0_deg = phi0_deg
         for i, one in enumerate(seeds):
             if one is not None or self._rngs[i] is None:
                 self._rngs[i] = seeding.np_random(one)[0]
@@ -163,7 +158,8 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
         """Step every episode with its action (a ``(num_envs, 2)`` array, as the single env's
         action each); an episode that ended on the last step is reset instead (NEXT_STEP).
         ``(observations, rewards, terminated, truncated, info)``, arrays over the episodes."""
-        torques = self._torques(actions)
+        shape = (self.num_envs, 2)
+        torques = torques_of(actions, shape, self._action_units, self.torque_limit).tolist()
         n, steps = self.num_envs, self._built.steps
         rewards = np.zeros(n)
         terminated, truncated = np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
@@ -211,7 +207,6 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
         stepper = self._steppers[i]
         stepper.reset(self._rngs[i], phi0_deg=self._phi0_deg)
         episode = stepper.begin_agent(self._kernel)
-        self._scheduled = bool(episode[1].steering.kind)
         self._unit_s[i] = self._start_s
         agent = agent_step.AgentRecord(self._reverse, self._unit_s[i], self._raw[i], self._aux[i])
         self._args[i] = (episode, agent)
@@ -252,13 +247,11 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
 
     def _stop(self, i: int, code: int, k: int) -> None:
         """Episode ``i`` stopped at step ``k`` with ``code``: raise its StopRun."""
-        stop_record = self._args[i][0][5]
-        if code == RAISED:  # Python code the kernel called back raised
-            for hook in self._steppers[i].hooks:
-                raised = getattr(hook, "raised", None)
-                if raised is not None:
-                    raise raised
-        status, message = outcome.outcome(code, stop_record, self._steppers[i], None, k)
+        stop_record, stepper = self._args[i][0][5], self._steppers[i]
+        raised = stepper.hook_failure() if code == RAISED else None
+        if raised is not None:  # Python code the kernel called back
+            raise raised
+        status, message = outcome.outcome(code, stop_record, stepper, None, k)
         raise sim.StopRun(status, message)
 
     # --- the batch ---------------------------------------------------------------------------
@@ -278,50 +271,20 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
             )
         return seeds
 
-    def _torques(self, actions) -> list:
-        """The actions as torques (N m), one ``[T_r, T_l]`` per episode."""
-        try:
-            a = np.asarray(actions, dtype=float).reshape(self.num_envs, 2)
-        except (TypeError, ValueError):
-            a = None
-        if a is None or not np.all(np.isfinite(a)):
-            units = (
-                "fractions of the torque limit in [-1, 1]"
-                if self._action_units == "normalized"
-                else "in N m"
-            )
-            raise ValueError(
-                f"actions={shown(actions)} is not allowed: give ({self.num_envs}, 2) finite "
-                f"numbers (T_r, T_l), {units}"
-            )
-        if self._action_units == "normalized":
-            a = a * self._scale
-        return a.tolist()
-
     def _observations(self) -> np.ndarray:
         """The batch's observations: headings wrapped to [-pi, pi], clipped to the bounds."""
-        obs = self._raw.copy()
-        heads = obs[:, self._headings]
-        obs[:, self._headings] = np.remainder(heads + math.pi, 2 * math.pi) - math.pi
-        return np.clip(obs, self._low, self._high)
+        return bounded(self._raw, self._headings, self._low, self._high)
 
     def _rewards(self) -> np.ndarray:
-        """Every episode's reward for the env's task after its step (see the single env)."""
-        aux = self._aux
-        e_v = aux[:, _V] - aux[:, _V_D]
-        if self.task == "velocity":
-            e_w = aux[:, _OMEGA] - aux[:, _OMEGA_D]
-            return -(e_v * e_v + e_w * e_w)
-        lead = len(self.observation_names) - 4  # the leading unit's (e_y, e_psi)
-        a = self._raw[:, lead] / PATH_TASK_SCALES["cross_track"]
-        b = self._raw[:, lead + 1] / PATH_TASK_SCALES["heading_error"]
-        c = e_v / PATH_TASK_SCALES["speed"]
-        mean = (a * a + b * b + c * c) / 3
-        return -np.where(mean < 1.0, mean, 1.0)  # as min(1.0, mean), NaN included
+        """Every episode's reward for the env's task after its step (the single env's)."""
+        aux, lead = self._aux, len(self.observation_names) - 4  # the leading unit's errors
+        target = (aux[:, _V_D], aux[:, _OMEGA_D])
+        errors = (self._raw[:, lead], self._raw[:, lead + 1])
+        return task_reward(self.task, aux[:, _V], aux[:, _OMEGA], target, errors)
 
     def _etas(self) -> np.ndarray:
         """Each episode's trailers' gains in force: a schedule's, else the constant ones."""
-        if self._scheduled:
+        if self._steppers[0].scheduler is not None:
             return np.array([stepper.plant_etas for stepper in self._steppers])
         return np.repeat(np.array([self._built.plant_params.etas]), self.num_envs, axis=0)
 

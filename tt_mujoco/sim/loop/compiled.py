@@ -541,7 +541,6 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
             f"the law {controller.name!r} has no compiled form: {compile_failure(err, source)}"
         ) from err
     stepper.begin(controller, user, kernel=k_mod)
-    called_back = [hook for hook in stepper.hooks if isinstance(hook, k_mod.CalledBack)]
     entry = None
 
     def run_chunk(*args):
@@ -555,9 +554,9 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
             except Exception as err:  # damaged: nothing has run, the Python loop takes over
                 raise _DamagedCacheError() from err
             _write_manifest(sum(k_mod.run_chunk.stats.cache_misses.values()) > 0)
-        for hook in called_back:  # what Python code the kernel called back raised
-            if hook.raised is not None:
-                raise hook.raised
+        raised = stepper.hook_failure()
+        if raised is not None:
+            raise raised
         return out
 
     def advance(*args):  # not compiled by the warm-up: its first call may add to the cache

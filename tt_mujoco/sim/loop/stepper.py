@@ -137,6 +137,7 @@ class Stepper:
         self.plant = None
         self._checkpoint = None
         self._episode = None
+        self._end_status = None
         self._log = None
 
     def reset(
@@ -180,7 +181,6 @@ class Stepper:
         self.drag = DragConstants(*(getattr(b.plant_params, f) for f in DragConstants._fields))
         self._blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self._episode = None  # the records: begin()
-        self._end_status = None
         #: The C functions the kernel's records name by address (the law, the path, the
         #: disturbance; begin()), held while it runs.
         self.hooks: tuple = ()
@@ -236,6 +236,14 @@ class Stepper:
         loop, plant, law, target, stop = self.begin(None, None, kernel, by_address=True)
         self._start_log(self.k, 2)
         return loop, plant, law, target, self._log, stop
+
+    def hook_failure(self) -> BaseException | None:
+        """What Python code the kernel called back (a controller's ``compute``, a user's path
+        or disturbance) raised in this episode, which its caller raises; None if nothing did."""
+        for hook in self.hooks:
+            if getattr(hook, "raised", None) is not None:
+                return hook.raised
+        return None
 
     @property
     def records(self):
