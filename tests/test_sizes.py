@@ -15,8 +15,6 @@ LIMITS = {"module": 600, "function": 80, "arguments": 8}
 #: Units over their limit, by kind and name, with the size each may not pass.
 KNOWN = {
     ("arguments", "controllers/pure_pursuit.py:pure_pursuit"): 9,
-    ("arguments", "tt_mujoco/sweep/execute.py:run_sweep"): 10,
-    ("arguments", "tt_mujoco/sweep/execute.py:_execute_watched"): 9,
 }
 
 

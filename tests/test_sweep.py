@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -260,7 +261,9 @@ def test_an_edited_input_file_is_not_reused_and_a_changed_spec_is_refused(tmp_pa
     other = sweep.parse_spec(["traj=p.csv", "duration=0.5,0.6", "plant=reduced"], None, 0, 1, None)
     with pytest.raises(sweep.BadSpecError, match="another specification"):
         sweep.run_sweep(other, out, workers=1, figures=False, resume=True)
-    extended = sweep.run_sweep(other, out, workers=1, figures=False, resume=True, extend=True)
+    extended = sweep.run_sweep(
+        other, out, workers=1, figures=False, resume=sweep.Resume(extend=True)
+    )
     assert extended.reused == 1 and len(extended.rows) == 2
 
 
@@ -417,3 +420,20 @@ def test_the_sweep_figures_label_units_and_keep_their_titles_inside(reference, m
                 name = label.split(" [")[0]
                 if metric_unit(name):
                     assert label == f"{name} [{metric_unit(name)}]"
+
+
+@pytest.mark.parametrize(
+    "resume, named",
+    [("yes", "resume='yes'"), (1, "resume=1"), (None, "resume=None")],
+)
+def test_a_resume_that_is_not_one_is_refused_before_any_run(tmp_path, resume, named):
+    spec = sweep.parse_spec(["duration=0.2", "plant=reduced"], None, 0, 1, None)
+    with pytest.raises(sweep.BadSpecError, match=re.escape(named)):
+        sweep.run_sweep(spec, tmp_path / "sw", workers=1, figures=False, resume=resume)
+    assert not (tmp_path / "sw").exists()
+
+
+@pytest.mark.parametrize("field", ["retry_errors", "extend"])
+def test_a_resume_s_switches_are_booleans(field):
+    with pytest.raises(sweep.BadSpecError, match=rf"Resume\({field}='no'\)"):
+        sweep.Resume(**{field: "no"})

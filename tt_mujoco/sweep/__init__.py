@@ -32,7 +32,7 @@ with its status and error, never lost. Exit codes: 0 the sweep finished (whateve
 2 bad sweep specification (one message), 130 interrupted (resumable)."""
 
 from tt_mujoco.sweep.cli import main
-from tt_mujoco.sweep.execute import SweepResult, run_sweep
+from tt_mujoco.sweep.execute import Resume, SweepResult, run_sweep
 from tt_mujoco.sweep.options import (
     JOURNAL,
     KEY_METRICS,
@@ -57,6 +57,7 @@ __all__ = [
     "WALL_COLUMNS",
     "Axis",
     "BadSpecError",
+    "Resume",
     "SweepResult",
     "SweepSpec",
     "build_scenario",

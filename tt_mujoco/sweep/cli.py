@@ -14,7 +14,7 @@ from tt_mujoco.cliargs import BadInputError, Parser
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_OK
 from tt_mujoco.executor import ExecutorError
 from tt_mujoco.outputs import free_name
-from tt_mujoco.sweep.execute import run_sweep
+from tt_mujoco.sweep.execute import Resume, run_sweep
 from tt_mujoco.sweep.options import (
     DICT_OPTIONS,
     JOURNAL,
@@ -157,12 +157,10 @@ def main(argv: list[str] | None = None) -> int:
             out,
             workers=workers,
             scheduler=args.scheduler,
-            resume=args.resume,
+            resume=args.resume and Resume(retry_errors=args.retry_errors, extend=args.extend),
             quiet=args.quiet,
             metric=args.metric,
             figures=not args.no_figures,
-            retry_errors=args.retry_errors,
-            extend=args.extend,
         )
     except (BadSpecError, BadInputError, ExecutorError) as err:
         print(f"error: {err}", file=sys.stderr)

@@ -64,6 +64,69 @@ class SweepResult:
 HANG_DIR = ".hangs"
 
 
+@dataclass(frozen=True)
+class Resume:
+    """How :func:`run_sweep` continues the unfinished sweep in its output folder: the runs in
+    its journal are not run again.
+
+    Parameters
+    ----------
+    retry_errors : bool
+        Run again the runs whose status is "error" (a raised exception or a lost worker,
+        perhaps transient); jackknifed and diverged runs are results and stay.
+    extend : bool
+        Accept a specification other than the saved one (more values or samples); without it
+        a different specification is refused.
+    """
+
+    retry_errors: bool = False
+    extend: bool = False
+
+    def __post_init__(self):
+        for name in ("retry_errors", "extend"):
+            if not isinstance(getattr(self, name), bool):
+                raise BadSpecError(
+                    f"Resume({name}={getattr(self, name)!r}) is not allowed: it must be True "
+                    "or False"
+                )
+
+
+def _resume_of(resume) -> Resume | None:
+    """``run_sweep``'s ``resume``: False (a new sweep), True (``Resume()``) or a Resume."""
+    if isinstance(resume, Resume):
+        return resume
+    if isinstance(resume, bool):
+        return Resume() if resume else None
+    raise BadSpecError(
+        f"resume={resume!r} is not allowed: it must be True, False or a sweep.Resume"
+    )
+
+
+class _Journal:
+    """The journal open for appending, and every finished run it holds by id: a record is
+    written (a line, flushed) and kept in one step."""
+
+    def __init__(self, file, done: dict[str, dict]):
+        self.file, self.done = file, done
+
+    def add(self, run: dict, result: dict) -> dict:
+        # As the journal holds it (NaN as None), so a resumed table is the same.
+        record = json_safe({"run_id": run["run_id"], "index": run["index"], **result})
+        self.file.write(_json_line(record))
+        self.file.flush()
+        self.done[run["run_id"]] = record
+        return record
+
+    @property
+    def failures(self) -> int:
+        return sum(1 for r in self.done.values() if r.get("status") != "ok")
+
+
+def _failed_run(status: str, message: str = "", error: str = "") -> dict:
+    """A run's result that the sweep itself records (no metrics, no wall time)."""
+    return {"status": status, "message": message, "error": error, "metrics": {}, "run_wall_s": None}
+
+
 def _progress(total: int, initial: int, quiet: bool):
     if quiet:
         return None
@@ -119,10 +182,10 @@ def _json_line(record: dict) -> str:
     return json.dumps(json_safe(record), allow_nan=False) + "\n"
 
 
-def _check_same_spec(out: Path, spec: SweepSpec, resume: bool, extend: bool) -> None:
+def _check_same_spec(out: Path, spec: SweepSpec, resume: Resume | None) -> None:
     """A resumed sweep keeps its specification; another one is refused unless extending."""
     saved = out / SPEC_FILE
-    if not resume or extend or not saved.exists():
+    if resume is None or resume.extend or not saved.exists():
         return
     if saved.read_bytes() != spec.to_toml().encode("utf-8"):
         raise BadSpecError(
@@ -137,12 +200,10 @@ def run_sweep(
     out: str | Path,
     workers: int = 1,
     scheduler: str | None = None,
-    resume: bool = False,
+    resume: bool | Resume = False,
     quiet: bool = True,
     metric: str = "rmse_lateral",
     figures: bool = True,
-    retry_errors: bool = False,
-    extend: bool = False,
 ) -> SweepResult:
     """Run a sweep and write its table, summary and figures into ``out``.
 
@@ -157,20 +218,16 @@ def run_sweep(
     scheduler : str, optional
         None: a local process pool. ``"local"``: a Dask ``LocalCluster``. Otherwise the address
         of a running Dask scheduler, e.g. ``tcp://10.0.0.5:8786``.
-    extend : bool
-        With ``resume``: accept a specification other than the saved one (more values or
-        samples); without it a different specification is refused.
-    resume : bool
+    resume : bool or Resume
         Continue a sweep in ``out``: runs whose configuration is in its journal are not run.
+        ``True`` is ``Resume()``; a :class:`Resume` also says whether to run the errors again
+        and whether the specification may have grown.
     quiet : bool
         No progress bar.
     metric : str
         The metric of the scatter figure.
     figures : bool
         Write ``histograms.png`` and ``scatter.png``.
-    retry_errors : bool
-        With ``resume``: run again the runs whose status is "error" (a raised exception or a
-        lost worker, perhaps transient); jackknifed and diverged runs are results and stay.
 
     Raises
     ------
@@ -183,25 +240,28 @@ def run_sweep(
     out = Path(out)
     if not (isinstance(workers, int) and workers >= 1):
         raise BadSpecError(f"workers={workers!r} is not allowed: it must be an integer >= 1")
+    resume = _resume_of(resume)
+    retry_errors = resume is not None and resume.retry_errors
     runs = expand(spec, validate=False)
     # Every run still to do goes through the setup path before any work; a resumed sweep's
     # finished runs are not checked again (a file they read may be gone by now).
     finished = _finished(out / JOURNAL, retry_errors) if resume and not out.is_symlink() else {}
     validate_runs([r for r in runs if r["run_id"] not in finished])
-    prepare_out(out, resume)
+    prepare_out(out, resume is not None)
     with _lock(out):
         journal_path = out / JOURNAL
         done = _finished(journal_path, retry_errors)
         # Rewrite the journal without a line cut by a kill, so appends start on a fresh line.
         if journal_path.exists():
             atomic_write(journal_path, "".join(_json_line(r) for r in done.values()))
-        _check_same_spec(out, spec, resume, extend)
+        _check_same_spec(out, spec, resume)
         atomic_write(out / SPEC_FILE, spec.to_toml())
         todo = deque(r for r in runs if r["run_id"] not in done)
         reused = len(runs) - len(todo)
         if todo:
             workers = _worker_count(workers, len(todo), scheduler)
-            _execute(todo, done, journal_path, workers, scheduler, quiet, len(runs), reused)
+            bar = _progress(len(runs), reused, quiet)
+            _execute(todo, done, journal_path, Executors(workers, scheduler, ignore_sigint), bar)
         header, rows = build_rows(runs, done)
         atomic_write(out / TABLE, table_csv(header, rows))
         summary = summarize(header, rows, group_options(spec, rows))
@@ -244,92 +304,73 @@ def _worker_count(workers: int, runs: int, scheduler: str | None) -> int:
     return min(workers, runs)
 
 
-def _execute(todo, done, journal_path, workers, scheduler, quiet, total, reused) -> None:
+def _execute(todo, done, journal_path: Path, executors: Executors, bar) -> None:
     """Run ``todo`` through the executor, journalling each result as it arrives. Local
     workers watch each run for a hang (:func:`tt_mujoco.watchdog.armed`, files in
     :data:`HANG_DIR`, removed at the end); a Dask cluster's workers are its own."""
     hang_dir = None
-    if scheduler is None:
+    if executors.scheduler is None:
         hang_dir = journal_path.parent / HANG_DIR
         hang_dir.mkdir(exist_ok=True)
     try:
-        _execute_watched(
-            todo, done, journal_path, workers, scheduler, quiet, total, reused, hang_dir
-        )
+        fd = os.open(journal_path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW, 0o644)
+        with os.fdopen(fd, "a", encoding="utf-8") as file:
+            _execute_watched(todo, _Journal(file, done), executors, bar, hang_dir)
     finally:
+        if bar is not None:
+            bar.close()
         if hang_dir is not None:
             shutil.rmtree(hang_dir, ignore_errors=True)
 
 
-def _execute_watched(
-    todo, done, journal_path, workers, scheduler, quiet, total, reused, hang_dir
-) -> None:
+def _execute_watched(todo, journal: _Journal, executors: Executors, bar, hang_dir) -> None:
     # The workers import run_one by its module's name (tt_mujoco.sweep.runs), which a Dask
     # worker on another machine can do too.
-    executors = Executors(workers, scheduler, ignore_sigint)
     executor = executors.open()
-    bar = _progress(total, reused, quiet)
-    failures = sum(1 for r in done.values() if r.get("status") != "ok")
+    failures = journal.failures
     crashes: dict[str, int] = {}
     inflight: dict[cf.Future, dict] = {}
     slots, slots_checked = executors.slots(), time.monotonic()
     try:
-        fd = os.open(journal_path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW, 0o644)
-        with os.fdopen(fd, "a", encoding="utf-8") as journal:
-            while todo or inflight:
-                if executors.client is not None and time.monotonic() - slots_checked > 10:
-                    slots, slots_checked = executors.slots(), time.monotonic()  # adaptive
-                # A bounded window keeps memory flat for huge sweeps and makes Ctrl-C prompt.
-                while todo and len(inflight) < 2 * slots + 2:
-                    if any(r["run_id"] in crashes for r in inflight.values()):
-                        break  # a suspect of a worker death runs alone (see _recover)
-                    if todo[0]["run_id"] in crashes and inflight:
-                        break
-                    run = todo.popleft()
-                    future = executor.submit(run_one, run["options"], hang_dir, run["run_id"])
-                    inflight[future] = run
-                finished, _ = cf.wait(inflight, return_when=cf.FIRST_COMPLETED)
-                broken = []
-                for fut in finished:
-                    run = inflight.pop(fut)
-                    try:
-                        result = fut.result()
-                    except cf.process.BrokenProcessPool:
-                        broken.append(run)
-                        continue
-                    except Exception as err:  # e.g. Dask's KilledWorker after its retries
-                        result = {
-                            "status": "error",
-                            "message": "",
-                            "error": f"{type(err).__name__}: {err}",
-                            "metrics": {},
-                            "run_wall_s": None,
-                        }
-                    # As the journal holds it (NaN as None), so a resumed table is the same.
-                    record = json_safe({"run_id": run["run_id"], "index": run["index"], **result})
-                    journal.write(_json_line(record))
-                    journal.flush()
-                    done[run["run_id"]] = record
-                    failures += result["status"] != "ok"
-                    if bar is not None:
-                        bar.update(1)
-                        bar.set_postfix(failed=failures, refresh=False)
-                if broken:
-                    hung = watchdog.read_hangs(hang_dir) if hang_dir is not None else {}
-                    executor = _recover(
-                        executors, broken, inflight, todo, crashes, journal, done, hung
-                    )
-                    failures = sum(1 for r in done.values() if r.get("status") != "ok")
+        while todo or inflight:
+            if executors.client is not None and time.monotonic() - slots_checked > 10:
+                slots, slots_checked = executors.slots(), time.monotonic()  # adaptive
+            # A bounded window keeps memory flat for huge sweeps and makes Ctrl-C prompt.
+            while todo and len(inflight) < 2 * slots + 2:
+                if any(r["run_id"] in crashes for r in inflight.values()):
+                    break  # a suspect of a worker death runs alone (see _recover)
+                if todo[0]["run_id"] in crashes and inflight:
+                    break
+                run = todo.popleft()
+                future = executor.submit(run_one, run["options"], hang_dir, run["run_id"])
+                inflight[future] = run
+            finished, _ = cf.wait(inflight, return_when=cf.FIRST_COMPLETED)
+            broken = []
+            for fut in finished:
+                run = inflight.pop(fut)
+                try:
+                    result = fut.result()
+                except cf.process.BrokenProcessPool:
+                    broken.append(run)
+                    continue
+                except Exception as err:  # e.g. Dask's KilledWorker after its retries
+                    result = _failed_run("error", error=f"{type(err).__name__}: {err}")
+                journal.add(run, result)
+                failures += result["status"] != "ok"
+                if bar is not None:
+                    bar.update(1)
+                    bar.set_postfix(failed=failures, refresh=False)
+            if broken:
+                hung = watchdog.read_hangs(hang_dir) if hang_dir is not None else {}
+                executor = _recover(executors, broken, inflight, todo, crashes, journal, hung)
+                failures = journal.failures
     except BaseException:
         executors.close(cancel=True)
         raise
-    finally:
-        if bar is not None:
-            bar.close()
     executors.close()
 
 
-def _recover(executors, broken, inflight, todo, crashes, journal, done, hung) -> cf.Executor:
+def _recover(executors, broken, inflight, todo, crashes, journal: _Journal, hung) -> cf.Executor:
     """A worker process died (segfault, out of memory, or ended by its watch for a run that
     hung): every run in flight is suspect.
 
@@ -342,19 +383,13 @@ def _recover(executors, broken, inflight, todo, crashes, journal, done, hung) ->
     inflight.clear()
     named = [run for run in suspects if run["run_id"] in hung]
     for run in named:
-        run_id, hang = run["run_id"], hung[run["run_id"]]
+        hang = hung[run["run_id"]]
         suspects.remove(run)
         message = (
             f"the run passed its time limit of {hang.limit_s:g} s in code that never returned "
             f"to Python, at {watchdog.hang_site(hang.traceback)}: its worker was ended"
         )
-        record = {
-            **{"run_id": run_id, "index": run["index"], "status": "failed"},
-            **{"message": message, "error": "", "metrics": {}, "run_wall_s": None},
-        }
-        journal.write(_json_line(record))
-        journal.flush()
-        done[run_id] = record
+        journal.add(run, _failed_run("failed", message=message))
     if named:  # the watch named the cause: the others were only in flight beside it
         todo.extendleft(reversed(suspects))
         return executors.reopen()
@@ -362,18 +397,7 @@ def _recover(executors, broken, inflight, todo, crashes, journal, done, hung) ->
     for run in reversed(suspects):
         crashes[run["run_id"]] = crashes.get(run["run_id"], 0) + 1
         if alone or crashes[run["run_id"]] >= 2:
-            record = {
-                "run_id": run["run_id"],
-                "index": run["index"],
-                "status": "error",
-                "message": "",
-                "error": "the worker process died during this run",
-                "metrics": {},
-                "run_wall_s": None,
-            }
-            journal.write(_json_line(record))
-            journal.flush()
-            done[run["run_id"]] = record
+            journal.add(run, _failed_run("error", error="the worker process died during this run"))
         else:
             todo.appendleft(run)
     return executors.reopen()

@@ -165,8 +165,9 @@ def _place_payloads(k, s, fault, plant) -> int:
         return count
     mj = plant.mj
     for i in range(count):
-        body = mj.trailer_bodies[int(changes[i][0]) - 1]
-        plant_mujoco.scale_body_of(mj.body_mass, mj.body_inertia, body, changes[i][1])
+        body = mj.trailer_bodies[int(changes[i][faults.CHANGE_TRAILER]) - 1]
+        scale = changes[i][faults.CHANGE_FACTOR]
+        plant_mujoco.scale_body_of(mj.body_mass, mj.body_inertia, body, scale)
     return 0
 
 

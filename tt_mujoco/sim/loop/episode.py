@@ -29,7 +29,13 @@ from tt_mujoco.sim.loop.records import (
     WindRecord,
 )
 from tt_mujoco.sim.parts import disturbances, schedule
-from tt_mujoco.sim.parts.faults import ACTUATOR_ROW, HELD, PAYLOAD_ROW
+from tt_mujoco.sim.parts.faults import (
+    ACTUATOR_ROW,
+    HELD,
+    PAYLOAD_CHANGE,
+    PAYLOAD_ROW,
+    PAYLOAD_STATE,
+)
 from tt_mujoco.sim.parts.measure import TRAIN_FIELDS, Measurement
 from tt_mujoco.sim.parts.motors import MotorConstants
 
@@ -356,8 +362,8 @@ def loop_record(stepper) -> LoopRecord:
             ),
             held=np.array(faults.held if faults else [0.0] * len(HELD), dtype=float),
             payloads=np.array(rows, dtype=float).reshape(-1, len(PAYLOAD_ROW)),
-            payload_state=np.array(faults.payload_state if faults else [0.0, 0.0]),
-            payload_changes=np.zeros((len(rows), 2)),
+            payload_state=np.array(faults.payload_state if faults else [0.0] * len(PAYLOAD_STATE)),
+            payload_changes=np.zeros((len(rows), len(PAYLOAD_CHANGE))),
         ),
         dc_motor=motors is not None,
         motor=motors.constants if motors else MotorConstants(*[0.0] * 6),

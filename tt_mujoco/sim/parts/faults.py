@@ -331,26 +331,33 @@ def fault_torque_of(k: int, actuators, T_r: float, T_l: float) -> tuple[float, f
 #: factor, when it acted (s; NaN before) and its index among the faults.
 PAYLOAD_ROW = ("timed", "k0", "s", "trailer", "factor", "acted", "index")
 TIMED, K0, AT_S, TRAILER, FACTOR, ACTED = range(len(PAYLOAD_ROW) - 1)
+#: The payloads' state: the reference's arc length at the last step (NaN before the first) and
+#: the control period (s).
+PAYLOAD_STATE = ("last_s", "control_dt")
+LAST_S, CONTROL_DT = range(len(PAYLOAD_STATE))
+#: A payload change as :func:`payloads_of` gives it: the trailer (1..N) and the factor.
+PAYLOAD_CHANGE = ("trailer", "factor")
+CHANGE_TRAILER, CHANGE_FACTOR = range(len(PAYLOAD_CHANGE))
 
 
 def payloads_of(k: int, s: float, rows, state, out) -> int:
     """The payload changes taking effect at step ``k`` with the reference at arc length ``s``,
-    as ``(trailer, factor)`` rows of ``out``; how many. ``rows`` (:data:`PAYLOAD_ROW`) record
-    when a placed one acted, ``state`` holds the last ``s`` and the control period (the
-    compiled episode shares it)."""
+    as :data:`PAYLOAD_CHANGE` rows of ``out``; how many. ``rows`` (:data:`PAYLOAD_ROW`) record
+    when a placed one acted, ``state`` is :data:`PAYLOAD_STATE` (the compiled episode shares
+    it)."""
     count, placed = 0, False
     for i in range(len(rows)):
         row = rows[i]
         if row[TIMED] == 1.0:
             if row[K0] == k:
-                out[count][0], out[count][1] = row[TRAILER], row[FACTOR]
+                out[count][CHANGE_TRAILER], out[count][CHANGE_FACTOR] = row[TRAILER], row[FACTOR]
                 count += 1
         else:
             placed = True
     if not placed:
         return count
-    prev = state[0]
-    state[0] = s
+    prev = state[LAST_S]
+    state[LAST_S] = s
     for i in range(len(rows)):
         row = rows[i]
         if row[TIMED] == 1.0 or not math.isnan(row[ACTED]):
@@ -358,8 +365,8 @@ def payloads_of(k: int, s: float, rows, state, out) -> int:
         at = row[AT_S]
         reached = s == at if math.isnan(prev) else min(prev, s) <= at <= max(prev, s)
         if reached:
-            row[ACTED] = k * state[1]
-            out[count][0], out[count][1] = row[TRAILER], row[FACTOR]
+            row[ACTED] = k * state[CONTROL_DT]
+            out[count][CHANGE_TRAILER], out[count][CHANGE_FACTOR] = row[TRAILER], row[FACTOR]
             count += 1
     return count
 

@@ -8,6 +8,7 @@ import math
 import numpy as np
 
 from tt_mujoco.defaults import DRIVEN_PATH_GAIN
+from tt_mujoco.sim.parts.measure import ROW_X0, ROW_Y0
 from tt_mujoco.sim.parts.plant import Plant
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.path_schedule import (
@@ -181,4 +182,4 @@ def gains_moved(etas, current, tolerance: float) -> bool:
 
 def _axle_positions(me) -> list[tuple[float, float]]:
     """Every trailer's axle midpoint (x, y) in a measurement, trailer 1 first."""
-    return [(me.x0, me.y0), *((row[0], row[1]) for row in getattr(me, "train", ()))]
+    return [(me.x0, me.y0), *((row[ROW_X0], row[ROW_Y0]) for row in getattr(me, "train", ()))]
