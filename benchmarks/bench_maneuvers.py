@@ -123,6 +123,15 @@ def main(argv=None) -> int:
                     f"  not reached: torques saturated a median {100 * np.median(missed):.1f} % "
                     f"of the time (max {100 * np.max(missed):.1f} %)"
                 )
+            outside = [r for r in rows if r["outcome"] == "missed"]  # ended, off the goal
+            if outside:
+                off = np.array([r["position_error_m"] for r in outside])
+                turned = np.abs([r["heading_error_deg"] for r in outside])
+                print(
+                    f"  missed: final position error median {1000 * np.median(off):.2f} mm, max "
+                    f"{1000 * off.max():.2f} mm; heading error median {np.median(turned):.2f} "
+                    f"deg, max {turned.max():.2f} deg"
+                )
             if len(reached):
                 print(
                     f"  reached: final position error median {1000 * np.median(errors):.2f} mm, "

@@ -72,3 +72,52 @@ def random_world(rng: np.random.Generator) -> dict:
         },
         "obstacle": obstacles,
     }
+
+
+def turned_bay(rng: np.random.Generator, dock_length: float) -> dict:
+    """A world file's table: a corridor 2.0-2.4 m wide that turns 90 deg, left or right, into a
+    dock ``dock_length`` (m) from the first leg's centre line to the goal, at a random place and
+    heading; the start in the first leg, facing away from the turn (the train backs into it)."""
+    width = float(rng.uniform(2.0, 2.4))
+    side = float(rng.choice([-1.0, 1.0]))  # the dock's side of the first leg
+    h, w = width / 2.0, 0.05
+    corner = 5.6  # the dock's centre line, along the first leg
+    local = {  # the walls in the corridor's frame: the first leg along +x, the dock towards +y
+        "outer wall": ([-4.5, -h - w / 2], [corner + h + w / 2, -h - w / 2]),
+        "inner wall": ([-4.5, h + w / 2], [corner - h - w / 2, h + w / 2]),
+        "far wall": ([corner + h + w / 2, -h - w / 2], [corner + h + w / 2, dock_length + 0.5]),
+        "near wall": ([corner - h - w / 2, h + w / 2], [corner - h - w / 2, dock_length + 0.5]),
+        "dock": (
+            [corner - h - w / 2, dock_length + 0.45],
+            [corner + h + w / 2, dock_length + 0.45],
+        ),
+    }
+    turn = float(rng.uniform(-math.pi, math.pi))
+    ox, oy = (float(v) for v in rng.uniform(-3.0, 3.0, 2))
+    c, s = math.cos(turn), math.sin(turn)
+
+    def placed(x, y):
+        y *= side
+        return [ox + c * x - s * y, oy + s * x + c * y]
+
+    obstacles = [
+        {"kind": "wall", "name": name, "start": placed(*a), "end": placed(*b), "thickness": w}
+        for name, (a, b) in local.items()
+    ]
+    gx, gy = placed(corner, dock_length)
+    sx, sy = placed(-1.0, 0.0)
+    corners = [
+        placed(x, y) for x in (-4.7, corner + h + 0.3) for y in (-h - 0.3, dock_length + 0.7)
+    ]
+    xs, ys = [p[0] for p in corners], [p[1] for p in corners]
+    facing = math.degrees(turn) + 180.0
+    return {
+        "bounds": [min(xs), max(xs), min(ys), max(ys)],
+        "start": {
+            "x": [sx - 0.3, sx + 0.3],
+            "y": [sy - 0.3, sy + 0.3],
+            "heading_deg": [facing - 3.0, facing + 3.0],
+        },
+        "goal": {"x": gx, "y": gy, "heading_deg": math.degrees(turn + side * math.pi / 2) + 180.0},
+        "obstacle": obstacles,
+    }

@@ -246,10 +246,15 @@ def test_runs_keep_every_trailer_within_five_millimetres(plant, traj, n):
 
 def test_on_the_cycloids_slipping_start_the_feedback_follows_the_tractors_track():
     # docs/model.md Section 13: the cycloid's timed start accelerates four bodies on the
-    # tractor's two driven wheels, which slip by up to 1.16 m/s (0.005 m/s with one trailer) and
-    # shake the tractor off the reference path. The table's steering alone (gain 0) keeps the
-    # trailers on the reference path, 7.7 / 7.8 / 8.9 mm off the tractor's track; the feedback
-    # to that track brings them to 4.0 / 4.0 / 4.1 mm.
+    # tractor's two driven wheels, which slip by more than 1 m/s (0.005 m/s with one trailer)
+    # and shake the tractor off the reference path. The table's steering alone (gain 0) keeps
+    # the trailers on the reference path, 8 to 9 mm off the tractor's track; the feedback to
+    # that track brings them to 4.0 / 4.0 / 4.1 mm. The slipping start is chaotic to the last
+    # bit of the arithmetic, so machines differ: the one that recorded the study gave 7.7 /
+    # 7.8 / 8.9 mm and slips of 1.16 m/s, another (the same versions of Python, MuJoCo and
+    # numba; no AVX-512) 7.6 / 7.9 / 9.0 mm and 1.11 m/s; both 4.0 / 4.0 / 4.1 mm with the
+    # feedback. The bounds hold the claim, not one machine's last digit: gain 0 leaves every
+    # trailer 7.5-9.5 mm off, the feedback brings every one under 4.5 mm.
     slips = [
         simulate(Scenario(traj="cycloid", trailers=n, disturbance="none", eta="path")).metrics[
             "slip_longitudinal_max"
@@ -262,8 +267,9 @@ def test_on_the_cycloids_slipping_start_the_feedback_follows_the_tractors_track(
         scenario = Scenario(
             traj="cycloid", trailers=3, disturbance="none", eta="path", driven_path_gain=gain
         )
-        worst[gain] = [round(1e3 * x, 1) for x in _offtracks(simulate(scenario).metrics, 3)]
-    assert worst == {0.0: [7.7, 7.8, 8.9], 10.0: [4.0, 4.0, 4.1]}
+        worst[gain] = [1e3 * x for x in _offtracks(simulate(scenario).metrics, 3)]
+    assert all(7.5 < mm < 9.5 for mm in worst[0.0]), worst
+    assert all(mm < 4.5 for mm in worst[10.0]), worst
 
 
 @pytest.mark.parametrize("plant", PLANTS)

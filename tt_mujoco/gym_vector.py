@@ -62,9 +62,14 @@ from tt_mujoco.sim.loop.stepper import Stepper
 
 __all__ = ["TractorTrailerVectorEnv"]
 
-_V, _OMEGA, _V_D, _OMEGA_D, _V_D_DOT, _OMEGA_D_DOT, _SLIP_LEFT, _SLIP_RIGHT = range(
-    len(agent_step.AUX_FIELDS)
+_V, _OMEGA, _V_D, _OMEGA_D = (
+    agent_step.AUX_V,
+    agent_step.AUX_OMEGA,
+    agent_step.AUX_V_D,
+    agent_step.AUX_OMEGA_D,
 )
+_V_D_DOT, _OMEGA_D_DOT = agent_step.AUX_V_D_DOT, agent_step.AUX_OMEGA_D_DOT
+_SLIP_LEFT, _SLIP_RIGHT = agent_step.AUX_SLIP_LEFT, agent_step.AUX_SLIP_RIGHT
 
 
 class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):

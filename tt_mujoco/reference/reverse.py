@@ -29,12 +29,17 @@ class ReverseTarget(Target):
     ----------
     target : tt_mujoco.reference.targets.Target
         The forward target (its path, speed profile, kind and duration are reused).
+    stop_s : float
+        Where on the path the run stops backing (m): the profile's distance is driven back to
+        it from ``s_end``. 0: the path's start (a planned leg into a short bay stops beyond it,
+        :attr:`tt_mujoco.world.plan.Leg.stop_s`).
     """
 
-    def __init__(self, target):
+    def __init__(self, target, stop_s: float = 0.0):
         self.forward = target
         self.kind = target.kind
-        self.s_end = min(target.path.length, target.profile.distance(target.duration))
+        travel = target.profile.distance(target.duration)
+        self.s_end = min(target.path.length, stop_s + travel)
         super().__init__(target.path, target.profile, target.duration)
 
     @property

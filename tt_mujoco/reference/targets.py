@@ -502,13 +502,20 @@ def _setup(path, profile, kind: str, duration: float | None) -> TargetSetup:
     return TargetSetup(path, target_cls(path, profile, duration), path.initial_pose)
 
 
-def target_on(path, kind: str = "dynamic", duration: float | None = None, **ramp) -> TargetSetup:
-    """The target on ``path`` (its stations' speeds, else the ramp profile over its length
-    with ``ramp``'s ``cruise`` and ``ramp_time``) and its initial pose."""
+def target_on(
+    path,
+    kind: str = "dynamic",
+    duration: float | None = None,
+    distance: float | None = None,
+    **ramp,
+) -> TargetSetup:
+    """The target on ``path`` (its stations' speeds, else the ramp profile over ``distance``,
+    by default its length, with ``ramp``'s ``cruise`` and ``ramp_time``) and its initial
+    pose."""
     if path.station_speeds is not None:
         profile = StationSpeed(*path.station_speeds)
     else:
-        profile = RampSpeed(path.length, **ramp)
+        profile = RampSpeed(path.length if distance is None else distance, **ramp)
     return _setup(path, profile, kind, duration)
 
 

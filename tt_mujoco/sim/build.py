@@ -456,13 +456,15 @@ def _path_and_target(scenario: Scenario, leg: LegStart | None):
     if leg is not None:
         plan = leg.plan
         ramp = {k: v for k, v in scenario.path_options.items() if k in ("cruise", "ramp_time")}
-        leg_path = plan.legs[leg.index].path
+        planned_leg = plan.legs[leg.index]
         duration = scenario.duration
         if duration is not None and plan.cusps:  # each leg its share, by its length
-            whole = sum(one.path.length for one in plan.legs)
-            steps = round(duration * leg_path.length / whole / scenario.control_dt)
+            whole = sum(one.driven_length for one in plan.legs)
+            steps = round(duration * planned_leg.driven_length / whole / scenario.control_dt)
             duration = max(steps, 1) * scenario.control_dt
-        path, target, pose = target_on(leg_path, scenario.target, duration, **ramp)
+        path, target, pose = target_on(
+            planned_leg.path, scenario.target, duration, planned_leg.driven_length, **ramp
+        )
     else:
         path, target, pose = make_target(
             scenario.traj,
@@ -473,7 +475,7 @@ def _path_and_target(scenario: Scenario, leg: LegStart | None):
         )
     start_s = 0.0
     if scenario.reverse:
-        target = ReverseTarget(target)
+        target = ReverseTarget(target, 0.0 if leg is None else leg.plan.legs[leg.index].stop_s)
         pose = target.initial_pose
         start_s = target.s_end
     if leg is not None and leg.pose is not None:

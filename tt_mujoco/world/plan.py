@@ -17,6 +17,12 @@ last axle, straight) ahead of it along the goal's heading.
 - **Forward**: from the tractor's start, a Dubins word to the goal pose ``exit`` short of it,
   then straight ``exit + D`` to the tractor's place at the goal.
 
+- **Backing up into a short bay**: where the straight out of the goal cannot hold the whole
+  train (a bay right after a turn), the path starts at the goal pose itself, straight out for
+  a share of :data:`GOAL_STRAIGHTS` of ``D`` (never shorter than the last trailer), then the
+  Dubins word and the straight ``D`` to the start. The run then stops with the tractor at
+  ``stop_s`` along it (:attr:`Leg.stop_s`), where the axle chain puts the last axle on the
+  path's start: the train ends on the curve, its last axle on the goal pose.
 - **Backing up with a cusp** (when no path backs in directly): the train drives forward to a
   cusp, stops, and backs in. The leg it backs: from the tractor at the goal, straight out for
   an exit, an arc (of :data:`CUSP_TURNS`, at a radius of :data:`CUSP_RADII`) and a straight
@@ -25,7 +31,9 @@ last axle, straight) ahead of it along the goal's heading.
 
 The candidates (each exit length of :data:`EXITS`, each radius of :data:`RADII` scaled by the
 train's least radius, each Dubins word) are tried shortest first, the long exits before the
-short ones, the plans with a cusp last; the first whose every unit keeps ``margin`` from every
+short ones, then the plans with a cusp, and last those that end on a curve (its train ends
+less precisely: the trailers there follow the tractor's path only as closely as their gains
+let them in a change of curvature); the first whose every unit keeps ``margin`` from every
 obstacle, and every axle inside the world's bounds, at every sample (``step`` apart along each
 leg) is the plan. Every formula it uses is the project's own: the axle chain, the footprints
 and the contact check (:mod:`tt_mujoco.world.contact`).
@@ -49,10 +57,12 @@ from tt_mujoco.world.part import outside_bounds, start_problem, world_record
 from tt_mujoco.world.world import World, WorldError
 
 __all__ = [
+    "CURVE_HEADING_SHARE",
     "CUSP_EXITS",
     "CUSP_RADII",
     "CUSP_TURNS",
     "EXITS",
+    "GOAL_STRAIGHTS",
     "MARGIN",
     "PLAN",
     "RADII",
@@ -76,6 +86,13 @@ MARGIN = 0.05
 #: ``D``: the long ones first (the train then ends a straight as long as itself, on which the
 #: hitch cascade straightens it), the short ones where no long one is clear.
 EXITS = ((1.0, 1.5, 2.0), (0.0, 0.25, 0.5))
+#: The straights out of the goal pose tried, as multiples of ``D``, where no straight of the
+#: whole train is clear (the train then ends on the curve beyond it).
+GOAL_STRAIGHTS = (0.9, 0.8, 0.7, 0.6, 0.5)
+#: The share of the goal's heading tolerance a plan ending on a curve may spend: there the last
+#: trailer's heading is its hitch's, which the unit ahead of it on the curve places off the
+#: path's tangent; the rest is left to the tracking.
+CURVE_HEADING_SHARE = 0.5
 #: The turning radii tried, as multiples of the train's least radius (:func:`least_radius`).
 RADII = (1.0, 1.25, 1.5, 2.0, 3.0)
 #: The least turning radius of one trailer's plan (m): the hitch cascade backs the paper's
@@ -110,10 +127,19 @@ class Leg:
     word: str
     #: the radius of its arcs (m; 0 for a straight)
     radius: float
+    #: backing up, the tractor's arc length on ``path`` where the leg ends, with the last axle
+    #: at the path's start (m; 0: the tractor ends at the path's start, the train straight
+    #: beyond it)
+    stop_s: float = 0.0
 
     @property
     def reverse(self) -> bool:
         return self.direction == "reverse"
+
+    @property
+    def driven_length(self) -> float:
+        """How far the tractor drives along the leg (m)."""
+        return float(self.path.length) - self.stop_s
 
     def report(self) -> dict:
         return {
@@ -121,6 +147,7 @@ class Leg:
             "word": self.word,
             "radius_m": self.radius,
             "length_m": float(self.path.length),
+            "stop_s_m": self.stop_s,
         }
 
 
@@ -129,7 +156,9 @@ class Plan:
     """A planned maneuver, its legs driven one after the other, and how it was found."""
 
     legs: tuple[Leg, ...]
-    #: the straight exit out of (or into) the goal (m)
+    #: the straight exit out of (or into) the goal beyond the train standing in it (m;
+    #: negative: the straight out of the goal is this much shorter than the train, which ends
+    #: on the curve beyond it)
     exit: float
     #: the least clearance of any unit along it (m), the candidates tried, the time taken (s)
     clearance: float
@@ -149,7 +178,7 @@ class Plan:
             "word": " + ".join(leg.word for leg in self.legs),
             "radius_m": last.radius if not self.cusps else self.legs[0].radius,
             "exit_m": self.exit,
-            "length_m": float(sum(leg.path.length for leg in self.legs)),
+            "length_m": float(sum(leg.driven_length for leg in self.legs)),
             "cusps": self.cusps,
             "legs": [leg.report() for leg in self.legs],
             "clearance_m": self.clearance,
@@ -192,6 +221,7 @@ def clearance_along(
     below: float = -math.inf,
     bounds=None,
     blocked: dict | None = None,
+    s_from: float = 0.0,
 ) -> tuple[float, float]:
     """``(gap, reached)``: the least gap between any unit of ``p`` and any obstacle of a
     world's ``record`` (:func:`~tt_mujoco.world.part.world_record`) with the tractor at arc
@@ -202,11 +232,13 @@ def clearance_along(
     are not told apart (the gap is then ``below``); ``blocked`` (a dict) then receives where:
     the ``unit`` (index, tractor 0), the ``obstacle`` (index, None: outside the bounds) and
     the tractor's ``x``, ``y``. With ``bounds`` (x_min, x_max, y_min, y_max), a sample with an
-    axle outside them has the gap -inf."""
+    axle outside them has the gap -inf. The tractor is placed from arc length ``s_from`` on
+    (a leg that stops short of the path's start, :attr:`Leg.stop_s`)."""
     cap = math.inf if below == -math.inf else below
     if not record.sizes.size and bounds is None:
         return math.inf, 1.0
-    s = np.linspace(0.0, path.length, max(2, math.ceil(path.length / step) + 1))
+    span = path.length - s_from
+    s = np.linspace(s_from, path.length, max(2, math.ceil(span / step) + 1))
     lengths = [(t.L, t.L0) for t in p.trailers]
     poses = np.zeros((p.n_trailers + 1, 3))
 
@@ -271,6 +303,57 @@ def _direct(start, goal_pose, d, base, reverse):
                         yield (tier, word.length + exit_length), exit_length, start, pieces, word
 
 
+def _on_curve(start, goal_pose, d, base, last_unit: float):
+    """The backing candidates that start at the goal pose, ``((straight, length), exit,
+    origin, pieces, word)``: the longest straight out of the goal first (the train ends on the
+    curve beyond it, its last axle at the start, :func:`train_end_on`)."""
+    tail_at_start = _ahead(start, -d)
+    straights = {max(d * share, last_unit) for share in GOAL_STRAIGHTS}
+    for straight in (length for length in straights if length < d):
+        for scale in RADII:
+            for word in dubins_words(_ahead(goal_pose, straight), tail_at_start, base * scale):
+                pieces = [(straight, 0.0), *_word_pieces(word), (d, 0.0)]
+                yield (-straight, word.length + straight), straight - d, goal_pose, pieces, word
+
+
+def _prefix(pieces, length: float) -> tuple:
+    """The ``(length, kappa)`` pieces of a path's first ``length`` (m), rounded: a key."""
+    out, done = [], 0.0
+    for piece, kappa in pieces:
+        if done >= length:
+            break
+        out.append((round(min(piece, length - done), 9), round(kappa, 9)))
+        done += piece
+    return tuple(out)
+
+
+def train_end_on(path, p: Params) -> tuple[float, float] | None:
+    """``(stop_s, heading_error)``: the tractor's arc length on ``path`` at which every axle of
+    ``p``'s train lies on it and the last one at its start
+    (:func:`~tt_mujoco.vehicle.path_schedule.axle_chain`), and how far the last trailer's
+    heading is then from the path's start's (rad, absolute); None where the path turns too
+    tightly for the chain."""
+    lengths = [(t.L, t.L0) for t in p.trailers]
+    d = train_length(p)
+    try:  # the last axle's arc length grows with the tractor's: bracket its zero on a grid
+        grid = np.linspace(0.75 * d, 1.25 * d, 11)
+        last = axle_chain(path, grid, lengths)[-1]["s"]
+        i = int(np.searchsorted(last, 0.0))
+        if not 0 < i < len(grid):
+            return None
+        slope = (last[i] - last[i - 1]) / (grid[i] - grid[i - 1])
+        s = grid[i - 1] - last[i - 1] / slope
+        for _ in range(8):  # Newton's steps with the grid's slope
+            axle = axle_chain(path, np.array([s]), lengths)[-1]
+            if abs(axle["s"][0]) < 1e-7:
+                heading = float(axle["theta"][0]) - path.pose_at(0.0)[2]
+                return float(s), abs(math.remainder(heading, math.tau))
+            s -= float(axle["s"][0]) / slope
+    except ValueError:
+        pass
+    return None
+
+
 def _backing_legs(goal_pose, d, base):
     """The legs a cusp plan backs in on, each ``(leg, exit)``: from the tractor at the goal
     straight out, an arc of :data:`CUSP_TURNS` and a straight ``d`` to the cusp."""
@@ -317,11 +400,18 @@ class _Search:
         self.tried += 1
         return True
 
-    def clear(self, path, word: str = "") -> bool:
-        """Whether every unit keeps the margin along ``path`` (and the bounds)."""
+    def clear(self, path, word: str = "", s_from: float = 0.0) -> bool:
+        """Whether every unit keeps the margin along ``path`` (and the bounds), the tractor
+        from ``s_from`` on."""
         where = {}
         gap, reached = clearance_along(
-            path, self.p, self.record, below=self.margin, bounds=self.world.bounds, blocked=where
+            path,
+            self.p,
+            self.record,
+            below=self.margin,
+            bounds=self.world.bounds,
+            blocked=where,
+            s_from=s_from,
         )
         if gap < self.margin and reached > self.best:  # the blocked one that got furthest
             self.best = reached
@@ -330,7 +420,9 @@ class _Search:
         return gap >= self.margin
 
     def found(self, legs, exit_length: float) -> Plan:
-        clearance = min(clearance_along(leg.path, self.p, self.record)[0] for leg in legs)
+        clearance = min(
+            clearance_along(leg.path, self.p, self.record, s_from=leg.stop_s)[0] for leg in legs
+        )
         return Plan(
             legs=tuple(legs),
             exit=exit_length,
@@ -409,6 +501,26 @@ def plan_path(
             if search.clear(forward, f"forward {word.kinds} at {word.radius:.3g} m, then backing"):
                 legs = [Leg(forward, "forward", word.kinds, word.radius), backing]
                 return search.found(legs, exit_length)
+    if reverse and not search.late:  # last: a train that ends on a curve ends less precisely
+        last_unit = p.trailers[-1].L + p.trailers[-1].L0
+        heading_allowed = CURVE_HEADING_SHARE * math.radians(goal.heading_tolerance_deg)
+        curved = sorted(_on_curve(start, goal_pose, d, base, last_unit), key=lambda c: c[0])
+        search.total += len(curved)
+        ends = {}  # where the train ends depends only on the path's first 1.5 D
+        for _, exit_length, origin, pieces, word in curved:
+            if not search.next_candidate(deadline):
+                break
+            path = _arcs(origin, pieces)
+            key = _prefix(pieces, 1.5 * d)
+            if key not in ends:
+                ends[key] = train_end_on(path, p)
+            if ends[key] is None or ends[key][1] > heading_allowed:
+                continue
+            stop = ends[key][0]
+            label = f"{word.kinds} at {word.radius:.3g} m, the train ending on its curve"
+            if search.clear(path, label, s_from=stop):
+                leg = Leg(path, direction, word.kinds, word.radius, stop)
+                return search.found([leg], exit_length)
     raise search.failure(start, reverse)
 
 

@@ -28,6 +28,7 @@ from tt_mujoco.compiled_form import compiled_form_reason
 from tt_mujoco.reference import feedback
 from tt_mujoco.sim.loop import agent_step, closed_loop, law, target_step
 from tt_mujoco.sim.loop.kernel_sources import SHARED
+from tt_mujoco.sim.loop.law import BACK_STATUS, BACK_T_L, BACK_T_R, BACK_U1, BACK_U2
 from tt_mujoco.sim.parts import disturbances
 from tt_mujoco.vehicle import path_schedule
 
@@ -151,14 +152,16 @@ class PythonLawCallback(CalledBack):
 
     def _call(self, *_):
         law = self.law_record
-        out = (math.nan, math.nan, math.nan, math.nan, LAW_OK)
+        status, T_r, T_l, u1, u2 = LAW_OK, math.nan, math.nan, math.nan, math.nan
         if not self.stop_record[0]["raised"]:
             try:
                 status, T_r, T_l, u1, u2 = self.fn(law)
-                out = (T_r, T_l, u1, u2, status)
             except BaseException as err:  # raised by the kernel's caller
+                status, T_r, T_l, u1, u2 = LAW_OK, math.nan, math.nan, math.nan, math.nan
                 self._failed(err)
-        law.torques[:] = out
+        out = law.torques
+        out[BACK_T_R], out[BACK_T_L], out[BACK_U1], out[BACK_U2] = T_r, T_l, u1, u2
+        out[BACK_STATUS] = status
 
 
 class HookCallback(CalledBack):
@@ -307,7 +310,8 @@ def _python_law(law):
         out = law.torques
         at = _pointer(out)
         law.user(at, at, at, at, at, at, 0.0, 0.0)
-        return int(out[4]), out[0], out[1], out[2], out[3]
+        status = int(out[BACK_STATUS])
+        return status, out[BACK_T_R], out[BACK_T_L], out[BACK_U1], out[BACK_U2]
 
     return call_back
 

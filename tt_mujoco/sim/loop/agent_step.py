@@ -59,6 +59,16 @@ AUX_FIELDS = (
     "slip_left",
     "slip_right",
 )
+(
+    AUX_V,
+    AUX_OMEGA,
+    AUX_V_D,
+    AUX_OMEGA_D,
+    AUX_V_D_DOT,
+    AUX_OMEGA_D_DOT,
+    AUX_SLIP_LEFT,
+    AUX_SLIP_RIGHT,
+) = range(len(AUX_FIELDS))
 _SLIP_LEFT = Measurement._fields.index("slip_left")
 _SLIP_RIGHT = Measurement._fields.index("slip_right")
 
@@ -109,9 +119,10 @@ def observe_into(row, law, target, log, agent):
     out[i], out[i + 1] = out[lead], out[lead + 1]
     r = law.reference[0]
     out[i + 2], out[i + 3] = r.v_d, r.omega_d
-    aux[0], aux[1], aux[2], aux[3] = measured[V], measured[OMEGA], r.v_d, r.omega_d
-    aux[4], aux[5] = r.v_d_dot, r.omega_d_dot
-    aux[6], aux[7] = measured[_SLIP_LEFT], measured[_SLIP_RIGHT]
+    aux[AUX_V], aux[AUX_OMEGA] = measured[V], measured[OMEGA]
+    aux[AUX_V_D], aux[AUX_OMEGA_D] = r.v_d, r.omega_d
+    aux[AUX_V_D_DOT], aux[AUX_OMEGA_D_DOT] = r.v_d_dot, r.omega_d_dot
+    aux[AUX_SLIP_LEFT], aux[AUX_SLIP_RIGHT] = measured[_SLIP_LEFT], measured[_SLIP_RIGHT]
 
 
 def sense_and_observe(k, episode, agent):

@@ -66,9 +66,14 @@ LAW_OK, LAW_RAISED, LAW_NOT_FINITE = base.LAW_OK, base.LAW_RAISED, base.LAW_NOT_
 NOMINAL_SINGULAR = -1.0
 #: where a trailer's gain is in a train's row
 ETA_COLUMN = train.TRAILER_ROW.index("eta")
-#: Where a plain-number law's C entry says, in ``law.torques``, that the law raised (1.0):
-#: an exception cannot leave a C function (:mod:`tt_mujoco.sim.loop.compiled`, its entry)
-USER_RAISED = 2
+#: ``law.torques`` as a plain-number law's C entry leaves it: its two torques, and whether the
+#: law raised (1.0): an exception cannot leave a C function (:mod:`tt_mujoco.sim.loop.compiled`,
+#: its entry)
+USER_OUT = ("T_r", "T_l", "raised")
+USER_T_R, USER_T_L, USER_RAISED = range(len(USER_OUT))
+#: ``law.torques`` as a Python law called back leaves it (``_kernel.PythonLawCallback``)
+CALLED_BACK_OUT = ("T_r", "T_l", "u1", "u2", "status")
+BACK_T_R, BACK_T_L, BACK_U1, BACK_U2, BACK_STATUS = range(len(CALLED_BACK_OUT))
 
 
 @compiled_form("a test of kind for each built-in law, written out (run_law_written_out)")
@@ -145,7 +150,7 @@ def law_step(law, v_m, w_m, dt, limit):
         )  # fmt: skip
         if out[USER_RAISED] != 0.0:
             return LAW_RAISED, math.nan, math.nan, math.nan, math.nan
-        T_r, T_l = out[0], out[1]
+        T_r, T_l = out[USER_T_R], out[USER_T_L]
         if not (math.isfinite(T_r) and math.isfinite(T_l)):
             return LAW_NOT_FINITE, T_r, T_l, T_r, T_l
         return LAW_OK, T_r, T_l, T_r, T_l
@@ -268,7 +273,7 @@ def law_record(controller, nominal, user, steering, python) -> records.LawRecord
         reference=records.new_record(records.REFERENCE_FIELDS),
         model=records.new_record(records.NOMINAL_FIELDS),
         measurement_values=np.zeros(len(records.MEASUREMENT_DTYPE)),
-        torques=np.zeros(5),
+        torques=np.zeros(max(len(USER_OUT), len(CALLED_BACK_OUT))),
         follows_steering=kind < USER,
         steered_train=records.train_record(nominal.with_etas(tuple(steering.etas.tolist()))),
         axle_slew_rate=float(getattr(controller, "axle_slew_rate", math.inf)),
