@@ -242,10 +242,8 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
             if self._kernel is None
             else self._kernel.advance_after_payload
         )
-        code, _ = stepper._after_payloads(PAYLOAD, k, advance)
-        loop, plant, law, target, stop = stepper._episode
-        episode, agent = self._args[i]
-        self._args[i] = ((loop, plant, law, target, episode[4], stop), agent)
+        code, episode = stepper.agent_after_payload(k, advance)
+        self._args[i] = (episode, self._args[i][1])
         if code != RUNNING:
             return code
         return self._sense(k + 1, *self._args[i])

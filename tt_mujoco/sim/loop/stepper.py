@@ -237,6 +237,16 @@ class Stepper:
         self._start_log(self.k, 2)
         return loop, plant, law, target, self._log, stop
 
+    def agent_after_payload(self, k: int, advance) -> tuple[int, tuple]:
+        """An agent's step ``k`` that a payload on the reduced plant interrupted
+        (:data:`~tt_mujoco.sim.loop.step.PAYLOAD`): the plant's constants changed and the step
+        advanced (``advance``: the kernel's or CPython's
+        :func:`~tt_mujoco.sim.loop.closed_loop.advance_after_payload`). ``(status, records)``:
+        the records as :meth:`begin_agent` gives them, the plant's a new one."""
+        status, _ = self._after_payloads(PAYLOAD, k, advance)
+        loop, plant, law, target, stop = self._episode
+        return status, (loop, plant, law, target, self._log, stop)
+
     def hook_failure(self) -> BaseException | None:
         """What Python code the kernel called back (a controller's ``compute``, a user's path
         or disturbance) raised in this episode, which its caller raises; None if nothing did."""
