@@ -57,19 +57,20 @@ from tt_mujoco.gym_env import (
 )
 from tt_mujoco.registry import shown
 from tt_mujoco.sim.loop import agent_step, closed_loop, compiled, outcome
+from tt_mujoco.sim.loop.agent_step import (
+    AUX_OMEGA,
+    AUX_OMEGA_D,
+    AUX_OMEGA_D_DOT,
+    AUX_SLIP_LEFT,
+    AUX_SLIP_RIGHT,
+    AUX_V,
+    AUX_V_D,
+    AUX_V_D_DOT,
+)
 from tt_mujoco.sim.loop.step import PAYLOAD, RAISED, RUNNING
 from tt_mujoco.sim.loop.stepper import Stepper
 
 __all__ = ["TractorTrailerVectorEnv"]
-
-_V, _OMEGA, _V_D, _OMEGA_D = (
-    agent_step.AUX_V,
-    agent_step.AUX_OMEGA,
-    agent_step.AUX_V_D,
-    agent_step.AUX_OMEGA_D,
-)
-_V_D_DOT, _OMEGA_D_DOT = agent_step.AUX_V_D_DOT, agent_step.AUX_OMEGA_D_DOT
-_SLIP_LEFT, _SLIP_RIGHT = agent_step.AUX_SLIP_LEFT, agent_step.AUX_SLIP_RIGHT
 
 
 class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
@@ -281,9 +282,9 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
     def _rewards(self) -> np.ndarray:
         """Every episode's reward for the env's task after its step (the single env's)."""
         aux, lead = self._aux, len(self.observation_names) - 4  # the leading unit's errors
-        target = (aux[:, _V_D], aux[:, _OMEGA_D])
+        target = (aux[:, AUX_V_D], aux[:, AUX_OMEGA_D])
         errors = (self._raw[:, lead], self._raw[:, lead + 1])
-        return task_reward(self.task, aux[:, _V], aux[:, _OMEGA], target, errors)
+        return task_reward(self.task, aux[:, AUX_V], aux[:, AUX_OMEGA], target, errors)
 
     def _etas(self) -> np.ndarray:
         """Each episode's trailers' gains in force: a schedule's, else the constant ones."""
@@ -297,12 +298,12 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
             "t": np.array(self._k, dtype=float) * self.dt,
             "status": self._status.copy(),
             "message": self._message.copy(),
-            "e_v": aux[:, _V] - aux[:, _V_D],
-            "e_omega": aux[:, _OMEGA] - aux[:, _OMEGA_D],
-            "v_d_dot": aux[:, _V_D_DOT].copy(),
-            "omega_d_dot": aux[:, _OMEGA_D_DOT].copy(),
+            "e_v": aux[:, AUX_V] - aux[:, AUX_V_D],
+            "e_omega": aux[:, AUX_OMEGA] - aux[:, AUX_OMEGA_D],
+            "v_d_dot": aux[:, AUX_V_D_DOT].copy(),
+            "omega_d_dot": aux[:, AUX_OMEGA_D_DOT].copy(),
             "slip_longitudinal": np.maximum(
-                np.abs(aux[:, _SLIP_LEFT]), np.abs(aux[:, _SLIP_RIGHT])
+                np.abs(aux[:, AUX_SLIP_LEFT]), np.abs(aux[:, AUX_SLIP_RIGHT])
             ),
             "etas": self._etas(),
         }

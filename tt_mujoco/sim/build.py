@@ -453,10 +453,12 @@ def _path_and_target(scenario: Scenario, leg: LegStart | None):
     """``(path, target, initial pose, start arc length)``: the scenario's path (or the leg's,
     its share of the duration by its length) and its target, backing up when it does, from
     where the last leg stopped when there was one."""
+    stop_s = 0.0  # where backing stops on the path (a planned leg's)
     if leg is not None:
         plan = leg.plan
         ramp = {k: v for k, v in scenario.path_options.items() if k in ("cruise", "ramp_time")}
         planned_leg = plan.legs[leg.index]
+        stop_s = planned_leg.stop_s
         duration = scenario.duration
         if duration is not None and plan.cusps:  # each leg its share, by its length
             whole = sum(one.driven_length for one in plan.legs)
@@ -475,7 +477,7 @@ def _path_and_target(scenario: Scenario, leg: LegStart | None):
         )
     start_s = 0.0
     if scenario.reverse:
-        target = ReverseTarget(target, 0.0 if leg is None else leg.plan.legs[leg.index].stop_s)
+        target = ReverseTarget(target, stop_s)
         pose = target.initial_pose
         start_s = target.s_end
     if leg is not None and leg.pose is not None:

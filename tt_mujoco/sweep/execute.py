@@ -109,13 +109,12 @@ class _Journal:
     def __init__(self, file, done: dict[str, dict]):
         self.file, self.done = file, done
 
-    def add(self, run: dict, result: dict) -> dict:
+    def add(self, run: dict, result: dict) -> None:
         # As the journal holds it (NaN as None), so a resumed table is the same.
         record = json_safe({"run_id": run["run_id"], "index": run["index"], **result})
         self.file.write(_json_line(record))
         self.file.flush()
         self.done[run["run_id"]] = record
-        return record
 
     @property
     def failures(self) -> int:

@@ -72,6 +72,7 @@ __all__ = [
     "plan_path",
     "planned",
     "start_pose",
+    "train_end_on",
     "train_length",
 ]
 

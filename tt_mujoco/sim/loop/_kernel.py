@@ -157,7 +157,6 @@ class PythonLawCallback(CalledBack):
             try:
                 status, T_r, T_l, u1, u2 = self.fn(law)
             except BaseException as err:  # raised by the kernel's caller
-                status, T_r, T_l, u1, u2 = LAW_OK, math.nan, math.nan, math.nan, math.nan
                 self._failed(err)
         out = law.torques
         out[BACK_T_R], out[BACK_T_L], out[BACK_U1], out[BACK_U2] = T_r, T_l, u1, u2
