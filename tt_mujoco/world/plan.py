@@ -26,7 +26,8 @@ last axle, straight) ahead of it along the goal's heading.
 - **Backing up with a cusp** (when no path backs in directly): the train drives forward to a
   cusp, stops, and backs in. The leg it backs: from the tractor at the goal, straight out for
   an exit, an arc (of :data:`CUSP_TURNS`, at a radius of :data:`CUSP_RADII`) and a straight
-  ``D``, on which the train stands straight at the cusp. The forward leg: a Dubins word from
+  to the cusp (2 ``D`` where it is clear, else ``D``: :data:`CUSP_STRAIGHTS`), on which the
+  trailers straighten after the forward leg's last turn. The forward leg: a Dubins word from
   the start to that last straight, then along it to the cusp.
 
 The candidates (each exit length of :data:`EXITS`, each radius of :data:`RADII` scaled by the
@@ -60,6 +61,7 @@ __all__ = [
     "CURVE_HEADING_SHARE",
     "CUSP_EXITS",
     "CUSP_RADII",
+    "CUSP_STRAIGHTS",
     "CUSP_TURNS",
     "EXITS",
     "GOAL_STRAIGHTS",
@@ -108,6 +110,11 @@ STEP, COARSE = 0.05, 8
 CUSP_EXITS = (0.5, 1.0, 2.0)
 CUSP_TURNS = (0.0, math.pi / 4, -math.pi / 4, math.pi / 2, -math.pi / 2)
 CUSP_RADII = (1.0, 1.5)
+#: The straight the train drives into a cusp, as multiples of ``D``, the long one tried first:
+#: after the forward leg's last turn the trailers straighten only with the distance driven
+#: (passively steered, each hitch's angle decays over about a unit's length per unit behind
+#: the tractor), and the backing leg starts from where they then stand.
+CUSP_STRAIGHTS = (2.0, 1.0)
 
 
 class PlanError(WorldError):
@@ -356,29 +363,34 @@ def train_end_on(path, p: Params) -> tuple[float, float] | None:
 
 
 def _backing_legs(goal_pose, d, base):
-    """The legs a cusp plan backs in on, each ``(leg, exit)``: from the tractor at the goal
-    straight out, an arc of :data:`CUSP_TURNS` and a straight ``d`` to the cusp."""
+    """The legs a cusp plan backs in on, each ``(tier, leg, exit, straight)``: from the tractor
+    at the goal straight out, an arc of :data:`CUSP_TURNS` and a straight (of
+    :data:`CUSP_STRAIGHTS`, tier its index) to the cusp."""
     tractor_at_goal = _ahead(goal_pose, d)
-    for share in CUSP_EXITS:
-        exit_length = d * share
-        for turn in CUSP_TURNS:
-            for scale in CUSP_RADII if turn else (0.0,):
-                radius = base * scale
-                kappa = math.copysign(1.0 / radius, turn) if turn else 0.0
-                arc = abs(turn) * radius
-                path = _arcs(tractor_at_goal, [(exit_length, 0.0), (arc, kappa), (d, 0.0)])
-                word = "S" if not turn else ("SLS" if turn > 0 else "SRS")
-                yield Leg(path, "reverse", word, radius), exit_length
+    for tier, straight in enumerate(d * share for share in CUSP_STRAIGHTS):
+        for share in CUSP_EXITS:
+            exit_length = d * share
+            for turn in CUSP_TURNS:
+                for scale in CUSP_RADII if turn else (0.0,):
+                    radius = base * scale
+                    kappa = math.copysign(1.0 / radius, turn) if turn else 0.0
+                    arc = abs(turn) * radius
+                    pieces = [(exit_length, 0.0), (arc, kappa), (straight, 0.0)]
+                    word = "S" if not turn else ("SLS" if turn > 0 else "SRS")
+                    leg = Leg(_arcs(tractor_at_goal, pieces), "reverse", word, radius)
+                    yield tier, leg, exit_length, straight
 
 
 def _with_cusp(start, goal_pose, d, base):
-    """The candidates with one cusp, ``(length, exit, backing leg, word)``: the forward leg a
-    Dubins word from ``start`` to the backing leg's last straight, then along it."""
-    for backing, exit_length in _backing_legs(goal_pose, d, base):
-        approach = backing.path.pose_at(backing.path.length - d)
+    """The candidates with one cusp, ``((tier, length), exit, backing leg, word, straight)``:
+    the forward leg a Dubins word from ``start`` to the backing leg's last straight, then along
+    it (the long straights of :data:`CUSP_STRAIGHTS` first)."""
+    for tier, backing, exit_length, straight in _backing_legs(goal_pose, d, base):
+        approach = backing.path.pose_at(backing.path.length - straight)
         for scale in RADII:
             for word in dubins_words(start, approach, base * scale):
-                yield word.length + d + backing.path.length, exit_length, backing, word
+                length = word.length + straight + backing.path.length
+                yield (tier, length), exit_length, backing, word, straight
 
 
 class _Search:
@@ -490,7 +502,7 @@ def plan_path(
         cusped = sorted(_with_cusp(start, goal_pose, d, base), key=lambda c: c[0])
         search.total += len(cusped)
         backing_clear: dict[int, bool] = {}
-        for _, exit_length, backing, word in cusped:
+        for _, exit_length, backing, word, straight in cusped:
             if not search.next_candidate(deadline):
                 break
             key = id(backing)
@@ -498,7 +510,7 @@ def plan_path(
                 backing_clear[key] = search.clear(backing.path, f"backing {backing.word}")
             if not backing_clear[key]:
                 continue
-            forward = _arcs(start, [*_word_pieces(word), (d, 0.0)])
+            forward = _arcs(start, [*_word_pieces(word), (straight, 0.0)])
             if search.clear(forward, f"forward {word.kinds} at {word.radius:.3g} m, then backing"):
                 legs = [Leg(forward, "forward", word.kinds, word.radius), backing]
                 return search.found(legs, exit_length)
