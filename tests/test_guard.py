@@ -17,7 +17,8 @@ from tt_mujoco.registry import describe_failure
 
 #: Ways a user's code fails: (name, statement that fails, what the message shows)
 FAILURES = {
-    "ValueError": ("raise ValueError('bad value')", "ValueError: bad value"),
+    # a message over two lines is said on one
+    "ValueError": ("raise ValueError('bad\\n  value')", "ValueError: bad value"),
     "BaseException": ("raise BaseException('base')", "BaseException: base"),
     "GeneratorExit": ("raise GeneratorExit('gone')", "GeneratorExit: gone"),
     "KeyboardInterrupt": ("raise KeyboardInterrupt", "KeyboardInterrupt"),

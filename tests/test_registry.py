@@ -91,3 +91,65 @@ def test_finite_number_is_the_one_test_of_a_number():
         assert finite_number(good) == float(good)
     for bad in (True, np.bool_(False), math.nan, -math.inf, 10**400, "1", 1j, None, [1.0], b"1"):
         assert finite_number(bad) is None, bad
+
+
+#: How the command line names a part of each kind that declares how it is called
+#: (``Registry.called_as``): its option.
+OPTION_OF = {"metric": "--metric", "disturbance": "--disturbance-model"}
+CALLED = {label: r for label, r in REGISTRIES.items() if r.called_as is not None}
+
+
+def test_every_kind_called_as_declared_has_its_option_here():
+    assert {r.what for r in CALLED.values()} <= set(OPTION_OF), CALLED
+    assert {"metric", "disturbance"} <= {r.what for r in CALLED.values()}
+
+
+@pytest.mark.parametrize("label", list(CALLED))
+@pytest.mark.parametrize("shape", ["one too many", "one too few", "a keyword it needs"])
+def test_a_part_whose_signature_does_not_take_its_call_is_bad_input(
+    tmp_path, monkeypatch, capsys, label, shape
+):
+    """A part that cannot be called as its kind is called fails before the run (exit 2,
+    nothing written), naming its signature, not after a long run (a metric) or at its first
+    step (a disturbance)."""
+    from tt_mujoco import run
+
+    registry = CALLED[label]
+    names = list(registry.called_as)
+    parameters = {
+        "one too many": [*names, "extra"],
+        "one too few": names[:-1],
+        "a keyword it needs": [*names, "*", "scale"],
+    }[shape]
+    (tmp_path / "part.py").write_text(f"def part({', '.join(parameters)}):\n    return 0.0, 0.0\n")
+    monkeypatch.chdir(tmp_path)
+    argv = ["--plant", "reduced", "--duration", "0.5", "--no-video", "--no-plots", "--quiet"]
+    code = run.main([*argv, OPTION_OF[registry.what], "part.py:part", "--out", "out"])
+    err = capsys.readouterr().err
+    assert code == 2 and f"it is called as {registry.what}(" in err, err
+    assert f"signature ({', '.join(parameters)})" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+
+
+def test_check_call_takes_what_fits_and_what_it_cannot_read():
+    registry = Registry("shape", called_as=("a", "b"))
+    registry.check_call(lambda a, b, c=1: None, "fits")
+    registry.check_call(lambda *args: None, "takes anything")
+    registry.check_call(max, "written in C")  # no signature Python can read: taken as it is
+    with pytest.raises(ValueError, match=r"called as shape\(a, b\), which its signature \(a\)"):
+        registry.check_call(lambda a: None, "too few")
+
+
+def test_a_call_that_does_not_fit_names_no_file_of_the_package():
+    """Where the user's code never ran (the call itself failed), the message names no line of
+    the package's, which would point the user at the wrong file."""
+    from tt_mujoco.registry import HookError, call_hook
+
+    def takes_one(a):
+        return a
+
+    with pytest.raises(HookError) as caught:
+        call_hook("metric 'm'", takes_one, 1, 2)
+    message = str(caught.value)
+    assert "takes 1 positional argument but 2 were given" in message
+    assert "registry.py" not in message and ".py, line" not in message

@@ -63,6 +63,12 @@ def assert_nothing_left(out):
         ("return float('inf'), 0.0", "returned T_r=inf, T_l=0.0 at t=0.000 s"),
         ("raise KeyError('gain')", "broken.py, line 10: KeyError: 'gain'"),
         ("sys.exit(0)", "broken.py, line 10: it called sys.exit(0)"),
+        # what spans lines is said on one: a NumPy array's repr, a message with line breaks
+        (
+            "return __import__('numpy').full((2, 1), 0.5)",
+            "returned array([[0.5], [0.5]]) at t=0.000 s",
+        ),
+        ("raise ValueError('first\\nsecond')", "broken.py, line 10: ValueError: first second"),
     ],
 )
 def test_a_controller_that_fails_on_the_initial_state_is_bad_input(tmp_path, capsys, body, said):

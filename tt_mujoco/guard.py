@@ -111,13 +111,21 @@ def users_failure(err: BaseException) -> bool:
     return True
 
 
+def one_line(text: str) -> str:
+    """``text`` on one line: each run of line breaks, with the indent around it, one space (a
+    message quotes what a user's code gave, whose repr or message may span lines: a NumPy
+    array's, a ``raise ValueError("...\\n...")``)."""
+    return " ".join(part.strip() for part in text.splitlines() if part.strip())
+
+
 def shown_error(err: BaseException) -> str:
-    """``err``'s message, or, where its ``__str__`` itself fails, what it is."""
+    """``err``'s message on one line (:func:`one_line`), or, where its ``__str__`` itself
+    fails, what it is."""
     try:
         text = str(err)
         if not isinstance(text, str):
             raise TypeError("__str__ returned a non-string")
-        return text
+        return one_line(text)
     except BaseException as inner:  # a user's exception's own code
         if not users_failure(inner):
             raise

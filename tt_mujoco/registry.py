@@ -27,7 +27,7 @@ from collections.abc import Callable, Iterator
 from numbers import Real
 from pathlib import Path
 
-from tt_mujoco.guard import shown_error, users_failure
+from tt_mujoco.guard import one_line, shown_error, users_failure
 
 __all__ = [
     "HookError",
@@ -71,12 +71,14 @@ def check_finite_fields(obj, what: str, names) -> None:
 
 
 def shown(value, limit: int = 80) -> str:
-    """``repr(value)`` for a message, cut to ``limit`` characters (a 10 MB value is not
-    echoed back); a user's object whose ``repr`` fails is named by its type."""
+    """``repr(value)`` for a message, on one line (:func:`~tt_mujoco.guard.one_line`) and cut
+    to ``limit`` characters (a 10 MB value is not echoed back); a user's object whose
+    ``repr`` fails is named by its type."""
     try:
         text = repr(value)
         if not isinstance(text, str):
             raise TypeError("__repr__ returned a non-string")
+        text = one_line(text)
     except BaseException as err:
         if not users_failure(err):
             raise
@@ -135,7 +137,9 @@ def describe_failure(err: BaseException) -> str:
     import traceback
 
     frames = traceback.extract_tb(err.__traceback__)
-    mine = [f for f in frames if not _inside_package(f.filename)] or frames
+    # no frame of the user's: the call itself failed (the arguments do not fit its signature),
+    # or C code did; the package's own line would name the wrong file
+    mine = [f for f in frames if not _inside_package(f.filename)]
     place = f"{mine[-1].filename}, line {mine[-1].lineno}: " if mine else ""
     if isinstance(err, SystemExit):
         return f"{place}it called sys.exit({shown(err.code)})"
@@ -279,12 +283,38 @@ class Registry:
         The kind of part, for messages ("controller", "path", "metric", "disturbance").
     also : str
         Other accepted forms, for messages (e.g. "a path to a .csv file").
+    called_as : tuple of str, optional
+        The arguments a part of this kind is called with, by name, where it is a function
+        (:meth:`check_call` refuses one whose signature cannot take them, before the run).
     """
 
-    def __init__(self, what: str, also: str = ""):
+    def __init__(self, what: str, also: str = "", called_as: tuple[str, ...] | None = None):
         self.what = what
         self.also = also
+        self.called_as = called_as
         self._items: dict[str, object] = {}
+
+    def check_call(self, obj, spec) -> None:
+        """Refuse ``obj``, the callable ``spec`` stands for, when it cannot be called with
+        :attr:`called_as` (a metric ``m(ts)``, a disturbance ``d(t, v)``): a ``ValueError``
+        naming its signature, before the run, where the call would fail after it. A callable
+        without a signature Python can read (one written in C) is taken as it is."""
+        import inspect
+
+        if self.called_as is None:
+            return
+        try:
+            signature = inspect.signature(obj)
+        except (TypeError, ValueError):
+            return
+        try:
+            signature.bind(*self.called_as)
+        except TypeError as err:
+            raise ValueError(
+                f"{self.what} {shown(spec)} is not allowed: it is called as "
+                f"{self.what}({', '.join(self.called_as)}), which its signature {signature} "
+                f"does not take ({err})"
+            ) from None
 
     def register(
         self, name: str, obj: object | None = None, *, replace: bool = False

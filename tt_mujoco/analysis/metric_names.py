@@ -139,7 +139,7 @@ def summary_table(metrics: Mapping[str, object], keys: Sequence[str] = DEFAULT_S
 
 #: Extra metric name -> function ``fn(timeseries, path) -> float | dict``. ``METRICS.register``
 #: adds one; a hook ``module:function`` or ``file.py:function`` needs no registration.
-METRICS = Registry("metric")
+METRICS = Registry("metric", called_as=("timeseries", "path"))
 
 
 #: The keys ``metrics.json`` holds beside the metrics: the run's outcome, its configuration and
@@ -172,6 +172,7 @@ def resolve_metrics(specs) -> dict:
         fn = METRICS.resolve(spec)
         if not callable(fn):
             raise ValueError(f"metric {spec!r} is not allowed: {fn!r} is not callable")
+        METRICS.check_call(fn, spec)
         name = metric_name(spec)
         if builtin_key(name):
             raise ValueError(

@@ -122,7 +122,7 @@ class RollingResistance(Disturbance):
 
 
 #: Disturbance name -> class (or callable). ``DISTURBANCES.register`` adds one.
-DISTURBANCES = Registry("disturbance")
+DISTURBANCES = Registry("disturbance", called_as=("t",))
 DISTURBANCES.register("paper", PaperDisturbance)
 DISTURBANCES.register("rolling", RollingResistance)
 
@@ -164,6 +164,7 @@ def make_disturbance(spec: str):
         obj = call_hook(f"disturbance {spec!r}", obj)
     if not callable(obj):
         raise ValueError(f"disturbance {spec!r} is not allowed: {obj!r} is not callable")
+    DISTURBANCES.check_call(obj, spec)
     return obj
 
 
