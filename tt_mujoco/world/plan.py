@@ -111,9 +111,9 @@ CUSP_EXITS = (0.5, 1.0, 2.0)
 CUSP_TURNS = (0.0, math.pi / 4, -math.pi / 4, math.pi / 2, -math.pi / 2)
 CUSP_RADII = (1.0, 1.5)
 #: The straight the train drives into a cusp, as multiples of ``D``, the long one tried first:
-#: after the forward leg's last turn the trailers straighten only with the distance driven
-#: (passively steered, each hitch's angle decays over about a unit's length per unit behind
-#: the tractor), and the backing leg starts from where they then stand.
+#: after the forward leg's last turn the passively steered trailers straighten only with the
+#: distance driven (the ones further back more slowly), and the backing leg starts from where
+#: they then stand (tests/test_maneuver.py).
 CUSP_STRAIGHTS = (2.0, 1.0)
 
 
