@@ -167,3 +167,28 @@ def test_the_failure_is_worded_whatever_the_exception_does():
 
     assert "its message cannot be shown: RecursionError" in describe_failure(UnrepresentableError())
     assert "sys.exit(<a Code whose repr fails>)" in describe_failure(SystemExit(Code()))
+
+
+def test_an_interrupt_that_other_code_turned_into_another_error_is_still_the_interrupt():
+    """A stop that lands in C code calling back into Python (numba's dispatch of a compiled
+    call) can come out as another error (a TypeError from numba once, in CI): once a real stop
+    came, what the run raises is that stop (exit 130, rows kept), not a bug of ours (exit 70)."""
+    import os
+    import signal
+    import time
+
+    def swallowing_c_code():
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(1.0)  # the handler runs here and raises
+        except KeyboardInterrupt:
+            raise TypeError(
+                "_get_wrapper_address() missing 1 required positional argument"
+            ) from None
+
+    with pytest.raises(KeyboardInterrupt) as caught, guard.noting_interrupts():
+        swallowing_c_code()
+    assert isinstance(caught.value.__cause__, TypeError)
+    # without a stop, an error is what it is
+    with pytest.raises(TypeError), guard.noting_interrupts():
+        raise TypeError("a bug")

@@ -74,7 +74,9 @@ def noting_interrupts():
     real Ctrl-C (or a SIGTERM the command line turns into one) notes that it came, then does
     what the handler before did (raise ``KeyboardInterrupt``), so that one a user's code raises
     itself is told apart, on every route. A signal ignored or left to the system (a sweep's
-    worker ignores SIGINT) raises no exception: every ``KeyboardInterrupt`` is then a user's."""
+    worker ignores SIGINT) raises no exception: every ``KeyboardInterrupt`` is then a user's.
+    Whatever else the run raises after a real stop came is that stop: ``KeyboardInterrupt``
+    (from what was raised)."""
     global _INTERRUPTED
     before = _INTERRUPTED
     if threading.current_thread() is not threading.main_thread():
@@ -95,6 +97,13 @@ def noting_interrupts():
             signal.signal(sig, interrupted)
     try:
         yield
+    except BaseException as err:
+        if noted.is_set() and not isinstance(err, KeyboardInterrupt):
+            # the stop landed in code that made another error of it (C code calling back into
+            # Python, as numba's dispatch of a compiled call does, loses the KeyboardInterrupt):
+            # what fails once a real stop came is the stop, not a bug
+            raise KeyboardInterrupt from err
+        raise
     finally:
         for sig, handler in previous.items():
             if callable(handler):
