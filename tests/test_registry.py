@@ -105,6 +105,21 @@ def test_every_kind_called_as_declared_has_its_option_here():
 
 
 @pytest.mark.parametrize("label", list(CALLED))
+def test_a_part_that_is_not_callable_is_bad_input(tmp_path, monkeypatch, capsys, label):
+    from tt_mujoco import run
+
+    registry = CALLED[label]
+    (tmp_path / "part.py").write_text("part = [0.0,\n        0.0]\n")
+    monkeypatch.chdir(tmp_path)
+    argv = ["--plant", "reduced", "--duration", "0.5", "--no-video", "--no-plots", "--quiet"]
+    code = run.main([*argv, OPTION_OF[registry.what], "part.py:part", "--out", "out"])
+    err = capsys.readouterr().err
+    assert code == 2 and "[0.0, 0.0] is not callable" in err, err
+    assert len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("label", list(CALLED))
 @pytest.mark.parametrize("shape", ["one too many", "one too few", "a keyword it needs"])
 def test_a_part_whose_signature_does_not_take_its_call_is_bad_input(
     tmp_path, monkeypatch, capsys, label, shape

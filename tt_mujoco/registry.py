@@ -295,12 +295,17 @@ class Registry:
         self._items: dict[str, object] = {}
 
     def check_call(self, obj, spec) -> None:
-        """Refuse ``obj``, the callable ``spec`` stands for, when it cannot be called with
-        :attr:`called_as` (a metric ``m(ts)``, a disturbance ``d(t, v)``): a ``ValueError``
-        naming its signature, before the run, where the call would fail after it. A callable
-        without a signature Python can read (one written in C) is taken as it is."""
+        """Refuse ``obj``, the part ``spec`` stands for, when it is not callable or its
+        signature cannot take :attr:`called_as` (a metric ``m(timeseries, path)``, a
+        disturbance ``d(t)``): a ``ValueError`` before the run, where the call would fail after
+        it. A callable without a signature Python can read (one written in C) is taken as it
+        is."""
         import inspect
 
+        if not callable(obj):
+            raise ValueError(
+                f"{self.what} {shown(spec)} is not allowed: {shown(obj)} is not callable"
+            )
         if self.called_as is None:
             return
         try:
