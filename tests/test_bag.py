@@ -137,6 +137,15 @@ def test_bad_input_is_exit_2_and_writes_nothing(bay_run, tmp_path, capsys, args,
     assert not out.exists() and not list(tmp_path.iterdir())
 
 
+@pytest.mark.parametrize("name", ["x.txt", "x", "x.mcap.part"])
+def test_an_out_file_not_named_mcap_is_refused(bay_run, tmp_path, capsys, name):
+    # Foxglove and the mcap tools know the file by its name
+    assert bag.main([str(bay_run), "--out", str(tmp_path / name)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "it must end in .mcap" in err[0], err
+    assert not list(tmp_path.iterdir())
+
+
 def test_a_folder_that_is_not_a_run_is_refused(tmp_path, capsys):
     (tmp_path / "metrics.json").write_text(json.dumps({"status": "ok"}))
     (tmp_path / "timeseries.csv").write_text("t\n0\n")

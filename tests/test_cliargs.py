@@ -11,7 +11,11 @@ CASES = [
     (["tt_mujoco.sweep", "noise_snrr=20", "--dry-run"], "did you mean 'noise_snr"),
     (["tt_mujoco.sweep", "--wokers", "2", "duration=1"], "did you mean --workers?"),
     (["tt_mujoco.paper", "--wokers", "2"], "did you mean --workers?"),
-    (["tt_mujoco.run", "--seed", "-1"], "--seed: '-1' is not allowed: it must be an integer >= 0"),
+    (["tt_mujoco.run", "--gains", '{"k1_v": 1, "k1_v": 2}'], "the key 'k1_v' is given twice"),
+    (
+        ["tt_mujoco.run", "--seed", "-1"],
+        "--seed: '-1' is not allowed: it must be an integer in [0, 2**63 - 1]",
+    ),
 ]
 
 

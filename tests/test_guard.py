@@ -192,3 +192,25 @@ def test_an_interrupt_that_other_code_turned_into_another_error_is_still_the_int
     # without a stop, an error is what it is
     with pytest.raises(TypeError), guard.noting_interrupts():
         raise TypeError("a bug")
+
+
+@pytest.mark.parametrize(
+    ("source", "line", "kind"),
+    [
+        ("x = 1\ndef f(:\n    pass\n", 2, "SyntaxError"),
+        ("def f():\n    x = 1\n   y = 2\n", 3, "IndentationError"),
+    ],
+)
+def test_a_file_that_does_not_compile_is_named_at_its_own_line(
+    tmp_path, monkeypatch, capsys, source, line, kind
+):
+    """The compiler's error names the user's file and line, not the import machinery's."""
+    from tt_mujoco import run
+
+    (tmp_path / "bad.py").write_text(source)
+    monkeypatch.chdir(tmp_path)
+    argv = ["--controller", "bad.py:C", "--plant", "reduced", "--duration", "0.3", "--no-video"]
+    assert run.main([*argv, "--out", "out"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"bad.py, line {line}: {kind}" in err[0], err
+    assert "importlib" not in err[0] and not (tmp_path / "out").exists()

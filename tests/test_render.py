@@ -330,6 +330,25 @@ def test_cli_never_writes_inside_the_run_folder(run_dir, capsys, inside):
     assert sorted(p.name for p in run_dir.iterdir()) == before
 
 
+@pytest.mark.parametrize(
+    ("args", "says"),
+    [
+        (["--out", "video.txt"], "it must end in .mp4"),
+        (["--height", "-5"], "height=-5 is not allowed"),
+        (["--width", "7"], "width=7 is not allowed"),
+        (["--fps", "nan"], "fps=nan is not allowed"),
+    ],
+)
+def test_cli_bad_options_are_one_line_before_the_run_is_read(run_dir, capsys, args, says):
+    if "--out" in args:
+        args = ["--out", str(run_dir.parent / args[1])]
+    before = sorted(p.name for p in run_dir.parent.iterdir())
+    assert render_cli.main([str(run_dir), *args, "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and says in err[0], err
+    assert sorted(p.name for p in run_dir.parent.iterdir()) == before
+
+
 def test_cli_rerenders_a_run_to_a_new_file(run_dir):
     out = run_dir.parent / "small.mp4"
     argv = [str(run_dir), "--out", str(out), "--width", "64", "--height", "48", "--fps", "10"]

@@ -212,3 +212,35 @@ def test_the_options_page_lists_every_option():
 def test_a_bad_form_is_refused():
     with pytest.raises(ValueError, match="form='flag' is not allowed"):
         Option("x", 1, "help", number(), form="flag")
+
+
+def _integer_options():
+    from tt_mujoco import run
+
+    found = []
+    for opt in (SCHEMA + run.OUTPUTS).options:
+        try:
+            value = opt.parse("3", opt.name)
+        except (ValueError, TypeError):
+            continue
+        if type(value) is int:
+            found.append(opt)
+    return found
+
+
+@pytest.mark.parametrize("opt", _integer_options(), ids=lambda o: o.name)
+def test_every_integer_option_takes_only_what_a_toml_file_holds(opt):
+    """What an option takes lands in config.toml (and a sweep's files), whose integers are
+    64-bit: a larger one would be written as a file no strict TOML reader reads back."""
+    from tt_mujoco.schema_values import TOML_INT_MAX
+
+    for too_large in (str(TOML_INT_MAX + 1), TOML_INT_MAX + 1, float(2**64)):
+        with pytest.raises(ValueError, match=r"is not allowed: it must be an integer in \["):
+            opt.parse(too_large, opt.name)
+
+
+def test_integer_options_are_found_and_a_seed_takes_the_largest():
+    from tt_mujoco.schema_values import TOML_INT_MAX
+
+    assert {"seed", "trailers"} <= {o.name for o in _integer_options()}
+    assert SCHEMA["seed"].parse(str(TOML_INT_MAX), "seed") == TOML_INT_MAX

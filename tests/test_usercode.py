@@ -334,6 +334,28 @@ def test_a_bad_logged_signal_is_named(tmp_path, capsys, call, said):
     assert code == 3 and said in err and "t=0.200 s" in err, err
 
 
+def test_a_controller_logging_ever_new_names_stops_at_the_limit_with_its_rows(tmp_path, capsys):
+    """A name made afresh at every step (an f-string with the time in it) would be a column
+    as long as the run per step; the run stops as failed at the name past the limit."""
+    from tt_mujoco.sim.usercode import MAX_SIGNALS
+
+    path = tmp_path / "names.py"
+    path.write_text(
+        "from tt_mujoco.controllers import Controller\n"
+        "class Names(Controller):\n"
+        "    def compute(self, t, m, r):\n"
+        "        self.log('kept', 1.0)\n"
+        "        self.log(f'k{round(t * 1000)}', t)\n"
+        "        return 0.5, 0.5\n"
+    )
+    code, out, err = cli(tmp_path, capsys, "--controller", f"{path}:Names")
+    assert code == 3 and f"beyond the {MAX_SIGNALS} names a run may log" in err, err
+    assert f"'k{MAX_SIGNALS - 1}'" in err  # 'kept' and k0..k98 fit; k99 is the 101st
+    ts = read_timeseries(out / "timeseries.parquet")
+    assert len([c for c in ts if c.startswith("ctrl_")]) == MAX_SIGNALS
+    assert len(ts["t"]) == MAX_SIGNALS - 1  # the rows before the stop
+
+
 def test_what_user_code_changes_in_the_path_it_is_given_changes_nothing_of_the_run(
     tmp_path, capsys
 ):

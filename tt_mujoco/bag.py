@@ -469,7 +469,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if out.exists() or out.is_symlink():
             return fail(f"{out} exists and is never overwritten; name a new file with --out FILE")
-        check_out(out)
+        check_out(out, ".mcap")
         run = read_run(run_dir)
         reverse = bool(run.scenario.get("reverse"))
         write_bag(run.timeseries, run.reference, run.params, out, reverse, run.world, args.rate)

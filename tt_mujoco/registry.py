@@ -141,6 +141,9 @@ def describe_failure(err: BaseException) -> str:
     # or C code did; the package's own line would name the wrong file
     mine = [f for f in frames if not _inside_package(f.filename)]
     place = f"{mine[-1].filename}, line {mine[-1].lineno}: " if mine else ""
+    if isinstance(err, SyntaxError) and str(err.filename).endswith(".py"):
+        # the compiler raised it for the file it read: that file's line, not the import's
+        place = f"{err.filename}, line {err.lineno}: "
     if isinstance(err, SystemExit):
         return f"{place}it called sys.exit({shown(err.code)})"
     if isinstance(err, RecursionError):

@@ -55,9 +55,9 @@ def main(argv: list[str] | None = None) -> int:
         if out.exists() or out.is_symlink():
             hint = "" if args.out is not None else "; name a new file with --out FILE"
             return fail(f"{out} exists and is never overwritten{hint}")
-        check_out(out)
+        check_out(out, ".mp4")
+        video = VideoFormat(args.width, args.height, args.fps, args.camera)
         run = read_run(run_dir)
-        print(f"reference path: {run.reference_source}", file=sys.stderr)
         info, outcome = run_labels(run.scenario, run.status, run.message)
         scene = RunScene(
             run.params,
@@ -66,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
             terrain=run.scenario.get("terrain", "flat"),
             world=run.world,
         )
-        video = VideoFormat(args.width, args.height, args.fps, args.camera)
+        print(f"reference path: {run.reference_source}", file=sys.stderr)
         render_video(run.timeseries, scene, out, video, outcome, progress=not args.no_progress)
     except (ValueError, FileExistsError) as exc:  # RunFolderError and BadInputError included
         return fail(str(exc))

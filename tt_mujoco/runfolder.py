@@ -246,9 +246,12 @@ def _world(folder: Path, metrics: Mapping):
         raise RunFolderError(f"{folder / METRICS_FILE}: config.scenario.world: {err}") from None
 
 
-def check_out(out: Path) -> None:
-    """Refuse ``out`` when it would be written inside a run's folder: a finished run is a
-    record, which a reader of it never changes."""
+def check_out(out: Path, suffix: str | None = None) -> None:
+    """Refuse ``out`` when it would be written inside a run's folder (a finished run is a
+    record, which a reader of it never changes), or, given ``suffix``, when its name does not
+    end in it (what a viewer opening the file goes by)."""
+    if suffix is not None and Path(out).suffix.lower() != suffix:
+        raise BadInputError(f"--out {out} is not allowed: it must end in {suffix}")
     for parent in Path(out).resolve().parents:
         if (parent / METRICS_FILE).is_file() or any(parent.glob(".in-progress*")):
             raise BadInputError(

@@ -24,6 +24,10 @@ __all__ = [
 ]
 
 
+#: The largest integer a TOML file holds (a signed 64-bit integer).
+TOML_INT_MAX = 2**63 - 1
+
+
 def refuse(label: str, value, allowed: str) -> ValueError:
     """The error of a value that is not allowed: the key, the value, what is allowed."""
     return ValueError(f"{label}={shown(value)} is not allowed: {allowed}")
@@ -56,7 +60,9 @@ def number(
     """A parser of a number in an interval; ``optional``: "none" is None; ``words``: texts
     allowed besides numbers (kept in lower case)."""
     if integer:
-        allowed = f"an integer >= {low:g}" if high is None else f"an integer in [{low}, {high}]"
+        # what a TOML file (config.toml, a sweep's) can hold, so every integer round-trips
+        high = TOML_INT_MAX if high is None else min(high, TOML_INT_MAX)
+        allowed = f"an integer in [{low}, {'2**63 - 1' if high == TOML_INT_MAX else high}]"
     else:
         allowed = _interval(low, high, low_open, high_open, unit)
     if words:

@@ -80,10 +80,13 @@ def _gains(value, label):
     if value is None:
         return None
     if isinstance(value, str) and value.strip().startswith("{"):
+        from tt_mujoco.outputs import parse_strict_json
+
         try:
-            value = json.loads(value)
-        except json.JSONDecodeError as err:
-            raise ValueError(f"{label} {value!r} is not valid JSON: {err.msg}") from None
+            value = parse_strict_json(value)
+        except ValueError as err:
+            why = err.msg if isinstance(err, json.JSONDecodeError) else str(err)
+            raise ValueError(f"{label} {value!r} is not valid JSON: {why}") from None
         if not isinstance(value, dict):
             raise ValueError(f"{label} {value!r} is not a JSON object")
     if isinstance(value, dict):

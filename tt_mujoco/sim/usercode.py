@@ -19,6 +19,7 @@ from tt_mujoco.registry import describe_failure, finite_number, real_number, sho
 from tt_mujoco.sim.parts.plant import StopRun
 
 __all__ = [
+    "MAX_SIGNALS",
     "CheckedPath",
     "checked_disturbance",
     "checked_signals",
@@ -112,9 +113,22 @@ def checked_disturbance(out, who: str, t: float) -> tuple[float, float]:
     return _two_numbers(out, who, "a disturbance", t, ("a_v", "a_omega"))
 
 
-def checked_signals(signals: dict, who: str, t: float) -> dict[str, float]:
+#: The most signals a controller logs in a run: each is a column of the time series as long
+#: as the run, so a name made afresh at every step would fill the memory.
+MAX_SIGNALS = 100
+
+
+def checked_signals(signals: dict, who: str, t: float, logged=()) -> dict[str, float]:
     """What a controller logged this step (:meth:`~tt_mujoco.controllers.Controller.log`), as
-    floats, or a "failed" stop naming the bad name or value."""
+    floats, or a "failed" stop naming the bad name or value, or the name beyond
+    :data:`MAX_SIGNALS` (``logged``: the names logged before this step)."""
+    fresh = [name for name in signals if name not in logged]
+    if fresh and len(logged) + len(fresh) > MAX_SIGNALS:
+        raise StopRun(
+            "failed",
+            f"{who} logged a signal named {shown(fresh[-1])} at t={t:.3f} s, beyond the "
+            f"{MAX_SIGNALS} names a run may log (each is a column of the time series)",
+        )
     out = {}
     for name, value in signals.items():
         if not (isinstance(name, str) and name.isidentifier() and name[:1].isalpha()):

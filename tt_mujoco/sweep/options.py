@@ -7,6 +7,7 @@ from pathlib import Path
 
 from tt_mujoco.registry import closest
 from tt_mujoco.schema import Schema
+from tt_mujoco.schema_values import number
 from tt_mujoco.sim import SCHEMA
 from tt_mujoco.vehicle.params import MAX_TRAILERS, TRAILER_FIELDS
 
@@ -117,16 +118,11 @@ def as_number(name: str, value, positive: bool = False) -> float:
 
 
 def as_integer(name: str, value) -> int:
-    if isinstance(value, float) and value.is_integer():
-        value = int(value)
-    if isinstance(value, str):
-        try:
-            value = int(value)
-        except ValueError:
-            pass
-    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-        raise BadSpecError(f"{name}={value!r} is not allowed: it must be an integer >= 0")
-    return value
+    """An integer >= 0 that a TOML file holds (the schema's own integer check)."""
+    try:
+        return number(0, integer=True)(value, name)
+    except ValueError as err:
+        raise BadSpecError(str(err)) from None
 
 
 def convert(name: str, value, schema: Schema = SCHEMA):

@@ -97,7 +97,8 @@ class PythonLaw:
         signals = controller.take_signals()
         if signals:
             k = round(t / self.dt)
-            self.stepper.record_signals(usercode.checked_signals(signals, who, t), k)
+            logged = self.stepper.signal_names
+            self.stepper.record_signals(usercode.checked_signals(signals, who, t, logged), k)
         command = controller.command
         u1, u2 = (T_r, T_l) if command is None else command
         return closed_loop.LAW_OK, T_r, T_l, u1, u2

@@ -513,6 +513,11 @@ class Stepper:
             return []
         return np.asarray(self._episode.loop.ground.masks)[: self.k].tolist()
 
+    @property
+    def signal_names(self):
+        """The names the controller has logged so far (a view, not a copy)."""
+        return self._signals.keys()
+
     def record_signals(self, signals: dict[str, float], k: int) -> None:
         """The controller's logged signals at step ``k``, columns ``ctrl_<name>`` of the time
         series, NaN where a step logged none."""
