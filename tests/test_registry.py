@@ -168,3 +168,21 @@ def test_a_call_that_does_not_fit_names_no_file_of_the_package():
     message = str(caught.value)
     assert "takes 1 positional argument but 2 were given" in message
     assert "registry.py" not in message and ".py, line" not in message
+
+
+@pytest.mark.parametrize("label", list(REGISTRIES))
+def test_an_unknown_name_says_what_is_allowed_in_a_sentence(label):
+    registry = REGISTRIES[label]
+    for r in (registry, Registry(registry.what, also=registry.also)):  # and with none registered
+        message = str(r.unknown("zzz_no_such_part"))
+        assert "a hook 'package.module:Name'" in message, message
+        assert "one of ," not in message and "use or" not in message, message
+        assert ("use one of" in message) == bool(r.names()), message
+
+
+def test_a_built_in_metric_or_run_key_given_as_an_extra_metric_is_named_as_such():
+    from tt_mujoco.analysis.metric_names import RUN_KEYS, resolve_metrics
+
+    for name in ("rmse_v", "trailer_offtrack_rms", *RUN_KEYS):
+        with pytest.raises(ValueError, match=r"every run's metrics\.json holds it"):
+            resolve_metrics([name])

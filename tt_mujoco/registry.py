@@ -391,8 +391,11 @@ class Registry:
         if isinstance(spec, str):
             close = closest(_key(spec), self._items)
             hint = f"; did you mean {close!r}?" if close else ""
-        return ValueError(
-            f"{self.what} name={shown(spec)} is not allowed: use one of {allowed}, "
-            f"{self.also + ', ' if self.also else ''}or a hook "
-            f"'package.module:Name' or 'path/to/file.py:Name'{hint}"
-        )
+        hook = "a hook 'package.module:Name' or 'path/to/file.py:Name'"
+        if allowed:
+            use = f"use one of {allowed}, {self.also + ', ' if self.also else ''}or {hook}"
+        else:
+            use = (
+                f"no {self.what} is registered: use {self.also + ' or ' if self.also else ''}{hook}"
+            )
+        return ValueError(f"{self.what} name={shown(spec)} is not allowed: {use}{hint}")

@@ -8,7 +8,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from tt_mujoco.registry import Registry
+from tt_mujoco.registry import Registry, is_hook
 
 __all__ = [
     "DEFAULT_SUMMARY_KEYS",
@@ -137,7 +137,7 @@ def summary_table(metrics: Mapping[str, object], keys: Sequence[str] = DEFAULT_S
     )
 
 
-#: Extra metric name -> function ``fn(timeseries, path) -> float | dict``. ``METRICS.register``
+#: Extra metric name -> function ``fn(timeseries, path) -> float`` (or None). ``METRICS.register``
 #: adds one; a hook ``module:function`` or ``file.py:function`` needs no registration.
 METRICS = Registry("metric", called_as=("timeseries", "path"))
 
@@ -169,6 +169,14 @@ def resolve_metrics(specs) -> dict:
     """
     out, given = {}, {}
     for spec in specs:
+        if isinstance(spec, str) and not is_hook(spec) and spec not in METRICS:
+            if builtin_key(spec.strip()):
+                raise ValueError(
+                    f"metric {spec!r} is not allowed: every run's metrics.json holds it (a "
+                    "built-in metric, or the run's own entry); --metric adds one of yours (a "
+                    "registered name, or a hook 'package.module:function' or "
+                    "'path/to/file.py:function')"
+                )
         fn = METRICS.resolve(spec)
         METRICS.check_call(fn, spec)
         name = metric_name(spec)
