@@ -325,3 +325,61 @@ def test_an_integer_beyond_a_float_is_neither_read_nor_written():
         parse_strict_json('{"m": 1' + "0" * 400 + "}")
     assert parse_strict_json('{"m": 12345678901234567890}') == {"m": 12345678901234567890}
     assert json_safe({"m": 10**400, "n": -(10**400), "k": 3}) == {"m": None, "n": None, "k": 3}
+
+
+#: Every command that makes an output folder, with arguments that would run it (short).
+FOLDER_COMMANDS = {
+    "tt_mujoco.run": ["--plant", "reduced", "--duration", "0.2", "--no-video", "--quiet"],
+    "tt_mujoco.sweep.cli": ["duration=0.2", "plant=reduced", "--no-figures", "--quiet"],
+    "tt_mujoco.validate": [],
+    "tt_mujoco.model": [],
+    "tt_mujoco.compare": ["{run}", "{run}"],
+    "tt_mujoco.identify": ["{run}"],
+    "tt_mujoco.excite": [],
+    "tt_mujoco.paper.cli": [],
+}
+
+
+def test_every_command_that_makes_a_folder_is_listed_here():
+    from pathlib import Path
+
+    package = Path(outputs.__file__).parent
+    makers = {
+        "tt_mujoco." + str(p.relative_to(package.parent).with_suffix("")).replace("/", ".")[10:]
+        for p in package.rglob("*.py")
+        if "claim_folder(" in p.read_text() or "prepare_out(" in p.read_text()
+    }
+    makers -= {"tt_mujoco.outputs", "tt_mujoco.sweep.execute"}  # the makers themselves
+    assert makers | {"tt_mujoco.sweep.cli"} == set(FOLDER_COMMANDS), makers
+
+
+@pytest.fixture(scope="module")
+def finished_run(tmp_path_factory):
+    from tt_mujoco import run
+
+    folder = tmp_path_factory.mktemp("finished") / "run"
+    assert run.main([*FOLDER_COMMANDS["tt_mujoco.run"], "--no-plots", "--out", str(folder)]) == 0
+    return folder
+
+
+@pytest.mark.parametrize("command", list(FOLDER_COMMANDS))
+@pytest.mark.parametrize("where", ["inside a finished run", "a dangling link"])
+def test_no_command_writes_inside_a_finished_run_or_through_a_link(
+    finished_run, tmp_path, capsys, command, where
+):
+    import importlib
+
+    before = sorted(p.name for p in finished_run.iterdir())
+    if where == "a dangling link":
+        out = tmp_path / "link"
+        out.symlink_to(tmp_path / "missing")
+    else:
+        out = finished_run / "inner"
+    argv = [a.format(run=finished_run) for a in FOLDER_COMMANDS[command]]
+    code = importlib.import_module(command).main([*argv, "--out", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1, err
+    said = ("is a symbolic link",) if where == "a dangling link" else ("lies inside", "is inside")
+    assert any(words in err[0] for words in said), err
+    assert sorted(p.name for p in finished_run.iterdir()) == before
+    assert not (tmp_path / "missing").exists()

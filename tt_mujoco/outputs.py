@@ -28,11 +28,13 @@ __all__ = [
     "OutputError",
     "atomic_write",
     "claim_folder",
+    "enclosing_output",
     "free_name",
     "json_default",
     "json_safe",
     "publish_new",
     "read_timeseries",
+    "refuse_link_or_enclosed",
     "release_folder",
     "remove_if_empty",
     "run_timeseries_file",
@@ -141,6 +143,35 @@ def _claim(out: Path, option: str, created: bool) -> None:
         )
 
 
+def enclosing_output(path: Path) -> Path | None:
+    """The folder of outputs that ``path`` lies inside, or None: the nearest parent holding a
+    run's ``metrics.json`` or the claim of a writer (finished outputs are a record, and
+    unfinished ones are another writer's)."""
+    for parent in Path(path).resolve().parents:
+        if (parent / "metrics.json").is_file() or (parent / CLAIM_FILE).exists():
+            return parent
+    return None
+
+
+def refuse_link_or_enclosed(out: Path, option: str = "--out") -> None:
+    """Refuse an output folder ``out`` that is a symbolic link (outputs are never written
+    through one) or lies inside another command's outputs (:func:`enclosing_output`)."""
+    if out.is_symlink():
+        target = os.readlink(out)
+        state = "" if out.exists() else ", which does not exist"
+        raise OutputError(
+            f"{option} {str(out)!r} is not allowed: it is a symbolic link (to {target!r}{state}) "
+            "and outputs are never written through a link; name the folder itself, or a new one"
+        )
+    inside = enclosing_output(out)
+    if inside is not None:
+        raise OutputError(
+            f"{option} {str(out)!r} is not allowed: it lies inside {str(inside)!r}, the "
+            "outputs of another run or command, which are never changed; name a folder "
+            "outside it"
+        )
+
+
 def release_folder(out: Path) -> None:
     """Mark ``out``'s outputs complete (remove the claim :func:`claim_folder` made)."""
     with contextlib.suppress(FileNotFoundError):
@@ -169,9 +200,17 @@ def claim_folder(out: Path | None, default_base: Path, option: str = "--out") ->
     Raises
     ------
     OutputError
-        ``out`` holds files, is not a folder, or cannot be created or written.
+        ``out`` holds files, is not a folder, is a symbolic link, lies inside another
+        command's outputs, or cannot be created or written.
     """
     if out is None:
+        inside = enclosing_output(default_base)
+        if inside is not None:  # run from inside a finished run's folder
+            raise OutputError(
+                f"the new folder {str(default_base)!r} would lie inside {str(inside)!r}, the "
+                f"outputs of another run or command, which are never changed; name a folder "
+                f"outside it with {option}"
+            )
         for _ in range(1000):
             path = free_name(default_base)
             try:
@@ -193,13 +232,7 @@ def claim_folder(out: Path | None, default_base: Path, option: str = "--out") ->
             f"{option} {str(out)!r} is not allowed: the name has bytes that are not UTF-8, "
             "which the time series' file format cannot record; use a UTF-8 name"
         ) from None
-    if out.is_symlink():
-        target = os.readlink(out)
-        state = "" if out.exists() else ", which does not exist"
-        raise OutputError(
-            f"{option} {str(out)!r} is not allowed: it is a symbolic link (to {target!r}{state}) "
-            "and outputs are never written through a link; name the folder itself, or a new one"
-        )
+    refuse_link_or_enclosed(out, option)
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise OutputError(
             f"{option} {str(out)!r} already exists and is not an empty folder: outputs are "

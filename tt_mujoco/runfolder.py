@@ -32,6 +32,7 @@ from tt_mujoco.outputs import (
     REFERENCE_FILE,
     JsonField,
     check_fields,
+    enclosing_output,
     lookup,
     read_strict_json,
     read_timeseries,
@@ -252,12 +253,12 @@ def check_out(out: Path, suffix: str | None = None) -> None:
     end in it (what a viewer opening the file goes by)."""
     if suffix is not None and Path(out).suffix.lower() != suffix:
         raise BadInputError(f"--out {out} is not allowed: it must end in {suffix}")
-    for parent in Path(out).resolve().parents:
-        if (parent / METRICS_FILE).is_file() or any(parent.glob(".in-progress*")):
-            raise BadInputError(
-                f"{out} is inside the run folder {parent}, which a reader never writes into: "
-                "name a file elsewhere with --out"
-            )
+    parent = enclosing_output(out)
+    if parent is not None:
+        raise BadInputError(
+            f"{out} is inside the run folder {parent}, which a reader never writes into: "
+            "name a file elsewhere with --out"
+        )
 
 
 def default_out(run_dir: Path, kind: str, suffix: str) -> Path:

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from tt_mujoco import watchdog
 from tt_mujoco.executor import Executors, ignore_sigint
-from tt_mujoco.outputs import atomic_write, json_safe, write_json
+from tt_mujoco.outputs import atomic_write, json_safe, refuse_link_or_enclosed, write_json
 from tt_mujoco.progress import progress_bar
 from tt_mujoco.sweep.options import JOURNAL, SPEC_FILE, TABLE, BadSpecError
 from tt_mujoco.sweep.runs import expand, run_one, validate_runs
@@ -155,7 +155,12 @@ def _lock(out: Path):
 
 def prepare_out(out: Path, resume: bool) -> None:
     """Make the output folder; refuse a used one unless resuming, and any sweep file in it that
-    is a symlink (outputs are never written through one)."""
+    is a symlink (outputs are never written through one), and a folder that is a link or lies
+    inside another command's outputs."""
+    try:
+        refuse_link_or_enclosed(out)
+    except ValueError as err:
+        raise BadSpecError(str(err)) from None
     for name in (JOURNAL, SPEC_FILE, TABLE, "summary.csv", "summary.json", ".lock", HANG_DIR):
         if (out / name).is_symlink():
             raise BadSpecError(
