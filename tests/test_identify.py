@@ -195,6 +195,57 @@ def test_a_bad_log_is_exit_2_naming_column_and_row(tmp_path, capsys, change, say
     assert not (tmp_path / "o").exists()
 
 
+def _text_log(tmp_path, header="t,v,omega,phi", sep=",", row=None, bom=""):
+    lines = [header.replace(",", sep)]
+    for i in range(50):
+        values = [f"{i * 0.01:.2f}", "0.5", "0.1", "0.0"]
+        lines.append(sep.join(row if row is not None and i == 7 else values))
+    path = tmp_path / "log.csv"
+    path.write_text(bom + "\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "says"),
+    [
+        ({"header": "t,v,omega,phi,phi"}, "column 'phi' is given twice (columns 4 and 5)"),
+        ({"header": "t,v,,phi"}, "column 3 has no name"),
+        ({"sep": ";"}, "is one column: a CSV file's columns are separated by commas"),
+        ({"sep": "\t"}, "is one column"),
+        ({"row": ["0.07", "fast", "0.1", "0.0"]}, "column 'v' row 9 is 'fast', not a number"),
+        ({"row": ["0.07", "0.5", "0.1", "7.5"]}, "column 'phi' row 9 is 7.5 rad, beyond the +-pi"),
+    ],
+)
+def test_a_log_written_another_way_is_one_line_naming_where(tmp_path, capsys, kwargs, says):
+    path = _text_log(tmp_path, **kwargs)
+    assert identify.main([str(path), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and says in err[0] and err[0].count(str(path)) == 1, err
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_byte_order_mark_is_read_past():
+    import tempfile
+    from pathlib import Path
+
+    from tt_mujoco.outputs import read_timeseries
+
+    with tempfile.TemporaryDirectory() as folder:
+        path = _text_log(Path(folder), bom="\ufeff")
+        assert sorted(read_timeseries(path)) == ["omega", "phi", "t", "v"]
+
+
+def test_a_log_in_milliseconds_is_said_to_lead_to_no_vehicle(tmp_path, capsys):
+    ts = simulate(Scenario(traj="s_curve", plant="reduced", duration=2.0)).timeseries
+    table = {"t": ts["t"] * 1000.0, "v": ts["v"], "omega": ts["omega"], "phi": ts["phi"]}
+    path = tmp_path / "log.csv"
+    write_timeseries(path, table, list(table))
+    assert identify.main([str(path), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "leads to no vehicle" in err[0] and "t in s" in err[0], err
+    assert not (tmp_path / "o").exists()
+
+
 def test_a_log_without_a_column_or_with_a_bad_fit_is_exit_2(tmp_path, capsys):
     path = tmp_path / "log.csv"
     write_timeseries(path, {"t": np.arange(20) * 0.01, "v": np.ones(20)}, ["t", "v"])

@@ -83,10 +83,17 @@ def _with(p: Params, values: dict[tuple[int, str], float]) -> Params:
     values = {key: value for key, value in values.items() if key[0] > 0}
     first = {field: float(value) for (k, field), value in values.items() if k == 1}
     train = list(p.train)
-    for (k, field), value in values.items():
-        if k > 1:
-            train[k - 2] = dataclasses.replace(train[k - 2], **{field: float(value)})
-    return p.replace(**first, train=tuple(train))
+    try:
+        for (k, field), value in values.items():
+            if k > 1:
+                train[k - 2] = dataclasses.replace(train[k - 2], **{field: float(value)})
+        return p.replace(**first, train=tuple(train))
+    except ValueError as err:  # the fit went where no vehicle is: said of the log
+        raise LogError(
+            f"the fit leads to no vehicle ({err}): a log in other units than the fit reads "
+            "does this (t in s, v in m/s, omega in rad/s, the hitch angles in rad, or in "
+            "degrees in a column named ..._deg)"
+        ) from None
 
 
 def _rates(p: Params, phis: np.ndarray, v: np.ndarray, omega: np.ndarray) -> np.ndarray:

@@ -16,6 +16,7 @@ import io
 import json
 import math
 import os
+import re
 import sys
 import tempfile
 import warnings
@@ -344,26 +345,58 @@ def run_timeseries_file(run_dir: Path) -> Path:
 
 
 def read_timeseries(path) -> dict[str, np.ndarray]:
-    """A time series file (``.parquet``, or ``.csv``: header row, then numbers) as column
-    name -> 1-D array."""
+    """A time series file (``.parquet``, or ``.csv``: header row, then numbers; a UTF-8 byte
+    order mark is read past) as column name -> 1-D array. A column without a name, or a name
+    given twice, is a ``ValueError`` (which of the two would be read is a guess)."""
     path = Path(path)
     if path.suffix == ".parquet":
         import pyarrow.parquet as pq
 
         table = pq.read_table(path)
-        return {name: table.column(name).to_numpy().astype(float) for name in table.column_names}
-    with path.open(newline="") as f:
+        names = _column_names(path, table.column_names)
+        return {name: table.column(j).to_numpy().astype(float) for j, name in enumerate(names)}
+    with path.open(newline="", encoding="utf-8-sig") as f:
         header = next(csv.reader(f), None)
     if not header:
         raise ValueError(f"{path} is empty: a time series needs a header row")
+    if len(header) == 1 and any(mark in header[0] for mark in ";\t|"):
+        raise ValueError(
+            f"{path}: its header {header[0][:60]!r} is one column: a CSV file's columns are "
+            "separated by commas"
+        )
+    names = _column_names(path, header)
     with warnings.catch_warnings():  # a header and no rows: no columns' rows, said so below
         warnings.simplefilter("ignore", UserWarning)
-        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+        try:
+            data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+        except ValueError as err:  # NumPy counts data rows from 0: said as the file's lines
+            found = re.search(r"string (.*) to float64 at row (\d+), column (\d+)", str(err))
+            if found is None:
+                raise
+            row, col = int(found.group(2)), int(found.group(3))
+            column = f"column {names[col - 1]!r}" if col <= len(names) else f"column {col}"
+            raise ValueError(
+                f"{path}: {column} row {row + 2} is {found.group(1)}, not a number"
+            ) from None
     if data.size == 0:
-        return {name.strip(): np.zeros(0) for name in header}
+        return {name: np.zeros(0) for name in names}
     if data.shape[1] != len(header):
         raise ValueError(f"{path} has {len(header)} header names but {data.shape[1]} columns")
-    return {name.strip(): data[:, j].copy() for j, name in enumerate(header)}
+    return {name: data[:, j].copy() for j, name in enumerate(names)}
+
+
+def _column_names(path: Path, header) -> list[str]:
+    """The header's names, stripped; a ValueError for one empty or given twice."""
+    names = [str(name).strip() for name in header]
+    for j, name in enumerate(names):
+        if not name:
+            raise ValueError(f"{path}: column {j + 1} has no name")
+        if name in names[:j]:
+            raise ValueError(
+                f"{path}: column {name!r} is given twice (columns {names.index(name) + 1} and "
+                f"{j + 1}): which to read is a guess"
+            )
+    return names
 
 
 def shown_json(value) -> str:

@@ -9,6 +9,7 @@ column, time not increasing, a gap, a value that is not a finite number) with a
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -71,7 +72,8 @@ def read_log(
         try:
             table = read_timeseries(file)
         except (OSError, ValueError) as err:
-            raise LogError(f"{file}: {err}") from None
+            said = str(err)  # named once: the reader's messages may name the file already
+            raise LogError(said if said.startswith(str(file)) else f"{file}: {said}") from None
     count = trailers or 1
     while trailers is None and (f"phi_{count + 1}" in table or f"phi_{count + 1}" in mapping):
         count += 1
@@ -90,6 +92,15 @@ def read_log(
     data = {name: _log_column(file, table, mapping.get(name, name), name) for name in names}
     t = data["t"]
     _check_times(file, t)
+    for name in names[len(speeds) + 1 :]:
+        beyond = np.flatnonzero(np.abs(data[name]) > math.pi)
+        if beyond.size:
+            column = mapping.get(name, name)
+            raise LogError(
+                f"{file}: column {column!r} row {int(beyond[0]) + 2} is "
+                f"{float(data[name][beyond[0]]):.6g} rad, beyond the +-pi of a hitch angle (a "
+                "column in degrees has a name ending in _deg)"
+            )
     phis = np.column_stack([data[n] for n in names[len(speeds) + 1 :]])
     v, omega = _speeds(data, t, wheel)
     return t, v, omega, phis
@@ -106,7 +117,7 @@ def _log_column(file: Path, table, column: str, name: str) -> np.ndarray:
     bad = np.flatnonzero(~np.isfinite(values))
     if bad.size:
         raise LogError(
-            f"{file}: column {column!r} row {int(bad[0]) + 2} is {values[bad[0]]!r}, not a "
+            f"{file}: column {column!r} row {int(bad[0]) + 2} is {float(values[bad[0]])!r}, not a "
             "finite number"
         )
     return values
@@ -120,14 +131,15 @@ def _check_times(file: Path, t: np.ndarray) -> None:
     if np.any(steps <= 0):
         i = int(np.flatnonzero(steps <= 0)[0]) + 1
         raise LogError(
-            f"{file}: column 't' does not increase at row {i + 2} ({t[i]!r} after {t[i - 1]!r})"
+            f"{file}: column 't' does not increase at row {i + 2} ({float(t[i])!r} after "
+            f"{float(t[i - 1])!r})"
         )
     median = float(np.median(steps))
     if np.any(steps > GAP * median):
         i = int(np.flatnonzero(steps > GAP * median)[0]) + 1
         raise LogError(
             f"{file}: a gap in column 't' at row {i + 2}: {steps[i - 1]:.6g} s after "
-            f"{t[i - 1]!r}, more than {GAP:g} times the log's period ({median:.6g} s)"
+            f"{float(t[i - 1])!r}, more than {GAP:g} times the log's period ({median:.6g} s)"
         )
 
 
