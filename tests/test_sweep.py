@@ -46,6 +46,25 @@ def reference(tmp_path_factory) -> Path:
 
 
 # --- specification -------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    "toml",
+    [
+        "[options]\nduration = {lin = [0.1, 1, 2.5]}\n",
+        "[options]\nduration = {lin = [0.1, 1, true]}\n",
+        "[options]\nseed = {range = [0, 3, 0.5]}\n",
+    ],
+)
+def test_a_generators_integer_is_an_integer_not_cut_to_one(tmp_path, toml):
+    # 2.5 points made 2, and true made 1, in silence
+    path = tmp_path / "sweep.toml"
+    path.write_text(toml)
+    with pytest.raises(BadSpecError, match="is not an integer"):
+        parse_spec([], config=path)
+    with pytest.raises(BadSpecError, match="is not an integer"):
+        sweep.parse_item("duration=lin:0.1:1:2.5")
+    assert len(sweep.expand(parse_spec(["duration=lin:0.1:1:3"]))) == 3
+
+
 def test_values_lists_generators_and_toml_agree():
     assert sweep.parse_item("gain.k1_v=5,10,20").values == (5.0, 10.0, 20.0)
     assert sweep.parse_item("scale.Mr=lin:0.8:1.2:5").values == (0.8, 0.9, 1.0, 1.1, 1.2)

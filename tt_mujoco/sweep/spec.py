@@ -140,11 +140,16 @@ def _generator(name: str, kind: str, args: Sequence) -> Axis:
 
 
 def _int_arg(name: str, text) -> int:
+    """An integer argument of a generator (a COUNT, range's START:STOP:STEP), from text or a
+    TOML number; 2.5 or true is refused, not cut to 2 or taken as 1."""
+    if isinstance(text, float) and text.is_integer():
+        return int(text)
+    if isinstance(text, int) and not isinstance(text, bool):
+        return text
     try:
-        value = int(text)
-    except (TypeError, ValueError):
+        return int(text.strip()) if isinstance(text, str) else int("not an integer")
+    except ValueError:
         raise BadSpecError(f"{name}: {text!r} is not an integer") from None
-    return value
 
 
 def parse_item(item: str) -> Axis:
