@@ -82,6 +82,8 @@ def _bad_tables():
         for key in (*required, *optional):
             cases[f"{kind} {key} not a number"] = ({"obstacle": [{**good, key: "x"}]}, "'x'")
         cases[f"{kind} unknown key"] = ({"obstacle": [{**good, "colour": 1}]}, "'colour'")
+    box = {**_obstacle("box"), "x": 8.0, "y": 8.0}
+    goal = {"x": 1.0, "y": 1.0, "heading_deg": 0.0}
     cases |= {
         "unknown kind": ({"obstacle": [{"kind": "tree"}]}, "'tree'"),
         "unknown top key": ({"obstacles": []}, "'obstacles'"),
@@ -109,6 +111,24 @@ def _bad_tables():
         "bad bounds": ({"bounds": [1, 0, 0, 1]}, "x_min < x_max"),
         "bounds not four": ({"bounds": [1, 2]}, "bounds=[1, 2]"),
         "obstacle not a list": ({"obstacle": 3}, "obstacle=3"),
+        # a collision names the obstacle: a name is one line and one obstacle's
+        "name twice": (
+            {"obstacle": [{**box, "name": "crate"}, {**box, "x": 9.0, "name": "crate"}]},
+            "obstacle 2 name='crate' is not allowed: obstacle 1 has it",
+        ),
+        "a bay wall's name": (
+            {
+                "goal": {**goal, "bay": {"width": 0.5, "depth": 1.2, "back": 0.25}},
+                "obstacle": [{**box, "name": "bay back wall"}],
+            },
+            "the bay has it",
+        ),
+        "name over lines": ({"obstacle": [{**box, "name": "a\nb"}]}, "text on one line"),
+        "name not text": ({"obstacle": [{**box, "name": ["a"]}]}, "text on one line"),
+        "world name not text": ({"name": 3}, "world name=3"),
+        # a number beyond any yard is a unit mistake
+        "far away": ({"obstacle": [{**box, "x": 1e300}]}, "within +-10000"),
+        "huge tolerance": ({"goal": {**goal, "position_tolerance": 1e9}}, "within"),
     }
     return cases
 

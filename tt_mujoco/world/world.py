@@ -75,12 +75,29 @@ class WorldError(ValueError):
     """A world that cannot be used: the message names the bad value and what is allowed."""
 
 
+#: The largest number a world holds (m, or deg): a world 10 km across is far beyond a yard,
+#: and a larger number is a unit mistake (the geometry's squares would lose every digit).
+WORLD_EXTENT = 1e4
+
+
 def _number(value, what: str, positive: bool = False) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
         raise WorldError(f"{what}={value!r} is not allowed: it must be a finite number")
     if positive and value <= 0:
         raise WorldError(f"{what}={value!r} is not allowed: it must be > 0")
+    if abs(value) > WORLD_EXTENT:
+        raise WorldError(
+            f"{what}={value!r} is not allowed: a world's numbers are within +-{WORLD_EXTENT:g} "
+            "(m, deg)"
+        )
     return float(value)
+
+
+def _name(value, what: str) -> str:
+    """A name said in messages and kept in MuJoCo's model: text on one line."""
+    if not isinstance(value, str) or not value.strip() or not value.isprintable():
+        raise WorldError(f"{what} name={value!r} is not allowed: give it as text on one line")
+    return value
 
 
 def _point(value, what: str) -> tuple[float, float]:
@@ -252,7 +269,7 @@ def _obstacle(table, i: int) -> Obstacle:
         raise WorldError(f"{what} kind={kind!r} is not allowed: use one of {', '.join(KINDS)}")
     required, optional = KINDS[kind]
     _keys(table, ("kind", "name", *required, *optional), what)
-    name = str(table.get("name", f"{kind} {i + 1}"))
+    name = _name(table["name"], what) if "name" in table else f"{kind} {i + 1}"
     values = []
     for key in (*required, *optional):
         if key not in table:
@@ -333,8 +350,8 @@ def world_from_table(table, name: str) -> World:
             raise WorldError(
                 f"bounds={list(bounds)} is not allowed: x_min < x_max and y_min < y_max"
             )
-    return World(
-        name=str(table.get("name", name)),
+    world = World(
+        name=_name(table["name"], "world") if "name" in table else name,
         obstacles=tuple(_obstacle(t, i) for i, t in enumerate(obstacles)),
         goal=_goal(table["goal"]) if "goal" in table else None,
         bounds=bounds,
@@ -342,6 +359,17 @@ def world_from_table(table, name: str) -> World:
         start=_start(table["start"]) if "start" in table else None,
         table=copy.deepcopy(dict(table)),
     )
+    seen: dict[str, int] = {}
+    walls = {o.name for o in world.all_obstacles[len(world.obstacles) :]}  # the goal's bay
+    for i, obstacle in enumerate(world.obstacles):  # a collision names it: one name, one obstacle
+        if obstacle.name in seen or obstacle.name in walls:
+            holder = f"obstacle {seen[obstacle.name] + 1}" if obstacle.name in seen else "the bay"
+            raise WorldError(
+                f"obstacle {i + 1} name={obstacle.name!r} is not allowed: {holder} has it; "
+                "give each obstacle its own name"
+            )
+        seen[obstacle.name] = i
+    return world
 
 
 def read_world(path: Path) -> World:
