@@ -467,6 +467,7 @@ class _Search:
             f"y={start[1]:.3f} m, heading {math.degrees(start[2]):.1f} deg "
             f"({'backing up' if reverse else 'forward'}): {self.tried} of {self.total} "
             f"candidates tried, {why} with a margin of {margin:g} m{closest}"
+            f"{'' if reverse else '; --reverse plans the train backing in'}"
         )
 
 
