@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = [
+    "METRICS_FILE",
     "OutputError",
     "atomic_write",
     "claim_folder",
@@ -123,6 +124,8 @@ def free_name(base: Path) -> Path:
 #: started into one folder at once: one gets it, the other is refused) and removed when the
 #: outputs are complete, so a folder that still has it holds an interrupted run's outputs.
 CLAIM_FILE = ".in-progress"
+#: A finished run's record, written last: a folder with it holds a run's outputs.
+METRICS_FILE = "metrics.json"
 
 
 def _claim(out: Path, option: str, created: bool) -> None:
@@ -149,7 +152,7 @@ def enclosing_output(path: Path) -> Path | None:
     run's ``metrics.json`` or the claim of a writer (finished outputs are a record, and
     unfinished ones are another writer's)."""
     for parent in Path(path).resolve().parents:
-        if (parent / "metrics.json").is_file() or (parent / CLAIM_FILE).exists():
+        if (parent / METRICS_FILE).is_file() or (parent / CLAIM_FILE).exists():
             return parent
     return None
 

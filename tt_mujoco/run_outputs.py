@@ -15,6 +15,7 @@ from pathlib import Path
 from tt_mujoco.config import CONFIG_FILE
 from tt_mujoco.defaults import CAMERAS
 from tt_mujoco.outputs import (
+    METRICS_FILE,
     REFERENCE_FILE,
     atomic_write,
     publish_new,
@@ -174,8 +175,8 @@ def write_outputs(
         "notes": notes,
         "config": result.config,
     }
-    write_json(out / "metrics.json", doc, strict=True)
-    written.append(out / "metrics.json")
+    write_json(out / METRICS_FILE, doc, strict=True)
+    written.append(out / METRICS_FILE)
     return written, notes
 
 

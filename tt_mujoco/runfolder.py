@@ -29,6 +29,7 @@ import numpy as np
 
 from tt_mujoco.cliargs import BadInputError
 from tt_mujoco.outputs import (
+    METRICS_FILE,
     REFERENCE_FILE,
     JsonField,
     check_fields,
@@ -58,8 +59,6 @@ __all__ = [
     "read_run",
     "reference_polyline_for",
 ]
-
-METRICS_FILE = "metrics.json"
 
 
 class RunFolderError(BadInputError):
