@@ -42,6 +42,28 @@ def test_plot_writes_the_four_figures(tmp_path):
     (tmp_path / "a_file").write_text("")
     with pytest.raises(ValueError, match=r"a_file.*is a file, not a folder"):
         run.plot(tmp_path / "a_file")
+    # figures there already are never overwritten (a second call replaced them in silence)
+    before = {p.name: p.read_bytes() for p in made}
+    with pytest.raises(ValueError, match=r"holds path\.png already"):
+        run.plot(tmp_path)
+    assert {p.name: p.read_bytes() for p in made} == before
+
+
+def test_plot_never_writes_inside_a_finished_run(tmp_path):
+    from tt_mujoco import run as run_cli
+
+    folder = tmp_path / "finished"
+    argv = ["--plant", "reduced", "--duration", "0.2", "--no-video", "--no-plots", "--quiet"]
+    assert run_cli.main([*argv, "--out", str(folder)]) == 0
+    run = tt_mujoco.simulate(Scenario(traj="circle", plant="reduced", duration=0.5))
+    with pytest.raises(ValueError, match="lies inside"):
+        run.plot(folder / "figures")
+    assert not (folder / "figures").exists()
+
+
+def test_a_progress_that_is_not_callable_is_named():
+    with pytest.raises(TypeError, match=r"progress=3 is not allowed"):
+        tt_mujoco.simulate(Scenario(plant="reduced", duration=0.2), progress=3)
 
 
 @pytest.mark.parametrize("wrong", ["s_curve", {"traj": "s_curve"}, None])

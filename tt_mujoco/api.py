@@ -77,13 +77,28 @@ class Run:
 
     def plot(self, out_dir) -> list[Path]:
         """Write the run's four figures (as the command line does) into the folder
-        ``out_dir``, made first when it does not exist; returns their paths."""
-        from tt_mujoco.viz import plots
+        ``out_dir``, made first when it does not exist; returns their paths.
+
+        Raises
+        ------
+        ValueError
+            ``out_dir`` is a file or a symbolic link, lies inside another run's or command's
+            outputs, or holds one of the figures already (they are never overwritten).
+        """
+        from tt_mujoco.outputs import refuse_link_or_enclosed
+        from tt_mujoco.viz import FIGURES, plots
         from tt_mujoco.world.builtin import parse_world
 
         out = Path(out_dir)
         if out.exists() and not out.is_dir():
             raise ValueError(f"out_dir={str(out_dir)!r} is not allowed: it is a file, not a folder")
+        refuse_link_or_enclosed(out, "out_dir")
+        taken = [name for name in FIGURES if (out / name).exists() or (out / name).is_symlink()]
+        if taken:
+            raise ValueError(
+                f"out_dir={str(out_dir)!r} is not allowed: it holds {taken[0]} already, and "
+                "figures are never overwritten; name a new folder"
+            )
         out.mkdir(parents=True, exist_ok=True)
         made = plots.plot_run(
             self.result.timeseries,
@@ -138,12 +153,17 @@ def simulate(scenario: Scenario, progress=None) -> Run:
     ValueError
         A bad scenario value, or a user's controller or disturbance that fails before the run.
     TypeError
-        ``scenario`` is not a :class:`Scenario`.
+        ``scenario`` is not a :class:`Scenario`, or ``progress`` is not callable.
     """
     if not isinstance(scenario, Scenario):
         raise TypeError(
             f"scenario={scenario!r} is not allowed: simulate takes a tt_mujoco.Scenario, e.g. "
             "tt_mujoco.Scenario(traj='s_curve'), or tt_mujoco.load_scenario(FILE)"
+        )
+    if progress is not None and not callable(progress):
+        raise TypeError(
+            f"progress={progress!r} is not allowed: give None or a function "
+            "progress(steps_done, steps_total)"
         )
     return Run(_simulate(scenario, progress=progress))
 
