@@ -456,3 +456,25 @@ def test_a_resume_that_is_not_one_is_refused_before_any_run(tmp_path, resume, na
 def test_a_resume_s_switches_are_booleans(field):
     with pytest.raises(sweep.BadSpecError, match=rf"Resume\({field}='no'\)"):
         sweep.Resume(**{field: "no"})
+
+
+def test_a_sweep_its_scheduler_refuses_leaves_nothing_that_blocks_the_retry(tmp_path, monkeypatch):
+    """The issue's case: journal.jsonl and sweep.toml stayed, and the same command again was
+    refused ('already exists and is not empty'). A resumed sweep's files stay as they were."""
+    import socket
+
+    from tt_mujoco import executor
+    from tt_mujoco.sweep import cli
+
+    pytest.importorskip("distributed")
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(1)
+    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    monkeypatch.setattr(executor, "CONNECT_TIMEOUT_S", 1.0)
+    out = tmp_path / "sweep"
+    argv = ["duration=0.2", "plant=reduced", "--scheduler", address, "--out", str(out), "--quiet"]
+    for _ in range(2):  # the retry meets the same refusal, not a folder in its way
+        assert cli.main([*argv, "--no-figures"]) == 2
+        assert not out.exists()
+    server.close()

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from tt_mujoco import watchdog
-from tt_mujoco.executor import Executors, ignore_sigint
+from tt_mujoco.executor import ExecutorError, Executors, ignore_sigint
 from tt_mujoco.outputs import atomic_write, json_safe, refuse_link_or_enclosed, write_json
 from tt_mujoco.progress import progress_bar
 from tt_mujoco.sweep.options import JOURNAL, SPEC_FILE, TABLE, BadSpecError
@@ -153,10 +153,11 @@ def _lock(out: Path):
     return fh
 
 
-def prepare_out(out: Path, resume: bool) -> None:
+def prepare_out(out: Path, resume: bool) -> bool:
     """Make the output folder; refuse a used one unless resuming, and any sweep file in it that
     is a symlink (outputs are never written through one), and a folder that is a link or lies
-    inside another command's outputs."""
+    inside another command's outputs. Whether the folder was new (or empty): only then does
+    a sweep that fails before its first run remove it again."""
     try:
         refuse_link_or_enclosed(out)
     except ValueError as err:
@@ -175,10 +176,22 @@ def prepare_out(out: Path, resume: bool) -> None:
             )
         if not (out / JOURNAL).exists() and not (out / SPEC_FILE).exists():
             raise BadSpecError(f"--out {str(out)!r} holds no sweep ({JOURNAL}) to resume")
+    fresh = not out.exists() or not any(out.iterdir())
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise BadSpecError(f"--out {str(out)!r} cannot be made: {err.strerror}") from None
+    return fresh
+
+
+def _undo_fresh(out: Path) -> None:
+    """Remove what a sweep wrote into its new folder before its first run, and the folder:
+    a sweep refused then (its scheduler unreachable) leaves nothing that blocks the retry."""
+    for name in (JOURNAL, SPEC_FILE, ".lock"):
+        with contextlib.suppress(FileNotFoundError):
+            (out / name).unlink()
+    with contextlib.suppress(OSError):
+        out.rmdir()
 
 
 def _json_line(record: dict) -> str:
@@ -251,7 +264,7 @@ def run_sweep(
     # finished runs are not checked again (a file they read may be gone by now).
     finished = _finished(out / JOURNAL, retry_errors) if resume and not out.is_symlink() else {}
     validate_runs([r for r in runs if r["run_id"] not in finished])
-    prepare_out(out, resume is not None)
+    fresh = prepare_out(out, resume is not None)
     with _lock(out):
         journal_path = out / JOURNAL
         done = _finished(journal_path, retry_errors)
@@ -265,7 +278,14 @@ def run_sweep(
         if todo:
             workers = _worker_count(workers, len(todo), scheduler)
             bar = _progress(len(runs), reused, quiet)
-            _execute(todo, done, journal_path, Executors(workers, scheduler, ignore_sigint), bar)
+            try:
+                _execute(
+                    todo, done, journal_path, Executors(workers, scheduler, ignore_sigint), bar
+                )
+            except (BadSpecError, ExecutorError):  # refused before its first run
+                if fresh and not done:
+                    _undo_fresh(out)
+                raise
         header, rows = build_rows(runs, done)
         atomic_write(out / TABLE, table_csv(header, rows))
         summary = summarize(header, rows, group_options(spec, rows))
