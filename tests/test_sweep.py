@@ -386,10 +386,10 @@ def test_workers_are_capped_at_the_runs_and_warned_above_the_cores(capsys):
     assert capsys.readouterr().err == ""
 
 
-def test_a_scheduler_that_accepts_and_never_answers_is_given_up_at_the_deadline(monkeypatch):
-    # A peer on loopback that takes the connection and says nothing: the wait is bounded.
+@pytest.fixture
+def silent_scheduler(monkeypatch):
+    """The address of a peer on loopback that takes the connection and says nothing."""
     import socket
-    import time
 
     from tt_mujoco import executor
 
@@ -397,13 +397,22 @@ def test_a_scheduler_that_accepts_and_never_answers_is_given_up_at_the_deadline(
     server = socket.socket()
     server.bind(("127.0.0.1", 0))
     server.listen(1)
-    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
     monkeypatch.setattr(executor, "CONNECT_TIMEOUT_S", 2.0)
+    yield f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    server.close()
+
+
+def test_a_scheduler_that_accepts_and_never_answers_is_given_up_at_the_deadline(
+    silent_scheduler,
+):
+    import time
+
+    from tt_mujoco import executor
+
     start = time.monotonic()
     with pytest.raises(executor.ExecutorError, match="cannot connect to a Dask scheduler"):
-        executor.Executors(1, address).open()
+        executor.Executors(1, silent_scheduler).open()
     assert time.monotonic() - start < 10
-    server.close()
 
 
 @pytest.mark.parametrize("width", [4.0, 12.0])
@@ -458,23 +467,15 @@ def test_a_resume_s_switches_are_booleans(field):
         sweep.Resume(**{field: "no"})
 
 
-def test_a_sweep_its_scheduler_refuses_leaves_nothing_that_blocks_the_retry(tmp_path, monkeypatch):
+def test_a_sweep_its_scheduler_refuses_leaves_nothing_that_blocks_the_retry(
+    tmp_path, silent_scheduler
+):
     """The issue's case: journal.jsonl and sweep.toml stayed, and the same command again was
     refused ('already exists and is not empty'). A resumed sweep's files stay as they were."""
-    import socket
-
-    from tt_mujoco import executor
     from tt_mujoco.sweep import cli
 
-    pytest.importorskip("distributed")
-    server = socket.socket()
-    server.bind(("127.0.0.1", 0))
-    server.listen(1)
-    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
-    monkeypatch.setattr(executor, "CONNECT_TIMEOUT_S", 1.0)
     out = tmp_path / "sweep"
-    argv = ["duration=0.2", "plant=reduced", "--scheduler", address, "--out", str(out), "--quiet"]
+    argv = ["duration=0.2", "plant=reduced", "--scheduler", silent_scheduler, "--out", str(out)]
     for _ in range(2):  # the retry meets the same refusal, not a folder in its way
-        assert cli.main([*argv, "--no-figures"]) == 2
+        assert cli.main([*argv, "--quiet", "--no-figures"]) == 2
         assert not out.exists()
-    server.close()
