@@ -137,3 +137,8 @@ def test_made_by_its_id():
 def test_reset_refuses_options_it_does_not_take(env):
     with pytest.raises(ValueError, match=r"options=\{'phi0_deg': 5\} is not allowed: this env's"):
         env.reset(seed=1, options={"phi0_deg": 5})
+
+
+def test_a_bad_keyword_names_the_env_it_was_given_to():
+    with pytest.raises(ValueError, match=r"TractorTrailerGoalEnv: unknown key 'task'"):
+        gym_goal.TractorTrailerGoalEnv(plant="reduced", task="path")

@@ -188,6 +188,8 @@ def test_a_users_path_that_fails_ends_its_episode_as_failed(tmp_path):
         (lambda: TractorTrailerVectorEnv(0), "num_envs=0"),
         (lambda: TractorTrailerVectorEnv(True), "num_envs=True"),
         (lambda: TractorTrailerVectorEnv(2.5), "num_envs=2.5"),
+        # a slip of a few digits: named before NumPy is asked for 201 GiB
+        (lambda: TractorTrailerVectorEnv(10**9), r"num_envs=1000000000 is not allowed"),
         (lambda: TractorTrailerVectorEnv(2, traj="scurve"), "did you mean 's_curve'"),
     ],
 )

@@ -203,16 +203,19 @@ def observation_bounds(names, params, reference: np.ndarray, duration: float):
     return np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
 
 
-def scenario_overrides(overrides: dict, schema: Schema = sim.SCHEMA) -> dict:
+def scenario_overrides(
+    overrides: dict, schema: Schema = sim.SCHEMA, where: str = "TractorTrailerEnv"
+) -> dict:
     """The env's keyword arguments as checked Scenario values: the option schema's checks and
     "did you mean", as the command line, scenario files and sweeps have.
 
     Raises
     ------
     ValueError
-        An unknown name (with the nearest) or a bad value, named.
+        An unknown name (with the nearest) or a bad value, named, with ``where`` (the env
+        that was given it).
     """
-    return schema.values(overrides, "TractorTrailerEnv")
+    return schema.values(overrides, where)
 
 
 def torques_of(action, shape: tuple, action_units: str, limit: float) -> np.ndarray:

@@ -108,7 +108,9 @@ class TractorTrailerGoalEnv(gymnasium.Env):
                 control_dt=DEFAULT_CONTROL_DT,
             )
         overrides = {**overrides, "traj": PLAN}
-        scenario = dataclasses.replace(scenario, **scenario_overrides(overrides))
+        scenario = dataclasses.replace(
+            scenario, **scenario_overrides(overrides, where=type(self).__name__)
+        )
         scenario.validate()
         if reward_type not in REWARD_TYPES:
             raise ValueError(

@@ -70,7 +70,11 @@ from tt_mujoco.sim.loop.agent_step import (
 from tt_mujoco.sim.loop.step import PAYLOAD, RAISED, RUNNING
 from tt_mujoco.sim.loop.stepper import Stepper
 
-__all__ = ["TractorTrailerVectorEnv"]
+__all__ = ["MAX_ENVS", "TractorTrailerVectorEnv"]
+
+#: The most episodes one vector env steps: 65,536 simulations hold several GB already, and a
+#: larger number is a slip (10**9 asked NumPy for 201 GiB).
+MAX_ENVS = 1 << 16
 
 
 class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
@@ -80,7 +84,7 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
     Parameters
     ----------
     num_envs : int
-        How many episodes, at least 1.
+        How many episodes, 1 to :data:`MAX_ENVS`.
     scenario, action_units, task, **overrides
         As :class:`~tt_mujoco.gym_env.TractorTrailerEnv`'s (no rendering).
 
@@ -103,8 +107,15 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
         task: str = "velocity",
         **overrides,
     ):
-        if isinstance(num_envs, bool) or not isinstance(num_envs, Integral) or num_envs < 1:
-            raise ValueError(f"num_envs={shown(num_envs)} is not allowed: give an integer >= 1")
+        if (
+            isinstance(num_envs, bool)
+            or not isinstance(num_envs, Integral)
+            or not 1 <= num_envs <= MAX_ENVS
+        ):
+            raise ValueError(
+                f"num_envs={shown(num_envs)} is not allowed: give an integer in [1, {MAX_ENVS}] "
+                "(each env is a simulation of its own, with its own memory)"
+            )
         single = TractorTrailerEnv(scenario, action_units=action_units, task=task, **overrides)
         if single.n_legs > 1:
             raise ValueError(
