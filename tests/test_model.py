@@ -97,6 +97,10 @@ def test_presets():
         ({"eta": float("inf")}, "eta=inf"),
         ({"timestep": 0.5}, "timestep=0.5"),
         ({"Iw": 0.05}, "Iw=0.05"),
+        # a pair that does not fit names both: either may be the one given
+        ({"L0": 1e-9}, "r=0.02 with L0=1e-09"),
+        ({"L": 0.01}, "r=0.02 with L=0.01"),
+        ({"d": 0.01}, "r=0.02 with d=0.01"),
     ],
 )
 def test_bad_params_name_the_field(kwargs, fragment):

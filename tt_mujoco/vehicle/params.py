@@ -354,14 +354,16 @@ class Params:
                 f"timestep={self.timestep!r} is not allowed: it must be in [1e-05, 0.01] s"
             )
         if self.r >= self.d / 2:
+            # either may be the one given: both are named
             raise ValueError(
-                f"r={self.r!r} is not allowed: the wheel radius must be smaller than half the "
-                f"track d/2 = {self.d / 2!r} (the wheels would overlap)"
+                f"r={self.r!r} with d={self.d!r} is not allowed: the wheel radius must be "
+                f"smaller than half the track d/2 = {self.d / 2!r} (the wheels would overlap)"
             )
         if self.r >= min(self.L, self.L0):
+            short = "L" if self.L <= self.L0 else "L0"
             raise ValueError(
-                f"r={self.r!r} is not allowed: the wheel radius must be smaller than both links "
-                f"(L={self.L!r}, L0={self.L0!r})"
+                f"r={self.r!r} with {short}={getattr(self, short)!r} is not allowed: the wheel "
+                f"radius must be smaller than both links (L={self.L!r}, L0={self.L0!r})"
             )
         if self.Iw > 2 * self.Iwd:
             raise ValueError(
