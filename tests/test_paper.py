@@ -318,3 +318,30 @@ def test_a_docs_page_in_a_missing_folder_is_refused_before_the_suite(tmp_path, c
     assert code == 2
     assert "its folder does not exist" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize(
+    ("page", "says"),
+    [
+        ("run/metrics.json", "it must end in .md"),  # it replaced a finished run's record
+        ("run/page.md", "is inside the run folder"),
+        ("folder.md", "it is a folder"),  # it was exit 70 after the whole suite
+        ("nowhere/page.md", "its folder does not exist"),
+    ],
+)
+def test_a_docs_page_that_would_harm_a_run_or_cannot_be_written_is_refused_first(
+    tmp_path, monkeypatch, capsys, page, says
+):
+    from tt_mujoco import run
+    from tt_mujoco.paper import cli
+
+    argv = ["--plant", "reduced", "--duration", "0.2", "--no-video", "--no-plots", "--quiet"]
+    assert run.main([*argv, "--out", str(tmp_path / "run")]) == 0
+    (tmp_path / "folder.md").mkdir()
+    record = (tmp_path / "run" / "metrics.json").read_bytes()
+    monkeypatch.setattr(cli, "run_suite", lambda *a, **k: pytest.fail("the suite ran"))
+    out = tmp_path / "paper"
+    code = cli.main(["--quick", "--docs-page", str(tmp_path / page), "--out", str(out)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and says in err[0], err
+    assert not out.exists() and (tmp_path / "run" / "metrics.json").read_bytes() == record

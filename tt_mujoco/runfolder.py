@@ -246,17 +246,20 @@ def _world(folder: Path, metrics: Mapping):
         raise RunFolderError(f"{folder / METRICS_FILE}: config.scenario.world: {err}") from None
 
 
-def check_out(out: Path, suffix: str | None = None) -> None:
-    """Refuse ``out`` when it would be written inside a run's folder (a finished run is a
-    record, which a reader of it never changes), or, given ``suffix``, when its name does not
-    end in it (what a viewer opening the file goes by)."""
+def check_out(out: Path, suffix: str | None = None, option: str = "--out") -> None:
+    """Refuse the file ``out`` (given as ``option``) when it is a folder, when it would be
+    written inside a run's folder (a finished run is a record, which a reader of it never
+    changes), or, given ``suffix``, when its name does not end in it (what a viewer opening
+    the file goes by)."""
     if suffix is not None and Path(out).suffix.lower() != suffix:
-        raise BadInputError(f"--out {out} is not allowed: it must end in {suffix}")
+        raise BadInputError(f"{option} {out} is not allowed: it must end in {suffix}")
+    if Path(out).is_dir():
+        raise BadInputError(f"{option} {out} is not allowed: it is a folder; name a file")
     parent = enclosing_output(out)
     if parent is not None:
         raise BadInputError(
             f"{out} is inside the run folder {parent}, which a reader never writes into: "
-            "name a file elsewhere with --out"
+            f"name a file elsewhere with {option}"
         )
 
 

@@ -14,6 +14,7 @@ from tt_mujoco.outputs import atomic_write, claim_folder, release_folder, remove
 from tt_mujoco.paper.execute import run_suite
 from tt_mujoco.paper.report import build_report
 from tt_mujoco.paper.suite import COMMAND, DEFAULT_OUT, suite
+from tt_mujoco.runfolder import check_out
 
 
 # --- command line -------------------------------------------------------------------------------
@@ -60,10 +61,12 @@ def main(argv: list[str] | None = None) -> int:
     """Exit 0 done, 2 bad input, 1 if a run raised an error (it is in the report)."""
     try:
         args = build_parser().parse_args(argv)
-        if args.docs_page is not None and not Path(args.docs_page).parent.is_dir():
-            raise BadInputError(
-                f"--docs-page {args.docs_page!r} is not allowed: its folder does not exist"
-            )
+        if args.docs_page is not None:  # a page of Markdown, never a run's file
+            check_out(Path(args.docs_page), ".md", "--docs-page")
+            if not Path(args.docs_page).parent.is_dir():
+                raise BadInputError(
+                    f"--docs-page {args.docs_page!r} is not allowed: its folder does not exist"
+                )
         out, _ = claim_folder(args.out, DEFAULT_OUT)  # before the suite: a bad --out fails now
     except (BadInputError, ValueError) as err:
         print(f"error: {err}", file=sys.stderr)
