@@ -69,6 +69,8 @@ def test_the_command_writes_a_run_to_log(tmp_path, capsys):
     [
         (["--fit", "mass"], "--fit 'mass' is not allowed"),
         (["--rate", "0"], "--rate 0.0 is not allowed"),
+        # beyond the simulation's rate the log was the simulation's, its noise the rate asked
+        (["--rate", "1e9"], "at most as fast as the simulation's control rate, 1000 Hz"),
         (["--encoder-noise-deg", "nan"], "--encoder-noise-deg nan is not allowed"),
         (["--eta", "fast"], "eta='fast' is not allowed"),
     ],

@@ -91,6 +91,7 @@ def _predicted(scenario, fit, rate_hz, noise_deg) -> Candidate | None:
     if result.status != "ok" or phi_max > JACKKNIFE_MARGIN * limit:
         return None
     stride = max(1, round(1.0 / (rate_hz * scenario.control_dt)))
+    rate_hz = 1.0 / (stride * scenario.control_dt)  # the rate of the rows taken: the noise's
     t, v, omega, phis = ts["t"][::stride], ts["v"][::stride], ts["omega"][::stride], phis[::stride]
     keys, names, x = fitted_values(p, fit)
     residuals = step_errors(p, keys, t, v, omega, phis)
@@ -208,6 +209,11 @@ def main(argv: list[str] | None = None) -> int:
     try:
         scenario = Scenario(eta=args.eta, trailers=args.trailers)
         scenario.validate()
+        if args.rate > 1.0 / scenario.control_dt:
+            return fail(
+                f"--rate {args.rate!r} is not allowed: a log is at most as fast as the "
+                f"simulation's control rate, {1.0 / scenario.control_dt:g} Hz"
+            )
         out, _ = claim_folder(args.out, Path("renders") / "excite")
     except ValueError as err:
         return fail(str(err))
