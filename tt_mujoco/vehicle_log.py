@@ -92,7 +92,8 @@ def read_log(
     data = {name: _log_column(file, table, mapping.get(name, name), name) for name in names}
     t = data["t"]
     _check_times(file, t)
-    for name in names[len(speeds) + 1 :]:
+    hitches = names[len(speeds) + 1 :]
+    for name in hitches:
         beyond = np.flatnonzero(np.abs(data[name]) > math.pi)
         if beyond.size:
             column = mapping.get(name, name)
@@ -101,7 +102,7 @@ def read_log(
                 f"{float(data[name][beyond[0]]):.6g} rad, beyond the +-pi of a hitch angle (a "
                 "column in degrees has a name ending in _deg)"
             )
-    phis = np.column_stack([data[n] for n in names[len(speeds) + 1 :]])
+    phis = np.column_stack([data[n] for n in hitches])
     v, omega = _speeds(data, t, wheel)
     return t, v, omega, phis
 

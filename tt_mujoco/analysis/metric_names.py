@@ -169,14 +169,14 @@ def resolve_metrics(specs) -> dict:
     """
     out, given = {}, {}
     for spec in specs:
-        if isinstance(spec, str) and not is_hook(spec) and spec not in METRICS:
-            if builtin_key(spec.strip()):
-                raise ValueError(
-                    f"metric {spec!r} is not allowed: every run's metrics.json holds it (a "
-                    "built-in metric, or the run's own entry); --metric adds one of yours (a "
-                    "registered name, or a hook 'package.module:function' or "
-                    "'path/to/file.py:function')"
-                )
+        named = isinstance(spec, str) and not is_hook(spec) and spec not in METRICS
+        if named and builtin_key(spec.strip()):
+            raise ValueError(
+                f"metric {spec!r} is not allowed: every run's metrics.json holds it (a "
+                "built-in metric, or the run's own entry); --metric adds one of yours (a "
+                "registered name, or a hook 'package.module:function' or "
+                "'path/to/file.py:function')"
+            )
         fn = METRICS.resolve(spec)
         METRICS.check_call(fn, spec)
         name = metric_name(spec)

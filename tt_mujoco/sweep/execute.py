@@ -62,6 +62,8 @@ class SweepResult:
 
 #: The sweep folder's folder of its workers' hang files while it runs (removed at its end).
 HANG_DIR = ".hangs"
+#: The file a running sweep holds locked, so that a second one into its folder is refused.
+LOCK_FILE = ".lock"
 
 
 @dataclass(frozen=True)
@@ -138,10 +140,10 @@ def _lock(out: Path):
     except ImportError:  # Windows: no advisory lock, the user keeps one sweep per folder
         return contextlib.nullcontext()
     try:  # never through a symlink: a planted link must not be truncated or followed
-        fd = os.open(out / ".lock", os.O_WRONLY | os.O_CREAT | os.O_NOFOLLOW, 0o644)
+        fd = os.open(out / LOCK_FILE, os.O_WRONLY | os.O_CREAT | os.O_NOFOLLOW, 0o644)
     except OSError as err:
         raise BadSpecError(
-            f"--out {str(out)!r}: its .lock cannot be opened ({err.strerror}; a symlink is "
+            f"--out {str(out)!r}: its {LOCK_FILE} cannot be opened ({err.strerror}; a symlink is "
             "refused): remove it"
         ) from None
     fh = os.fdopen(fd, "w")  # held open (and locked) for the sweep's lifetime
@@ -162,13 +164,14 @@ def prepare_out(out: Path, resume: bool) -> bool:
         refuse_link_or_enclosed(out)
     except ValueError as err:
         raise BadSpecError(str(err)) from None
-    for name in (JOURNAL, SPEC_FILE, TABLE, "summary.csv", "summary.json", ".lock", HANG_DIR):
+    for name in (JOURNAL, SPEC_FILE, TABLE, "summary.csv", "summary.json", LOCK_FILE, HANG_DIR):
         if (out / name).is_symlink():
             raise BadSpecError(
                 f"--out {str(out)!r}: {name} is a symlink; outputs are never written through "
                 "one: remove it"
             )
-    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+    used = out.exists() and (not out.is_dir() or any(out.iterdir()))
+    if used:
         if not resume:
             raise BadSpecError(
                 f"--out {str(out)!r} already exists and is not empty: pass --resume to continue "
@@ -176,18 +179,17 @@ def prepare_out(out: Path, resume: bool) -> bool:
             )
         if not (out / JOURNAL).exists() and not (out / SPEC_FILE).exists():
             raise BadSpecError(f"--out {str(out)!r} holds no sweep ({JOURNAL}) to resume")
-    fresh = not out.exists() or not any(out.iterdir())
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
         raise BadSpecError(f"--out {str(out)!r} cannot be made: {err.strerror}") from None
-    return fresh
+    return not used
 
 
 def _undo_fresh(out: Path) -> None:
     """Remove what a sweep wrote into its new folder before its first run, and the folder:
     a sweep refused then (its scheduler unreachable) leaves nothing that blocks the retry."""
-    for name in (JOURNAL, SPEC_FILE, ".lock"):
+    for name in (JOURNAL, SPEC_FILE, LOCK_FILE):
         with contextlib.suppress(FileNotFoundError):
             (out / name).unlink()
     with contextlib.suppress(OSError):

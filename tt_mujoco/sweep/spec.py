@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -146,10 +147,10 @@ def _int_arg(name: str, text) -> int:
         return int(text)
     if isinstance(text, int) and not isinstance(text, bool):
         return text
-    try:
-        return int(text.strip()) if isinstance(text, str) else int("not an integer")
-    except ValueError:
-        raise BadSpecError(f"{name}: {text!r} is not an integer") from None
+    if isinstance(text, str):
+        with contextlib.suppress(ValueError):
+            return int(text.strip())
+    raise BadSpecError(f"{name}: {text!r} is not an integer")
 
 
 def parse_item(item: str) -> Axis:
