@@ -3,7 +3,7 @@ planning takes, how closely the leading point follows the plan.
 
     python benchmarks/bench_maneuvers.py [--world loading_bay] [--trailers 1 2 3] [--seeds 200]
         [--plant mujoco] [--noise-snr-db 20] [--direction reverse] [--workers 2]
-        [--disturbance matched]
+        [--disturbance matched] [--generated dead_end]
 
 Each run is ``python -m tt_mujoco.run --world WORLD --traj plan [--reverse] --trailers N
 --seed SEED`` (one process per worker, the runs of a seed in order): the start drawn from the
@@ -18,6 +18,9 @@ core's, the medians and 95th percentiles over the seeds planned. The disturbance
 scenario's default (the paper's matched torque disturbance) unless ``--disturbance`` names
 another; the runs that did not reach the goal are summed up by how much of the time their
 wheel torques were saturated (the train's load and the disturbance against the motors' limit).
+With ``--generated dead_end`` each seed runs in a world of its own that no one drew
+(``tests/generated_worlds.py``: a dead-end corridor the train starts in, facing its end, and a
+bay at a random pose in the yard), where plans back out first and may need several cusps.
 """
 
 from __future__ import annotations
@@ -26,21 +29,49 @@ import argparse
 import math
 import os
 import sys
+import tempfile
 from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
 
 import numpy as np
+import tomli_w
 
 from tt_mujoco.sim import Scenario, simulate
-from tt_mujoco.world.plan import PlanError
+from tt_mujoco.world.plan import PlanError, train_length
 
 #: How far (rms) the leading point may be off each leg's path: the runs whose worst leg is
 #: further off are counted.
 LEG_RMS_BOUND = 0.02
 
 
+#: The generators of worlds no one drew (tests/generated_worlds.py) that ``--generated`` takes:
+#: each seed's run is in a world of its own, drawn from ``(trailers, seed)``.
+GENERATED = ("dead_end",)
+
+
+def _generated_world(name: str, trailers: int, seed: int, folder: str) -> str:
+    """The world file of run ``seed``: drawn by ``tests/generated_worlds.py``'s ``name``."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    import generated_worlds
+
+    p = Scenario(trailers=trailers).plant_params()
+    rng = np.random.default_rng([trailers, seed])
+    table = getattr(generated_worlds, name)(rng, train_length(p))
+    path = Path(folder) / f"{name}-{trailers}-{seed}.toml"
+    path.write_text(tomli_w.dumps({"name": f"{name} {trailers} {seed}", **table}))
+    return str(path)
+
+
 def one(args) -> dict:
-    world, trailers, seed, plant, snr, reverse, disturbance = args
+    world, trailers, seed, plant, snr, reverse, disturbance, generated = args
+    with tempfile.TemporaryDirectory() as folder:
+        if generated is not None:
+            world = _generated_world(generated, trailers, seed, folder)
+        return _one(world, trailers, seed, plant, snr, reverse, disturbance)
+
+
+def _one(world, trailers, seed, plant, snr, reverse, disturbance) -> dict:
     scenario = Scenario(
         world=world,
         traj="plan",
@@ -86,18 +117,34 @@ def main(argv=None) -> int:
     parser.add_argument("--direction", choices=("reverse", "forward"), default="reverse")
     parser.add_argument("--workers", type=int, default=min(2, os.cpu_count() or 1))
     parser.add_argument("--disturbance", default=None, help="default: the scenario's")
+    parser.add_argument(
+        "--generated",
+        choices=GENERATED,
+        default=None,
+        help="each seed in a world of its own, drawn by tests/generated_worlds.py (--world unused)",
+    )
     args = parser.parse_args(argv)
     reverse = args.direction == "reverse"
     disturbance = args.disturbance or Scenario().disturbance
+    world = args.world if args.generated is None else f"{args.generated} (generated, one per seed)"
     print(
-        f"world {args.world}, {args.direction}, {args.plant} plant, "
+        f"world {world}, {args.direction}, {args.plant} plant, "
         f"{args.noise_snr_db:g} dB noise, disturbance {disturbance}, seeds 0..{args.seeds - 1}, "
         f"{args.workers} workers"
     )
     with ProcessPoolExecutor(args.workers) as pool:
         for n in args.trailers:
             jobs = [
-                (args.world, n, seed, args.plant, args.noise_snr_db, reverse, args.disturbance)
+                (
+                    args.world,
+                    n,
+                    seed,
+                    args.plant,
+                    args.noise_snr_db,
+                    reverse,
+                    args.disturbance,
+                    args.generated,
+                )
                 for seed in range(args.seeds)
             ]
             rows = list(pool.map(one, jobs, chunksize=4))
@@ -117,6 +164,13 @@ def main(argv=None) -> int:
                 f"  with a cusp: {cusped} of {len(planned)} planned, "
                 f"{sum(1 for r in reached if r['cusps'])} of them reached"
             )
+            several = [r for r in planned if r["cusps"] > 1]
+            if several:
+                most = max(r["cusps"] for r in several)
+                print(
+                    f"  with more than one cusp: {len(several)} planned (at most {most}), "
+                    f"{sum(1 for r in reached if r['cusps'] > 1)} of them reached"
+                )
             if len(times):
                 print(
                     f"  planning time: median {np.median(times):.3f} s, 95th percentile "

@@ -121,3 +121,36 @@ def turned_bay(rng: np.random.Generator, dock_length: float) -> dict:
         "goal": {"x": gx, "y": gy, "heading_deg": math.degrees(turn + side * math.pi / 2) + 180.0},
         "obstacle": obstacles,
     }
+
+
+def dead_end(rng: np.random.Generator, train_length: float) -> dict:
+    """A world file's table: a yard with a dead-end corridor 1.4-2.0 m wide off its east side
+    (at a random height, two or three times the train long) and a goal bay at a random pose
+    in the yard's west half; the train starts in the corridor facing its closed end, so every
+    plan starts backing out, and a bay facing the wrong way needs cusps."""
+    width = float(rng.uniform(1.4, 2.0))
+    cy = float(rng.uniform(-2.5, 2.5))
+    length = float(rng.uniform(2.0, 3.0)) * train_length + 1.0
+    x0, x1 = 6.0 - length, 6.0
+    half = width / 2
+    gx, gy = float(rng.uniform(-6.0, -1.0)), float(rng.uniform(-4.0, 4.0))
+    gh = float(rng.uniform(-180.0, 180.0))
+    walls = [
+        ("corridor north", [x0, cy + half], [x1, cy + half]),
+        ("corridor south", [x0, cy - half], [x1, cy - half]),
+        ("corridor end", [x1, cy - half], [x1, cy + half]),
+    ]
+    return {
+        "bounds": [-9.0, 6.5, -6.0, 6.0],
+        "start": {"x": [x1 - 1.0, x1 - 0.6], "y": [cy - 0.05, cy + 0.05], "heading_deg": [-3, 3]},
+        "goal": {
+            "x": gx,
+            "y": gy,
+            "heading_deg": gh,
+            "bay": {"width": 0.5, "depth": 1.2, "back": 0.25, "wall": 0.05},
+        },
+        "obstacle": [
+            {"kind": "wall", "name": name, "start": a, "end": b, "thickness": 0.05}
+            for name, a, b in walls
+        ],
+    }

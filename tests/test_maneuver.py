@@ -239,3 +239,30 @@ def test_the_nmpc_drives_both_legs_to_the_goal(facing_away):
     world = result.metrics["world"]
     assert [leg["status"] for leg in world["plan"]["legs"]] == ["ok", "ok"]
     assert world["goal"]["reached"], world["goal"]
+
+
+def test_a_maneuver_stopped_before_it_backs_up_still_says_what_backs_it_up(
+    facing_away, tmp_path, monkeypatch
+):
+    """A maneuver whose forward leg stops (a collision, forced here) never drives a backing
+    leg: metrics.json still says what drives its backing legs, and the command line ends as
+    a stopped run does (exit 3, its rows kept), not as a bug of ours (its summary names the
+    backing drive, and read it from the last leg driven: exit 70)."""
+    from tt_mujoco.sim import maneuver
+
+    real = maneuver.drive_leg
+
+    def collides(built, *args):
+        stepper, controller, _, _, wall = real(built, *args)
+        return stepper, controller, "collision", "a collision (forced by the test)", wall
+
+    monkeypatch.setattr(maneuver, "drive_leg", collides)
+    monkeypatch.chdir(tmp_path)
+    options = ["--world", facing_away, "--traj", "plan", "--reverse", "--plant", "reduced"]
+    assert run.main([*options, "--no-video", "--no-plots", "--quiet", "--out", "out"]) == 3
+    metrics = json.loads((tmp_path / "out" / "metrics.json").read_text())
+    assert metrics["status"] == "collision"
+    assert metrics["reversing"] == "hitch_cascade"
+    legs = metrics["world"]["plan"]["legs"]
+    assert legs[0]["direction"] == "forward" and legs[0]["status"] == "collision"
+    assert "status" not in legs[1]

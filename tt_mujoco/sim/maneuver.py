@@ -29,7 +29,8 @@ import time
 import numpy as np
 
 from tt_mujoco.analysis.metrics import RUN_KEYS, merge_metrics
-from tt_mujoco.sim.build import Build, LegStart, build
+from tt_mujoco.controllers import controller_class
+from tt_mujoco.sim.build import Build, LegStart, build, reversing_drive
 from tt_mujoco.sim.simulate import Result, drive_leg, driven_leg, finish, user_metric
 from tt_mujoco.sim.usercode import users_copy
 from tt_mujoco.world.part import world_report
@@ -93,6 +94,17 @@ def drive(first: Build, progress=None, on_step=None, checkpoint=None) -> Result:
     return _joined(asked, plan, driven, stop)
 
 
+def _run_keys(metrics: dict, asked, last: dict) -> None:
+    """The controller's report and the metric errors as the last leg gave them, and what
+    drives the backing legs (said though the run stopped before any of them backed up)."""
+    for key in ("controller", "metric_errors"):
+        if key in last and key not in metrics:
+            metrics[key] = last[key]
+    reversing = reversing_drive(asked, controller_class(asked.controller))
+    if reversing is not None:
+        metrics["reversing"] = reversing
+
+
 def _joined(asked, plan, driven, stop: str | None = None) -> Result:
     """One result of the legs that ran (``stop``: why the next could not start)."""
     offsets, t0 = [], 0.0
@@ -137,9 +149,7 @@ def _joined(asked, plan, driven, stop: str | None = None) -> Result:
         t = result.timeseries["t"]
         driven_leg(leg, built.scenario.reverse, result.metrics, t, result.status, offset)
     metrics["world"]["plan"] = report
-    for key in ("controller", "reversing", "metric_errors"):
-        if key in last.metrics and key not in metrics:
-            metrics[key] = last.metrics[key]
+    _run_keys(metrics, asked, last.metrics)
     metrics["wall_time_s"] = sum(result.wall_time_s for _, _, result in driven)
     status = "failed" if stop is not None else last.status
     metrics["status"] = status

@@ -15,7 +15,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["Word", "dubins_words", "sample_word"]
+__all__ = ["Word", "ahead", "dubins_words", "sample_word", "word_pieces"]
 
 _TAU = 2.0 * math.pi
 
@@ -111,3 +111,15 @@ def dubins_words(start, goal, radius: float, tolerance: float = 1e-6) -> list[Wo
         if math.hypot(end[0] - goal[0], end[1] - goal[1]) <= tolerance and abs(turned) <= 1e-6:
             words.append(word)
     return sorted(words, key=lambda w: w.length)
+
+
+def ahead(pose, distance: float) -> tuple[float, float, float]:
+    """The pose ``distance`` (m) ahead of ``pose`` ``(x, y, heading)`` along its heading."""
+    x, y, heading = pose
+    return x + distance * math.cos(heading), y + distance * math.sin(heading), heading
+
+
+def word_pieces(word: Word) -> list[tuple[float, float]]:
+    """A word's segments as ``(length, kappa)`` pieces (left arcs positive)."""
+    turn = {"L": 1.0 / word.radius, "R": -1.0 / word.radius, "S": 0.0}
+    return [(length, turn[kind]) for kind, length in zip(word.kinds, word.lengths, strict=True)]

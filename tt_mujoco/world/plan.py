@@ -53,8 +53,9 @@ from tt_mujoco.vehicle.footprint import unit_names
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.path_schedule import axle_chain
 from tt_mujoco.world import contact
-from tt_mujoco.world.dubins import dubins_words
+from tt_mujoco.world.dubins import ahead, dubins_words, word_pieces
 from tt_mujoco.world.part import outside_bounds, start_problem, world_record
+from tt_mujoco.world.roadmap import ROADMAP_RADIUS, roadmap_route
 from tt_mujoco.world.world import World, WorldError
 
 __all__ = [
@@ -205,20 +206,10 @@ def least_radius(p: Params) -> float:
     return LEAST_RADIUS * (1.0 + (p.n_trailers - 1) / 3.0)
 
 
-def _ahead(pose, distance: float):
-    x, y, heading = pose
-    return x + distance * math.cos(heading), y + distance * math.sin(heading), heading
-
-
 def _arcs(start, pieces) -> ArcsPath:
     """The path from ``start`` through ``pieces`` ``(length, kappa)`` (zero lengths left out)."""
     segments = [(length, kappa) for length, kappa in pieces if length > 1e-9]
     return ArcsPath("plan", start, segments)
-
-
-def _word_pieces(word) -> list[tuple[float, float]]:
-    turn = {"L": 1.0 / word.radius, "R": -1.0 / word.radius, "S": 0.0}
-    return [(length, turn[kind]) for kind, length in zip(word.kinds, word.lengths, strict=True)]
 
 
 def clearance_along(
@@ -294,20 +285,20 @@ def clearance_along(
 
 def _direct(start, goal_pose, d, base, reverse):
     """The candidates without a cusp: ``((tier, length), exit, origin, pieces, word)``."""
-    tractor_at_goal = _ahead(goal_pose, d)
-    tail_at_start = _ahead(start, -d)
+    tractor_at_goal = ahead(goal_pose, d)
+    tail_at_start = ahead(start, -d)
     for tier, exits in enumerate(EXITS):
         for exit_length in (d * share for share in exits):
             for scale in RADII:
                 if reverse:
-                    out = _ahead(tractor_at_goal, exit_length)
+                    out = ahead(tractor_at_goal, exit_length)
                     for word in dubins_words(out, tail_at_start, base * scale):
-                        pieces = [(exit_length, 0.0), *_word_pieces(word), (d, 0.0)]
+                        pieces = [(exit_length, 0.0), *word_pieces(word), (d, 0.0)]
                         key = (tier, word.length + exit_length)
                         yield key, exit_length, tractor_at_goal, pieces, word
                 else:
-                    for word in dubins_words(start, _ahead(goal_pose, -exit_length), base * scale):
-                        pieces = [*_word_pieces(word), (exit_length + d, 0.0)]
+                    for word in dubins_words(start, ahead(goal_pose, -exit_length), base * scale):
+                        pieces = [*word_pieces(word), (exit_length + d, 0.0)]
                         yield (tier, word.length + exit_length), exit_length, start, pieces, word
 
 
@@ -315,12 +306,12 @@ def _on_curve(start, goal_pose, d, base, last_unit: float):
     """The backing candidates that start at the goal pose, ``((straight, length), exit,
     origin, pieces, word)``: the longest straight out of the goal first (the train ends on the
     curve beyond it, its last axle at the start, :func:`train_end_on`)."""
-    tail_at_start = _ahead(start, -d)
+    tail_at_start = ahead(start, -d)
     straights = {max(d * share, last_unit) for share in GOAL_STRAIGHTS}
     for straight in (length for length in straights if length < d):
         for scale in RADII:
-            for word in dubins_words(_ahead(goal_pose, straight), tail_at_start, base * scale):
-                pieces = [(straight, 0.0), *_word_pieces(word), (d, 0.0)]
+            for word in dubins_words(ahead(goal_pose, straight), tail_at_start, base * scale):
+                pieces = [(straight, 0.0), *word_pieces(word), (d, 0.0)]
                 yield (-straight, word.length + straight), straight - d, goal_pose, pieces, word
 
 
@@ -366,7 +357,7 @@ def _backing_legs(goal_pose, d, base):
     """The legs a cusp plan backs in on, each ``(tier, leg, exit, straight)``: from the tractor
     at the goal straight out, an arc of :data:`CUSP_TURNS` and a straight (of
     :data:`CUSP_STRAIGHTS`, tier its index) to the cusp."""
-    tractor_at_goal = _ahead(goal_pose, d)
+    tractor_at_goal = ahead(goal_pose, d)
     for tier, straight in enumerate(d * share for share in CUSP_STRAIGHTS):
         for share in CUSP_EXITS:
             exit_length = d * share
@@ -404,6 +395,8 @@ class _Search:
         self.began = time.perf_counter()
         self.best, self.tried, self.total, self.late = 0.0, 0, 0, False
         self.worst = {}  # where the candidate that got furthest was blocked
+        # the last resort's poses and the edges between them checked (tt_mujoco.world.roadmap)
+        self.roadmap_poses = self.roadmap_edges = 0
 
     def next_candidate(self, deadline: float | None) -> bool:
         """Whether another candidate may be tried (``deadline`` not passed); counts it."""
@@ -462,11 +455,18 @@ class _Search:
                 f"it, then the {names[worst['unit']]} {what} (the tractor at x={worst['x']:.2f}, "
                 f"y={worst['y']:.2f} m)"
             )
+        roadmap = (
+            f" (and {self.roadmap_edges} edges between {self.roadmap_poses} poses where the "
+            "train stands straight)"
+            if self.roadmap_poses
+            else ""
+        )
         return PlanError(
             f"no path to world {self.world.name!r}'s goal from x={start[0]:.3f}, "
             f"y={start[1]:.3f} m, heading {math.degrees(start[2]):.1f} deg "
-            f"({'backing up' if reverse else 'forward'}): {self.tried} of {self.total} "
-            f"candidates tried, {why} with a margin of {margin:g} m{closest}"
+            f"({'backing up' if reverse else 'forward'}): {self.tried - self.roadmap_edges} of "
+            f"{self.total} "
+            f"candidates tried{roadmap}, {why} with a margin of {margin:g} m{closest}"
             f"{'' if reverse else '; --reverse plans the train backing in'}"
         )
 
@@ -511,7 +511,7 @@ def plan_path(
                 backing_clear[key] = search.clear(backing.path, f"backing {backing.word}")
             if not backing_clear[key]:
                 continue
-            forward = _arcs(start, [*_word_pieces(word), (straight, 0.0)])
+            forward = _arcs(start, [*word_pieces(word), (straight, 0.0)])
             if search.clear(forward, f"forward {word.kinds} at {word.radius:.3g} m, then backing"):
                 legs = [Leg(forward, "forward", word.kinds, word.radius), backing]
                 return search.found(legs, exit_length)
@@ -535,6 +535,15 @@ def plan_path(
             if search.clear(path, label, s_from=stop):
                 leg = Leg(path, direction, word.kinds, word.radius, stop)
                 return search.found([leg], exit_length)
+    if not search.late:  # the last resort: a search over where the train stands straight
+        route = roadmap_route(search, start, ahead(goal_pose, d), d, base, reverse, deadline)
+        if route is not None:
+            radius = ROADMAP_RADIUS * base
+            legs = [
+                Leg(_arcs(origin, pieces), leg_direction, word, radius)
+                for leg_direction, origin, pieces, word in route[0]
+            ]
+            return search.found(legs, route[1])
     raise search.failure(start, reverse)
 
 
