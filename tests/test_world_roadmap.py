@@ -3,6 +3,7 @@ stands straight, and the plans with several cusps it finds where no candidate of
 tt_mujoco.world.plan does (a train facing a dead end: tests/generated_worlds.py dead_end)."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,9 +24,10 @@ from tt_mujoco.world.roadmap import (
     _edge,
     _word,
 )
-from tt_mujoco.world.world import world_from_table
+from tt_mujoco.world.world import read_world, world_from_table
 
 RADIUS, D = 1.875, 0.7
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "worlds" / "dead_end.toml"
 
 
 def _pose_pairs(count=60):
@@ -78,10 +80,15 @@ def test_one_pose_is_joined_by_no_word_and_a_loop_by_none():
     assert sum(length for length, _ in pieces) == pytest.approx(3.0)
 
 
-def _dead_end(trailers: int, draw: int):
+def _dead_end(trailers: int, draw: int | None):
+    """A dead end drawn by tests/generated_worlds.py (draw None: examples/worlds/dead_end.toml)."""
     from generated_worlds import dead_end
 
     p = Params().with_trailers(trailers)
+    if draw is None:
+        return read_world(
+            Path(__file__).resolve().parents[1] / "examples" / "worlds" / "dead_end.toml"
+        ), p
     table = dead_end(np.random.default_rng([trailers, draw]), train_length(p))
     return world_from_table(table, "dead end"), p
 
@@ -94,8 +101,9 @@ def _leg_ends(leg):
 
 
 #: (trailers, draw) of dead ends no candidate plan leaves (measured: the candidates' search
-#: ends without a plan, and the roadmap's has two cusps), and whether it is planned twice.
-DEAD_ENDS = [(2, 0, True), (3, 4, False)]
+#: ends without a plan, and the roadmap's has two cusps), and whether it is planned twice; the
+#: draw None is the example (examples/worlds/dead_end.toml).
+DEAD_ENDS = [(2, None, True), (3, 4, False)]
 
 
 @pytest.mark.parametrize(("trailers", "draw", "twice"), DEAD_ENDS)
@@ -104,7 +112,8 @@ def test_a_train_facing_a_dead_end_backs_out_and_turns_with_cusps(trailers, draw
     once, keeps the margin along every leg (checked five times finer) and the bounds, each
     leg starts where the last ended, and its last leg puts the last axle on the goal."""
     world, p = _dead_end(trailers, draw)
-    plan = planned(world, p, draw, reverse=True)
+    seed = draw or 0
+    plan = planned(world, p, seed, reverse=True)
     assert plan.cusps >= 1 and plan.legs[0].reverse and plan.legs[-1].reverse
     pairs = list(zip(plan.legs, plan.legs[1:], strict=False))
     assert all(one.reverse != two.reverse for one, two in pairs)
@@ -122,7 +131,7 @@ def test_a_train_facing_a_dead_end_backs_out_and_turns_with_cusps(trailers, draw
     if not twice:
         return
     # a second planning gives the same plan: the poses are drawn from a fixed stream
-    again = planned(world, p, draw, reverse=True)
+    again = planned(world, p, seed, reverse=True)
     assert again.report()["word"] == plan.report()["word"]
     assert again.report()["legs"] == plan.report()["legs"]
 
@@ -155,3 +164,26 @@ def test_no_route_names_the_roadmap_in_its_message():
     walled = world_from_table({**table, "obstacle": [*table["obstacle"], wall]}, "walled")
     with pytest.raises(PlanError, match=r"edges between \d+ poses where the train stands"):
         planned(walled, p, 0, reverse=True)
+
+
+def test_a_passed_deadline_stops_the_roadmap_before_it_draws_or_checks_anything():
+    """The roadmap looks at the clock before each round and during each search, as the
+    candidates do before each check: past the deadline it ends at once, and the planning's
+    message says its time limit passed."""
+    import time
+
+    from tt_mujoco.world.plan import _Search, least_radius
+
+    world, p = _dead_end(2, 0)
+    search = _Search(world, p, MARGIN)
+    start = (5.0, 0.0, 0.0)
+    route = roadmap.roadmap_route(
+        search, start, (0.0, 0.0, 0.0), D, least_radius(p), True, time.monotonic() - 1.0
+    )
+    assert route is None and search.late
+    assert search.roadmap_poses == 0 and search.roadmap_edges == 0
+    with pytest.raises(PlanError, match="its time limit passed"):
+        planned(world, p, 0, reverse=True, deadline=time.monotonic() - 1.0)
+    never = roadmap._Roadmap(world, p, search.record, start, (0.0, 0.0, 0.0), D, RADIUS, MARGIN)
+    never.grow(50)
+    assert roadmap._shortest(never, (_FORWARD, _BACKING), _BACKING, set(), lambda: True) is None

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import heapq
 import math
+import time
 
 import numpy as np
 
@@ -36,6 +37,7 @@ from tt_mujoco.world.part import start_problem
 __all__ = [
     "CUSP_COST",
     "GOAL_EXITS",
+    "LINE_POSES",
     "LINE_STEP",
     "MAX_TURN",
     "ROADMAP_EXIT",
@@ -60,8 +62,9 @@ GOAL_EXITS = (1.0, 0.5, 0.0)
 #: The turning radius of every edge, as a multiple of the train's least radius (the middle of
 #: the candidates' radii: backing a train round its least radius is the hardest to track).
 ROADMAP_RADIUS = 1.25
-#: The spacing of the poses along the start's and the goal's lines, as a multiple of ``D``.
-LINE_STEP = 1.5
+#: The spacing of the poses along the start's and the goal's lines, as a multiple of ``D``,
+#: and the most poses on each side of each line (a world may be 10 km wide).
+LINE_STEP, LINE_POSES = 1.5, 50
 #: The most an edge's arcs turn, together (rad): a loop between two nodes is never the way to
 #: go (the route through other nodes, or a cusp, is), and checking it costs the most.
 MAX_TURN = 1.1 * math.pi
@@ -73,6 +76,8 @@ _NODE_STREAM = 0x524F4144
 _FORWARD, _BACKING = 1, 2
 #: Poses closer than this (m, rad) are one.
 _SAME = 1e-6
+#: Every how many nodes the search looks at the clock.
+_LOOK_EVERY = 64
 
 
 class _Edge:
@@ -147,11 +152,10 @@ class _Roadmap:
     def _lines(self):
         """The poses along the start's and the goal's headings, :data:`LINE_STEP` ``D`` apart
         (a corridor the train starts in, the way out of the goal), as far as the region
-        reaches."""
+        reaches (:data:`LINE_POSES` on each side at most)."""
         x_min, x_max, y_min, y_max = self.region
         reach = math.hypot(x_max - x_min, y_max - y_min)
-        steps = range(1, int(reach / (LINE_STEP * self.d)) + 1)
-        for k in steps:
+        for k in range(1, min(int(reach / (LINE_STEP * self.d)), LINE_POSES) + 1):
             yield ahead(self.poses[0], -k * LINE_STEP * self.d)
             yield ahead(self.poses[0], k * LINE_STEP * self.d)
             yield ahead(self.poses[1], k * LINE_STEP * self.d)
@@ -247,14 +251,19 @@ class _Roadmap:
         return True
 
 
-def _shortest(roadmap: _Roadmap, directions, into_goal, blocked: set) -> list | None:
+def _shortest(roadmap: _Roadmap, directions, into_goal, blocked: set, late) -> list | None:
     """The cheapest route of edges ``(a, b, direction)`` from the start (node 0) to the goal
-    (node 1), arriving there in ``into_goal``, leaving out ``blocked`` edges; None: none."""
+    (node 1), arriving there in ``into_goal``, leaving out ``blocked`` edges; None: none, or
+    ``late()`` said the time is up (it is asked every :data:`_LOOK_EVERY` nodes)."""
     cusp = CUSP_COST * roadmap.d
     best = {(0, 0): 0.0}
     came: dict[tuple[int, int], tuple] = {}
     queue = [(0.0, 0, 0)]
+    popped = 0
     while queue:
+        if popped % _LOOK_EVERY == 0 and late():
+            return None
+        popped += 1
         cost, node, last = heapq.heappop(queue)
         if cost > best.get((node, last), math.inf):
             continue
@@ -296,10 +305,17 @@ def roadmap_route(search, start, goal_tractor, d: float, base: float, reverse: b
     into_goal = _BACKING if reverse else _FORWARD
     blocked: set = set()
     clear: set = set()
+
+    def late() -> bool:
+        search.late = search.late or (deadline is not None and time.monotonic() > deadline)
+        return search.late
+
     for _ in range(ROADMAP_ROUNDS):
+        if late():
+            return None
         roadmap.grow(ROADMAP_NODES)
         search.roadmap_poses = len(roadmap.poses)
-        while (route := _shortest(roadmap, directions, into_goal, blocked)) is not None:
+        while (route := _shortest(roadmap, directions, into_goal, blocked, late)) is not None:
             for key in route:
                 if key in clear:
                     continue
