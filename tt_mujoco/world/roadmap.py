@@ -329,8 +329,32 @@ def roadmap_route(search, start, goal_tractor, d: float, base: float, reverse: b
                     break
                 clear.add(key)
             else:
+                route = _shortcut(roadmap, route, search, deadline)
                 return _legs(roadmap, route), roadmap.edge(*route[-1]).exit
     return None
+
+
+def _shortcut(roadmap: _Roadmap, route: list, search, deadline) -> list:
+    """The route with each run of edges of one direction replaced by one edge from its first
+    node to its last, where that edge exists and is clear (a roadmap's route through drawn
+    poses makes detours, and each node joined adds a change of curvature to track)."""
+    out, run = [], []
+    for key in [*route, None]:
+        if run and (key is None or key[2] != run[-1][2]):
+            whole = (run[0][0], run[-1][1], run[0][2])
+            direct = roadmap.edge(*whole) if len(run) > 1 else None
+            if (
+                direct is not None
+                and direct.length < sum(roadmap.edge(*one).length for one in run)
+                and search.next_candidate(deadline)
+                and search.clear(_path(direct), f"roadmap {direct.label}")
+            ):
+                run = [whole]
+            out += run
+            run = []
+        if key is not None:
+            run.append(key)
+    return out
 
 
 def _path(edge: _Edge) -> ArcsPath:
