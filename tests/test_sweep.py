@@ -198,6 +198,44 @@ def test_a_crashing_run_is_a_row_with_its_error():
     assert result["metrics"] == {}
 
 
+def test_a_seed_whose_start_has_no_plan_is_a_row_not_the_sweep_s_end(monkeypatch, tmp_path):
+    """A planned run's start is drawn by its seed, and a start the planner finds no path from
+    is that run's outcome (status "no_plan", the planner's message), whichever seed it is: the
+    configuration is checked with the next seed, never refused for the first one's start (it
+    was refused, exit 2, when the first seed's start had no plan, and a row "error" when a
+    later one's had none). A sweep whose every run has no plan ends as every failed one does,
+    exit 3 (the forward dead end: every start faces the corridor's end)."""
+    import importlib
+
+    from tt_mujoco.sweep.runs import validate_runs
+    from tt_mujoco.world.plan import PlanError
+
+    build_module = importlib.import_module("tt_mujoco.sim.build")  # the module, not build()
+    real = build_module.planned
+
+    def none_for_seed_0(world, p, seed, reverse, deadline=None):
+        if seed == 0:
+            raise PlanError("no path (the test's) from seed 0's start")
+        return real(world, p, seed, reverse, deadline)
+
+    monkeypatch.setattr(build_module, "planned", none_for_seed_0)
+    options = {"world": "loading_bay", "traj": "plan", "reverse": True, "plant": "reduced"}
+    runs = [{"index": i, "options": {**options, "seed": i}} for i in (0, 1)]
+    validate_runs(runs)  # seed 0 has no plan: checked with seed 1
+    row = sweep.run_one({**options, "seed": 0, "duration": 0.5})
+    assert row["status"] == "no_plan" and row["error"] == "" and row["metrics"] == {}
+    assert row["message"] == "no path (the test's) from seed 0's start"
+    assert sweep.run_one({**options, "seed": 1, "duration": 0.5})["status"] == "ok"
+    monkeypatch.undo()
+    monkeypatch.chdir(tmp_path)
+    dead_end = str(Path(__file__).resolve().parents[1] / "examples" / "worlds" / "dead_end.toml")
+    items = [f"world={dead_end}", "traj=plan", "reverse=false", "plant=reduced", "seed=0,1"]
+    assert sweep.main([*items, "--quiet", "--no-figures", "--out", "forward"]) == 3
+    rows = _table(tmp_path / "forward" / "runs.csv")
+    assert [row["status"] for row in rows] == ["no_plan", "no_plan"]
+    assert all(row["message"].startswith("no path to world 'dead_end'") for row in rows)
+
+
 def test_nested_metrics_become_flat_columns():
     # The per-fault report is a list of dicts in metrics.json: one column per entry here.
     result = sweep.run_one({"duration": 0.4, "faults": "payload:t=0.1;dropout:t=0.2"})

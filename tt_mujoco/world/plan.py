@@ -36,8 +36,10 @@ short ones, then the plans with a cusp, and last those that end on a curve (its 
 less precisely: the trailers there follow the tractor's path only as closely as their gains
 let them in a change of curvature); the first whose every unit keeps ``margin`` from every
 obstacle, and every axle inside the world's bounds, at every sample (``step`` apart along each
-leg) is the plan. Every formula it uses is the project's own: the axle chain, the footprints
-and the contact check (:mod:`tt_mujoco.world.contact`).
+leg) is the plan. Where none is, the last resort is a search over the poses where the train
+stands straight (:mod:`tt_mujoco.world.roadmap`: plans with several cusps). Every formula it
+uses is the project's own: the axle chain, the footprints and the contact check
+(:mod:`tt_mujoco.world.contact`).
 """
 
 from __future__ import annotations
@@ -67,6 +69,7 @@ __all__ = [
     "EXITS",
     "GOAL_STRAIGHTS",
     "MARGIN",
+    "NO_PLAN",
     "PLAN",
     "RADII",
     "Leg",
@@ -81,6 +84,8 @@ __all__ = [
 
 #: ``Scenario.traj`` of a run whose path is planned to its world's goal.
 PLAN = "plan"
+#: The status of a sweep's run whose start has no plan (a row, not the sweep's end).
+NO_PLAN = "no_plan"
 #: How many starts are drawn before a world's start region is called too crowded.
 START_DRAWS = 1000
 
@@ -465,8 +470,7 @@ class _Search:
             f"no path to world {self.world.name!r}'s goal from x={start[0]:.3f}, "
             f"y={start[1]:.3f} m, heading {math.degrees(start[2]):.1f} deg "
             f"({'backing up' if reverse else 'forward'}): {self.tried - self.roadmap_edges} of "
-            f"{self.total} "
-            f"candidates tried{roadmap}, {why} with a margin of {margin:g} m{closest}"
+            f"{self.total} candidates tried{roadmap}, {why} with a margin of {margin:g} m{closest}"
             f"{'' if reverse else '; --reverse plans the train backing in'}"
         )
 
