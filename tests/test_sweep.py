@@ -236,6 +236,29 @@ def test_a_seed_whose_start_has_no_plan_is_a_row_not_the_sweep_s_end(monkeypatch
     assert all(row["message"].startswith("no path to world 'dead_end'") for row in rows)
 
 
+def test_a_seed_whose_plan_has_a_cusp_is_a_row_where_faults_are_asked():
+    """Faults are timed within one run, so a start whose plan has a cusp cannot take them: in
+    a sweep over seeds that is the run's outcome (status "start_refused"), whichever seed drew
+    it, never the whole sweep refused because the first seed did (loading bay, one trailer:
+    seed 9's plan has a cusp, seed 0's none)."""
+    from tt_mujoco.sweep.runs import validate_runs
+
+    options = {
+        "world": "loading_bay",
+        "traj": "plan",
+        "reverse": True,
+        "plant": "reduced",
+        "faults": "dropout:t=0.2,duration=0.1",
+    }
+    validate_runs(
+        [{"index": i, "options": {**options, "seed": seed}} for i, seed in enumerate((9, 0))]
+    )
+    row = sweep.run_one({**options, "seed": 9, "duration": 0.5})
+    assert row["status"] == "start_refused" and row["error"] == ""
+    assert "cusp" in row["message"] and "faults=" in row["message"]
+    assert sweep.run_one({**options, "seed": 0, "duration": 0.5})["status"] == "ok"
+
+
 def test_nested_metrics_become_flat_columns():
     # The per-fault report is a list of dicts in metrics.json: one column per entry here.
     result = sweep.run_one({"duration": 0.4, "faults": "payload:t=0.1;dropout:t=0.2"})

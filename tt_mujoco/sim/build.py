@@ -48,7 +48,7 @@ from tt_mujoco.vehicle.params import Params, jackknife_phi_deg
 from tt_mujoco.vehicle.path_schedule import PathSchedule, axle_chain, path_schedule
 from tt_mujoco.world.builtin import parse_world
 from tt_mujoco.world.part import check_world
-from tt_mujoco.world.plan import PLAN, planned
+from tt_mujoco.world.plan import PLAN, StartError, planned
 
 __all__ = [
     "PLAN_FORWARD_DRIVE",
@@ -429,7 +429,7 @@ def _leg_of(scenario: Scenario, world, leg: LegStart | None):
     if leg is None:
         return scenario, None
     if leg.plan.cusps and parse_faults(scenario.faults):
-        raise ValueError(
+        raise StartError(
             f"faults={scenario.faults!r} is not allowed here: this start's plan has "
             f"{leg.plan.cusps} cusp(s), each leg a run from rest, and a fault is timed within "
             "one run (give a start the train backs in from directly, or no faults)"

@@ -29,7 +29,7 @@ from tt_mujoco.sweep.options import (
 from tt_mujoco.sweep.runs import expand
 from tt_mujoco.sweep.spec import parse_spec
 from tt_mujoco.sweep.tables import summary_text
-from tt_mujoco.world.plan import NO_PLAN
+from tt_mujoco.world.plan import NO_PLAN, START_REFUSED
 
 # --- command line ------------------------------------------------------------------------------
 _DICT_HELP = "".join(
@@ -182,7 +182,9 @@ def main(argv: list[str] | None = None) -> int:
         f"{len(result.rows)} runs ({result.reused} reused) in {result.wall_s:.1f} s{rate}; "
         f"wrote {', '.join(p.name for p in result.files)} to {result.out}/"
     )
-    failed = [r for r in result.rows if r.get("status") in ("error", "failed", NO_PLAN)]
+    failed = [
+        r for r in result.rows if r.get("status") in ("error", "failed", NO_PLAN, START_REFUSED)
+    ]
     if result.rows and len(failed) == len(result.rows):
         first = failed[0].get("error") or failed[0].get("message") or ""
         print(

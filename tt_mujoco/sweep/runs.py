@@ -28,7 +28,7 @@ from tt_mujoco.sweep.options import (
     trailer_option,
 )
 from tt_mujoco.sweep.spec import Axis, SweepSpec
-from tt_mujoco.world.plan import NO_PLAN, PlanError
+from tt_mujoco.world.plan import StartError
 
 
 # --- the runs ----------------------------------------------------------------------------------
@@ -173,8 +173,9 @@ def _resolved_gains(scenario: Scenario) -> tuple[str, dict]:
 def validate_runs(runs: Sequence[dict]) -> None:
     """Every run through the one setup path (:func:`tt_mujoco.sim.build`), before any work
     (exit 2 on a bad one). Runs that differ only in their seed are checked once; a seed whose
-    start has no plan (``traj="plan"``) is no fault of the configuration, which is checked with
-    its next seed."""
+    start has no plan (``traj="plan"``), or one the run cannot drive as asked
+    (:class:`~tt_mujoco.world.plan.StartError`), is no fault of the configuration, which is
+    checked with its next seed."""
     checked: set[str] = set()
     for run in runs:
         options = run["options"]
@@ -183,8 +184,8 @@ def validate_runs(runs: Sequence[dict]) -> None:
             continue
         try:
             check_user_code(build(build_scenario(options)))
-        except PlanError:  # no plan from this seed's start: its run's outcome, a row of its
-            continue  # own (run_one); the configuration is checked with the next seed
+        except StartError:  # this seed's start has no plan (or one it cannot drive): a row
+            continue  # of its own (run_one); the configuration is checked with the next seed
         except (ValueError, TypeError, OSError) as err:
             shown = {k: v for k, v in options.items() if k != "seed"}
             raise BadSpecError(f"run {run['index']} {shown}: {err}") from None
@@ -255,7 +256,8 @@ def run_one(options: Mapping, hang_dir=None, run_id: str = "") -> dict:
     -------
     dict
         ``status`` ("ok", "jackknife", "diverged", ..., ``"no_plan"`` where the planner found
-        no path from the run's start, or "error" when the run raised),
+        no path from the run's start, ``"start_refused"`` where its plan cannot be driven as
+        asked, or "error" when the run raised),
         ``message``, ``error`` (exception type and text, "" unless status is "error"),
         ``metrics`` (dict; empty on error) and ``run_wall_s`` (the whole run in this worker:
         setup, control loop and metrics).
@@ -273,8 +275,8 @@ def run_one(options: Mapping, hang_dir=None, run_id: str = "") -> dict:
         metrics = _flatten_metrics({k: v for k, v in result.metrics.items() if k != "status"})
         out = {"status": result.status, "message": result.message, "error": "", "metrics": metrics}
         out["config"] = config
-    except PlanError as err:  # no plan from this seed's start: the run's outcome
-        out = {"status": NO_PLAN, "message": str(err), "error": "", "metrics": {}}
+    except StartError as err:  # this seed's start has no plan, or one it cannot drive
+        out = {"status": err.status, "message": str(err), "error": "", "metrics": {}}
     except (Exception, SystemExit) as err:  # a run's crash is a row, not the sweep's end
         out = {
             "status": "error",

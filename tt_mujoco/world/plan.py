@@ -72,9 +72,11 @@ __all__ = [
     "NO_PLAN",
     "PLAN",
     "RADII",
+    "START_REFUSED",
     "Leg",
     "Plan",
     "PlanError",
+    "StartError",
     "plan_path",
     "planned",
     "start_pose",
@@ -84,8 +86,9 @@ __all__ = [
 
 #: ``Scenario.traj`` of a run whose path is planned to its world's goal.
 PLAN = "plan"
-#: The status of a sweep's run whose start has no plan (a row, not the sweep's end).
-NO_PLAN = "no_plan"
+#: The statuses of a sweep's run whose start has no plan, or a plan the run cannot drive as
+#: asked (a row, not the sweep's end: :class:`StartError`).
+NO_PLAN, START_REFUSED = "no_plan", "start_refused"
 #: How many starts are drawn before a world's start region is called too crowded.
 START_DRAWS = 1000
 
@@ -123,8 +126,17 @@ CUSP_RADII = (1.0, 1.5)
 CUSP_STRAIGHTS = (2.0, 1.0)
 
 
-class PlanError(WorldError):
+class StartError(WorldError):
+    """A run's start (drawn by its seed) cannot be driven as asked: in a sweep, that run's
+    outcome (a row with the status :attr:`status`), not its configuration's fault."""
+
+    status = START_REFUSED
+
+
+class PlanError(StartError):
     """No plan: the message says why and how far the best candidate got."""
+
+    status = NO_PLAN
 
 
 @dataclass(frozen=True)
