@@ -126,15 +126,21 @@ def turned_bay(rng: np.random.Generator, dock_length: float) -> dict:
 def dead_end(rng: np.random.Generator, train_length: float) -> dict:
     """A world file's table: a yard with a dead-end corridor 1.4-2.0 m wide off its east side
     (at a random height, two or three times the train long) and a goal bay at a random pose
-    in the yard's west half; the train starts in the corridor facing its closed end, so every
-    plan starts backing out, and a bay facing the wrong way needs cusps."""
+    in the yard's west half, its way out (two trains long, and a metre) inside the yard; the
+    train starts in the corridor facing its closed end, so every plan starts backing out, and a
+    bay facing the wrong way needs cusps."""
     width = float(rng.uniform(1.4, 2.0))
     cy = float(rng.uniform(-2.5, 2.5))
     length = float(rng.uniform(2.0, 3.0)) * train_length + 1.0
     x0, x1 = 6.0 - length, 6.0
     half = width / 2
-    gx, gy = float(rng.uniform(-6.0, -1.0)), float(rng.uniform(-4.0, 4.0))
-    gh = float(rng.uniform(-180.0, 180.0))
+    for _ in range(100):  # the way out of the bay (two trains long, and a metre) in the yard
+        gx, gy = float(rng.uniform(-6.0, -1.0)), float(rng.uniform(-4.0, 4.0))
+        gh = float(rng.uniform(-180.0, 180.0))
+        out = 2.0 * train_length + 1.0
+        ox, oy = gx + out * math.cos(math.radians(gh)), gy + out * math.sin(math.radians(gh))
+        if -8.5 <= ox <= x0 - 0.5 and -5.5 <= oy <= 5.5:
+            break
     walls = [
         ("corridor north", [x0, cy + half], [x1, cy + half]),
         ("corridor south", [x0, cy - half], [x1, cy - half]),

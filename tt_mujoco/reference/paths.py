@@ -220,7 +220,8 @@ class ArcsPath(ReferencePath):
     def _pose(self, s):
         idx, local = self._segment(s)
         kappa = self._kappas[idx]
-        x0, y0, h0 = np.moveaxis(self._starts[idx], -1, 0)
+        starts = self._starts[idx]
+        x0, y0, h0 = starts[..., 0], starts[..., 1], starts[..., 2]
         dx, dy, dh = _arc_step(local, kappa, h0)
         return x0 + dx, y0 + dy, h0 + dh
 

@@ -65,7 +65,7 @@ _PHI_TINY = 1e-7
 _BISECTIONS = 56
 
 
-def axle_chain(path, s, lengths):
+def axle_chain(path, s, lengths, bisections: int = _BISECTIONS):
     """Where every axle lies on the path when the tractor's P is at arc length ``s``.
 
     Parameters
@@ -76,6 +76,10 @@ def axle_chain(path, s, lengths):
         Tractor arc lengths (m).
     lengths : sequence of (L_k, L0_k)
         Trailers 1..N: hitch behind the unit ahead, axle behind the hitch (m).
+    bisections : int
+        Bisection steps for each axle's arc length (its bracket, about 2 (L + L0) long, halves
+        with each): the default places it to rounding; a planner's clearance check needs
+        far less.
 
     Returns
     -------
@@ -109,7 +113,7 @@ def axle_chain(path, s, lengths):
                 f"path {path.name!r} at s={bad:.4g} m is not allowed for the path schedule: "
                 f"trailer {k}'s axle (L={L:g} m, L0={L0:g} m) cannot be placed on it"
             )
-        for _ in range(_BISECTIONS):
+        for _ in range(bisections):
             mid = 0.5 * (lo + hi)
             inside = excess(mid) < 0.0
             hi = np.where(inside, mid, hi)

@@ -114,6 +114,9 @@ LEAST_RADIUS = 1.5
 #: The spacing of the samples the plan is checked at (m), and every how many of them a first
 #: look is taken.
 STEP, COARSE = 0.05, 8
+#: The bisections that place each axle on a candidate path for its clearance check: its
+#: bracket (under 2 m for the trains planned for) shrinks below 1e-7 m, far inside the margin.
+CHAIN_BISECTIONS = 24
 #: A cusp's place: the straight out of the goal before the arc (multiples of ``D``), the arc's
 #: turn (rad, left positive) and radius (multiples of the least radius).
 CUSP_EXITS = (0.5, 1.0, 2.0)
@@ -261,7 +264,7 @@ def clearance_along(
     def gaps(arcs):
         """Each sample's least gap, the unit and the obstacle (None: out of bounds)."""
         x, y, heading = path.pose(arcs)
-        chain = axle_chain(path, arcs, lengths)
+        chain = axle_chain(path, arcs, lengths, CHAIN_BISECTIONS)
         for i in range(len(arcs)):
             poses[0] = x[i], y[i], heading[i]
             for k, axle in enumerate(chain, start=1):
