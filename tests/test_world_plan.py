@@ -15,13 +15,13 @@ from tt_mujoco.sim import Scenario, build, simulate
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.path_schedule import axle_chain
 from tt_mujoco.world.builtin import WORLDS, parse_world
+from tt_mujoco.world.clearance import clearance_along
 from tt_mujoco.world.dubins import dubins_words, sample_word
 from tt_mujoco.world.part import start_problem, world_record
 from tt_mujoco.world.plan import (
     CURVE_HEADING_SHARE,
     MARGIN,
     PlanError,
-    clearance_along,
     plan_path,
     planned,
     start_pose,

@@ -11,9 +11,10 @@ import pytest
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.path_schedule import axle_chain
 from tt_mujoco.world import roadmap
+from tt_mujoco.world.clearance import clearance_along
 from tt_mujoco.world.dubins import ahead
 from tt_mujoco.world.part import world_record
-from tt_mujoco.world.plan import MARGIN, PlanError, clearance_along, planned, train_length
+from tt_mujoco.world.plan import MARGIN, PlanError, planned, train_length
 from tt_mujoco.world.roadmap import (
     _BACKING,
     _FORWARD,

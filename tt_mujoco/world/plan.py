@@ -54,9 +54,9 @@ from tt_mujoco.reference.paths import ArcsPath
 from tt_mujoco.vehicle.footprint import unit_names
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.path_schedule import axle_chain
-from tt_mujoco.world import contact
+from tt_mujoco.world.clearance import clearance_along
 from tt_mujoco.world.dubins import ahead, dubins_words, word_pieces
-from tt_mujoco.world.part import outside_bounds, start_problem, world_record
+from tt_mujoco.world.part import start_problem, world_record
 from tt_mujoco.world.roadmap import ROADMAP_RADIUS, roadmap_route
 from tt_mujoco.world.world import World, WorldError
 
@@ -111,12 +111,6 @@ RADII = (1.0, 1.25, 1.5, 2.0, 3.0)
 #: vehicle around R = 1.5 m (the reversing S-curve); each further trailer adds a third of it
 #: (:func:`least_radius`).
 LEAST_RADIUS = 1.5
-#: The spacing of the samples the plan is checked at (m), and every how many of them a first
-#: look is taken.
-STEP, COARSE = 0.05, 8
-#: The bisections that place each axle on a candidate path for its clearance check: its
-#: bracket (under 2 m for the trains planned for) shrinks below 1e-7 m, far inside the margin.
-CHAIN_BISECTIONS = 24
 #: A cusp's place: the straight out of the goal before the arc (multiples of ``D``), the arc's
 #: turn (rad, left positive) and radius (multiples of the least radius).
 CUSP_EXITS = (0.5, 1.0, 2.0)
@@ -230,77 +224,6 @@ def _arcs(start, pieces) -> ArcsPath:
     """The path from ``start`` through ``pieces`` ``(length, kappa)`` (zero lengths left out)."""
     segments = [(length, kappa) for length, kappa in pieces if length > 1e-9]
     return ArcsPath("plan", start, segments)
-
-
-def clearance_along(
-    path,
-    p: Params,
-    record,
-    step: float = STEP,
-    below: float = -math.inf,
-    bounds=None,
-    blocked: dict | None = None,
-    s_from: float = 0.0,
-) -> tuple[float, float]:
-    """``(gap, reached)``: the least gap between any unit of ``p`` and any obstacle of a
-    world's ``record`` (:func:`~tt_mujoco.world.part.world_record`) with the tractor at arc
-    lengths ``step`` apart along ``path``, every unit on the path's axle chain, and the
-    fraction of the samples looked at. With ``below``, it stops at the first sample whose gap
-    is under it, looking first at every :data:`COARSE`-th sample (a path that fails is most
-    often told there, and those samples are among the others), and gaps of ``below`` or more
-    are not told apart (the gap is then ``below``); ``blocked`` (a dict) then receives where:
-    the ``unit`` (index, tractor 0), the ``obstacle`` (index, None: outside the bounds) and
-    the tractor's ``x``, ``y``. With ``bounds`` (x_min, x_max, y_min, y_max), a sample with an
-    axle outside them has the gap -inf. The tractor is placed from arc length ``s_from`` on
-    (a leg that stops short of the path's start, :attr:`Leg.stop_s`)."""
-    cap = math.inf if below == -math.inf else below
-    if not record.sizes.size and bounds is None:
-        return math.inf, 1.0
-    span = path.length - s_from
-    s = np.linspace(s_from, path.length, max(2, math.ceil(span / step) + 1))
-    lengths = [(t.L, t.L0) for t in p.trailers]
-    poses = np.zeros((p.n_trailers + 1, 3))
-
-    def gaps(arcs):
-        """Each sample's least gap, the unit and the obstacle (None: out of bounds)."""
-        x, y, heading = path.pose(arcs)
-        chain = axle_chain(path, arcs, lengths, CHAIN_BISECTIONS)
-        for i in range(len(arcs)):
-            poses[0] = x[i], y[i], heading[i]
-            for k, axle in enumerate(chain, start=1):
-                poses[k] = axle["x"][i], axle["y"][i], axle["theta"][i]
-            if bounds is not None and outside_bounds(bounds, poses):
-                yield i, -math.inf, 0, None
-                continue
-            if not record.sizes.size:
-                yield i, math.inf, 0, None
-                continue
-            gap, unit, obstacle = contact.clearance_of(
-                poses,
-                record.boxes,
-                record.polygons,
-                record.sizes,
-                record.circles,
-                record.corners,
-                cap,
-            )
-            yield i, gap, int(unit), int(obstacle)
-
-    def told(gap, unit, obstacle):
-        if blocked is not None:
-            blocked.update(unit=unit, obstacle=obstacle, x=poses[0][0], y=poses[0][1])
-        return gap
-
-    if below > -math.inf:
-        for i, gap, unit, obstacle in gaps(s[::COARSE]):
-            if gap < below:
-                return told(gap, unit, obstacle), i * COARSE / len(s)
-    least = math.inf
-    for i, gap, unit, obstacle in gaps(s):
-        least = min(least, gap)
-        if least < below:
-            return told(least, unit, obstacle), (i + 1) / len(s)
-    return least, 1.0
 
 
 def _direct(start, goal_pose, d, base, reverse):
