@@ -52,7 +52,9 @@ GENERATED = ("dead_end",)
 
 def _generated_world(name: str, trailers: int, seed: int, folder: str) -> str:
     """The world file of run ``seed``: drawn by ``tests/generated_worlds.py``'s ``name``."""
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    tests = str(Path(__file__).resolve().parents[1] / "tests")
+    if tests not in sys.path:  # once per worker, not once per run
+        sys.path.insert(0, tests)
     import generated_worlds
 
     p = Scenario(trailers=trailers).plant_params()
