@@ -383,7 +383,11 @@ class _Search:
     def failure(self, start, reverse: bool) -> PlanError:
         """No candidate is clear (or the time ran out): what was tried, and how far the best
         one got and what blocked it."""
-        why = "its time limit passed" if self.late else "none is clear"
+        why = (
+            f"its time limit passed before one clear by {self.margin:g} m was found"
+            if self.late
+            else f"none is clear with a margin of {self.margin:g} m"
+        )
         closest, worst, margin = "", self.worst, self.margin
         if self.tried and worst:
             names = unit_names(self.p.n_trailers)
@@ -408,7 +412,7 @@ class _Search:
             f"no path to world {self.world.name!r}'s goal from x={start[0]:.3f}, "
             f"y={start[1]:.3f} m, heading {math.degrees(start[2]):.1f} deg "
             f"({'backing up' if reverse else 'forward'}): {self.tried - self.roadmap_edges} of "
-            f"{self.total} candidates tried{roadmap}, {why} with a margin of {margin:g} m{closest}"
+            f"{self.total} candidates tried{roadmap}, {why}{closest}"
             f"{'' if reverse else '; --reverse plans the train backing in'}"
         )
 
