@@ -12,7 +12,7 @@ from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.path_schedule import axle_chain
 from tt_mujoco.world import roadmap
 from tt_mujoco.world.clearance import clearance_along
-from tt_mujoco.world.dubins import ahead
+from tt_mujoco.world.dubins import ahead, arcs_path
 from tt_mujoco.world.part import world_record
 from tt_mujoco.world.plan import MARGIN, PlanError, planned, train_length
 from tt_mujoco.world.roadmap import (
@@ -39,10 +39,6 @@ def _pose_pairs(count=60):
         yield tuple(map(float, a)), tuple(map(float, b))
 
 
-def _path(edge):
-    return roadmap._path(edge)
-
-
 def _same_pose(one, two, atol=1e-6):
     np.testing.assert_allclose(one[:2], two[:2], atol=atol)
     assert abs(math.remainder(one[2] - two[2], math.tau)) < atol
@@ -60,7 +56,7 @@ def test_an_edge_joins_its_poses_on_straights_the_train_stands_on(direction):
         if edge is None:  # every word turns more than MAX_TURN
             continue
         made += 1
-        path = _path(edge)
+        path = arcs_path(edge.origin, edge.pieces)
         first, last = (a, b) if direction == _FORWARD else (b, a)
         _same_pose(path.pose_at(0.0), first)
         _same_pose(path.pose_at(path.length), last)

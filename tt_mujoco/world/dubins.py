@@ -15,7 +15,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["Word", "ahead", "dubins_words", "sample_word", "word_pieces"]
+from tt_mujoco.reference.paths import ArcsPath
+
+__all__ = ["Word", "ahead", "arcs_path", "dubins_words", "sample_word", "word_pieces"]
 
 _TAU = 2.0 * math.pi
 
@@ -123,3 +125,9 @@ def word_pieces(word: Word) -> list[tuple[float, float]]:
     """A word's segments as ``(length, kappa)`` pieces (left arcs positive)."""
     turn = {"L": 1.0 / word.radius, "R": -1.0 / word.radius, "S": 0.0}
     return [(length, turn[kind]) for kind, length in zip(word.kinds, word.lengths, strict=True)]
+
+
+def arcs_path(start, pieces) -> ArcsPath:
+    """The planned path from pose ``start`` through ``(length, kappa)`` ``pieces`` (zero
+    lengths left out: where two pieces of a plan meet, one may be empty)."""
+    return ArcsPath("plan", start, [(length, kappa) for length, kappa in pieces if length > 1e-9])

@@ -55,9 +55,9 @@ from tt_mujoco.vehicle.footprint import unit_names
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.path_schedule import axle_chain
 from tt_mujoco.world.clearance import clearance_along
-from tt_mujoco.world.dubins import ahead, dubins_words, word_pieces
+from tt_mujoco.world.dubins import ahead, arcs_path, dubins_words, word_pieces
 from tt_mujoco.world.part import start_problem, world_record
-from tt_mujoco.world.roadmap import ROADMAP_RADIUS, roadmap_route
+from tt_mujoco.world.roadmap import roadmap_route
 from tt_mujoco.world.world import World, WorldError
 
 __all__ = [
@@ -220,12 +220,6 @@ def least_radius(p: Params) -> float:
     return LEAST_RADIUS * (1.0 + (p.n_trailers - 1) / 3.0)
 
 
-def _arcs(start, pieces) -> ArcsPath:
-    """The path from ``start`` through ``pieces`` ``(length, kappa)`` (zero lengths left out)."""
-    segments = [(length, kappa) for length, kappa in pieces if length > 1e-9]
-    return ArcsPath("plan", start, segments)
-
-
 def _direct(start, goal_pose, d, base, reverse):
     """The candidates without a cusp: ``((tier, length), exit, origin, pieces, word)``."""
     tractor_at_goal = ahead(goal_pose, d)
@@ -311,7 +305,7 @@ def _backing_legs(goal_pose, d, base):
                     arc = abs(turn) * radius
                     pieces = [(exit_length, 0.0), (arc, kappa), (straight, 0.0)]
                     word = "S" if not turn else ("SLS" if turn > 0 else "SRS")
-                    leg = Leg(_arcs(tractor_at_goal, pieces), "reverse", word, radius)
+                    leg = Leg(arcs_path(tractor_at_goal, pieces), "reverse", word, radius)
                     yield tier, leg, exit_length, straight
 
 
@@ -341,10 +335,15 @@ class _Search:
         # the last resort's poses and the edges between them checked (tt_mujoco.world.roadmap)
         self.roadmap_poses = self.roadmap_edges = 0
 
+    def out_of_time(self, deadline: float | None) -> bool:
+        """Whether ``deadline`` (a ``time.monotonic()`` value, None: none) has passed; once
+        it has, the planning is :attr:`late`."""
+        self.late = self.late or (deadline is not None and time.monotonic() > deadline)
+        return self.late
+
     def next_candidate(self, deadline: float | None) -> bool:
         """Whether another candidate may be tried (``deadline`` not passed); counts it."""
-        if deadline is not None and time.monotonic() > deadline:
-            self.late = True
+        if self.out_of_time(deadline):
             return False
         self.tried += 1
         return True
@@ -442,7 +441,7 @@ def plan_path(
     for _, exit_length, origin, pieces, word in direct:
         if not search.next_candidate(deadline):
             break
-        path = _arcs(origin, pieces)
+        path = arcs_path(origin, pieces)
         if search.clear(path, f"{word.kinds} at {word.radius:.3g} m"):
             return search.found([Leg(path, direction, word.kinds, word.radius)], exit_length)
     if reverse and not search.late:
@@ -457,7 +456,7 @@ def plan_path(
                 backing_clear[key] = search.clear(backing.path, f"backing {backing.word}")
             if not backing_clear[key]:
                 continue
-            forward = _arcs(start, [*word_pieces(word), (straight, 0.0)])
+            forward = arcs_path(start, [*word_pieces(word), (straight, 0.0)])
             if search.clear(forward, f"forward {word.kinds} at {word.radius:.3g} m, then backing"):
                 legs = [Leg(forward, "forward", word.kinds, word.radius), backing]
                 return search.found(legs, exit_length)
@@ -470,7 +469,7 @@ def plan_path(
         for _, exit_length, origin, pieces, word in curved:
             if not search.next_candidate(deadline):
                 break
-            path = _arcs(origin, pieces)
+            path = arcs_path(origin, pieces)
             key = _prefix(pieces, 1.5 * d)
             if key not in ends:
                 ends[key] = train_end_on(path, p)
@@ -484,10 +483,9 @@ def plan_path(
     if not search.late:  # the last resort: a search over where the train stands straight
         route = roadmap_route(search, start, ahead(goal_pose, d), d, base, reverse, deadline)
         if route is not None:
-            radius = ROADMAP_RADIUS * base
             legs = [
-                Leg(_arcs(origin, pieces), leg_direction, word, radius)
-                for leg_direction, origin, pieces, word in route[0]
+                Leg(arcs_path(origin, pieces), leg_direction, word, radius)
+                for leg_direction, origin, pieces, word, radius in route[0]
             ]
             return search.found(legs, route[1])
     raise search.failure(start, reverse)

@@ -26,12 +26,10 @@ from __future__ import annotations
 
 import heapq
 import math
-import time
 
 import numpy as np
 
-from tt_mujoco.reference.paths import ArcsPath
-from tt_mujoco.world.dubins import ahead, dubins_words, word_pieces
+from tt_mujoco.world.dubins import ahead, arcs_path, dubins_words, word_pieces
 from tt_mujoco.world.part import start_problem
 
 __all__ = [
@@ -89,7 +87,7 @@ class _Edge:
 
     def __init__(self, origin, pieces, label: str, exit_length: float = 0.0):
         self.origin, self.label, self.exit = origin, label, exit_length
-        self.pieces = [(length, kappa) for length, kappa in pieces if length > 1e-9]
+        self.pieces = list(pieces)
         self.length = float(sum(length for length, _ in self.pieces))
 
 
@@ -293,7 +291,7 @@ def _shortest(roadmap: _Roadmap, directions, into_goal, blocked: set, late) -> l
 
 
 def roadmap_route(search, start, goal_tractor, d: float, base: float, reverse: bool, deadline):
-    """``(legs, exit)``: each leg ``(direction, origin, pieces, word)`` of the route found
+    """``(legs, exit)``: each leg ``(direction, origin, pieces, word, radius)`` of the route found
     (see the module), the last edge's straight out of the goal; None when none is found.
     ``search`` is the planning's bookkeeping (:class:`tt_mujoco.world.plan._Search`): it
     counts the edges checked, keeps the one blocked furthest along, and holds the deadline."""
@@ -307,8 +305,7 @@ def roadmap_route(search, start, goal_tractor, d: float, base: float, reverse: b
     clear: set = set()
 
     def late() -> bool:
-        search.late = search.late or (deadline is not None and time.monotonic() > deadline)
-        return search.late
+        return search.out_of_time(deadline)
 
     for _ in range(ROADMAP_ROUNDS):
         if late():
@@ -323,7 +320,7 @@ def roadmap_route(search, start, goal_tractor, d: float, base: float, reverse: b
                     return None
                 search.roadmap_edges += 1
                 edge = roadmap.edge(*key)
-                if not search.clear(_path(edge), f"roadmap {edge.label}"):
+                if not search.clear(arcs_path(edge.origin, edge.pieces), f"roadmap {edge.label}"):
                     if not roadmap.drop(key):
                         blocked.add(key)
                     break
@@ -334,47 +331,48 @@ def roadmap_route(search, start, goal_tractor, d: float, base: float, reverse: b
     return None
 
 
+def _runs(route):
+    """The route's edges in runs of one direction, in the order driven."""
+    run = []
+    for key in route:
+        if run and key[2] != run[-1][2]:
+            yield run
+            run = []
+        run.append(key)
+    if run:
+        yield run
+
+
 def _shortcut(roadmap: _Roadmap, route: list, search, deadline) -> list:
     """The route with each run of edges of one direction replaced by one edge from its first
     node to its last, where that edge exists and is clear (a roadmap's route through drawn
     poses makes detours, and each node joined adds a change of curvature to track)."""
-    out, run = [], []
-    for key in [*route, None]:
-        if run and (key is None or key[2] != run[-1][2]):
-            whole = (run[0][0], run[-1][1], run[0][2])
-            direct = roadmap.edge(*whole) if len(run) > 1 else None
-            if (
-                direct is not None
-                and direct.length < sum(roadmap.edge(*one).length for one in run)
-                and search.next_candidate(deadline)
-                and search.clear(_path(direct), f"roadmap {direct.label}")
-            ):
-                run = [whole]
-            out += run
-            run = []
-        if key is not None:
-            run.append(key)
+    out = []
+    for run in _runs(route):
+        whole = (run[0][0], run[-1][1], run[0][2])
+        direct = roadmap.edge(*whole) if len(run) > 1 else None
+        if (
+            direct is not None
+            and direct.length < sum(roadmap.edge(*one).length for one in run)
+            and search.next_candidate(deadline)
+            and search.clear(arcs_path(direct.origin, direct.pieces), f"roadmap {direct.label}")
+        ):
+            run = [whole]
+        out += run
     return out
 
 
-def _path(edge: _Edge) -> ArcsPath:
-    return ArcsPath("plan", edge.origin, edge.pieces)
-
-
 def _legs(roadmap: _Roadmap, route) -> list[tuple]:
-    """The route's edges joined into legs, one per run of a direction: forward, the edges'
-    pieces in the order driven; backing, in the reverse order (each backing edge's path runs
-    from where it ends)."""
-    legs, run = [], []
-    for key in [*route, None]:
-        if run and (key is None or key[2] != run[-1][2]):
-            edges = [roadmap.edge(*one) for one in run]
-            forward = run[0][2] == _FORWARD
-            ordered = edges if forward else edges[::-1]
-            pieces = [piece for edge in ordered for piece in edge.pieces]
-            word = "+".join(edge.label for edge in ordered)
-            legs.append(("forward" if forward else "reverse", ordered[0].origin, pieces, word))
-            run = []
-        if key is not None:
-            run.append(key)
+    """The route's edges joined into legs ``(direction, origin, pieces, word, radius)``, one
+    per run of a direction: forward, the edges' pieces in the order driven; backing, in the
+    reverse order (each backing edge's path runs from where it ends)."""
+    legs = []
+    for run in _runs(route):
+        edges = [roadmap.edge(*one) for one in run]
+        forward = run[0][2] == _FORWARD
+        ordered = edges if forward else edges[::-1]
+        pieces = [piece for edge in ordered for piece in edge.pieces]
+        word = "+".join(edge.label for edge in ordered)
+        direction = "forward" if forward else "reverse"
+        legs.append((direction, ordered[0].origin, pieces, word, roadmap.radius))
     return legs
