@@ -262,6 +262,9 @@ def test_fault_specs_parse_and_refuse():
         faults.parse_fault("actuator:t=1,scale=1.5")
     with pytest.raises(ValueError, match="'oops' is not key=value"):
         faults.parse_fault("dropout:t=1,oops")
+    for lost in ("dropout:t=1,,duration=0.2", "dropout:t=1,", "dropout:,t=1"):
+        with pytest.raises(ValueError, match="an empty item between commas"):
+            faults.parse_fault(lost)  # a value lost, not skipped
 
 
 # --- a payload placed along the path -------------------------------------------------------------

@@ -2,6 +2,7 @@
 
 import dataclasses
 import math
+import re
 
 import numpy as np
 import pytest
@@ -319,3 +320,22 @@ def test_reset_refuses_an_option_it_does_not_know():
     with pytest.raises(ValueError, match=r"'phi0' is not a reset option \(allowed: phi0_deg\)"):
         env.reset(seed=0, options={"phi0": 20.0})
     env.reset(seed=0, options={"phi0_deg": 5.0})  # the one it takes
+
+
+@pytest.mark.parametrize(
+    ("seed", "named"),
+    [(2**63, "seed=9223372036854775808"), (-1, "seed=-1"), (True, "seed=True"), ("3", "seed='3'")],
+)
+@pytest.mark.parametrize("make", ["single", "goal"])
+def test_reset_takes_the_seeds_a_run_takes_and_names_the_others(make, seed, named):
+    """A seed the command line refuses (beyond a TOML integer, a bool, text) would start an
+    episode that no other route repeats: every env refuses it as the option schema does."""
+    from tt_mujoco import gym_goal
+
+    if make == "single":
+        env = gym_env.TractorTrailerEnv(plant="reduced", duration=1.0)
+    else:
+        env = gym_goal.TractorTrailerGoalEnv(plant="reduced")
+    with pytest.raises(ValueError, match=re.escape(named) + " is not allowed"):
+        env.reset(seed=seed)
+    env.reset(seed=np.int64(3))  # any integer type

@@ -202,6 +202,13 @@ def test_bad_actions_seeds_and_options_are_named():
     env = TractorTrailerVectorEnv(2, traj="circle", duration=0.5)
     with pytest.raises(ValueError, match=r"seed=\[1, 2, 3\] is not allowed"):
         env.reset(seed=[1, 2, 3])
+    # each episode's seed is one a run takes (the option schema's), the last one too
+    with pytest.raises(ValueError, match=r"seed \+ 1=9223372036854775808 is not allowed"):
+        env.reset(seed=2**63 - 1)
+    with pytest.raises(ValueError, match=r"seed\[1\]=True is not allowed"):
+        env.reset(seed=[1, True])
+    with pytest.raises(ValueError, match=r"seed='12' is not allowed: give an int"):
+        env.reset(seed="12")
     with pytest.raises(ValueError, match="'phi' is not a reset option"):
         env.reset(options={"phi": 3.0})
     env.reset(seed=0)

@@ -319,7 +319,10 @@ def test_cli_eta_path_reaches_the_scenario_and_replays(tmp_path):
 def test_sweeps_take_the_schedule_by_name():
     assert convert("eta_schedule", "path") == "path"
     assert convert("eta_schedule", "Curvature") == "curvature"
-    assert convert("eta_schedule", "true") is True
+    assert convert("eta_schedule", "true", typed=False) is True  # command-line text
+    assert convert("eta_schedule", True) is True
+    with pytest.raises(BadSpecError, match="text where true or false is wanted"):
+        convert("eta_schedule", "true")  # a sweep file's string, not its boolean
     with pytest.raises(BadSpecError, match=r"eta_schedule='kappa'.*'curvature', 'path'"):
         convert("eta_schedule", "kappa")
 

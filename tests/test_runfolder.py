@@ -18,7 +18,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tt_mujoco import bag, compare, render, run, runfolder
-from tt_mujoco.outputs import REFERENCE_FILE, read_timeseries, write_timeseries
+from tt_mujoco.outputs import CLAIM_FILE, REFERENCE_FILE, read_timeseries, write_timeseries
 from tt_mujoco.world.builtin import KEPT_WORLD
 
 #: The commands that read run folders, each with the arguments that make it write a new file.
@@ -125,6 +125,12 @@ def _drop(column: str):
     return change
 
 
+def _claimed(folder: Path) -> str:
+    """A writer's claim left beside complete outputs (a run killed while it drew its video)."""
+    (folder / CLAIM_FILE).write_text("claimed by process 1\n")
+    return f"{CLAIM_FILE} is there"
+
+
 def _backwards(ts):
     ts["t"][5] = ts["t"][3]
 
@@ -177,6 +183,7 @@ def _cases() -> dict[str, tuple]:
     for column in runfolder.STATE_COLUMNS:
         cases[f"NaN in {column}"] = (_series_edit(_nan_at(column, 7), column), "parquet")
     cases["time backwards"] = (_series_edit(_backwards, "time must increase"), "parquet")
+    cases["a writer's claim"] = (_claimed, "parquet")
     return cases
 
 

@@ -55,9 +55,10 @@ def test_a_new_field_reaches_the_command_line_files_sweeps_and_the_gym_env(tmp_p
     with pytest.raises(ValueError, match=r"tyre\.toml': unknown key 'tyre_mode'.*'tyre_model'"):
         config.read_options({"tyre_mode": "linear"}, file, run_schema)
     # A sweep's options.
-    assert sweep_options.convert("tyre_stiffness", "12.5", TYRE_SCHEMA) == 12.5
+    assert sweep_options.convert("tyre_stiffness", "12.5", TYRE_SCHEMA, typed=False) == 12.5
+    assert sweep_options.convert("tyre_stiffness", 12.5, TYRE_SCHEMA) == 12.5
     with pytest.raises(sweep_options.BadSpecError, match="tyre_stiffness='-1' is not allowed"):
-        sweep_options.convert("tyre_stiffness", "-1", TYRE_SCHEMA)
+        sweep_options.convert("tyre_stiffness", "-1", TYRE_SCHEMA, typed=False)
     values = sweep_runs.scenario_values({"tyre_model": "pacejka", "seed": 3}, TYRE_SCHEMA)
     assert values == {"tyre_model": "pacejka", "seed": 3}
     # The Gym env's keyword arguments.
@@ -157,6 +158,8 @@ def test_parsers_convert_text_and_toml_values_alike(parse, value, expected):
         (number(), True, "it must be a finite number"),
         (choice("linear", "pacejka"), "lin", r"use one of 'linear', 'pacejka'"),
         (schema.boolean, "maybe", "use true or false"),
+        (schema.boolean, 1, "use true or false"),  # a number is no truth value (text "1" is)
+        (schema.boolean, 0.0, "use true or false"),
         (schema.text, "  ", "non-empty string"),
         (schema.table(number(), ("a",)), {"b": 1}, r"x: 'b' is not allowed.*use one of a"),
         (schema.optional_table(number()), "sometimes", "use on"),
@@ -244,3 +247,61 @@ def test_integer_options_are_found_and_a_seed_takes_the_largest():
 
     assert {"seed", "trailers"} <= {o.name for o in _integer_options()}
     assert SCHEMA["seed"].parse(str(TOML_INT_MAX), "seed") == TOML_INT_MAX
+
+
+def _typed_options():
+    """Every option (the scenario's and the outputs') with a text that its parser turns into
+    a number or true/false: the text, and what it parses to."""
+    found = []
+    for opt in (SCHEMA + run.OUTPUTS).options:
+        for text in ("true", "1", "0.5", "2", "20"):
+            try:
+                value = opt.parse(text, opt.name)
+            except (ValueError, TypeError):
+                continue
+            if isinstance(value, bool | int | float):
+                found.append(pytest.param(opt, text, value, id=opt.name))
+                break
+    return found
+
+
+@pytest.mark.parametrize(("opt", "text", "value"), _typed_options())
+def test_text_for_a_number_or_a_truth_value_is_taken_from_the_command_line_only(
+    opt, text, value, tmp_path
+):
+    """The command line (and a sweep's command-line axes) gives text; a TOML file, a sweep
+    file, the Python API and the Gym env give typed values, so ``video = "yes"`` there is a
+    mistake, refused naming the key, where ``--video yes`` is text to read."""
+    both = SCHEMA + run.OUTPUTS
+    assert both.values({opt.name: text}, "", typed=False)[opt.name] == value
+    assert both.values({opt.name: value}, "")[opt.name] == value
+    refused = rf"{opt.name}='{text}' is not allowed: it is text where"
+    with pytest.raises(ValueError, match=refused):
+        both.values({opt.name: text}, "")
+    toml = tmp_path / "scenario.toml"
+    toml.write_text(f'{opt.name} = "{text}"\n')
+    with pytest.raises(ValueError, match=f"config file.*{refused}"):
+        config.read_options(config.load_config(toml), toml, both)
+    if opt.name not in SCHEMA.names:
+        return
+    with pytest.raises(ValueError, match=refused):
+        Scenario(**{opt.name: text}).validate()
+    with pytest.raises(ValueError, match=refused):
+        gym_env.scenario_overrides({opt.name: text})
+    if opt.axis:
+        assert sweep_options.convert(opt.name, text, typed=False) == value
+        with pytest.raises(sweep_options.BadSpecError, match=refused):
+            sweep_options.convert(opt.name, text)
+
+
+def test_typed_options_are_found_and_tables_and_switches_are_checked_too():
+    names = {p.values[0].name for p in _typed_options()}
+    assert {"seed", "duration", "video", "reverse", "noise_snr_db", "eta"} <= names
+    with pytest.raises(ValueError, match=r"here: gains.k1_v='5' is not allowed: it is text"):
+        SCHEMA.values({"gains": {"k1_v": "5"}}, "here")
+    with pytest.raises(ValueError, match=r"here: no_video='yes' is not allowed: it is text"):
+        (SCHEMA + run.OUTPUTS).values({"no_video": "yes"}, "here")
+    with pytest.raises(ValueError, match=r"here: no_video=1 is not allowed: use true or false"):
+        (SCHEMA + run.OUTPUTS).values({"no_video": 1}, "here")
+    # Text an option keeps as text ("none" where TOML has no null, a word) stays allowed.
+    assert SCHEMA.values({"eta": "same_path", "duration": "none"}, "")["duration"] is None

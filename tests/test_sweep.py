@@ -136,6 +136,17 @@ def test_cli_bad_spec_is_exit_2_with_one_line(tmp_path, capsys):
         assert sweep.main(["duration=1", flag, "--out", str(tmp_path / "x")]) == 2
         assert f"{flag} is not allowed without --resume" in capsys.readouterr().err
         assert not (tmp_path / "x").exists()
+    # --resume names a sweep to continue: a folder without one (a typo) is refused, not begun
+    (tmp_path / "empty").mkdir()
+    for name, state in (("typo", "does not exist"), ("empty", "is empty")):
+        assert sweep.main(["duration=1", "--resume", "--out", str(tmp_path / name)]) == 2
+        assert f"{state}: there is no sweep to resume" in capsys.readouterr().err
+    assert not (tmp_path / "typo").exists() and not any((tmp_path / "empty").iterdir())
+    # --workers and --scheduler both say who runs the runs: one of them, not the last
+    argv = ["duration=1", "--workers", "2", "--scheduler", "local", "--out", str(tmp_path / "w")]
+    assert sweep.main(argv) == 2
+    assert "--workers 2 is not allowed with --scheduler 'local'" in capsys.readouterr().err
+    assert not (tmp_path / "w").exists()
 
 
 def test_scales_gains_and_timestep_reach_the_scenario():

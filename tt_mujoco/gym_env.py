@@ -83,6 +83,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from numbers import Integral
 from typing import ClassVar
 
 import numpy as np
@@ -100,7 +101,7 @@ from tt_mujoco.defaults import MAX_SPEED
 from tt_mujoco.gym_legs import Legs
 from tt_mujoco.reference.feedback import path_errors
 from tt_mujoco.registry import shown
-from tt_mujoco.schema import Schema
+from tt_mujoco.schema import Schema, check_typed
 from tt_mujoco.sim.loop.episode import has_closed_form
 from tt_mujoco.sim.loop.timeseries import train_columns
 from tt_mujoco.sim.maneuver import leg_rng
@@ -267,6 +268,25 @@ def reset_phi0_deg(scenario: sim.Scenario, options: dict | None) -> float | None
     return phi0_deg
 
 
+def checked_seed(seed, label: str = "seed") -> int | None:
+    """``reset``'s ``seed`` as the run's: None, or an integer the option schema allows (any
+    integer type, NumPy's too), so a seed the command line refuses (a bool, beyond a TOML
+    integer) is refused here as well and every seed an env takes reproduces on every route.
+
+    Raises
+    ------
+    ValueError
+        Naming the seed and what is allowed.
+    """
+    if seed is None:
+        return None
+    if isinstance(seed, Integral) and not isinstance(seed, bool | np.bool_):
+        seed = int(seed)
+    checked = sim.SCHEMA["seed"].parse(seed, label)
+    check_typed(seed, checked, label)  # "3" is text, not a seed
+    return checked
+
+
 def bounded(observation, headings, low, high) -> np.ndarray:
     """A copy of ``observation`` (one, or a batch along the leading axes) with its headings
     (the boolean mask ``headings``) wrapped to [-pi, pi] and every value clipped to its bounds
@@ -396,6 +416,7 @@ class TractorTrailerEnv(gymnasium.Env):
         ``phi0_deg``, the initial articulation (default the scenario's)."""
         if seed is None and not self._seeded:
             seed = self.scenario.seed
+        seed = checked_seed(seed)
         phi0_deg = reset_phi0_deg(self.scenario, options)
         super().reset(seed=seed)
         self._seeded = True

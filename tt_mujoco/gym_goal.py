@@ -48,6 +48,7 @@ from tt_mujoco import sim
 from tt_mujoco.gym_env import (
     DEFAULT_CONTROL_DT,
     TractorTrailerEnv,
+    checked_seed,
     observation_bounds,
     observation_names,
     scenario_overrides,
@@ -168,6 +169,7 @@ class TractorTrailerGoalEnv(gymnasium.Env):
             )
         if seed is None and not self._seeded:
             seed = self.scenario.seed
+        seed = checked_seed(seed)
         super().reset(seed=seed)
         self._seeded = True
         candidates = [int(seed)] if seed is not None else []

@@ -51,6 +51,7 @@ from tt_mujoco import sim
 from tt_mujoco.gym_env import (
     TractorTrailerEnv,
     bounded,
+    checked_seed,
     reset_phi0_deg,
     task_reward,
     torques_of,
@@ -277,14 +278,15 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
         if seed is None:
             return [None] * self.num_envs
         if isinstance(seed, Integral) and not isinstance(seed, bool):
-            return [int(seed) + i for i in range(self.num_envs)]
-        seeds = list(seed)
-        if len(seeds) != self.num_envs:
+            first = checked_seed(seed)
+            return [checked_seed(first + i, f"seed + {i}") for i in range(self.num_envs)]
+        seeds = list(seed) if isinstance(seed, list | tuple | np.ndarray) else None
+        if seeds is None or len(seeds) != self.num_envs:
             raise ValueError(
                 f"seed={shown(seed)} is not allowed: give an int, None, or one per episode "
                 f"({self.num_envs})"
             )
-        return seeds
+        return [checked_seed(one, f"seed[{i}]") for i, one in enumerate(seeds)]
 
     def _observations(self) -> np.ndarray:
         """The batch's observations: headings wrapped to [-pi, pi], clipped to the bounds."""

@@ -5,6 +5,8 @@ here only: each file is checked against what :data:`METRICS_FIELDS` and :func:`r
 declare before anything uses it, and any deviation is a :class:`RunFolderError` (a bad input:
 one line, exit code 2) naming the file and the field, column or row. What is checked:
 
+- the folder: no writer's claim (:data:`tt_mujoco.outputs.CLAIM_FILE`) in it, since outputs
+  beside a claim are being written or were left by an interrupted writer;
 - ``metrics.json``: UTF-8, strict JSON (no ``NaN``, no infinities, no number beyond a float,
   no key given twice), an object, and each declared field of the declared type where present
   (:data:`METRICS_FIELDS`); the vehicle's parameters are ``Params`` fields with allowed values;
@@ -29,6 +31,7 @@ import numpy as np
 
 from tt_mujoco.cliargs import BadInputError
 from tt_mujoco.outputs import (
+    CLAIM_FILE,
     METRICS_FILE,
     REFERENCE_FILE,
     JsonField,
@@ -139,6 +142,12 @@ def read_run(folder) -> FinishedRun:
     metrics_file, ts_file = folder / METRICS_FILE, run_timeseries_file(folder)
     if not folder.is_dir():
         raise RunFolderError(f"{str(folder)!r} is not a folder: give a finished run's folder")
+    if (folder / CLAIM_FILE).exists() or (folder / CLAIM_FILE).is_symlink():
+        raise RunFolderError(
+            f"{folder / CLAIM_FILE} is there: the run in {str(folder)!r} is being written, or "
+            f"its writer was interrupted; read it once it is finished (remove {CLAIM_FILE} "
+            "only if no run is writing it)"
+        )
     missing = [str(f) for f in (metrics_file, ts_file) if not f.is_file()]
     if not ts_file.is_file():  # neither form of the time series
         missing[-1] = f"{ts_file.with_suffix('.parquet')} (or {ts_file.with_suffix('.csv').name})"

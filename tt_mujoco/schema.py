@@ -28,6 +28,7 @@ from typing import Any
 from tt_mujoco.registry import closest, shown
 from tt_mujoco.schema_values import (
     boolean,
+    check_typed,
     choice,
     number,
     optional_table,
@@ -42,6 +43,7 @@ __all__ = [
     "Option",
     "Schema",
     "boolean",
+    "check_typed",
     "choice",
     "number",
     "option",
@@ -261,13 +263,18 @@ class Schema:
                 return o
         return None
 
-    def values(self, given: Mapping, where: str, base: Path | None = None) -> dict:
+    def values(
+        self, given: Mapping, where: str, base: Path | None = None, *, typed: bool = True
+    ) -> dict:
         """The checked values of ``given`` (a TOML table, a sweep's options, keyword
         arguments), by field name.
 
         Keys are field names or long flags (``noise_snr`` as ``noise_snr_db``; a switch's
         ``no_x = true`` is ``x = false``); a table's entries may also come as flat keys
-        ``ENTRY.NAME``. Files are resolved against ``base``.
+        ``ENTRY.NAME``. Files are resolved against ``base``. ``typed``: the values come with
+        their types (TOML, keyword arguments), so text where a number or true/false is wanted
+        is refused (:func:`~tt_mujoco.schema_values.check_typed`); False for text (a sweep's
+        command-line axes).
 
         Raises
         ------
@@ -297,9 +304,16 @@ class Schema:
             label = f"{where}: {raw_key}" if where else str(raw_key)
             if const is _PLAIN:
                 parsed = opt.parse(value, label)
-            elif const is _NOT:  # ``no_video = true`` is ``--no-video``
-                parsed = opt.parse(not boolean(value, label), label)
-            elif boolean(value, label):
+                if typed:
+                    check_typed(value, parsed, label)
+                out[opt.name] = resolve_file(parsed, base) if opt.file else parsed
+                continue
+            on = boolean(value, label)
+            if typed:
+                check_typed(value, on, label)
+            if const is _NOT:  # ``no_video = true`` is ``--no-video``
+                parsed = opt.parse(not on, label)
+            elif on:
                 parsed = const
             else:
                 raise refuse(label, value, f"use true (it means {opt.name} = {const!r})")
@@ -318,7 +332,10 @@ class Schema:
                         f"{label}: {name}=off contradicts {', '.join(map(str, found))} set for it"
                     )
                 current = {}
-            out[name] = {**current, **opt.parse(found, label)}
+            parsed = opt.parse(found, label)
+            if typed:
+                check_typed(found, parsed, label)
+            out[name] = {**current, **parsed}
         return out
 
     def merged(self, *layers: Mapping) -> dict:

@@ -9,10 +9,13 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from tt_mujoco.registry import closest, is_hook, normalise_hook, shown
 
 __all__ = [
     "boolean",
+    "check_typed",
     "choice",
     "number",
     "optional_table",
@@ -120,15 +123,37 @@ _FALSE = ("false", "off", "no", "0")
 
 
 def boolean(value, label):
-    """A parser of true/false (also on/off, yes/no, 1/0 as text)."""
-    if isinstance(value, bool):
-        return value
-    key = str(value).strip().lower()
+    """A parser of true/false (also on/off, yes/no, 1/0 as text); a number is not a truth
+    value (``video = 1`` is refused, where text ``"1"`` from the command line is true)."""
+    if isinstance(value, bool | np.bool_):
+        return bool(value)
+    if not isinstance(value, str):
+        raise refuse(label, value, "use true or false")
+    key = value.strip().lower()
     if key in _TRUE:
         return True
     if key in _FALSE:
         return False
     raise refuse(label, value, "use true or false")
+
+
+def check_typed(given, parsed, label: str) -> None:
+    """Refuse text given where the option's value is a number or true/false.
+
+    Only the command line (and a sweep's command-line axes) gives values as text; a TOML file,
+    a sweep file, the Python API and the Gym env give them with their types, so
+    ``video = "yes"`` or ``duration = "1"`` there is a mistake to name, not to guess. ``given``
+    is what was given, ``parsed`` what its option's parser made of it; tables are walked
+    entry by entry.
+    """
+    if isinstance(given, Mapping) and isinstance(parsed, Mapping):
+        for key, item in given.items():
+            if key in parsed:
+                check_typed(item, parsed[key], f"{label}.{key}")
+        return
+    if isinstance(given, str) and isinstance(parsed, bool | int | float):
+        kind = "true or false" if isinstance(parsed, bool) else "a number"
+        raise refuse(label, given, f"it is text where {kind} is wanted: write it without quotes")
 
 
 def spec_list(check_one: Callable[[Any, str], Any]):

@@ -27,6 +27,7 @@ from tt_mujoco.reference.feedback import check_config
 from tt_mujoco.schema import (
     Schema,
     boolean,
+    check_typed,
     choice,
     number,
     option,
@@ -466,7 +467,10 @@ class Scenario:
         first bad field and what is allowed. Values are kept in their checked form (``seed``
         3.0 becomes 3, a fault's text its table)."""
         for opt in SCHEMA.options:
-            setattr(self, opt.name, opt.parse(getattr(self, opt.name), opt.name))
+            given = getattr(self, opt.name)
+            parsed = opt.parse(given, opt.name)
+            check_typed(given, parsed, opt.name)  # Scenario(duration="1") is a mistake
+            setattr(self, opt.name, parsed)
         if self.duration is not None and self.duration < self.control_dt:
             raise ValueError(
                 f"duration={self.duration!r} is not allowed: it is shorter than one control "

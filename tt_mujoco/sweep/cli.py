@@ -112,19 +112,31 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _checked_workers(args) -> int:
+    """The worker count, once the options that only make sense together are checked: a
+    conflict or an option that would be ignored is refused, not resolved in silence."""
+    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+    if workers < 1:
+        raise BadSpecError(f"--workers {workers} is not allowed: it must be >= 1")
+    if args.workers is not None and args.scheduler is not None:
+        raise BadSpecError(
+            f"--workers {args.workers} is not allowed with --scheduler {args.scheduler!r}: "
+            "the scheduler's cluster has its own workers; give one of them"
+        )
+    for flag, name in (("--extend", "extend"), ("--retry-errors", "retry_errors")):
+        if getattr(args, name) and not args.resume:  # it would be ignored in silence
+            raise BadSpecError(f"{flag} is not allowed without --resume: it changes a resume")
+    if args.resume and args.out is None:
+        raise BadSpecError("--resume needs --out DIR, the folder of the sweep to continue")
+    return workers
+
+
 @guard.command
 def main(argv: list[str] | None = None) -> int:
     out = None
     try:
         args = build_parser().parse_args(argv)
-        workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
-        if workers < 1:
-            raise BadSpecError(f"--workers {workers} is not allowed: it must be >= 1")
-        for flag, name in (("--extend", "extend"), ("--retry-errors", "retry_errors")):
-            if getattr(args, name) and not args.resume:  # it would be ignored in silence
-                raise BadSpecError(f"{flag} is not allowed without --resume: it changes a resume")
-        if args.resume and args.out is None:
-            raise BadSpecError("--resume needs --out DIR, the folder of the sweep to continue")
+        workers = _checked_workers(args)
         config = args.config
         if args.resume and not args.items and config is None:
             config = args.out / SPEC_FILE

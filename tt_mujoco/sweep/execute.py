@@ -179,6 +179,12 @@ def prepare_out(out: Path, resume: bool) -> bool:
             )
         if not (out / JOURNAL).exists() and not (out / SPEC_FILE).exists():
             raise BadSpecError(f"--out {str(out)!r} holds no sweep ({JOURNAL}) to resume")
+    elif resume:  # a mistyped folder would start the whole sweep again in silence
+        state = "is empty" if out.exists() else "does not exist"
+        raise BadSpecError(
+            f"--out {str(out)!r} {state}: there is no sweep to resume; drop --resume to start "
+            "one there"
+        )
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:

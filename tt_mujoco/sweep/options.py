@@ -7,7 +7,7 @@ from pathlib import Path
 
 from tt_mujoco.registry import closest
 from tt_mujoco.schema import Schema
-from tt_mujoco.schema_values import number
+from tt_mujoco.schema_values import check_typed, number
 from tt_mujoco.sim import SCHEMA
 from tt_mujoco.vehicle.params import MAX_TRAILERS, TRAILER_FIELDS
 
@@ -125,10 +125,10 @@ def as_integer(name: str, value) -> int:
         raise BadSpecError(str(err)) from None
 
 
-def convert(name: str, value, schema: Schema = SCHEMA):
-    """Check and convert one value of option ``name`` (text from the command line, or a TOML
-    value) by the option schema; raises :class:`BadSpecError` naming the value and what is
-    allowed.
+def convert(name: str, value, schema: Schema = SCHEMA, *, typed: bool = True):
+    """Check and convert one value of option ``name`` (text from the command line with
+    ``typed=False``, or a TOML value) by the option schema; raises :class:`BadSpecError`
+    naming the value and what is allowed.
 
     The value is kept in a sweep's own spelling, one JSON value per option: a list of specs as
     its text, a table that may be off as "on" or "off", a table's entry (``gain.k1_v``) as its
@@ -136,12 +136,17 @@ def convert(name: str, value, schema: Schema = SCHEMA):
     """
     name = check_option_name(name, schema)
     trailer = trailer_option(name)
-    if trailer is not None:
-        if trailer[1] == "eta":
-            return schema["eta"].parse(value, name)
-        return as_number(name, value, positive=True)
     try:
-        parsed = schema.values({name: value}, "")
+        if trailer is not None:
+            checked = (
+                schema["eta"].parse(value, name)
+                if trailer[1] == "eta"
+                else as_number(name, value, positive=True)
+            )
+            if typed:
+                check_typed(value, checked, name)
+            return checked
+        parsed = schema.values({name: value}, "", typed=typed)
     except ValueError as err:
         raise BadSpecError(str(err)) from None
     field, checked = next(iter(parsed.items()))

@@ -174,12 +174,12 @@ def parse_item(item: str) -> Axis:
         raise BadSpecError(f"{name}= has no value")
     if name in LIST_OPTIONS:
         # A fault spec has commas of its own: one value here; several in a TOML list.
-        return Axis(name, values=(convert(name, text),))
+        return Axis(name, values=(convert(name, text, typed=False),))
     kind, colon, rest = text.partition(":")
     if colon and kind in GRID_GENERATORS + DISTRIBUTIONS:
         return _generator(name, kind, rest.split(":"))
     parts = [p.strip() for p in text.split(",")]
-    return Axis(name, values=tuple(convert(name, p) for p in parts))
+    return Axis(name, values=tuple(convert(name, p, typed=False) for p in parts))
 
 
 def _toml_axis(name: str, value) -> Axis:

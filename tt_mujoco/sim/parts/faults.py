@@ -113,7 +113,12 @@ def _split_text(spec: str) -> dict:
     """``"actuator:t=2,scale=0.3"`` -> ``{"kind": "actuator", "t": "2", "scale": "0.3"}``."""
     kind, _, rest = spec.partition(":")
     out: dict = {"kind": kind.strip()}
-    for item in filter(None, (part.strip() for part in rest.split(","))):
+    items = [part.strip() for part in rest.split(",")] if rest.strip() else []
+    for item in items:
+        if not item:  # "t=1,,scale=0.3" or "t=1,": a value lost, not a spelling
+            raise ValueError(
+                f"fault {spec!r}: an empty item between commas; write e.g. 'actuator:t=2,scale=0.3'"
+            )
         key, sep, value = item.partition("=")
         if not sep or not key.strip():
             raise ValueError(
