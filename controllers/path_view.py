@@ -75,6 +75,7 @@ def path_table(path, spacing: float = PATH_SPACING) -> np.ndarray:
     table[5, :-1], table[6, :-1] = np.diff(x), np.diff(y)
     length2 = table[5, :-1] ** 2 + table[6, :-1] ** 2
     table[7, :-1] = np.where(length2 > 0.0, 1.0 / np.where(length2 > 0.0, length2, 1.0), 0.0)
+    table.setflags(write=False)  # a law reads its path; a write raises, as numba's is refused
     return table
 
 

@@ -496,6 +496,10 @@ def compile_failure(err: BaseException, source_file: str | None) -> str:
     import linecache
     import re
 
+    from tt_mujoco.sim.loop.compiled_law import LawFormError
+
+    if isinstance(err, LawFormError):  # says its line itself
+        return str(err)
     text = re.sub(r"\x1b\[[0-9;]*m", "", str(err))
     lines = [line.strip() for line in text.splitlines()]
     why = next((line for line in lines if line and not line.startswith("Failed in")), "")

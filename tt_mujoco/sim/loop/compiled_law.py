@@ -11,6 +11,7 @@ of its Python form.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import math
 import sys
@@ -142,7 +143,7 @@ def _as_compiled(fn, done: dict, exact):
         elif value is math.hypot:
             names[name] = exact.hypot
     for name, helper in _own_calls(fn):
-        names[name] = register_jitable(_as_compiled(helper, done, exact))
+        names[name] = register_jitable(boundscheck=True)(_as_compiled(helper, done, exact))
     return copy
 
 
@@ -159,19 +160,22 @@ from numba import carray, cfunc
 def entry(m, r, model, gains, state, out, dt, limit):
     torques = carray(out, 3)
     torques[2] = 0.0
-    try:
+    kept = carray(state, {n_state})
+{keep}    try:
         T_r, T_l = law(
             carray(m, {n_meas}).view(MEASUREMENT)[0],
             carray(r, {n_ref}).view(REFERENCE)[0],
             carray(model, {n_model}).view(NOMINAL)[0],
             carray(gains, {n_gains}).view(GAINS)[0],
-            carray(state, {n_state}).view(STATE)[0],
+            kept.view(STATE)[0],
             dt,
             limit,
         )
     except Exception:  # it cannot leave a C function: the loop stops, Python says what
         torques[2] = 1.0
-        return
+{restore}        return
+    if T_r - T_r != 0.0 or T_l - T_l != 0.0:  # not finite: the loop stops, Python says what
+{restore}        pass
     torques[0], torques[1] = T_r, T_l
 """
 #: The C entry of a law that sees the path (``plain_law(..., path=True)``): what it is handed
@@ -190,13 +194,14 @@ def entry(m, r, model, gains, state, out, dt, limit):
     torques[2] = 0.0
     samples = int(carray(gains, {n_head})[{n_head} - 1])
     data = carray(gains, {n_head} + {n_rows} * samples)
-    try:
+    kept = carray(state, {n_state})
+{keep}    try:
         T_r, T_l = law(
             carray(m, {n_meas}).view(MEASUREMENT)[0],
             carray(r, {n_ref}).view(REFERENCE)[0],
             carray(model, {n_model}).view(NOMINAL)[0],
             data[:{n_gains}].view(GAINS)[0],
-            carray(state, {n_state}).view(STATE)[0],
+            kept.view(STATE)[0],
             dt,
             limit,
             data[{n_head}:].reshape(({n_rows}, samples)),
@@ -204,7 +209,9 @@ def entry(m, r, model, gains, state, out, dt, limit):
         )
     except Exception:  # it cannot leave a C function: the loop stops, Python says what
         torques[2] = 1.0
-        return
+{restore}        return
+    if T_r - T_r != 0.0 or T_l - T_l != 0.0:  # not finite: the loop stops, Python says what
+{restore}        pass
     torques[0], torques[1] = T_r, T_l
 """
 
@@ -256,7 +263,8 @@ def _compile_law(cls):
     # _as_compiled changes; the entry below, cached, holds the law's code
     # Python's error model: a division by zero raises, as it does in the law's Python form
     # (numpy's gives inf, or 0 for integers, and the run would drive on where Python's stops)
-    law = njit(error_model="python")(_as_compiled(cls.LAW, copies, _exact_math()))
+    # Bounds-checked: an index out of range raises, as in Python, rather than reading beyond
+    law = njit(error_model="python", boundscheck=True)(_as_compiled(cls.LAW, copies, _exact_math()))
     helpers = set(copies) - {cls.LAW}  # the plain functions of its module it calls
     gain_names = tuple(cls.PRESETS[cls.DEFAULT_PRESET]) or ("unused",)
     dtypes = {
@@ -283,7 +291,11 @@ def _compile_law(cls):
         return sys.modules[module_name].entry
     file = inspect.getsourcefile(cls.LAW) or "?"
     template = _PATH_ENTRY_SOURCE if cls.SEES_PATH else _ENTRY_SOURCE
-    source = template.format(name=cls.__qualname__, file=file, **sizes)
+    # the state as the law was given it, put back where the law fails: its Python form,
+    # called with what the compiled law was given, sees the state the compiled one saw
+    keep = "".join(f"    state_{i} = kept[{i}]\n" for i in range(sizes["n_state"]))
+    restore = "".join(f"        kept[{i}] = state_{i}\n" for i in range(sizes["n_state"]))
+    source = template.format(name=cls.__qualname__, file=file, keep=keep, restore=restore, **sizes)
     path = _cache_dir() / "laws" / f"{name}.py"
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -300,7 +312,38 @@ def _compile_law(cls):
     sys.modules[module_name] = module  # numba's cache finds the entry's module by its name
     try:
         spec.loader.exec_module(module)
+        _refuse_unreproducible(law, copies, dtypes, cls.SEES_PATH, path.with_suffix(".verdict"))
     except BaseException:
         del sys.modules[module_name]
         raise
     return module.entry
+
+
+class LawFormError(Exception):
+    """A law whose compiled form would not do what its Python form does
+    (:mod:`~tt_mujoco.sim.loop.law_semantics`): integer arithmetic that can pass 2**63, a
+    write to what it is given to read. Its message says why and where."""
+
+
+def _refuse_unreproducible(law, copies, dtypes, sees_path, verdict: Path) -> None:
+    """Raise :class:`LawFormError` where the law's typed code does what its Python form would
+    not. The verdict is kept beside the cached entry, since a process that loads the entry from
+    the cache never types the law; where it is lost the law is typed again."""
+    from numba import from_dtype
+
+    from tt_mujoco.sim.loop.law_semantics import law_signature, unreproducible_site
+
+    own = {fn.__code__ for fn in copies}
+    state_type = from_dtype(dtypes["STATE"])
+    if law.overloads:  # typed in this process: the entry was compiled, not loaded
+        site = unreproducible_site(law, own, state_type)
+        with contextlib.suppress(OSError):
+            atomic_write(verdict, site or "")
+    else:
+        try:
+            site = verdict.read_text() or None
+        except OSError:
+            law.compile(law_signature(dtypes, sees_path))
+            site = unreproducible_site(law, own, state_type)
+    if site:
+        raise LawFormError(site)
