@@ -5,6 +5,7 @@ is one message (exit 2)."""
 
 import json
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -169,15 +170,28 @@ def test_a_world_with_no_way_through_is_one_message(tmp_path, monkeypatch, capsy
     walled["obstacle"][-1]["thickness"] = 0.05
     walled["start"] = {"x": 2.0, "y": -1.0, "heading_deg": 0.0}
     (tmp_path / "walled.toml").write_text(tomli_w.dumps(walled))
-    code = run.main(
-        ["--world", "walled.toml", "--traj", "plan", "--reverse", "--out", "o", "--quiet"]
-    )
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    monkeypatch.setenv("TMPDIR", str(temporary))
+    monkeypatch.setattr("tempfile.tempdir", None)
+    argv = ["--world", "walled.toml", "--traj", "plan", "--reverse", "--out", "o", "--quiet"]
+    code = run.main(argv)
     err = capsys.readouterr().err
     assert code == 2 and "no path to world" in err and "candidates tried" in err, err
     # where the candidate that got furthest was blocked, and by what
     assert "then the " in err and ("'barrier'" in err or "bounds" in err), err
     assert len(err.strip().splitlines()) == 1
     assert not (tmp_path / "o").exists()
+    # its figure: beside the crash files, named in the message, a whole PNG, nothing else
+    (figure,) = temporary.iterdir()
+    assert err.strip().endswith(f"; the best candidate is drawn in {figure}"), err
+    assert figure.name.startswith("tt_mujoco-no-plan-") and figure.suffix == ".png"
+    assert figure.read_bytes().startswith(b"\x89PNG\r\n\x1a\n")
+    # --no-plots draws nothing
+    assert run.main([*argv, "--no-plots", "--time-limit", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "no path to world" in err and "drawn" not in err, err
+    assert list(temporary.iterdir()) == [figure] and not (tmp_path / "o").exists()
 
 
 def test_plan_without_a_world_is_refused(tmp_path, monkeypatch, capsys):
@@ -355,3 +369,9 @@ def test_no_plan_names_the_blocked_candidate_when_a_backing_leg_was_clear(monkey
     with pytest.raises(PlanError, match="then the ") as caught:
         planned(parse_world("loading_bay"), Params().with_trailers(3), 0, reverse=True)
     assert "is clear for" in str(caught.value)
+    best = caught.value.best  # what the failure's figure draws (tt_mujoco.viz.plan_figure)
+    assert f"the best ({best.word})" in str(caught.value)
+    assert best.poses.shape == (4, 3) and 0.0 < best.reached < 1.0
+    assert best.unit in str(caught.value) and np.isfinite(best.polyline).all()
+    again = pickle.loads(pickle.dumps(caught.value))  # a sweep's worker sends the message
+    assert type(again) is PlanError and str(again) == str(caught.value)

@@ -41,6 +41,7 @@ from tt_mujoco.outputs import claim_folder, release_folder
 from tt_mujoco.progress import progress_bar
 from tt_mujoco.run_endings import (
     abandon,
+    best_candidate_drawn,
     exited_early,
     fail,
     hung,
@@ -279,7 +280,7 @@ def _set_up(invocation: Invocation) -> _RunSetup | int:
                 live.close()
             raise
     except (BadInputError, ValueError, reduced.SingularityError) as err:  # OutputError too
-        return fail(str(err))
+        return fail(str(err) + best_candidate_drawn(err, invocation.outputs["plots"]))
     except OSError as err:  # a name the file system refuses (too long, not encodable, ...)
         return _file_system_refused(err)
     except viewer_mod.ViewerUnavailable as err:

@@ -20,6 +20,7 @@ from tt_mujoco.run_outputs import CHECKPOINT_FILE, ERROR_LOG
 
 __all__ = [
     "abandon",
+    "best_candidate_drawn",
     "exited_early",
     "fail",
     "hung",
@@ -32,6 +33,23 @@ __all__ = [
 def fail(message: str, code: int = EXIT_BAD_INPUT) -> int:
     print(f"error: {message}", file=sys.stderr)
     return code
+
+
+def best_candidate_drawn(err: BaseException, plots: bool) -> str:
+    """``"; the best candidate is drawn in FILE"`` for a run refused for want of a plan (a
+    :class:`~tt_mujoco.world.plan.PlanError` with its best candidate), its figure written beside
+    the crash files (the refused run leaves nothing in its folder); ``""`` otherwise, or with
+    ``plots`` off, or where the temporary folder takes no file."""
+    best = getattr(err, "best", None)
+    if best is None or not plots:
+        return ""
+    from tt_mujoco.viz.plan_figure import write_best_candidate
+
+    try:
+        file = write_best_candidate(best)
+    except OSError as problem:
+        return f"; its best candidate could not be drawn ({problem.strerror})"
+    return f"; the best candidate is drawn in {file}"
 
 
 def abandon(out: Path, created: bool, live, message: str, code: int) -> int:

@@ -28,6 +28,7 @@ from tt_mujoco.viz import FIGURES
 
 __all__ = [
     "FIGURES",
+    "draw_world",
     "plot_comparison",
     "plot_run",
     "run_pngs",
@@ -135,8 +136,9 @@ def _train(c: dict) -> list[tuple[int, str]]:
 
 
 # --- figures of one run ---------------------------------------------------------------------------
-def _draw_world(ax, world, params: Params) -> None:
-    """A world's obstacles (grey) and its goal: the last trailer's footprint there, dashed."""
+def draw_world(ax, world, params: Params) -> None:
+    """Draw a world's obstacles (grey) and its goal (the last trailer's footprint there,
+    dashed) into the axes ``ax``, for the train ``params``."""
     from matplotlib.patches import Polygon
 
     from tt_mujoco.vehicle.footprint import footprints
@@ -165,7 +167,7 @@ def _path_figure(c: dict, ref: np.ndarray, world=None, params: Params | None = N
     fig = Figure(figsize=(7, 6), layout="constrained")
     ax = fig.add_subplot()
     if world is not None:
-        _draw_world(ax, world, Params() if params is None else params)
+        draw_world(ax, world, Params() if params is None else params)
     ax.plot(ref[:, 0], ref[:, 1], "--", color=REFERENCE_COLOR, lw=1.2, label="reference path")
     ax.plot(c["x"], c["y"], color=TRACTOR_COLOR, lw=1.6, label="tractor P")
     ax.plot(c["x0"], c["y0"], color=TRAILER_COLOR, lw=1.2, label="trailer P0")

@@ -41,9 +41,10 @@ def clearance_along(
     often told there, and those samples are among the others), and gaps of ``below`` or more
     are not told apart (the gap is then ``below``); ``blocked`` (a dict) then receives where:
     the ``unit`` (index, tractor 0), the ``obstacle`` (index, None: outside the bounds) and
-    the tractor's ``x``, ``y``. With ``bounds`` (x_min, x_max, y_min, y_max), a sample with an
-    axle outside them has the gap -inf. The tractor is placed from arc length ``s_from`` on
-    (a leg that stops short of the path's start, :attr:`Leg.stop_s`)."""
+    the tractor's ``x``, ``y`` and every unit's ``poses`` there. With ``bounds`` (x_min,
+    x_max, y_min, y_max), a sample with an axle outside them has the gap -inf. The tractor is
+    placed from arc length ``s_from`` on (a leg that stops short of the path's start,
+    :attr:`Leg.stop_s`)."""
     cap = math.inf if below == -math.inf else below
     if not record.sizes.size and bounds is None:
         return math.inf, 1.0
@@ -79,7 +80,9 @@ def clearance_along(
 
     def told(gap, unit, obstacle):
         if blocked is not None:
-            blocked.update(unit=unit, obstacle=obstacle, x=poses[0][0], y=poses[0][1])
+            blocked.update(
+                unit=unit, obstacle=obstacle, x=poses[0][0], y=poses[0][1], poses=poses.copy()
+            )
         return gap
 
     if below > -math.inf:

@@ -73,6 +73,7 @@ __all__ = [
     "PLAN",
     "RADII",
     "START_REFUSED",
+    "BestCandidate",
     "Leg",
     "Plan",
     "PlanError",
@@ -130,10 +131,53 @@ class StartError(WorldError):
     status = START_REFUSED
 
 
+@dataclass(frozen=True)
+class BestCandidate:
+    """The candidate of a planning with no plan that got furthest before it was blocked: what
+    a figure of the failure draws (:func:`tt_mujoco.viz.plan_figure.plot_best_candidate`).
+
+    Attributes
+    ----------
+    world : World
+    params : Params
+        The train planned for.
+    start : tuple of float
+        The tractor's start ``(x, y, heading)`` (m, rad).
+    word : str
+        The candidate's name in the failure's message.
+    polyline : numpy.ndarray
+        The tractor's path, ``(n, 2)`` (m).
+    reached : float
+        The fraction of it that is clear.
+    poses : numpy.ndarray
+        Every unit's ``(x, y, heading)`` where it was blocked (the tractor first).
+    unit, obstacle : str or None
+        The unit that came too close, and the obstacle (None: the world's bounds).
+    """
+
+    world: World
+    params: Params
+    start: tuple
+    word: str
+    polyline: np.ndarray
+    reached: float
+    poses: np.ndarray
+    unit: str
+    obstacle: str | None
+
+
 class PlanError(StartError):
-    """No plan: the message says why and how far the best candidate got."""
+    """No plan: the message says why and how far the best candidate got; :attr:`best` is that
+    candidate (a :class:`BestCandidate`, None where none was tried)."""
 
     status = NO_PLAN
+
+    def __init__(self, message: str, best: BestCandidate | None = None):
+        super().__init__(message)
+        self.best = best
+
+    def __reduce__(self):  # a sweep's worker sends the message, not the drawing's data
+        return type(self), (str(self),)
 
 
 @dataclass(frozen=True)
@@ -364,7 +408,7 @@ class _Search:
         if gap < self.margin and reached > self.best:  # the blocked one that got furthest
             self.best = reached
             self.worst.clear()
-            self.worst.update(where, word=word)
+            self.worst.update(where, word=word, path=path)
         return gap >= self.margin
 
     def found(self, legs, exit_length: float) -> Plan:
@@ -412,7 +456,24 @@ class _Search:
             f"y={start[1]:.3f} m, heading {math.degrees(start[2]):.1f} deg "
             f"({'backing up' if reverse else 'forward'}): {self.tried - self.roadmap_edges} of "
             f"{self.total} candidates tried{roadmap}, {why}{closest}"
-            f"{'' if reverse else '; --reverse plans the train backing in'}"
+            f"{'' if reverse else '; --reverse plans the train backing in'}",
+            self._best_candidate(start) if self.tried and worst else None,
+        )
+
+    def _best_candidate(self, start) -> BestCandidate:
+        worst, obstacles = self.worst, self.world.all_obstacles
+        path = worst["path"]
+        x, y, _ = path.pose(np.linspace(0.0, path.length, max(2, math.ceil(path.length / 0.05))))
+        return BestCandidate(
+            world=self.world,
+            params=self.p,
+            start=tuple(float(v) for v in start),
+            word=worst["word"],
+            polyline=np.column_stack([x, y]),
+            reached=self.best,
+            poses=worst["poses"],
+            unit=unit_names(self.p.n_trailers)[worst["unit"]],
+            obstacle=None if worst["obstacle"] is None else obstacles[worst["obstacle"]].name,
         )
 
 
