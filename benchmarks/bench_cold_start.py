@@ -43,9 +43,15 @@ LONG = ["--traj", "circle", "--duration", "40", "--no-video", "--no-plots", "--q
 LAW = ["--controller", f"{ROOT}/examples/kanayama.py:kanayama_law"]
 
 
+#: What a shell here may set that a user's does not: a compile forced into the run, and no
+#: bytecode written (every module compiled from source in every process: the warm-up round
+#: writes the package's, as a user's first run, or pip's install, does).
+NOT_A_USERS = ("TT_MUJOCO_COMPILE_NOW", "PYTHONDONTWRITEBYTECODE")
+
+
 def user_env(**extra) -> dict:
-    """The environment a user's shell gives: no compile forced into the run."""
-    env = {k: v for k, v in os.environ.items() if k != "TT_MUJOCO_COMPILE_NOW"}
+    """The environment a user's shell gives (:data:`NOT_A_USERS` dropped)."""
+    env = {k: v for k, v in os.environ.items() if k not in NOT_A_USERS}
     return {**env, **extra}
 
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from tt_mujoco.analysis.kdtree import kd_tree_class
 from tt_mujoco.analysis.nearest import (
     CHUNK,
     Best,
@@ -68,7 +69,7 @@ def use_compiled_projection(project_points) -> None:
 def prepare_search() -> None:
     """Import what the vectorised search needs (SciPy's k-d tree): a worker forked ahead of
     its work (the run's figures) pays for it before the work comes."""
-    from scipy.spatial import cKDTree  # noqa: F401
+    kd_tree_class()
 
 
 class Polyline:
@@ -143,7 +144,7 @@ class Polyline:
         """
         if self._tree is not None:
             return
-        from scipy.spatial import cKDTree  # only where the vectorised search runs
+        cKDTree = kd_tree_class()  # only where the vectorised search runs
 
         n_seg = self.n_segments
         spacing = max(float(np.median(self._seg_lengths)), self.length / (2.0 * n_seg))
