@@ -305,3 +305,40 @@ def test_typed_options_are_found_and_tables_and_switches_are_checked_too():
         (SCHEMA + run.OUTPUTS).values({"no_video": 1}, "here")
     # Text an option keeps as text ("none" where TOML has no null, a word) stays allowed.
     assert SCHEMA.values({"eta": "same_path", "duration": "none"}, "")["duration"] is None
+
+
+@pytest.mark.parametrize("opt", _integer_options(), ids=lambda o: o.name)
+def test_an_integer_option_reads_its_text_as_a_toml_file_holds_it(opt):
+    """A whole float is taken as TOML's ``3.0`` is (so ``--seed 3.0`` and ``seed = 3.0`` run
+    the same), read exactly; text that is no ASCII number (``int("３")`` is 3 in Python) is
+    refused, and a huge exponent is refused without being written out."""
+    for spelling in ("3", "3.0", "3e0", " 3 ", 3.0):
+        assert opt.parse(spelling, opt.name) == 3
+    for bad in ("３", "3.5", "0x3", "nan", "1e999999999", "9" * 5000):
+        with pytest.raises(ValueError, match="is not allowed: it must be an integer"):
+            opt.parse(bad, opt.name)
+
+
+def test_every_text_of_numbers_is_read_by_one_reader():
+    """The specs written as text (wind, terrain, ground patches, faults, a sweep's numbers and
+    ranges) read their numbers as the option schema does: ASCII, exact, finite."""
+    from tt_mujoco.schema_values import number_text
+    from tt_mujoco.sim.parts.faults import parse_fault
+    from tt_mujoco.sim.parts.ground import parse_patch
+    from tt_mujoco.sim.parts.terrain import parse_terrain
+    from tt_mujoco.sim.parts.wind import parse_wind
+    from tt_mujoco.sweep import spec
+
+    assert number_text("1_0.5") == 10.5 and number_text("１") is None
+    assert number_text("9007199254740993.0", integer=True) == 9007199254740993
+    refusals = [
+        (parse_wind, "８:90"),
+        (parse_terrain, "slope:５"),
+        (parse_patch, "band:0:１:0.5"),
+        (parse_fault, "dropout:t=１"),
+        (lambda text: sweep_options.as_number("gain.k1_v", text), "１"),
+        (lambda text: spec.parse_item(f"seed=range:0:{text}"), "３"),
+    ]
+    for parse, text in refusals:
+        with pytest.raises(ValueError, match="not"):
+            parse(text)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
+from decimal import Decimal, InvalidOperation
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +19,7 @@ __all__ = [
     "check_typed",
     "choice",
     "number",
+    "number_text",
     "optional_table",
     "refuse",
     "resolve_file",
@@ -80,10 +82,9 @@ def number(
             return value.strip().lower()
         x = value
         if isinstance(x, str):
-            try:
-                x = int(x) if integer else float(x)
-            except ValueError:
-                raise refuse(label, value, f"it must be {allowed}") from None
+            x = number_text(x, integer)
+            if x is None:
+                raise refuse(label, value, f"it must be {allowed}")
         if integer and isinstance(x, float) and x.is_integer():
             x = int(x)
         ok_type = int if integer else int | float
@@ -96,6 +97,29 @@ def number(
         return x if integer else float(x)
 
     return parse
+
+
+def number_text(text: str, integer: bool = False):
+    """The number a text spells, as a TOML file would hold it (None: not a number): ASCII only
+    (Python's ``int("３")`` is 3), and an integer may be spelt as a whole float, ``3.0`` or
+    ``3e0``, as a TOML float holding a whole number is taken; read exactly, so a whole number
+    beyond a float's 53 bits is not rounded to another."""
+    text = text.strip()
+    if not text.isascii():
+        return None
+    try:
+        return int(text) if integer else float(text)
+    except ValueError:
+        if not integer:
+            return None
+    try:
+        exact = Decimal(text)
+    except InvalidOperation:
+        return None
+    # far beyond any option's range: not made into an integer of a billion digits
+    if not exact.is_finite() or exact.adjusted() > 20 or exact != exact.to_integral_value():
+        return None
+    return int(exact)
 
 
 def choice(*allowed):

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from tt_mujoco.registry import is_hook
 from tt_mujoco.schema import boolean, choice, number, table, text
+from tt_mujoco.schema_values import number_text
 from tt_mujoco.sim.parts.faults import parse_fault
 from tt_mujoco.sim.parts.ground import parse_patch
 from tt_mujoco.vehicle.params import MAX_TRAILERS, SETTABLE_FIELDS, Params
@@ -131,10 +132,8 @@ def train(value, label):
 
 def path_option(value, label):
     if isinstance(value, str) and value.strip():
-        try:
-            return float(value)
-        except ValueError:
-            return value.strip()
+        number = number_text(value)
+        return value.strip() if number is None else number
     return finite(value, label)
 
 

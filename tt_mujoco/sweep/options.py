@@ -7,7 +7,7 @@ from pathlib import Path
 
 from tt_mujoco.registry import closest
 from tt_mujoco.schema import Schema
-from tt_mujoco.schema_values import check_typed, number
+from tt_mujoco.schema_values import check_typed, number, number_text
 from tt_mujoco.sim import SCHEMA
 from tt_mujoco.vehicle.params import MAX_TRAILERS, TRAILER_FIELDS
 
@@ -106,10 +106,9 @@ class BadSpecError(ValueError):
 # --- option values ---------------------------------------------------------------------------
 def as_number(name: str, value, positive: bool = False) -> float:
     if isinstance(value, str):
-        try:
-            value = float(value)
-        except ValueError:
-            raise BadSpecError(f"{name}={value!r} is not allowed: it must be a number") from None
+        text, value = value, number_text(value)
+        if value is None:
+            raise BadSpecError(f"{name}={text!r} is not allowed: it must be a number")
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
         raise BadSpecError(f"{name}={value!r} is not allowed: it must be a finite number")
     if positive and value <= 0:

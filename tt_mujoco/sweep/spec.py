@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -11,6 +10,7 @@ import numpy as np
 import tomli_w
 
 from tt_mujoco.outputs import read_toml
+from tt_mujoco.schema_values import number_text
 from tt_mujoco.sweep.options import (
     DISTRIBUTIONS,
     GRID_GENERATORS,
@@ -147,9 +147,8 @@ def _int_arg(name: str, text) -> int:
         return int(text)
     if isinstance(text, int) and not isinstance(text, bool):
         return text
-    if isinstance(text, str):
-        with contextlib.suppress(ValueError):
-            return int(text.strip())
+    if isinstance(text, str) and number_text(text, integer=True) is not None:
+        return number_text(text, integer=True)
     raise BadSpecError(f"{name}: {text!r} is not an integer")
 
 

@@ -33,6 +33,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from tt_mujoco.analysis.metrics import distance_to_polyline
+from tt_mujoco.schema_values import number_text
 from tt_mujoco.vehicle.params import MAX_TRAILERS
 
 __all__ = [
@@ -95,10 +96,9 @@ class Fault:
 def _number(kind: str, key: str, value, low: float, high: float, low_open: bool = False):
     text = value
     if isinstance(value, str):
-        try:
-            value = float(value)
-        except ValueError:
-            raise ValueError(f"fault {kind}: {key}={text!r} is not a number") from None
+        value = number_text(value)
+        if value is None:
+            raise ValueError(f"fault {kind}: {key}={text!r} is not a number")
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise ValueError(f"fault {kind}: {key}={text!r} is not a number")
     value = float(value)

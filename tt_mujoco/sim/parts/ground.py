@@ -22,6 +22,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from tt_mujoco.reference.feedback import path_errors_of
+from tt_mujoco.schema_values import number_text
 
 __all__ = [
     "GroundPatches",
@@ -114,10 +115,9 @@ def parse_patch(text) -> Patch:
     need = {"band": 3, "rect": 5}.get(kind.lower())
     if need is None or len(parts) != need:
         raise ValueError(f"ground patch {text!r} is not allowed: {_ALLOWED}")
-    try:
-        numbers = [float(p) for p in parts]
-    except ValueError:
-        raise ValueError(f"ground patch {text!r} is not allowed: {_ALLOWED}") from None
+    numbers = [number_text(p) for p in parts]
+    if None in numbers:
+        raise ValueError(f"ground patch {text!r} is not allowed: {_ALLOWED}")
     if not all(math.isfinite(n) for n in numbers):
         raise ValueError(f"ground patch {text!r} is not allowed: its numbers must be finite")
     *bounds, mu = numbers

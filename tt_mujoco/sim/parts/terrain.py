@@ -22,6 +22,7 @@ import math
 from dataclasses import dataclass
 
 from tt_mujoco.registry import check_finite_fields
+from tt_mujoco.schema_values import number_text
 
 __all__ = ["GRAVITY", "MAX_GRADE_DEG", "Ramp", "Rough", "Terrain", "parse_terrain"]
 
@@ -214,10 +215,9 @@ def parse_terrain(text) -> Terrain | Ramp | Rough:
     if kind not in _KINDS or not _KINDS[kind][1] <= len(parts) - 1 <= _KINDS[kind][2]:
         raise ValueError(f"terrain={text!r} is not allowed: {_ALLOWED}")
     make = _KINDS[kind][0]
-    try:
-        numbers = [float(p) for p in parts[1:]]
-    except ValueError:
-        raise ValueError(f"terrain={text!r} is not allowed: {_ALLOWED}") from None
+    numbers = [number_text(p) for p in parts[1:]]
+    if None in numbers:
+        raise ValueError(f"terrain={text!r} is not allowed: {_ALLOWED}")
     if make is Rough and len(numbers) == 3:
         if not numbers[2].is_integer():
             raise ValueError(

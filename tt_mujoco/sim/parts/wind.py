@@ -22,6 +22,7 @@ import numpy as np
 
 from tt_mujoco.exact import hypot_of
 from tt_mujoco.registry import check_finite_fields
+from tt_mujoco.schema_values import number_text
 from tt_mujoco.sim.parts import measure
 
 __all__ = [
@@ -106,10 +107,9 @@ def parse_wind(text) -> Wind:
     parts = [p.strip() for p in text.split(":")]
     if not 1 <= len(parts) <= 3:
         raise ValueError(f"wind={text!r} is not allowed: {allowed}")
-    try:
-        numbers = [float(p) for p in parts]
-    except ValueError:
-        raise ValueError(f"wind={text!r} is not allowed: {allowed}") from None
+    numbers = [number_text(p) for p in parts]
+    if None in numbers:
+        raise ValueError(f"wind={text!r} is not allowed: {allowed}")
     return Wind(*numbers)
 
 
