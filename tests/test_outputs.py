@@ -383,3 +383,24 @@ def test_no_command_writes_inside_a_finished_run_or_through_a_link(
     assert any(words in err[0] for words in said), err
     assert sorted(p.name for p in finished_run.iterdir()) == before
     assert not (tmp_path / "missing").exists()
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device", "folder"])
+def test_a_file_read_back_is_a_regular_file_or_refused_before_it_is_opened(tmp_path, kind):
+    """A FIFO waits for a writer and /dev/zero never ends: every reader of a file read back
+    (TOML, strict JSON, a sweep's journal) goes through read_regular, which refuses them."""
+    from tt_mujoco.sweep.options import BadSpecError
+    from tt_mujoco.sweep.tables import read_journal
+
+    path = {"fifo": tmp_path / "f.toml", "device": "/dev/zero", "folder": tmp_path}[kind]
+    if kind == "fifo":
+        os.mkfifo(path)
+    said = "it is a folder" if kind == "folder" else "it is not a regular file"
+    with pytest.raises(ValueError, match=f"cannot be read: {said}"):
+        outputs.read_toml(path, "a file")
+    with pytest.raises(ValueError, match=f"cannot be read: {said}"):
+        outputs.read_strict_json(path)
+    with pytest.raises(BadSpecError, match=f"cannot be read: {said}"):
+        read_journal(path)
+    with pytest.raises(FileNotFoundError):
+        outputs.read_regular(tmp_path / "missing", "missing")

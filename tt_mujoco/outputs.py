@@ -35,6 +35,7 @@ __all__ = [
     "json_default",
     "json_safe",
     "publish_new",
+    "read_regular",
     "read_timeseries",
     "refuse_link_or_enclosed",
     "release_folder",
@@ -501,12 +502,33 @@ def parse_strict_json(text: str):
         raise ValueError("it is nested too deeply") from None
 
 
-def read_utf8(path, shown: str) -> str:
-    """The text of file ``path``; a ValueError naming it as ``shown`` when it cannot be read or
-    is not UTF-8 (with the first bad byte): the one way a text file read back is opened."""
+def read_regular(path, shown: str) -> bytes:
+    """The bytes of the regular file ``path``: what a file read back may be. A FIFO, a device
+    or a folder is refused before it is opened (``/dev/zero`` would be read for ever, a FIFO
+    waits for a writer), with a ValueError naming it as ``shown``; ``FileNotFoundError`` is
+    raised as it is, for a reader to which a missing file means something."""
+    import stat
+
     try:
-        data = Path(path).read_bytes()
+        mode = os.stat(path).st_mode
+        if not stat.S_ISREG(mode):
+            kind = "a folder" if stat.S_ISDIR(mode) else "not a regular file"
+            raise ValueError(f"{shown} cannot be read: it is {kind}")
+        with open(path, "rb") as handle:
+            return handle.read()
+    except FileNotFoundError:
+        raise
     except OSError as err:
+        raise ValueError(f"{shown} cannot be read: {err.strerror}") from None
+
+
+def read_utf8(path, shown: str) -> str:
+    """The text of file ``path``; a ValueError naming it as ``shown`` when it cannot be read
+    (:func:`read_regular`) or is not UTF-8 (with the first bad byte): the one way a text file
+    read back is opened."""
+    try:
+        data = read_regular(path, shown)
+    except FileNotFoundError as err:
         raise ValueError(f"{shown} cannot be read: {err.strerror}") from None
     try:
         return data.decode("utf-8")

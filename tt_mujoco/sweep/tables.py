@@ -15,6 +15,7 @@ from tt_mujoco.outputs import (
     JsonField,
     check_fields,
     parse_strict_json,
+    read_regular,
     save_figure,
     shown_json,
 )
@@ -71,11 +72,11 @@ def read_journal(path: Path) -> dict[str, dict]:
     """
     done = {}
     try:
-        data = Path(path).read_bytes()
+        data = read_regular(path, str(path))
     except FileNotFoundError:
         return done
-    except OSError as err:
-        raise BadSpecError(f"{path} cannot be read: {err.strerror}") from None
+    except ValueError as err:
+        raise BadSpecError(str(err)) from None
     lines = data.split(b"\n")
     for number, raw in enumerate(lines, start=1):
         if not raw.strip():

@@ -82,7 +82,8 @@ def _world(text: str) -> World | None:
     path = Path(text)
     if path.suffix == ".toml":
         if not path.is_file():
-            raise WorldError(f"world file {text!r} is not allowed: there is no such file")
+            what = "there is no such file" if not path.exists() else "it is not a regular file"
+            raise WorldError(f"world file {text!r} is not allowed: {what}")
         return read_world(path)
     raise WorldError(
         f"world={text!r} is not allowed: use {NO_WORLD}, one of {', '.join(WORLDS)}, or a "
