@@ -66,6 +66,31 @@ def test_a_progress_that_is_not_callable_is_named():
         tt_mujoco.simulate(Scenario(plant="reduced", duration=0.2), progress=3)
 
 
+def _raise(err):
+    raise err
+
+
+@pytest.mark.parametrize(
+    ("make", "said"),
+    [
+        (lambda: lambda done, total: 1 / 0, "ZeroDivisionError: division by zero"),
+        (lambda: lambda done: None, "TypeError"),  # the wrong signature
+        (lambda: lambda done, total: _raise(SystemExit(0)), "it called sys.exit(0)"),
+        (lambda: lambda done, total: _raise(GeneratorExit()), "GeneratorExit"),
+    ],
+    ids=["raises", "signature", "SystemExit", "GeneratorExit"],
+)
+def test_a_progress_that_fails_is_the_run_s_failure_with_its_rows_kept(make, said):
+    """The caller's progress is user code like any hook: its failure (a BaseException too)
+    stops the run as "failed", naming it, with the rows computed, and never escapes."""
+    from tt_mujoco.sim import simulate
+
+    result = simulate(Scenario(plant="reduced", duration=0.5), progress=make())
+    assert result.status == "failed"
+    assert result.message.startswith("progress failed at t=") and said in result.message
+    assert len(result.timeseries["t"]) == 501 and result.details.strip()
+
+
 @pytest.mark.parametrize("wrong", ["s_curve", {"traj": "s_curve"}, None])
 def test_simulate_names_what_it_takes(wrong):
     # simulate("s_curve") was an AttributeError about 'validate' from deep inside

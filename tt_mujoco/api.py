@@ -160,11 +160,6 @@ def simulate(scenario: Scenario, progress=None) -> Run:
             f"scenario={scenario!r} is not allowed: simulate takes a tt_mujoco.Scenario, e.g. "
             "tt_mujoco.Scenario(traj='s_curve'), or tt_mujoco.load_scenario(FILE)"
         )
-    if progress is not None and not callable(progress):
-        raise TypeError(
-            f"progress={progress!r} is not allowed: give None or a function "
-            "progress(steps_done, steps_total)"
-        )
     return Run(_simulate(scenario, progress=progress))
 
 

@@ -27,11 +27,12 @@ from tt_mujoco.sim.loop import compiled
 from tt_mujoco.sim.loop.stepper import Stepper
 from tt_mujoco.sim.parts import faults as faults_mod
 from tt_mujoco.sim.parts.ground import ground_report, parse_patches
+from tt_mujoco.sim.parts.plant import StopRun
 from tt_mujoco.sim.parts.relief import RampRelief
 from tt_mujoco.sim.parts.terrain import parse_terrain
 from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sim.scenario import Scenario
-from tt_mujoco.sim.usercode import users_copy
+from tt_mujoco.sim.usercode import CheckedProgress, users_copy
 from tt_mujoco.world.part import world_report
 
 __all__ = ["Result", "simulate"]
@@ -173,6 +174,8 @@ def simulate(
     else:
         built = build(scenario)
         check_user_code(built)
+    if progress is not None:  # a caller's code: its failure stops the run as "failed"
+        progress = CheckedProgress(progress, built.scenario.control_dt)
     if built.plan is not None and built.plan.cusps:
         from tt_mujoco.sim.maneuver import drive  # a maneuver: its legs one after the other
 
@@ -203,7 +206,11 @@ def drive_leg(built: Build, rng, time_limit: float, progress=None, on_step=None,
         stepper.close()  # the checkpoint file, if any, then holds every row computed
     wall = time.perf_counter() - start_wall
     if progress is not None:
-        progress(stepper.steps, stepper.steps)
+        try:
+            progress(stepper.steps, stepper.steps)
+        except StopRun as stop:  # the caller's progress failed at the end: the run's failure
+            if status == "ok":
+                status, message, stepper.stop_details = stop.status, stop.message, stop.details
     return stepper, controller, status, message, wall
 
 

@@ -187,6 +187,34 @@ class CheckedPath:
         return self._asked("pose_at", s, ("x", "y", "heading"))
 
 
+class CheckedProgress:
+    """A caller's ``progress(steps_done, steps_total)`` as the run calls it: what it raises
+    that is its failure (:func:`tt_mujoco.guard.users_failure`) stops the run as "failed" at
+    that step, its rows kept, as any user code's does.
+
+    Raises
+    ------
+    TypeError
+        ``progress`` is not callable (before anything is simulated).
+    """
+
+    def __init__(self, progress, dt: float):
+        if not callable(progress):
+            raise TypeError(
+                f"progress={shown(progress)} is not allowed: give None or a function "
+                "progress(steps_done, steps_total)"
+            )
+        self.progress, self.dt = progress, dt
+
+    def __call__(self, done: int, total: int) -> None:
+        try:
+            self.progress(done, total)
+        except BaseException as err:
+            if not users_failure(err):
+                raise
+            raise failure("progress", done * self.dt, err) from None
+
+
 def path_label(built) -> str:
     return f"path {built.scenario.traj!r}"
 
