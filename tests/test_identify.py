@@ -586,3 +586,25 @@ def test_fit_names_are_fittable_and_given_once(text, said):
     with pytest.raises(LogError, match=f"--fit {text!r} is not allowed: {said}"):
         fit_names(text)
     assert fit_names(" L , eta") == ("L", "eta")
+
+
+@pytest.mark.parametrize(
+    ("option", "says"),
+    [
+        (["--columns", "=v"], "--columns '=v' is not allowed: write NAME=VALUE"),
+        (["--columns", "phi="], "--columns 'phi=' is not allowed: write NAME=VALUE"),
+        (["--columns", "phi"], "--columns 'phi' is not allowed: write NAME=VALUE"),
+        (["--topics", "odom="], "--topics 'odom=' is not allowed: write NAME=VALUE"),
+        (["--wheel", "０.1,0.3"], "--wheel '０.1,0.3' is not allowed: give RADIUS,TRACK"),
+        (["--wheel", "0.1,"], "--wheel '0.1,' is not allowed: give RADIUS,TRACK"),
+    ],
+)
+def test_a_bad_option_is_exit_2_before_the_log_is_read(tmp_path, capsys, option, says):
+    """The NAME=VALUE items of every command are read by one reader (schema.name_value: an
+    empty name or value is refused, not run with) and numbers as the option schema reads them
+    (ASCII)."""
+    path = _log(tmp_path)
+    assert identify.main([str(path), *option, "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert says in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "o").exists()

@@ -43,7 +43,8 @@ import numpy as np
 from tt_mujoco import guard
 from tt_mujoco.cliargs import Parser
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_OK
-from tt_mujoco.schema import table_of
+from tt_mujoco.schema import name_value, table_of
+from tt_mujoco.schema_values import number_text
 from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle_log import LogError, read_log
 
@@ -467,13 +468,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {message}", file=sys.stderr)
         return EXIT_BAD_INPUT
 
-    if not all("=" in item for item in args.columns):
-        return fail(f"--columns {args.columns!r} is not allowed: give NAME=COLUMN")
-    if not all("=" in item for item in args.topics):
-        return fail(f"--topics {args.topics!r} is not allowed: give odom=TOPIC or joints=TOPIC")
     try:
-        mapping = table_of((item.split("=", 1) for item in args.columns), "--columns")
-        topics = table_of((item.split("=", 1) for item in args.topics), "--topics")
+        columns = (name_value(item, "--columns", "phi=hitch_deg") for item in args.columns)
+        mapping = table_of(columns, "--columns")
+        given = (name_value(item, "--topics", "odom=/tractor/odom") for item in args.topics)
+        topics = table_of(given, "--topics")
     except ValueError as err:
         return fail(str(err))
     unknown = sorted(set(topics) - {"odom", "joints"})
@@ -484,11 +483,10 @@ def main(argv: list[str] | None = None) -> int:
             check_out(args.out / "identified.toml")
         wheel = None
         if args.wheel is not None:
-            try:
-                wheel = tuple(float(x) for x in args.wheel.split(","))
-            except ValueError:
-                wheel = ()
-            if len(wheel) != 2 or not all(math.isfinite(x) and x > 0 for x in wheel):
+            wheel = tuple(number_text(x) for x in args.wheel.split(","))
+            if len(wheel) != 2 or not all(
+                x is not None and math.isfinite(x) and x > 0 for x in wheel
+            ):
                 return fail(f"--wheel {args.wheel!r} is not allowed: give RADIUS,TRACK in m")
         t, v, omega, phis = read_log(args.log, mapping, topics=topics, wheel=wheel)
         from tt_mujoco.sim import Scenario

@@ -31,6 +31,7 @@ from tt_mujoco.schema_values import (
     check_typed,
     choice,
     number,
+    number_text,
     optional_table,
     refuse,
     resolve_file,
@@ -45,6 +46,7 @@ __all__ = [
     "boolean",
     "check_typed",
     "choice",
+    "name_value",
     "number",
     "option",
     "optional_table",
@@ -508,18 +510,32 @@ def _without_label(message: str, flag: str) -> str:
     return message.removeprefix(head) if message.startswith(head) else message
 
 
+def name_value(text: str, flag: str, example: str = "R=2") -> tuple[str, str]:
+    """``(NAME, VALUE)`` of one ``NAME=VALUE`` item of a repeatable option (every command's:
+    ``--param``, ``--path-option``, ``--columns``, ``--topics``, ...), both stripped.
+
+    Raises
+    ------
+    ValueError
+        No ``=``, or an empty name or value, naming the item and the form ``example`` shows.
+    """
+    name, sep, value = str(text).partition("=")
+    name, value = name.strip(), value.strip()
+    if not sep or not name or not value:
+        raise ValueError(
+            f"{flag} {shown(text)} is not allowed: write NAME=VALUE, e.g. {flag} {example}"
+        )
+    return name, value
+
+
 def _entry_type(flag: str):
     def convert(text: str):
-        name, sep, value = text.partition("=")
-        name, value = name.strip(), value.strip()
-        if not sep or not name or not value:
-            raise argparse.ArgumentTypeError(
-                f"{shown(text)} is not allowed: write NAME=VALUE, e.g. {flag} R=2"
-            )
         try:
-            return name, float(value)
-        except ValueError:
-            return name, value
+            name, value = name_value(text, flag)
+        except ValueError as err:
+            raise argparse.ArgumentTypeError(str(err).removeprefix(f"{flag} ")) from None
+        number = number_text(value)
+        return name, value if number is None else number
 
     return convert
 
