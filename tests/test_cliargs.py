@@ -103,3 +103,24 @@ def test_every_command_says_its_errors_alike(tmp_path, argv):
     )
     lines = proc.stderr.strip().splitlines()
     assert proc.returncode == 2 and len(lines) == 1 and lines[0].startswith("error: "), lines
+
+
+def test_every_command_s_numbers_are_read_as_the_option_schema_reads_them():
+    """Every command's parser is a Parser (tests/test_commands.py), whose ``type=int`` and
+    ``type=float`` options, in groups too, read numbers as the option schema does: ASCII only
+    (Python's ``int("６４")`` is 64), a whole float as an integer (``seed = 3.0`` in TOML)."""
+    from tt_mujoco.cliargs import BadInputError, Parser
+
+    parser = Parser()
+    parser.add_argument("--n", type=int)
+    parser.add_mutually_exclusive_group().add_argument("--x", type=float)
+    parser.add_argument_group("g").add_argument("--m", type=int)
+    got = parser.parse_args(["--n", "2.0", "--x", "1_0.5", "--m", "1_000"])
+    assert (got.n, got.x, got.m) == (2, 10.5, 1000)
+    for argv, said in (
+        (["--n", "６４"], "'６４' is not an integer"),
+        (["--m", "2.5"], "'2.5' is not an integer"),
+        (["--x", "１.5"], "'１.5' is not a number"),
+    ):
+        with pytest.raises(BadInputError, match=said):
+            parser.parse_args(argv)

@@ -12,6 +12,7 @@ import argparse
 import re
 
 from tt_mujoco.registry import closest
+from tt_mujoco.schema_values import number_text
 
 __all__ = ["BadInputError", "Parser", "integer_at_least"]
 
@@ -20,8 +21,34 @@ class BadInputError(ValueError):
     """A user's mistake: reported as one line, exit code 2."""
 
 
+def _ascii_integer(text: str) -> int:
+    value = number_text(text, integer=True)
+    if value is None:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer")
+    return value
+
+
+def _ascii_number(text: str) -> float:
+    value = number_text(text)
+    if value is None:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number")
+    return value
+
+
+#: The readers of ``type=int`` and ``type=float`` options, which every command's numbers are
+#: read by: the option schema's (:func:`tt_mujoco.schema_values.number_text`: ASCII, a whole
+#: float as an integer), not Python's ``int``, which reads ``"６４"`` as 64.
+_NUMBER_TYPES = {int: _ascii_integer, float: _ascii_number}
+
+
 class Parser(argparse.ArgumentParser):
-    """argparse with errors raised as :class:`BadInputError`, with a hint for misspellings."""
+    """argparse with errors raised as :class:`BadInputError`, with a hint for misspellings,
+    and numbers read as the option schema reads them (:data:`_NUMBER_TYPES`)."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        for kind, reader in _NUMBER_TYPES.items():  # argparse's own registry of types
+            self.register("type", kind, reader)
 
     def error(self, message: str):
         raise BadInputError(message + self._hint(message))
@@ -48,13 +75,8 @@ def integer_at_least(name: str, low: int):
     """An argparse type: an integer >= ``low``, the message naming ``name``."""
 
     def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(
-                f"{name} {text!r} is not an integer >= {low}"
-            ) from None
-        if value < low:
+        value = number_text(text, integer=True)
+        if value is None or value < low:
             raise argparse.ArgumentTypeError(f"{name} {text!r} is not an integer >= {low}")
         return value
 
