@@ -551,3 +551,13 @@ def test_a_sweep_its_scheduler_refuses_leaves_nothing_that_blocks_the_retry(
     for _ in range(2):  # the retry meets the same refusal, not a folder in its way
         assert cli.main([*argv, "--quiet", "--no-figures"]) == 2
         assert not out.exists()
+
+
+@pytest.mark.parametrize("key", ["seed", "repeats", "samples"])
+def test_a_sweep_file_s_numbers_are_typed(tmp_path, key):
+    """A TOML file gives numbers with their type, so [sweep] repeats = "3" is a mistake named,
+    as an option's text is in [options] (schema_values.check_typed)."""
+    spec = tmp_path / "sweep.toml"
+    spec.write_text(f'[sweep]\n{key} = "3"\n[options]\nplant = "reduced"\n')
+    with pytest.raises(BadSpecError, match=rf"\[sweep\] {key}='3' is not allowed: it is text"):
+        sweep.load_spec(spec)

@@ -10,7 +10,7 @@ import numpy as np
 import tomli_w
 
 from tt_mujoco.outputs import read_toml
-from tt_mujoco.schema_values import number_text
+from tt_mujoco.schema_values import check_typed, number_text
 from tt_mujoco.sweep.options import (
     DISTRIBUTIONS,
     GRID_GENERATORS,
@@ -236,6 +236,11 @@ def load_spec(path: str | Path) -> SweepSpec:
             f"--config {str(path)!r}: [sweep] key(s) {bad} are not allowed: use seed, repeats, "
             "samples"
         )
+    for key, value in sweep.items():  # a TOML file's numbers are typed: "3" is a mistake
+        try:
+            check_typed(value, as_integer(key, value), f"--config {str(path)!r}: [sweep] {key}")
+        except ValueError as err:
+            raise BadSpecError(str(err)) from None
     axes = [_toml_axis(name, value) for name, value in _flatten(doc.get("options", {}))]
     return _make_spec(axes, sweep.get("seed"), sweep.get("repeats"), sweep.get("samples"))
 
