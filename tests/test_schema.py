@@ -303,6 +303,10 @@ def test_typed_options_are_found_and_tables_and_switches_are_checked_too():
         (SCHEMA + run.OUTPUTS).values({"no_video": "yes"}, "here")
     with pytest.raises(ValueError, match=r"here: no_video=1 is not allowed: use true or false"):
         (SCHEMA + run.OUTPUTS).values({"no_video": 1}, "here")
+    # JSON is typed as TOML is: --gains '{"k1_v": "5"}' is the same mistake
+    with pytest.raises(ValueError, match=r"gains.k1_v='5' is not allowed: it is text"):
+        SCHEMA["gains"].parse('{"k1_v": "5"}', "gains")
+    assert SCHEMA["gains"].parse('{"k1_v": 5}', "gains") == {"k1_v": 5.0}
     # Text an option keeps as text ("none" where TOML has no null, a word) stays allowed.
     assert SCHEMA.values({"eta": "same_path", "duration": "none"}, "")["duration"] is None
 

@@ -90,6 +90,9 @@ def _gains(value, label):
             raise ValueError(f"{label} {value!r} is not valid JSON: {why}") from None
         if not isinstance(value, dict):
             raise ValueError(f"{label} {value!r} is not a JSON object")
+        gains = table(_gain)(value, label)
+        check_typed(value, gains, label)  # JSON is typed: {"k1_v": "5"} is a mistake
+        return gains
     if isinstance(value, dict):
         return table(_gain)(value, label)
     return text(value, label)
