@@ -415,16 +415,21 @@ LAW_FORMS = {
     "write the model": ("model.g11 = 1.0\n    x = 1.0", "model.g11 = 1.0"),
     "write the gains": ("k.k = 2.0\n    x = 1.0", "k.k = 2.0"),
     "write the state": ("s.n = s.n + 0.0\n    x = 1.0", None),
+    "write the path": ("path[0, 0] = 1.0\n    x = 1.0", "path[0, 0] = 1.0"),
+    "write the vehicle": ("vehicle.L = 1.0\n    x = 1.0", "vehicle.L = 1.0"),
+    "write a buffer of its own": ("x = fill(np.zeros(3))", None),
 }
 
 
 def _integer_law(tmp_path, body: str) -> str:
     law = tmp_path / f"integer_law_{abs(hash(body))}.py"
     law.write_text(
+        "import numpy as np\n\n"
         "from tt_mujoco.controllers import plain_law\n\n\n"
         "def helper(i):\n    return i * i\n\n\n"
-        "@plain_law(gains={'k': 1.0}, state=('n',))\n"
-        "def integer_law(m, r, model, k, s, dt, torque_limit):\n"
+        "def fill(buffer):\n    buffer[0] = 1.0\n    return buffer[0]\n\n\n"
+        "@plain_law(gains={'k': 1.0}, state=('n',), path=True)\n"
+        "def integer_law(m, r, model, k, s, dt, torque_limit, path, vehicle):\n"
         "    s.n += 1.0\n"
         "    i = int(s.n)\n"
         f"    {body}\n"

@@ -111,7 +111,8 @@ def _unreproducible(stmt, kinds, state_type, given, ir, types) -> str | None:
                 "form cannot (only its state is written)"
             )
     elif isinstance(stmt, ir.SetItem | ir.StaticSetItem) and stmt.target.name in given:
-        if isinstance(kinds[stmt.target.name], types.Array):
+        # the path is the one table a law is given (a helper may be handed a buffer of its own)
+        if isinstance(kinds[stmt.target.name], types.Array) and kinds[stmt.target.name].ndim == 2:
             return (
                 "it writes into the path it is given to read, which its Python form cannot "
                 "(the table is read-only)"
