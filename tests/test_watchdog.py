@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from tt_mujoco import watchdog
+from tt_mujoco import guard, watchdog
 from tt_mujoco.defaults import EXIT_BUG, EXIT_DIVERGED, EXIT_INTERRUPTED, EXIT_OK
 
 pytestmark = pytest.mark.skipif(not watchdog.available(), reason="no fork here")
@@ -145,8 +145,10 @@ def test_an_interrupt_ends_code_that_never_returns(compiled_spin, tmp_path):
     _no_process_left(tmp_path)
 
 
-@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+@pytest.mark.parametrize("signum", guard.STOP_SIGNALS, ids=lambda s: signal.Signals(s).name)
 def test_a_signal_to_the_command_reaches_its_run_once(tmp_path, signum):
+    """Every stop signal (Ctrl-C, a batch system's SIGTERM, a terminal's hangup) ends the run
+    as Ctrl-C does: one line, exit 130, the rows kept, no process left."""
     proc = _start(tmp_path, "--traj", "circle", "--trailers", "3", duration="600")
     time.sleep(4)
     proc.send_signal(signum)
@@ -240,3 +242,17 @@ def test_the_outputs_after_the_simulation_are_not_bound_by_its_limit(tmp_path):
     assert (tmp_path / "o" / "video.mp4").exists() and (tmp_path / "o" / "metrics.json").exists()
     if time.monotonic() - began < watchdog.grace_for(1.0):
         pytest.skip("the outputs were written within the grace: nothing to show here")
+
+
+def test_a_hangup_ignored_by_nohup_stays_ignored(tmp_path):
+    """nohup starts the command with SIGHUP ignored: the run goes on through a hangup."""
+    code = (
+        "import signal\n"
+        "signal.signal(signal.SIGHUP, signal.SIG_IGN)\n"
+        "from tt_mujoco import guard\n"
+        "guard.interrupts_from_signals()\n"
+        "print(signal.SIGHUP in guard.stop_signals(), "
+        "signal.getsignal(signal.SIGHUP) is signal.SIG_IGN)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.stdout.split() == ["False", "True"], done.stderr

@@ -22,6 +22,8 @@ import signal
 import sys
 from collections.abc import Callable
 
+from tt_mujoco import guard
+
 __all__ = ["BackgroundError", "Worker", "spare_cores"]
 
 
@@ -40,8 +42,9 @@ def spare_cores() -> int:
 
 def _serve(channel, caller_end, prepare) -> None:
     """The worker: ``prepare()``, then one call from the pipe, its answer sent back."""
-    # Ctrl-C reaches the whole process group: the caller handles it and ends this process.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # Ctrl-C and a hangup reach the whole process group: the caller handles them and ends
+    # this process.
+    guard.ignore_stop_signals()
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     caller_end.close()  # only the caller holds it: its end closing is this pipe's EOF
     try:

@@ -6,9 +6,10 @@ import concurrent.futures as cf
 import contextlib
 import multiprocessing
 import os
-import signal
 import threading
 import time
+
+from tt_mujoco import guard
 
 __all__ = ["PRELOAD", "ExecutorError", "Executors", "ignore_sigint"]
 
@@ -33,9 +34,10 @@ PRELOAD = [
 
 
 def ignore_sigint() -> None:
-    # Ctrl-C reaches the whole process group; only the parent should handle it (it cancels the
-    # rest and stops the workers), or every worker prints a traceback.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # Ctrl-C and a terminal's hangup reach the whole process group; only the parent should
+    # handle them (it cancels the rest and stops the workers), or every worker prints a
+    # traceback, or dies mid-run
+    guard.ignore_stop_signals()
 
 
 def _watch_parent(parent_pid: int, period: float = 1.0) -> None:

@@ -27,13 +27,38 @@ import threading
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_BUG
 
 __all__ = [
+    "STOP_SIGNALS",
     "command",
     "control_signal",
+    "ignore_stop_signals",
     "interrupts_from_signals",
     "noting_interrupts",
     "shown_error",
+    "stop_signals",
     "users_failure",
 ]
+
+#: The signals that stop a run cleanly, as Ctrl-C does (the rows kept, exit code 130): Ctrl-C,
+#: a batch system's SIGTERM, and a terminal's hangup (an ssh connection lost). A hangup that
+#: was ignored when the command started (``nohup``) stays ignored (:func:`stop_signals`).
+STOP_SIGNALS = tuple(
+    getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)
+)
+
+
+def stop_signals() -> tuple:
+    """The :data:`STOP_SIGNALS` this process takes as a stop: all of them but one it ignores
+    (``nohup`` ignores the hangup for the command it starts)."""
+    return tuple(sig for sig in STOP_SIGNALS if signal.getsignal(sig) is not signal.SIG_IGN)
+
+
+def ignore_stop_signals() -> None:
+    """In a worker process of a command: ignore Ctrl-C and the terminal's hangup, which reach
+    the whole process group; the command itself handles them and ends its workers."""
+    for sig in STOP_SIGNALS:
+        if sig != signal.SIGTERM:
+            signal.signal(sig, signal.SIG_IGN)
+
 
 _CONTROL: list[type] = []
 #: Whether a signal handler of ours has turned a real interrupt into KeyboardInterrupt
@@ -50,9 +75,10 @@ def control_signal(cls: type) -> type:
 
 def interrupts_from_signals() -> None:
     """Install, in the main thread, the handlers through which a real interrupt reaches the
-    run: SIGINT (Ctrl-C) and SIGTERM (a batch system's stop) raise ``KeyboardInterrupt`` after
-    noting that it is real. The command-line entry points call it; an API user's process keeps
-    its own handlers, and there every KeyboardInterrupt counts as real."""
+    run: SIGINT (Ctrl-C), SIGTERM (a batch system's stop) and SIGHUP (a terminal's hangup;
+    :func:`stop_signals`) raise ``KeyboardInterrupt`` after noting that it is real. The
+    command-line entry points call it; an API user's process keeps its own handlers, and there
+    every KeyboardInterrupt counts as real."""
     global _INTERRUPTED
     if threading.current_thread() is not threading.main_thread():
         return
@@ -64,8 +90,8 @@ def interrupts_from_signals() -> None:
         _INTERRUPTED.set()
         raise KeyboardInterrupt
 
-    signal.signal(signal.SIGINT, interrupted)
-    signal.signal(signal.SIGTERM, interrupted)
+    for sig in stop_signals():
+        signal.signal(sig, interrupted)
 
 
 @contextlib.contextmanager
@@ -83,7 +109,7 @@ def noting_interrupts():
         yield
         return
     noted = _INTERRUPTED = threading.Event()
-    previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    previous = {sig: signal.getsignal(sig) for sig in STOP_SIGNALS}
 
     def interrupted(signum, frame):
         if noted.is_set():  # the same stop again (to the process and to its group)

@@ -35,6 +35,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import NamedTuple
 
+from tt_mujoco import guard
+
 __all__ = [
     "GRACE_FRACTION",
     "GRACE_S",
@@ -173,7 +175,7 @@ def _wait(pid, seconds, traceback_fd, done_fd, on_expiry, on_killed, on_early_ex
             pass
         deadline[:] = [min(deadline[0], time.monotonic() + INTERRUPT_GRACE_S), True]
 
-    for signum in (signal.SIGINT, signal.SIGTERM):
+    for signum in guard.stop_signals():
         signal.signal(signum, interrupted)
     exited = os.pidfd_open(pid)  # readable once the child has exited
     watching = [exited, done_fd]
