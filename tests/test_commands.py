@@ -76,3 +76,24 @@ def test_no_command_parses_with_argparse_itself():
     root = Path(tt_mujoco.__file__).parent
     for path in root.rglob("*.py"):
         assert "argparse.ArgumentParser(" not in path.read_text(), path
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_a_reader_that_goes_away_is_no_bug(name, tmp_path):
+    """``python -m ... | head -1``: the pipe's reader closes it, and what the command still
+    prints is dropped (guard._ReaderMayGo), not a Broken pipe reported as a bug of ours."""
+    import subprocess
+    import sys
+
+    module = name.removesuffix(".cli")  # a package's command runs as the package
+    proc = subprocess.Popen(
+        [sys.executable, "-m", module, "--help"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        cwd=tmp_path,
+    )
+    proc.stdout.close()  # gone before the command writes a line
+    err = proc.stderr.read().decode()
+    proc.stderr.close()
+    assert proc.wait(timeout=120) == 0, err
+    assert "bug" not in err and "Traceback" not in err, err

@@ -181,6 +181,41 @@ def crash_file(err: BaseException) -> str:
     return path
 
 
+class _ReaderMayGo:
+    """A command's ``sys.stdout`` or ``sys.stderr``: once the reader of the stream has gone (a
+    pipe into ``head`` closed), what the command writes there is dropped, not raised, and the
+    command goes on to its own ending (its files written, its exit code). The stream's file
+    is then pointed at the null device, so the interpreter's last flush finds a sink too."""
+
+    def __init__(self, stream):
+        self._stream, self._gone = stream, False
+
+    def write(self, text):
+        if not self._gone:
+            try:
+                return self._stream.write(text)
+            except BrokenPipeError:
+                self._went()
+        return len(text)
+
+    def flush(self):
+        if not self._gone:
+            try:
+                self._stream.flush()
+            except BrokenPipeError:
+                self._went()
+
+    def _went(self):
+        self._gone = True
+        with contextlib.suppress(OSError, ValueError):
+            sink = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(sink, self._stream.fileno())
+            os.close(sink)
+
+    def __getattr__(self, name):  # isatty, fileno, encoding, ...: the stream's own
+        return getattr(self._stream, name)
+
+
 def command(main):
     """A command's ``main(argv) -> int``, guarded: bad input it raises
     (:class:`~tt_mujoco.cliargs.BadInputError`, an unknown or malformed option from
@@ -192,6 +227,8 @@ def command(main):
 
     @functools.wraps(main)
     def guarded(argv=None):
+        streams = sys.stdout, sys.stderr
+        sys.stdout, sys.stderr = (_ReaderMayGo(s) for s in streams)  # `| head` is no bug
         try:
             return main(argv)
         except (SystemExit, KeyboardInterrupt):
@@ -210,6 +247,10 @@ def command(main):
                 file=sys.stderr,
             )
             return EXIT_BUG
+        finally:
+            with contextlib.suppress(OSError, ValueError):
+                sys.stdout.flush()
+            sys.stdout, sys.stderr = streams
 
     guarded.guarded = True
     return guarded
