@@ -9,9 +9,7 @@ import os
 import threading
 import time
 
-from tt_mujoco import guard
-
-__all__ = ["PRELOAD", "ExecutorError", "Executors", "ignore_sigint"]
+__all__ = ["PRELOAD", "ExecutorError", "Executors"]
 
 
 class ExecutorError(ValueError):
@@ -31,13 +29,6 @@ PRELOAD = [
     "tt_mujoco.controllers",
     "tt_mujoco.sweep.runs",
 ]
-
-
-def ignore_sigint() -> None:
-    # Ctrl-C and a terminal's hangup reach the whole process group; only the parent should
-    # handle them (it cancels the rest and stops the workers), or every worker prints a
-    # traceback, or dies mid-run
-    guard.ignore_stop_signals()
 
 
 def _watch_parent(parent_pid: int, period: float = 1.0) -> None:
@@ -101,7 +92,7 @@ class Executors:
         None: local processes (forkserver, with :data:`PRELOAD` imported once); ``"local"``: a
         Dask ``LocalCluster``; else the address of a running Dask scheduler.
     initializer : callable, optional
-        Run in each pool worker at start (e.g. :func:`ignore_sigint`).
+        Run in each pool worker at start (e.g. :func:`tt_mujoco.guard.ignore_stop_signals`).
     """
 
     def __init__(self, workers: int, scheduler: str | None, initializer=None):

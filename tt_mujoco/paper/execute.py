@@ -12,12 +12,13 @@ from concurrent.futures import as_completed
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
+from tt_mujoco import guard
 from tt_mujoco.analysis.metrics import (
     finite_prefix_length,
     follower_offtrack,
     signed_lateral_error,
 )
-from tt_mujoco.executor import Executors, ignore_sigint
+from tt_mujoco.executor import Executors
 from tt_mujoco.outputs import json_safe
 from tt_mujoco.paper.suite import SERIES_POINTS, SETTLE_DISTANCE, V_MIN, RunSpec
 from tt_mujoco.progress import progress_bar
@@ -242,7 +243,9 @@ def run_suite(
                 done[spec.key] = runner(spec.key, spec.scenario, spec.keep_series)
                 bar.update()
         else:
-            executors = Executors(workers, None, ignore_sigint)  # the sweep's process pool
+            executors = Executors(
+                workers, None, guard.ignore_stop_signals
+            )  # the sweep's process pool
             pool = executors.open()
             try:
                 futures = {

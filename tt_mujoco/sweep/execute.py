@@ -13,8 +13,8 @@ from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from tt_mujoco import watchdog
-from tt_mujoco.executor import ExecutorError, Executors, ignore_sigint
+from tt_mujoco import guard, watchdog
+from tt_mujoco.executor import ExecutorError, Executors
 from tt_mujoco.outputs import atomic_write, json_safe, refuse_link_or_enclosed, write_json
 from tt_mujoco.progress import progress_bar
 from tt_mujoco.sweep.options import JOURNAL, SPEC_FILE, TABLE, BadSpecError
@@ -288,7 +288,11 @@ def run_sweep(
             bar = _progress(len(runs), reused, quiet)
             try:
                 _execute(
-                    todo, done, journal_path, Executors(workers, scheduler, ignore_sigint), bar
+                    todo,
+                    done,
+                    journal_path,
+                    Executors(workers, scheduler, guard.ignore_stop_signals),
+                    bar,
                 )
             except (BadSpecError, ExecutorError):  # refused before its first run
                 if fresh and not done:

@@ -147,8 +147,9 @@ def _int_arg(name: str, text) -> int:
         return int(text)
     if isinstance(text, int) and not isinstance(text, bool):
         return text
-    if isinstance(text, str) and number_text(text, integer=True) is not None:
-        return number_text(text, integer=True)
+    value = number_text(text, integer=True) if isinstance(text, str) else None
+    if value is not None:
+        return value
     raise BadSpecError(f"{name}: {text!r} is not an integer")
 
 
