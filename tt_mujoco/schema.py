@@ -308,17 +308,16 @@ class Schema:
                 parsed = opt.parse(value, label)
                 if typed:
                     check_typed(value, parsed, label)
-                out[opt.name] = resolve_file(parsed, base) if opt.file else parsed
-                continue
-            on = boolean(value, label)
-            if typed:
-                check_typed(value, on, label)
-            if const is _NOT:  # ``no_video = true`` is ``--no-video``
-                parsed = opt.parse(not on, label)
-            elif on:
-                parsed = const
             else:
-                raise refuse(label, value, f"use true (it means {opt.name} = {const!r})")
+                on = boolean(value, label)
+                if typed:
+                    check_typed(value, on, label)
+                if const is _NOT:  # ``no_video = true`` is ``--no-video``
+                    parsed = opt.parse(not on, label)
+                elif on:
+                    parsed = const
+                else:
+                    raise refuse(label, value, f"use true (it means {opt.name} = {const!r})")
             if opt.file:
                 parsed = resolve_file(parsed, base)
             out[opt.name] = parsed
