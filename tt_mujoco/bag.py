@@ -367,7 +367,7 @@ def read_bag_log(path, topics: dict[str, str] | None = None) -> dict[str, np.nda
                 if channel.topic == chosen["odom"]:
                     odom.append((at, msg.twist.twist.linear.x, msg.twist.twist.angular.z))
                 else:
-                    joints.append((at, list(msg.name), list(msg.position)))
+                    joints.append((at, list(msg.name), list(msg.position), list(msg.effort)))
     except (McapError, OSError, EOFError, KeyError, AttributeError, struct.error) as err:
         raise ValueError(f"{path} cannot be read as MCAP of ROS 2 messages: {err}") from None
     for topic, rows in ((chosen["odom"], odom), (chosen["joints"], joints)):
@@ -385,7 +385,7 @@ def read_bag_log(path, topics: dict[str, str] | None = None) -> dict[str, np.nda
     keep = (table["t"] >= joint_t[0]) & (table["t"] <= joint_t[-1])
     table = {name: column[keep] for name, column in table.items()}
     names = joints[0][1]
-    for k, (_, these, positions) in enumerate(joints):
+    for k, (_, these, positions, _) in enumerate(joints):
         if these != names or len(positions) != len(names):
             raise ValueError(
                 f"{path}: topic {chosen['joints']!r} message {k + 1} names the joints "
@@ -403,6 +403,13 @@ def read_bag_log(path, topics: dict[str, str] | None = None) -> dict[str, np.nda
                 f"{name!r} at {float(column[bad[0]])!r}, not a finite number"
             )
         table[name] = np.interp(table["t"], joint_t, column)
+    efforts = [r[3] for r in joints]
+    if all(len(e) == len(names) for e in efforts):  # a joint's effort, each held till the next
+        efforts = np.array(efforts, dtype=float)
+        held = np.clip(np.searchsorted(joint_t, table["t"], side="right") - 1, 0, None)
+        for j, name in enumerate(names):
+            if np.all(np.isfinite(efforts[:, j])):
+                table[f"{name}_effort"] = efforts[held, j]
     return table
 
 

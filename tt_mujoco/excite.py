@@ -172,7 +172,7 @@ def _table(ranked: list[Candidate]) -> str:
 @guard.command
 def main(argv: list[str] | None = None) -> int:
     """``python -m tt_mujoco.excite``: see the module."""
-    from tt_mujoco.identify import LogError, fit_names
+    from tt_mujoco.identify import KINEMATIC, LogError, fit_names
     from tt_mujoco.outputs import atomic_write, claim_folder, release_folder
     from tt_mujoco.sim import Scenario
 
@@ -200,7 +200,7 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_BAD_INPUT
 
     try:
-        fit = fit_names(args.fit)
+        fit = fit_names(args.fit, KINEMATIC)
     except LogError as err:
         return fail(str(err))
     for name, value in (("--rate", args.rate), ("--encoder-noise-deg", args.encoder_noise_deg)):

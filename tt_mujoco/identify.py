@@ -22,10 +22,16 @@ biases the lengths). Then the fitted train is replayed open loop (its hitch angl
 from the first logged ones under the logged ``v``, ``omega``) and its hitch angles compared
 with the log.
 
+The masses and inertias ``--fit`` names (``Mr``, ``Ird``, ... of
+:data:`tt_mujoco.identify_inertia.INERTIAL`) are fitted to the log's wheel torques ``T_r``,
+``T_l`` after the lengths, and ``--payload K`` finds a load put on trailer K during the log
+(:mod:`tt_mujoco.identify_inertia`); ``--config FILE`` gives the vehicle what is not fitted
+is taken from, and the fit's first guess.
+
 Written into ``--out`` (a new folder): ``identified.toml`` (the fitted vehicle, a scenario file
 every command takes: ``python -m tt_mujoco.run --config identified.toml``), ``identify.json``
 (estimates, 95 % confidence intervals, correlations, the replay's errors) and ``identify.md``.
-Two parameters whose estimates correlate beyond :data:`CORRELATED` are reported as not told
+Two parameters whose estimates correlate beyond :data:`CORRELATED` (0.95) are reported as not told
 apart by this log, with the excitation that would tell them apart. Bad logs (a missing column,
 time not increasing, a gap, a value that is not a finite number) are exit 2 naming the column
 and the row.
@@ -43,10 +49,20 @@ import numpy as np
 from tt_mujoco import guard
 from tt_mujoco.cliargs import Parser
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_OK
+from tt_mujoco.identify_inertia import INERTIAL, check_payload
 from tt_mujoco.schema import name_value, table_of
 from tt_mujoco.schema_values import number_text
 from tt_mujoco.vehicle.params import Params
-from tt_mujoco.vehicle_log import LogError, read_log
+from tt_mujoco.vehicle_log import (
+    CORRELATED,
+    NOISY_DB,
+    LogError,
+    confounded,
+    estimates_report,
+    input_snr_db,
+    read_log,
+    smoothed,
+)
 
 __all__ = [
     "CORRELATED",
@@ -61,21 +77,20 @@ __all__ = [
     "step_errors",
 ]
 
-#: The parameters a fit can take: each trailer's, and the log's own ``hitch_lag``.
-FITTABLE = ("L", "L0", "eta", "hitch_lag")
+#: The parameters the kinematic fit takes: each trailer's, and the log's own ``hitch_lag``.
+KINEMATIC = ("L", "L0", "eta", "hitch_lag")
+#: Every parameter a fit can take: :data:`KINEMATIC`, and the masses and inertias
+#: (:data:`tt_mujoco.identify_inertia.INERTIAL`, fitted to the log's torques).
+FITTABLE = (*KINEMATIC, *INERTIAL)
 #: How late (s) the hitch angles are logged after the inputs they answer: an encoder's
 #: filter or a bus's latency. The log's own, one for every hitch; fitted where asked.
 HITCH_LAG = "hitch_lag"
 #: The largest hitch lag a fit looks for (s); the rows within it of either end stay out.
 LAG_MAX = 0.5
-#: Above this |correlation| two estimates are not told apart by the log.
-CORRELATED = 0.95
 #: At most this many rows enter the fit (the log is thinned evenly beyond it).
 FIT_ROWS = 4000
 #: The window (s) a noisy log's ``v`` and ``omega`` are averaged over before the fit.
 INPUT_WINDOW_S = 0.04
-#: Below this estimated signal-to-noise ratio (dB) ``v`` or ``omega`` counts as noisy.
-NOISY_DB = 40.0
 
 
 def _with(p: Params, values: dict[tuple[int, str], float]) -> Params:
@@ -137,27 +152,11 @@ class Fit:
 
     def confounded(self) -> list[tuple[str, str, float]]:
         """The pairs this log does not tell apart: ``(a, b, correlation)``."""
-        pairs = []
-        for i in range(len(self.names)):
-            for j in range(i + 1, len(self.names)):
-                rho = float(self.correlation[i, j])
-                if abs(rho) > CORRELATED:
-                    pairs.append((self.names[i], self.names[j], rho))
-        return pairs
+        return confounded(self.names, self.correlation)
 
     def report(self) -> dict:
         return {
-            "estimates": {
-                n: {"value": float(e), "ci95": [float(e - h), float(e + h)]}
-                for n, e, h in zip(self.names, self.estimates, self.half_widths, strict=True)
-            },
-            "correlation": {
-                a: {b: float(self.correlation[i, j]) for j, b in enumerate(self.names)}
-                for i, a in enumerate(self.names)
-            },
-            "not_told_apart": [
-                {"parameters": [a, b], "correlation": rho} for a, b, rho in self.confounded()
-            ],
+            **estimates_report(self.names, self.estimates, self.half_widths, self.correlation),
             "replay_phi_rms_deg": [math.degrees(r) for r in self.replay_rms],
             "inputs": {
                 "snr_db_estimated": self.input_snr_db,
@@ -167,33 +166,9 @@ class Fit:
         }
 
 
-def input_snr_db(x: np.ndarray) -> float:
-    """An estimate of a logged signal's signal-to-noise ratio (dB): its rms over the noise
-    that its second differences show (a robust spread, so that the few jumps of a signal that
-    steps do not count as noise); infinite for a clean log."""
-    # second differences: a smooth signal's are its curvature times the step squared, small;
-    # white noise's have six times its variance
-    bends = np.diff(np.asarray(x, dtype=float), n=2)
-    if bends.size < 3:
-        return math.inf
-    noise = 1.4826 * float(np.median(np.abs(bends - np.median(bends)))) / math.sqrt(6.0)
-    power = float(np.sqrt(np.mean(np.square(x))))
-    return math.inf if noise == 0.0 or power == 0.0 else 20.0 * math.log10(power / noise)
-
-
-def _smoothed(x: np.ndarray, t: np.ndarray, seconds: float) -> np.ndarray:
-    """``x`` averaged over a centred window of about ``seconds`` (an odd number of samples;
-    the ends held)."""
-    period = float(np.median(np.diff(t)))
-    width = 2 * int(seconds / period / 2.0) + 1
-    if width <= 1:
-        return x
-    padded = np.pad(np.asarray(x, dtype=float), width // 2, mode="edge")
-    return np.convolve(padded, np.ones(width) / width, mode="valid")
-
-
-def fit_names(text: str) -> tuple[str, ...]:
-    """The parameters a ``--fit`` text names, each of :data:`FITTABLE` once.
+def fit_names(text: str, allowed=FITTABLE) -> tuple[str, ...]:
+    """The parameters a ``--fit`` text names, each of ``allowed`` (default :data:`FITTABLE`)
+    once.
 
     Raises
     ------
@@ -202,8 +177,8 @@ def fit_names(text: str) -> tuple[str, ...]:
     """
     names = tuple(name.strip() for name in str(text).split(","))
     twice = sorted({name for name in names if names.count(name) > 1})
-    if not all(name in FITTABLE for name in names) or twice:
-        why = f"{twice[0]!r} is given twice" if twice else f"choose from {', '.join(FITTABLE)}"
+    if not all(name in allowed for name in names) or twice:
+        why = f"{twice[0]!r} is given twice" if twice else f"choose from {', '.join(allowed)}"
         raise LogError(f"--fit {text!r} is not allowed: {why}")
     return names
 
@@ -223,12 +198,12 @@ def fit_train(t, v, omega, phis, p: Params, fit=("L", "L0"), smooth_s: float | N
     if smooth_s is None:
         smooth_s = INPUT_WINDOW_S if snr < NOISY_DB else 0.0
     if smooth_s > 0.0:
-        v, omega = _smoothed(v, t, smooth_s), _smoothed(omega, t, smooth_s)
+        v, omega = smoothed(v, t, smooth_s), smoothed(omega, t, smooth_s)
 
     n = phis.shape[1]
     if n != p.n_trailers:
         raise LogError(f"the log has {n} hitch angle column(s); the vehicle has {p.n_trailers}")
-    fit = fit_names(",".join(fit))
+    fit = fit_names(",".join(fit), KINEMATIC)
     keys, names, x0 = fitted_values(p, fit)
     residuals = step_errors(p, keys, t, v, omega, phis)
 
@@ -380,16 +355,25 @@ def replay(t, v, omega, phi0, p: Params) -> np.ndarray:
     return phis
 
 
-def identified_toml(p: Params) -> str:
-    """The fitted vehicle as a scenario file every command takes."""
+def identified_toml(p: Params, inertial=()) -> str:
+    """The fitted vehicle as a scenario file every command takes: its trailers' geometry and
+    gains, and the masses and inertias ``inertial`` names."""
     import tomli_w
 
+    from tt_mujoco.identify_inertia import TRACTOR_INERTIAL, TRAILER_INERTIAL
+
     first = p.trailers[0]
-    doc = {"eta": float(first.eta), "params": {"L": float(first.L), "L0": float(first.L0)}}
+    own = [name for name in inertial if name in TRAILER_INERTIAL]
+    params = {"L": float(first.L), "L0": float(first.L0)}
+    params.update({name: float(getattr(p, name)) for name in inertial if name in TRACTOR_INERTIAL})
+    params.update({name: float(getattr(first, name)) for name in own})
+    doc = {"eta": float(first.eta), "params": params}
     if p.n_trailers > 1:
         doc["trailers"] = p.n_trailers
         doc["train"] = [
-            {"L": float(t.L), "L0": float(t.L0), "eta": float(t.eta)} for t in p.trailers[1:]
+            {"L": float(t.L), "L0": float(t.L0), "eta": float(t.eta)}
+            | {name: float(getattr(t, name)) for name in own}
+            for t in p.trailers[1:]
         ]
     return "# the vehicle python -m tt_mujoco.identify fitted\n" + tomli_w.dumps(doc)
 
@@ -433,36 +417,7 @@ def main(argv: list[str] | None = None) -> int:
     from tt_mujoco.outputs import atomic_write, claim_folder, release_folder, write_json
     from tt_mujoco.runfolder import check_out
 
-    parser = Parser(
-        prog="python -m tt_mujoco.identify",
-        description="Fit the trailers' L, L0 and eta to a log (t, v, omega, phi, phi_2, ...).",
-    )
-    parser.add_argument("log", type=Path, metavar="LOG", help="a CSV or Parquet log, or a run")
-    parser.add_argument(
-        "--fit",
-        default="L,L0",
-        help="of L, L0, eta (each trailer's) and hitch_lag (the log's) (default L,L0)",
-    )
-    parser.add_argument("--eta", default="same_path", help="the initial or fixed eta")
-    parser.add_argument(
-        "--columns", action="append", default=[], metavar="NAME=COLUMN", help="map a column"
-    )
-    parser.add_argument(
-        "--topics",
-        action="append",
-        default=[],
-        metavar="KIND=TOPIC",
-        help="an MCAP log's topics: odom=/tractor/odom, joints=/joint_states (the defaults)",
-    )
-    parser.add_argument(
-        "--wheel",
-        default=None,
-        metavar="RADIUS,TRACK",
-        help="the tractor's wheel radius and track (m), for a log of wheel rates "
-        "(default the project's vehicle's)",
-    )
-    parser.add_argument("--out", type=Path, default=None, help="a new folder")
-    args = parser.parse_args(argv)
+    args = _parser().parse_args(argv)
 
     def fail(message: str) -> int:
         print(f"error: {message}", file=sys.stderr)
@@ -488,21 +443,116 @@ def main(argv: list[str] | None = None) -> int:
                 x is not None and math.isfinite(x) and x > 0 for x in wheel
             ):
                 return fail(f"--wheel {args.wheel!r} is not allowed: give RADIUS,TRACK in m")
-        t, v, omega, phis = read_log(args.log, mapping, topics=topics, wheel=wheel)
-        from tt_mujoco.sim import Scenario
-
-        p = Scenario(eta=args.eta, trailers=phis.shape[1]).plant_params()
-        fit = fit_train(t, v, omega, phis, p, fit_names(args.fit))
+        fit, inertia = _fits(args, mapping, topics, wheel)
         out, _ = claim_folder(args.out, Path("renders") / f"identify-{args.log.stem}")
-    except ValueError as err:  # LogError, a bad --eta, an --out in use
+    except ValueError as err:  # LogError, a bad --eta or --config, an --out in use
         return fail(str(err))
-    atomic_write(out / "identified.toml", identified_toml(fit.params))
-    write_json(out / "identify.json", fit.report(), strict=True)
-    atomic_write(out / "identify.md", _markdown(fit, args.log))
+    fitted = (inertia or fit).params
+    report = {} if fit is None else fit.report()
+    text = "" if fit is None else _markdown(fit, args.log)
+    if inertia is not None:
+        report["inertia"] = inertia.report()
+        text += inertia.markdown(args.log, fit is None)
+    inertial = () if inertia is None else inertia.fields
+    atomic_write(out / "identified.toml", identified_toml(fitted, inertial))
+    write_json(out / "identify.json", report, strict=True)
+    atomic_write(out / "identify.md", text)
     release_folder(out)
-    print(_markdown(fit, args.log), end="")
+    print(text, end="")
     print(f"wrote identified.toml, identify.json, identify.md to {out}/")
     return EXIT_OK
+
+
+def _vehicle(config: Path | None, eta: str | None, trailers: int) -> Params:
+    """The vehicle a fit starts from: ``--config``'s (its ``eta`` unless ``--eta`` is given)
+    or the project's, with as many trailers as the log has hitch angles."""
+    from tt_mujoco.sim import Scenario
+
+    if config is None:
+        return Scenario(eta="same_path" if eta is None else eta, trailers=trailers).plant_params()
+    from tt_mujoco.run import scenario_from_argv
+
+    scenario = scenario_from_argv(["--config", str(config)])
+    if scenario.trailers != trailers:
+        raise LogError(
+            f"--config {str(config)!r} has {scenario.trailers} trailer(s); the log has "
+            f"{trailers} hitch angle column(s)"
+        )
+    if eta is not None:
+        scenario = dataclasses.replace(scenario, eta=eta)
+    return scenario.plant_params()
+
+
+def _parser() -> Parser:
+    parser = Parser(
+        prog="python -m tt_mujoco.identify",
+        description="Fit the trailers' L, L0 and eta to a log (t, v, omega, phi, phi_2, ...).",
+    )
+    parser.add_argument("log", type=Path, metavar="LOG", help="a CSV or Parquet log, or a run")
+    parser.add_argument(
+        "--fit",
+        default="L,L0",
+        help="of L, L0, eta (each trailer's), hitch_lag (the log's), and the masses and inertias "
+        f"{', '.join(INERTIAL)} (each trailer's; the log's torques T_r, T_l needed) (default L,L0)",
+    )
+    parser.add_argument(
+        "--eta", default=None, help="the initial or fixed eta (default --config's, or same_path)"
+    )
+    parser.add_argument(
+        "--config",
+        type=Path,
+        default=None,
+        metavar="FILE",
+        help="a scenario file of the vehicle: what is not fitted, and the fit's first guess",
+    )
+    parser.add_argument(
+        "--payload",
+        type=int,
+        default=None,
+        metavar="K",
+        help="find a payload put on trailer K during the log: its time and mass",
+    )
+    parser.add_argument(
+        "--columns", action="append", default=[], metavar="NAME=COLUMN", help="map a column"
+    )
+    parser.add_argument(
+        "--topics",
+        action="append",
+        default=[],
+        metavar="KIND=TOPIC",
+        help="an MCAP log's topics: odom=/tractor/odom, joints=/joint_states (the defaults)",
+    )
+    parser.add_argument(
+        "--wheel",
+        default=None,
+        metavar="RADIUS,TRACK",
+        help="the tractor's wheel radius and track (m), for a log of wheel rates "
+        "(default the project's vehicle's)",
+    )
+    parser.add_argument("--out", type=Path, default=None, help="a new folder")
+    return parser
+
+
+def _fits(args, mapping: dict, topics: dict, wheel):
+    """The kinematic fit (None where ``--fit`` names no length, gain or lag) and the fit of
+    the masses and inertias (None where it names none and no ``--payload``) of the log."""
+    names = fit_names(args.fit)
+    kinematic = tuple(name for name in names if name not in INERTIAL)
+    inertial = tuple(name for name in names if name in INERTIAL)
+    dynamic = bool(inertial) or args.payload is not None
+    t, v, omega, phis, *torques = read_log(
+        args.log, mapping, topics=topics, wheel=wheel, torques=dynamic
+    )
+    if args.payload is not None:
+        check_payload(args.payload, phis.shape[1])
+    p = _vehicle(args.config, args.eta, phis.shape[1])
+    fit = fit_train(t, v, omega, phis, p, kinematic) if kinematic else None
+    if not dynamic:
+        return fit, None
+    from tt_mujoco.identify_inertia import fit_inertia
+
+    known = p if fit is None else fit.params
+    return fit, fit_inertia(t, v, omega, phis, torques[0], known, inertial, args.payload)
 
 
 if __name__ == "__main__":

@@ -16,7 +16,21 @@ import numpy as np
 
 from tt_mujoco.vehicle.params import Params
 
-__all__ = ["GAP", "POSE", "WHEEL_RATES", "LogError", "read_log"]
+__all__ = [
+    "CORRELATED",
+    "GAP",
+    "NOISY_DB",
+    "POSE",
+    "TORQUES",
+    "WHEEL_RATES",
+    "LogError",
+    "confounded",
+    "estimates_report",
+    "input_snr_db",
+    "noise_std",
+    "read_log",
+    "smoothed",
+]
 
 #: A step in ``t`` longer than this many times the median is a gap in the log.
 GAP = 5.0
@@ -25,6 +39,15 @@ GAP = 5.0
 WHEEL_RATES = ("wheel_rate_r", "wheel_rate_l")
 #: A log's columns of the tractor axle's pose (m, m, rad), where it has neither.
 POSE = ("x", "y", "theta")
+#: A log's columns of the tractor's wheels' torques (N m), right and left, each row's held until
+#: the next: what a fit of the masses and inertias needs.
+TORQUES = ("T_r", "T_l")
+
+
+#: Below this estimated signal-to-noise ratio (dB) a logged signal counts as noisy.
+NOISY_DB = 40.0
+#: Above this |correlation| two estimates are not told apart by the log.
+CORRELATED = 0.95
 
 
 class LogError(ValueError):
@@ -37,12 +60,14 @@ def read_log(
     trailers: int | None = None,
     topics: dict[str, str] | None = None,
     wheel: tuple[float, float] | None = None,
+    torques: bool = False,
 ):
-    """``(t, v, omega, phis)`` of a log (see the module): ``phis`` is ``(rows, N)``, N the
-    number of ``phi`` columns found (or ``trailers``); ``topics`` names an MCAP log's odometry
-    and joint-state topics (:data:`tt_mujoco.bag.LOG_TOPICS`). A log without ``v`` and
-    ``omega`` gives them from its wheels' rates (:data:`WHEEL_RATES`, with ``wheel`` the
-    wheels' radius and track, m; default the project's vehicle's) or from the axle's pose
+    """``(t, v, omega, phis)`` of a log (see the module), and ``(T_r, T_l)`` after them where
+    ``torques`` (:data:`TORQUES`; an MCAP log's wheel joints' efforts). ``phis`` is ``(rows,
+    N)``, N the number of ``phi`` columns found (or ``trailers``); ``topics`` names an MCAP
+    log's odometry and joint-state topics (:data:`tt_mujoco.bag.LOG_TOPICS`). A log without
+    ``v`` and ``omega`` gives them from its wheels' rates (:data:`WHEEL_RATES`, with ``wheel``
+    the wheels' radius and track, m; default the project's vehicle's) or from the axle's pose
     (:data:`POSE`). Raises :class:`LogError`."""
     if wheel is None:
         default = Params()
@@ -65,7 +90,13 @@ def read_log(
             raise LogError(
                 f"{file} is MCAP: reading it needs the mcap extra (pip install 'tt-mujoco[mcap]')"
             ) from None
-        mapping = {"phi": "hitch_1", **{f"phi_{k}": f"hitch_{k}" for k in range(2, 10)}, **mapping}
+        mapping = {
+            "phi": "hitch_1",
+            **{f"phi_{k}": f"hitch_{k}" for k in range(2, 10)},
+            "T_r": "wheel_right_effort",
+            "T_l": "wheel_left_effort",
+            **mapping,
+        }
         if trailers is None:  # as many trailers as hitch joints with positions
             trailers = sum(1 for k in range(1, 10) if f"hitch_{k}" in table)
     else:
@@ -89,10 +120,11 @@ def read_log(
     elif not has(*speeds) and has(*POSE):
         speeds = list(POSE)
     names = ["t", *speeds, "phi", *(f"phi_{k}" for k in range(2, count + 1))]
+    names += list(TORQUES) if torques else []
     data = {name: _log_column(file, table, mapping.get(name, name), name) for name in names}
     t = data["t"]
     _check_times(file, t)
-    hitches = names[len(speeds) + 1 :]
+    hitches = names[len(speeds) + 1 : len(names) - (len(TORQUES) if torques else 0)]
     for name in hitches:
         beyond = np.flatnonzero(np.abs(data[name]) > math.pi)
         if beyond.size:
@@ -104,6 +136,8 @@ def read_log(
             )
     phis = np.column_stack([data[n] for n in hitches])
     v, omega = _speeds(data, t, wheel)
+    if torques:
+        return t, v, omega, phis, tuple(data[name] for name in TORQUES)
     return t, v, omega, phis
 
 
@@ -157,3 +191,64 @@ def _speeds(data: dict, t: np.ndarray, wheel: tuple[float, float]):
     x, y, theta = data["x"], data["y"], np.unwrap(data["theta"])
     vx, vy = np.gradient(x, t), np.gradient(y, t)
     return vx * np.cos(theta) + vy * np.sin(theta), np.gradient(theta, t)
+
+
+def noise_std(x: np.ndarray) -> float:
+    """A logged signal's noise (its standard deviation) from its second differences (a
+    robust spread, so that the few jumps of a signal that steps do not count as noise); 0 for
+    a clean log."""
+    # second differences: a smooth signal's are its curvature times the step squared, small;
+    # white noise's have six times its variance
+    bends = np.diff(np.asarray(x, dtype=float), n=2)
+    if bends.size < 3:
+        return 0.0
+    return 1.4826 * float(np.median(np.abs(bends - np.median(bends)))) / math.sqrt(6.0)
+
+
+def input_snr_db(x: np.ndarray) -> float:
+    """An estimate of a logged signal's signal-to-noise ratio (dB): its rms over its
+    :func:`noise_std`; infinite for a clean log."""
+    noise = noise_std(x)
+    power = float(np.sqrt(np.mean(np.square(x))))
+    return math.inf if noise == 0.0 or power == 0.0 else 20.0 * math.log10(power / noise)
+
+
+def smoothed(x: np.ndarray, t: np.ndarray, seconds: float) -> np.ndarray:
+    """``x`` averaged over a centred window of about ``seconds`` (an odd number of samples;
+    the ends held)."""
+    period = float(np.median(np.diff(t)))
+    width = 2 * int(seconds / period / 2.0) + 1
+    if width <= 1:
+        return x
+    padded = np.pad(np.asarray(x, dtype=float), width // 2, mode="edge")
+    return np.convolve(padded, np.ones(width) / width, mode="valid")
+
+
+def confounded(names, correlation) -> list[tuple[str, str, float]]:
+    """The pairs of a fit's estimates its log does not tell apart: ``(a, b, correlation)``
+    beyond :data:`CORRELATED`."""
+    pairs = [(i, j) for i in range(len(names)) for j in range(i + 1, len(names))]
+    return [
+        (names[i], names[j], float(correlation[i, j]))
+        for i, j in pairs
+        if abs(correlation[i, j]) > CORRELATED
+    ]
+
+
+def estimates_report(names, estimates, half_widths, correlation) -> dict:
+    """A fit's estimates with their 95 % intervals, their correlations and the pairs not told
+    apart, as strict-JSON-ready numbers (``identify.json``)."""
+    return {
+        "estimates": {
+            n: {"value": float(e), "ci95": [float(e - h), float(e + h)]}
+            for n, e, h in zip(names, estimates, half_widths, strict=True)
+        },
+        "correlation": {
+            a: {b: float(correlation[i, j]) for j, b in enumerate(names)}
+            for i, a in enumerate(names)
+        },
+        "not_told_apart": [
+            {"parameters": [a, b], "correlation": rho}
+            for a, b, rho in confounded(names, correlation)
+        ],
+    }
