@@ -394,10 +394,13 @@ def test_a_run_written_as_mcap_is_a_log(truth_run, tmp_path):
     scenario, ts = truth_run
     line = np.array([[0.0, 0.0], [1.0, 0.0]])
     path = bag.write_bag(ts, line, scenario.plant_params(), tmp_path / "run.mcap", rate=100.0)
-    _, v, _, phis = identify.read_log(path)
+    _, v, _, phis, (T_r, T_l) = identify.read_log(path, torques=True)
     assert phis.shape[1] == 1
     np.testing.assert_allclose(v, ts["v"][::10][: v.size], atol=1e-12)
     np.testing.assert_allclose(phis[:, 0], ts["phi"][::10][: v.size], atol=1e-12)
+    # the wheels' torques, the joint states' efforts, for a fit of the masses
+    np.testing.assert_allclose(T_r, ts["T_r"][::10][: v.size], atol=1e-12)
+    np.testing.assert_allclose(T_l, ts["T_l"][::10][: v.size], atol=1e-12)
 
 
 def _damaged_mcap(tmp_path, how):

@@ -146,13 +146,16 @@ def test_the_command_fits_a_run_s_trailer_mass_and_the_fit_drives_again(tmp_path
         (["--payload", "0"], "--payload 0 is not allowed"),
         (["--payload", "2"], "--payload 2 is not allowed"),
         (["--fit", "Mr,Mr"], "'Mr' is given twice"),
+        (["--fit", "Mr", "--columns", "T_l=T_bad"], "column 'T_bad' row 5 is nan"),
+        (["--fit", "Mr", "--config", "missing.toml"], "missing.toml"),
     ],
 )
 def test_a_bad_request_is_exit_2_with_nothing_written(tmp_path, capsys, argv, said):
     log = tmp_path / "log.csv"
     t = np.linspace(0, 6, 601)
     columns = {"t": t, "v": 0.5 + 0 * t, "omega": 0.1 + 0 * t, "phi": 0.05 + 0 * t}
-    columns.update(T_r=0.1 + 0 * t, T_l=0.1 + 0 * t)
+    columns.update(T_r=0.1 + 0 * t, T_l=0.1 + 0 * t, T_bad=0.1 + 0 * t)
+    columns["T_bad"][3] = np.nan
     np.savetxt(log, np.column_stack(list(columns.values())), delimiter=",",
                header=",".join(columns), comments="")  # fmt: skip
     out = tmp_path / "fit"
