@@ -360,8 +360,8 @@ def fit_inertia(t, v, omega, phis, torques, p: Params, fit=("Mr",), payload=None
     if unknown:
         raise LogError(f"{unknown[0]!r} is not a mass or inertia: choose from {INERTIAL}")
     keys, names, x0 = inertia_keys(p, fit)
-    if not keys:
-        raise LogError("nothing to fit: name a mass or inertia")
+    if not keys and payload is None:
+        raise LogError("nothing to fit: name a mass or inertia, or look for a payload")
     bed = None
     if payload is not None:
         check_payload(payload, p.n_trailers)
@@ -494,9 +494,11 @@ def _closer_time(log: _Log, x, starts, jac, found: float) -> float:
     """The payload's time to the grid step, near ``found``: where the fit with the payload
     (``x``, its mass last, ``starts``, its Jacobian) moved to each grid time within a segment
     leaves the least squares after one Gauss-Newton step of every parameter (the score test
-    judged a payload of none; a real one is not small)."""
+    judged a payload of none; a real one is not small). Not within a segment of either end of
+    the log: a payload there is a mass of the bed (``--fit Mr``)."""
     basis, _ = np.linalg.qr(jac)
-    near = log.t[(log.t >= found - SEGMENT_S) & (log.t <= found + SEGMENT_S)]
+    first, last = log.t[0] + SEGMENT_S, log.t[-1] - SEGMENT_S  # as the score test's
+    near = log.t[(log.t >= max(found - SEGMENT_S, first)) & (log.t <= min(found + SEGMENT_S, last))]
 
     def left(at: float) -> float:
         r = log.residuals(log.simulate(x[:-1], starts, (x[-1], log.t >= at)))
