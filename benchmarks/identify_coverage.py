@@ -41,17 +41,19 @@ def main() -> None:
     print(f"  half width: median {100 * np.median(halves):.2f} %")
 
     ts, p = _log("mujoco", faults="payload:t=21.3")
-    masses, times, covered = [], [], []
+    masses, times, covered, held = [], [], [], []
     for seed in seeds:
         load = _fit(_noisy(ts, 20.0, seed), p.replace(Mr=6.0), payload=1).payload
         masses.append(load.mass / 4.0 - 1.0)
         times.append(load.time - 21.3)
         covered.append(abs(load.mass - 4.0) <= load.mass_half_width)
+        held.append(load.time_interval[0] <= 21.3 <= load.time_interval[1])
     masses, times = np.array(masses), np.array(times)
     print(f"payload of 4 kg at 21.3 s, {len(masses)} seeds, 20 dB:")
     print(f"  mass within 5 %: {np.mean(np.abs(masses) < 0.05):.2f}")
     print(f"  time within 0.5 s: {np.mean(np.abs(times) < 0.5):.2f}")
     print(f"  interval holds the mass: {np.mean(covered):.2f}")
+    print(f"  interval holds the time: {np.mean(held):.2f}")
     print(f"  mass error: max {100 * np.max(np.abs(masses)):.2f} %")
     print(f"  time error: max {np.max(np.abs(times)):.2f} s")
 

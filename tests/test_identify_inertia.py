@@ -105,6 +105,7 @@ def test_a_payload_put_on_mid_log_is_found():
     assert load.found and load.trailer == 1
     assert abs(load.mass - 4.0) < 0.05 * 4.0
     assert abs(load.time - 21.3) < 0.5
+    assert load.time_interval[0] <= 21.3 <= load.time_interval[1]
     assert abs(fit.estimates[0] - 8.0) < 0.02 * 8.0  # the bed's own mass, before it
 
 

@@ -151,12 +151,14 @@ def _averaged(x: np.ndarray, centres: np.ndarray, half: int) -> np.ndarray:
 
 @dataclasses.dataclass(frozen=True)
 class Payload:
-    """A payload found in a log: on ``trailer``, from ``time`` (s, to ``time_step_s``), of
-    ``mass`` (kg) with its 95 % half width."""
+    """A payload found in a log: on ``trailer``, from ``time`` (s, to ``time_step_s``; the
+    times the log does not tell from it at a nominal 95 %, ``time_interval``: measured, it is
+    too narrow, docs/identify.md), of ``mass`` (kg) with its 95 % half width."""
 
     trailer: int
     time: float
     time_step_s: float
+    time_interval: tuple
     mass: float
     mass_half_width: float
 
@@ -208,8 +210,10 @@ class InertiaFit:
                 f"{load.mass:.4g} kg, 95 % interval {load.mass - load.mass_half_width:.4g} .. "
                 f"{load.mass + load.mass_half_width:.4g} kg"
             )
+            low, high = load.time_interval
             lines.append(
-                f"A payload on trailer {load.trailer} from t = {load.time:.2f} s: {within}."
+                f"A payload on trailer {load.trailer} from t = {load.time:.2f} s (not told from "
+                f"{low:.2f} .. {high:.2f} s): {within}."
                 if load.found
                 else f"No payload on trailer {load.trailer}: the likeliest step ({within}, at "
                 f"t = {load.time:.2f} s) is within its interval of none."
@@ -380,12 +384,13 @@ def fit_inertia(t, v, omega, phis, torques, p: Params, fit=("Mr",), payload=None
                 break
             found = better
             x, starts, jac, residuals = _least_squares(log, x, log.t >= found)
-    covariance, correlation = _statistics(log, jac, residuals, x.size)
+    covariance, correlation, inflation = _statistics(log, jac, residuals, x.size)
     half = 1.96 * np.sqrt(np.diag(covariance))
     mass = None
     if found is not None:
+        within = _time_interval(log, x, starts, jac, residuals, found, float(inflation[-1]))
         step = float(np.median(log.dt))
-        mass = Payload(payload, float(found), step, float(x[-1]), float(half[-1]))
+        mass = Payload(payload, float(found), step, within, float(x[-1]), float(half[-1]))
         x, half, correlation = x[:-1], half[:-1], correlation[:-1, :-1]
     on = None if mass is None else (mass.mass, log.t >= found)
     error = log.simulate(x, starts, on) - log.V[log.lanes]
@@ -446,7 +451,8 @@ def _least_squares(log: _Log, x0: np.ndarray, on=None):
 def _statistics(log: _Log, jac, residuals, count: int):
     """The first ``count`` estimates' covariance (the wider of the plain and the
     segment-clustered one: the residuals within a segment are not independent where the model
-    is not the vehicle) and their correlations (the design's alone)."""
+    is not the vehicle), their correlations (the design's alone) and each variance over the
+    plain one."""
     try:
         bread = np.linalg.inv(jac.T @ jac)
     except np.linalg.LinAlgError:
@@ -463,7 +469,8 @@ def _statistics(log: _Log, jac, residuals, count: int):
     with np.errstate(invalid="ignore", divide="ignore"):
         scale = np.sqrt(np.abs(np.diag(block)))
         correlation = block / np.outer(scale, scale)
-    return np.diag(variance), correlation
+        inflation = variance / np.diag(plain)[:count]
+    return np.diag(variance), correlation, inflation
 
 
 def _payload_time(log: _Log, x, starts, jac, residuals, probe: float) -> float:
@@ -490,10 +497,10 @@ def _payload_time(log: _Log, x, starts, jac, residuals, probe: float) -> float:
     return float(near[int(np.argmax([score(at) for at in near]))])
 
 
-def _closer_time(log: _Log, x, starts, jac, found: float) -> float:
-    """The payload's time to the grid step, near ``found``: where the fit with the payload
-    (``x``, its mass last, ``starts``, its Jacobian) moved to each grid time within a segment
-    leaves the least squares after one Gauss-Newton step of every parameter (the score test
+def _time_profile(log: _Log, x, starts, jac, found: float):
+    """The payload's candidate times near ``found`` and what each leaves of the least squares:
+    the fit with the payload (``x``, its mass last, ``starts``, its Jacobian) moved to each
+    grid time within a segment, after one Gauss-Newton step of every parameter (the score test
     judged a payload of none; a real one is not small). Not within a segment of either end of
     the log: a payload there is a mass of the bed (``--fit Mr``)."""
     basis, _ = np.linalg.qr(jac)
@@ -504,7 +511,25 @@ def _closer_time(log: _Log, x, starts, jac, found: float) -> float:
         r = log.residuals(log.simulate(x[:-1], starts, (x[-1], log.t >= at)))
         return float(np.sum((r - basis @ (basis.T @ r)) ** 2))
 
-    return float(near[int(np.argmin([left(at) for at in near]))])
+    return near, np.array([left(at) for at in near])
+
+
+def _closer_time(log: _Log, x, starts, jac, found: float) -> float:
+    """The grid time of :func:`_time_profile` that leaves the least."""
+    times, left = _time_profile(log, x, starts, jac, found)
+    return float(times[int(np.argmin(left))])
+
+
+def _time_interval(log: _Log, x, starts, jac, residuals, found: float, inflation: float):
+    """The payload times the log does not tell from ``found`` at 95 %: where the profile
+    (:func:`_time_profile`) stays within 3.84 residual variances of its least, the variance
+    ``inflation`` times the plain one (the clustered intervals' ratio: residuals within a
+    segment are not independent). Reaching an end of the profile's window, the interval is at
+    least that wide."""
+    times, left = _time_profile(log, x, starts, jac, found)
+    variance = float(residuals @ residuals) / max(residuals.size - jac.shape[1], 1)
+    inside = times[left <= left.min() + 3.84 * variance * max(inflation, 1.0)]
+    return float(inside.min()), float(inside.max())
 
 
 def _with(p: Params, values: dict) -> Params:
