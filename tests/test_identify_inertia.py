@@ -163,3 +163,31 @@ def test_a_bad_request_is_exit_2_with_nothing_written(tmp_path, capsys, argv, sa
     assert identify.main([str(log), *argv, "--out", str(out)]) == 2
     assert said in capsys.readouterr().err
     assert not out.exists()
+
+
+def _flat_log(path, torque_scale=0.0):
+    """20 s at constant speed and turn: nothing accelerates."""
+    t = np.linspace(0, 20, 2001)
+    columns = {"t": t, "v": 0.5 + 0 * t, "omega": 0.1 + 0 * t, "phi": 0.05 + 0 * t}
+    columns.update(T_r=torque_scale + 0 * t, T_l=torque_scale + 0 * t)
+    np.savetxt(path, np.column_stack(list(columns.values())), delimiter=",",
+               header=",".join(columns), comments="")  # fmt: skip
+    return path
+
+
+def test_a_log_that_does_not_excite_a_mass_says_so_and_keeps_it(tmp_path, capsys):
+    log = _flat_log(tmp_path / "flat.csv")
+    out = tmp_path / "fit"
+    assert identify.main([str(log), "--fit", "Mr", "--out", str(out)]) == 0
+    assert json.loads((out / "identify.json").read_text())["inertia"]["not_told"] == ["Mr"]
+    assert "Mr = 6.0" in (out / "identified.toml").read_text()  # the given vehicle's
+    assert "not told by this log" in capsys.readouterr().out
+
+
+def test_torques_in_the_wrong_units_are_exit_2(tmp_path, capsys):
+    """Torques of 1000 N m at every row (a log in N mm): the model runs away at once."""
+    log = _flat_log(tmp_path / "kilo.csv", torque_scale=1000.0)
+    out = tmp_path / "fit"
+    assert identify.main([str(log), "--fit", "Mr", "--out", str(out)]) == 2
+    assert "are the torques the wheels' in N m" in capsys.readouterr().err
+    assert not out.exists()

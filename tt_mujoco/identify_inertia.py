@@ -71,6 +71,9 @@ GRID_S = 0.01
 #: :data:`tt_mujoco.vehicle_log.NOISY_DB`): they enter the model, where their noise biases the
 #: masses (errors in the variables), not what the model is compared with.
 PHI_WINDOW_S = 0.5
+#: An estimate whose 95 % half width is beyond this fraction of it is not told by the log: it
+#: is reported, and the vehicle keeps its given value.
+TOLD_WITHIN = 0.5
 #: Candidate payload times are this far apart (s) before the search narrows to the grid.
 PAYLOAD_STEP_S = 0.5
 
@@ -188,6 +191,12 @@ class InertiaFit:
         return confounded(self.names, self.correlation)
 
     @property
+    def told(self) -> np.ndarray:
+        """Whether the log tells each estimate: its 95 % interval within
+        :data:`TOLD_WITHIN` of it (a log that does not excite it leaves it anywhere)."""
+        return self.half_widths < TOLD_WITHIN * np.abs(self.estimates)
+
+    @property
     def fields(self) -> tuple:
         """The Params fields fitted (``Mr`` for ``Mr_2`` too), each once."""
         return tuple(dict.fromkeys(name.split("_")[0] for name in self.names))
@@ -196,8 +205,10 @@ class InertiaFit:
         """The fit as a Markdown section (under a title naming ``log`` where ``title``)."""
         lines = [f"# Identified from {log}", ""] if title else [""]
         lines += ["| mass or inertia | estimate | 95 % interval |", "|---|---|---|"]
-        for n, e, h in zip(self.names, self.estimates, self.half_widths, strict=True):
-            lines.append(f"| {n} | {e:.6g} | {e - h:.6g} .. {e + h:.6g} |")
+        rows = zip(self.names, self.estimates, self.half_widths, self.told, strict=True)
+        for n, e, h, told in rows:
+            kept = "" if told else " (not told by this log: the vehicle keeps its given value)"
+            lines.append(f"| {n} | {e:.6g} | {e - h:.6g} .. {e + h:.6g}{kept} |")
         v_rms, omega_rms = self.output_rms
         lines += [
             "",
@@ -229,6 +240,7 @@ class InertiaFit:
         """The fit as strict-JSON-ready numbers."""
         out = {
             **estimates_report(self.names, self.estimates, self.half_widths, self.correlation),
+            "not_told": [n for n, told in zip(self.names, self.told, strict=True) if not told],
             "simulated_rms": {"v": self.output_rms[0], "omega": self.output_rms[1]},
             "segments": self.segments,
         }
@@ -394,13 +406,22 @@ def fit_inertia(t, v, omega, phis, torques, p: Params, fit=("Mr",), payload=None
         x, half, correlation = x[:-1], half[:-1], correlation[:-1, :-1]
     on = None if mass is None else (mass.mass, log.t >= found)
     error = log.simulate(x, starts, on) - log.V[log.lanes]
+    missed = np.sqrt(np.mean(error**2, axis=(0, 1)))
+    spread = np.sqrt(np.mean(log.V**2, axis=0))
+    if np.any(missed > spread):  # the model explains less of V than V's own size
+        raise LogError(
+            f"the fitted model misses the log's v by {missed[0]:.3g} m/s rms and its omega by "
+            f"{missed[1]:.3g} rad/s (their own rms: {spread[0]:.3g}, {spread[1]:.3g}): are the "
+            "torques the wheels' in N m (T_r, T_l), and the vehicle's masses near the given ones?"
+        )
+    told = half < TOLD_WITHIN * np.abs(x)  # as InertiaFit.told: the others stay as given
     return InertiaFit(
         tuple(names),
         x,
         half,
         correlation,
-        _with(p, dict(zip(keys, x, strict=True))),
-        tuple(float(np.sqrt(np.mean(error[..., i] ** 2))) for i in range(2)),
+        _with(p, {key: value for key, value, ok in zip(keys, x, told, strict=True) if ok}),
+        tuple(float(m) for m in missed),
         log.segments,
         mass,
     )
@@ -442,9 +463,14 @@ def _least_squares(log: _Log, x0: np.ndarray, on=None):
 
     z0 = np.concatenate([x0, log.V[log.lanes[:, 0]].ravel()])
     with np.errstate(all="ignore"):  # a trial step may leave every vehicle: its residuals say
-        result = least_squares(residuals, z0, jac=jacobian, x_scale="jac", method="lm")
-    if not np.all(np.isfinite(result.fun)):
-        raise LogError("the fit leads to no vehicle: are the torques the wheels' in N m?")
+        start = residuals(z0)
+        if np.all(np.isfinite(start)):
+            result = least_squares(residuals, z0, jac=jacobian, x_scale="jac", method="lm")
+    if not np.all(np.isfinite(start)) or not np.all(np.isfinite(result.fun)):
+        raise LogError(
+            "the model's velocities run away under the log's torques: are the torques the "
+            "wheels' in N m (T_r, T_l), and the vehicle's masses near the given ones?"
+        )
     return result.x[:count], result.x[count:], jacobian(result.x), result.fun
 
 
