@@ -1,6 +1,8 @@
 """tt_mujoco.gym_legs: a planned maneuver with a cusp is one episode of the Gym env, driven leg
 by leg as ``python -m tt_mujoco.run`` drives it: the same plant, the same noise, bit for bit."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -64,3 +66,41 @@ def test_the_next_leg_starts_where_the_measurement_is():
         train = ((0.0, 0.0, 0.0, -0.2, 0.0, 0.0),)
 
     assert leg_start(Train) == ((1.0, 2.0, 0.5), (0.1, -0.2))
+
+
+def _single(scenario):
+    return gym_env.TractorTrailerEnv(scenario)
+
+
+def _vector(scenario):
+    from tt_mujoco.gym_vector import TractorTrailerVectorEnv
+
+    return TractorTrailerVectorEnv(2, scenario)
+
+
+def _goal(scenario):
+    from tt_mujoco.gym_goal import TractorTrailerGoalEnv
+
+    return TractorTrailerGoalEnv(dataclasses.replace(scenario, world="loading_bay", reverse=True))
+
+
+@pytest.mark.parametrize("make", [_single, _vector, _goal])
+def test_every_env_owns_its_scenario(make):
+    """The caller's scenario changed after the env is made, or the copy the env gives out: its
+    first episode is still the one of the scenario it was made with (the seed read at reset is
+    the env's own)."""
+
+    def scenario():
+        return Scenario(plant="reduced", duration=1.0, seed=3, noise_snr_db=20.0)
+
+    def first(env):
+        obs = env.reset()[0]
+        return obs["observation"] if isinstance(obs, dict) else obs
+
+    expected = first(make(scenario()))
+    given = scenario()
+    env = make(given)
+    given.seed = 99
+    env.scenario.seed = 77
+    np.testing.assert_array_equal(first(env), expected)
+    assert env.scenario.seed == 3

@@ -98,7 +98,7 @@ import mujoco
 
 from tt_mujoco import sim
 from tt_mujoco.defaults import MAX_SPEED
-from tt_mujoco.gym_legs import Legs
+from tt_mujoco.gym_legs import Legs, OwnScenario
 from tt_mujoco.reference.feedback import path_errors
 from tt_mujoco.registry import shown
 from tt_mujoco.schema import Schema, check_typed
@@ -312,7 +312,7 @@ def task_reward(task: str, v, omega, target, lead):
     return -np.where(mean < 1.0, mean, 1.0)  # min(1.0, mean): an error of NaN costs 1 too
 
 
-class TractorTrailerEnv(gymnasium.Env):
+class TractorTrailerEnv(OwnScenario, gymnasium.Env):
     """Wheel-torque control of the tractor-trailer along a reference path.
 
     Parameters
@@ -363,7 +363,7 @@ class TractorTrailerEnv(gymnasium.Env):
         if task not in TASKS:
             raise ValueError(f"task={task!r} is not allowed: use one of {TASKS}")
         self.task = task
-        self.scenario = scenario
+        self._own(scenario)
         self.render_mode = render_mode
         self._legs = Legs(sim.build(scenario))
         #: The episode's legs: more than one for a planned maneuver with cusps.
@@ -415,9 +415,9 @@ class TractorTrailerEnv(gymnasium.Env):
         """Start an episode at the path start (as ``simulate``). ``options`` may hold
         ``phi0_deg``, the initial articulation (default the scenario's)."""
         if seed is None and not self._seeded:
-            seed = self.scenario.seed
+            seed = self._scenario.seed
         seed = checked_seed(seed)
-        phi0_deg = reset_phi0_deg(self.scenario, options)
+        phi0_deg = reset_phi0_deg(self._scenario, options)
         super().reset(seed=seed)
         self._seeded = True
         if self._legs.count > 1:  # the later legs' noise: the maneuver's of this seed

@@ -53,6 +53,7 @@ from tt_mujoco.gym_env import (
     observation_names,
     scenario_overrides,
 )
+from tt_mujoco.gym_legs import OwnScenario
 from tt_mujoco.registry import shown
 from tt_mujoco.world.builtin import parse_world
 from tt_mujoco.world.plan import PLAN, PlanError, train_length
@@ -70,7 +71,7 @@ EPISODE_S = 60.0
 SEED_DRAWS = 100
 
 
-class TractorTrailerGoalEnv(gymnasium.Env):
+class TractorTrailerGoalEnv(OwnScenario, gymnasium.Env):
     """Wheel-torque control of the tractor-trailer to a world's goal (see the module).
 
     Parameters
@@ -126,7 +127,7 @@ class TractorTrailerGoalEnv(gymnasium.Env):
                 "goal and a start"
             )
         steps = round(episode_s / scenario.control_dt)
-        self.scenario = dataclasses.replace(scenario, duration=steps * scenario.control_dt)
+        self._own(dataclasses.replace(scenario, duration=steps * scenario.control_dt))
         self.reward_type, self.episode_s, self.action_units = reward_type, episode_s, action_units
         self.world = world
         p = scenario.plant_params()
@@ -139,7 +140,7 @@ class TractorTrailerGoalEnv(gymnasium.Env):
         x_min, x_max, y_min, y_max = world.bounds or (goal.x, goal.x, goal.y, goal.y)
         corners = np.array([[x_min, y_min], [x_max, y_max]])
         names = observation_names(p.n_trailers)
-        self._low, self._high = observation_bounds(names, p, corners, self.scenario.duration)
+        self._low, self._high = observation_bounds(names, p, corners, self._scenario.duration)
         reach = self._high[names.index("x")] - x_max
         goal_low = np.array([x_min - reach, y_min - reach, -1.0, -1.0])
         goal_high = np.array([x_max + reach, y_max + reach, 1.0, 1.0])
@@ -168,7 +169,7 @@ class TractorTrailerGoalEnv(gymnasium.Env):
                 "is drawn in the world, by the seed)"
             )
         if seed is None and not self._seeded:
-            seed = self.scenario.seed
+            seed = self._scenario.seed
         seed = checked_seed(seed)
         super().reset(seed=seed)
         self._seeded = True
@@ -227,7 +228,7 @@ class TractorTrailerGoalEnv(gymnasium.Env):
         plan."""
         try:
             env = TractorTrailerEnv(
-                dataclasses.replace(self.scenario, seed=seed), action_units=self.action_units
+                dataclasses.replace(self._scenario, seed=seed), action_units=self.action_units
             )
         except PlanError:
             return None

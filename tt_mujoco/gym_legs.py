@@ -11,13 +11,30 @@ episode's seed and its index, as the maneuver's does.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 
 import numpy as np
 
 from tt_mujoco.sim.build import Build, LegStart, build, drawn_polyline
 
-__all__ = ["Legs", "leg_start"]
+__all__ = ["Legs", "OwnScenario", "leg_start"]
+
+
+class OwnScenario:
+    """An env's scenario, its own: copied when the env is made (:meth:`_own`), so that later
+    changes to the caller's object do not reach its episodes (a seed or a start angle read at
+    ``reset``), and given out as a copy (``env.scenario``): make a new env to change it."""
+
+    _scenario = None
+
+    def _own(self, scenario):
+        self._scenario = copy.deepcopy(scenario)
+
+    @property
+    def scenario(self):
+        """The env's scenario (a copy: the env's own is fixed when it is made)."""
+        return copy.deepcopy(self._scenario)
 
 
 def leg_start(measurement) -> tuple[tuple, tuple]:

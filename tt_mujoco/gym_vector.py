@@ -56,6 +56,7 @@ from tt_mujoco.gym_env import (
     task_reward,
     torques_of,
 )
+from tt_mujoco.gym_legs import OwnScenario
 from tt_mujoco.registry import shown
 from tt_mujoco.sim.loop import agent_step, closed_loop, compiled, outcome
 from tt_mujoco.sim.loop.agent_step import (
@@ -78,7 +79,7 @@ __all__ = ["MAX_ENVS", "TractorTrailerVectorEnv"]
 MAX_ENVS = 1 << 16
 
 
-class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
+class TractorTrailerVectorEnv(OwnScenario, gymnasium.vector.VectorEnv):
     """``num_envs`` episodes of :class:`~tt_mujoco.gym_env.TractorTrailerEnv` stepped together
     in compiled code (see the module).
 
@@ -125,7 +126,8 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
                 "TractorTrailer-v0', num_envs=N, vectorization_mode='sync')"
             )
         self.num_envs = int(num_envs)
-        self.task, self.scenario = task, single.scenario
+        self.task = task
+        self._own(single._scenario)
         self.observation_names = single.observation_names
         self.single_observation_space = single.observation_space
         self.single_action_space = single.action_space
@@ -161,7 +163,7 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
         """Start every episode at the path start; ``seed`` an int (episode ``i`` gets
         ``seed + i``), a sequence of one per episode, or None. ``options`` may hold
         ``phi0_deg``, the initial articulation of every episode."""
-        phi0_deg = reset_phi0_deg(self.scenario, options)
+        phi0_deg = reset_phi0_deg(self._scenario, options)
         seeds = self._seeds(seed)
         self._phi0_deg = phi0_deg
         for i, one in enumerate(seeds):
@@ -273,7 +275,7 @@ class TractorTrailerVectorEnv(gymnasium.vector.VectorEnv):
     # --- the batch ---------------------------------------------------------------------------
     def _seeds(self, seed) -> list:
         if seed is None and not self._seeded:
-            seed = self.scenario.seed
+            seed = self._scenario.seed
         self._seeded = True
         if seed is None:
             return [None] * self.num_envs
