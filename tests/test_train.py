@@ -177,3 +177,13 @@ def test_train_ode_keeps_straight_driving_straight():
         ode.step((0.2, 0.2), 0.001)
     assert np.all(ode.state[3:6] == 0.0)
     assert ode.state[-2] > 0.5
+
+
+def test_with_unit_fields_sets_the_tractor_s_and_each_trailer_s():
+    """Unit 0 the tractor, 1 trailer 1 (Params' own fields), k trailer k; a gain stays."""
+    p = Params().with_trailers(3)
+    q = p.with_unit_fields({(0, "Mf"): 11.0, (1, "Mr"): 7.0, (3, "L0"): 0.5, (2, "Ird"): 0.04})
+    assert (q.Mf, q.Mr, q.train[1].L0, q.train[0].Ird) == (11.0, 7.0, 0.5, 0.04)
+    assert q.etas == p.etas and q.train[1].L == p.train[1].L
+    with pytest.raises(ValueError):
+        p.with_unit_fields({(2, "L0"): -1.0})

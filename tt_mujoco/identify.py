@@ -94,16 +94,10 @@ INPUT_WINDOW_S = 0.04
 
 
 def _with(p: Params, values: dict[tuple[int, str], float]) -> Params:
-    """``p`` with trailer k's field set for each ``(k, field)`` (k from 1; a gain stays the
-    number it is, whatever the lengths become; the log's hitch lag, key 0, is not ``p``'s)."""
-    values = {key: value for key, value in values.items() if key[0] > 0}
-    first = {field: float(value) for (k, field), value in values.items() if k == 1}
-    train = list(p.train)
+    """``p`` with trailer k's field set for each ``(k, field)`` (k from 1; the log's hitch lag
+    is not ``p``'s): :meth:`~tt_mujoco.vehicle.params.Params.with_unit_fields`."""
     try:
-        for (k, field), value in values.items():
-            if k > 1:
-                train[k - 2] = dataclasses.replace(train[k - 2], **{field: float(value)})
-        return p.replace(**first, train=tuple(train))
+        return p.with_unit_fields({key: x for key, x in values.items() if key[1] != HITCH_LAG})
     except ValueError as err:  # the fit went where no vehicle is: said of the log
         raise LogError(
             f"the fit leads to no vehicle ({err}): a log in other units than the fit reads "

@@ -178,6 +178,8 @@ class InertiaFit:
     the simulated ``v`` and ``omega`` against the log, and the payload found (or None)."""
 
     names: tuple
+    #: The Params fields fitted (``Mr`` for ``Mr_1`` and ``Mr_2``), each once.
+    fields: tuple
     estimates: np.ndarray
     half_widths: np.ndarray
     correlation: np.ndarray
@@ -192,14 +194,8 @@ class InertiaFit:
 
     @property
     def told(self) -> np.ndarray:
-        """Whether the log tells each estimate: its 95 % interval within
-        :data:`TOLD_WITHIN` of it (a log that does not excite it leaves it anywhere)."""
-        return self.half_widths < TOLD_WITHIN * np.abs(self.estimates)
-
-    @property
-    def fields(self) -> tuple:
-        """The Params fields fitted (``Mr`` for ``Mr_2`` too), each once."""
-        return tuple(dict.fromkeys(name.split("_")[0] for name in self.names))
+        """Whether the log tells each estimate (:func:`_told`)."""
+        return _told(self.estimates, self.half_widths)
 
     def markdown(self, log, title: bool) -> str:
         """The fit as a Markdown section (under a title naming ``log`` where ``title``)."""
@@ -353,6 +349,12 @@ def _heun():
     return _COMPILED[0]
 
 
+def _told(estimates: np.ndarray, half_widths: np.ndarray) -> np.ndarray:
+    """Whether the log tells each estimate: its 95 % interval within :data:`TOLD_WITHIN` of it
+    (a log that does not excite it leaves it anywhere)."""
+    return half_widths < TOLD_WITHIN * np.abs(estimates)
+
+
 def check_payload(trailer: int, trailers: int) -> None:
     """Raise a :class:`LogError` unless ``trailer`` is one of the train's ``trailers``."""
     if not 1 <= trailer <= trailers:
@@ -391,16 +393,19 @@ def fit_inertia(t, v, omega, phis, torques, p: Params, fit=("Mr",), payload=None
         found = _payload_time(log, x, starts, jac, residuals, 0.01 * bed.Mr)
         x, starts, jac, residuals = _least_squares(log, np.append(x, 0.0), log.t >= found)
         for _ in range(3):  # the score test's time, moved while a closer one fits better
-            better = _closer_time(log, x, starts, jac, found)
+            profile = _time_profile(log, x, starts, jac, found)
+            better = float(profile[0][int(np.argmin(profile[1]))])
             if better == found:
                 break
             found = better
             x, starts, jac, residuals = _least_squares(log, x, log.t >= found)
+        else:  # moved at every turn: the profile of the last fit
+            profile = _time_profile(log, x, starts, jac, found)
     covariance, correlation, inflation = _statistics(log, jac, residuals, x.size)
     half = 1.96 * np.sqrt(np.diag(covariance))
     mass = None
     if found is not None:
-        within = _time_interval(log, x, starts, jac, residuals, found, float(inflation[-1]))
+        within = _time_interval(profile, jac, residuals, float(inflation[-1]))
         step = float(np.median(log.dt))
         mass = Payload(payload, float(found), step, within, float(x[-1]), float(half[-1]))
         x, half, correlation = x[:-1], half[:-1], correlation[:-1, :-1]
@@ -414,9 +419,10 @@ def fit_inertia(t, v, omega, phis, torques, p: Params, fit=("Mr",), payload=None
             f"{missed[1]:.3g} rad/s (their own rms: {spread[0]:.3g}, {spread[1]:.3g}): are the "
             "torques the wheels' in N m (T_r, T_l), and the vehicle's masses near the given ones?"
         )
-    told = half < TOLD_WITHIN * np.abs(x)  # as InertiaFit.told: the others stay as given
+    told = _told(x, half)  # the others stay as given
     return InertiaFit(
         tuple(names),
+        tuple(dict.fromkeys(field for _, field in keys)),
         x,
         half,
         correlation,
@@ -540,32 +546,23 @@ def _time_profile(log: _Log, x, starts, jac, found: float):
     return near, np.array([left(at) for at in near])
 
 
-def _closer_time(log: _Log, x, starts, jac, found: float) -> float:
-    """The grid time of :func:`_time_profile` that leaves the least."""
-    times, left = _time_profile(log, x, starts, jac, found)
-    return float(times[int(np.argmin(left))])
-
-
-def _time_interval(log: _Log, x, starts, jac, residuals, found: float, inflation: float):
-    """The payload times the log does not tell from ``found`` at 95 %: where the profile
-    (:func:`_time_profile`) stays within 3.84 residual variances of its least, the variance
-    ``inflation`` times the plain one (the clustered intervals' ratio: residuals within a
-    segment are not independent). Reaching an end of the profile's window, the interval is at
-    least that wide."""
-    times, left = _time_profile(log, x, starts, jac, found)
+def _time_interval(profile, jac, residuals, inflation: float) -> tuple[float, float]:
+    """The payload times the log does not tell from the best at 95 %: where the ``profile``
+    (:func:`_time_profile` of the fit with the payload, ``jac`` and ``residuals`` its own)
+    stays within 3.84 residual variances of its least, the variance ``inflation`` times the
+    plain one (the clustered intervals' ratio: residuals within a segment are not
+    independent). Reaching an end of the profile's window, the interval is at least that
+    wide."""
+    times, left = profile
     variance = float(residuals @ residuals) / max(residuals.size - jac.shape[1], 1)
     inside = times[left <= left.min() + 3.84 * variance * max(inflation, 1.0)]
     return float(inside.min()), float(inside.max())
 
 
 def _with(p: Params, values: dict) -> Params:
-    """``p`` with the masses and inertias ``values`` (``(unit, field) -> value``)."""
-    own = {f: float(v) for (k, f), v in values.items() if k in (0, 1)}
-    train = list(p.train)
-    for (k, f), value in values.items():
-        if k > 1:
-            train[k - 2] = dataclasses.replace(train[k - 2], **{f: float(value)})
+    """``p`` with the masses and inertias ``values`` (``(unit, field) -> value``):
+    :meth:`~tt_mujoco.vehicle.params.Params.with_unit_fields`."""
     try:
-        return p.replace(**own, train=tuple(train))
+        return p.with_unit_fields(values)
     except ValueError as err:
         raise LogError(f"the fit leads to no vehicle ({err})") from None

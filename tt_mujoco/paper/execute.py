@@ -243,9 +243,8 @@ def run_suite(
                 done[spec.key] = runner(spec.key, spec.scenario, spec.keep_series)
                 bar.update()
         else:
-            executors = Executors(
-                workers, None, guard.ignore_stop_signals
-            )  # the sweep's process pool
+            # the sweep's process pool
+            executors = Executors(workers, None, guard.ignore_stop_signals)
             pool = executors.open()
             try:
                 futures = {

@@ -455,6 +455,17 @@ class Params:
         train = tuple(dataclasses.replace(t, eta=float(e)) for t, e in rest)
         return self.replace(eta=float(etas[0]), train=train)
 
+    def with_unit_fields(self, values) -> Params:
+        """A copy with ``values``, ``{(unit, field): value}``: unit 0 the tractor and 1 trailer
+        1 (this object's own fields), k trailer k of :attr:`train` (validated again; a gain
+        stays the number it is, whatever the lengths become)."""
+        own = {name: float(value) for (k, name), value in values.items() if k in (0, 1)}
+        train = list(self.train)
+        for (k, name), value in values.items():
+            if k > 1:
+                train[k - 2] = dataclasses.replace(train[k - 2], **{name: float(value)})
+        return self.replace(**own, train=tuple(train))
+
     def with_trailers(self, n: int, overrides=()) -> Params:
         """A train of ``n`` trailers: trailers 2..n copy trailer 1's lengths, masses and
         steering (a preset gives each trailer its own value), then take ``overrides[k - 2]``
