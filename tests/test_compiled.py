@@ -226,20 +226,21 @@ def test_compiled_loop_equals_python_loop_bit_for_bit(monkeypatch, case):
     assert python.metrics.get("ground") == fast.metrics.get("ground")  # the patches' report
 
 
-def test_records_of_equal_type_keys_have_equal_numba_types(monkeypatch):
-    """A process finds its compiled entry point again by compiled.type_key of the records,
-    not by numba's typing: scenarios whose records have equal keys must have equal types (else
-    an entry would run on records of other types)."""
-    from numba import typeof
+def test_records_of_equal_keys_have_equal_numba_types(monkeypatch):
+    """A process finds the machine code of its chunk loop by machine_code.records_key of the
+    records, not by numba's typing: scenarios whose records have equal keys must have equal
+    types (else an entry would run on records of other types)."""
+    from tt_mujoco.sim.loop import _entry_compile, machine_code
 
     seen = []
-    compiled_for = compiled._compiled_for
+    records_key = machine_code.records_key
 
-    def spied(dispatcher, args):
-        seen.append((tuple(compiled.type_key(a) for a in args), tuple(typeof(a) for a in args)))
-        return compiled_for(dispatcher, args)
+    def spied(records):
+        typed = tuple(_entry_compile._typed(compiled.kernel(), r) for r in records)
+        seen.append((records_key(records), typed))
+        return records_key(records)
 
-    monkeypatch.setattr(compiled, "_compiled_for", spied)
+    monkeypatch.setattr(machine_code, "records_key", spied)
     options = [
         dict(seed=1, noise_snr_db=20.0),
         dict(seed=2, noise_snr_db=20.0),
@@ -256,7 +257,7 @@ def test_records_of_equal_type_keys_have_equal_numba_types(monkeypatch):
     types_of = {}
     for key, types in seen:
         assert types_of.setdefault(key, types) == types
-    # and the key tells apart no more than the types do (each new key costs numba's typing)
+    # and the key tells apart no more than the types do (each new key costs a compile)
     assert len(types_of) == len({types for _, types in seen}) and seen[0][0] == seen[1][0]
 
 
@@ -323,12 +324,13 @@ def test_the_python_loop_runs_what_has_no_compiled_form(changes, reason):
 
 
 def test_a_single_short_run_in_a_new_process_takes_the_faster_python_loop(monkeypatch):
-    # loading the compiled loop costs what the Python loop takes for its first
-    # COLD_MIN_STEPS steps: a process's first episode shorter than that runs in Python, its
-    # next ones compiled, and a long one compiled at once
+    # without machine code in the cache, loading the compiled loop through numba costs what
+    # the Python loop takes for its first COLD_MIN_STEPS steps: a process's first episode
+    # shorter than that runs in Python, its next ones compiled, and a long one compiled at once
     monkeypatch.delenv("TT_MUJOCO_COMPILE_NOW", raising=False)
     monkeypatch.setattr(compiled, "_KERNEL", None)
     monkeypatch.setattr(compiled, "_EPISODES", 0)
+    monkeypatch.setattr(compiled, "_machine_code_pays", lambda: False)
     short = build(Scenario(traj="circle", duration=13.0))
     why = compiled.loading_pays(short)
     assert why is not None and "13000 control steps" in why and "next episode" in why
@@ -338,6 +340,14 @@ def test_a_single_short_run_in_a_new_process_takes_the_faster_python_loop(monkey
     monkeypatch.setattr(compiled, "_EPISODES", 0)
     monkeypatch.setenv("TT_MUJOCO_COMPILE_NOW", "1")  # the tests and benchmarks ask for it
     assert compiled.loading_pays(short) is None
+    # machine code loads in milliseconds: a short first episode runs compiled, but for a
+    # user's plain-number law, which numba still compiles (or loads) in the process
+    monkeypatch.delenv("TT_MUJOCO_COMPILE_NOW")
+    monkeypatch.setattr(compiled, "_machine_code_pays", lambda: True)
+    for law, pays in [("ismc_sta", True), ("examples/kanayama.py:kanayama_law", False)]:
+        monkeypatch.setattr(compiled, "_EPISODES", 0)
+        built = build(Scenario(traj="circle", duration=13.0, controller=law))
+        assert (compiled.loading_pays(built) is None) is pays, law
 
 
 def test_switched_off_by_the_environment(monkeypatch):
@@ -631,38 +641,44 @@ def test_a_cache_a_background_compile_is_writing_is_not_set_aside(monkeypatch, t
     assert not cache.exists() and list(cache.parent.glob(f"{cache.name}.damaged-*"))
 
 
-def test_a_kernel_that_fails_to_load_leaves_the_episode_to_the_python_loop(
-    monkeypatch, tmp_path, capsys
+@pytest.mark.parametrize("damage", ["hash", "symbols"])
+def test_machine_code_that_fails_to_load_leaves_the_episode_to_the_python_loop(
+    monkeypatch, tmp_path, damage
 ):
-    class BrokenDispatcher:  # a cached kernel whose code fails to load (a truncated file)
-        @staticmethod
-        def typeof_pyval(value):
-            return None
+    """An entry whose object differs from its description is never loaded (garbage object
+    code can crash the process that loads it); one that loads but lacks its symbols is
+    refused: either way the cache is set aside and the Python loop runs, the same numbers."""
+    import hashlib
+    import json
 
-        @staticmethod
-        def compile(signature):
-            raise EOFError("Ran out of input")
-
-    real = compiled.kernel()
-
-    class Broken:  # placeholders numba can type, never called
-        no_user_law = no_hook = 0.0
-        run_chunk = BrokenDispatcher
-        CalledBack, PythonLawCallback, HookCallback = (
-            real.CalledBack,
-            real.PythonLawCallback,
-            real.HookCallback,
-        )
-        address_of = staticmethod(lambda function: 0)
+    from tt_mujoco.sim.loop import machine_code
 
     monkeypatch.setenv("TT_MUJOCO_CACHE", str(tmp_path))
     scenario = Scenario(traj="circle", duration=3.0, noise_snr_db=25.0)
     monkeypatch.setenv("TT_MUJOCO_COMPILED", "0")
     python = simulate(scenario)
     monkeypatch.setenv("TT_MUJOCO_COMPILED", "1")
-    monkeypatch.setattr(compiled, "_KERNEL", Broken)
+    records_key = machine_code.records_key
+    llvm, machine, _ = machine_code._llvm()  # an object of one function: loads, lacks them
+    obj = machine.emit_object(llvm.parse_assembly("define i32 @f() { ret i32 1 }"))
+    sha = hashlib.sha256(obj if damage == "symbols" else b"other").hexdigest()
+    meta = {"wrapper": "entry", "env": "env", "ints": 1, "floats": 1, "sha256": sha}
+
+    def damaged(records):
+        key = records_key(records)
+        folder = compiled._cache_dir() / machine_code.MACHINE_DIR
+        folder.mkdir(parents=True, exist_ok=True)
+        (folder / f"{key}.o").write_bytes(obj)
+        (folder / f"{key}.json").write_text(json.dumps(meta))
+        return key
+
+    monkeypatch.setattr(machine_code, "records_key", damaged)
+    monkeypatch.setattr(machine_code, "_LOADED", {})
+    cache = compiled._cache_dir()
     result = simulate(scenario)
-    assert len(result.notes) == 1 and "EOFError: Ran out of input" in result.notes[0]
+    why = {"hash": "differs from its description", "symbols": "does not load"}[damage]
+    assert len(result.notes) == 1 and why in result.notes[0], result.notes
+    assert not cache.exists() and list(cache.parent.glob(f"{cache.name}.damaged-*"))
     for name, column in python.timeseries.items():
         assert np.array_equal(column, result.timeseries[name], equal_nan=True), name
 
@@ -766,6 +782,7 @@ def test_a_run_the_python_loop_takes_sooner_judges_no_cache_during_the_run(monke
     monkeypatch.delenv("TT_MUJOCO_COMPILE_NOW", raising=False)
     monkeypatch.setattr(compiled, "_KERNEL", None)
     monkeypatch.setattr(compiled, "_EPISODES", 0)
+    monkeypatch.setattr(compiled, "_machine_code_pays", lambda: False)
     asked, judged = [], []
     monkeypatch.setattr(compiled, "_ask_for_compile", lambda: asked.append(1))
     monkeypatch.setattr(compiled, "_cached", lambda: judged.append(1) or False)

@@ -113,7 +113,7 @@ def _no_process_left(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize(
     ("controller", "names"),
-    [("user.py:spin_law", "compiled.py"), ("user.py:StuckInC", "user.py, line 29 in compute")],
+    [("user.py:spin_law", "machine_code.py"), ("user.py:StuckInC", "user.py, line 29 in compute")],
 )
 def test_code_that_never_returns_is_stopped_at_its_time_limit(
     compiled_spin, tmp_path, controller, names
@@ -221,7 +221,7 @@ def test_a_sweeps_run_that_never_returns_is_recorded_and_the_sweep_goes_on(compi
     rows = {r["gain.spin_after"]: r for r in csv.DictReader(open(tmp_path / "sw" / "runs.csv"))}
     hung = rows["0.3"]
     assert hung["status"] == "failed", done.stderr
-    assert "never returned to Python" in hung["message"] and "compiled.py" in hung["message"]
+    assert "never returned to Python" in hung["message"] and "machine_code.py" in hung["message"]
     assert rows["1000000000.0"]["status"] != "error", rows  # the other run was run, once
     assert not (tmp_path / "sw" / ".hangs").exists()
     _no_process_left(tmp_path)

@@ -14,7 +14,6 @@ them by overloads.
 
 from __future__ import annotations
 
-import ctypes
 import math
 import types as pytypes
 
@@ -26,7 +25,7 @@ from tt_mujoco import exact
 from tt_mujoco.analysis import nearest
 from tt_mujoco.compiled_form import compiled_form_reason
 from tt_mujoco.reference import feedback
-from tt_mujoco.sim.loop import agent_step, closed_loop, law, target_step
+from tt_mujoco.sim.loop import agent_step, callbacks, closed_loop, law, target_step
 from tt_mujoco.sim.loop.kernel_sources import SHARED
 from tt_mujoco.sim.loop.law import BACK_STATUS, BACK_T_L, BACK_T_R, BACK_U1, BACK_U2
 from tt_mujoco.sim.parts import disturbances
@@ -104,86 +103,18 @@ def no_hook(what, value, out):  # the placeholder where the episode has no hook
     pass
 
 
-class CalledBack(types.WrapperAddressProtocol):
-    """Python code as a C function the kernel calls back, of the type ``signature`` (a numba
-    first-class function, like a compiled law: the kernel compiles once for either). What the
-    code raises cannot leave a C callback: it sets the stop record's ``raised``, which stops
-    the step where CPython's would have stopped (:func:`~tt_mujoco.sim.loop.closed_loop.run_steps`),
-    and waits in :attr:`raised` for the kernel's caller to raise it; once it is set, nothing
-    is called back again."""
-
-    signature_of = None  # the kernel's type of the function (its C signature)
-
-    def __init__(self, fn, prototype):
-        self.fn = fn
-        self.stop_record = None  # the episode's stop record (Stepper.begin)
-        self.raised = None
-        self._function = prototype(self._call)  # held: the kernel calls its address
-
-    def _failed(self, err: BaseException) -> None:
-        self.raised = err
-        self.stop_record[0]["raised"] = 1.0
-
-    def _call(self, *args):
-        raise NotImplementedError
-
-    def __wrapper_address__(self):
-        return ctypes.cast(self._function, ctypes.c_void_p).value
-
-    def signature(self):
-        return self.signature_of
+# The callbacks, as numba types them: first-class functions of the kernel's signatures.
+class CalledBack(callbacks.CalledBack, types.WrapperAddressProtocol):
+    """:class:`tt_mujoco.sim.loop.callbacks.CalledBack`, which numba types as a first-class
+    function of the kernel's :attr:`signature_of`."""
 
 
-_C_LAW = ctypes.CFUNCTYPE(None, *[ctypes.c_void_p] * 6, ctypes.c_double, ctypes.c_double)
-_C_HOOK = ctypes.CFUNCTYPE(None, ctypes.c_double, ctypes.c_double, ctypes.c_void_p)
-
-
-class PythonLawCallback(CalledBack):
-    """A law Python computes (``python_law(law) -> (status, T_r, T_l, u1, u2)``, a controller
-    class's ``compute`` with its checks) as a C function of the kernel's law signature, which
-    the kernel calls back at every step (:func:`_python_law`): the step runs compiled, and only
-    the law in Python."""
-
+class PythonLawCallback(callbacks.PythonLawCallback, CalledBack):
     signature_of = USER_LAW
 
-    def __init__(self, python_law):
-        super().__init__(python_law, _C_LAW)
-        self.law_record = None  # the kernel's law record, which the law reads (Stepper.begin)
 
-    def _call(self, *_):
-        law = self.law_record
-        status, T_r, T_l, u1, u2 = LAW_OK, math.nan, math.nan, math.nan, math.nan
-        if not self.stop_record[0]["raised"]:
-            try:
-                status, T_r, T_l, u1, u2 = self.fn(law)
-            except BaseException as err:  # raised by the kernel's caller
-                self._failed(err)
-        out = law.torques
-        out[BACK_T_R], out[BACK_T_L], out[BACK_U1], out[BACK_U2] = T_r, T_l, u1, u2
-        out[BACK_STATUS] = status
-
-
-class HookCallback(CalledBack):
-    """A user's path or disturbance, ``fn(what, value) -> tuple`` (:data:`HOOK`), as a C
-    function the kernel calls back, writing its answer into ``out`` (the record's
-    ``hook_out``)."""
-
+class HookCallback(callbacks.HookCallback, CalledBack):
     signature_of = HOOK
-
-    def __init__(self, fn, out):
-        super().__init__(fn, _C_HOOK)
-        self.out = out
-
-    def _call(self, what, value, _):
-        out = self.out
-        if not self.stop_record[0]["raised"]:
-            try:
-                answer = self.fn(what, value)
-                out[: len(answer)] = answer
-                return
-            except BaseException as err:  # raised by the kernel's caller
-                self._failed(err)
-        out[:] = math.nan
 
 
 @intrinsic
@@ -203,12 +134,9 @@ def _pointer_of(array):
 
 
 def address_of(function) -> int:
-    """The address of a C function the kernel calls: a callback's (:class:`CalledBack`) or a
-    compiled function's (a user's law, a placeholder), which an agent's records hold
-    (:func:`_call_hook`)."""
-    if isinstance(function, CalledBack):
-        return function.__wrapper_address__()
-    return function.address
+    """The address of a C function the kernel calls (:func:`tt_mujoco.sim.loop.callbacks.
+    address_of`), which an agent's records hold (:func:`_call_hook`)."""
+    return callbacks.address_of(function)
 
 
 @intrinsic

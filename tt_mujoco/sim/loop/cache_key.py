@@ -69,8 +69,8 @@ def source_digest() -> str:
     """A hash of what the compiled code depends on: the interpreter, the machine, numba's,
     llvmlite's and MuJoCo's versions, every file the kernel compiles
     (:func:`tt_mujoco.sim.loop.kernel_sources.source_files`, that module's, this file,
-    :mod:`~tt_mujoco.sim.loop.compiled` and the kernel's) and the built-in laws in their order
-    (a law's index is its kind)."""
+    :mod:`~tt_mujoco.sim.loop.compiled`, the kernel's and its machine code's) and the
+    built-in laws in their order (a law's index is its kind)."""
     import platform
     from importlib import metadata
 
@@ -82,6 +82,8 @@ def source_digest() -> str:
     digest.update(" ".join(laws).encode())
     here = Path(__file__).parent
     sources = (*kernel_sources.source_files(), kernel_sources.__file__, __file__)
-    for name in (*sources, here / "compiled.py", here / "_kernel.py"):
+    compiling = ("compiled.py", "_kernel.py", "_entry_compile.py", "machine_code.py")
+    compiling += ("callbacks.py",)
+    for name in (*sources, *(here / name for name in compiling)):
         digest.update(Path(name).read_bytes())
     return digest.hexdigest()[:16]

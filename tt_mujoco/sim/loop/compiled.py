@@ -6,38 +6,28 @@ compiled form (:func:`unsupported` says why not otherwise): a built-in law
 nominal model, a user's plain-number law (:mod:`tt_mujoco.controllers.plain`, compiled once by
 :func:`~tt_mujoco.sim.loop.compiled_law.compile_law` and cached on disk, keyed by its source),
 or any other controller, whose Python ``compute`` the kernel calls back at every step through a
-C function (:class:`tt_mujoco.sim.loop._kernel.PythonLawCallback`); a static or dynamic target
-on any path (the S-curve, the circle, the cycloid and a CSV spline from their tables, a path
-without closed form called back), driven forwards or backing up (the reverse target, with the
-hitch cascade or path feedback), the paper's disturbance or a user's (called back), matched or
-as a wrench, or none, measurement noise, one trailer or a train, constant steering gains or
-either schedule (:mod:`tt_mujoco.sim.parts.schedule`), path feedback, faults, DC motors, wind, a
-sensor delay, friction patches; not a per-step callback (a payload step on the reduced plant
-returns to Python, which recomputes the plant's constants and advances that step, then the
-kernel goes on). The loop then runs in numba, chunk by chunk, calling ``mj_step`` through
-MuJoCo's C library or stepping the reduced ODE, over the named records of
-:mod:`tt_mujoco.sim.loop.records`.
+C function (:mod:`tt_mujoco.sim.loop.callbacks`); any target, path, disturbance, noise, train,
+steering schedule, fault, motor, wind, delay or friction patch the step has (a payload step on
+the reduced plant returns to Python, which recomputes the plant's constants and advances that
+step); not a per-step callback (the live viewer).
 
-The loop it runs is :func:`tt_mujoco.sim.loop.closed_loop.run_steps`, compiled from its source with
-every function it calls (:mod:`tt_mujoco.sim.loop._kernel`), the one CPython runs for every other
-episode (the Python loop): both compute the same numbers bit for bit
-(``tests/test_compiled.py``, ``tests/test_plain.py``, ``tests/test_closed_loop.py``).
-:class:`~tt_mujoco.sim.loop.stepper.Stepper` makes the records and runs the chunks either way.
-``TT_MUJOCO_COMPILED=0`` turns it off.
+The loop it runs is :func:`tt_mujoco.sim.loop.closed_loop.run_steps`, compiled by numba from
+its source with every function it calls (:mod:`tt_mujoco.sim.loop._kernel`), the one CPython
+runs for every other episode (the Python loop): both compute the same numbers bit for bit
+(``tests/test_compiled.py``, ``tests/test_plain.py``, ``tests/test_closed_loop.py``). Its
+machine code is stored and loaded without numba (:mod:`~tt_mujoco.sim.loop.machine_code`, a
+few milliseconds), chunk by chunk over the records :class:`~tt_mujoco.sim.loop.stepper.Stepper`
+makes. ``TT_MUJOCO_COMPILED=0`` turns it off.
 
 Compiled code is cached on disk under ``$TT_MUJOCO_CACHE`` or ``~/.cache/tt_mujoco``, in a
 folder keyed by :func:`~tt_mujoco.sim.loop.cache_key.source_digest` (the interpreter, numba,
-llvmlite and MuJoCo versions and every file the kernel compiles: numba's own cache only watches
-the file of the function it caches). Compiling takes seconds, so it never happens in the
-user's run: the first episode that could run compiled finds no whole cache (:func:`not_ready`),
-starts one background process that compiles it, and runs the Python loop (same numbers); later
-episodes load it, once per process. Loading costs about half a second, so a process's first
-episode, when short (:data:`COLD_MIN_STEPS`), runs in the Python loop, which finishes it sooner
-(:func:`loading_pays`). Every episode the Python loop runs says why in the run's notes.
-The kernel runs from a copy of its source inside that folder, so every checkout of the same
-sources shares one cache, and a manifest of the folder's files lets a damaged cache be set
-aside rather than recompiled in the foreground. ``TT_MUJOCO_COMPILE_NOW=1`` compiles in the
-run itself (the tests and benchmarks).
+llvmlite and MuJoCo versions and every file the kernel compiles). Compiling takes a minute, so
+it never happens in the user's run: the first episode that could run compiled finds no cache
+(:func:`not_ready`), starts one background process that compiles it, and runs the Python loop
+(same numbers); later episodes load it. Every episode the Python loop runs says why in the
+run's notes. A manifest of the folder's files lets a damaged cache be set aside rather than
+recompiled in the foreground. ``TT_MUJOCO_COMPILE_NOW=1`` compiles in the run itself (the
+tests and benchmarks).
 """
 
 from __future__ import annotations
@@ -55,7 +45,6 @@ from tt_mujoco.sim.loop.cache_key import digest_by_stamp, source_digest
 
 __all__ = [
     "Fallback",
-    "compile_failure",
     "entry_point",
     "kernel",
     "not_ready",
@@ -125,6 +114,8 @@ def not_ready() -> str | None:
     (:func:`_ask_for_compile`)."""
     if _KERNEL is not None or os.environ.get("TT_MUJOCO_COMPILE_NOW") == "1":
         return None
+    if _machine_code_pays():
+        return None  # each entry's own hash is checked as it loads
     failed = compile_failure_of(_cache_dir())
     if failed is not None:  # not tried again for these sources: it would fail alike
         return failed
@@ -200,6 +191,8 @@ def loading_pays(built) -> str | None:
     _EPISODES += 1
     if _KERNEL is not None or _EPISODES > 1 or built.steps >= COLD_MIN_STEPS:
         return None
+    if _machine_code_pays() and not _is_plain_law(built.controller_class):
+        return None  # loading it costs milliseconds; a user's law still compiles with numba
     if getattr(built.controller_class, "SEES_PATH", False):
         return None
     if os.environ.get("TT_MUJOCO_COMPILE_NOW") == "1":
@@ -209,6 +202,21 @@ def loading_pays(built) -> str | None:
         f"{COLD_MIN_STEPS} for which loading the compiled loop pays (the process's next "
         "episode loads it)"
     )
+
+
+def _machine_code_pays() -> bool:
+    """Whether the cache holds machine code of the chunk loop, which loads in milliseconds
+    without numba (:mod:`~tt_mujoco.sim.loop.machine_code`), and no compile is writing it."""
+    from tt_mujoco.sim.loop import machine_code
+
+    cache = _cache_dir()
+    return machine_code.has_entries(cache) and not compile_in_progress(cache)
+
+
+def _is_plain_law(cls) -> bool:
+    from tt_mujoco.controllers.plain import PlainLawController
+
+    return isinstance(cls, type) and issubclass(cls, PlainLawController)
 
 
 #: Whether this process has asked for a background compile (see :func:`_ask_for_compile`).
@@ -265,6 +273,7 @@ def _cache_files(cache: Path) -> dict[str, str]:
     the copy's folder and a sha1 of its path, so a cache moved elsewhere lists nothing."""
     subfolder = f"{cache.name}_{hashlib.sha1(str(cache.resolve()).encode()).hexdigest()}"
     files = [cache / "_kernel.py", *sorted((cache / subfolder).glob("*.nb[ic]"))]
+    files += sorted((cache / "machine").glob("*.[oj]*"))  # machine_code.MACHINE_DIR
     return {
         str(f.relative_to(cache)): hashlib.sha256(f.read_bytes()).hexdigest()
         for f in files
@@ -490,39 +499,11 @@ class _DamagedCacheError(Exception):
     """The cached kernel failed to load or to run its first chunk: nothing has run."""
 
 
-def compile_failure(err: BaseException, source_file: str | None) -> str:
-    """numba's error compiling a user's law, in one line: what has no compiled form and the
-    line of ``source_file`` (the law's file) where it is used."""
-    import linecache
-    import re
-
-    from tt_mujoco.sim.loop.compiled_law import LawFormError
-
-    if isinstance(err, LawFormError):  # says its line itself
-        return str(err)
-    text = re.sub(r"\x1b\[[0-9;]*m", "", str(err))
-    lines = [line.strip() for line in text.splitlines()]
-    why = next((line for line in lines if line and not line.startswith("Failed in")), "")
-    signature = next((line[3:].strip() for line in lines if line.startswith(">>>")), None)
-    if why.startswith("No implementation of function") and signature:
-        why = f"numba has no {signature}"
-    why = re.sub(r"Function\(<function (\w+) at 0x[0-9a-f]+>\)", r"\1", why).rstrip(":")
-    why = why or type(err).__name__
-    if source_file is None:
-        return why
-    own = os.path.realpath(source_file)
-    places = re.findall(r"typing of [^\n]*? at (.+?) \((\d+)\)", text)
-    places += re.findall(r'File "(.+?)", line (\d+)', text)  # relative to the working folder
-    for path, number in places:
-        if os.path.realpath(path) == own:
-            code = linecache.getline(own, int(number)).strip()
-            return f"{why}, at {os.path.basename(path)} line {number}: {code}"
-    return why
-
-
 def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
     """Run the (reset) ``stepper``'s episode with ``controller`` compiled; ``(status,
-    message)`` as :func:`tt_mujoco.sim.simulate.run_episode`.
+    message)`` as :func:`tt_mujoco.sim.simulate.run_episode`. The chunk loop runs as machine
+    code loaded without numba (:mod:`~tt_mujoco.sim.loop.machine_code`), compiled here first
+    when the cache has none for these records (:func:`_machine_entry`).
 
     Raises
     ------
@@ -530,55 +511,84 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
         When the compiled code cannot be loaded or the user's law has no compiled form:
         nothing has run, and the caller runs the Python loop.
     """
-    try:
-        k_mod = kernel()
-    except Exception as err:  # a damaged cache: its copy of the kernel does not import
-        raise Fallback(set_aside_cache(err)) from err
-    try:
-        user = _user_law(k_mod, controller)
-    except Exception as err:  # numba cannot compile the user's law: the Python loop can run it
-        import inspect
+    from tt_mujoco.sim.loop import callbacks, machine_code
 
-        law = getattr(type(controller), "LAW", None)
-        source = inspect.getsourcefile(law) if law is not None else None
-        raise Fallback(
-            f"the law {controller.name!r} has no compiled form: {compile_failure(err, source)}"
-        ) from err
-    stepper.begin(controller, user, kernel=k_mod)
+    cache = _cache_dir()
+    stepper.begin(controller, _user_law(callbacks.no_user_law, controller), kernel=callbacks)
     entry = None
 
-    def run_chunk(*args):
+    def run_chunk(k, k_end, *records):
         nonlocal entry
-        if entry is not None:
-            out = entry(*args)
-        else:
-            try:  # the first call loads the compiled code from the cache
-                entry = _compiled_for(k_mod.run_chunk, args)
-                out = entry(*args)
-            except Exception as err:  # damaged: nothing has run, the Python loop takes over
-                raise _DamagedCacheError() from err
-            _write_manifest(sum(k_mod.run_chunk.stats.cache_misses.values()) > 0)
+        ints, floats = machine_code.flatten(records)
+        if entry is None:  # nothing has run: a damaged or missing entry leaves it to Python
+            entry = _machine_entry(cache, records)
+        out = entry(k, k_end, ints, floats)
         raised = stepper.hook_failure()
         if raised is not None:
             raise raised
         return out
 
     def advance(*args):  # not compiled by the warm-up: its first call may add to the cache
-        return _call_listed(k_mod.advance_after_payload, *args)
+        return _call_listed(kernel().advance_after_payload, *args)
 
     try:
         return stepper.run(run_chunk, advance, progress)
     except _DamagedCacheError as damaged:
         raise Fallback(set_aside_cache(damaged.__cause__)) from damaged
+    except _NoEntryError as missing:
+        raise Fallback(str(missing)) from None
 
 
-def _user_law(k_mod, controller):
-    """The compiled form of a plain-number law, the kernel's placeholder for a built-in one,
-    or None for a controller whose Python ``compute`` the kernel calls back."""
+class _NoEntryError(Exception):
+    """The cache has no machine code for these records, and compiling it here would hold up
+    the run (a background compile is still filling the cache)."""
+
+
+def _machine_entry(cache: Path, records: tuple):
+    """The machine-code entry for ``records``: loaded from the cache, or compiled here (once
+    per kind of records and version of the sources, as numba compiles a new signature) when
+    the kernel is loaded, ``TT_MUJOCO_COMPILE_NOW=1`` asks, or the cache is whole."""
+    from tt_mujoco.sim.loop import machine_code
+
+    key = machine_code.records_key(records)
+    try:
+        entry = machine_code.entry_for(cache, key)
+        if entry is not None:
+            return entry
+        here = _KERNEL is not None or os.environ.get("TT_MUJOCO_COMPILE_NOW") == "1"
+        if not here and not _cached():
+            raise _NoEntryError(
+                "the compiled loop has no machine code for this episode's records yet (a "
+                "background process compiles it)"
+            )
+        from tt_mujoco.sim.loop._entry_compile import compile_entry
+
+        obj, symbols = compile_entry(kernel(), records)
+        machine_code.write_entry(cache, key, obj, symbols)
+        _write_manifest(compiled_here=True)
+        return machine_code.entry_for(cache, key)
+    except (_NoEntryError, _DamagedCacheError):
+        raise
+    except Exception as err:  # damaged: nothing has run, the Python loop takes over
+        raise _DamagedCacheError() from err
+
+
+def _user_law(placeholder, controller):
+    """The compiled form of a plain-number law, ``placeholder`` for a built-in one, or None
+    for a controller whose Python ``compute`` the kernel calls back; a law numba cannot
+    compile is a :class:`Fallback`."""
     from tt_mujoco.controllers.plain import PlainLawController
-    from tt_mujoco.sim.loop.compiled_law import compile_law
+    from tt_mujoco.sim.loop.compiled_law import compile_failure, compile_law
     from tt_mujoco.sim.loop.episode import runs_built_in
 
-    if isinstance(controller, PlainLawController):
+    if not isinstance(controller, PlainLawController):
+        return placeholder if runs_built_in(controller) else None
+    try:
         return compile_law(type(controller))
-    return k_mod.no_user_law if runs_built_in(controller) else None
+    except Exception as err:  # numba cannot compile the user's law: the Python loop can run it
+        import inspect
+
+        source = inspect.getsourcefile(controller.LAW)
+        raise Fallback(
+            f"the law {controller.name!r} has no compiled form: {compile_failure(err, source)}"
+        ) from err

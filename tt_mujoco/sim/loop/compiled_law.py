@@ -20,7 +20,7 @@ from pathlib import Path
 from tt_mujoco.outputs import atomic_write
 from tt_mujoco.sim.loop.compiled import _cache_dir, kernel
 
-__all__ = ["compile_law", "frozen_values"]
+__all__ = ["compile_failure", "compile_law", "frozen_values"]
 
 
 def compile_law(cls):
@@ -347,3 +347,32 @@ def _refuse_unreproducible(law, copies, dtypes, sees_path, verdict: Path) -> Non
             site = unreproducible_site(law, own, state_type)
     if site:
         raise LawFormError(site)
+
+
+def compile_failure(err: BaseException, source_file: str | None) -> str:
+    """numba's error compiling a user's law, in one line: what has no compiled form and the
+    line of ``source_file`` (the law's file) where it is used."""
+    import linecache
+    import os
+    import re
+
+    if isinstance(err, LawFormError):  # says its line itself
+        return str(err)
+    text = re.sub(r"\x1b\[[0-9;]*m", "", str(err))
+    lines = [line.strip() for line in text.splitlines()]
+    why = next((line for line in lines if line and not line.startswith("Failed in")), "")
+    signature = next((line[3:].strip() for line in lines if line.startswith(">>>")), None)
+    if why.startswith("No implementation of function") and signature:
+        why = f"numba has no {signature}"
+    why = re.sub(r"Function\(<function (\w+) at 0x[0-9a-f]+>\)", r"\1", why).rstrip(":")
+    why = why or type(err).__name__
+    if source_file is None:
+        return why
+    own = os.path.realpath(source_file)
+    places = re.findall(r"typing of [^\n]*? at (.+?) \((\d+)\)", text)
+    places += re.findall(r'File "(.+?)", line (\d+)', text)  # relative to the working folder
+    for path, number in places:
+        if os.path.realpath(path) == own:
+            code = linecache.getline(own, int(number)).strip()
+            return f"{why}, at {os.path.basename(path)} line {number}: {code}"
+    return why

@@ -1,0 +1,222 @@
+"""The compiled chunk loop as machine code on disk, loaded without numba.
+
+Loading the kernel through numba costs a cold process about a second (numba's import, its
+target's registries, the cached code's typing), several times the main run's physics. So the
+background compile (:func:`tt_mujoco.sim.loop.compiled.warm_up`) also writes, for each kind of
+records the loop is given, one *entry*: :func:`~tt_mujoco.sim.loop.closed_loop.run_steps`
+compiled by numba behind a plain signature, ``entry(k, k_end, ints, floats)``, which rebuilds
+the records from two flat arrays (:mod:`tt_mujoco.sim.loop._entry_compile` generates it), and
+its object code. A process loads that object code with llvmlite alone (a few milliseconds)
+and calls the entry's CPython wrapper: the same machine code numba would run, the same numbers.
+
+Files, in the compiled-code cache folder's ``machine/``: ``KEY.o`` (the object code) and
+``KEY.json`` (its symbols, its flat sizes and the object's sha256), ``KEY`` a hash of the
+records' structure (:func:`records_key`). The JSON is written last, so a reader sees a whole
+pair or none; an object whose hash differs is set aside, never loaded.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import importlib.util
+import json
+from pathlib import Path
+
+import numpy as np
+
+from tt_mujoco.outputs import atomic_write
+from tt_mujoco.sim.loop import callbacks
+
+__all__ = [
+    "MACHINE_DIR",
+    "MachineCodeError",
+    "entry_for",
+    "flatten",
+    "has_entries",
+    "records_key",
+    "write_entry",
+]
+
+#: The cache folder's subfolder of machine-code entries.
+MACHINE_DIR = "machine"
+#: The object format's version: part of every key, so a change of this module's layout never
+#: loads an older file.
+_FORMAT = 1
+
+
+class MachineCodeError(Exception):
+    """An entry on disk that cannot be used (a hash that differs, a file that does not load);
+    the message says which and why."""
+
+
+def _shape_key(value) -> object:
+    """What the entry's machine code depends on in ``value``: numba's type of it, told from
+    Python (an array's dtype, dimensions, layout, writability and alignment; a named tuple's
+    class; a number's class; a C function's kind)."""
+    if isinstance(value, np.ndarray):
+        flags = value.flags
+        layout = "C" if flags.c_contiguous else ("F" if flags.f_contiguous else "A")
+        return ("array", value.dtype.descr, value.ndim, layout, flags.writeable, flags.aligned)
+    if isinstance(value, tuple):
+        cls = type(value)
+        return (f"{cls.__module__}.{cls.__qualname__}", [_shape_key(v) for v in value])
+    if type(value) in (bool, int, float):
+        return type(value).__name__
+    kind = callbacks.kind_of(value)
+    if kind is None:
+        raise TypeError(f"no machine-code form for a {type(value).__name__} in the records")
+    return kind
+
+
+def records_key(records: tuple) -> str:
+    """The key of the entry that runs ``records`` (the chunk loop's arguments after ``k,
+    k_end``): a hash of their structure (:func:`_shape_key`)."""
+    text = json.dumps([_FORMAT, _shape_key(tuple(records))], default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:24]
+
+
+def flatten(records: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """``(ints, floats)``: every leaf of ``records`` in order, as the entry reads them: an
+    array as its data address, its shape and its strides; a bool or an integer; a C function
+    as its address (into ``ints``); a float (into ``floats``)."""
+    ints, floats = [], []
+
+    def walk(value):
+        if isinstance(value, np.ndarray):
+            ints.append(value.ctypes.data)
+            ints.extend(value.shape)
+            ints.extend(value.strides)
+        elif isinstance(value, tuple):
+            for item in value:
+                walk(item)
+        elif isinstance(value, float):
+            floats.append(value)
+        elif isinstance(value, int):  # bool included
+            ints.append(int(value))
+        else:
+            ints.append(callbacks.address_of(value))
+
+    walk(records)
+    return np.array(ints, np.int64), np.array(floats, np.float64)
+
+
+def _folder(cache: Path) -> Path:
+    return cache / MACHINE_DIR
+
+
+def has_entries(cache: Path) -> bool:
+    """Whether the cache folder holds any machine-code entry."""
+    try:
+        return any(_folder(cache).glob("*.json"))
+    except OSError:
+        return False
+
+
+def write_entry(cache: Path, key: str, obj: bytes, symbols: dict) -> None:
+    """Write an entry's object code and its description (atomically, the description last)."""
+    folder = _folder(cache)
+    folder.mkdir(parents=True, exist_ok=True)
+    atomic_write(folder / f"{key}.o", obj)
+    meta = {**symbols, "sha256": hashlib.sha256(obj).hexdigest(), "format": _FORMAT}
+    atomic_write(folder / f"{key}.json", json.dumps(meta, indent=1))
+
+
+#: Loaded entries of this process, by key.
+_LOADED: dict = {}
+
+
+def entry_for(cache: Path, key: str):
+    """The loaded entry of ``key`` (a function of ``(k, k_end, ints, floats)``), or None when
+    the cache has none.
+
+    Raises
+    ------
+    MachineCodeError
+        When the entry's files are damaged or do not load.
+    """
+    if key in _LOADED:
+        return _LOADED[key]
+    folder = _folder(cache)
+    try:
+        meta = json.loads((folder / f"{key}.json").read_text())
+    except FileNotFoundError:
+        return None
+    except (OSError, ValueError) as err:
+        raise MachineCodeError(f"{folder / key}.json does not read: {err}") from err
+    try:
+        obj = (folder / f"{key}.o").read_bytes()
+    except OSError as err:
+        raise MachineCodeError(f"{folder / key}.o does not read: {err}") from err
+    if not isinstance(meta, dict) or meta.get("sha256") != hashlib.sha256(obj).hexdigest():
+        raise MachineCodeError(f"{folder / key}.o differs from its description")
+    try:
+        entry = _load(obj, meta)
+    except Exception as err:  # llvmlite refuses it: a foreign or damaged object
+        raise MachineCodeError(f"{folder / key}.o does not load: {err}") from err
+    _LOADED[key] = entry
+    return entry
+
+
+def _numba_extension(name: str):
+    """numba's C extension module ``name`` (``_helperlib``, ``_dynfunc``), loaded alone:
+    importing it as numba's own would import numba."""
+    numba_dir = Path(importlib.util.find_spec("numba").origin).parent
+    path = next(numba_dir.glob(f"{name}.*.so"), None) or next(numba_dir.glob(f"{name}.*.pyd"))
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+_LLVM = None
+
+
+def _llvm():
+    """llvmlite, set up with the symbols numba's code calls (numba's helpers, MuJoCo's C
+    library for ``mj_step``), and numba's ``_dynfunc`` (the environment a CPython wrapper
+    checks)."""
+    global _LLVM
+    if _LLVM is None:
+        import llvmlite.binding as llvm
+        import mujoco
+
+        llvm.initialize_native_target()
+        llvm.initialize_native_asmprinter()
+        for name, address in _numba_extension("_helperlib").c_helpers.items():
+            llvm.add_symbol(f"numba_{name}", address)
+        library = next(Path(mujoco.__file__).parent.glob("libmujoco.so*"), None)
+        if library is not None:
+            llvm.load_library_permanently(str(library))
+        machine = llvm.Target.from_default_triple().create_target_machine()
+        _LLVM = (llvm, machine, _numba_extension("_dynfunc"))
+    return _LLVM
+
+
+_WRAPPER = ctypes.PYFUNCTYPE(ctypes.py_object, ctypes.py_object, ctypes.py_object, ctypes.py_object)
+
+
+def _load(obj: bytes, meta: dict):
+    """The entry's CPython wrapper in ``obj``, callable as ``entry(k, k_end, ints, floats)``:
+    its environment (numba's, which the wrapper checks) set first."""
+    llvm, machine, dynfunc = _llvm()
+    # an engine of its own: entries define the same helper functions
+    engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), machine)
+    engine.add_object_file(llvm.ObjectFileRef.from_data(obj))
+    engine.finalize_object()
+    environment = dynfunc.Environment({})
+    env_address = engine.get_global_value_address(meta["env"])
+    wrapper = engine.get_function_address(meta["wrapper"])
+    if not env_address or not wrapper:
+        raise MachineCodeError("its symbols are not in it")
+    ctypes.c_void_p.from_address(env_address).value = id(environment)
+    call = _WRAPPER(wrapper)
+    n_ints, n_floats = meta["ints"], meta["floats"]
+
+    def entry(k, k_end, ints, floats):
+        if ints.size != n_ints or floats.size != n_floats:
+            raise MachineCodeError(f"records of {ints.size}, {floats.size} leaves")
+        return call(None, (k, k_end, ints, floats), None)
+
+    entry.keep = (engine, environment, call)  # held while the entry can run
+    return entry
