@@ -341,13 +341,21 @@ def test_a_single_short_run_in_a_new_process_takes_the_faster_python_loop(monkey
     monkeypatch.setenv("TT_MUJOCO_COMPILE_NOW", "1")  # the tests and benchmarks ask for it
     assert compiled.loading_pays(short) is None
     # machine code loads in milliseconds: a short first episode runs compiled, but for a
-    # user's plain-number law, which numba still compiles (or loads) in the process
+    # user's plain-number law whose machine code the cache lacks (numba compiles it)
+    from tt_mujoco.sim.loop import compiled_law
+
     monkeypatch.delenv("TT_MUJOCO_COMPILE_NOW")
     monkeypatch.setattr(compiled, "_machine_code_pays", lambda: True)
-    for law, pays in [("ismc_sta", True), ("examples/kanayama.py:kanayama_law", False)]:
+    plain = "examples/kanayama.py:kanayama_law"
+    for law, cached, pays in [
+        ("ismc_sta", False, True),
+        (plain, True, True),
+        (plain, False, False),
+    ]:
+        monkeypatch.setattr(compiled_law, "has_machine_law", lambda cls, cached=cached: cached)
         monkeypatch.setattr(compiled, "_EPISODES", 0)
         built = build(Scenario(traj="circle", duration=13.0, controller=law))
-        assert (compiled.loading_pays(built) is None) is pays, law
+        assert (compiled.loading_pays(built) is None) is pays, (law, cached)
 
 
 def test_switched_off_by_the_environment(monkeypatch):
@@ -836,3 +844,32 @@ def test_the_sources_stamp_changes_with_a_file_of_the_package():
     finally:
         os.utime(path, ns=(before.st_atime_ns, before.st_mtime_ns))
     assert cache_key.sources_stamp.__wrapped__() == stamp
+
+
+def test_a_new_process_runs_the_machine_code_without_numba():
+    """Where the cache holds the chunk loop's machine code (and a plain-number law's), a new
+    process runs its first episode compiled without importing numba, with the numbers of the
+    process that compiled it."""
+    import subprocess
+    import sys
+
+    law = str(Path(__file__).resolve().parents[1] / "examples" / "kanayama.py") + ":kanayama_law"
+    specs = ("ismc_sta", law)
+    here = [simulate(Scenario(traj="circle", duration=3.0, controller=s)) for s in specs]
+    script = (
+        "import sys\n"
+        "from tt_mujoco.sim import Scenario, simulate\n"
+        f"for spec in {specs!r}:\n"
+        "    run = simulate(Scenario(traj='circle', duration=3.0, controller=spec))\n"
+        "    print(run.notes, repr(run.timeseries['T_r'][-1]))\n"
+        "print('numba' in sys.modules)\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "TT_MUJOCO_COMPILE_NOW"}
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, env=env, timeout=300
+    )
+    assert done.returncode == 0, done.stderr
+    *runs, imported = done.stdout.splitlines()
+    assert imported == "False"
+    for line, run in zip(runs, here, strict=True):
+        assert line == f"[] {run.timeseries['T_r'][-1]!r}"

@@ -191,8 +191,8 @@ def loading_pays(built) -> str | None:
     _EPISODES += 1
     if _KERNEL is not None or _EPISODES > 1 or built.steps >= COLD_MIN_STEPS:
         return None
-    if _machine_code_pays() and not _is_plain_law(built.controller_class):
-        return None  # loading it costs milliseconds; a user's law still compiles with numba
+    if _machine_code_pays() and _law_loads_alike(built.controller_class):
+        return None  # loading it costs milliseconds
     if getattr(built.controller_class, "SEES_PATH", False):
         return None
     if os.environ.get("TT_MUJOCO_COMPILE_NOW") == "1":
@@ -213,10 +213,15 @@ def _machine_code_pays() -> bool:
     return machine_code.has_entries(cache) and not compile_in_progress(cache)
 
 
-def _is_plain_law(cls) -> bool:
+def _law_loads_alike(cls) -> bool:
+    """Whether the controller's law loads as machine code too: a built-in one, or a user's
+    plain-number law whose machine code the cache holds (else numba compiles it)."""
     from tt_mujoco.controllers.plain import PlainLawController
+    from tt_mujoco.sim.loop.compiled_law import has_machine_law
 
-    return isinstance(cls, type) and issubclass(cls, PlainLawController)
+    return not (isinstance(cls, type) and issubclass(cls, PlainLawController)) or (
+        has_machine_law(cls)
+    )
 
 
 #: Whether this process has asked for a background compile (see :func:`_ask_for_compile`).

@@ -2,9 +2,10 @@
 
 A ``@plain_law`` function (:mod:`tt_mujoco.controllers.plain`) runs in the compiled loop
 through a C entry (:data:`_ENTRY_SOURCE`) that views the law record's arrays as the law's named
-records. The entry is written once per law and version into the compiled-code cache and cached
-there by numba, keyed by the law's source and everything it calls (:func:`_law_digest`), so a
-law's second process loads it instead of compiling it. ``math`` and ``math.hypot`` in the law
+records. The entry is compiled once per law and version, and its machine code written into the
+compiled-code cache, keyed by the law's source and everything it calls (:func:`_law_digest`),
+so a law's second process loads it, without numba (:func:`_machine_law`), instead of
+compiling it. ``math`` and ``math.hypot`` in the law
 are read as CPython computes them (:func:`_as_compiled`), so the compiled law gives the numbers
 of its Python form.
 """
@@ -34,8 +35,42 @@ def compile_law(cls):
     key = (cls.__module__, cls.__qualname__, cls.LAW, frozen_values(_reached(cls.LAW)))
     compiled_law = _LAWS.get(key)
     if compiled_law is None:
-        compiled_law = _LAWS[key] = _compile_law(cls)
+        compiled_law = _LAWS[key] = _machine_law(cls) or _compile_law(cls)
     return compiled_law
+
+
+def _law_name(cls, helpers) -> str:
+    """The name of the law's files in the cache's ``laws/``, keyed by :func:`_law_digest`."""
+    return f"law_{cls.LAW.__name__}_{_law_digest(cls, helpers)}"
+
+
+def has_machine_law(cls) -> bool:
+    """Whether the cache holds the law's machine code, told fit to run (:func:`_machine_law`
+    loads it without numba)."""
+    folder, name = _cache_dir() / "laws", _law_name(cls, _reached(cls.LAW)[1:])
+    try:
+        return (folder / f"{name}.verdict").read_text() == "" and (folder / f"{name}.o").is_file()
+    except OSError:
+        return False
+
+
+def _machine_law(cls):
+    """The law's machine code, which :func:`_compile_law` wrote into the cache, loaded without
+    numba; None when the cache has none (or a damaged one: compiled again). A law refused
+    before is refused again by its kept verdict."""
+    from tt_mujoco.sim.loop import callbacks, machine_code
+
+    folder, name = _cache_dir() / "laws", _law_name(cls, _reached(cls.LAW)[1:])
+    try:
+        site = (folder / f"{name}.verdict").read_text()
+    except OSError:
+        return None
+    if site:
+        raise LawFormError(site)
+    try:
+        return machine_code.c_function_at(folder, name, callbacks.LAW)
+    except machine_code.MachineCodeError:
+        return None
 
 
 def _own_calls(fn):
@@ -148,15 +183,15 @@ def _as_compiled(fn, done: dict, exact):
 
 
 #: The C entry of a plain-number law, written into the cache folder once per law and version
-#: (:func:`_compile_law`), so that numba caches it on disk as it does the kernel: a law's second
-#: process loads it instead of compiling it. ``{...}`` are filled in per law.
+#: (:func:`_compile_law`), numba compiling it from that file: a law's second process loads its
+#: machine code instead. ``{...}`` are filled in per law.
 _ENTRY_SOURCE = """\
 # The C entry of the plain-number law {name} ({file}), written by tt_mujoco.sim.loop.compiled:
-# numba caches its compiled code beside this file. The law's source digest is in the name.
+# its machine code is kept beside this file. The law's source digest is in the name.
 from numba import carray, cfunc
 
 
-@cfunc(USER_LAW, error_model="numpy", cache=True)
+@cfunc(USER_LAW, error_model="numpy")
 def entry(m, r, model, gains, state, out, dt, limit):
     torques = carray(out, 3)
     torques[2] = 0.0
@@ -183,12 +218,12 @@ def entry(m, r, model, gains, state, out, dt, limit):
 #: and the table, row by row (:meth:`~tt_mujoco.controllers.plain.PlainLawController.law_data`).
 _PATH_ENTRY_SOURCE = """\
 # The C entry of the plain-number law {name} ({file}), which sees the path, written by
-# tt_mujoco.sim.loop.compiled: numba caches its compiled code beside this file. The law's source
+# tt_mujoco.sim.loop.compiled: its machine code is kept beside this file. The law's source
 # digest is in the name.
 from numba import carray, cfunc
 
 
-@cfunc(USER_LAW, error_model="numpy", cache=True)
+@cfunc(USER_LAW, error_model="numpy")
 def entry(m, r, model, gains, state, out, dt, limit):
     torques = carray(out, 3)
     torques[2] = 0.0
@@ -255,7 +290,7 @@ def _compile_law(cls):
     from numba import njit
 
     from tt_mujoco.controllers.path_view import PATH_ROWS, VEHICLE_FIELDS
-    from tt_mujoco.sim.loop import records
+    from tt_mujoco.sim.loop import machine_code, records
 
     k_mod = kernel()
     copies: dict = {}
@@ -285,7 +320,7 @@ def _compile_law(cls):
         "n_head": len(gain_names) + len(VEHICLE_FIELDS) + 1,
         "n_rows": len(PATH_ROWS),
     }
-    name = f"law_{cls.LAW.__name__}_{_law_digest(cls, helpers)}"
+    name = _law_name(cls, helpers)
     module_name = f"tt_mujoco_{name}"
     if module_name in sys.modules:  # the same law, of another class: compiled already
         return sys.modules[module_name].entry
@@ -316,6 +351,9 @@ def _compile_law(cls):
     except BaseException:
         del sys.modules[module_name]
         raise
+    with contextlib.suppress(OSError):  # a read-only cache: compiled again by the next process
+        obj = module.entry._library.serialize_using_object_code()[2][0]
+        machine_code.write_object(path.parent, name, obj, {"symbol": module.entry.native_name})
     return module.entry
 
 

@@ -30,12 +30,15 @@ from tt_mujoco.sim.loop import callbacks
 
 __all__ = [
     "MACHINE_DIR",
+    "CFunction",
     "MachineCodeError",
+    "c_function_at",
     "entry_for",
     "flatten",
     "has_entries",
     "records_key",
     "write_entry",
+    "write_object",
 ]
 
 #: The cache folder's subfolder of machine-code entries.
@@ -114,12 +117,17 @@ def has_entries(cache: Path) -> bool:
 
 
 def write_entry(cache: Path, key: str, obj: bytes, symbols: dict) -> None:
-    """Write an entry's object code and its description (atomically, the description last)."""
-    folder = _folder(cache)
+    """Write the chunk loop's entry for ``key`` (:func:`write_object` in the cache's
+    :data:`MACHINE_DIR`)."""
+    write_object(_folder(cache), key, obj, symbols)
+
+
+def write_object(folder: Path, name: str, obj: bytes, symbols: dict) -> None:
+    """Write object code and its description (atomically, the description last)."""
     folder.mkdir(parents=True, exist_ok=True)
-    atomic_write(folder / f"{key}.o", obj)
+    atomic_write(folder / f"{name}.o", obj)
     meta = {**symbols, "sha256": hashlib.sha256(obj).hexdigest(), "format": _FORMAT}
-    atomic_write(folder / f"{key}.json", json.dumps(meta, indent=1))
+    atomic_write(folder / f"{name}.json", json.dumps(meta, indent=1))
 
 
 #: Loaded entries of this process, by key.
@@ -135,34 +143,79 @@ def entry_for(cache: Path, key: str):
     MachineCodeError
         When the entry's files are damaged or do not load.
     """
-    if key in _LOADED:
-        return _LOADED[key]
-    folder = _folder(cache)
+    if key not in _LOADED:
+        loaded = _loaded(_folder(cache), key, _entry)
+        if loaded is None:
+            return None
+        _LOADED[key] = loaded
+    return _LOADED[key]
+
+
+class CFunction:
+    """A C function of machine code on disk, of a kind the loop calls
+    (:func:`tt_mujoco.sim.loop.callbacks.kind_of`): a user's law."""
+
+    def __init__(self, kind: str, address: int, engine):
+        self.kind, self._address, self._engine = kind, address, engine
+
+    def __wrapper_address__(self):
+        return self._address
+
+
+def c_function_at(folder: Path, name: str, kind: str) -> CFunction | None:
+    """The C function of object ``name`` in ``folder`` (its description's ``symbol``), loaded;
+    None when there is none.
+
+    Raises
+    ------
+    MachineCodeError
+        When its files are damaged or do not load.
+    """
+
+    def function(engine, meta):
+        address = engine.get_function_address(meta["symbol"])
+        if not address:
+            raise MachineCodeError("its symbol is not in it")
+        return CFunction(kind, address, engine)
+
+    return _loaded(folder, name, function)
+
+
+def _loaded(folder: Path, name: str, make):
+    """``make(engine, description)`` of object ``name`` in ``folder``, loaded into an engine of
+    its own (objects define the same helper functions) once its hash is checked: llvmlite
+    loading damaged object code can crash the process. None when there is no such object."""
     try:
-        meta = json.loads((folder / f"{key}.json").read_text())
+        meta = json.loads((folder / f"{name}.json").read_text())
     except FileNotFoundError:
         return None
     except (OSError, ValueError) as err:
-        raise MachineCodeError(f"{folder / key}.json does not read: {err}") from err
+        raise MachineCodeError(f"{folder / name}.json does not read: {err}") from err
     try:
-        obj = (folder / f"{key}.o").read_bytes()
+        obj = (folder / f"{name}.o").read_bytes()
     except OSError as err:
-        raise MachineCodeError(f"{folder / key}.o does not read: {err}") from err
+        raise MachineCodeError(f"{folder / name}.o does not read: {err}") from err
     if not isinstance(meta, dict) or meta.get("sha256") != hashlib.sha256(obj).hexdigest():
-        raise MachineCodeError(f"{folder / key}.o differs from its description")
+        raise MachineCodeError(f"{folder / name}.o differs from its description")
     try:
-        entry = _load(obj, meta)
+        llvm, machine, _ = _llvm()
+        engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), machine)
+        engine.add_object_file(llvm.ObjectFileRef.from_data(obj))
+        engine.finalize_object()
+        return make(engine, meta)
     except Exception as err:  # llvmlite refuses it: a foreign or damaged object
-        raise MachineCodeError(f"{folder / key}.o does not load: {err}") from err
-    _LOADED[key] = entry
-    return entry
+        raise MachineCodeError(f"{folder / name}.o does not load: {err}") from err
 
 
-def _numba_extension(name: str):
-    """numba's C extension module ``name`` (``_helperlib``, ``_dynfunc``), loaded alone:
-    importing it as numba's own would import numba."""
-    numba_dir = Path(importlib.util.find_spec("numba").origin).parent
-    path = next(numba_dir.glob(f"{name}.*.so"), None) or next(numba_dir.glob(f"{name}.*.pyd"))
+def _numba_extension(where: str):
+    """numba's C extension module at ``where`` in its package (``_helperlib``,
+    ``core/runtime/_nrt_python``), loaded alone: importing it as numba's own would import
+    numba."""
+    folder, name = (
+        (Path(importlib.util.find_spec("numba").origin).parent / where).parent,
+        Path(where).name,
+    )
+    path = next(folder.glob(f"{name}.*.so"), None) or next(folder.glob(f"{name}.*.pyd"))
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -173,8 +226,8 @@ _LLVM = None
 
 
 def _llvm():
-    """llvmlite, set up with the symbols numba's code calls (numba's helpers, MuJoCo's C
-    library for ``mj_step``), and numba's ``_dynfunc`` (the environment a CPython wrapper
+    """llvmlite, set up with the symbols numba's code calls (numba's helpers and runtime,
+    MuJoCo's C library for ``mj_step``), and numba's ``_dynfunc`` (the environment a CPython wrapper
     checks)."""
     global _LLVM
     if _LLVM is None:
@@ -185,6 +238,9 @@ def _llvm():
         llvm.initialize_native_asmprinter()
         for name, address in _numba_extension("_helperlib").c_helpers.items():
             llvm.add_symbol(f"numba_{name}", address)
+        # its runtime (an exception's info is freed through it), as numba registers it
+        for name, address in _numba_extension("core/runtime/_nrt_python").c_helpers.items():
+            llvm.add_symbol(name if name.startswith("_") else f"NRT_{name}", address)
         library = next(Path(mujoco.__file__).parent.glob("libmujoco.so*"), None)
         if library is not None:
             llvm.load_library_permanently(str(library))
@@ -196,15 +252,10 @@ def _llvm():
 _WRAPPER = ctypes.PYFUNCTYPE(ctypes.py_object, ctypes.py_object, ctypes.py_object, ctypes.py_object)
 
 
-def _load(obj: bytes, meta: dict):
-    """The entry's CPython wrapper in ``obj``, callable as ``entry(k, k_end, ints, floats)``:
-    its environment (numba's, which the wrapper checks) set first."""
-    llvm, machine, dynfunc = _llvm()
-    # an engine of its own: entries define the same helper functions
-    engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), machine)
-    engine.add_object_file(llvm.ObjectFileRef.from_data(obj))
-    engine.finalize_object()
-    environment = dynfunc.Environment({})
+def _entry(engine, meta: dict):
+    """The entry's CPython wrapper in ``engine``, callable as ``entry(k, k_end, ints,
+    floats)``: its environment (numba's, which the wrapper checks) set first."""
+    environment = _llvm()[2].Environment({})
     env_address = engine.get_global_value_address(meta["env"])
     wrapper = engine.get_function_address(meta["wrapper"])
     if not env_address or not wrapper:
