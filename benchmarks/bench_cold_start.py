@@ -9,15 +9,14 @@ try runs, one after the other in new processes:
 - the README's main command without video (``--traj s_curve --no-video``), and the same with
   ``--no-plots``; its episode's physics floor, MuJoCo's C rollout of the run's own inputs on one
   thread (``bench_cli.floor``, checked to end in the run's final state), is timed in this
-  process from that run's time series. Its 13,782 steps are fewer than
-  ``compiled.COLD_MIN_STEPS``: a single such run takes the Python loop;
+  process from that run's time series. It runs the chunk loop's machine code, loaded without
+  numba (``tt_mujoco/sim/loop/machine_code.py``);
 - the same run with the Python loop forced (``TT_MUJOCO_COMPILED=0``), whose ``wall_time_s``
   the chosen route's should not exceed;
-- a long run, 40 s on the circle (``--traj circle --duration 40``, 40,001 steps), which a new
-  process runs compiled (numba and the kernel loaded from the cache), against the same run in
-  the Python loop and its own C floor;
+- a long run, 40 s on the circle (``--traj circle --duration 40``, 40,001 steps), against the
+  same run in the Python loop and its own C floor;
 - that long run with ``--controller examples/kanayama.py:kanayama_law`` (a plain-number law,
-  loaded from the cache like the kernel) against the built-in law's.
+  its machine code loaded from the cache like the loop's) against the built-in law's.
 
 Each figure is the median over the tries of a ratio taken within one try: the machine is shared,
 and whole-process times drift by tenths of a second from one minute to the next.

@@ -227,20 +227,21 @@ def test_compiled_loop_equals_python_loop_bit_for_bit(monkeypatch, case):
 
 
 def test_records_of_equal_keys_have_equal_numba_types(monkeypatch):
-    """A process finds the machine code of its chunk loop by machine_code.records_key of the
+    """A process finds the machine code of its chunk loop by machine_code.entry_key of the
     records, not by numba's typing: scenarios whose records have equal keys must have equal
     types (else an entry would run on records of other types)."""
     from tt_mujoco.sim.loop import _entry_compile, machine_code
 
     seen = []
-    records_key = machine_code.records_key
+    entry_key = machine_code.entry_key
 
-    def spied(records):
-        typed = tuple(_entry_compile._typed(compiled.kernel(), r) for r in records)
-        seen.append((records_key(records), typed))
-        return records_key(records)
+    def spied(name, args):
+        if name == "run_chunk":
+            typed = tuple(_entry_compile._typed(compiled.kernel(), r) for r in args)
+            seen.append((entry_key(name, args), typed))
+        return entry_key(name, args)
 
-    monkeypatch.setattr(machine_code, "records_key", spied)
+    monkeypatch.setattr(machine_code, "entry_key", spied)
     options = [
         dict(seed=1, noise_snr_db=20.0),
         dict(seed=2, noise_snr_db=20.0),
@@ -666,21 +667,21 @@ def test_machine_code_that_fails_to_load_leaves_the_episode_to_the_python_loop(
     monkeypatch.setenv("TT_MUJOCO_COMPILED", "0")
     python = simulate(scenario)
     monkeypatch.setenv("TT_MUJOCO_COMPILED", "1")
-    records_key = machine_code.records_key
+    entry_key = machine_code.entry_key
     llvm, machine, _ = machine_code._llvm()  # an object of one function: loads, lacks them
     obj = machine.emit_object(llvm.parse_assembly("define i32 @f() { ret i32 1 }"))
     sha = hashlib.sha256(obj if damage == "symbols" else b"other").hexdigest()
     meta = {"wrapper": "entry", "env": "env", "ints": 1, "floats": 1, "sha256": sha}
 
-    def damaged(records):
-        key = records_key(records)
+    def damaged(name, args):
+        key = entry_key(name, args)
         folder = compiled._cache_dir() / machine_code.MACHINE_DIR
         folder.mkdir(parents=True, exist_ok=True)
         (folder / f"{key}.o").write_bytes(obj)
         (folder / f"{key}.json").write_text(json.dumps(meta))
         return key
 
-    monkeypatch.setattr(machine_code, "records_key", damaged)
+    monkeypatch.setattr(machine_code, "entry_key", damaged)
     monkeypatch.setattr(machine_code, "_LOADED", {})
     cache = compiled._cache_dir()
     result = simulate(scenario)

@@ -1,21 +1,19 @@
-"""The machine-code entry of the chunk loop, compiled by numba (the background compile only).
+"""Machine-code entries of the kernel's functions, compiled by numba (the background compile).
 
-:func:`compile_entry` generates, for the records the loop was given, a function
+:func:`compile_entry` generates, for a function of the kernel and the arguments it was given
+(the chunk loop and its records, the metrics' projection and its arrays), a function
 
 .. code-block:: python
 
-    def entry(k, k_end, ints, floats):
-        loop = LoopRecord(Limits(floats[0], ...), ..., ARRAY_3(ints, 7), ...)
-        ...
-        return run_chunk(k, k_end, loop, plant, law, target, log, stop_record)
+    def entry(ints, floats):
+        return FUNCTION(ints[0], RECORD_0(RECORD_1(floats[0], ...), ARRAY_3(ints, 7)), ...)
 
-which reads every leaf of the records from two flat arrays in the order
+which reads every leaf of the arguments from two flat arrays in the order
 :func:`tt_mujoco.sim.loop.machine_code.flatten` writes them (an array rebuilt around its data
-address, shape and strides; a C function around its address), then calls the kernel's chunk loop
-(``_kernel.run_chunk``, :func:`~tt_mujoco.sim.loop.closed_loop.run_steps` compiled), whose
-machine code numba links into the entry's.
-numba compiles it and hands over its object code, which
-:mod:`~tt_mujoco.sim.loop.machine_code` stores and loads without numba.
+address, shape and strides; a C function around its address), then calls the kernel's function
+(the chunk loop is ``_kernel.run_chunk``, :func:`~tt_mujoco.sim.loop.closed_loop.run_steps`
+compiled), whose machine code numba links into the entry's. numba compiles it and hands over
+its object code, which :mod:`~tt_mujoco.sim.loop.machine_code` stores and loads without numba.
 """
 
 from __future__ import annotations
@@ -31,7 +29,7 @@ from tt_mujoco.sim.loop import callbacks
 __all__ = ["compile_entry"]
 
 #: The entry's own signature.
-ENTRY_SIGNATURE = (types.int64, types.int64, types.int64[::1], types.float64[::1])
+ENTRY_SIGNATURE = (types.int64[::1], types.float64[::1])
 
 
 def _word(context, builder, ints, at, j):
@@ -146,21 +144,17 @@ def _typeof_typed(value, context):
     return value.numba_type
 
 
-def compile_entry(k_mod, records: tuple) -> tuple[bytes, dict]:
-    """The entry for ``records`` (the chunk loop's arguments after ``k, k_end``) compiled:
-    its object code and what loading it needs (the CPython wrapper's and the environment's
-    symbols, the number of ints and floats it reads)."""
+def compile_entry(k_mod, name: str, args: tuple) -> tuple[bytes, dict]:
+    """The entry of the kernel's function ``name`` for ``args`` compiled: its object code and
+    what loading it needs (the CPython wrapper's and the environment's symbols, the number of
+    ints and floats it reads)."""
     source = _Source()
-    names = ("loop", "plant", "law", "target", "log", "stop_record")
-    lines = ["def entry(k, k_end, ints, floats):"]
-    for name, value in zip(names, records, strict=True):
-        lines.append(f"    {name} = {source.expression(_typed(k_mod, value))}")
-    lines.append(f"    return run_chunk(k, k_end, {', '.join(names)})")
-    # numba's chunk loop called, not its steps inlined here: inlined into this function, a
-    # path schedule's gains went unlogged (the log's etas never written; tests/test_compiled.py)
-    scope = {**source.scope, "run_chunk": k_mod.run_chunk}
-    exec("\n".join(lines), scope)
-    entry = njit(_nrt=False, nogil=True)(scope["entry"])
+    rebuilt = ", ".join(source.expression(_typed(k_mod, value)) for value in args)
+    # the kernel's function called, not inlined here: the chunk loop's steps inlined into this
+    # function left a path schedule's gains unlogged (tests/test_compiled.py)
+    scope = {**source.scope, "FUNCTION": getattr(k_mod, name)}
+    exec(f"def entry(ints, floats):\n    return FUNCTION({rebuilt})", scope)
+    entry = njit(nogil=True)(scope["entry"])  # with the counting: a callee may allocate
     entry.compile(ENTRY_SIGNATURE)
     (compiled,) = entry.overloads.values()
     obj = compiled.library.serialize_using_object_code()[2][0]

@@ -413,11 +413,16 @@ def kernel():
 
 
 def _projection(*args) -> bool:
-    """The metrics' compiled projection (:func:`tt_mujoco.analysis.nearest.nearest_segments_of`);
-    the cache's manifest is rewritten once this process has compiled it. False
-    (and the cache set aside) when its compiled code fails to load."""
+    """The metrics' compiled projection (:func:`tt_mujoco.analysis.nearest.nearest_segments_of`)
+    as machine code; False when the cache has none (and the process may not compile it) or
+    it fails to load (the cache set aside): the vectorised search serves instead."""
+    from tt_mujoco.sim.loop import entries
+
     try:
-        _call_listed(_KERNEL.project_points, *args)
+        found = entries.entry("project_points", args, _may_compile)
+        if found is None:
+            return False
+        entries.call(found, args)
     except Exception as err:  # a damaged cache: the vectorised search serves instead
         set_aside_cache(err)
         return False
@@ -508,7 +513,8 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
     """Run the (reset) ``stepper``'s episode with ``controller`` compiled; ``(status,
     message)`` as :func:`tt_mujoco.sim.simulate.run_episode`. The chunk loop runs as machine
     code loaded without numba (:mod:`~tt_mujoco.sim.loop.machine_code`), compiled here first
-    when the cache has none for these records (:func:`_machine_entry`).
+    when the cache has none for these records and the process may compile
+    (:func:`_may_compile`).
 
     Raises
     ------
@@ -516,18 +522,22 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
         When the compiled code cannot be loaded or the user's law has no compiled form:
         nothing has run, and the caller runs the Python loop.
     """
-    from tt_mujoco.sim.loop import callbacks, machine_code
+    from tt_mujoco.sim.loop import callbacks, entries
 
-    cache = _cache_dir()
     stepper.begin(controller, _user_law(callbacks.no_user_law, controller), kernel=callbacks)
-    entry = None
+    geometry.use_compiled_projection(_projection)
+    found = None
 
-    def run_chunk(k, k_end, *records):
-        nonlocal entry
-        ints, floats = machine_code.flatten(records)
-        if entry is None:  # nothing has run: a damaged or missing entry leaves it to Python
-            entry = _machine_entry(cache, records)
-        out = entry(k, k_end, ints, floats)
+    def run_chunk(*args):
+        nonlocal found
+        if found is None:  # nothing has run: a damaged or missing entry leaves it to Python
+            try:
+                found = entries.entry("run_chunk", args, lambda: _may_compile() or _cached())
+            except Exception as err:
+                raise _DamagedCacheError() from err
+            if found is None:
+                raise _NoEntryError()
+        out = entries.call(found, args)
         raised = stepper.hook_failure()
         if raised is not None:
             raise raised
@@ -540,42 +550,22 @@ def run_compiled(stepper, controller, progress=None) -> tuple[str, str] | None:
         return stepper.run(run_chunk, advance, progress)
     except _DamagedCacheError as damaged:
         raise Fallback(set_aside_cache(damaged.__cause__)) from damaged
-    except _NoEntryError as missing:
-        raise Fallback(str(missing)) from None
+    except _NoEntryError:
+        raise Fallback(
+            "the compiled loop has no machine code for this episode's records yet (a "
+            "background process compiles it)"
+        ) from None
+
+
+def _may_compile() -> bool:
+    """Whether this process compiles what the cache lacks: it has loaded the kernel, or
+    ``TT_MUJOCO_COMPILE_NOW=1`` asks (as numba compiles a signature new to its cache)."""
+    return _KERNEL is not None or os.environ.get("TT_MUJOCO_COMPILE_NOW") == "1"
 
 
 class _NoEntryError(Exception):
     """The cache has no machine code for these records, and compiling it here would hold up
     the run (a background compile is still filling the cache)."""
-
-
-def _machine_entry(cache: Path, records: tuple):
-    """The machine-code entry for ``records``: loaded from the cache, or compiled here (once
-    per kind of records and version of the sources, as numba compiles a new signature) when
-    the kernel is loaded, ``TT_MUJOCO_COMPILE_NOW=1`` asks, or the cache is whole."""
-    from tt_mujoco.sim.loop import machine_code
-
-    key = machine_code.records_key(records)
-    try:
-        entry = machine_code.entry_for(cache, key)
-        if entry is not None:
-            return entry
-        here = _KERNEL is not None or os.environ.get("TT_MUJOCO_COMPILE_NOW") == "1"
-        if not here and not _cached():
-            raise _NoEntryError(
-                "the compiled loop has no machine code for this episode's records yet (a "
-                "background process compiles it)"
-            )
-        from tt_mujoco.sim.loop._entry_compile import compile_entry
-
-        obj, symbols = compile_entry(kernel(), records)
-        machine_code.write_entry(cache, key, obj, symbols)
-        _write_manifest(compiled_here=True)
-        return machine_code.entry_for(cache, key)
-    except (_NoEntryError, _DamagedCacheError):
-        raise
-    except Exception as err:  # damaged: nothing has run, the Python loop takes over
-        raise _DamagedCacheError() from err
 
 
 def _user_law(placeholder, controller):

@@ -1,18 +1,20 @@
-"""The compiled chunk loop as machine code on disk, loaded without numba.
+"""The kernel's entry points as machine code on disk, loaded without numba.
 
 Loading the kernel through numba costs a cold process about a second (numba's import, its
 target's registries, the cached code's typing), several times the main run's physics. So the
-background compile (:func:`tt_mujoco.sim.loop.compiled.warm_up`) also writes, for each kind of
-records the loop is given, one *entry*: :func:`~tt_mujoco.sim.loop.closed_loop.run_steps`
-compiled by numba behind a plain signature, ``entry(k, k_end, ints, floats)``, which rebuilds
-the records from two flat arrays (:mod:`tt_mujoco.sim.loop._entry_compile` generates it), and
-its object code. A process loads that object code with llvmlite alone (a few milliseconds)
-and calls the entry's CPython wrapper: the same machine code numba would run, the same numbers.
+background compile (:func:`tt_mujoco.sim.loop.compiled.warm_up`) also writes, for each kernel
+function a run calls (the chunk loop, the metrics' projection) and each kind of arguments it
+is given, one *entry*: the function compiled by numba behind a plain signature,
+``entry(ints, floats)``, which rebuilds the arguments from two flat arrays
+(:mod:`tt_mujoco.sim.loop._entry_compile` generates it), and its object code. A process loads
+that object code with llvmlite alone (a few milliseconds) and calls the entry's CPython wrapper:
+the same machine code numba would run, the same numbers. A user's plain-number law is kept the
+same way, as a C function (:func:`c_function_at`).
 
 Files, in the compiled-code cache folder's ``machine/``: ``KEY.o`` (the object code) and
 ``KEY.json`` (its symbols, its flat sizes and the object's sha256), ``KEY`` a hash of the
-records' structure (:func:`records_key`). The JSON is written last, so a reader sees a whole
-pair or none; an object whose hash differs is set aside, never loaded.
+function's name and its arguments' structure (:func:`entry_key`). The JSON is written last, so
+a reader sees a whole pair or none; an object whose hash differs is never loaded.
 """
 
 from __future__ import annotations
@@ -34,9 +36,9 @@ __all__ = [
     "MachineCodeError",
     "c_function_at",
     "entry_for",
+    "entry_key",
     "flatten",
     "has_entries",
-    "records_key",
     "write_entry",
     "write_object",
 ]
@@ -54,7 +56,7 @@ class MachineCodeError(Exception):
 
 
 def _shape_key(value) -> object:
-    """What the entry's machine code depends on in ``value``: numba's type of it, told from
+    """What an entry's machine code depends on in ``value``: numba's type of it, told from
     Python (an array's dtype, dimensions, layout, writability and alignment; a named tuple's
     class; a number's class; a C function's kind)."""
     if isinstance(value, np.ndarray):
@@ -68,19 +70,19 @@ def _shape_key(value) -> object:
         return type(value).__name__
     kind = callbacks.kind_of(value)
     if kind is None:
-        raise TypeError(f"no machine-code form for a {type(value).__name__} in the records")
+        raise TypeError(f"no machine-code form for a {type(value).__name__} argument")
     return kind
 
 
-def records_key(records: tuple) -> str:
-    """The key of the entry that runs ``records`` (the chunk loop's arguments after ``k,
-    k_end``): a hash of their structure (:func:`_shape_key`)."""
-    text = json.dumps([_FORMAT, _shape_key(tuple(records))], default=str)
+def entry_key(name: str, args: tuple) -> str:
+    """The key of the entry that runs the kernel's function ``name`` on ``args``: a hash of
+    the name and the arguments' structure (:func:`_shape_key`)."""
+    text = json.dumps([_FORMAT, name, _shape_key(tuple(args))], default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:24]
 
 
-def flatten(records: tuple) -> tuple[np.ndarray, np.ndarray]:
-    """``(ints, floats)``: every leaf of ``records`` in order, as the entry reads them: an
+def flatten(args: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """``(ints, floats)``: every leaf of ``args`` in order, as an entry reads them: an
     array as its data address, its shape and its strides; a bool or an integer; a C function
     as its address (into ``ints``); a float (into ``floats``)."""
     ints, floats = [], []
@@ -100,7 +102,7 @@ def flatten(records: tuple) -> tuple[np.ndarray, np.ndarray]:
         else:
             ints.append(callbacks.address_of(value))
 
-    walk(records)
+    walk(args)
     return np.array(ints, np.int64), np.array(floats, np.float64)
 
 
@@ -135,8 +137,8 @@ _LOADED: dict = {}
 
 
 def entry_for(cache: Path, key: str):
-    """The loaded entry of ``key`` (a function of ``(k, k_end, ints, floats)``), or None when
-    the cache has none.
+    """The loaded entry of ``key`` (a function of ``(ints, floats)``, :func:`flatten`'s), or
+    None when the cache has none.
 
     Raises
     ------
@@ -253,8 +255,8 @@ _WRAPPER = ctypes.PYFUNCTYPE(ctypes.py_object, ctypes.py_object, ctypes.py_objec
 
 
 def _entry(engine, meta: dict):
-    """The entry's CPython wrapper in ``engine``, callable as ``entry(k, k_end, ints,
-    floats)``: its environment (numba's, which the wrapper checks) set first."""
+    """The entry's CPython wrapper in ``engine``, callable as ``entry(ints, floats)``: its
+    environment (numba's, which the wrapper checks) set first."""
     environment = _llvm()[2].Environment({})
     env_address = engine.get_global_value_address(meta["env"])
     wrapper = engine.get_function_address(meta["wrapper"])
@@ -264,10 +266,10 @@ def _entry(engine, meta: dict):
     call = _WRAPPER(wrapper)
     n_ints, n_floats = meta["ints"], meta["floats"]
 
-    def entry(k, k_end, ints, floats):
+    def entry(ints, floats):
         if ints.size != n_ints or floats.size != n_floats:
-            raise MachineCodeError(f"records of {ints.size}, {floats.size} leaves")
-        return call(None, (k, k_end, ints, floats), None)
+            raise MachineCodeError(f"arguments of {ints.size}, {floats.size} leaves")
+        return call(None, (ints, floats), None)
 
     entry.keep = (engine, environment, call)  # held while the entry can run
     return entry
