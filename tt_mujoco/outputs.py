@@ -332,7 +332,8 @@ def write_timeseries(path: Path, ts: Mapping[str, np.ndarray], columns, units=No
     table = pa.Table.from_arrays([arrow_float64(ts[c]) for c in columns], schema=pa.schema(fields))
     table = table.replace_schema_metadata({"tt_mujoco": json.dumps({"units": units or {}})})
     with temporary_beside(path, suffix=".tmp.parquet") as tmp:
-        pq.write_table(table, tmp, compression="zstd")
+        # no dictionary: float columns seldom repeat, and trying one doubled the time
+        pq.write_table(table, tmp, compression="zstd", use_dictionary=False)
         os.replace(tmp, path)
 
 
