@@ -192,6 +192,7 @@ def drive_leg(built: Build, rng, time_limit: float, progress=None, on_step=None,
     """``(stepper, controller, status, message, wall)``: one episode of ``built`` (a run, or
     one leg of a maneuver) with the noise of ``rng``, stopped after ``time_limit`` s of wall
     time (what is left of the scenario's); the others as :func:`simulate`'s."""
+    compiled.prepare()  # beside the set-up below
     stepper = Stepper(built)
     stepper.reset(rng, checkpoint=checkpoint)
     controller = built.new_controller()

@@ -213,6 +213,16 @@ def _machine_code_pays() -> bool:
     return machine_code.has_entries(cache) and not compile_in_progress(cache)
 
 
+def prepare() -> None:
+    """Start setting up what the machine code needs (:func:`machine_code.prepare
+    <tt_mujoco.sim.loop.machine_code.prepare>`) beside an episode's set-up, where the episode
+    may run it."""
+    if _enabled() and _machine_code_pays():
+        from tt_mujoco.sim.loop import machine_code
+
+        machine_code.prepare()
+
+
 def _law_loads_alike(cls) -> bool:
     """Whether the controller's law loads as machine code too: a built-in one, or a user's
     plain-number law whose machine code the cache holds (else numba compiles it)."""

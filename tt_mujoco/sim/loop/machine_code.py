@@ -19,10 +19,12 @@ a reader sees a whole pair or none; an object whose hash differs is never loaded
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import hashlib
 import importlib.util
 import json
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -39,6 +41,7 @@ __all__ = [
     "entry_key",
     "flatten",
     "has_entries",
+    "prepare",
     "write_entry",
     "write_object",
 ]
@@ -225,6 +228,20 @@ def _numba_extension(where: str):
 
 
 _LLVM = None
+_LLVM_LOCK = threading.Lock()
+
+
+def prepare() -> None:
+    """Set llvmlite up (:func:`_llvm`) in a thread of its own: loading its library, most of
+    what a process's first entry costs, goes on beside the caller's work (the library loads
+    without Python's lock)."""
+    if _LLVM is None:
+        threading.Thread(target=_prepared, name="tt_mujoco-machine-code", daemon=True).start()
+
+
+def _prepared() -> None:
+    with contextlib.suppress(Exception):  # said where the entry is loaded, if it fails again
+        _llvm()
 
 
 def _llvm():
@@ -232,23 +249,29 @@ def _llvm():
     MuJoCo's C library for ``mj_step``), and numba's ``_dynfunc`` (the environment a CPython wrapper
     checks)."""
     global _LLVM
-    if _LLVM is None:
-        import llvmlite.binding as llvm
-        import mujoco
-
-        llvm.initialize_native_target()
-        llvm.initialize_native_asmprinter()
-        for name, address in _numba_extension("_helperlib").c_helpers.items():
-            llvm.add_symbol(f"numba_{name}", address)
-        # its runtime (an exception's info is freed through it), as numba registers it
-        for name, address in _numba_extension("core/runtime/_nrt_python").c_helpers.items():
-            llvm.add_symbol(name if name.startswith("_") else f"NRT_{name}", address)
-        library = next(Path(mujoco.__file__).parent.glob("libmujoco.so*"), None)
-        if library is not None:
-            llvm.load_library_permanently(str(library))
-        machine = llvm.Target.from_default_triple().create_target_machine()
-        _LLVM = (llvm, machine, _numba_extension("_dynfunc"))
+    with _LLVM_LOCK:
+        if _LLVM is None:
+            _LLVM = _set_up_llvm()
     return _LLVM
+
+
+def _set_up_llvm():
+    """:func:`_llvm`'s set-up, once."""
+    import llvmlite.binding as llvm
+    import mujoco
+
+    llvm.initialize_native_target()
+    llvm.initialize_native_asmprinter()
+    for name, address in _numba_extension("_helperlib").c_helpers.items():
+        llvm.add_symbol(f"numba_{name}", address)
+    # its runtime (an exception's info is freed through it), as numba registers it
+    for name, address in _numba_extension("core/runtime/_nrt_python").c_helpers.items():
+        llvm.add_symbol(name if name.startswith("_") else f"NRT_{name}", address)
+    library = next(Path(mujoco.__file__).parent.glob("libmujoco.so*"), None)
+    if library is not None:
+        llvm.load_library_permanently(str(library))
+    machine = llvm.Target.from_default_triple().create_target_machine()
+    return llvm, machine, _numba_extension("_dynfunc")
 
 
 _WRAPPER = ctypes.PYFUNCTYPE(ctypes.py_object, ctypes.py_object, ctypes.py_object, ctypes.py_object)
