@@ -14,7 +14,7 @@ from pathlib import Path
 
 from tt_mujoco.outputs import atomic_write
 
-__all__ = ["digest_by_stamp", "source_digest", "sources_stamp"]
+__all__ = ["digest_by_stamp", "file_key", "source_digest", "sources_stamp"]
 
 
 @functools.cache
@@ -52,14 +52,15 @@ def sources_stamp() -> str:
     parts = [sys.version, platform.machine()]
     for name in ("numba", "llvmlite", "mujoco"):
         spec = find_spec(name)  # found, not imported
-        parts.append(_file_key(Path(spec.origin)) if spec and spec.origin else f"{name}: none")
+        parts.append(file_key(Path(spec.origin)) if spec and spec.origin else f"{name}: none")
     for package in ("tt_mujoco", "tt_mujoco.controllers"):
         for folder in find_spec(package).submodule_search_locations:
-            parts += [_file_key(f) for f in sorted(Path(folder).rglob("*.py"))]
+            parts += [file_key(f) for f in sorted(Path(folder).rglob("*.py"))]
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:32]
 
 
-def _file_key(path: Path) -> str:
+def file_key(path: Path) -> str:
+    """A file by its resolved path, size and modification time."""
     stat = path.stat()
     return f"{path.resolve()} {stat.st_size} {stat.st_mtime_ns}"
 

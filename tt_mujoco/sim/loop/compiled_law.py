@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import inspect
 import math
 import sys
 from pathlib import Path
@@ -37,11 +38,6 @@ def compile_law(cls):
     if compiled_law is None:
         compiled_law = _LAWS[key] = _machine_law(cls) or _compile_law(cls)
     return compiled_law
-
-
-def _law_name(cls, helpers) -> str:
-    """The name of the law's files in the cache's ``laws/``, keyed by :func:`_law_digest`."""
-    return f"law_{cls.LAW.__name__}_{_law_digest(cls, helpers)}"
 
 
 def has_machine_law(cls) -> bool:
@@ -256,22 +252,13 @@ def _law_digest(cls, helpers) -> str:
     law, of its helpers and of every function they call from elsewhere (a compiled one from
     another module of the user's), and the values of the globals they read, which numba
     freezes when it compiles (:func:`frozen_values`)."""
-    import inspect
-
     from tt_mujoco.sim.loop import kernel_sources
 
     digest = hashlib.sha256()
-    names = (*cls.PRESETS[cls.DEFAULT_PRESET], "|", *cls.STATE, "|", str(cls.SEES_PATH))
-    digest.update(" ".join(names).encode())
+    digest.update(_law_names(cls).encode())
     # the package's functions the law reaches (the path's, and what they call)
     files = {inspect.getsourcefile(fn) for fn in kernel_sources.discover((cls.LAW, *helpers))[0]}
-    for fn in (cls.LAW, *helpers):
-        for name in fn.__code__.co_names:
-            used = getattr(fn.__globals__.get(name), "py_func", fn.__globals__.get(name))
-            if inspect.isfunction(used):
-                files.add(inspect.getsourcefile(used))
-        files.add(inspect.getsourcefile(fn))
-    files.add(__file__)  # how a law is compiled (_as_compiled) is part of its code
+    files |= _law_files(cls, helpers)
     for file in sorted(f for f in files if f):
         try:
             digest.update(Path(file).read_bytes())
@@ -281,11 +268,52 @@ def _law_digest(cls, helpers) -> str:
     return digest.hexdigest()[:16]
 
 
+def _law_names(cls) -> str:
+    names = (*cls.PRESETS[cls.DEFAULT_PRESET], "|", *cls.STATE, "|", str(cls.SEES_PATH))
+    return " ".join(names)
+
+
+def _law_files(cls, helpers) -> set:
+    """The files of the law, of its helpers and of the functions they call by name, and this
+    one (how a law is compiled, :func:`_as_compiled`, is part of its code)."""
+    files = {__file__}
+    for fn in (cls.LAW, *helpers):
+        for name in fn.__code__.co_names:
+            used = getattr(fn.__globals__.get(name), "py_func", fn.__globals__.get(name))
+            if inspect.isfunction(used):
+                files.add(inspect.getsourcefile(used))
+        files.add(inspect.getsourcefile(fn))
+    return files
+
+
+def _law_name(cls, helpers) -> str:
+    """The name of the law's files in the cache's ``laws/``, keyed by :func:`_law_digest`, which
+    is found by a stamp of what it reads where a process worked it out before: working it out
+    finds every function of the package the law reaches (a quarter of a second)."""
+    from tt_mujoco.sim.loop.cache_key import file_key, sources_stamp
+
+    stamp = hashlib.sha256(f"{cls.__module__}.{cls.__qualname__} {_law_names(cls)}".encode())
+    stamp.update(sources_stamp().encode())  # the package's files, by size and time
+    for file in sorted(f for f in _law_files(cls, helpers) if f):
+        with contextlib.suppress(OSError):
+            stamp.update(file_key(Path(file)).encode())
+    stamp.update(frozen_values((cls.LAW, *helpers)).encode())
+    known = _cache_dir() / "laws" / "stamps" / stamp.hexdigest()[:32]
+    with contextlib.suppress(OSError):
+        name = known.read_text().strip()
+        if name.startswith(f"law_{cls.LAW.__name__}_"):
+            return name
+    name = f"law_{cls.LAW.__name__}_{_law_digest(cls, helpers)}"
+    with contextlib.suppress(OSError):  # a read-only cache: worked out again next time
+        known.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write(known, name + "\n")
+    return name
+
+
 def _compile_law(cls):
     """The law's C entry, from the cache when a process compiled it before (keyed by
     :func:`_law_digest`), compiled and cached otherwise."""
     import importlib.util
-    import inspect
 
     from numba import njit
 
