@@ -267,9 +267,12 @@ def _set_up_llvm():
     # its runtime (an exception's info is freed through it), as numba registers it
     for name, address in _numba_extension("core/runtime/_nrt_python").c_helpers.items():
         llvm.add_symbol(name if name.startswith("_") else f"NRT_{name}", address)
-    library = next(Path(mujoco.__file__).parent.glob("libmujoco.so*"), None)
-    if library is not None:
-        llvm.load_library_permanently(str(library))
+    here = Path(mujoco.__file__).parent  # MuJoCo's C library: Linux's, macOS's or Windows'
+    for pattern in ("libmujoco.so*", "libmujoco*.dylib", "mujoco*.dll"):
+        library = next(here.glob(pattern), None)
+        if library is not None:
+            llvm.load_library_permanently(str(library))
+            break
     machine = llvm.Target.from_default_triple().create_target_machine()
     return llvm, machine, _numba_extension("_dynfunc")
 
