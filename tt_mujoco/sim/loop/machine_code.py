@@ -135,8 +135,9 @@ def write_object(folder: Path, name: str, obj: bytes, symbols: dict) -> None:
     atomic_write(folder / f"{name}.json", json.dumps(meta, indent=1))
 
 
-#: Loaded entries of this process, by key.
+#: Loaded entries of this process, by key; and every engine loaded (its code stays).
 _LOADED: dict = {}
+_ENGINES: list = []
 
 
 def entry_for(cache: Path, key: str):
@@ -203,8 +204,11 @@ def _loaded(folder: Path, name: str, make):
     if not isinstance(meta, dict) or meta.get("sha256") != hashlib.sha256(obj).hexdigest():
         raise MachineCodeError(f"{folder / name}.o differs from its description")
     try:
-        llvm, machine, _ = _llvm()
+        llvm, _ = _llvm()
+        # a target machine of its own: the engine owns it and frees it with itself
+        machine = llvm.Target.from_default_triple().create_target_machine()
         engine = llvm.create_mcjit_compiler(llvm.parse_assembly(""), machine)
+        _ENGINES.append(engine)  # never freed: a record may still hold an address in it
         engine.add_object_file(llvm.ObjectFileRef.from_data(obj))
         engine.finalize_object()
         return make(engine, meta)
@@ -273,8 +277,7 @@ def _set_up_llvm():
         if library is not None:
             llvm.load_library_permanently(str(library))
             break
-    machine = llvm.Target.from_default_triple().create_target_machine()
-    return llvm, machine, _numba_extension("_dynfunc")
+    return llvm, _numba_extension("_dynfunc")
 
 
 _WRAPPER = ctypes.PYFUNCTYPE(ctypes.py_object, ctypes.py_object, ctypes.py_object, ctypes.py_object)
@@ -283,7 +286,7 @@ _WRAPPER = ctypes.PYFUNCTYPE(ctypes.py_object, ctypes.py_object, ctypes.py_objec
 def _entry(engine, meta: dict):
     """The entry's CPython wrapper in ``engine``, callable as ``entry(ints, floats)``: its
     environment (numba's, which the wrapper checks) set first."""
-    environment = _llvm()[2].Environment({})
+    environment = _llvm()[1].Environment({})
     env_address = engine.get_global_value_address(meta["env"])
     wrapper = engine.get_function_address(meta["wrapper"])
     if not env_address or not wrapper:
