@@ -25,7 +25,7 @@ from tt_mujoco import exact
 from tt_mujoco.analysis import nearest
 from tt_mujoco.compiled_form import compiled_form_reason
 from tt_mujoco.reference import feedback
-from tt_mujoco.sim.loop import agent_step, callbacks, closed_loop, law, target_step
+from tt_mujoco.sim.loop import agent_step, callbacks, closed_loop, law, machine_code, target_step
 from tt_mujoco.sim.loop.kernel_sources import SHARED
 from tt_mujoco.sim.loop.law import BACK_STATUS, BACK_T_L, BACK_T_R, BACK_U1, BACK_U2
 from tt_mujoco.sim.parts import disturbances
@@ -115,6 +115,12 @@ class PythonLawCallback(callbacks.PythonLawCallback, CalledBack):
 
 class HookCallback(callbacks.HookCallback, CalledBack):
     signature_of = HOOK
+
+
+# A law's machine code loaded from the cache (compiled_law) is a first-class function to numba
+# too, where numba runs the loop (the Gym agent's steps, a test's chunk)
+machine_code.CFunction.SIGNATURES.update({callbacks.LAW: USER_LAW, callbacks.HOOK: HOOK})
+types.WrapperAddressProtocol.register(machine_code.CFunction)
 
 
 @intrinsic

@@ -24,6 +24,7 @@ __all__ = [
     "Placeholder",
     "PythonLawCallback",
     "address_of",
+    "c_function",
     "kind_of",
     "no_hook",
     "no_user_law",
@@ -129,6 +130,11 @@ class Placeholder:
 
 
 no_user_law, no_hook = Placeholder(LAW), Placeholder(HOOK)
+
+
+def c_function(kind: str, address: int):
+    """The C function of ``kind`` at ``address``, callable from Python (``ctypes``)."""
+    return _C_TYPES[kind](address)
 
 
 def kind_of(function) -> str | None:

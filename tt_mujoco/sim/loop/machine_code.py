@@ -26,6 +26,7 @@ import importlib.util
 import json
 import threading
 from pathlib import Path
+from typing import ClassVar
 
 import numpy as np
 
@@ -161,11 +162,21 @@ class CFunction:
     """A C function of machine code on disk, of a kind the loop calls
     (:func:`tt_mujoco.sim.loop.callbacks.kind_of`): a user's law."""
 
+    #: numba's types of the kinds, which the kernel gives where numba runs (``_kernel``).
+    SIGNATURES: ClassVar[dict] = {}
+
     def __init__(self, kind: str, address: int, engine):
         self.kind, self._address, self._engine = kind, address, engine
 
     def __wrapper_address__(self):
         return self._address
+
+    def signature(self):
+        return self.SIGNATURES[self.kind]
+
+    def __call__(self, *args):
+        """Called from Python as numba's ``cfunc`` is (the Python loop calls a user's law so)."""
+        return callbacks.c_function(self.kind, self._address)(*args)
 
 
 def c_function_at(folder: Path, name: str, kind: str) -> CFunction | None:
