@@ -30,7 +30,9 @@ FAILURES = {
 
 PRELUDE = """
 import math
+import os
 import sys
+import tempfile
 
 from tt_mujoco.controllers import Controller
 from tt_mujoco.reference.paths import ArcsPath
@@ -93,7 +95,11 @@ HOOKS = {
         ["--disturbance-model", "{file}:D"],
         "before",
     ),
-    "path factory": ("def p():\n    fail()\n", ["--traj", "{file}:p"], "before"),
+    "path factory": (
+        "def p():\n    fail()\n    return ArcsPath('arc', (0.0, 0.0, 0.0), [(10.0, 0.5)])\n",
+        ["--traj", "{file}:p"],
+        "before",
+    ),
     "path method": (
         "class P(ArcsPath):\n    def curvature_and_rate(self, s):\n        if s > 0.5:\n"
         "            fail()\n        return super().curvature_and_rate(s)\n\n"
@@ -194,6 +200,59 @@ def test_an_interrupt_that_other_code_turned_into_another_error_is_still_the_int
         raise TypeError("a bug")
 
 
+#: Ways a user's code disturbs the process it runs in without failing: (name, statement)
+MISCHIEF = {
+    "changes the working folder": "os.chdir(tempfile.mkdtemp())",
+    "closes sys.stdout": "sys.stdout.close()",
+    "closes sys.stderr": "sys.stderr.close()",
+}
+
+
+def _outcome(tmp_path, monkeypatch, capsys, name: str, hook: str, statement: str):
+    """A hooked run from its own folder, with a relative ``--out``: its exit code, what it
+    printed, its files and its metrics, the folder's name and the run's time taken out."""
+    from tt_mujoco import run
+
+    folder = tmp_path / name
+    folder.mkdir()
+    monkeypatch.chdir(folder)
+    code, options, _ = HOOKS[hook]
+    (folder / "user.py").write_text(
+        PRELUDE.replace("FAIL", statement) + "\n" + textwrap.dedent(code)
+    )
+    argv = [o.format(file="user.py") for o in options]
+    argv += ["--plant", "reduced", "--traj", "circle"] if "--traj" not in argv else []
+    argv += ["--duration", "2", "--no-video", "--no-plots", "--quiet", "--out", "out"]
+    monkeypatch.setenv("TT_MUJOCO_COMPILED", "0")
+    exit_code = run.main(argv)
+    captured = capsys.readouterr()
+    out = folder / "out"
+    files = sorted(p.name for p in out.iterdir()) if out.is_dir() else []
+    metrics = (out / "metrics.json").read_text() if "metrics.json" in files else "{}"
+    doc = json.loads(metrics.replace(str(folder), "FOLDER"))
+    doc.pop("wall_time_s", None)
+    said = [
+        line
+        for line in (captured.out + captured.err).replace(str(folder), "FOLDER").splitlines()
+        if not line.startswith("wall_time_s")
+    ]
+    return exit_code, files, doc, said
+
+
+@pytest.mark.parametrize("mischief", list(MISCHIEF))
+@pytest.mark.parametrize("hook", list(HOOKS))
+def test_every_hook_disturbing_the_process_changes_nothing_of_the_run(
+    tmp_path, monkeypatch, capsys, hook, mischief
+):
+    """The run's folder, its files, its numbers and what it says are those of the same hook
+    doing nothing of the kind: the outputs go where the command line said, and the command's
+    streams stay open."""
+    clean = _outcome(tmp_path, monkeypatch, capsys, "clean", hook, "pass")
+    disturbed = _outcome(tmp_path, monkeypatch, capsys, "disturbed", hook, MISCHIEF[mischief])
+    assert clean[1], clean  # the clean run wrote its folder
+    assert disturbed == clean
+
+
 @pytest.mark.parametrize(
     ("source", "line", "kind"),
     [
@@ -214,3 +273,22 @@ def test_a_file_that_does_not_compile_is_named_at_its_own_line(
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and f"bad.py, line {line}: {kind}" in err[0], err
     assert "importlib" not in err[0] and not (tmp_path / "out").exists()
+
+
+def test_a_sweep_whose_controller_changes_the_working_folder_writes_where_asked(
+    tmp_path, monkeypatch, capsys
+):
+    from tt_mujoco.sweep import cli
+
+    monkeypatch.chdir(tmp_path)
+    code = HOOKS["controller __init__"][0]
+    (tmp_path / "user.py").write_text(
+        PRELUDE.replace("FAIL", MISCHIEF["changes the working folder"])
+        + "\n"
+        + textwrap.dedent(code)
+    )
+    argv = ["--out", "sweep", "--workers", "1", "--quiet", "--no-figures"]
+    argv += ["controller=user.py:C", "plant=reduced", "traj=circle", "duration=1"]
+    assert cli.main(argv) == 0, capsys.readouterr().err
+    assert (tmp_path / "sweep" / "runs.csv").is_file()
+    assert len((tmp_path / "sweep" / "runs.csv").read_text().splitlines()) == 2

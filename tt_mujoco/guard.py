@@ -23,11 +23,13 @@ import os
 import signal
 import sys
 import threading
+from pathlib import Path
 
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_BUG
 
 __all__ = [
     "STOP_SIGNALS",
+    "absolute",
     "command",
     "control_signal",
     "ignore_stop_signals",
@@ -167,6 +169,21 @@ def shown_error(err: BaseException) -> str:
         return f"(its message cannot be shown: {type(inner).__name__} in its __str__)"
 
 
+#: The working folder the running command started in (None outside a command): what its
+#: relative paths mean, whatever folder a user's code moves the process to.
+_START_DIR: str | None = None
+
+
+def absolute(path) -> Path:
+    """``path`` made absolute against the folder the command started in (outside a command,
+    the current folder): a user's code that changes the working folder (``os.chdir`` in a
+    controller) moves none of the command's outputs."""
+    path = Path(path).expanduser()
+    if path.is_absolute():
+        return path
+    return Path(_START_DIR if _START_DIR is not None else os.getcwd()) / path
+
+
 def crash_file(err: BaseException) -> str:
     """Write ``err``'s traceback to a new file in the temporary folder; its path."""
     import tempfile  # only when there is a bug to report: --help stays quick
@@ -185,7 +202,8 @@ class _ReaderMayGo:
     """A command's ``sys.stdout`` or ``sys.stderr``: once the reader of the stream has gone (a
     pipe into ``head`` closed), what the command writes there is dropped, not raised, and the
     command goes on to its own ending (its files written, its exit code). The stream's file
-    is then pointed at the null device, so the interpreter's last flush finds a sink too."""
+    is then pointed at the null device, so the interpreter's last flush finds a sink too. A
+    user's code that closes it only flushes it."""
 
     def __init__(self, stream):
         self._stream, self._gone = stream, False
@@ -204,6 +222,15 @@ class _ReaderMayGo:
                 self._stream.flush()
             except BrokenPipeError:
                 self._went()
+
+    def close(self):
+        """Flush only: the command's streams stay open to the end (a user's code that closes
+        ``sys.stdout`` does not silence the command's summary and messages)."""
+        self.flush()
+
+    @property
+    def closed(self) -> bool:
+        return False
 
     def _went(self):
         self._gone = True
@@ -227,6 +254,11 @@ def command(main):
 
     @functools.wraps(main)
     def guarded(argv=None):
+        global _START_DIR
+        outermost = _START_DIR is None  # a command another runs keeps the outer one's folder
+        if outermost:
+            with contextlib.suppress(OSError):  # a working folder removed under the shell
+                _START_DIR = os.getcwd()
         streams = sys.stdout, sys.stderr
         sys.stdout, sys.stderr = (_ReaderMayGo(s) for s in streams)  # `| head` is no bug
         try:
@@ -251,6 +283,10 @@ def command(main):
             with contextlib.suppress(OSError, ValueError):
                 sys.stdout.flush()
             sys.stdout, sys.stderr = streams
+            if outermost and _START_DIR is not None:  # the process left where it started
+                with contextlib.suppress(OSError):
+                    os.chdir(_START_DIR)
+                _START_DIR = None
 
     guarded.guarded = True
     return guarded

@@ -25,6 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
+from tt_mujoco import guard
+
 __all__ = [
     "METRICS_FILE",
     "OutputError",
@@ -208,6 +210,8 @@ def claim_folder(out: Path | None, default_base: Path, option: str = "--out") ->
         ``out`` holds files, is not a folder, is a symbolic link, lies inside another
         command's outputs, or cannot be created or written.
     """
+    # absolute now: a user's code that changes the working folder moves no output
+    default_base = guard.absolute(default_base)
     if out is None:
         inside = enclosing_output(default_base)
         if inside is not None:  # run from inside a finished run's folder
@@ -229,7 +233,7 @@ def claim_folder(out: Path | None, default_base: Path, option: str = "--out") ->
             _claim(path, "output folder", created=True)
             return path, True
         raise OutputError(f"no free output folder name for {str(default_base)!r}")
-    out = Path(out)
+    out = guard.absolute(out)
     try:
         str(out).encode("utf-8")
     except UnicodeEncodeError:

@@ -262,7 +262,7 @@ def run_sweep(
         When interrupted; finished runs are in the journal, and ``resume=True`` continues.
     """
     t0 = time.perf_counter()
-    out = Path(out)
+    out = guard.absolute(out)  # a user's code that changes the working folder moves nothing
     if not (isinstance(workers, int) and workers >= 1):
         raise BadSpecError(f"workers={workers!r} is not allowed: it must be an integer >= 1")
     resume = _resume_of(resume)
