@@ -116,3 +116,18 @@ def test_importing_the_package_loads_no_simulation():
     code = "import sys, tt_mujoco; print('mujoco' in sys.modules)"
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.stdout.strip() == "False"
+
+
+def test_a_constructor_that_does_not_return_is_refused_at_the_time_limit(tmp_path):
+    """The Python API's set-up is bounded by the scenario's time limit as the command's is."""
+    (tmp_path / "hangs.py").write_text(
+        "from tt_mujoco.controllers import Controller\n\n"
+        "class C(Controller):\n    def __init__(self, setup, gains=None):\n"
+        "        super().__init__(setup, gains)\n        while True:\n            pass\n\n"
+        "    def compute(self, t, m, r):\n        return 0.0, 0.0\n"
+    )
+    scenario = Scenario(
+        controller=f"{tmp_path / 'hangs.py'}:C", plant="reduced", duration=1.0, time_limit_s=0.5
+    )
+    with pytest.raises(ValueError, match=r"passed its time limit of 0.5 s .*hangs.py, line 6"):
+        tt_mujoco.simulate(scenario)

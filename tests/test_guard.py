@@ -292,3 +292,19 @@ def test_a_sweep_whose_controller_changes_the_working_folder_writes_where_asked(
     assert cli.main(argv) == 0, capsys.readouterr().err
     assert (tmp_path / "sweep" / "runs.csv").is_file()
     assert len((tmp_path / "sweep" / "runs.csv").read_text().splitlines()) == 2
+
+
+@pytest.mark.parametrize("hook", [h for h, (_, _, when) in HOOKS.items() if when == "before"])
+def test_every_hook_that_does_not_return_before_the_run_is_stopped_by_its_time_limit(
+    tmp_path, monkeypatch, capsys, hook
+):
+    """A user's import, constructor or path factory that never returns is bad input once the
+    run's time limit has passed: exit 2 naming its file and line, nothing written."""
+    code, options, _ = HOOKS[hook]
+    file = tmp_path / "user_hangs.py"
+    file.write_text(PRELUDE.replace("FAIL", "while True:\n        pass") + "\n" + code)
+    exit_code, out = run_hooked(tmp_path, monkeypatch, file, [*options, "--time-limit", "0.5"])
+    err = capsys.readouterr().err
+    assert exit_code == 2, err
+    assert "passed its time limit of 0.5 s" in err and f"{file}, line " in err, err
+    assert not out.exists() or not any(out.iterdir())

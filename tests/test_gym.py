@@ -320,6 +320,9 @@ def test_reset_refuses_an_option_it_does_not_know():
     with pytest.raises(ValueError, match=r"'phi0' is not a reset option \(allowed: phi0_deg\)"):
         env.reset(seed=0, options={"phi0": 20.0})
     env.reset(seed=0, options={"phi0_deg": 5.0})  # the one it takes
+    for options in ("phi0_deg", ["phi0_deg"], 5.0):  # not a mapping: said so, not its items
+        with pytest.raises(ValueError, match=r"give a dict of reset options"):
+            env.reset(seed=0, options=options)
 
 
 @pytest.mark.parametrize(

@@ -5,6 +5,7 @@ import dataclasses
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from tt_mujoco import config, gym_env, run, schema
@@ -346,3 +347,25 @@ def test_every_text_of_numbers_is_read_by_one_reader():
     for parse, text in refusals:
         with pytest.raises(ValueError, match="not"):
             parse(text)
+
+
+def _typed_defaults():
+    for opt in SCHEMA.options:
+        if isinstance(opt.default, bool):
+            yield pytest.param(opt, np.bool_(opt.default), id=opt.name)
+        elif isinstance(opt.default, int):
+            yield pytest.param(opt, np.int64(opt.default), id=opt.name)
+        elif isinstance(opt.default, float):
+            yield pytest.param(opt, np.float64(opt.default), id=opt.name)
+
+
+@pytest.mark.parametrize(("opt", "numpy_value"), list(_typed_defaults()))
+def test_every_number_or_truth_option_takes_a_numpy_scalar_as_its_value(opt, numpy_value):
+    """The Python API is driven from NumPy (``for d in np.linspace(...)``): a NumPy scalar is
+    its value, made a Python one, as a truth value already was."""
+    parsed = opt.parse(numpy_value, opt.name)
+    assert parsed == opt.parse(opt.default, opt.name)
+    assert type(parsed) is type(opt.parse(opt.default, opt.name))
+    scenario = Scenario(**{opt.name: numpy_value})
+    scenario.validate()
+    assert type(getattr(scenario, opt.name)) is type(parsed)

@@ -83,6 +83,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from numbers import Integral
 from typing import ClassVar
 
@@ -255,7 +256,12 @@ def reset_phi0_deg(scenario: sim.Scenario, options: dict | None) -> float | None
     ValueError
         An option ``reset`` does not take, or a ``phi0_deg`` the scenario refuses, named.
     """
-    unknown = sorted(set(options or {}) - set(RESET_OPTIONS))
+    if options is not None and not isinstance(options, Mapping):
+        raise ValueError(
+            f"options={shown(options)} is not allowed: give a dict of reset options "
+            f"(allowed keys: {', '.join(RESET_OPTIONS)}) or None"
+        )
+    unknown = sorted(set(options or {}) - set(RESET_OPTIONS), key=str)
     if unknown:
         raise ValueError(
             f"options={shown(options)} is not allowed: {unknown[0]!r} is not a reset "

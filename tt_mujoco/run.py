@@ -260,8 +260,7 @@ def _main(argv: list[str] | None) -> int:
 def _set_up(invocation: Invocation) -> _RunSetup | int:
     """Everything simulate checks, before an output folder exists (simulate reuses the
     build), then the live view and the folder; an exit code for what is refused."""
-    from tt_mujoco.sim.build import build
-    from tt_mujoco.sim.probe import check_user_code
+    from tt_mujoco.sim.simulate import checked_build
     from tt_mujoco.vehicle import reduced
     from tt_mujoco.viz import viewer as viewer_mod
 
@@ -269,8 +268,7 @@ def _set_up(invocation: Invocation) -> _RunSetup | int:
         scenario, shown = invocation.scenario, invocation.outputs
         if shown["mcap"]:
             _check_mcap()
-        built = build(scenario)
-        check_user_code(built)
+        built = checked_build(scenario)
         config_toml = config_mod.dump_config(invocation.file_form())
         live = _live_view(built, shown)
         try:

@@ -81,6 +81,8 @@ def number(
         if isinstance(value, str) and value.strip().lower() in words:
             return value.strip().lower()
         x = value
+        if isinstance(x, np.integer | np.floating):  # a NumPy scalar (np.linspace's): its value
+            x = x.item()
         if isinstance(x, str):
             x = number_text(x, integer)
             if x is None:

@@ -14,8 +14,8 @@ import numpy as np
 from tt_mujoco.analysis.metrics import compute_metrics
 from tt_mujoco.defaults import MAX_SPEED
 from tt_mujoco.guard import control_signal, noting_interrupts, users_failure
+from tt_mujoco.registry import HookError, finite_number, real_number, shown
 from tt_mujoco.registry import describe_failure as usercode_failure
-from tt_mujoco.registry import finite_number, real_number, shown
 from tt_mujoco.sim.build import (
     PLAN_FORWARD_DRIVE,
     REVERSING_DRIVES,
@@ -35,7 +35,7 @@ from tt_mujoco.sim.scenario import Scenario
 from tt_mujoco.sim.usercode import CheckedProgress, users_copy
 from tt_mujoco.world.part import world_report
 
-__all__ = ["Result", "simulate"]
+__all__ = ["Result", "checked_build", "simulate"]
 
 
 @dataclass
@@ -87,6 +87,37 @@ def wall_time_limit(seconds: float, told: float | None = None):
     finally:
         signal.setitimer(signal.ITIMER_REAL, 0.0)
         signal.signal(signal.SIGALRM, previous)
+
+
+def checked_build(scenario: Scenario) -> Build:
+    """What every route does before a run: :func:`~tt_mujoco.sim.build.build` ``scenario``
+    and try its user code once (:func:`~tt_mujoco.sim.probe.check_user_code`), within the
+    scenario's time limit (``time_limit_s``).
+
+    Raises
+    ------
+    ValueError
+        A bad option, or a user's code that fails; a :class:`~tt_mujoco.registry.HookError`
+        too for a set-up that passed the time limit (a user's import, constructor or path
+        factory that does not return), naming where it was. Code stuck inside one call into C
+        is stopped when that call returns: the in-process limit acts between bytecodes.
+    """
+    limit = scenario.time_limit_s if isinstance(scenario, Scenario) else None
+    if not isinstance(limit, int | float) or isinstance(limit, bool) or not limit > 0:
+        limit = None  # no limit to keep, or a bad one: build names it
+    try:
+        with wall_time_limit(limit) if limit is not None else contextlib.nullcontext():
+            built = build(scenario)
+            check_user_code(built)
+    except TimeLimitExceeded as err:
+        where = usercode_failure(err).split(": ")[0]
+        where = f"in {where}" if ", line " in where else "in tt-mujoco's own set-up"
+        raise HookError(
+            f"the run's set-up passed its time limit of {err.args[0]:g} s (wall clock; "
+            f"--time-limit) {where}, before anything was simulated (a user's import, "
+            "constructor or path that did not return)"
+        ) from None
+    return built
 
 
 def _time_limit_stop(stepper: Stepper, err: TimeLimitExceeded) -> tuple[str, str]:
@@ -169,11 +200,7 @@ def simulate(
         User code that fails during the run stops it instead: status ``"failed"``, the
         traceback in ``Result.details``.
     """
-    if isinstance(scenario, Build):
-        built = scenario
-    else:
-        built = build(scenario)
-        check_user_code(built)
+    built = scenario if isinstance(scenario, Build) else checked_build(scenario)
     if progress is not None:  # a caller's code: its failure stops the run as "failed"
         progress = CheckedProgress(progress, built.scenario.control_dt)
     if built.plan is not None and built.plan.cusps:

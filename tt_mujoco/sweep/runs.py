@@ -17,7 +17,7 @@ from tt_mujoco.controllers import controller_class
 from tt_mujoco.registry import is_hook
 from tt_mujoco.schema import Schema
 from tt_mujoco.sim import SCHEMA, Scenario, build, simulate
-from tt_mujoco.sim.probe import check_user_code
+from tt_mujoco.sim.simulate import checked_build
 from tt_mujoco.sweep.options import (
     DICT_OPTIONS,
     LIST_OPTIONS,
@@ -183,7 +183,7 @@ def validate_runs(runs: Sequence[dict]) -> None:
         if key in checked:
             continue
         try:
-            check_user_code(build(build_scenario(options)))
+            checked_build(build_scenario(options))
         except StartError:  # this seed's start has no plan (or one it cannot drive): a row
             continue  # of its own (run_one); the configuration is checked with the next seed
         except (ValueError, TypeError, OSError) as err:
