@@ -62,3 +62,26 @@ def test_a_broken_copy_of_the_path_is_refused_before_an_output_folder(tmp_path, 
     assert compare.main([str(tmp_path / "a"), str(tmp_path / "b"), "--out", str(out)]) == 2
     assert REFERENCE_FILE in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_every_run_is_one_column_whatever_its_folder_is_called(runs, tmp_path, capsys):
+    """Copies of one run in folders of one name (``a/run``, ``b/run``) are told apart by
+    their paths; a folder given twice, in any spelling, is refused."""
+    import shutil
+
+    copies = [tmp_path / "a" / "run", tmp_path / "b" / "run", tmp_path / "b" / "c" / "run"]
+    for copy in copies:
+        shutil.copytree(runs[0], copy)
+    out = tmp_path / "cmp"
+    assert compare.main([*map(str, copies), "--out", str(out)]) == 0
+    labels = json.loads((out / "compare.json").read_text())["labels"]
+    assert len(set(labels)) == 3, labels
+    assert [label.split(" (")[0] for label in labels] == ["a/run", "b/run", "c/run"]
+    capsys.readouterr()
+    for twice in (
+        [runs[0], runs[0]],
+        [runs[0], runs[1], runs[0].parent / ".." / runs[0].parent.name / runs[0].name],
+    ):
+        assert compare.main([*map(str, twice), "--out", str(tmp_path / "twice")]) == 2
+        assert "is given twice" in capsys.readouterr().err
+        assert not (tmp_path / "twice").exists()

@@ -140,6 +140,11 @@ def test_export_for_other_parameters_and_never_over_files(tmp_path, capsys):
     assert "not an empty folder" in capsys.readouterr().err
     assert model_cli.main(["--out", str(tmp_path / "bad"), "--param", "L0=-1"]) == 2
     assert not (tmp_path / "bad").exists()
+    capsys.readouterr()
+    # a bad value is named first, with --out or without it
+    for argv, named in ((["--trailers", "99"], "trailers=99"), (["--eta", "abc"], "eta='abc'")):
+        assert model_cli.main(argv) == 2
+        assert named in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("n", [2, 3])

@@ -53,8 +53,34 @@ class Run:
         self.reference = run.reference
         scenario = run.scenario
         self.path = str(scenario.get("traj", "?"))
-        parts = [scenario.get("controller", "?"), scenario.get("plant", "?")]
-        self.label = f"{run.folder.name} ({', '.join(str(p) for p in parts)})"
+        self.parts = [str(scenario.get("controller", "?")), str(scenario.get("plant", "?"))]
+        self.label = self.named(1)
+
+    def named(self, depth: int) -> str:
+        """The label with the folder's last ``depth`` path parts."""
+        name = "/".join(self.folder.absolute().parts[-depth:])
+        return f"{name} ({', '.join(self.parts)})"
+
+
+def _distinct(runs: list[Run]) -> None:
+    """Refuse a folder given twice; label runs that a folder's name does not tell apart (two
+    seeds of one scenario in ``a/run`` and ``b/run``) by as much of their paths as tells them
+    apart: every table column and every figure's legend entry is one run."""
+    seen = {}
+    for run in runs:
+        key = run.folder.resolve()
+        if key in seen:
+            again = "" if run.folder == seen[key] else f" (as {str(seen[key])!r} before)"
+            raise BadInputError(
+                f"RUN_DIR {str(run.folder)!r} is given twice{again}: give each run once"
+            )
+        seen[key] = run.folder
+    depth = 1
+    while len({r.label for r in runs}) < len(runs) and depth < 64:
+        depth += 1
+        shared = [r for r in runs if sum(o.label == r.label for o in runs) > 1]
+        for run in shared:
+            run.label = run.named(depth)
 
 
 def load_run(folder: Path) -> Run:
@@ -141,6 +167,7 @@ def _signals_figure(runs: list[Run]) -> Figure:
 def compare(folders: list[Path], out: Path | None, allow_different_paths: bool) -> Path:
     """Write the comparison of ``folders`` into a new folder; returns it."""
     runs = [load_run(f) for f in folders]
+    _distinct(runs)
     paths = sorted({r.path for r in runs})
     if len(paths) > 1 and not allow_different_paths:
         raise BadInputError(

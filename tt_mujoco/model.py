@@ -56,24 +56,23 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     try:
+        # the values first: a bad one is named whatever else the command line lacks
+        eta = args.eta if args.eta is not None else "same_path"
+        try:
+            eta = float(eta)
+        except ValueError:
+            pass
+        changed = vehicle.from_command_line(args).get("params", {})
+        params = Params(eta=eta, **changed).with_trailers(args.trailers)
         if args.out is None:
-            if vehicle.from_command_line(args) or args.eta is not None or args.trailers != 1:
+            if changed or args.eta is not None or args.trailers != 1:
                 raise OutputError(
                     "--param, --eta and --trailers change the model: give --out DIR (models/ "
-                    "holds the "
-                    "default parameters' files, which the tests check)"
+                    "holds the default parameters' files, which the tests check)"
                 )
-            params, out = Params(), MODELS_DIR
+            out = MODELS_DIR
             out.mkdir(parents=True, exist_ok=True)
         else:
-            eta = args.eta if args.eta is not None else "same_path"
-            try:
-                eta = float(eta)
-            except ValueError:
-                pass
-            params = Params(
-                eta=eta, **vehicle.from_command_line(args).get("params", {})
-            ).with_trailers(args.trailers)
             out, _ = claim_folder(args.out, args.out)
     except ValueError as err:  # Params' checks and OutputError name the value
         print(f"error: {err}", file=sys.stderr)
