@@ -561,3 +561,35 @@ def test_a_sweep_file_s_numbers_are_typed(tmp_path, key):
     spec.write_text(f'[sweep]\n{key} = "3"\n[options]\nplant = "reduced"\n')
     with pytest.raises(BadSpecError, match=rf"\[sweep\] {key}='3' is not allowed: it is text"):
         sweep.load_spec(spec)
+
+
+def test_a_resume_after_its_spec_file_was_edited_is_refused_unless_extending(tmp_path, capsys):
+    """An edited sweep.toml is a changed sweep: its finished runs came from what it held."""
+    from tt_mujoco.sweep import cli
+
+    out = tmp_path / "sw"
+    argv = ["--out", str(out), "--workers", "1", "--quiet", "--no-figures"]
+    assert cli.main([*argv, "plant=reduced", "duration=0.3,0.4"]) == 0
+    spec = out / sweep.SPEC_FILE
+    spec.write_text(spec.read_text().replace("0.4", "0.5"))
+    capsys.readouterr()
+    assert cli.main([*argv, "--resume"]) == 2
+    assert f"its {sweep.SPEC_FILE} was edited" in capsys.readouterr().err
+    assert cli.main([*argv, "--resume", "--extend"]) == 0
+    assert "2 runs (1 reused)" in capsys.readouterr().out
+    assert cli.main([*argv, "--resume"]) == 0  # the extension wrote what it ran
+
+
+def test_a_table_that_cannot_be_written_is_one_line_and_the_runs_kept(tmp_path, capsys):
+    from tt_mujoco.sweep import cli
+
+    out = tmp_path / "sw"
+    argv = ["--out", str(out), "--workers", "1", "--quiet", "--no-figures", "--resume"]
+    assert cli.main([*argv[:-1], "plant=reduced", "duration=0.3"]) == 0
+    (out / sweep.TABLE).unlink()
+    (out / sweep.TABLE).mkdir()  # a folder where the table goes
+    capsys.readouterr()
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and f"{out / sweep.TABLE}: Is a directory" in err, err
+    assert "--resume --out" in err and len(sweep.read_journal(out / sweep.JOURNAL)) == 1

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import contextlib
+import hashlib
 import json
 import os
 import shutil
@@ -64,6 +65,8 @@ class SweepResult:
 HANG_DIR = ".hangs"
 #: The file a running sweep holds locked, so that a second one into its folder is refused.
 LOCK_FILE = ".lock"
+#: The sha256 of the ``sweep.toml`` the sweep wrote: an edit of it before a resume is told.
+SPEC_DIGEST = ".sweep.toml.sha256"
 
 
 @dataclass(frozen=True)
@@ -164,7 +167,8 @@ def prepare_out(out: Path, resume: bool) -> bool:
         refuse_link_or_enclosed(out)
     except ValueError as err:
         raise BadSpecError(str(err)) from None
-    for name in (JOURNAL, SPEC_FILE, TABLE, "summary.csv", "summary.json", LOCK_FILE, HANG_DIR):
+    written = (JOURNAL, SPEC_FILE, SPEC_DIGEST, TABLE, "summary.csv", "summary.json")
+    for name in (*written, LOCK_FILE, HANG_DIR):
         if (out / name).is_symlink():
             raise BadSpecError(
                 f"--out {str(out)!r}: {name} is a symlink; outputs are never written through "
@@ -195,7 +199,7 @@ def prepare_out(out: Path, resume: bool) -> bool:
 def _undo_fresh(out: Path) -> None:
     """Remove what a sweep wrote into its new folder before its first run, and the folder:
     a sweep refused then (its scheduler unreachable) leaves nothing that blocks the retry."""
-    for name in (JOURNAL, SPEC_FILE, LOCK_FILE):
+    for name in (JOURNAL, SPEC_FILE, SPEC_DIGEST, LOCK_FILE):
         with contextlib.suppress(FileNotFoundError):
             (out / name).unlink()
     with contextlib.suppress(OSError):
@@ -207,11 +211,23 @@ def _json_line(record: dict) -> str:
     return json.dumps(json_safe(record), allow_nan=False) + "\n"
 
 
+def _digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
 def _check_same_spec(out: Path, spec: SweepSpec, resume: Resume | None) -> None:
     """A resumed sweep keeps its specification; another one is refused unless extending."""
     saved = out / SPEC_FILE
     if resume is None or resume.extend or not saved.exists():
         return
+    recorded = out / SPEC_DIGEST
+    if recorded.is_file() and recorded.read_text().strip() != _digest(saved):
+        raise BadSpecError(
+            f"--out {str(out)!r}: its {SPEC_FILE} was edited since the sweep wrote it, and its "
+            "finished runs were made by what it held then: --resume continues a sweep as it "
+            "was; pass --extend to run the edited specification beside them (the finished "
+            "runs it still makes are reused), or name a new folder"
+        )
     if saved.read_bytes() != spec.to_toml().encode("utf-8"):
         raise BadSpecError(
             f"--out {str(out)!r} holds a sweep with another specification ({SPEC_FILE}): "
@@ -281,6 +297,7 @@ def run_sweep(
             atomic_write(journal_path, "".join(_json_line(r) for r in done.values()))
         _check_same_spec(out, spec, resume)
         atomic_write(out / SPEC_FILE, spec.to_toml())
+        atomic_write(out / SPEC_DIGEST, _digest(out / SPEC_FILE) + "\n")
         todo = deque(r for r in runs if r["run_id"] not in done)
         reused = len(runs) - len(todo)
         if todo:
