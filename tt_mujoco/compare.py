@@ -15,6 +15,7 @@ Runs on different paths are refused (their errors do not compare) unless
 
 from __future__ import annotations
 
+import contextlib
 import glob
 import math
 import sys
@@ -31,6 +32,7 @@ from tt_mujoco.outputs import (
     atomic_write,
     claim_folder,
     release_folder,
+    remove_if_empty,
     save_figure,
     write_json,
 )
@@ -178,7 +180,29 @@ def compare(folders: list[Path], out: Path | None, allow_different_paths: bool) 
     reference = runs[0].reference
     if out is not None:
         check_out(out / "compare.md")
-    folder, _ = claim_folder(out, DEFAULT_OUT)
+    folder, created = claim_folder(out, DEFAULT_OUT)
+    try:
+        _write_comparison(folder, runs, rows, reference)
+    except BaseException as err:  # a full disk, an interrupt: no half comparison left behind
+        for name in WRITTEN:
+            with contextlib.suppress(OSError):
+                (folder / name).unlink()
+        if created:
+            remove_if_empty(folder)
+        else:
+            release_folder(folder)
+        if isinstance(err, OSError) and not err.filename:  # a figure's writer names nothing
+            raise OSError(err.errno, err.strerror, str(folder)) from err
+        raise
+    release_folder(folder)
+    return folder
+
+
+#: The files a comparison writes.
+WRITTEN = ("compare.md", "compare.json", "paths.png", "errors.png", "signals.png")
+
+
+def _write_comparison(folder: Path, runs: list[Run], rows: list[dict], reference) -> None:
     atomic_write(folder / "compare.md", _markdown(runs, rows))
     write_json(
         folder / "compare.json",
@@ -193,8 +217,6 @@ def compare(folders: list[Path], out: Path | None, allow_different_paths: bool) 
         title="Tracking errors",
     )
     save_figure(_signals_figure(runs), folder / "signals.png", DPI)
-    release_folder(folder)
-    return folder
 
 
 def _expand(patterns: list[str]) -> list[Path]:

@@ -12,12 +12,17 @@ code raises itself, ``SystemExit`` (``sys.exit(0)`` included), ``GeneratorExit``
 
 Every command's ``main`` is wrapped by :func:`command`: what escapes it that is neither bad
 input (the commands turn that into exit 2 themselves) nor an interrupt is a bug of ours: one
-line on stderr naming the file its traceback was written to, and exit code 70.
+line on stderr naming the file its traceback was written to, and exit code 70. What the file
+system refused (:data:`REFUSALS`: a full disk, a quota, a read-only folder) is not: one line
+naming what was refused, exit code 2. Either way the folders the command claimed and left
+holding nothing are removed. A command's relative paths are taken against the folder it
+started in (:func:`absolute`), whatever folder a user's code moves the process to.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import functools
 import os
 import signal
@@ -28,6 +33,7 @@ from pathlib import Path
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_BUG
 
 __all__ = [
+    "REFUSALS",
     "STOP_SIGNALS",
     "absolute",
     "command",
@@ -169,6 +175,14 @@ def shown_error(err: BaseException) -> str:
         return f"(its message cannot be shown: {type(inner).__name__} in its __str__)"
 
 
+#: What the file system refuses for reasons outside the command (a full disk, a quota, a
+#: read-only or forbidden folder, a folder where a file goes): one line and exit code 2.
+REFUSALS = frozenset(
+    getattr(errno, name)
+    for name in ("ENOSPC", "EDQUOT", "EROFS", "EACCES", "EPERM", "EISDIR", "ENOTDIR", "EFBIG")
+    if hasattr(errno, name)
+)
+
 #: The working folder the running command started in (None outside a command): what its
 #: relative paths mean, whatever folder a user's code moves the process to.
 _START_DIR: str | None = None
@@ -243,6 +257,31 @@ class _ReaderMayGo:
         return getattr(self._stream, name)
 
 
+def _abandon_outputs() -> list:
+    """The failed command's claimed folders that hold nothing yet, removed
+    (:func:`tt_mujoco.outputs.abandon_claims`); the folders it had claimed."""
+    from tt_mujoco import outputs  # it imports this module
+
+    try:
+        return outputs.abandon_claims()
+    except Exception:
+        return []
+
+
+def _bug(err: BaseException) -> int:
+    """A bug of ours: one line naming the file its traceback went to; exit code 70."""
+    try:
+        where = crash_file(err)
+    except OSError as failed:  # a full or read-only temporary folder
+        where = f"nowhere ({failed.strerror})"
+    print(
+        f"error: internal error, a bug of tt-mujoco ({shown_error(err)}); "
+        f"its traceback is in {where}: please report it",
+        file=sys.stderr,
+    )
+    return EXIT_BUG
+
+
 def command(main):
     """A command's ``main(argv) -> int``, guarded: bad input it raises
     (:class:`~tt_mujoco.cliargs.BadInputError`, an unknown or malformed option from
@@ -266,19 +305,25 @@ def command(main):
         except (SystemExit, KeyboardInterrupt):
             raise
         except BadInputError as err:  # what a command leaves to be said: one line, exit 2
+            _abandon_outputs()
             print(f"error: {' '.join(str(err).split())}", file=sys.stderr)
             return EXIT_BAD_INPUT
-        except BaseException as err:
-            try:
-                where = crash_file(err)
-            except OSError as failed:  # a full or read-only temporary folder
-                where = f"nowhere ({failed.strerror})"
+        except OSError as err:
+            claimed = _abandon_outputs()
+            if err.errno not in REFUSALS:
+                return _bug(err)
+            # the file system refused what the command wrote (a full disk, a quota, a
+            # read-only folder): no bug of ours, and nothing a traceback would help with
+            named = err.filename2 or err.filename or ", ".join(map(str, claimed)) or None
             print(
-                f"error: internal error, a bug of tt-mujoco ({shown_error(err)}); "
-                f"its traceback is in {where}: please report it",
+                f"error: {str(named) + ': ' if named else ''}{err.strerror or err} (the file "
+                "system refused it: make room or change the folder, and run again)",
                 file=sys.stderr,
             )
-            return EXIT_BUG
+            return EXIT_BAD_INPUT
+        except BaseException as err:
+            _abandon_outputs()
+            return _bug(err)
         finally:
             with contextlib.suppress(OSError, ValueError):
                 sys.stdout.flush()

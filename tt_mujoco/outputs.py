@@ -131,6 +131,27 @@ CLAIM_FILE = ".in-progress"
 METRICS_FILE = "metrics.json"
 
 
+#: The folders this process claimed and has not released, with whether it made them.
+_CLAIMED: dict[Path, bool] = {}
+
+
+def abandon_claims() -> list[Path]:
+    """After a command failed (:func:`tt_mujoco.guard.command`): every folder it claimed and
+    did not release is removed where it holds nothing but the claim (a folder the user named
+    is left as it was); one holding outputs keeps them, labelled incomplete by the claim.
+    Returns those folders."""
+    claimed = list(_CLAIMED)
+    for out, created in list(_CLAIMED.items()):
+        _CLAIMED.pop(out, None)
+        with contextlib.suppress(OSError):
+            if {p.name for p in out.iterdir()} <= {CLAIM_FILE}:
+                if created:
+                    remove_if_empty(out)
+                else:
+                    release_folder(out)
+    return claimed
+
+
 def _claim(out: Path, option: str, created: bool) -> None:
     try:
         fd = os.open(out / CLAIM_FILE, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW)
@@ -143,6 +164,7 @@ def _claim(out: Path, option: str, created: bool) -> None:
         if created:
             remove_if_empty(out)
         raise OutputError(f"{option} {str(out)!r} cannot be written: {err.strerror}") from None
+    _CLAIMED[out.absolute()] = created
     with os.fdopen(fd, "w") as handle:
         handle.write(
             f"claimed by process {os.getpid()}: while this file is here the outputs in this "
@@ -181,6 +203,7 @@ def refuse_link_or_enclosed(out: Path, option: str = "--out") -> None:
 
 def release_folder(out: Path) -> None:
     """Mark ``out``'s outputs complete (remove the claim :func:`claim_folder` made)."""
+    _CLAIMED.pop(Path(out).absolute(), None)
     with contextlib.suppress(FileNotFoundError):
         (Path(out) / CLAIM_FILE).unlink()
 

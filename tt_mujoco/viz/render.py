@@ -14,7 +14,10 @@ re-renders a finished run.
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import math
+import os
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -455,6 +458,22 @@ class RunRenderer:
         return cam
 
 
+@contextlib.contextmanager
+def _encoder_failure_is_oserror(out: Path):
+    """The encoder that cannot finish the file (a full disk, a quota: mediapy raises
+    ffmpeg's words as a RuntimeError when the writer closes) as the OSError it is, naming
+    ``out``: what the file system refused is said as such, not taken for a bug."""
+    try:
+        yield
+    except RuntimeError as err:
+        text = str(err)
+        if not text.startswith("Error writing"):
+            raise
+        known = {"No space left": errno.ENOSPC, "quota": errno.EDQUOT, "Read-only": errno.EROFS}
+        code = next((c for words, c in known.items() if words in text), errno.EIO)
+        raise OSError(code, os.strerror(code), str(out)) from err
+
+
 def render_video(
     ts: Mapping,
     scene: RunScene,
@@ -516,14 +535,17 @@ def render_video(
         RunRenderer(ts, scene, video) as renderer,
         temporary_beside(out, suffix=".tmp.mp4") as tmp,
     ):
-        with mediapy.VideoWriter(
-            tmp,
-            shape=(video.height, video.width),
-            fps=video.fps,
-            codec="h264",
-            qp=H264_QP,
-            ffmpeg_args=["-preset", H264_PRESET],
-        ) as writer:
+        with (
+            _encoder_failure_is_oserror(out),
+            mediapy.VideoWriter(
+                tmp,
+                shape=(video.height, video.width),
+                fps=video.fps,
+                codec="h264",
+                qp=H264_QP,
+                ffmpeg_args=["-preset", H264_PRESET],
+            ) as writer,
+        ):
             bar = progress_bar(renderer.n_frames, f"video {out.name}", "frame", progress)
             with bar:
                 for k in range(renderer.n_frames):
