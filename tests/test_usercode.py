@@ -401,3 +401,68 @@ def test_the_check_before_the_run_leaves_a_stateful_disturbance_as_it_was(tmp_pa
     options = {"disturbance_model": spec, "plant": "reduced", "traj": "circle", "duration": 1.0}
     api = simulate(Scenario(**options)).timeseries
     assert np.array_equal(cli_series["dist_T_r"], api["dist_T_r"])
+
+
+VANDAL = """
+import dataclasses
+
+import numpy as np
+
+from tt_mujoco.controllers import Controller
+
+
+def _vandalise(obj, seen):
+    # every field a controller can reach from its setup, frozen ones included, written over
+    if id(obj) in seen or obj is None:
+        return
+    seen.add(id(obj))
+    if isinstance(obj, np.ndarray):
+        if obj.flags.writeable and obj.dtype.kind == "f":
+            obj[...] = 0.0
+        return
+    names = [f.name for f in dataclasses.fields(obj)] if dataclasses.is_dataclass(obj) else []
+    names += list(getattr(obj, "__dict__", {}))
+    for name in names:
+        value = getattr(obj, name, None)
+        if isinstance(value, bool):
+            continue
+        if isinstance(value, int | float):
+            try:
+                object.__setattr__(obj, name, type(value)(123))
+            except (AttributeError, TypeError):
+                pass
+        else:
+            _vandalise(value, seen)
+
+
+class C(Controller):
+    VANDAL = False
+
+    def compute(self, t, m, r):
+        if self.VANDAL:
+            _vandalise(self.setup, set())
+        return 0.3 * (r.v_d - m.v) + 0.2, 0.3 * (r.v_d - m.v) + 0.25
+
+
+class Vandal(C):
+    VANDAL = True
+"""
+
+
+@pytest.mark.parametrize("traj", ["circle", "s_curve"])
+def test_a_controller_that_writes_over_everything_it_was_given_changes_nothing_of_the_run(
+    tmp_path, capsys, traj
+):
+    """Its setup (the nominal parameters, frozen or not, and the path with its arrays) is its
+    own copy: the run's checks, its plant and its metrics read their own."""
+    (tmp_path / "vandal.py").write_text(VANDAL)
+    docs = []
+    for name in ("C", "Vandal"):
+        out = tmp_path / name
+        argv = ["--controller", f"{tmp_path / 'vandal.py'}:{name}", "--plant", "reduced"]
+        argv += ["--traj", traj, "--duration", "2", "--no-video", "--no-plots", "--quiet"]
+        run.main([*argv, "--out", str(out)])
+        doc = json.loads((out / "metrics.json").read_text())
+        docs.append({k: v for k, v in doc.items() if k not in ("wall_time_s", "config")})
+    capsys.readouterr()
+    assert docs[1]["status"] == docs[0]["status"] and docs[1] == docs[0]

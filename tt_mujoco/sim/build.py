@@ -44,6 +44,7 @@ from tt_mujoco.sim.parts.relief import relief_of
 from tt_mujoco.sim.parts.schedule import EtaScheduler, PathEtaScheduler
 from tt_mujoco.sim.parts.terrain import parse_terrain
 from tt_mujoco.sim.scenario import Scenario
+from tt_mujoco.sim.usercode import users_setup
 from tt_mujoco.vehicle.params import Params, jackknife_phi_deg
 from tt_mujoco.vehicle.path_schedule import PathSchedule, axle_chain, path_schedule
 from tt_mujoco.world.builtin import parse_world
@@ -239,7 +240,7 @@ class Build:
         if not is_hook(self.scenario.controller):
             return make(self.controller_setup, self.scenario.gains)
         who = f"controller {self.scenario.controller!r}"
-        return call_hook(who, make, self.controller_setup, self.scenario.gains)
+        return call_hook(who, make, users_setup(self.controller_setup), self.scenario.gains)
 
 
 def drawn_polyline(path, duration: float) -> np.ndarray:

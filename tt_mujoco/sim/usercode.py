@@ -12,6 +12,8 @@ failure is bad input (exit code 2).
 from __future__ import annotations
 
 import copy
+import dataclasses
+import math
 import traceback
 
 from tt_mujoco.guard import users_failure
@@ -26,6 +28,7 @@ __all__ = [
     "checked_torques",
     "failure",
     "users_copy",
+    "users_setup",
 ]
 
 
@@ -39,6 +42,23 @@ def users_copy(obj):
         if not users_failure(err):
             raise
         return obj
+
+
+def users_setup(setup):
+    """A user's controller's :class:`~tt_mujoco.controllers.ControllerSetup`: its own copies of
+    the nominal parameters (and the model made from them) and of the path, so that a
+    controller that writes into them (``object.__setattr__`` on frozen parameters included)
+    changes nothing the run checks or steps with."""
+    from tt_mujoco.controllers import reduced_model
+
+    params = users_copy(setup.params)
+    slew = getattr(setup.model, "axle_slew_rate", math.inf)
+    return dataclasses.replace(
+        setup,
+        params=params,
+        model=reduced_model(params, slew) if params is not setup.params else setup.model,
+        path=users_copy(setup.path),
+    )
 
 
 def failure(who: str, t: float, err: BaseException) -> StopRun:
