@@ -450,3 +450,13 @@ def test_a_file_read_back_is_a_regular_file_or_refused_before_it_is_opened(tmp_p
         read_journal(path)
     with pytest.raises(FileNotFoundError):
         outputs.read_regular(tmp_path / "missing", "missing")
+
+
+def test_a_text_file_saved_with_a_byte_order_mark_reads_as_without(tmp_path):
+    """Windows editors start UTF-8 files with U+FEFF: every text reader (TOML, strict JSON;
+    the CSV readers already did) drops it."""
+    toml, doc = tmp_path / "a.toml", tmp_path / "a.json"
+    toml.write_bytes(b"\xef\xbb\xbfduration = 1.0\n")
+    doc.write_bytes(b'\xef\xbb\xbf{"status": "ok"}\n')
+    assert outputs.read_toml(toml, "a file") == {"duration": 1.0}
+    assert outputs.read_strict_json(doc) == {"status": "ok"}

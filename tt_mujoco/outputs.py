@@ -553,13 +553,14 @@ def read_regular(path, shown: str) -> bytes:
 def read_utf8(path, shown: str) -> str:
     """The text of file ``path``; a ValueError naming it as ``shown`` when it cannot be read
     (:func:`read_regular`) or is not UTF-8 (with the first bad byte): the one way a text file
-    read back is opened."""
+    read back is opened. A leading byte-order mark (what Windows editors write) is dropped, as
+    the CSV readers drop it."""
     try:
         data = read_regular(path, shown)
     except FileNotFoundError as err:
         raise ValueError(f"{shown} cannot be read: {err.strerror}") from None
     try:
-        return data.decode("utf-8")
+        return data.decode("utf-8-sig")
     except UnicodeDecodeError as err:
         raise ValueError(
             f"{shown} cannot be read: it is not UTF-8 text (byte {err.start})"
