@@ -259,11 +259,11 @@ class _ReaderMayGo:
 
 def _abandon_outputs() -> list:
     """The failed command's claimed folders that hold nothing yet, removed
-    (:func:`tt_mujoco.outputs.abandon_claims`); the folders it had claimed."""
-    from tt_mujoco import outputs  # it imports this module
+    (:func:`tt_mujoco.folders.abandon_claims`); the folders it had claimed."""
+    from tt_mujoco import folders  # it imports this module
 
     try:
-        return outputs.abandon_claims()
+        return folders.abandon_claims()
     except Exception:
         return []
 

@@ -256,17 +256,12 @@ def reset_phi0_deg(scenario: sim.Scenario, options: dict | None) -> float | None
     ValueError
         An option ``reset`` does not take, or a ``phi0_deg`` the scenario refuses, named.
     """
+    refused, allowed = f"options={shown(options)} is not allowed", ", ".join(RESET_OPTIONS)
     if options is not None and not isinstance(options, Mapping):
-        raise ValueError(
-            f"options={shown(options)} is not allowed: give a dict of reset options "
-            f"(allowed keys: {', '.join(RESET_OPTIONS)}) or None"
-        )
+        raise ValueError(f"{refused}: give a dict of reset options ({allowed}) or None")
     unknown = sorted(set(options or {}) - set(RESET_OPTIONS), key=str)
     if unknown:
-        raise ValueError(
-            f"options={shown(options)} is not allowed: {unknown[0]!r} is not a reset "
-            f"option (allowed: {', '.join(RESET_OPTIONS)})"
-        )
+        raise ValueError(f"{refused}: {unknown[0]!r} is not a reset option (allowed: {allowed})")
     phi0_deg = (options or {}).get("phi0_deg", scenario.phi0_deg)
     if phi0_deg == scenario.phi0_deg:
         return None

@@ -33,6 +33,7 @@ from tt_mujoco.sim.parts.terrain import parse_terrain
 from tt_mujoco.sim.probe import check_user_code
 from tt_mujoco.sim.scenario import Scenario
 from tt_mujoco.sim.usercode import CheckedProgress, users_copy
+from tt_mujoco.watchdog import grace_for
 from tt_mujoco.world.part import world_report
 
 __all__ = ["Result", "checked_build", "simulate"]
@@ -92,7 +93,8 @@ def wall_time_limit(seconds: float, told: float | None = None):
 def checked_build(scenario: Scenario) -> Build:
     """What every route does before a run: :func:`~tt_mujoco.sim.build.build` ``scenario``
     and try its user code once (:func:`~tt_mujoco.sim.probe.check_user_code`), within the
-    scenario's time limit (``time_limit_s``).
+    scenario's time limit (``time_limit_s``, and the grace
+    :func:`tt_mujoco.watchdog.grace_for` adds to it).
 
     Raises
     ------
@@ -105,8 +107,11 @@ def checked_build(scenario: Scenario) -> Build:
     limit = scenario.time_limit_s if isinstance(scenario, Scenario) else None
     if not isinstance(limit, int | float) or isinstance(limit, bool) or not limit > 0:
         limit = None  # no limit to keep, or a bad one: build names it
+    # after a grace (the watchdog's): a budget of the set-up's own that keeps the limit (the
+    # planner's) ends first and says so itself; this catches only what does not return
+    grace = None if limit is None else grace_for(limit)
     try:
-        with wall_time_limit(limit) if limit is not None else contextlib.nullcontext():
+        with wall_time_limit(grace, limit) if grace is not None else contextlib.nullcontext():
             built = build(scenario)
             check_user_code(built)
     except TimeLimitExceeded as err:

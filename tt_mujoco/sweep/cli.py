@@ -131,6 +131,19 @@ def _checked_workers(args) -> int:
     return workers
 
 
+def _unwritable(err: OSError, out: Path | None) -> str:
+    """What a sweep whose files cannot be written says: the file, why, and how to go on."""
+    named = err.filename2 or err.filename  # a replace's target, not its temporary file
+    where = f"{named}: " if named else ""
+    kept = (
+        f"; its finished runs are kept in {out / JOURNAL}: make room and continue with "
+        f"python -m tt_mujoco.sweep --resume --out {out}"
+        if out is not None
+        else ""
+    )
+    return f"the sweep's files cannot be written ({where}{err.strerror or err}){kept}"
+
+
 @guard.command
 def main(argv: list[str] | None = None) -> int:
     out = None
@@ -179,18 +192,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except OSError as err:  # a full disk, a quota, a folder where a table goes
-        named = err.filename2 or err.filename  # a replace's target, not its temporary file
-        where = f"{named}: " if named else ""
-        kept = (
-            f"; its finished runs are kept in {out / JOURNAL}: make room and continue with "
-            f"python -m tt_mujoco.sweep --resume --out {out}"
-            if out is not None
-            else ""
-        )
-        print(
-            f"error: the sweep's files cannot be written ({where}{err.strerror or err}){kept}",
-            file=sys.stderr,
-        )
+        print(f"error: {_unwritable(err, out)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         if out is not None:
