@@ -97,3 +97,46 @@ def test_a_reader_that_goes_away_is_no_bug(name, tmp_path):
     proc.stderr.close()
     assert proc.wait(timeout=120) == 0, err
     assert "bug" not in err and "Traceback" not in err, err
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_an_interrupt_no_command_ended_on_itself_is_one_line_and_exit_130(
+    name, monkeypatch, tmp_path, capsys
+):
+    """Ctrl-C (or the SIGTERM the guard turns into one) wherever a command did not catch it:
+    one line, exit code 130, no traceback, nothing left."""
+    module = importlib.import_module(name)
+
+    def stopped(self, *args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(argparse.ArgumentParser, "parse_known_args", stopped)
+    monkeypatch.chdir(tmp_path)
+    code = module.main(["--help"])
+    err = capsys.readouterr().err
+    assert code == 130, err
+    assert len(err.strip().splitlines()) == 1 and "interrupted" in err, err
+    assert not any(tmp_path.iterdir())
+
+
+def test_every_command_takes_sigterm_as_a_stop_and_removes_what_it_claimed(tmp_path, capsys):
+    """A batch system's SIGTERM reaches a command as Ctrl-C does (its default action would end
+    the process with its files half written): the folder it claimed and left empty goes."""
+    import os
+    import signal
+    import time
+
+    from tt_mujoco import guard, outputs
+
+    out = tmp_path / "out"
+
+    @guard.command
+    def main(argv):
+        outputs.claim_folder(out, out)
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5.0)  # the handler raises here
+        return 0
+
+    assert main([]) == 130
+    assert "interrupted: nothing was written" in capsys.readouterr().err
+    assert not out.exists()

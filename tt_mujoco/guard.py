@@ -30,7 +30,7 @@ import sys
 import threading
 from pathlib import Path
 
-from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_BUG
+from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_BUG, EXIT_INTERRUPTED
 
 __all__ = [
     "REFUSALS",
@@ -298,12 +298,20 @@ def command(main):
         if outermost:
             with contextlib.suppress(OSError):  # a working folder removed under the shell
                 _START_DIR = os.getcwd()
+            # Ctrl-C, a batch system's SIGTERM, a hangup: a KeyboardInterrupt every command
+            # ends cleanly on (SIGTERM's default would end it with its files half written)
+            interrupts_from_signals()
         streams = sys.stdout, sys.stderr
         sys.stdout, sys.stderr = (_ReaderMayGo(s) for s in streams)  # `| head` is no bug
         try:
             return main(argv)
-        except (SystemExit, KeyboardInterrupt):
+        except SystemExit:
             raise
+        except KeyboardInterrupt:  # one the command did not end on itself
+            left = [str(p) for p in _abandon_outputs() if p.exists()]
+            kept = f": the outputs in {', '.join(left)} are incomplete" if left else ""
+            print(f"\ninterrupted{kept or ': nothing was written'}", file=sys.stderr)
+            return EXIT_INTERRUPTED
         except BadInputError as err:  # what a command leaves to be said: one line, exit 2
             _abandon_outputs()
             print(f"error: {' '.join(str(err).split())}", file=sys.stderr)
@@ -328,8 +336,10 @@ def command(main):
             with contextlib.suppress(OSError, ValueError):
                 sys.stdout.flush()
             sys.stdout, sys.stderr = streams
-            if outermost and _START_DIR is not None:  # the process left where it started
-                with contextlib.suppress(OSError):
+            # the process left in the folder it started in; the stop handlers stay: a stop
+            # that comes while the process ends is still the clean one, not SIGTERM's kill
+            if outermost:
+                with contextlib.suppress(OSError, TypeError):
                     os.chdir(_START_DIR)
                 _START_DIR = None
 

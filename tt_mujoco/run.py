@@ -211,9 +211,8 @@ def _progress_bar(total_label: str, quiet: bool):
 
 @guard.command
 def main(argv: list[str] | None = None) -> int:
-    # Ctrl-C and a batch system's SIGTERM: the same clean exit, told from a KeyboardInterrupt
-    # a user's code raises itself (tt_mujoco.guard)
-    guard.interrupts_from_signals()
+    # Ctrl-C and a batch system's SIGTERM reach it as the same clean exit, told from a
+    # KeyboardInterrupt a user's code raises itself (tt_mujoco.guard.command installs them)
     try:
         return _main(argv)
     except KeyboardInterrupt:  # before a folder exists (start-up); later ones are handled inside

@@ -177,7 +177,6 @@ def main(argv: list[str] | None = None) -> int:
         out = args.out
         if out is None:
             out = free_name(RENDERS / f"sweep-{time.strftime('%Y%m%d-%H%M%S')}")
-        guard.interrupts_from_signals()  # Ctrl-C, SIGTERM: the same clean, resumable exit
         result = run_sweep(
             spec,
             out,
@@ -195,12 +194,13 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {_unwritable(err, out)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
-        if out is not None:
-            print(
-                f"\ninterrupted: finished runs are in {out / JOURNAL}; continue with "
-                f"python -m tt_mujoco.sweep --resume --out {out}",
-                file=sys.stderr,
-            )
+        said = (
+            f"finished runs are in {out / JOURNAL}; continue with python -m tt_mujoco.sweep "
+            f"--resume --out {out}"
+            if out is not None
+            else "nothing was written"
+        )
+        print(f"\ninterrupted: {said}", file=sys.stderr)
         return EXIT_INTERRUPTED
     metric_names = [m for m in dict.fromkeys([*KEY_METRICS, args.metric])]
     print(summary_text(result.summary, metric_names))
