@@ -6,8 +6,11 @@ import tomllib
 from types import SimpleNamespace
 
 import pytest
+import tomli_w
 
 from tt_mujoco import config, run
+from tt_mujoco.cliargs import BadInputError
+from tt_mujoco.sim import SCHEMA
 
 SCENARIO_TOML = """
 traj = "circle"
@@ -188,3 +191,46 @@ def test_a_flags_negative_key_means_what_it_says(tmp_path, flag, value):
 def _on(values, flag: str) -> bool:
     value = getattr(values, flag)
     return value if isinstance(value, bool) else value is not None  # a table on, or None off
+
+
+#: A value given on the command line for each option that declares what it needs (a new
+#: declaration fails the test below until it has one here).
+NEEDING = {
+    "disturbance_model": ["--disturbance-model", "rolling"],
+    "disturbance_limit": ["--disturbance-limit", "5"],
+    "hitch_feedback": ["--no-hitch-feedback"],
+}
+#: Command-line spellings of a value of each option another one needs.
+NEEDED = {
+    "disturbance": {"none": ["--no-disturbance"], "wrench": ["--disturbance-mode", "wrench"]},
+    "reverse": {False: ["--no-reverse"]},
+}
+
+
+def _needing_cases():
+    for opt in SCHEMA.options:
+        if opt.needs is None:
+            continue
+        other, acts = opt.needs
+        for value, spelt in NEEDED[other].items():
+            if not acts(value):
+                yield pytest.param(opt.name, spelt, id=f"{opt.name}-{other}={value}")
+
+
+@pytest.mark.parametrize(("name", "spelt"), list(_needing_cases()))
+def test_a_command_line_giving_an_option_that_does_nothing_with_another_is_refused(
+    tmp_path, capsys, name, spelt
+):
+    """``--no-disturbance --disturbance-model x`` ran no disturbance and dropped the model in
+    silence: one command line that gives both is refused naming both; a command line that
+    changes a file's option is an override, and runs."""
+    argv = [*NEEDING[name], *spelt]
+    with pytest.raises(BadInputError, match="under which it does nothing") as caught:
+        run._parse(argv)
+    other = SCHEMA[name].needs[0]
+    assert NEEDING[name][0].replace("--no-", "--") in str(caught.value).replace("--no-", "--")
+    assert SCHEMA[other].cli_flags[0] in str(caught.value).replace("--no-", "--")
+    # the option in a file, the other on the command line: an override, taken
+    file_form = run._parse(NEEDING[name]).file_form()
+    (tmp_path / "f.toml").write_text(tomli_w.dumps({name: file_form[name]}))
+    run._parse(["--config", str(tmp_path / "f.toml"), *spelt])

@@ -34,6 +34,7 @@ from pathlib import Path
 
 import tomli_w
 
+from tt_mujoco.cliargs import BadInputError
 from tt_mujoco.outputs import read_toml
 from tt_mujoco.registry import existing_file
 from tt_mujoco.schema import Schema
@@ -94,3 +95,30 @@ def dump_config(options: dict) -> str:
     plain = {k: v for k, v in options.items() if not isinstance(v, dict | list)}
     tables = {k: v for k, v in options.items() if isinstance(v, dict | list)}
     return header + tomli_w.dumps(plain) + ("\n" + tomli_w.dumps(tables) if tables else "")
+
+
+def check_needs(schema: Schema, given: dict, values: dict, where: str) -> None:
+    """Refuse a command line (``where``) that gives an option and, with it, another option's
+    value under which the first does nothing (:attr:`~tt_mujoco.schema.Option.needs`:
+    ``--no-disturbance --disturbance-model x`` would run no disturbance, the model unused);
+    ``values`` are the resolved options. A command line that changes a file's option is an
+    override, not a conflict; and a file may hold an option that does nothing (the
+    ``config.toml`` a run writes holds every option), so files are not checked."""
+    for opt in schema.options:
+        if opt.needs is None or opt.name not in given:
+            continue
+        other, acts = opt.needs
+        if other in given and not acts(values[other]):
+            raise BadInputError(
+                f"{where} gives {_as_given(opt, given[opt.name])} and "
+                f"{_as_given(schema[other], values[other])}, under which it does nothing: "
+                "drop one of them"
+            )
+
+
+def _as_given(opt, value) -> str:
+    """``value`` of ``opt`` as a command line spells it (a switch by its flag)."""
+    flag = opt.cli_flags[0]
+    if opt.form == "switch":
+        return flag if value not in (None, False) else "--no-" + flag.removeprefix("--")
+    return f"{flag} {value!r}"

@@ -154,7 +154,9 @@ def options_from_argv(argv, schema: Schema | None = None) -> dict:
         if "gains" in from_file and "gains" not in given:
             controller = given.get("controller", from_file.get("controller", CONTROLLER))
             _check_gains(controller, from_file["gains"], f"config file {str(args.config)!r}")
-    return {**schema.merged(from_file, given), "config": args.config, "out": args.out}
+    merged = schema.merged(from_file, given)
+    config_mod.check_needs(schema, given, merged, "the command line")
+    return {**merged, "config": args.config, "out": args.out}
 
 
 def _parse(argv) -> Invocation:

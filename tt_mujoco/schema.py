@@ -123,6 +123,10 @@ class Option:
     axis : bool
         Whether a sweep varies the whole option as one axis; a table of named entries (the
         vehicle's parameters) is swept entry by entry instead, as ``ENTRY.NAME``.
+    needs : (str, callable) or None
+        ``(other, acts)``: the option does something only where ``acts(value of other)``;
+        one source (a command line, a file) that gives both otherwise is refused
+        (:func:`tt_mujoco.config.check_needs`).
     """
 
     name: str
@@ -140,6 +144,7 @@ class Option:
     metavar: str | Callable[[], str] | None = None
     choices: tuple = ()
     axis: bool = True
+    needs: tuple[str, Callable[[Any], bool]] | None = None
 
     def __post_init__(self):
         if self.form not in FORMS:

@@ -166,6 +166,7 @@ class Scenario:
         "the disturbance Delta(t): paper, rolling (the wheels' rolling resistance, c_rr = "
         "0.015), another registered one, or a hook package.module:Name / file.py:Name",
         file=True,
+        needs=("disturbance", lambda mode: mode != "none"),
     )
     #: Bound on each wheel's matched disturbance torque (N m): "actuator" (the nominal torque
     #: limit, what a motor-sized disturbance can apply), "none" (the paper's unbounded
@@ -176,6 +177,7 @@ class Scenario:
         "bound on each wheel's matched disturbance torque: actuator (the torque limit), none "
         "(the paper's unbounded g^-1 Delta) or a number",
         unit="N m",
+        needs=("disturbance", lambda mode: mode == "matched"),
     )
     noise_snr_db: float | None = option(
         None,
@@ -285,6 +287,7 @@ class Scenario:
         default_factory=dict,
         form="switch",
         entry="hitch_feedback",
+        needs=("reverse", bool),
     )
     #: Scheduled passive steering (:mod:`tt_mujoco.sim.parts.schedule`): False (the constant
     #: ``eta``),
