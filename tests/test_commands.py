@@ -23,7 +23,7 @@ def _commands() -> list[str]:
             continue  # importing it runs the command; its package stands for it
         path = root.joinpath(*info.name.split(".")[1:])
         source = path / "__main__.py" if info.ispkg else path.with_suffix(".py")
-        if source.exists() and re.search(r"sys\.exit\(main\(\)\)", source.read_text()):
+        if source.exists() and re.search(r"^\s*guard\.end\(main\(\)\)$", source.read_text(), re.M):
             found.append(info.name + (".cli" if info.ispkg else ""))
     return sorted(found)
 

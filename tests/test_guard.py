@@ -308,3 +308,75 @@ def test_every_hook_that_does_not_return_before_the_run_is_stopped_by_its_time_l
     assert exit_code == 2, err
     assert "passed its time limit of 0.5 s" in err and f"{file}, line " in err, err
     assert not out.exists() or not any(out.iterdir())
+
+
+THREAD_LEFT = """
+import threading
+import time
+
+from tt_mujoco.controllers import Controller
+
+threading.Thread(target=time.sleep, args=(600,), name="left-running").start()
+
+
+class C(Controller):
+    def compute(self, t, m, r):
+        return 0.2, 0.2
+"""
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["tt_mujoco.run", "--no-video", "--no-plots", "--plant", "reduced", "--duration", "0.3"],
+        ["tt_mujoco.sweep", "--workers", "1", "--no-figures", "plant=reduced", "duration=0.3"],
+    ],
+    ids=["run", "sweep"],
+)
+def test_a_thread_a_users_code_leaves_running_does_not_keep_the_command_alive(tmp_path, command):
+    import subprocess
+    import sys
+
+    (tmp_path / "left.py").write_text(THREAD_LEFT)
+    hook = "--controller=left.py:C" if command[0] == "tt_mujoco.run" else "controller=left.py:C"
+    proc = subprocess.run(
+        [sys.executable, "-m", *command, hook, "--quiet", "--out", "out"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**__import__("os").environ, "TT_MUJOCO_COMPILED": "0"},
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "out").is_dir()
+    # the run's own process forked its watched run after the import: the thread stayed in
+    # the parent, which leaves by os._exit; the sweep ends the thread's holders and says so
+    assert command[0] == "tt_mujoco.run" or "'left-running'" in proc.stderr, proc.stderr
+
+
+def test_a_stop_sent_again_after_a_while_ends_a_clean_up_that_hangs(tmp_path):
+    """The first SIGTERM is the clean stop; one sent again after guard.AGAIN_S is the
+    signal's own action, so a clean-up that hangs needs no SIGKILL."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    script = (
+        "import time\nfrom tt_mujoco import guard\n\n@guard.command\ndef main(argv):\n"
+        "    try:\n        time.sleep(60)\n    except KeyboardInterrupt:\n"
+        "        print('cleaning', flush=True)\n        time.sleep(60)\n    return 0\n\n"
+        "guard.end(main())\n"
+    )
+    proc = subprocess.Popen(
+        [sys.executable, "-c", script], stdout=subprocess.PIPE, text=True, cwd=tmp_path
+    )
+    time.sleep(3.0)  # imported and asleep
+    proc.send_signal(signal.SIGTERM)
+    assert proc.stdout.readline().strip() == "cleaning"
+    proc.send_signal(signal.SIGTERM)  # the same stop again at once: still the clean-up
+    time.sleep(0.5)
+    assert proc.poll() is None
+    time.sleep(guard.AGAIN_S)
+    proc.send_signal(signal.SIGTERM)
+    assert proc.wait(timeout=10) == -signal.SIGTERM

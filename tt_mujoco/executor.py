@@ -6,6 +6,7 @@ import concurrent.futures as cf
 import contextlib
 import multiprocessing
 import os
+import sys
 import threading
 import time
 
@@ -52,6 +53,32 @@ def _worker_start(parent_pid: int, initializer) -> None:
     _watch_parent(parent_pid)
     if initializer is not None:
         initializer()
+
+
+#: How long a pool's worker may take to end once its work is done (s): one that a thread a
+#: user's code left running holds at its exit (Python joins such threads) is ended then.
+WORKER_EXIT_S = 5.0
+
+
+def _shut_down(pool: cf.ProcessPoolExecutor, cancel: bool) -> None:
+    """Shut ``pool`` down (its pending work cancelled): wait for its workers to end, except
+    one a user's thread holds (:data:`WORKER_EXIT_S`), which is ended, said in a note."""
+    processes = list(getattr(pool, "_processes", {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    held = 0
+    for proc in processes:
+        with contextlib.suppress(Exception):
+            proc.join(timeout=0.0 if cancel else WORKER_EXIT_S)
+            if proc.is_alive():
+                held += not cancel
+                proc.terminate()
+                proc.join(timeout=WORKER_EXIT_S)
+    if held:
+        print(
+            f"note: {held} worker(s) held at their end by a thread a user's code left running "
+            "were ended",
+            file=sys.stderr,
+        )
 
 
 #: How long a connection to a Dask scheduler may take, handshake included (s).
@@ -156,7 +183,7 @@ class Executors:
                     with contextlib.suppress(Exception):
                         proc.terminate()
             if isinstance(self.pool, cf.ProcessPoolExecutor):
-                self.pool.shutdown(wait=not cancel, cancel_futures=True)
+                _shut_down(self.pool, cancel)
             else:  # Dask's executor cancels what is pending on shutdown(wait=False)
                 self.pool.shutdown(wait=not cancel)
             self.pool = None

@@ -28,7 +28,9 @@ import os
 import signal
 import sys
 import threading
+import time
 from pathlib import Path
+from typing import NoReturn
 
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_BUG, EXIT_INTERRUPTED
 
@@ -38,6 +40,7 @@ __all__ = [
     "absolute",
     "command",
     "control_signal",
+    "end",
     "ignore_stop_signals",
     "interrupts_from_signals",
     "noting_interrupts",
@@ -52,6 +55,11 @@ __all__ = [
 STOP_SIGNALS = tuple(
     getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)
 )
+
+
+#: A stop sent again this long (s) after the first ends the process by the signal's own
+#: action: a clean-up that hangs can still be stopped without SIGKILL.
+AGAIN_S = 3.0
 
 
 def stop_signals() -> tuple:
@@ -92,10 +100,18 @@ def interrupts_from_signals() -> None:
         return
     _INTERRUPTED = threading.Event()
 
+    first: list[float] = []
+
     def interrupted(signum, frame):
-        if _INTERRUPTED.is_set():  # one stop is enough: the same signal sent twice (to the
-            return  # process and to its group) must not break the clean-up of the first
+        if first:  # one stop is enough: the same signal sent twice (to the process and to
+            # its group) must not break the clean-up of the first; one sent again later is a
+            # user who waited long enough: the signal's own action
+            if time.monotonic() - first[0] > AGAIN_S:
+                signal.signal(signum, signal.SIG_DFL)
+                os.kill(os.getpid(), signum)
+            return
         _INTERRUPTED.set()
+        first.append(time.monotonic())
         raise KeyboardInterrupt
 
     for sig in stop_signals():
@@ -280,6 +296,28 @@ def _bug(err: BaseException) -> int:
         file=sys.stderr,
     )
     return EXIT_BUG
+
+
+def end(code: int) -> NoReturn:
+    """End a command's process with ``code``: ``guard.end(main())`` in its ``__main__``. A
+    thread a user's code started and left running (not a daemon) would hold the interpreter
+    at its exit for ever: the process then ends at once, said in a note."""
+    held = [
+        t
+        for t in threading.enumerate()
+        if t is not threading.main_thread() and t.is_alive() and not t.daemon
+    ]
+    if held:
+        names = ", ".join(repr(t.name) for t in held)
+        with contextlib.suppress(OSError, ValueError):
+            print(
+                f"note: ended with {len(held)} thread(s) a user's code left running ({names})",
+                file=sys.stderr,
+            )
+            sys.stdout.flush()
+            sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)
 
 
 def command(main):

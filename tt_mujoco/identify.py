@@ -550,4 +550,4 @@ def _fits(args, mapping: dict, topics: dict, wheel):
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    guard.end(main())

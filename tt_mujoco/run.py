@@ -467,4 +467,4 @@ def _print_summary(result, out: Path, written, notes) -> None:
 
 if __name__ == "__main__":
     WATCHED = watchdog.available()  # the command itself: its run goes on in a watched child
-    sys.exit(main())
+    guard.end(main())

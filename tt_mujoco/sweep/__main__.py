@@ -1,7 +1,6 @@
 """``python -m tt_mujoco.sweep``."""
 
-import sys
-
+from tt_mujoco import guard
 from tt_mujoco.sweep import main
 
-sys.exit(main())
+guard.end(main())
