@@ -255,6 +255,7 @@ def test_every_command_refuses_a_damaged_run_in_one_line(finished, tmp_path, cap
     err = capsys.readouterr().err
     assert code == 2, err
     assert len(err.strip().splitlines()) == 1 and says in err, err
+    assert "np." not in err, err  # a value as the user reads it, not NumPy's repr
     assert not list(out.iterdir())
     assert {p: p.read_bytes() for p in folder.iterdir()} == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "run"]

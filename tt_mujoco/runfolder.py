@@ -226,8 +226,8 @@ def _read_series(path: Path, params: Params, steps) -> dict[str, np.ndarray]:
     if backwards.size:
         row = int(backwards[0]) + 1
         raise RunFolderError(
-            f"{path}: row {row + 2} has t = {ts['t'][row]!r}, not after the row before's "
-            f"{ts['t'][row - 1]!r}: time must increase"
+            f"{path}: row {row + 2} has t = {float(ts['t'][row])!r}, not after the row "
+            f"before's {float(ts['t'][row - 1])!r}: time must increase"
         )
     return ts
 
