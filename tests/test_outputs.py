@@ -460,3 +460,13 @@ def test_a_text_file_saved_with_a_byte_order_mark_reads_as_without(tmp_path):
     doc.write_bytes(b'\xef\xbb\xbf{"status": "ok"}\n')
     assert outputs.read_toml(toml, "a file") == {"duration": 1.0}
     assert outputs.read_strict_json(doc) == {"status": "ok"}
+
+
+def test_a_csv_row_with_fewer_values_is_named_by_its_line(tmp_path):
+    """NumPy's own message advised its ``usecols``, which no command has."""
+    path = tmp_path / "log.csv"
+    path.write_text("t,v,omega\n0,1,0\n0.1,1,0\n0.2,1\n0.3,1,0\n")
+    with pytest.raises(
+        ValueError, match=r"log.csv: row 4 has 2 values where the rows before have 3$"
+    ):
+        outputs.read_timeseries(path)

@@ -239,6 +239,12 @@ def read_timeseries(path) -> dict[str, np.ndarray]:
             data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
         except ValueError as err:  # NumPy counts data rows from 0: said as the file's lines
             found = re.search(r"string (.*) to float64 at row (\d+), column (\d+)", str(err))
+            ragged = re.search(r"columns changed from (\d+) to (\d+) at row (\d+)", str(err))
+            if ragged is not None:  # NumPy's advice (its own `usecols`) is no option here
+                was, now, row = (int(g) for g in ragged.groups())
+                raise ValueError(
+                    f"{path}: row {row + 1} has {now} values where the rows before have {was}"
+                ) from None
             if found is None:
                 raise
             row, col = int(found.group(2)), int(found.group(3))
