@@ -6,6 +6,8 @@ import os
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from tt_mujoco import outputs, validate
 from tt_mujoco.sim.loop.checkpoint import read_checkpoint
@@ -470,3 +472,39 @@ def test_a_csv_row_with_fewer_values_is_named_by_its_line(tmp_path):
         ValueError, match=r"log.csv: row 4 has 2 values where the rows before have 3$"
     ):
         outputs.read_timeseries(path)
+
+
+_JSON_ISH = st.one_of(
+    st.text(max_size=60),
+    st.recursive(
+        st.one_of(st.none(), st.booleans(), st.integers(), st.floats(), st.text(max_size=5)),
+        lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=3), inner),
+        max_leaves=8,
+    ).map(lambda doc: json.dumps(doc, allow_nan=True)),
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(text=_JSON_ISH)
+def test_the_strict_json_reader_takes_strict_json_or_refuses_it_in_words(text):
+    """Every text: a document whose numbers are all finite, or a ValueError (never another
+    exception, never NaN or an infinity taken)."""
+    from tt_mujoco.outputs import parse_strict_json
+
+    try:
+        doc = parse_strict_json(text)
+    except ValueError as err:
+        assert str(err)
+        return
+    assert json.loads(json.dumps(doc, allow_nan=False)) == doc
+
+
+@settings(max_examples=200, deadline=None)
+@given(content=st.binary(max_size=200))
+def test_the_toml_reader_takes_toml_or_refuses_it_naming_the_file(tmp_path_factory, content):
+    path = tmp_path_factory.mktemp("toml") / "f.toml"
+    path.write_bytes(content)
+    try:
+        outputs.read_toml(path, "a file")
+    except ValueError as err:
+        assert str(path) in str(err), err

@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from tt_mujoco import config, gym_env, run, schema
 from tt_mujoco.cliargs import BadInputError
@@ -369,3 +371,32 @@ def test_every_number_or_truth_option_takes_a_numpy_scalar_as_its_value(opt, num
     scenario = Scenario(**{opt.name: numpy_value})
     scenario.validate()
     assert type(getattr(scenario, opt.name)) is type(parsed)
+
+
+#: Anything a command line, a file, the API or a sweep might hand an option's parser.
+_ANY_VALUE = st.one_of(
+    st.text(max_size=20),
+    st.from_regex(r"\s*-?[0-9]{0,25}(\.[0-9]{0,5})?(e-?[0-9]{1,3})?\s*", fullmatch=True),
+    st.integers(),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.booleans(),
+    st.none(),
+    st.lists(st.integers(), max_size=3),
+    st.dictionaries(st.text(max_size=5), st.integers(), max_size=2),
+    st.floats(allow_nan=True).map(np.float64),
+)
+
+
+@pytest.mark.parametrize("opt", SCHEMA.options, ids=lambda o: o.name)
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(value=_ANY_VALUE)
+def test_every_parser_takes_a_value_or_refuses_it_naming_the_option(opt, value):
+    """Whatever it is given, an option's parser returns a value or raises ValueError naming
+    the option: never another exception, never a non-finite number taken."""
+    try:
+        parsed = opt.parse(value, opt.name)
+    except ValueError as err:
+        assert opt.name in str(err) or "is not allowed" in str(err), err
+        return
+    if isinstance(parsed, float):
+        assert np.isfinite(parsed), parsed
