@@ -73,6 +73,8 @@ def _shut_down(pool: cf.ProcessPoolExecutor, cancel: bool) -> None:
                 held += not cancel
                 proc.terminate()
                 proc.join(timeout=WORKER_EXIT_S)
+    if not any(proc.is_alive() for proc in processes):
+        pool.shutdown(wait=True)  # its manager thread too, now that every worker has ended
     if held:
         print(
             f"note: {held} worker(s) held at their end by a thread a user's code left running "

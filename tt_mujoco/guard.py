@@ -311,7 +311,8 @@ def end(code: int) -> NoReturn:
         names = ", ".join(repr(t.name) for t in held)
         with contextlib.suppress(OSError, ValueError):
             print(
-                f"note: ended with {len(held)} thread(s) a user's code left running ({names})",
+                f"note: ended with {len(held)} thread(s) still running ({names}), which "
+                "would have held the process at its exit",
                 file=sys.stderr,
             )
             sys.stdout.flush()
