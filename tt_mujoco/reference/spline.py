@@ -4,6 +4,7 @@ true arc length and checked against the curvature the vehicle can follow (docs/m
 
 from __future__ import annotations
 
+import copy
 import csv
 import math
 
@@ -64,16 +65,17 @@ class SplinePath(ReferencePath):
         secant = np.diff(kappa) / h
         c2 = (3.0 * secant - 2.0 * rate_left - rate_right) / h
         c3 = (rate_left + rate_right - 2.0 * secant) / h**2
-        self._bounds = [float(q) for q in s_fine]
-        self._cells = [
+        # Tuples, which nothing can change: a copy of the path shares them (__deepcopy__).
+        self._bounds = tuple(float(q) for q in s_fine)
+        self._cells = tuple(
             tuple(map(float, row))
             for row in zip(s_fine[:-1], kappa[:-1], rate_left, c2, c3, strict=True)
-        ]
+        )
         self._kappa_ends = (float(kappa[0]), float(kappa[-1]))
         # Per fine cell for pose_at: cubic Hermite in s of x, y (slopes cos, sin of the heading)
         # and of the heading (slopes kappa); exact at the cell ends, error ~ h^4 inside.
         xy = spline(u_fine)
-        self._pose_cells = [
+        self._pose_cells = tuple(
             tuple(map(float, row))
             for row in zip(
                 s_fine[:-1],
@@ -88,7 +90,18 @@ class SplinePath(ReferencePath):
                 kappa[1:],
                 strict=True,
             )
-        ]
+        )
+
+    def __deepcopy__(self, memo):
+        """A copy sharing the fine tables (tuples of floats: immutable): a user's code is
+        given copies of the path (:func:`tt_mujoco.sim.usercode.users_copy`), each of which
+        walked every one of their tuples otherwise."""
+        for table in (self._bounds, self._cells, self._pose_cells):
+            memo[id(table)] = table
+        clone = object.__new__(type(self))
+        memo[id(self)] = clone
+        clone.__dict__.update(copy.deepcopy(self.__dict__, memo))
+        return clone
 
     def _derivatives(self, s):
         u = self._u_of_s(s)
