@@ -253,7 +253,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
     print((folder / "compare.md").read_text())
-    print(f"wrote compare.md, compare.json, paths.png, errors.png, signals.png to {folder}/")
+    print(f"wrote {', '.join(WRITTEN)} to {folder}/")
     return EXIT_OK
 
 

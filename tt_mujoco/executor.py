@@ -62,7 +62,9 @@ WORKER_EXIT_S = 5.0
 
 def _shut_down(pool: cf.ProcessPoolExecutor, cancel: bool) -> None:
     """Shut ``pool`` down (its pending work cancelled): wait for its workers to end, except
-    one a user's thread holds (:data:`WORKER_EXIT_S`), which is ended, said in a note."""
+    one a user's thread holds (:data:`WORKER_EXIT_S`), which is ended, said in a note.
+    ``cancel``: runs in flight are stopped, not waited for (their results would be dropped
+    anyway; Python 3.11 has no ``terminate_workers()``)."""
     processes = list(getattr(pool, "_processes", {}).values())
     pool.shutdown(wait=False, cancel_futures=True)
     held = 0
@@ -178,12 +180,6 @@ class Executors:
 
     def close(self, cancel: bool = False) -> None:
         if self.pool is not None:
-            if cancel and isinstance(self.pool, cf.ProcessPoolExecutor):
-                # Python 3.11 has no terminate_workers(): stop runs in flight instead of
-                # waiting for them (their results would be dropped anyway).
-                for proc in list(getattr(self.pool, "_processes", {}).values()):
-                    with contextlib.suppress(Exception):
-                        proc.terminate()
             if isinstance(self.pool, cf.ProcessPoolExecutor):
                 _shut_down(self.pool, cancel)
             else:  # Dask's executor cancels what is pending on shutdown(wait=False)

@@ -1,5 +1,5 @@
 """Writing results: atomic files, JSON, and the time series on disk (the output folders
-themselves are :mod:`tt_mujoco.folders`', re-exported here).
+themselves are :mod:`tt_mujoco.folders`, re-exported here).
 
 Every application (run, sweep, paper suite, validation, re-rendering) writes through here, so
 they follow one rule: outputs go to a new folder, or an empty one named by the user, never into

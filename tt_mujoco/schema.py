@@ -125,7 +125,7 @@ class Option:
         vehicle's parameters) is swept entry by entry instead, as ``ENTRY.NAME``.
     needs : (str, callable) or None
         ``(other, acts)``: the option does something only where ``acts(value of other)``;
-        one source (a command line, a file) that gives both otherwise is refused
+        a command line that gives both otherwise is refused
         (:func:`tt_mujoco.config.check_needs`).
     """
 

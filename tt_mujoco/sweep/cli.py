@@ -191,6 +191,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {err}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except OSError as err:  # a full disk, a quota, a folder where a table goes
+        if err.errno not in guard.REFUSALS:
+            raise  # not the file system's refusal: the guard says it is a bug of ours
         print(f"error: {_unwritable(err, out)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
