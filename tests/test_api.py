@@ -49,6 +49,20 @@ def test_plot_writes_the_four_figures(tmp_path):
     assert {p.name: p.read_bytes() for p in made} == before
 
 
+@pytest.mark.parametrize("reverse", [False, True])
+def test_plot_draws_the_figures_the_command_line_writes(tmp_path, reverse):
+    """The same run's figures on both routes, byte for byte: backing up, the errors figure
+    measures the run as its metrics do (the trailer leading), on the API's route too."""
+    from tt_mujoco import run as run_cli
+
+    argv = ["--plant", "reduced", "--duration", "1", "--seed", "4", "--no-video", "--quiet"]
+    argv += ["--reverse"] if reverse else []
+    assert run_cli.main([*argv, "--out", str(tmp_path / "cli")]) == 0
+    run = tt_mujoco.simulate(Scenario(plant="reduced", duration=1.0, seed=4, reverse=reverse))
+    for made in run.plot(tmp_path / "api"):
+        assert made.read_bytes() == (tmp_path / "cli" / made.name).read_bytes(), made.name
+
+
 def test_plot_never_writes_inside_a_finished_run(tmp_path):
     from tt_mujoco import run as run_cli
 

@@ -16,6 +16,7 @@ from tt_mujoco.analysis.metrics import (
     max_abs,
     metric_unit,
     rmse,
+    run_error_signals,
     signed_lateral_error,
     summary_table,
     trailer_offtrack,
@@ -903,3 +904,34 @@ def test_merged_metrics_of_a_run_cut_in_two_are_the_whole_runs():
     # a path error is measured sample by sample against the same line: the same too
     assert merged["cross_track_rms"] == pytest.approx(whole["cross_track_rms"], rel=1e-9)
     assert merged["offtrack_follower"] == whole["offtrack_follower"]
+
+
+@pytest.mark.parametrize("reverse", [False, True])
+def test_metrics_given_the_runs_error_signals_are_the_metrics_that_measure_them(reverse):
+    """run_error_signals is what compute_metrics measures (the figures draw it): handed over,
+    the metrics are the same to the last bit, a diverged run's rows after its finite part NaN."""
+    n, k = 400, 310
+    t = np.arange(n) * 0.01
+    x = np.linspace(0.0, 4.0, n)
+    ts = make_series(
+        n,
+        x=x,
+        y=0.05 * np.sin(t),
+        x_ref=x,
+        x0=x - 0.7,
+        y0=0.02 * np.cos(2 * t),
+        v=0.1 * np.sin(3 * t),
+        omega=0.2 * np.cos(t),
+        x0_2=x - 1.4,
+        y0_2=0.03 * np.sin(t),
+        phi_2=0.01 * t,
+    )
+    ts["x"][k:] = np.nan
+    signals = run_error_signals(ts, STRAIGHT_REFERENCE, reverse)
+    assert all(len(values) == n for values in signals.values())
+    assert all(np.isnan(values[k:]).all() for values in signals.values())
+    given = compute_metrics(ts, STRAIGHT_REFERENCE, TORQUE_LIMIT, reverse, signals)
+    measured = compute_metrics(ts, STRAIGHT_REFERENCE, TORQUE_LIMIT, reverse)
+    assert given.keys() == measured.keys()
+    for key, value in measured.items():
+        assert given[key] == value or (math.isnan(given[key]) and math.isnan(value)), key

@@ -9,6 +9,7 @@ import sys
 import pytest
 
 from tt_mujoco import sim
+from tt_mujoco.analysis.metrics import run_error_signals
 from tt_mujoco.viz import FIGURES, plots
 from tt_mujoco.viz.run_figures import GROUPS, RunFigures
 
@@ -58,3 +59,19 @@ def test_the_run_process_never_imports_matplotlib(tmp_path):
     )
     assert shown.stdout.strip().splitlines()[-1] == "[]"
     assert sorted(p.name for p in out.glob("*.png")) == sorted(FIGURES)
+
+
+@pytest.mark.parametrize("reverse", [False, True])
+def test_the_errors_figure_of_the_runs_own_signals_is_the_one_measured_again(reverse):
+    """The run hands its figures the error signals its metrics measured (the worker no longer
+    projects the run again): the same figure as measuring them in the worker, byte for byte."""
+    result = sim.simulate(sim.Scenario(duration=1.0, reverse=reverse))
+    ts, reference = result.timeseries, result.reference_polyline
+    signals = run_error_signals(ts, reference, reverse)
+    names = ("errors.png",)
+    handed = plots.run_pngs(ts, reference, names=names, errors=signals, reverse=reverse)
+    measured = plots.run_pngs(ts, reference, names=names, reverse=reverse)
+    assert handed == measured
+    assert plots.tracking_errors(ts, reference, reverse)["lateral"] == pytest.approx(
+        signals["lateral"], abs=0.0, nan_ok=True
+    )

@@ -106,6 +106,7 @@ class Run:
             out,
             params=self.scenario.plant_params(),
             world=parse_world(self.scenario.world),
+            reverse=self.scenario.reverse,
         )
         return [Path(f) for f in made]
 

@@ -254,10 +254,12 @@ def figure_worker(built):
     of fewer than 2 samples has none to draw)."""
     from tt_mujoco.viz.run_figures import RunFigures
 
-    figures = RunFigures()
+    # A maneuver's joined legs come without their error signals: the figures measure them.
+    figures = RunFigures(projects=built.plan is not None and bool(built.plan.cusps))
+    reverse = built.scenario.reverse
 
-    def on_rows(ts, reference_polyline) -> None:
+    def on_rows(ts, reference_polyline, signals=None) -> None:
         if len(ts["t"]) >= 2:
-            figures.draw(ts, reference_polyline, built.plant_params, built.world)
+            figures.draw(ts, reference_polyline, built.plant_params, built.world, signals, reverse)
 
     return figures, on_rows

@@ -70,6 +70,7 @@ __all__ = [
     "metric_unit",
     "resolve_metrics",
     "rmse",
+    "run_error_signals",
     "signed_lateral_error",
     "summary_table",
     "trailer_offtrack",
@@ -234,6 +235,44 @@ def error_signals(
     return out
 
 
+def run_error_signals(
+    ts: Mapping[str, np.ndarray], reference_polyline, reverse: bool = False
+) -> dict[str, np.ndarray]:
+    """:func:`error_signals` of a whole run, as :func:`compute_metrics` measures it: over the
+    finite part of the run, the rows after it NaN (one value per row of ``ts``).
+
+    Parameters
+    ----------
+    ts : mapping of str -> ndarray
+        The run's columns (:data:`REQUIRED_COLUMNS`, and :data:`OPTIONAL_COLUMNS` where present).
+    reference_polyline : array_like, shape (M, 2), or Polyline
+    reverse : bool
+        The run drives the path backwards (the trailer leads).
+
+    Returns
+    -------
+    dict of ndarray
+        :func:`error_signals`' signals, each of ``ts``' length.
+    """
+    columns, n_total = _check_inputs(ts, 1.0)
+    n, c = _finite_part(ts, columns)
+    driven = None if reverse else _driven_path(np.column_stack([c["x"], c["y"]]))
+    signals = error_signals(c, as_polyline(reference_polyline), reverse, driven)
+    after = np.full(n_total - n, np.nan)
+    return {name: np.concatenate([values, after]) for name, values in signals.items()}
+
+
+def _finite_part(ts, columns) -> tuple[int, dict[str, np.ndarray]]:
+    """``(n, c)``: the length of the run's finite part and its columns cut to it (the optional
+    ones too)."""
+    n = finite_prefix_length(columns, CORE_COLUMNS)
+    c = {name: col[:n] for name, col in columns.items()}
+    for name in OPTIONAL_COLUMNS:
+        if name in ts:
+            c[name] = np.asarray(ts[name], dtype=float)[:n]
+    return n, c
+
+
 def cross_track_and_lateral(reference: Polyline, points) -> tuple[np.ndarray, np.ndarray]:
     """Signed distances to the path with its ends continued as rays, and without.
 
@@ -251,7 +290,11 @@ def cross_track_and_lateral(reference: Polyline, points) -> tuple[np.ndarray, np
 
 
 def compute_metrics(
-    ts: Mapping[str, np.ndarray], reference_polyline, torque_limit: float, reverse: bool = False
+    ts: Mapping[str, np.ndarray],
+    reference_polyline,
+    torque_limit: float,
+    reverse: bool = False,
+    signals: Mapping[str, np.ndarray] | None = None,
 ) -> dict[str, float | int | str]:
     """Summarise a run (docs/model.md Section 11, ``metrics.json``).
 
@@ -263,6 +306,11 @@ def compute_metrics(
         The reference path, vertices in the direction of travel.
     torque_limit : float
         Actuator limit (N m; 15 for the paper, docs/model.md Section 1).
+    reverse : bool
+        The run drives the path backwards (the trailer leads).
+    signals : mapping, optional
+        :func:`run_error_signals` of this run with the same polyline and ``reverse``, when the
+        caller has them already (the run's figures draw them); computed here otherwise.
 
     Returns
     -------
@@ -313,11 +361,7 @@ def compute_metrics(
     """
     columns, n_total = _check_inputs(ts, torque_limit)
     reference = as_polyline(reference_polyline)
-    n = finite_prefix_length(columns, CORE_COLUMNS)
-    c = {name: col[:n] for name, col in columns.items()}
-    for name in OPTIONAL_COLUMNS:
-        if name in ts:
-            c[name] = np.asarray(ts[name], dtype=float)[:n]
+    n, c = _finite_part(ts, columns)
     t = c["t"]
     if n >= 2 and np.any(np.diff(t) <= 0.0):
         i = int(np.flatnonzero(np.diff(t) <= 0.0)[0]) + 1
@@ -330,7 +374,10 @@ def compute_metrics(
 
     # Driving forward every trailer follows the tractor: its driven path is built once.
     driven = None if reverse else _driven_path(np.column_stack([c["x"], c["y"]]))
-    signals = error_signals(c, reference, reverse, driven)
+    if signals is None:
+        signals = error_signals(c, reference, reverse, driven)
+    else:  # run_error_signals' of this run
+        signals = {name: np.asarray(values, dtype=float)[:n] for name, values in signals.items()}
     metrics: dict[str, float | int] = {}
     metrics["rmse_v"] = rmse(signals["e_v"])
     metrics["max_abs_v"] = max_abs(signals["e_v"])

@@ -11,7 +11,7 @@ from numbers import Integral
 
 import numpy as np
 
-from tt_mujoco.analysis.metrics import compute_metrics
+from tt_mujoco.analysis.metrics import compute_metrics, run_error_signals
 from tt_mujoco.defaults import MAX_SPEED
 from tt_mujoco.guard import control_signal, noting_interrupts, users_failure
 from tt_mujoco.registry import HookError, finite_number, real_number, shown
@@ -193,9 +193,12 @@ def simulate(
         A file that receives the logged rows block by block while the run goes on (see
         :meth:`tt_mujoco.sim.loop.stepper.Stepper.reset`).
     on_rows : callable, optional
-        Called as ``on_rows(timeseries, reference_polyline)`` once the run is over, before its
-        metrics are computed (those of ``Result``; the CLI's figures are drawn meanwhile). It
-        must not change them.
+        Called as ``on_rows(timeseries, reference_polyline, signals)`` once the run is over,
+        before its metrics are computed (those of ``Result``; the CLI's figures are drawn
+        meanwhile), ``signals`` the run's
+        :func:`~tt_mujoco.analysis.metrics.run_error_signals` that its metrics take (None for a
+        maneuver's joined legs, each measured against its own path). It must change none of
+        them.
 
     Raises
     ------
@@ -213,7 +216,7 @@ def simulate(
 
         result = drive(built, progress, on_step, checkpoint)
         if on_rows is not None:
-            on_rows(result.timeseries, result.reference_polyline)
+            on_rows(result.timeseries, result.reference_polyline, None)
         return result
     rng = np.random.default_rng(built.scenario.seed)
     leg = drive_leg(built, rng, built.scenario.time_limit_s, progress, on_step, checkpoint)
@@ -348,11 +351,12 @@ def finish(
     scenario = built.scenario
     ts = stepper.timeseries(release=True)
     polyline, measured_against = reference_polylines(built)
+    signals = run_error_signals(ts, measured_against, scenario.reverse) if len(ts["t"]) else None
     if on_rows is not None:
-        on_rows(ts, polyline)
+        on_rows(ts, polyline, signals)
     limit = built.nominal.torque_limit
     if len(ts["t"]):
-        metrics = compute_metrics(ts, measured_against, limit, reverse=scenario.reverse)
+        metrics = compute_metrics(ts, measured_against, limit, scenario.reverse, signals)
     else:  # stopped before its first sample was logged
         metrics = {"steps": 0, "finite_samples": 0, "sim_time_s": 0.0}
     for name, fn in built.extra_metrics.items():

@@ -187,7 +187,7 @@ def _path_figure(c: dict, ref: np.ndarray, world=None, params: Params | None = N
     return fig
 
 
-def _errors_figure(c: dict, err: dict) -> Figure:
+def _errors_figure(c: dict, err: dict, reverse: bool = False) -> Figure:
     t = c["t"]
     fig = Figure(figsize=(8, 9), layout="constrained")
     axes = fig.subplots(4, 1, sharex=True)
@@ -216,7 +216,7 @@ def _errors_figure(c: dict, err: dict) -> Figure:
         "--",
         color=TRAILER_COLOR,
         lw=1.2,
-        label=f"P0 to the tractor's path (off-tracking, unsigned), "
+        label=f"{OFFTRACK_LABELS[reverse]} (off-tracking, unsigned), "
         f"RMS {_rms(err['trailer_offtrack']):.4g}",
     )
     ax.axhline(0.0, color="0.5", lw=0.8)
@@ -227,6 +227,11 @@ def _errors_figure(c: dict, err: dict) -> Figure:
         ax.legend(loc="upper right", fontsize=8)
     fig.suptitle("Tracking errors (lateral: positive left of the path)")
     return fig
+
+
+#: Who is off-tracked against whose path (metrics.trailer_offtrack): the trailer against the
+#: tractor's driving forward, the tractor against the trailer's backing up.
+OFFTRACK_LABELS = {False: "P0 to the tractor's path", True: "tractor P to P0's path"}
 
 
 def _torques_figure(c: dict, limit: float) -> Figure:
@@ -294,6 +299,7 @@ def plot_run(
     params: Params | None = None,
     world=None,
     names: Sequence[str] = FIGURES,
+    reverse: bool = False,
 ) -> list[Path]:
     """Write the run's figures (:data:`FIGURES`, or those of them in ``names``) into
     ``out_dir`` (created if missing).
@@ -318,13 +324,15 @@ def plot_run(
         The run's obstacles and goal (:mod:`tt_mujoco.world`), drawn in ``path.png``.
     names : sequence of str, optional
         The figures to draw (default all of :data:`FIGURES`).
+    reverse : bool, optional
+        The run backed up (the trailer led): its errors measured as its metrics measure them.
 
     Returns
     -------
     list of Path
         The files written, in :data:`FIGURES` order.
     """
-    figures = _run_figures(ts, reference_polyline, params, world, names)
+    figures = _run_figures(ts, reference_polyline, params, world, names, reverse=reverse)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     return [save_figure(make(), out / name, DPI) for name, make in figures.items()]
@@ -336,19 +344,32 @@ def run_pngs(
     params: Params | None = None,
     world=None,
     names: Sequence[str] = FIGURES,
+    errors: Mapping | None = None,
+    reverse: bool = False,
 ) -> dict[str, bytes]:
     """The figures :func:`plot_run` writes, as PNG files' bytes by file name (in
     :data:`FIGURES` order): what a worker drawing them hands back
-    (:mod:`tt_mujoco.viz.run_figures`). The arguments are :func:`plot_run`'s."""
+    (:mod:`tt_mujoco.viz.run_figures`). The other arguments are :func:`plot_run`'s.
+
+    Parameters
+    ----------
+    errors : mapping, optional
+        The run's error signals as its metrics measured them
+        (:func:`tt_mujoco.analysis.metrics.run_error_signals`); :func:`tracking_errors` of
+        ``reference_polyline`` otherwise.
+    reverse : bool, optional
+        The run backed up (the trailer led): who is off-tracked against whose path.
+    """
     pngs = {}
-    for name, make in _run_figures(ts, reference_polyline, params, world, names).items():
+    figures = _run_figures(ts, reference_polyline, params, world, names, errors, reverse)
+    for name, make in figures.items():
         buffer = io.BytesIO()
         make().savefig(buffer, format="png", dpi=DPI)
         pngs[name] = buffer.getvalue()
     return pngs
 
 
-def _run_figures(ts, reference_polyline, params, world, names) -> dict:
+def _run_figures(ts, reference_polyline, params, world, names, errors=None, reverse=False) -> dict:
     """File name -> a function making that figure, for ``names`` in :data:`FIGURES` order;
     the time series checked first."""
     unknown = sorted(set(names) - set(FIGURES))
@@ -370,7 +391,9 @@ def _run_figures(ts, reference_polyline, params, world, names) -> dict:
     c.update(_columns(ts, train_columns(n_trailers)) if n_trailers > 1 else {})
     makers = {
         "path.png": lambda: _path_figure(c, ref, world, p),
-        "errors.png": lambda: _errors_figure(c, tracking_errors(ts, ref)),
+        "errors.png": lambda: _errors_figure(
+            c, tracking_errors(ts, ref, reverse) if errors is None else errors, reverse
+        ),
         "torques.png": lambda: _torques_figure(c, p.torque_limit),
         "articulation.png": lambda: _articulation_figure(c, p),
     }

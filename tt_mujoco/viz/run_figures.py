@@ -4,7 +4,8 @@ A single run's figures took longer than its simulation: importing matplotlib and
 figures one after the other, after the run. :class:`RunFigures` forks its worker when the run
 starts (:class:`tt_mujoco.background.Worker`); the worker imports matplotlib (and the search
 its errors figure projects with) and draws a first small figure while the simulation runs on
-its own core. Handed the time series as soon as the episode ends, it forks a second worker
+its own core. Handed the time series as soon as the episode ends (with its error signals, which
+the run measures for its metrics anyway), it forks a second worker
 from that warmed state, and the two draw their halves of the figures at once, while the run
 computes its metrics, writes its files and renders its video; the figures come back as PNG
 bytes, which the run writes into its folder.
@@ -27,26 +28,32 @@ GROUPS = (("errors.png",), ("path.png", "torques.png", "articulation.png"))
 
 
 def _prepare() -> None:
-    from tt_mujoco.analysis import geometry
     from tt_mujoco.viz import plots
 
     plots.warm_up()
+
+
+def _prepare_with_search() -> None:
+    from tt_mujoco.analysis import geometry
+
+    _prepare()
     geometry.prepare_search()
 
 
-def _draw(names, ts, reference_polyline, params, world) -> dict[str, bytes]:
+def _draw(names, ts, reference_polyline, params, world, errors, reverse) -> dict[str, bytes]:
     from tt_mujoco.viz import plots
 
-    return plots.run_pngs(ts, reference_polyline, params=params, world=world, names=names)
+    return plots.run_pngs(ts, reference_polyline, params, world, names, errors, reverse)
 
 
-def _draw_groups(ts, reference_polyline, params, world) -> dict[str, bytes]:
-    """In the warmed worker: the other groups in workers forked from it, the first here."""
+def _draw_groups(*args) -> dict[str, bytes]:
+    """In the warmed worker: the other groups in workers forked from it, the first here; the
+    arguments are :func:`_draw`'s after ``names``."""
     others = [Worker() for _ in GROUPS[1:]]
     try:
         for worker, names in zip(others, GROUPS[1:], strict=True):
-            worker.call(_draw, names, ts, reference_polyline, params, world)
-        pngs = _draw(GROUPS[0], ts, reference_polyline, params, world)
+            worker.call(_draw, names, *args)
+        pngs = _draw(GROUPS[0], *args)
         for worker in others:
             pngs.update(worker.result())
         return pngs
@@ -62,20 +69,31 @@ class RunFigures:
     ----------
     forked : bool, optional
         As :class:`~tt_mujoco.background.Worker`'s (default: forked where a core is spare).
+    projects : bool, optional
+        Whether the figures will measure the run against its path themselves (its error
+        signals not handed over): the worker imports the nearest-point search ahead.
     """
 
-    def __init__(self, forked: bool | None = None):
-        self._worker = Worker(_prepare, forked=forked)
+    def __init__(self, forked: bool | None = None, projects: bool = False):
+        self._worker = Worker(_prepare_with_search if projects else _prepare, forked=forked)
 
     @property
     def asked(self) -> bool:
         """Whether the worker has been handed a time series."""
         return self._worker.called
 
-    def draw(self, ts: Mapping, reference_polyline, params=None, world=None) -> None:
+    def draw(
+        self,
+        ts: Mapping,
+        reference_polyline,
+        params=None,
+        world=None,
+        errors: Mapping | None = None,
+        reverse: bool = False,
+    ) -> None:
         """Hand the worker this time series (once); returns at once. The arguments are
         :func:`tt_mujoco.viz.plots.run_pngs`'."""
-        self._worker.call(_draw_groups, ts, reference_polyline, params, world)
+        self._worker.call(_draw_groups, ts, reference_polyline, params, world, errors, reverse)
 
     def result(self) -> dict[str, bytes]:
         """The figures as PNG files' bytes by file name, in :data:`~tt_mujoco.viz.FIGURES`
