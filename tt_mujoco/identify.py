@@ -30,7 +30,10 @@ is taken from, and the fit's first guess.
 
 Written into ``--out`` (a new folder): ``identified.toml`` (the fitted vehicle, a scenario file
 every command takes: ``python -m tt_mujoco.run --config identified.toml``), ``identify.json``
-(estimates, 95 % confidence intervals, correlations, the replay's errors) and ``identify.md``.
+(estimates, 95 % confidence intervals, correlations, the replay's errors), ``identify.md`` and
+the same page as ``identify.html`` with its figures inside (the replayed hitch angles against
+the log's, the estimates' correlations; also written as PNG files,
+:mod:`tt_mujoco.identify_report`).
 Two parameters whose estimates correlate beyond :data:`CORRELATED` (0.95) are reported as not told
 apart by this log, with the excitation that would tell them apart. Bad logs (a missing column,
 time not increasing, a gap, a value that is not a finite number) are exit 2 naming the column
@@ -130,19 +133,22 @@ class Fit:
         correlation,
         params,
         replay_rms,
-        phi_max,
+        replay,
         inputs=(math.inf, 0.0),
     ):
         #: the inputs' estimated signal-to-noise ratio (dB) and the window they were averaged
         #: over (s; 0: not averaged)
         self.input_snr_db, self.inputs_smoothed_s = inputs
+        #: the log's times and hitch angles (rows), and the fitted train's replayed (NaN
+        #: where the replay has none): what the report draws
+        self.t, self.logged, self.replayed = replay
         self.names = list(names)
         self.estimates = np.asarray(estimates)
         self.half_widths = np.asarray(half_widths)
         self.correlation = np.asarray(correlation)
         self.params = params
         self.replay_rms = list(replay_rms)
-        self.phi_max = list(phi_max)
+        self.phi_max = list(np.max(np.abs(self.logged), axis=0))
 
     def confounded(self) -> list[tuple[str, str, float]]:
         """The pairs this log does not tell apart: ``(a, b, correlation)``."""
@@ -233,7 +239,7 @@ def fit_train(t, v, omega, phis, p: Params, fit=("L", "L0"), smooth_s: float | N
         correlation,
         fitted,
         np.sqrt(np.nanmean(errors**2, axis=0)),
-        np.max(np.abs(phis), axis=0),
+        (t, phis, phis + errors),
         (snr, smooth_s),
     )
 
@@ -450,11 +456,32 @@ def main(argv: list[str] | None = None) -> int:
     inertial = () if inertia is None else inertia.fields
     atomic_write(out / "identified.toml", identified_toml(fitted, inertial))
     write_json(out / "identify.json", report, strict=True)
-    atomic_write(out / "identify.md", text)
+    written = ["identified.toml", "identify.json", *_write_report(out, text, fit, inertia)]
     release_folder(out)
     print(text, end="")
-    print(f"wrote identified.toml, identify.json, identify.md to {out}/")
+    print(f"wrote {', '.join(written)} to {out}/")
     return EXIT_OK
+
+
+def _write_report(out: Path, text: str, fit, inertia) -> list[str]:
+    """The report's files written into ``out``: its figures, ``identify.md`` (showing them)
+    and ``identify.html`` (:mod:`tt_mujoco.identify_report`); their names."""
+    import io
+
+    from tt_mujoco import identify_report
+    from tt_mujoco.outputs import atomic_write
+
+    images = {}
+    for name, figure in identify_report.figures(fit, inertia).items():
+        buffer = io.BytesIO()
+        figure.savefig(buffer, format="png", dpi=identify_report.DPI)
+        images[name] = buffer.getvalue()
+        atomic_write(out / name, images[name])
+    text += identify_report.image_lines(images)
+    atomic_write(out / "identify.md", text)
+    page = identify_report.html_page(text, images, f"Identified from {out.name}")
+    atomic_write(out / "identify.html", page)
+    return [*images, "identify.md", "identify.html"]
 
 
 def _vehicle(config: Path | None, eta: str | None, trailers: int) -> Params:

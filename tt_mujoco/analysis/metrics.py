@@ -262,6 +262,19 @@ def run_error_signals(
     return {name: np.concatenate([values, after]) for name, values in signals.items()}
 
 
+def _sample_period(t, all_t) -> float:
+    """The median spacing of the run's finite times ``all_t``, its finite part's ``t``
+    checked to increase strictly."""
+    if t.size >= 2 and np.any(np.diff(t) <= 0.0):
+        i = int(np.flatnonzero(np.diff(t) <= 0.0)[0]) + 1
+        raise ValueError(
+            f"column 't' must strictly increase, got t[{i}] = {t[i]!r} after t[{i - 1}] = "
+            f"{t[i - 1]!r}"
+        )
+    all_t = all_t[np.isfinite(all_t)]
+    return float(np.median(np.diff(all_t))) if all_t.size >= 2 else math.nan
+
+
 def _finite_part(ts, columns) -> tuple[int, dict[str, np.ndarray]]:
     """``(n, c)``: the length of the run's finite part and its columns cut to it (the optional
     ones too)."""
@@ -363,14 +376,7 @@ def compute_metrics(
     reference = as_polyline(reference_polyline)
     n, c = _finite_part(ts, columns)
     t = c["t"]
-    if n >= 2 and np.any(np.diff(t) <= 0.0):
-        i = int(np.flatnonzero(np.diff(t) <= 0.0)[0]) + 1
-        raise ValueError(
-            f"column 't' must strictly increase, got t[{i}] = {t[i]!r} after t[{i - 1}] = "
-            f"{t[i - 1]!r}"
-        )
-    all_t = columns["t"][np.isfinite(columns["t"])]
-    sample_period = float(np.median(np.diff(all_t))) if all_t.size >= 2 else math.nan
+    sample_period = _sample_period(t, columns["t"])
 
     # Driving forward every trailer follows the tractor: its driven path is built once.
     driven = None if reverse else _driven_path(np.column_stack([c["x"], c["y"]]))
