@@ -6,12 +6,13 @@ from __future__ import annotations
 import base64
 import json
 from html.parser import HTMLParser
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from tt_mujoco import identify
-from tt_mujoco.identify_report import CORRELATION_PNG, REPLAY_PNG, html_page
+from tt_mujoco.identify_report import CORRELATION_PNG, REPLAY_PNG, SIMULATED_PNG, html_page
 from tt_mujoco.outputs import write_timeseries
 from tt_mujoco.sim import Scenario, simulate
 
@@ -118,3 +119,19 @@ def test_the_replay_figure_draws_the_fits_own_replay(identified):
     np.testing.assert_array_equal(rms, fit.replay_rms)
     report = json.loads((identified / "identify.json").read_text())
     assert report["replay_phi_rms_deg"] == pytest.approx(np.degrees(rms), rel=1e-9)
+
+
+def test_a_fit_of_a_mass_draws_the_train_simulated_from_the_torques(tmp_path):
+    """With torques in the log and a mass to fit, the report draws the log's v and omega
+    against the fitted train's, and every figure is inside the page."""
+    weave = str(Path(__file__).resolve().parents[1] / "examples" / "weave_surge.csv")
+    scenario = Scenario(traj=weave, plant="reduced", disturbance="none", duration=20)
+    ts = simulate(scenario).timeseries
+    names = ["t", "v", "omega", "phi", "T_r", "T_l"]
+    write_timeseries(tmp_path / "log.csv", {k: ts[k] for k in names}, names)
+    out = tmp_path / "out"
+    assert identify.main([str(tmp_path / "log.csv"), "--fit", "L,L0,Mr", "--out", str(out)]) == 0
+    figures = [REPLAY_PNG, SIMULATED_PNG, CORRELATION_PNG]
+    page = _parsed((out / "identify.html").read_text())
+    inside = [base64.b64decode(src.split(",", 1)[1]) for src in page.images]
+    assert inside == [(out / name).read_bytes() for name in figures]

@@ -187,6 +187,9 @@ class InertiaFit:
     output_rms: tuple
     segments: int
     payload: Payload | None = None
+    #: What the report draws: the grid's times, the log's ``(v, omega)`` averaged on it and
+    #: the fitted train's simulated from each segment's start (segments, steps[, 2]).
+    simulated: tuple | None = dataclasses.field(default=None, compare=False, repr=False)
 
     def confounded(self) -> list[tuple[str, str, float]]:
         """The pairs this log does not tell apart: ``(a, b, correlation)``."""
@@ -410,7 +413,8 @@ def fit_inertia(t, v, omega, phis, torques, p: Params, fit=("Mr",), payload=None
         mass = Payload(payload, float(found), step, within, float(x[-1]), float(half[-1]))
         x, half, correlation = x[:-1], half[:-1], correlation[:-1, :-1]
     on = None if mass is None else (mass.mass, log.t >= found)
-    error = log.simulate(x, starts, on) - log.V[log.lanes]
+    simulated = log.simulate(x, starts, on)
+    error = simulated - log.V[log.lanes]
     missed = np.sqrt(np.mean(error**2, axis=(0, 1)))
     spread = np.sqrt(np.mean(log.V**2, axis=0))
     if np.any(missed > spread):  # the model explains less of V than V's own size
@@ -430,6 +434,7 @@ def fit_inertia(t, v, omega, phis, torques, p: Params, fit=("Mr",), payload=None
         tuple(float(m) for m in missed),
         log.segments,
         mass,
+        (log.t[log.lanes], log.V[log.lanes], simulated),
     )
 
 

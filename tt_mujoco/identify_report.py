@@ -21,6 +21,7 @@ __all__ = ["CORRELATION_PNG", "REPLAY_PNG", "figures", "html_page", "image_lines
 
 #: The figures' files in the output folder.
 REPLAY_PNG = "identify_replay.png"
+SIMULATED_PNG = "identify_simulated.png"
 CORRELATION_PNG = "identify_correlation.png"
 DPI = 110
 
@@ -33,6 +34,8 @@ def figures(fit, inertia) -> dict:
     out = {}
     if fit is not None:
         out[REPLAY_PNG] = _replay_figure(fit.t, fit.logged, fit.replayed)
+    if inertia is not None and inertia.simulated is not None:
+        out[SIMULATED_PNG] = _simulated_figure(*inertia.simulated)
     fits = [f for f in (fit, inertia) if f is not None and len(f.names) >= 2]
     if fits:
         out[CORRELATION_PNG] = _correlation_figure(fits)
@@ -63,6 +66,36 @@ def _replay_figure(t, logged, replayed):
         ax.legend(loc="best", fontsize=8)
     axes[-1].set_xlabel("t (s)")
     fig.suptitle("Hitch angles: the log, and the fitted train under the logged v and omega")
+    return fig
+
+
+def _simulated_figure(t, logged, simulated):
+    """The log's v and omega against the fitted train's, simulated from the wheel torques
+    segment by segment (each from its own first velocity)."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(8, 5.8), layout="constrained")
+    axes = fig.subplots(2, 1, sharex=True)
+    units = ("v (m/s)", "omega (rad/s)")
+    for channel, (ax, unit) in enumerate(zip(axes, units, strict=True)):
+        for s in range(t.shape[0]):
+            first = s == 0
+            ax.plot(
+                t[s], logged[s, :, channel], color="0.3", lw=1.0, label="logged" if first else None
+            )
+            ax.plot(
+                t[s],
+                simulated[s, :, channel],
+                "--",
+                color="tab:blue",
+                lw=1.2,
+                label="the fitted train, from the torques" if first else None,
+            )
+        ax.set_ylabel(unit)
+        ax.grid(True, alpha=0.3)
+        ax.legend(loc="best", fontsize=8)
+    axes[-1].set_xlabel("t (s)")
+    fig.suptitle("Speed and yaw rate: the log, and the fitted train under the logged torques")
     return fig
 
 
