@@ -118,3 +118,33 @@ def test_a_worker_whose_caller_goes_away_ends_itself():
             break
         time.sleep(0.01)
     assert done == pid
+
+
+@pytest.mark.parametrize("called", [True, False])
+def test_a_worker_used_by_a_later_fork_is_reaped_by_the_process_that_forked_it(called):
+    """As a run does: the figures' worker forked first, then the watched child that calls it,
+    takes its answer (or gives up on it) and ends; the first process then ends and reaps every
+    worker it forked (end_workers), so none outlives the command."""
+    from tt_mujoco import background
+
+    worker = Worker(forked=True)
+    pid = worker._process
+    child = os.fork()
+    if child == 0:  # the watched child: the worker is its parent's, not its own
+        code = 1
+        try:
+            if called:
+                worker.call(_total, [1.0, 2.0])
+                code = 0 if worker.result() == 3.0 else 1
+            else:
+                worker.cancel()
+                code = 0
+        finally:
+            os._exit(code)
+    _, status = os.waitpid(child, 0)
+    assert os.waitstatus_to_exitcode(status) == 0
+    assert pid in background._FORKED
+    background.end_workers()
+    assert pid not in background._FORKED
+    with pytest.raises(ChildProcessError):  # reaped
+        os.waitpid(pid, os.WNOHANG)

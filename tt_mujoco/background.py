@@ -11,7 +11,9 @@ core (the worker would take the simulation's), the call runs in the caller when 
 asked for, with the same result.
 
 A worker never outlives its caller: it ignores Ctrl-C (the caller handles it and ends the
-worker), and it exits when its pipe closes, which the end of the caller's process does.
+worker), and it exits when its pipe closes, which the end of the caller's process does. A
+process forked from the caller after the worker (a run's watched child) may call it, take its
+result and end it; the caller reaps it.
 """
 
 from __future__ import annotations
@@ -24,7 +26,10 @@ from collections.abc import Callable
 
 from tt_mujoco import guard
 
-__all__ = ["BackgroundError", "Worker", "spare_cores"]
+__all__ = ["BackgroundError", "Worker", "end_workers", "spare_cores"]
+
+#: The workers forked and not yet reaped: pid -> the pid of the process that forked it.
+_FORKED: dict[int, int] = {}
 
 
 class BackgroundError(RuntimeError):
@@ -64,6 +69,25 @@ def _serve(channel, caller_end, prepare) -> None:
     except Exception as err:  # an exception that cannot be pickled: its text, typed plainly
         channel.send((False, RuntimeError(f"{type(answer[1]).__name__}: {answer[1]}: {err}")))
     channel.close()
+
+
+def end_workers() -> None:
+    """End and reap every worker this process forked and has not reaped: the workers a
+    process forked from it used (a run's watched child, the figures' worker forked before
+    it). Called by that process once its child is over, so that no worker outlives the
+    command and their time is counted as the command's."""
+    for pid, forker in list(_FORKED.items()):
+        if forker != os.getpid():
+            continue
+        try:
+            os.kill(pid, signal.SIGKILL)  # done by now, or stuck on a pipe no one reads
+        except ProcessLookupError:
+            pass
+        try:
+            os.waitpid(pid, 0)
+        except ChildProcessError:
+            pass
+        del _FORKED[pid]
 
 
 def _fork(prepare, channel, caller_end) -> int:
@@ -110,6 +134,7 @@ class Worker:
             return
         self._channel, theirs = multiprocessing.connection.Pipe(duplex=True)
         self._process = _fork(prepare, theirs, self._channel)
+        _FORKED[self._process] = os.getpid()
         theirs.close()
 
     @property
@@ -175,7 +200,12 @@ class Worker:
         """Wait for the worker's end; how it ended, in words."""
         if self._process is None:
             return "ended"
-        _, status = os.waitpid(self._process, 0)
+        try:
+            _, status = os.waitpid(self._process, 0)
+        except ChildProcessError:  # forked by the process this one was forked from (a run's
+            self._process = None  # watchdog): that one reaps it (end_workers)
+            return "ended"
+        _FORKED.pop(self._process, None)
         self._process = None
         if os.WIFSIGNALED(status):
             return f"killed by signal {os.WTERMSIG(status)}"

@@ -49,7 +49,13 @@ from tt_mujoco.run_endings import (
     killed,
     rows_unwritable,
 )
-from tt_mujoco.run_outputs import CHECKPOINT_FILE, OUTPUTS, figure_worker, write_outputs
+from tt_mujoco.run_outputs import (
+    CHECKPOINT_FILE,
+    OUTPUTS,
+    figure_rows,
+    figure_worker,
+    write_outputs,
+)
 from tt_mujoco.schema import Schema
 from tt_mujoco.sim import SCHEMA, Scenario
 
@@ -240,7 +246,14 @@ def _main(argv: list[str] | None) -> int:
         return fail(str(err))
     except OSError as err:  # a name the file system refuses (too long, not encodable, ...)
         return _file_system_refused(err)
-    setup = _set_up(invocation)
+    # Forked before anything else starts (no thread yet): matplotlib loads meanwhile.
+    figures = figure_worker(invocation.scenario, invocation.outputs)
+    setup = None
+    try:
+        setup = _set_up(invocation)
+    finally:
+        if figures is not None and not isinstance(setup, _RunSetup):
+            figures.cancel()  # refused, or interrupted: nothing to draw
     if isinstance(setup, int):
         return setup
     if WATCHED and setup.live is None:  # from here on, the run in a watched child
@@ -252,7 +265,7 @@ def _main(argv: list[str] | None) -> int:
             lambda signum: killed(out, signum),
             lambda code: exited_early(out, code),
         )
-    result, figures = _simulate(setup)
+    result = _simulate(setup, figures)
     if isinstance(result, int):
         return result
     return _write(setup, result, figures)
@@ -321,9 +334,9 @@ def _live_view(built, shown: dict):
     return live
 
 
-def _simulate(setup: _RunSetup):
-    """``(result, figures)``: the run, its figures' worker drawing; or ``(exit code, None)``
-    for a run that produced no result."""
+def _simulate(setup: _RunSetup, figures):
+    """The run, handed as it ends to ``figures`` (its figures' worker, or None); or the exit
+    code of a run that produced no result."""
     from tt_mujoco.vehicle import reduced
     from tt_mujoco.viz import viewer as viewer_mod
 
@@ -334,9 +347,8 @@ def _simulate(setup: _RunSetup):
         setup.out,
         setup.created,
     )
-    # Forked now (before any thread starts), the figures' worker imports matplotlib while the
-    # simulation runs, and draws while the metrics are computed.
-    figures, on_rows = figure_worker(built) if shown["plots"] and live is None else (None, None)
+    # The figures' worker draws while the metrics are computed and the files written.
+    on_rows = None if figures is None else figure_rows(figures, built)
     update, bar = _progress_bar("simulating", shown["quiet"] or shown["viewer"])
     try:
         # Rows reach the disk every 8192 steps while the run goes on: a killed run keeps them.
@@ -350,20 +362,20 @@ def _simulate(setup: _RunSetup):
                 figures.cancel()
             raise
     except (BadInputError, ValueError, reduced.SingularityError) as err:
-        return abandon(out, created, live, str(err), EXIT_BAD_INPUT), None
+        return abandon(out, created, live, str(err), EXIT_BAD_INPUT)
     except viewer_mod.ViewerUnavailable as err:
-        return abandon(out, created, live, str(err), EXIT_BAD_INPUT), None
+        return abandon(out, created, live, str(err), EXIT_BAD_INPUT)
     except viewer_mod.ViewerClosed as err:
-        return abandon(out, created, live, f"{err}: run abandoned", EXIT_INTERRUPTED), None
+        return abandon(out, created, live, f"{err}: run abandoned", EXIT_INTERRUPTED)
     except KeyboardInterrupt:
-        return interrupted(out, created, live), None
+        return interrupted(out, created, live)
     except OSError as err:  # the rows on their way to the disk: a full disk, a quota
-        return rows_unwritable(out, created, live, err), None
+        return rows_unwritable(out, created, live, err)
     finally:
         watchdog.disarm()  # the outputs that follow are not the simulation's time
         if bar is not None:
             bar.close()
-    return result, figures
+    return result
 
 
 def _write(setup: _RunSetup, result, figures) -> int:

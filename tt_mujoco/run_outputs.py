@@ -32,6 +32,7 @@ __all__ = [
     "OUTPUTS",
     "STAGING",
     "TIMESERIES_FORMATS",
+    "figure_rows",
     "figure_worker",
     "write_outputs",
 ]
@@ -248,18 +249,27 @@ def _render_video(result, staging: Path, shown: Mapping, world):
     return Path(path), None
 
 
-def figure_worker(built):
-    """The run's figure worker (:class:`tt_mujoco.viz.run_figures.RunFigures`), forked before
-    the simulation, and the ``on_rows`` that hands it the time series as the run ends (a run
-    of fewer than 2 samples has none to draw)."""
+def figure_worker(scenario, shown: dict):
+    """The run's figure worker (:class:`tt_mujoco.viz.run_figures.RunFigures`), forked as soon
+    as the command line is read, before the set-up, so that matplotlib loads on the other core
+    while the run is built and simulated; None when the run draws no figures (``--no-plots``,
+    or a live view, which the figures would slow)."""
+    if not shown["plots"] or shown["live"] or shown["viewer"]:
+        return None
     from tt_mujoco.viz.run_figures import RunFigures
 
     # A maneuver's joined legs come without their error signals: the figures measure them.
-    figures = RunFigures(projects=built.plan is not None and bool(built.plan.cusps))
+    return RunFigures(projects=scenario.traj == "plan")
+
+
+def figure_rows(figures, built):
+    """The ``on_rows`` of :func:`tt_mujoco.sim.simulate` that hands ``figures`` (of
+    :func:`figure_worker`) the time series as the run ends (a run of fewer than 2 samples has
+    none to draw)."""
     reverse = built.scenario.reverse
 
     def on_rows(ts, reference_polyline, signals=None) -> None:
         if len(ts["t"]) >= 2:
             figures.draw(ts, reference_polyline, built.plant_params, built.world, signals, reverse)
 
-    return figures, on_rows
+    return on_rows

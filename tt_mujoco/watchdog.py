@@ -35,7 +35,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import NamedTuple
 
-from tt_mujoco import guard
+from tt_mujoco import background, guard
 
 __all__ = [
     "GRACE_FRACTION",
@@ -126,6 +126,7 @@ def supervise(
     finally:
         os.close(fd)
         os.close(done_read)
+        background.end_workers()  # forked before this watch (the figures'): the child used them
     for stream in (sys.stdout, sys.stderr):
         stream.flush()
     os._exit(code)  # the child ran the process's exit handlers; the parent runs none

@@ -1,7 +1,7 @@
 """The run's figures, drawn by a worker forked before its simulation.
 
 A single run's figures took longer than its simulation: importing matplotlib and drawing four
-figures one after the other, after the run. :class:`RunFigures` forks its worker when the run
+figures one after the other, after the run. :class:`RunFigures` forks its worker as the command
 starts (:class:`tt_mujoco.background.Worker`); the worker imports matplotlib (and the search
 its errors figure projects with) and draws a first small figure while the simulation runs on
 its own core. Handed the time series as soon as the episode ends (with its error signals, which
@@ -22,9 +22,9 @@ from tt_mujoco.viz import FIGURES
 __all__ = ["GROUPS", "RunFigures"]
 
 #: The run's figures (:data:`~tt_mujoco.viz.FIGURES`) in groups of about equal drawing
-#: time, one per process: the errors figure (four panels, and the path errors computed for
-#: them) takes as long as the three others.
-GROUPS = (("errors.png",), ("path.png", "torques.png", "articulation.png"))
+#: time, one per process: the errors figure (four panels) and the articulation's take about
+#: as long as the path's and the torques'.
+GROUPS = (("errors.png", "articulation.png"), ("path.png", "torques.png"))
 
 
 def _prepare() -> None:
