@@ -16,7 +16,8 @@ try runs, one after the other in new processes:
 - a long run, 40 s on the circle (``--traj circle --duration 40``, 40,001 steps), against the
   same run in the Python loop and its own C floor;
 - that long run with ``--controller examples/kanayama.py:kanayama_law`` (a plain-number law,
-  its machine code loaded from the cache like the loop's) against the built-in law's.
+  its machine code loaded from the cache like the loop's) against the built-in law's;
+- the main run with a train of three trailers (``--trailers 3``) against its own C floor.
 
 Each figure is the median over the tries of a ratio taken within one try: the machine is shared,
 and whole-process times drift by tenths of a second from one minute to the next.
@@ -40,6 +41,8 @@ ROOT = Path(__file__).resolve().parents[1]
 MAIN = ["--traj", "s_curve", "--no-video", "--quiet"]
 LONG = ["--traj", "circle", "--duration", "40", "--no-video", "--no-plots", "--quiet"]
 LAW = ["--controller", f"{ROOT}/examples/kanayama.py:kanayama_law"]
+#: The main run with a train of three trailers (issue 52's third cold case).
+TRAIN = ["--trailers", "3"]
 
 
 #: What a shell here may set that a user's does not: a compile forced into the run, and no
@@ -82,6 +85,9 @@ def one_try(tmp: Path, j: int) -> dict:
     long_floor = floor(["--traj", "circle", "--duration", "40"], long_series)
     _, long_python = run(LONG, tmp / f"long-python-{j}", python_env)
     law_whole, law_loop = run([*LONG, *LAW], tmp / f"law-{j}")
+    _, train_loop = run([*MAIN, "--no-plots", *TRAIN], tmp / f"train-{j}")
+    train_series = read_timeseries(tmp / f"train-{j}" / "timeseries.parquet")
+    train_floor = floor(["--traj", "s_curve", *TRAIN], train_series)
     figures = {
         "import numpy, mujoco (s)": importing,
         "C floor of the main episode (s)": c_floor,
@@ -95,13 +101,15 @@ def one_try(tmp: Path, j: int) -> dict:
         "40 s run, whole process / (import + floor)": long_whole / (importing + long_floor),
         "40 s kanayama_law, whole process / the built-in law's": law_whole / long_whole,
         "40 s kanayama_law's wall_time_s: floor / loop": long_floor / law_loop,
+        "main run, 3 trailers, wall_time_s: floor / loop": train_floor / train_loop,
     }
     print(
         f"try {j + 1}: import {importing:.3f} s, --help {helping:.3f} s, main {plots:.2f} s "
         f"(no plots {main_whole:.2f} s, its loop {main_loop:.3f} s, forced Python loop "
         f"{python_loop:.3f} s, floor {c_floor:.3f} s); 40 s run {long_whole:.2f} s (loop "
         f"{long_loop:.3f} s, Python loop {long_python:.3f} s, floor {long_floor:.3f} s), "
-        f"kanayama_law {law_whole:.2f} s (loop {law_loop:.3f} s)",
+        f"kanayama_law {law_whole:.2f} s (loop {law_loop:.3f} s); 3 trailers: loop "
+        f"{train_loop:.3f} s, floor {train_floor:.3f} s",
         flush=True,
     )
     return figures
@@ -113,11 +121,13 @@ def main() -> None:
     args = p.parse_args()
     with tempfile.TemporaryDirectory() as folder:
         tmp = Path(folder)
-        run(LONG, tmp / "warm-main")  # fills the cache if it is empty ...
-        from tt_mujoco.sim.loop import compiled  # ... by a background compile: wait for it
+        from tt_mujoco.sim.loop import compiled
 
-        while compiled.compile_in_progress(compiled._cache_dir()):
-            time.sleep(1.0)
+        # Each fills the cache if it lacks its entry, by a background compile: waited for.
+        for argv, name in ((LONG, "warm-main"), ([*MAIN, "--no-plots", *TRAIN], "warm-train")):
+            run(argv, tmp / name)
+            while compiled.compile_in_progress(compiled._cache_dir()):
+                time.sleep(1.0)
         run([*LONG, *LAW], tmp / "warm-law")  # compiles the law once
         tries = [one_try(tmp, j) for j in range(args.tries)]
     print(f"medians over {args.tries} tries:")

@@ -106,6 +106,7 @@ def _one(world, trailers, seed, plant, snr, reverse, disturbance) -> dict:
         "clearance_m": report["min_clearance_m"],
         "time_s": metrics["sim_time_s"],
         "saturation": metrics.get("torque_saturation_fraction", math.nan),
+        "clipped": metrics.get("disturbance_clipped_fraction", 0.0),
     }
 
 
@@ -200,6 +201,13 @@ def main(argv=None) -> int:
                     f"median {1000 * np.median(rms):.1f} mm, max {1000 * rms.max():.1f} mm, "
                     f"over {1000 * LEG_RMS_BOUND:.0f} mm in {int(np.sum(rms > LEG_RMS_BOUND))} runs"
                 )
+                over = [r["clipped"] for r in reached if r["leading_rms_m"] > LEG_RMS_BOUND]
+                if over:
+                    print(
+                        f"  over {1000 * LEG_RMS_BOUND:.0f} mm: the disturbance at the motors' "
+                        f"limit (no torque left on that wheel) a median {100 * np.median(over):.1f}"
+                        f" % of the time (max {100 * np.max(over):.1f} %)"
+                    )
                 driven = np.array([r["time_s"] for r in reached])
                 print(
                     f"  time to the goal (simulated): median {np.median(driven):.1f} s, "
