@@ -49,7 +49,7 @@ def check_user_code(built) -> None:
             if isinstance(err, AttributeError):
                 hint = " (does its __init__ call super().__init__(setup, gains)?)"
             raise HookError(f"{who} cannot be built: {describe_failure(err)}{hint}") from None
-        probe = Stepper(built)
+        probe = Stepper(built, steps=1)  # the first step's state: not the episode's tables
         probe.reset(np.random.default_rng(0))
         try:
             me, ref = probe.sense()

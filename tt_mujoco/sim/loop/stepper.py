@@ -112,12 +112,16 @@ class Stepper:
     ----------
     built : Build
         From :func:`tt_mujoco.sim.build.build`.
+    steps : int, optional
+        The control steps its records, noise and log are made for (default the run's,
+        ``built.steps``): a look at the first step alone needs one, not the episode's
+        tables (:mod:`tt_mujoco.sim.probe`).
     """
 
-    def __init__(self, built: Build):
+    def __init__(self, built: Build, steps: int | None = None):
         self.built = built
         self.dt = built.control_dt
-        self.steps = built.steps
+        self.steps = built.steps if steps is None else steps
         self.eta = built.nominal.eta
         bound = built.disturbance_limit
         self.limits = Limits(
