@@ -322,6 +322,15 @@ def hand_back(stepper, controller, status, k, law) -> None:
 _PROFILES: dict = {}
 
 
+def prepare_profile(built, steps: int) -> None:
+    """Make the table of the run's speed profile over ``steps`` steps ahead of the episode's
+    records (their :func:`target_record` then finds it made): a constant of the episode, as
+    its noise is, which a stepper's reset makes with the noise."""
+    target = inner_target(built.target)
+    if hasattr(target, "profile"):
+        _profile_table(target, built.control_dt, steps)
+
+
 def _profile_table(target, dt: float, steps: int) -> np.ndarray:
     """``(s_ref, v_ref, a_ref)`` of the target's speed profile at every control step, from
     the profile's own scalar ``state`` at the stepper's times ``k dt``."""

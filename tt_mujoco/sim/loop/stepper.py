@@ -177,6 +177,7 @@ class Stepper:
         self._signals: dict[str, np.ndarray] = {}  # what the controller logged, by name
         noise_v, noise_w = b.noise_std
         self.noise = rng.standard_normal(2 * (self.steps + 1)) if noise_v or noise_w else None
+        episode.prepare_profile(b, self.steps)  # the targets' table, with the noise
         wind = parse_wind(b.scenario.wind)
         # the gusts are drawn after the noise, so that a wind leaves the noise as it was
         self.wind_speeds = None if wind.calm else wind.speeds(rng, self.steps, self.dt)
