@@ -16,6 +16,10 @@ CASES = [
         ["tt_mujoco.run", "--seed", "-1"],
         "--seed: '-1' is not allowed: it must be an integer in [0, 2**63 - 1]",
     ),
+    # a value that names no folder (the current one, to Path) and a number argparse took for
+    # an option it did not know ("expected one argument")
+    (["tt_mujoco.run", "--out", ""], "argument --out: '' is not allowed: give a file or folder"),
+    (["tt_mujoco.run", "--noise-snr-db", "-inf"], "'-inf' is not allowed: it must be a finite"),
 ]
 
 
@@ -124,3 +128,27 @@ def test_every_command_s_numbers_are_read_as_the_option_schema_reads_them():
     ):
         with pytest.raises(BadInputError, match=said):
             parser.parse_args(argv)
+
+
+def test_every_command_s_paths_name_something_and_its_negative_numbers_are_values():
+    """Every command's parser is a Parser: a ``type=Path`` option refuses a name that is
+    empty or blank (``Path("")`` is the current folder), and a value that is a negative number
+    in any spelling (``-1e3``, ``-inf``) is the option's value, not an unknown option."""
+    import math
+    from pathlib import Path
+
+    from tt_mujoco.cliargs import BadInputError, Parser
+
+    parser = Parser()
+    parser.add_argument("--out", type=Path)
+    parser.add_argument_group("g").add_argument("--x", type=float)
+    for text in ("", "  "):
+        with pytest.raises(BadInputError, match=r"argument --out: '\s*' is not allowed: give a"):
+            parser.parse_args(["--out", text])
+    assert parser.parse_args(["--out", "a b"]).out == Path("a b")
+    for text, value in (("-1e3", -1000.0), ("-2.5E-1", -0.25), ("-5", -5.0), ("-.5", -0.5)):
+        assert parser.parse_args(["--x", text]).x == value
+    assert parser.parse_args(["--x", "-inf"]).x == -math.inf
+    assert math.isnan(parser.parse_args(["--x", "-NaN"]).x)
+    with pytest.raises(BadInputError, match="unrecognized arguments: -q"):
+        parser.parse_args(["-q"])  # an option-like word that is no number stays one

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import re
+from pathlib import Path
 
 from tt_mujoco.registry import closest
 from tt_mujoco.schema_values import number_text
@@ -35,10 +36,24 @@ def _ascii_number(text: str) -> float:
     return value
 
 
-#: The readers of ``type=int`` and ``type=float`` options, which every command's numbers are
-#: read by: the option schema's (:func:`tt_mujoco.schema_values.number_text`: ASCII, a whole
-#: float as an integer), not Python's ``int``, which reads ``"６４"`` as 64.
-_NUMBER_TYPES = {int: _ascii_integer, float: _ascii_number}
+def _path_text(text: str) -> Path:
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"{text!r} is not allowed: give a file or folder name")
+    return Path(text)
+
+
+#: The readers of ``type=int``, ``type=float`` and ``type=Path`` options, which every
+#: command's numbers and paths are read by: the option schema's numbers
+#: (:func:`tt_mujoco.schema_values.number_text`: ASCII, a whole float as an integer), not
+#: Python's ``int``, which reads ``"６４"`` as 64; a path that names something (an empty one
+#: is the current folder to ``Path``).
+_NUMBER_TYPES = {int: _ascii_integer, float: _ascii_number, Path: _path_text}
+
+#: What a value that starts with "-" is when it is a number (argparse takes only "-5" and
+#: "-.5" for one, and "-1e3" or "-inf" for an option it does not know): then a value.
+_NEGATIVE_NUMBER = re.compile(
+    r"^-(\d+\.?\d*([eE][-+]?\d+)?|\.\d+([eE][-+]?\d+)?|inf|infinity|nan)$", re.IGNORECASE
+)
 
 
 class Parser(argparse.ArgumentParser):
@@ -49,6 +64,7 @@ class Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
         for kind, reader in _NUMBER_TYPES.items():  # argparse's own registry of types
             self.register("type", kind, reader)
+        self._negative_number_matcher = _NEGATIVE_NUMBER  # argparse reads it (3.11 to 3.13)
 
     def error(self, message: str):
         raise BadInputError(message + self._hint(message))
