@@ -186,3 +186,17 @@ def test_a_built_in_metric_or_run_key_given_as_an_extra_metric_is_named_as_such(
     for name in ("rmse_v", "trailer_offtrack_rms", *RUN_KEYS):
         with pytest.raises(ValueError, match=r"every run's metrics\.json holds it"):
             resolve_metrics([name])
+
+
+def test_a_value_in_a_message_is_shown_as_the_number_it_is():
+    """NumPy 2's repr of its scalars (``np.int64(-3)``) is no way to name a user's value: a
+    scalar is shown as the Python number it holds, in a tuple or a list too; an array stays
+    an array."""
+    import numpy as np
+
+    from tt_mujoco.registry import shown
+
+    assert shown(np.int64(-3)) == "-3"
+    assert shown(np.float64(np.nan)) == "nan"
+    assert shown((np.float64(1.5), "x", [np.bool_(True)])) == "(1.5, 'x', [True])"
+    assert shown(np.array(1.0)) == "array(1.)"

@@ -384,6 +384,7 @@ _ANY_VALUE = st.one_of(
     st.lists(st.integers(), max_size=3),
     st.dictionaries(st.text(max_size=5), st.integers(), max_size=2),
     st.floats(allow_nan=True).map(np.float64),
+    st.integers(min_value=-(2**63), max_value=2**63 - 1).map(np.int64),
 )
 
 
@@ -397,6 +398,7 @@ def test_every_parser_takes_a_value_or_refuses_it_naming_the_option(opt, value):
         parsed = opt.parse(value, opt.name)
     except ValueError as err:
         assert opt.name in str(err) or "is not allowed" in str(err), err
+        assert "np." not in str(err), err  # the value as the number it is, not NumPy's repr
         return
     if isinstance(parsed, float):
         assert np.isfinite(parsed), parsed

@@ -72,10 +72,11 @@ def check_finite_fields(obj, what: str, names) -> None:
 
 def shown(value, limit: int = 80) -> str:
     """``repr(value)`` for a message, on one line (:func:`~tt_mujoco.guard.one_line`) and cut
-    to ``limit`` characters (a 10 MB value is not echoed back); a user's object whose
-    ``repr`` fails is named by its type."""
+    to ``limit`` characters (a 10 MB value is not echoed back), NumPy's scalars as the plain
+    numbers they hold (``-3``, not ``np.int64(-3)``), in a tuple or list too; a user's object
+    whose ``repr`` fails is named by its type."""
     try:
-        text = repr(value)
+        text = repr(_plain(value))
         if not isinstance(text, str):
             raise TypeError("__repr__ returned a non-string")
         text = one_line(text)
@@ -86,6 +87,17 @@ def shown(value, limit: int = 80) -> str:
     if len(text) <= limit:
         return text
     return f"{text[: limit - 30]}... ({len(text)} characters)"
+
+
+def _plain(value, depth: int = 2):
+    """``value`` with NumPy's scalars (told without importing NumPy) as Python's, in tuples
+    and lists ``depth`` deep."""
+    kind = type(value)
+    if kind.__module__ == "numpy" and kind.__name__ != "ndarray" and hasattr(value, "item"):
+        return value.item()
+    if depth and kind in (tuple, list) and len(value) <= 64:
+        return kind(_plain(item, depth - 1) for item in value)
+    return value
 
 
 def real_number(value) -> bool:

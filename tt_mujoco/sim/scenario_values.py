@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from tt_mujoco.registry import is_hook
 from tt_mujoco.schema import boolean, choice, number, table, text
-from tt_mujoco.schema_values import number_text
+from tt_mujoco.schema_values import number_text, refuse
 from tt_mujoco.sim.parts.faults import parse_fault
 from tt_mujoco.sim.parts.ground import parse_patch
 from tt_mujoco.vehicle.params import MAX_TRAILERS, SETTABLE_FIELDS, Params
@@ -53,7 +53,7 @@ def _reraised(parse):
 def spec(parse):
     def convert(value, label):
         if not isinstance(value, str):
-            raise ValueError(f"{label}={value!r} is not allowed: give its text, e.g. 'flat'")
+            raise refuse(label, value, "give its text, e.g. 'flat'")
         try:
             return parse(value).spec()
         except ValueError as err:
@@ -107,10 +107,8 @@ def eta_schedule(value, label):
     try:
         return boolean(value, label)
     except ValueError:
-        raise ValueError(
-            f"{label}={value!r} is not allowed: use False, True (curvature) or one of "
-            f"{', '.join(repr(e) for e in ETA_SCHEDULES)}"
-        ) from None
+        schedules = ", ".join(repr(e) for e in ETA_SCHEDULES)
+        raise refuse(label, value, f"use False, True (curvature) or one of {schedules}") from None
 
 
 def trailers(value, label):
@@ -126,7 +124,7 @@ def trailers(value, label):
 
 def train(value, label):
     if not isinstance(value, list | tuple) or not all(isinstance(t, dict) for t in value):
-        raise ValueError(f"{label}={value!r} is not allowed: give a list of tables")
+        raise refuse(label, value, "give a list of tables")
     return [dict(t) for t in value]
 
 

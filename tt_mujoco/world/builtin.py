@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 
+from tt_mujoco.registry import shown
 from tt_mujoco.world.world import World, WorldError, read_world, world_from_table
 
 __all__ = ["KEPT_WORLD", "NO_WORLD", "WORLDS", "kept_world_toml", "parse_world"]
@@ -109,8 +110,8 @@ def parse_world(value) -> World | None:
     file at that path (its contents read each time the file changes)."""
     if not isinstance(value, str) or not value.strip():
         raise WorldError(
-            f"world={value!r} is not allowed: use {NO_WORLD}, one of {', '.join(WORLDS)}, or a "
-            "world file path/to/world.toml"
+            f"world={shown(value)} is not allowed: use {NO_WORLD}, one of {', '.join(WORLDS)}, "
+            "or a world file path/to/world.toml"
         )
     text = value.strip()
     if text.endswith(".toml") and Path(text).is_file():
