@@ -256,6 +256,20 @@ def test_a_log_without_a_column_or_with_a_bad_fit_is_exit_2(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
+def test_a_log_that_never_turns_is_exit_2_saying_so(tmp_path, capsys):
+    """Straight driving leaves the hitch at 0: nothing of L or L0 is in the log. The fit's
+    intervals were NaN, a RuntimeWarning leaked and identified.toml kept the first guess;
+    now one line says why, and nothing is written."""
+    t = np.arange(0.0, 20.0, 0.01)
+    path = tmp_path / "straight.csv"
+    columns = {"t": t, "v": np.full(t.size, 0.5), "omega": np.zeros(t.size), "phi": 0 * t}
+    write_timeseries(path, columns, list(columns))
+    assert identify.main([str(path), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "the log tells nothing of L, L0" in err[0], err
+    assert not (tmp_path / "o").exists()
+
+
 _VALUE = st.floats(allow_nan=True, allow_infinity=True, width=64) | st.integers(-(10**6), 10**6)
 
 

@@ -18,6 +18,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from tt_mujoco import bag, compare, render, run, runfolder
+from tt_mujoco.analysis.metric_names import METRIC_UNITS
 from tt_mujoco.outputs import CLAIM_FILE, REFERENCE_FILE, read_timeseries, write_timeseries
 from tt_mujoco.world.builtin import KEPT_WORLD
 
@@ -144,6 +145,8 @@ def _cases() -> dict[str, tuple]:
                 _edit_metrics(field.path, value),
                 "parquet",
             )
+    for name in METRIC_UNITS:  # every built-in metric: a number or null, never text
+        cases[f"metrics {name}=text"] = (_edit_metrics(name, "abc"), "parquet")
     cases["metrics NaN"] = (_metrics_text('{"config": {}, "rmse_v": NaN}', "NaN"), "parquet")
     cases["metrics 1e400"] = (_metrics_text('{"config": {}, "rmse_v": 1e400}', "beyond"), "parquet")
     cases["metrics huge int"] = (

@@ -76,7 +76,8 @@ class RunFolderError(BadInputError):
 
 _TEXT = ((str,), "a string")
 #: The fields of ``metrics.json`` that the readers use, where the run writes them; every other
-#: key is a metric (a number, a string, null or a table of them) and is left to its reader.
+#: key is a metric: a built-in one a number or null (:func:`_builtin_metrics_why`), a user's
+#: a number, a string, null or a table of them, left to its reader.
 METRICS_FIELDS = (
     JsonField("status", *_TEXT),
     JsonField("message", *_TEXT),
@@ -190,10 +191,23 @@ def _read_metrics(path: Path) -> dict:
         )
     if "config" not in doc:
         raise RunFolderError(f"{path} is not a run's metrics: it has no config")
-    why = check_fields(doc, METRICS_FIELDS)
+    why = check_fields(doc, METRICS_FIELDS) or _builtin_metrics_why(doc)
     if why:
         raise RunFolderError(f"{path}: {why}")
     return doc
+
+
+def _builtin_metrics_why(doc: Mapping) -> str:
+    """Why one of the built-in metrics ``doc`` holds is not what every run writes there (a
+    number, or null where it has none), or "": the readers compare and draw them."""
+    from tt_mujoco.analysis.metric_names import metric_unit
+
+    for key, value in doc.items():
+        if metric_unit(key) is None or value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            return f"{key} holds {shown_json(value)}, not a number or null (a built-in metric)"
+    return ""
 
 
 def _read_series(path: Path, params: Params, steps) -> dict[str, np.ndarray]:
