@@ -107,6 +107,12 @@ def _file_damage(name: str, how: str):
             file.write_bytes(data[: len(data) // 2])
         elif how == "not UTF-8":
             file.write_bytes(b"\xff\xfe\x80" + data)
+        elif how == "a device":  # endless bytes: never to be read
+            file.unlink()
+            file.symlink_to("/dev/zero")
+        elif how == "a folder":
+            file.unlink()
+            file.mkdir()
         return name
 
     return edit
@@ -174,7 +180,7 @@ def _cases() -> dict[str, tuple]:
         "parquet",
     )
     cases["steps beyond rows"] = (_edit_metrics("steps", 10**7, "the file is cut"), "parquet")
-    for how in ("missing", "empty", "truncated", "not UTF-8"):
+    for how in ("missing", "empty", "truncated", "not UTF-8", "a device", "a folder"):
         cases[f"metrics.json {how}"] = (_file_damage("metrics.json", how), "parquet")
         cases[f"timeseries.parquet {how}"] = (_file_damage("timeseries.parquet", how), "parquet")
         cases[f"timeseries.csv {how}"] = (_file_damage("timeseries.csv", how), "csv")
@@ -251,7 +257,7 @@ for _name in CASES:
 def test_every_command_refuses_a_damaged_run_in_one_line(finished, tmp_path, capsys, command, name):
     damage, fmt = CASES[name]
     folder, says = _damaged(finished, tmp_path, damage, fmt)
-    before = {p: p.read_bytes() for p in folder.iterdir()}
+    before = _snapshot(folder)
     out = tmp_path / "out"
     out.mkdir()
     code = COMMANDS[command](folder, finished["parquet"], out)
@@ -260,8 +266,21 @@ def test_every_command_refuses_a_damaged_run_in_one_line(finished, tmp_path, cap
     assert len(err.strip().splitlines()) == 1 and says in err, err
     assert "np." not in err, err  # a value as the user reads it, not NumPy's repr
     assert not list(out.iterdir())
-    assert {p: p.read_bytes() for p in folder.iterdir()} == before
+    assert _snapshot(folder) == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "run"]
+
+
+def _snapshot(folder: Path) -> dict:
+    """A run folder's files by name: their bytes, a link's target, a folder's mark (a link to
+    a device is never read)."""
+    return {
+        p: ("link", str(p.readlink()))
+        if p.is_symlink()
+        else "folder"
+        if p.is_dir()
+        else p.read_bytes()
+        for p in folder.iterdir()
+    }
 
 
 @pytest.mark.parametrize("command", list(COMMANDS))

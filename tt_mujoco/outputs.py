@@ -206,10 +206,11 @@ REFERENCE_FILE = "reference_path.parquet"
 
 
 def run_timeseries_file(run_dir: Path) -> Path:
-    """A run folder's time series: ``timeseries.parquet`` when it is there, else the path of
+    """A run folder's time series: ``timeseries.parquet`` when there is anything by that name
+    (a link to nothing too: the caller refuses what is not a file), else the path of
     ``timeseries.csv`` (which the caller checks for)."""
     parquet = Path(run_dir) / "timeseries.parquet"
-    return parquet if parquet.is_file() else parquet.with_suffix(".csv")
+    return parquet if os.path.lexists(parquet) else parquet.with_suffix(".csv")
 
 
 def read_timeseries(path) -> dict[str, np.ndarray]:

@@ -149,6 +149,10 @@ def read_run(folder) -> FinishedRun:
             f"its writer was interrupted; read it once it is finished (remove {CLAIM_FILE} "
             "only if no run is writing it)"
         )
+    from tt_mujoco.world.builtin import KEPT_WORLD
+
+    for file in (metrics_file, ts_file, folder / REFERENCE_FILE, folder / KEPT_WORLD):
+        _refuse_unless_file(file, folder)
     missing = [str(f) for f in (metrics_file, ts_file) if not f.is_file()]
     if not ts_file.is_file():  # neither form of the time series
         missing[-1] = f"{ts_file.with_suffix('.parquet')} (or {ts_file.with_suffix('.csv').name})"
@@ -195,6 +199,16 @@ def _read_metrics(path: Path) -> dict:
     if why:
         raise RunFolderError(f"{path}: {why}")
     return doc
+
+
+def _refuse_unless_file(file: Path, folder: Path) -> None:
+    """Refuse ``file`` of the run folder ``folder`` when something by its name is not a file
+    (a folder, a device, a link to nothing): none is read, a device least of all."""
+    if (file.exists() or file.is_symlink()) and not file.is_file():
+        raise RunFolderError(
+            f"{file} is not a file (a folder, a device, or a link to nothing): {folder} is "
+            "not a finished run's folder"
+        )
 
 
 def _builtin_metrics_why(doc: Mapping) -> str:
