@@ -216,10 +216,11 @@ def fit_train(t, v, omega, phis, p: Params, fit=("L", "L0"), smooth_s: float | N
         design = np.full((len(x0), len(x0)), np.inf)
     if not np.all(np.isfinite(np.diag(design))):  # a log with nothing to tell: refused
         turned = math.degrees(float(np.max(np.abs(phis))))
+        dead = [n for n, column in zip(names, result.jac.T, strict=True) if not np.any(column)]
         raise LogError(
-            f"the log tells nothing of {', '.join(names)}: its hitch angles reach {turned:.3g}"
-            " deg at most, where the fit's parameters do not change them; log a run that turns "
-            "(python -m tt_mujoco.excite plans one)"
+            f"the log tells nothing of {', '.join(dead or names)}: its hitch angles reach "
+            f"{turned:.3g} deg at most, where the fit's parameters do not change them; log a run "
+            "that turns (python -m tt_mujoco.excite plans one)"
         )
     dof = max(result.fun.size - len(x0), 1)
     plain = design * float(result.fun @ result.fun) / dof
