@@ -172,7 +172,7 @@ def _table(ranked: list[Candidate]) -> str:
 @guard.command
 def main(argv: list[str] | None = None) -> int:
     """``python -m tt_mujoco.excite``: see the module."""
-    from tt_mujoco.identify import KINEMATIC, LogError, fit_names
+    from tt_mujoco.identify import INERTIAL, KINEMATIC, LogError, fit_names
     from tt_mujoco.outputs import atomic_write, claim_folder, release_folder
     from tt_mujoco.sim import Scenario
 
@@ -184,13 +184,20 @@ def main(argv: list[str] | None = None) -> int:
         "--fit",
         default="L,L0,eta",
         help="of L, L0, eta and hitch_lag (the log's, judged against its period) "
-        "(default L,L0,eta)",
+        "(default L,L0,eta), or of the masses and inertias (Mr, Ird, ...: a run whose speed "
+        "and turning swing, tt_mujoco.excite_inertia)",
     )
     parser.add_argument("--eta", default="same_path", help="the vehicle's eta")
     parser.add_argument("--trailers", type=int, default=1)
     parser.add_argument("--rate", type=float, default=50.0, help="the log's rate (Hz)")
     parser.add_argument(
         "--encoder-noise-deg", type=float, default=0.05, help="the hitch encoders' noise (deg)"
+    )
+    parser.add_argument(
+        "--snr-db", type=float, default=20.0, help="masses: the sensors' noise (dB, default 20)"
+    )
+    parser.add_argument(
+        "--duration", type=float, default=30.0, help="masses: the run's length (s, default 30)"
     )
     parser.add_argument("--out", type=Path, default=None, help="a new folder")
     args = parser.parse_args(argv)
@@ -200,9 +207,17 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_BAD_INPUT
 
     try:
-        fit = fit_names(args.fit, KINEMATIC)
+        fit = fit_names(args.fit, KINEMATIC + INERTIAL)
     except LogError as err:
         return fail(str(err))
+    inertial = [name for name in fit if name in INERTIAL]
+    if inertial and len(inertial) < len(fit):
+        return fail(
+            f"--fit {args.fit!r} is not allowed: plan the lengths ({', '.join(KINEMATIC)}) and "
+            "the masses and inertias in two excitations"
+        )
+    if inertial:
+        return _main_inertial(args, tuple(fit), fail)
     for name, value in (("--rate", args.rate), ("--encoder-noise-deg", args.encoder_noise_deg)):
         if not (math.isfinite(value) and value > 0):
             return fail(f"{name} {value!r} is not allowed: give a positive number")
@@ -226,6 +241,41 @@ def main(argv: list[str] | None = None) -> int:
     atomic_write(out / "excitation.md", _table(ranked))
     release_folder(out)
     print(_table(ranked), end="")
+    print(
+        f"best: {best.label()}, every parameter within {100 * best.worst:.2g} % (95 %); "
+        f"log it with: python -m tt_mujoco.run --config {out}/excitation.toml"
+    )
+    return EXIT_OK
+
+
+def _main_inertial(args, fit: tuple, fail) -> int:
+    """``excite --fit Mr,...``: the run whose log tells the masses and inertias best
+    (:mod:`tt_mujoco.excite_inertia`), written with its path."""
+    from tt_mujoco import excite_inertia
+    from tt_mujoco.defaults import MAX_DURATION
+    from tt_mujoco.outputs import atomic_write, claim_folder, release_folder
+    from tt_mujoco.sim import Scenario
+
+    if not (math.isfinite(args.snr_db) and 0.0 < args.snr_db <= 200.0):
+        return fail(f"--snr-db {args.snr_db!r} is not allowed: give a number in (0, 200] dB")
+    if not (math.isfinite(args.duration) and 5.0 <= args.duration <= MAX_DURATION):
+        return fail(f"--duration {args.duration!r} is not allowed: give 5 to {MAX_DURATION:g} s")
+    try:
+        scenario = Scenario(eta=args.eta, trailers=args.trailers)
+        scenario.validate()
+        out, _ = claim_folder(args.out, Path("renders") / "excite")
+    except ValueError as err:
+        return fail(str(err))
+    ranked = excite_inertia.rank_inertial(scenario, fit, args.snr_db, args.duration)
+    if not ranked:
+        release_folder(out)
+        return fail("no candidate run could be logged and fitted")
+    best = ranked[0]
+    atomic_write(out / "excitation_path.csv", excite_inertia.path_csv(best, args.duration))
+    atomic_write(out / "excitation.toml", excite_inertia.run_toml(scenario, args.duration))
+    atomic_write(out / "excitation.md", excite_inertia.table(ranked))
+    release_folder(out)
+    print(excite_inertia.table(ranked), end="")
     print(
         f"best: {best.label()}, every parameter within {100 * best.worst:.2g} % (95 %); "
         f"log it with: python -m tt_mujoco.run --config {out}/excitation.toml"
