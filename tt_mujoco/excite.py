@@ -12,7 +12,12 @@ Runs that come within :data:`JACKKNIFE_MARGIN` of the jackknife angle are left o
 candidate (the smallest largest relative half width) is written as ``excitation.toml`` into
 ``--out``: ``python -m tt_mujoco.run --config OUT/excitation.toml`` logs it.
 
-Exit codes: 0 written; 2 bad input (a parameter not fittable, an --out in use, no candidate).
+With ``--fit`` naming masses and inertias (``Mr``, ``Ird``, ...), the candidates are runs whose
+speed and turning swing, each logged with the sensors' noise and fitted as ``identify`` fits
+it (:mod:`tt_mujoco.excite_inertia`); the best is written with its path.
+
+Exit codes: 0 written; 2 bad input (a parameter not fittable, lengths and masses asked
+together, an --out in use, no candidate).
 """
 
 from __future__ import annotations
