@@ -149,7 +149,8 @@ def finite_prefix_length(columns: Mapping[str, np.ndarray], names: Sequence[str]
     return int(hits[0]) if hits.size else bad.size
 
 
-def _check_inputs(ts, torque_limit) -> tuple[dict[str, np.ndarray], int]:
+def _check_inputs(ts) -> tuple[dict[str, np.ndarray], int]:
+    """The run's required columns as float arrays and its length, checked."""
     if not isinstance(ts, Mapping):
         raise ValueError(f"ts must be a mapping of column name -> array, got {type(ts).__name__}")
     missing = [name for name in REQUIRED_COLUMNS if name not in ts]
@@ -170,6 +171,10 @@ def _check_inputs(ts, torque_limit) -> tuple[dict[str, np.ndarray], int]:
         raise ValueError(f"all columns must have the length of 't' ({n}), got {wrong}")
     if n == 0:
         raise ValueError("time series must hold at least one sample, got 0")
+    return columns, n
+
+
+def _check_limit(torque_limit) -> None:
     if (
         isinstance(torque_limit, bool)
         or not isinstance(torque_limit, numbers.Real)
@@ -177,7 +182,6 @@ def _check_inputs(ts, torque_limit) -> tuple[dict[str, np.ndarray], int]:
         or torque_limit <= 0
     ):
         raise ValueError(f"torque_limit must be a finite number > 0 (N m), got {torque_limit!r}")
-    return columns, n
 
 
 def error_signals(
@@ -254,7 +258,7 @@ def run_error_signals(
     dict of ndarray
         :func:`error_signals`' signals, each of ``ts``' length.
     """
-    columns, n_total = _check_inputs(ts, 1.0)
+    columns, n_total = _check_inputs(ts)
     n, c = _finite_part(ts, columns)
     driven = None if reverse else _driven_path(np.column_stack([c["x"], c["y"]]))
     signals = error_signals(c, as_polyline(reference_polyline), reverse, driven)
@@ -372,7 +376,8 @@ def compute_metrics(
         On missing or malformed columns, a bad polyline or torque limit, or a ``t`` that does not
         strictly increase over the finite prefix.
     """
-    columns, n_total = _check_inputs(ts, torque_limit)
+    columns, n_total = _check_inputs(ts)
+    _check_limit(torque_limit)
     reference = as_polyline(reference_polyline)
     n, c = _finite_part(ts, columns)
     t = c["t"]

@@ -47,44 +47,28 @@ REFERENCE_COLOR = "0.2"
 def tracking_errors(
     ts: Mapping, reference_polyline=None, reverse: bool = False
 ) -> dict[str, np.ndarray]:
-    """Error signals of a run, those of :func:`tt_mujoco.analysis.metrics.error_signals`.
+    """Error signals of a run, as its metrics measure them.
 
     Returns
     -------
     dict
         ``e_v``, ``e_omega``; when a reference polyline is given, ``lateral`` (P to the path,
         signed, positive left of the path's direction of travel), ``trailer_lateral`` (P0's
-        cross-track where it counts) and ``trailer_offtrack``; their RMS values are the
-        metrics'. Samples
-        after the first non-finite position are NaN.
+        cross-track where it counts) and ``trailer_offtrack``, those of
+        :func:`tt_mujoco.analysis.metrics.run_error_signals` (NaN after the run's finite
+        part), whose RMS values are the metrics'; without one, ``trailer_offtrack`` of
+        :func:`tt_mujoco.analysis.metrics.follower_offtrack`.
     """
-    names = ("t", "x", "y", "x0", "y0", "x_ref", "y_ref", "v", "v_d", "omega", "omega_d")
-    c = _columns(ts, tuple(n for n in names if n in ts or n not in ("x_ref", "y_ref")))
-    c.update({n: np.asarray(ts[n], dtype=float) for n in metrics.OPTIONAL_COLUMNS if n in ts})
-    out = {"e_v": c["v"] - c["v_d"], "e_omega": c["omega"] - c["omega_d"]}
-    # Positions up to the first non-finite one (a run that diverged ends in NaN rows); the
-    # distances after it are NaN.
-    positions = np.column_stack([c["x"], c["y"], c["x0"], c["y0"]])
-    finite = np.all(np.isfinite(positions), axis=1)
-    n = len(finite) if finite.all() else int(np.argmin(finite))
-
-    def padded(values: np.ndarray) -> np.ndarray:
-        return np.concatenate([values, np.full(len(finite) - n, np.nan)])
-
     if reference_polyline is not None:
-        prefix = {k: v[:n] for k, v in c.items()}
-        prefix.setdefault("x_ref", prefix["x"])
-        prefix.setdefault("y_ref", prefix["y"])
-        signals = metrics.error_signals(prefix, reference_polyline, reverse)
-        out["lateral"] = padded(signals["lateral"])
-        out["trailer_lateral"] = padded(signals["trailer_lateral"])
-        out["trailer_offtrack"] = padded(signals["trailer_offtrack"])
-    else:
-        leader, follower = positions[:n, :2], positions[:n, 2:]
-        if reverse:
-            leader, follower = follower, leader
-        out["trailer_offtrack"] = padded(metrics.trailer_offtrack(leader, follower))
-    return out
+        signals = metrics.run_error_signals(ts, reference_polyline, reverse)
+        names = ("e_v", "e_omega", "lateral", "trailer_lateral", "trailer_offtrack")
+        return {name: signals[name] for name in names}
+    c = _columns(ts, ("t", "x", "y", "x0", "y0", "v", "v_d", "omega", "omega_d"))
+    return {
+        "e_v": c["v"] - c["v_d"],
+        "e_omega": c["omega"] - c["omega_d"],
+        "trailer_offtrack": metrics.follower_offtrack(ts, reverse),
+    }
 
 
 # --- helpers --------------------------------------------------------------------------------------
