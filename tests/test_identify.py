@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from tt_mujoco import identify
 from tt_mujoco.outputs import write_timeseries
 from tt_mujoco.sim import Scenario, simulate
+from tt_mujoco.vehicle_log import noisy
 
 
 @pytest.fixture(scope="module")
@@ -37,9 +38,9 @@ def test_a_noisy_encoders_log_keeps_the_truth_in_the_interval(s_curve):
     """0.05 deg of encoder noise on the hitch angle (seeded): the lengths' 95 % intervals
     (measured half widths about 3 cm) hold the truth."""
     t, v, omega, phis = s_curve
-    noisy = phis + np.radians(0.05) * np.random.default_rng(0).standard_normal(phis.shape)
+    encoded = phis + np.radians(0.05) * np.random.default_rng(0).standard_normal(phis.shape)
     guess = Scenario(params={"L": 0.35, "L0": 0.45}, eta=-1 / 7).plant_params()
-    fit = identify.fit_train(t, v, omega, noisy, guess)
+    fit = identify.fit_train(t, v, omega, encoded, guess)
     low, high = fit.estimates - fit.half_widths, fit.estimates + fit.half_widths
     assert np.all(low <= [0.3, 0.4]) and np.all([0.3, 0.4] <= high)
     assert np.all(fit.half_widths < 0.1)
@@ -83,9 +84,9 @@ def test_a_noisy_late_hitch_keeps_the_truth_in_the_intervals(s_curve):
     """0.05 deg of encoder noise and 40 ms of lag (seeded): every 95 % interval holds it
     (measured: the lag within 0.6 ms, its half width 5.8 ms; L within 0.1 %)."""
     t, v, omega, phis = _late(s_curve, 0.04)
-    noisy = phis + np.radians(0.05) * np.random.default_rng(1).standard_normal(phis.shape)
+    encoded = phis + np.radians(0.05) * np.random.default_rng(1).standard_normal(phis.shape)
     guess = Scenario(params={"L": 0.35, "L0": 0.45}, eta=-1 / 7).plant_params()
-    fit = identify.fit_train(t, v, omega, noisy, guess, fit=("L", "L0", "hitch_lag"))
+    fit = identify.fit_train(t, v, omega, encoded, guess, fit=("L", "L0", "hitch_lag"))
     low, high = fit.estimates - fit.half_widths, fit.estimates + fit.half_widths
     assert np.all(low <= [0.3, 0.4, 0.04]) and np.all([0.3, 0.4, 0.04] <= high)
 
@@ -508,10 +509,6 @@ def test_other_topics_are_named_on_the_command_line(tmp_path, capsys):
 
 
 # --- 20 dB of measurement noise on the MuJoCo plant's log -----------------------------------
-def _noisy(x, rng, snr_db=20.0):
-    return x + np.sqrt(np.mean(x**2)) / 10 ** (snr_db / 20) * rng.standard_normal(x.shape)
-
-
 def test_a_noisy_mujoco_log_gives_the_lengths_within_2_percent_in_their_intervals():
     """The MuJoCo plant (tyres, contact), a trailer of 0.35 and 0.45 m, v and omega with 20 dB
     of noise (three seeds). Unaveraged, the noise on the inputs biases the fit (errors in the
@@ -523,7 +520,7 @@ def test_a_noisy_mujoco_log_gives_the_lengths_within_2_percent_in_their_interval
     truth = np.array([0.35, 0.45])
     for seed in range(3):
         rng = np.random.default_rng(seed)
-        v, omega = _noisy(ts["v"], rng), _noisy(ts["omega"], rng)
+        v, omega = noisy(ts["v"], 20.0, rng), noisy(ts["omega"], 20.0, rng)
         fit = identify.fit_train(ts["t"], v, omega, ts["phi"][:, None], guess)
         assert fit.input_snr_db == pytest.approx(20.0, abs=1.0)
         assert fit.inputs_smoothed_s == identify.INPUT_WINDOW_S
@@ -547,7 +544,7 @@ def test_a_noisy_mujoco_log_of_two_trailers_gives_each_length_within_2_percent()
     for seed in range(3):
         rng = np.random.default_rng(seed)
         fit = identify.fit_train(
-            ts["t"], _noisy(ts["v"], rng), _noisy(ts["omega"], rng), phis, guess
+            ts["t"], noisy(ts["v"], 20.0, rng), noisy(ts["omega"], 20.0, rng), phis, guess
         )
         assert np.all(np.abs(fit.estimates / truth - 1.0) < 0.02), fit.estimates
         held += int(np.sum(np.abs(fit.estimates - truth) <= fit.half_widths))

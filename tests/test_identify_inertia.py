@@ -14,7 +14,7 @@ import pytest
 from tt_mujoco import identify
 from tt_mujoco.identify_inertia import fit_inertia
 from tt_mujoco.sim import Scenario, simulate
-from tt_mujoco.vehicle_log import LogError
+from tt_mujoco.vehicle_log import LogError, noisy
 
 WEAVE = str(Path(__file__).resolve().parents[1] / "examples" / "weave_surge.csv")
 #: The vehicle the logs are made with: not the project's defaults (Mf 9, Mr 6, Ird 0.02).
@@ -35,8 +35,7 @@ def _noisy(ts: dict, db: float, seed: int) -> dict:
     out = dict(ts)
     for name in SENSORS:
         if name in ts:
-            x = ts[name]
-            out[name] = x + np.sqrt(np.mean(x**2)) * 10 ** (-db / 20) * rng.standard_normal(x.size)
+            out[name] = noisy(ts[name], db, rng)
     return out
 
 

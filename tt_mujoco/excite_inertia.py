@@ -102,16 +102,15 @@ def rank_inertial(scenario, fit=("Mr",), snr_db=20.0, duration=30.0, candidates=
     list of InertiaCandidate
     """
     from tt_mujoco.identify_inertia import fit_inertia
-    from tt_mujoco.outputs import write_timeseries
+    from tt_mujoco.outputs import atomic_write
     from tt_mujoco.sim import simulate
     from tt_mujoco.vehicle_log import LogError
 
     out = []
     with tempfile.TemporaryDirectory() as folder:
         for i, surge in enumerate(candidates):
-            rows = surge_rows(surge, _length(surge, duration))
             path = Path(folder) / f"surge-{i}.csv"
-            write_timeseries(path, dict(zip("xyv", rows.T, strict=True)), ["x", "y", "v"])
+            atomic_write(path, _csv(surge, duration))
             run = dataclasses.replace(
                 scenario,
                 traj=str(path),
@@ -138,13 +137,13 @@ def rank_inertial(scenario, fit=("Mr",), snr_db=20.0, duration=30.0, candidates=
 
 
 def _noisy(ts, snr_db: float, rng) -> dict:
-    """The log with each sensor's noise at ``snr_db`` (its rms times 10^(-snr/20))."""
+    """The log with each of its sensors at ``snr_db`` (:func:`tt_mujoco.vehicle_log.noisy`)."""
+    from tt_mujoco.vehicle_log import noisy
+
     out = dict(ts)
-    for name in SENSORS:
+    for name in SENSORS:  # in this order: the draws of a seed
         if name in ts:
-            x = np.asarray(ts[name], dtype=float)
-            scale = math.sqrt(float(np.mean(x**2))) * 10 ** (-snr_db / 20)
-            out[name] = x + scale * rng.standard_normal(x.size)
+            out[name] = noisy(ts[name], snr_db, rng)
     return out
 
 
@@ -154,10 +153,16 @@ def _length(surge, duration: float) -> float:
 
 
 def path_csv(best: InertiaCandidate, duration: float) -> str:
-    """The best candidate's path as the CSV a run takes (``--traj FILE``)."""
-    rows = surge_rows(best.surge, _length(best.surge, duration))
-    lines = ["x,y,v", *(f"{x:.6f},{y:.6f},{v:.6f}" for x, y, v in rows)]
-    return "\n".join(lines) + "\n"
+    """The best candidate's path as the CSV a run takes (``--traj FILE``): the very file its
+    prediction drove."""
+    return _csv(best.surge, duration)
+
+
+def _csv(surge, duration: float) -> str:
+    from tt_mujoco.outputs import timeseries_csv
+
+    rows = surge_rows(surge, _length(surge, duration))
+    return timeseries_csv(dict(zip("xyv", rows.T, strict=True)), ["x", "y", "v"])
 
 
 def run_toml(scenario, duration: float) -> str:

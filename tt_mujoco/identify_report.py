@@ -17,7 +17,14 @@ import re
 
 import numpy as np
 
-__all__ = ["CORRELATION_PNG", "REPLAY_PNG", "figures", "html_page", "image_lines"]
+__all__ = [
+    "CORRELATION_PNG",
+    "REPLAY_PNG",
+    "SIMULATED_PNG",
+    "figures",
+    "html_page",
+    "image_lines",
+]
 
 #: The figures' files in the output folder.
 REPLAY_PNG = "identify_replay.png"

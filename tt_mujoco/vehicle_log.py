@@ -28,6 +28,7 @@ __all__ = [
     "estimates_report",
     "input_snr_db",
     "noise_std",
+    "noisy",
     "read_log",
     "smoothed",
 ]
@@ -191,6 +192,13 @@ def _speeds(data: dict, t: np.ndarray, wheel: tuple[float, float]):
     x, y, theta = data["x"], data["y"], np.unwrap(data["theta"])
     vx, vy = np.gradient(x, t), np.gradient(y, t)
     return vx * np.cos(theta) + vy * np.sin(theta), np.gradient(theta, t)
+
+
+def noisy(x, snr_db: float, rng: np.random.Generator) -> np.ndarray:
+    """``x`` as a sensor at ``snr_db`` logs it: white noise of a standard deviation of its rms
+    times ``10^(-snr_db / 20)`` added (20 dB: a tenth), drawn from ``rng``."""
+    x = np.asarray(x, dtype=float)
+    return x + np.sqrt(np.mean(x**2)) * 10 ** (-snr_db / 20) * rng.standard_normal(x.shape)
 
 
 def noise_std(x: np.ndarray) -> float:
