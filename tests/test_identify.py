@@ -257,6 +257,21 @@ def test_a_log_without_a_column_or_with_a_bad_fit_is_exit_2(tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.parametrize("kind", ["missing", "a device", "a folder without a run", "too long"])
+def test_a_log_that_is_no_file_is_exit_2_naming_it(tmp_path, capsys, kind):
+    """Whatever names no readable log (a link to /dev/zero was 'not found'; a name too long
+    for the file system was a bug of ours, exit 70): one line, exit 2."""
+    path = tmp_path / ("a" * 300 if kind == "too long" else "log.csv")
+    if kind == "a device":
+        path.symlink_to("/dev/zero")
+    elif kind == "a folder without a run":
+        path.mkdir()
+    assert identify.main([str(path), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("error: log ") and "give a CSV" in err[0], err
+    assert not (tmp_path / "o").exists()
+
+
 def test_a_log_that_never_turns_is_exit_2_saying_so(tmp_path, capsys):
     """Straight driving leaves the hitch at 0: nothing of L or L0 is in the log. The fit's
     intervals were NaN, a RuntimeWarning leaked and identified.toml kept the first guess;

@@ -74,11 +74,17 @@ def read_log(
         default = Params()
         wheel = (default.r, default.d)
     from tt_mujoco.outputs import read_timeseries, run_timeseries_file
+    from tt_mujoco.registry import existing_file
 
     path = Path(path)
-    file = run_timeseries_file(path) if path.is_dir() else path
-    if not file.is_file():
-        raise LogError(f"{file} not found: give a CSV, Parquet or MCAP log, or a run's folder")
+    try:
+        try:
+            given = run_timeseries_file(path) if path.is_dir() else path
+        except OSError as err:  # a name the file system refuses (too long)
+            raise ValueError(f"log {str(path)!r}: {err.strerror}") from None
+        file = existing_file(given, "log")
+    except ValueError as err:  # missing, a folder, a device, a name the file system refuses
+        raise LogError(f"{err}: give a CSV, Parquet or MCAP log, or a run's folder") from None
     mapping = dict(columns or {})
     if file.suffix == ".mcap":  # ROS 2 messages: the joints are named, hitch_k for phi_k
         from tt_mujoco.bag import read_bag_log
