@@ -360,3 +360,16 @@ def test_any_journal_is_read_or_refused_in_one_line(tmp_path_factory, lines):
         assert len(str(err).splitlines()) == 1
     else:
         assert all(isinstance(k, str) and isinstance(r, dict) for k, r in done.items())
+
+
+@pytest.mark.parametrize("command", list(COMMANDS))
+def test_every_command_refuses_a_run_folder_name_the_file_system_refuses(
+    finished, tmp_path, capsys, command
+):
+    """A name too long for the file system: one line, exit 2 (compare's was a bug of ours)."""
+    out = tmp_path / "out"
+    out.mkdir()
+    code = COMMANDS[command](tmp_path / ("a" * 300), finished["parquet"], out)
+    err = capsys.readouterr().err
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert "File name too long" in err and not list(out.iterdir())

@@ -140,8 +140,12 @@ def read_run(folder) -> FinishedRun:
         Naming the file and the field, column or row that is not a run's.
     """
     folder = Path(folder)
-    metrics_file, ts_file = folder / METRICS_FILE, run_timeseries_file(folder)
-    if not folder.is_dir():
+    try:
+        metrics_file, ts_file = folder / METRICS_FILE, run_timeseries_file(folder)
+        is_dir = folder.is_dir()
+    except OSError as err:  # a name the file system refuses (too long)
+        raise RunFolderError(f"{shown_json(str(folder))}: {err.strerror}") from None
+    if not is_dir:
         raise RunFolderError(f"{str(folder)!r} is not a folder: give a finished run's folder")
     if (folder / CLAIM_FILE).exists() or (folder / CLAIM_FILE).is_symlink():
         raise RunFolderError(
