@@ -73,18 +73,9 @@ def read_log(
     if wheel is None:
         default = Params()
         wheel = (default.r, default.d)
-    from tt_mujoco.outputs import read_timeseries, run_timeseries_file
-    from tt_mujoco.registry import existing_file
+    from tt_mujoco.outputs import read_timeseries
 
-    path = Path(path)
-    try:
-        try:
-            given = run_timeseries_file(path) if path.is_dir() else path
-        except OSError as err:  # a name the file system refuses (too long)
-            raise ValueError(f"log {str(path)!r}: {err.strerror}") from None
-        file = existing_file(given, "log")
-    except ValueError as err:  # missing, a folder, a device, a name the file system refuses
-        raise LogError(f"{err}: give a CSV, Parquet or MCAP log, or a run's folder") from None
+    file = _log_file(Path(path))
     mapping = dict(columns or {})
     if file.suffix == ".mcap":  # ROS 2 messages: the joints are named, hitch_k for phi_k
         from tt_mujoco.bag import read_bag_log
@@ -198,6 +189,23 @@ def _speeds(data: dict, t: np.ndarray, wheel: tuple[float, float]):
     x, y, theta = data["x"], data["y"], np.unwrap(data["theta"])
     vx, vy = np.gradient(x, t), np.gradient(y, t)
     return vx * np.cos(theta) + vy * np.sin(theta), np.gradient(theta, t)
+
+
+def _log_file(path: Path) -> Path:
+    """The file of the log ``path`` names (a run's folder: its time series), or a LogError:
+    missing, a folder, a device, a name the file system refuses
+    (:func:`tt_mujoco.registry.existing_file`)."""
+    from tt_mujoco.outputs import run_timeseries_file
+    from tt_mujoco.registry import existing_file
+
+    try:
+        try:
+            given = run_timeseries_file(path) if path.is_dir() else path
+        except OSError as err:  # a name the file system refuses (too long)
+            raise ValueError(f"log {str(path)!r}: {err.strerror}") from None
+        return existing_file(given, "log")
+    except ValueError as err:
+        raise LogError(f"{err}: give a CSV, Parquet or MCAP log, or a run's folder") from None
 
 
 def noisy(x, snr_db: float, rng: np.random.Generator) -> np.ndarray:
