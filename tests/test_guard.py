@@ -29,10 +29,15 @@ FAILURES = {
 }
 
 PRELUDE = """
+import io
 import math
 import os
 import sys
 import tempfile
+import traceback
+import warnings
+
+import numpy as np
 
 from tt_mujoco.controllers import Controller
 from tt_mujoco.reference.paths import ArcsPath
@@ -205,6 +210,12 @@ MISCHIEF = {
     "changes the working folder": "os.chdir(tempfile.mkdtemp())",
     "closes sys.stdout": "sys.stdout.close()",
     "closes sys.stderr": "sys.stderr.close()",
+    "replaces sys.stdout": "sys.stdout = io.StringIO()",
+    "replaces sys.stderr": "sys.stderr = io.StringIO()",
+    # a limit just above where the hook is: the run's own code after it went deeper
+    "lowers the recursion limit": "sys.setrecursionlimit(len(traceback.extract_stack()) + 20)",
+    "turns warnings into errors": "warnings.simplefilter('error')",
+    "makes NumPy raise on floating-point errors": "np.seterr(all='raise')",
 }
 
 
@@ -380,3 +391,36 @@ def test_a_stop_sent_again_after_a_while_ends_a_clean_up_that_hangs(tmp_path):
     time.sleep(guard.AGAIN_S)
     proc.send_signal(signal.SIGTERM)
     assert proc.wait(timeout=10) == -signal.SIGTERM
+
+
+EXIT_HANDLERS = """
+import atexit
+import sys
+
+from tt_mujoco import guard
+
+def fails():
+    raise RuntimeError("no words at the exit")
+
+atexit.register(lambda: sys.exit(5))
+atexit.register(fails)
+guard.end(0)
+"""
+
+
+def test_a_users_exit_handler_changes_neither_the_exit_code_nor_the_last_word(tmp_path):
+    """Before: a handler that raised printed its traceback after the command's last line,
+    and one calling sys.exit(5) made a run that had succeeded exit 5."""
+    import subprocess
+    import sys
+
+    proc = subprocess.run(
+        [sys.executable, "-c", EXIT_HANDLERS], capture_output=True, text=True, timeout=60
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert "Traceback" not in proc.stderr, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 2, lines
+    assert "note: the exit handler fails failed: <string>, line 8" in lines[0], lines
+    assert "no words at the exit" in lines[0]
+    assert "<lambda>" in lines[1] and "sys.exit(5)" in lines[1]

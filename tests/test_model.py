@@ -98,7 +98,8 @@ def test_presets():
         ({"timestep": 0.5}, "timestep=0.5"),
         ({"Iw": 0.05}, "Iw=0.05"),
         # a pair that does not fit names both: either may be the one given
-        ({"L0": 1e-9}, "r=0.02 with L0=1e-09"),
+        ({"L0": 0.005}, "r=0.02 with L0=0.005"),
+        ({"L0": 1e-9}, "L0=1e-09 is not allowed: it must be a finite number in [0.001, 100] m"),
         ({"L": 0.01}, "r=0.02 with L=0.01"),
         ({"d": 0.01}, "r=0.02 with d=0.01"),
     ],

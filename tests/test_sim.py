@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from tt_mujoco.sim import Scenario, simulate
+from tt_mujoco.sim.build import build
 
 PATHS = ("cycloid", "s_curve", "circle")
 CONTROLLERS = ("ismc_sta", "pid", "fbl")
@@ -105,7 +106,11 @@ def test_a_mujoco_warning_stops_the_run_before_the_reset_state_is_logged():
     # of the reset state (the model's default pose at the origin) is logged. The cycloid starts
     # at (0.078, 0.293), so a reset row would show. Before: warnings were checked every 64
     # steps, and up to 63 reset rows were logged and counted.
-    result = simulate(Scenario(traj="cycloid", friction=1e300, duration=1.0))
+    built = build(Scenario(traj="cycloid", duration=1.0))
+    # a friction far beyond Params' range (which refuses it), set past the check only to make
+    # MuJoCo warn at its first step
+    object.__setattr__(built.plant_params, "friction", 1e300)
+    result = simulate(built)
     assert result.status == "diverged" and "MuJoCo warning" in result.message
     ts = result.timeseries
     assert 1 <= len(ts["t"]) <= 2  # the steps before the failing one

@@ -45,7 +45,7 @@ class Run:
 
     @property
     def status(self) -> str:
-        """``"ok"``, ``"jackknife"``, ``"diverged"`` or ``"failed"``."""
+        """``"ok"``, ``"jackknife"``, ``"diverged"``, ``"collision"`` or ``"failed"``."""
         return self.result.status
 
     @property

@@ -25,6 +25,9 @@ MAX_PHYSICS_STEPS = 1_200_000
 MAX_CSV_ROWS = 100_000
 #: Speeds beyond this (m/s) are a numerical blow-up, not driving.
 MAX_SPEED = 20.0
+#: Longest clothoid path (m; its tables are made whole): what the longest run at the highest
+#: speed could drive.
+MAX_PATH_LENGTH = MAX_SPEED * MAX_DURATION
 #: Wheel torque saturation (N m, the paper's Section 6.2): ``Params.torque_limit`` and the
 #: controllers' default.
 TORQUE_LIMIT = 15.0

@@ -43,6 +43,7 @@ __all__ = [
     "end",
     "ignore_stop_signals",
     "interrupts_from_signals",
+    "keeping_process_state",
     "noting_interrupts",
     "shown_error",
     "stop_signals",
@@ -214,6 +215,27 @@ def absolute(path) -> Path:
     return Path(_START_DIR if _START_DIR is not None else os.getcwd()) / path
 
 
+@contextlib.contextmanager
+def keeping_process_state():
+    """Undo, as the block ends, what a user's code run inside it changed of the process state
+    the project's own code relies on: a lowered recursion limit, ``sys.stdout`` and
+    ``sys.stderr`` replaced, NumPy's floating-point error handling and the warning filters (a
+    ``warnings.simplefilter("error")`` in a controller's ``reset`` made a warning of the
+    run's own metrics an error). The run's set-up, its episode and its metrics each run in
+    one such block, so a change made in one does not reach the next."""
+    import warnings
+
+    limit, streams = sys.getrecursionlimit(), (sys.stdout, sys.stderr)
+    np = sys.modules.get("numpy")  # not imported for it: a command's --help imports no NumPy
+    with warnings.catch_warnings(), np.errstate(**np.geterr()) if np else contextlib.nullcontext():
+        try:
+            yield
+        finally:
+            if sys.getrecursionlimit() < limit:
+                sys.setrecursionlimit(limit)
+            sys.stdout, sys.stderr = streams
+
+
 def crash_file(err: BaseException) -> str:
     """Write ``err``'s traceback to a new file in the temporary folder; its path."""
     import tempfile  # only when there is a bug to report: --help stays quick
@@ -298,10 +320,38 @@ def _bug(err: BaseException) -> int:
     return EXIT_BUG
 
 
+def _run_exit_handlers() -> None:
+    """Run the process's exit handlers now, as its exit would (a user's code may have
+    registered some with :mod:`atexit`): one that fails is a one-line note, where Python
+    would print its traceback after the command's last word."""
+    import atexit
+
+    previous = sys.unraisablehook
+
+    def noted(failure) -> None:
+        from tt_mujoco.registry import describe_failure  # it imports this module
+
+        name = getattr(failure.object, "__qualname__", None) or repr(failure.object)
+        with contextlib.suppress(OSError, ValueError):
+            print(
+                f"note: the exit handler {name} failed: {describe_failure(failure.exc_value)}",
+                file=sys.stderr,
+            )
+
+    sys.unraisablehook = noted
+    try:
+        atexit._run_exitfuncs()  # then cleared: the exit runs none twice
+    finally:
+        sys.unraisablehook = previous
+
+
 def end(code: int) -> NoReturn:
-    """End a command's process with ``code``: ``guard.end(main())`` in its ``__main__``. A
-    thread a user's code started and left running (not a daemon) would hold the interpreter
-    at its exit for ever: the process then ends at once, said in a note."""
+    """End a command's process with ``code``: ``guard.end(main())`` in its ``__main__``. The
+    exit handlers run first (:func:`_run_exit_handlers`); nothing they do (``sys.exit(5)``, a
+    failure) changes the code. A thread a user's code started and left running (not a
+    daemon) would hold the interpreter at its exit for ever: the process ends without
+    waiting for it, said in a note."""
+    _run_exit_handlers()
     held = [
         t
         for t in threading.enumerate()
@@ -318,7 +368,7 @@ def end(code: int) -> NoReturn:
             sys.stdout.flush()
             sys.stderr.flush()
         os._exit(code)
-    sys.exit(code)
+    sys.exit(code)  # the interpreter's own exit: the files a user's code left open flushed
 
 
 def command(main):
@@ -343,7 +393,8 @@ def command(main):
         streams = sys.stdout, sys.stderr
         sys.stdout, sys.stderr = (_ReaderMayGo(s) for s in streams)  # `| head` is no bug
         try:
-            return main(argv)
+            with keeping_process_state():  # for a caller in this process (a test, a notebook)
+                return main(argv)
         except SystemExit:
             raise
         except KeyboardInterrupt:  # one the command did not end on itself

@@ -27,7 +27,7 @@ from collections.abc import Callable, Iterator
 from numbers import Real
 from pathlib import Path
 
-from tt_mujoco.guard import one_line, shown_error, users_failure
+from tt_mujoco.guard import keeping_process_state, one_line, shown_error, users_failure
 
 __all__ = [
     "HookError",
@@ -169,7 +169,8 @@ def call_hook(what: str, fn, *args, **kwargs):
     its failure (:func:`tt_mujoco.guard.users_failure`) becomes a :class:`HookError` naming
     ``what``, the file and the line."""
     try:
-        return fn(*args, **kwargs)
+        with keeping_process_state():
+            return fn(*args, **kwargs)
     except BaseException as err:
         if not users_failure(err):
             raise

@@ -117,8 +117,9 @@ def supervise(
         os.close(done_read)
         _DONE = done_write
         _die_with_parent()
-        dump = os.fdopen(fd, "w")  # held open: the signal handler writes into it
-        faulthandler.register(signal.SIGUSR1, file=dump, all_threads=True)
+        # the descriptor, held open, not a file object, which would warn of being left open
+        # at the exit (and fail the exit where a user's code turned warnings into errors)
+        faulthandler.register(signal.SIGUSR1, file=fd, all_threads=True)
         return
     os.close(done_write)
     try:

@@ -23,6 +23,7 @@ from tt_mujoco.analysis.nearest import (
     segment_distance2_of,
     segment_windows,
 )
+from tt_mujoco.analysis.tracks import new_vertices
 
 __all__ = [
     "Polyline",
@@ -78,8 +79,9 @@ class Polyline:
     Parameters
     ----------
     vertices : array_like, shape (M, 2)
-        Finite vertices in path order (metres). Exact consecutive repeats are dropped (a standing
-        vehicle logs the same point many times); at least two distinct points are required.
+        Finite vertices in path order (metres). Consecutive repeats (within
+        :data:`~tt_mujoco.analysis.tracks.MIN_SEGMENT`) are dropped (a standing vehicle logs
+        the same point many times); at least two distinct points are required.
 
     Attributes
     ----------
@@ -104,9 +106,7 @@ class Polyline:
             raise ValueError(
                 f"polyline vertices must be finite, got {given[bad].tolist()} at row {bad}"
             )
-        keep = np.ones(given.shape[0], dtype=bool)
-        x, y = given[:, 0], given[:, 1]
-        keep[1:] = (x[1:] != x[:-1]) | (y[1:] != y[:-1])
+        keep = new_vertices(given)
         kept = int(np.count_nonzero(keep))
         if kept < 2:
             raise ValueError(

@@ -45,6 +45,7 @@ from tt_mujoco.analysis.offtrack import (
     signed_lateral_error,
     trailer_offtrack,
 )
+from tt_mujoco.analysis.tracks import moves
 
 __all__ = [
     "CORE_COLUMNS",
@@ -566,7 +567,7 @@ def merge_metrics(parts: Sequence[Mapping]) -> dict:
 
 def _driven_path(leader) -> Polyline | None:
     """The leader's driven path, or None where it never moved (nothing to follow)."""
-    if leader.shape[0] >= 2 and np.any(leader != leader[0]):
+    if moves(leader):
         return Polyline(leader)
     return None
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from tt_mujoco.analysis.geometry import Polyline
+from tt_mujoco.analysis.tracks import moves
 
 __all__ = ["as_polyline", "distance_to_polyline", "signed_lateral_error", "trailer_offtrack"]
 
@@ -111,7 +112,7 @@ def trailer_offtrack(
             f"tractor_xy and trailer_xy must both have shape (N, 2), got {p.shape} and {p0.shape}"
         )
     out = np.full(p.shape[0], np.nan)
-    if p.shape[0] < 2 or np.all(p == p[0]):
+    if not moves(p):
         return out  # the tractor never moved: P0 cannot have passed its start
     spacing = float(np.hypot(*(p[0] - p0[0])))
     # The leader's start direction, from its first move of a tenth of the spacing (not from

@@ -30,6 +30,7 @@ import math
 
 import numpy as np
 
+from tt_mujoco.defaults import MAX_PATH_LENGTH
 from tt_mujoco.guard import users_failure
 from tt_mujoco.reference.path_base import (
     ARCS_PATH,
@@ -308,6 +309,7 @@ _GAUSS_NODES, _GAUSS_WEIGHTS = (
 )
 #: Longest fine cell of a clothoid's tables (m).
 CLOTHOID_CELL = 0.01
+_TOO_LONG = f"it may be at most {MAX_PATH_LENGTH:g} m (check R, straight, transition)"
 
 
 class ClothoidPath(ReferencePath):
@@ -343,7 +345,10 @@ class ClothoidPath(ReferencePath):
                 f"segments={segments!r}: every length must be finite and > 0, every "
                 "curvature finite"
             )
-        super().__init__(name, float(rows[:, 0].sum()), initial_pose=initial_pose)
+        length = float(rows[:, 0].sum())
+        if length > MAX_PATH_LENGTH:  # its grid of 1 cm cells is made whole, here
+            raise ValueError(f"path {name!r} of length {length:g} m is not allowed: {_TOO_LONG}")
+        super().__init__(name, length, initial_pose=initial_pose)
         self._lengths, self._k0 = rows[:, 0], rows[:, 1]
         self._rates = (rows[:, 2] - rows[:, 1]) / rows[:, 0]
         self._bounds = np.concatenate([[0.0], np.cumsum(self._lengths)])

@@ -173,7 +173,7 @@ class Scenario:
     #: idealisation g^-1 Delta), or a number > 0.
     disturbance_limit: str | float = option(
         "actuator",
-        number(0, low_open=True, words=("actuator", "none")),
+        values.torque_bound,
         "bound on each wheel's matched disturbance torque: actuator (the torque limit), none "
         "(the paper's unbounded g^-1 Delta) or a number",
         unit="N m",
@@ -181,7 +181,7 @@ class Scenario:
     )
     noise_snr_db: float | None = option(
         None,
-        number(optional=True),
+        values.snr_db,
         "Gaussian measurement noise on v and omega at this SNR; none by default",
         unit="dB",
         flags=("--noise-snr-db", "--noise-snr"),
@@ -189,7 +189,7 @@ class Scenario:
     )
     param_scale: float = option(
         1.0,
-        values.positive,
+        values.scale_factor,
         "scale the plant's masses and inertias (the controller keeps the nominal model)",
         metavar="F",
     )
@@ -220,7 +220,7 @@ class Scenario:
         "initial condition, at rest (on the cycloid at its pose (0, 0, pi/4))",
         choices=STARTS,
     )
-    friction: float = option(1.0, values.positive, "tyre friction coefficient")
+    friction: float = option(1.0, values.friction, "tyre friction coefficient")
     #: Overrides of vehicle parameters, of the plant and the controller's model alike.
     params: dict = option(
         parse=values.params,
@@ -236,7 +236,7 @@ class Scenario:
     #: Per-field factors on the *plant's* masses and inertias only (e.g. ``{"Mr": 1.2}``), on
     #: top of ``param_scale``: a model mismatch the controller does not know about.
     plant_scale: dict = option(
-        parse=table(values.positive, MASS_FIELDS + INERTIA_FIELDS),
+        parse=table(values.scale_factor, MASS_FIELDS + INERTIA_FIELDS),
         help="scale one of the plant's masses or inertias, e.g. Mr=1.2 (the controller keeps "
         "the nominal model; repeatable)",
         default_factory=dict,
@@ -249,7 +249,7 @@ class Scenario:
     #: Initial articulation phi (deg), with beta = eta phi; must stay short of the jackknife.
     phi0_deg: float = option(
         0.0,
-        values.finite,
+        values.articulation_deg,
         "initial articulation phi, short of the jackknife",
         unit="deg",
         flags=("--phi0-deg", "--phi0"),
@@ -270,7 +270,7 @@ class Scenario:
     #: a dict of gains, ``{}`` for the defaults (k_y, k_psi, c_max).
     path_feedback: dict | None = option(
         None,
-        optional_table(values.finite),
+        optional_table(values.loop_gain),
         "outer loop: lateral and heading errors feed the yaw-rate target "
         "(tt_mujoco.reference.feedback; k_y = k_psi = 4)",
         form="switch",
@@ -280,7 +280,7 @@ class Scenario:
     #: path (:class:`tt_mujoco.controllers.backing.HitchCascade`): a dict of its gains, ``{}``
     #: for the defaults, or None (the hitches left to themselves). Ignored driving forward.
     hitch_feedback: dict | None = option(
-        parse=optional_table(values.finite),
+        parse=optional_table(values.loop_gain),
         help="reversing without --path-feedback: the leading trailer's axle tracks the path "
         "and a cascade on the hitch angles sets the tractor's yaw rate "
         "(tt_mujoco.controllers.backing); --no-hitch-feedback leaves the hitches to themselves",
@@ -307,7 +307,7 @@ class Scenario:
     #: table's steering alone; docs/model.md Section 13).
     driven_path_gain: float = option(
         DRIVEN_PATH_GAIN,
-        number(0, unit="1/m"),
+        number(0, 1e4, unit="1/m"),
         "with --eta path, driving forward: how hard each axle is steered towards the path the "
         "tractor drove (0: the schedule's steering alone)",
         unit="1/m",
@@ -369,7 +369,7 @@ class Scenario:
     #: process's main thread (the CLI, a sweep's process workers), by SIGALRM.
     time_limit_s: float = option(
         TIME_LIMIT_S,
-        values.positive,
+        values.wall_limit,
         "wall-clock limit of the run: a run still going then stops, its rows kept (exit code 3)",
         unit="s",
         flags=("--time-limit",),
@@ -402,7 +402,7 @@ class Scenario:
     #: loops see the readings of that long ago (the first reading until then).
     sensor_delay: float = option(
         0.0,
-        number(0, unit="s"),
+        number(0, MAX_DURATION, unit="s"),
         "the sensors' delay (a multiple of the control period, shorter than the run)",
         unit="s",
         metavar="S",
@@ -433,7 +433,7 @@ class Scenario:
     #: paper's; None: :data:`tt_mujoco.defaults.DOCKING_GAIN` on a planned path, else 0.
     along_track_gain: float | None = option(
         None,
-        number(0, optional=True),
+        number(0, 1e3, optional=True),
         "gain of the along-track loop (1/s): the speed target corrected toward where the "
         "speed profile puts the tractor on its path; default: on for --traj plan, else off",
         unit="1/s",

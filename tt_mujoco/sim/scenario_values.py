@@ -10,6 +10,7 @@ from tt_mujoco.schema import boolean, choice, number, table, text
 from tt_mujoco.schema_values import number_text, refuse
 from tt_mujoco.sim.parts.faults import parse_fault
 from tt_mujoco.sim.parts.ground import parse_patch
+from tt_mujoco.vehicle.param_ranges import RANGES
 from tt_mujoco.vehicle.params import MAX_TRAILERS, SETTABLE_FIELDS, Params
 
 __all__ = [
@@ -144,6 +145,23 @@ def patch(value, label):
 
 
 positive = number(0, low_open=True)
+
+# Bounded numbers: every number a run takes has a stated range, wide enough for any study and
+# short of where the arithmetic breaks (10**(-snr/20) overflowing, a time past time_t, ...).
+#: A factor on masses or inertias.
+scale_factor = number(1e-3, 1e3)
+#: A friction coefficient (Params' range).
+friction = number(*RANGES["friction"][:2], unit=RANGES["friction"][2])
+#: A measurement noise's signal-to-noise ratio, from noise 100 times the signal to none.
+snr_db = number(-40, 200, optional=True, unit="dB")
+#: A bound on a disturbance torque (or one of its words).
+torque_bound = number(0, 1e6, low_open=True, words=("actuator", "none"), unit="N m")
+#: A gain of a feedback loop (1/m, 1/s).
+loop_gain = number(0, 1e4)
+#: The initial articulation (deg), the Scenario checks it against the jackknife.
+articulation_deg = number(-180, 180, unit="deg")
+#: A wall-clock limit (s): up to 10 days.
+wall_limit = number(0, 864000, low_open=True, unit="s")
 _param_table = table(finite, SETTABLE_FIELDS)
 
 

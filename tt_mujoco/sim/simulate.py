@@ -13,7 +13,12 @@ import numpy as np
 
 from tt_mujoco.analysis.metrics import compute_metrics, run_error_signals
 from tt_mujoco.defaults import MAX_SPEED
-from tt_mujoco.guard import control_signal, noting_interrupts, users_failure
+from tt_mujoco.guard import (
+    control_signal,
+    keeping_process_state,
+    noting_interrupts,
+    users_failure,
+)
 from tt_mujoco.registry import HookError, finite_number, real_number, shown
 from tt_mujoco.registry import describe_failure as usercode_failure
 from tt_mujoco.sim.build import (
@@ -31,7 +36,7 @@ from tt_mujoco.sim.parts.plant import StopRun
 from tt_mujoco.sim.parts.relief import RampRelief
 from tt_mujoco.sim.parts.terrain import parse_terrain
 from tt_mujoco.sim.probe import check_user_code
-from tt_mujoco.sim.scenario import Scenario
+from tt_mujoco.sim.scenario import SCHEMA, Scenario
 from tt_mujoco.sim.usercode import CheckedProgress, users_copy
 from tt_mujoco.watchdog import grace_for
 from tt_mujoco.world.part import world_report
@@ -46,7 +51,7 @@ class Result:
     scenario: Scenario
     timeseries: dict[str, np.ndarray]
     metrics: dict
-    status: str  # "ok", "jackknife", "diverged" or "failed" (the user's code)
+    status: str  # "ok", "jackknife", "diverged", "collision" or "failed" (the user's code)
     message: str
     reference_polyline: np.ndarray
     wall_time_s: float
@@ -104,14 +109,18 @@ def checked_build(scenario: Scenario) -> Build:
         factory that does not return), naming where it was. Code stuck inside one call into C
         is stopped when that call returns: the in-process limit acts between bytecodes.
     """
-    limit = scenario.time_limit_s if isinstance(scenario, Scenario) else None
-    if not isinstance(limit, int | float) or isinstance(limit, bool) or not limit > 0:
-        limit = None  # no limit to keep, or a bad one: build names it
+    limit = None  # no limit to keep, or a bad one: build names it
+    if isinstance(scenario, Scenario):
+        with contextlib.suppress(ValueError):
+            limit = SCHEMA["time_limit_s"].parse(scenario.time_limit_s, "time_limit_s")
     # after a grace (the watchdog's): a budget of the set-up's own that keeps the limit (the
     # planner's) ends first and says so itself; this catches only what does not return
     grace = None if limit is None else grace_for(limit)
     try:
-        with wall_time_limit(grace, limit) if grace is not None else contextlib.nullcontext():
+        with (
+            wall_time_limit(grace, limit) if grace is not None else contextlib.nullcontext(),
+            keeping_process_state(),
+        ):
             built = build(scenario)
             check_user_code(built)
     except TimeLimitExceeded as err:
@@ -229,12 +238,17 @@ def drive_leg(built: Build, rng, time_limit: float, progress=None, on_step=None,
     time (what is left of the scenario's); the others as :func:`simulate`'s."""
     compiled.prepare()  # beside the set-up below
     stepper = Stepper(built)
-    stepper.reset(rng, checkpoint=checkpoint)
-    controller = built.new_controller()
-    controller.reset()
+    with keeping_process_state():  # the user's resets
+        stepper.reset(rng, checkpoint=checkpoint)
+        controller = built.new_controller()
+        controller.reset()
     start_wall = time.perf_counter()
     try:
-        with wall_time_limit(time_limit, built.scenario.time_limit_s), noting_interrupts():
+        with (
+            wall_time_limit(time_limit, built.scenario.time_limit_s),
+            noting_interrupts(),
+            keeping_process_state(),
+        ):
             status, message = run_episode(stepper, controller, progress, on_step)
     except TimeLimitExceeded as err:
         status, message = _time_limit_stop(stepper, err)
@@ -255,7 +269,8 @@ def controller_report(controller) -> tuple[dict, str | None]:
     each value a finite number or None (strict JSON); a user's report that fails, or is not a
     dict of numbers, must not lose the run."""
     try:
-        report = controller.report()
+        with keeping_process_state():
+            report = controller.report()
         if not isinstance(report, dict):
             raise TypeError(f"report() returned {shown(report)}, not a dict")
         clean = {}
@@ -360,7 +375,8 @@ def finish(
     else:  # stopped before its first sample was logged
         metrics = {"steps": 0, "finite_samples": 0, "sim_time_s": 0.0}
     for name, fn in built.extra_metrics.items():
-        metrics[name], error = user_metric(fn, ts, users_copy(built.path))
+        with keeping_process_state():
+            metrics[name], error = user_metric(fn, ts, users_copy(built.path))
         if error is not None:
             metrics.setdefault("metric_errors", {})[name] = error
     terrain = parse_terrain(scenario.terrain)

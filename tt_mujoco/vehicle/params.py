@@ -14,6 +14,7 @@ import math
 from dataclasses import dataclass, field
 
 from tt_mujoco.defaults import AXLE_SLEW_RATE, JACKKNIFE_DEG, TORQUE_LIMIT
+from tt_mujoco.vehicle.param_ranges import RANGES, in_range
 
 __all__ = [
     "MAX_TRAILERS",
@@ -88,16 +89,6 @@ def train_same_path_etas_of(lengths, out) -> None:
         b_prev = b
 
 
-def _positive(name: str, value, label: str = "") -> float:
-    """``value`` as a float, or ValueError naming ``label + name`` unless it is a finite
-    number > 0."""
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"{label}{name}={value!r} is not allowed: it must be a number > 0")
-    if not math.isfinite(value) or value <= 0:
-        raise ValueError(f"{label}{name}={value!r} is not allowed: it must be finite and > 0")
-    return float(value)
-
-
 #: Most trailers a train may have (a longer train is accepted by the math but untested).
 MAX_TRAILERS = 8
 
@@ -137,7 +128,7 @@ class Trailer:
 
     def __post_init__(self) -> None:
         for name in TRAILER_FIELDS:
-            object.__setattr__(self, name, _positive(name, getattr(self, name), "trailer "))
+            object.__setattr__(self, name, in_range(name, getattr(self, name), "trailer "))
 
     def to_dict(self) -> dict:
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
@@ -322,24 +313,8 @@ class Params:
     steering: str = field(default="", init=False, compare=False)
 
     def __post_init__(self) -> None:
-        positive = (
-            *MASS_FIELDS,
-            *INERTIA_FIELDS,
-            "L",
-            "L0",
-            "r",
-            "d",
-            "torque_limit",
-            "axle_slew_rate",
-            "friction",
-            "impratio",
-            "body_tilt_inertia_ratio",
-            *MOTOR_FIELDS,
-            "drag_area_tractor",
-            "drag_area_trailer",
-        )
-        for name in positive:
-            object.__setattr__(self, name, _positive(name, getattr(self, name)))
+        for name in RANGES:
+            object.__setattr__(self, name, in_range(name, getattr(self, name)))
         for name in ("drag_centre_tractor", "drag_centre_trailer"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int | float):
@@ -369,11 +344,6 @@ class Params:
             raise ValueError(
                 f"Iw={self.Iw!r} is not allowed: a wheel's spin inertia cannot exceed twice its "
                 f"diametral inertia 2*Iwd = {2 * self.Iwd!r} (no rigid body has that)"
-            )
-        if self.body_tilt_inertia_ratio < 0.5:
-            raise ValueError(
-                f"body_tilt_inertia_ratio={self.body_tilt_inertia_ratio!r} is not allowed: "
-                "it must be >= 0.5 (triangle inequality of the body inertias)"
             )
         eta, preset = resolve_eta(self.eta, self.L, self.L0)
         object.__setattr__(self, "eta", eta)
