@@ -28,7 +28,7 @@ from tt_mujoco.world.plan import (
     start_pose,
 )
 from tt_mujoco.world.plan import train_length as chain_length
-from tt_mujoco.world.world import world_from_table
+from tt_mujoco.world.world import WorldError, world_from_table
 
 
 def test_every_dubins_word_appears_and_reaches_its_goal():
@@ -375,3 +375,24 @@ def test_no_plan_names_the_blocked_candidate_when_a_backing_leg_was_clear(monkey
     assert best.unit in str(caught.value) and np.isfinite(best.polyline).all()
     again = pickle.loads(pickle.dumps(caught.value))  # a sweep's worker sends the message
     assert type(again) is PlanError and str(again) == str(caught.value)
+
+
+@pytest.mark.parametrize(
+    ("goal", "said"),
+    [
+        ({"x": -50.0}, "lies outside world"),
+        ({"x": 3.0, "y": 3.0}, "would stand on obstacle 'block'"),
+    ],
+)
+def test_a_goal_no_path_can_reach_is_named_before_any_search(goal, said):
+    # Before: a goal outside the bounds was searched for, 1200 candidates and a roadmap,
+    # then "no path": the planner now asks check_goal first, as check_world does.
+    table = dict(WORLDS["loading_bay"])
+    table["obstacle"] = [
+        *table["obstacle"],
+        {"kind": "box", "name": "block", "x": 3.0, "y": 3.0, "length": 1.0, "width": 1.0},
+    ]
+    table["goal"] = {**table["goal"], **goal}
+    world = world_from_table(table, "blocked")
+    with pytest.raises(WorldError, match=said):
+        plan_path(world, Params(), (2.0, -1.0, 0.0), reverse=True, deadline=0.0)

@@ -25,6 +25,7 @@ from tt_mujoco.world.world import World, WorldError
 
 __all__ = [
     "WorldRecord",
+    "check_goal",
     "check_world",
     "no_world_record",
     "outside_bounds",
@@ -158,6 +159,14 @@ def check_world(world: World | None, p: Params, pose, hitches) -> None:
     problem = start_problem(world, record, p, pose, hitches)
     if problem is not None:
         raise WorldError(problem)
+    check_goal(world, p, record)
+
+
+def check_goal(world: World, p: Params, record: WorldRecord | None = None) -> None:
+    """Raise a :class:`WorldError` when ``world``'s goal cannot be reached by vehicle ``p``,
+    whatever the path: a bay narrower or shallower than the last unit, a goal outside the
+    bounds or on an obstacle (a planner asks before it searches)."""
+    record = world_record(world, p, 0) if record is None else record
     boxes, obstacles = footprints(p), world.all_obstacles
     goal = world.goal
     if goal is None:

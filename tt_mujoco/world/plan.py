@@ -56,7 +56,7 @@ from tt_mujoco.vehicle.params import Params
 from tt_mujoco.vehicle.path_schedule import axle_chain
 from tt_mujoco.world.clearance import clearance_along
 from tt_mujoco.world.dubins import ahead, arcs_path, dubins_words, word_pieces
-from tt_mujoco.world.part import start_problem, world_record
+from tt_mujoco.world.part import check_goal, start_problem, world_record
 from tt_mujoco.world.roadmap import roadmap_route
 from tt_mujoco.world.world import World, WorldError
 
@@ -493,6 +493,7 @@ def plan_path(
     goal = world.goal
     if goal is None:
         raise WorldError(f"world {world.name!r} has no goal to plan a path to")
+    check_goal(world, p)  # one outside the world or on an obstacle: said, not searched for
     d = train_length(p)
     goal_pose = (goal.x, goal.y, math.radians(goal.heading_deg))
     base = least_radius(p)
