@@ -132,6 +132,21 @@ def _drop(column: str):
     return change
 
 
+def _as_text(column: str):
+    def edit(folder: Path) -> str:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        file = folder / "timeseries.parquet"
+        table = pq.read_table(file)
+        j = table.column_names.index(column)
+        text = pa.array([repr(v) for v in table.column(j).to_pylist()])
+        pq.write_table(table.set_column(j, column, text), file)
+        return f"column {column!r} holds string, not numbers"
+
+    return edit
+
+
 def _claimed(folder: Path) -> str:
     """A writer's claim left beside complete outputs (a run killed while it drew its video)."""
     (folder / CLAIM_FILE).write_text("claimed by process 1\n")
@@ -176,7 +191,9 @@ def _cases() -> dict[str, tuple]:
         "parquet",
     )
     cases["plant_params L huge"] = (
-        _edit_metrics("config.plant_params.L", 10**30, "are not the vehicle"),
+        _edit_metrics(
+            "config.plant_params.L", 10**30, "it must be a finite number in [0.001, 100] m"
+        ),
         "parquet",
     )
     cases["steps beyond rows"] = (_edit_metrics("steps", 10**7, "the file is cut"), "parquet")
@@ -191,6 +208,8 @@ def _cases() -> dict[str, tuple]:
         cases[f"no column {column}"] = (_series_edit(_drop(column), column), "parquet")
     for column in runfolder.STATE_COLUMNS:
         cases[f"NaN in {column}"] = (_series_edit(_nan_at(column, 7), column), "parquet")
+    for column in runfolder.STATE_COLUMNS:  # numbers spelt as text are not numbers
+        cases[f"text in {column}"] = (_as_text(column), "parquet")
     cases["time backwards"] = (_series_edit(_backwards, "time must increase"), "parquet")
     cases["a writer's claim"] = (_claimed, "parquet")
     return cases

@@ -219,10 +219,15 @@ def read_timeseries(path) -> dict[str, np.ndarray]:
     given twice, is a ``ValueError`` (which of the two would be read is a guess)."""
     path = Path(path)
     if path.suffix == ".parquet":
+        import pyarrow as pa
         import pyarrow.parquet as pq
 
         table = pq.read_table(path)
         names = _column_names(path, table.column_names)
+        for name, kind in zip(names, table.schema.types, strict=True):
+            # numbers only: text that happens to spell numbers is a damaged file, not data
+            if not (pa.types.is_floating(kind) or pa.types.is_integer(kind)):
+                raise ValueError(f"{path}: column {name!r} holds {kind}, not numbers")
         return {name: table.column(j).to_numpy().astype(float) for j, name in enumerate(names)}
     with path.open(newline="", encoding="utf-8-sig") as f:
         header = next(csv.reader(f), None)

@@ -232,7 +232,9 @@ def _read_series(path: Path, params: Params, steps) -> dict[str, np.ndarray]:
     try:
         ts = read_timeseries(path)
     except (OSError, ValueError, TypeError, KeyError) as err:
-        raise RunFolderError(f"{path} is not a time series: {err}") from None
+        said = str(err)  # the readers' own messages name the file: not twice
+        said = said if said.startswith(str(path)) else f"{path} is not a time series: {said}"
+        raise RunFolderError(said) from None
     missing = [c for c in read_columns(params.n_trailers) if c not in ts]
     if missing:
         shown = ", ".join(missing[:6]) + (", ..." if len(missing) > 6 else "")
