@@ -2,8 +2,11 @@
 
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
+
+from tt_mujoco.cliargs import BadInputError, Parser
 
 CASES = [
     (["tt_mujoco.run", "--controler", "pid"], "did you mean --controller?"),
@@ -152,3 +155,12 @@ def test_every_command_s_paths_name_something_and_its_negative_numbers_are_value
     assert math.isnan(parser.parse_args(["--x", "-NaN"]).x)
     with pytest.raises(BadInputError, match="unrecognized arguments: -q"):
         parser.parse_args(["-q"])  # an option-like word that is no number stays one
+
+
+@pytest.mark.parametrize("name", ["a\nb", "a\tb", "out\x1b[31m", "x\x7f"])
+def test_a_path_with_a_control_character_is_refused(name):
+    # Before: --out 'a\x01b' made a folder a shell lists as 'ab'
+    parser = Parser(prog="t")
+    parser.add_argument("--out", type=Path)
+    with pytest.raises(BadInputError, match="control characters"):
+        parser.parse_args(["--out", name])

@@ -140,3 +140,61 @@ def test_every_command_takes_sigterm_as_a_stop_and_removes_what_it_claimed(tmp_p
     assert main([]) == 130
     assert "interrupted: nothing was written" in capsys.readouterr().err
     assert not out.exists()
+
+
+def _parser_of(name, monkeypatch):
+    """The command's parser, as its ``main`` builds it (caught as it parses)."""
+    from tt_mujoco import cliargs
+
+    caught = []
+
+    def catch(self, *args, **kwargs):
+        caught.append(self)
+        raise KeyboardInterrupt  # out of main at once: the guard says "interrupted"
+
+    monkeypatch.setattr(cliargs.Parser, "parse_known_args", catch)
+    importlib.import_module(name).main([])
+    monkeypatch.undo()
+    return caught[0]
+
+
+def _two_values(parser, action):
+    """Two texts the option reads as two different values, or None."""
+    for pair in (("1", "2"), ("3", "4"), ("a", "b"), ("0.5", "0.25"), ("none", "1")):
+        try:
+            values = [parser._get_values(action, [text]) for text in pair]
+        except Exception:
+            continue
+        if values[0] != values[1]:
+            return pair
+    return None
+
+
+@pytest.mark.parametrize("name", COMMANDS)
+def test_every_option_of_every_command_given_twice_with_two_values_is_refused(
+    name, monkeypatch, tmp_path, capsys
+):
+    """Before: a command's own options (``--out``, ``--workers``, ...) took the last of two in
+    silence, where the scenario's refused the second; cliargs.Parser now stores every option
+    once."""
+    monkeypatch.chdir(tmp_path)
+    parser = _parser_of(name, monkeypatch)
+    capsys.readouterr()
+    module = importlib.import_module(name)
+    tried = 0
+    for action in parser._actions:
+        if not action.option_strings or action.nargs not in (None, 1) or action.dest == "help":
+            continue
+        if isinstance(action, argparse._AppendAction):  # repeatable by design (--param)
+            continue
+        pair = _two_values(parser, action)
+        if pair is None:
+            continue
+        flag = action.option_strings[0]
+        code = module.main([flag, pair[0], flag, pair[1]])
+        err = capsys.readouterr().err
+        assert code == 2, (flag, err)
+        assert len(err.strip().splitlines()) == 1 and "both set" in err, (flag, err)
+        tried += 1
+    assert tried, f"{name}: no option takes a value"
+    assert not any(tmp_path.iterdir())

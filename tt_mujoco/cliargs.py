@@ -15,7 +15,16 @@ from pathlib import Path
 from tt_mujoco.registry import closest
 from tt_mujoco.schema_values import number_text
 
-__all__ = ["BadInputError", "Parser", "integer_at_least"]
+__all__ = [
+    "BadInputError",
+    "Parser",
+    "StoreConstOnce",
+    "StoreFalseOnce",
+    "StoreOnce",
+    "StoreTrueOnce",
+    "integer_at_least",
+    "set_once",
+]
 
 
 class BadInputError(ValueError):
@@ -39,6 +48,10 @@ def _ascii_number(text: str) -> float:
 def _path_text(text: str) -> Path:
     if not text.strip():
         raise argparse.ArgumentTypeError(f"{text!r} is not allowed: give a file or folder name")
+    if any(ord(c) < 32 or ord(c) == 127 for c in text):  # a tab, a newline, an escape
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not allowed: a file or folder name holds no control characters"
+        )
     return Path(text)
 
 
@@ -56,6 +69,72 @@ _NEGATIVE_NUMBER = re.compile(
 )
 
 
+#: Where a namespace keeps, per option, the flag that set it and the value (the parser's own
+#: bookkeeping: no option is named so).
+_GIVEN = "_given_by"
+
+
+def _said(value) -> str:
+    return repr(str(value)) if isinstance(value, Path) else repr(value)
+
+
+def set_once(parser, namespace, dest: str, flag: str, value) -> None:
+    """Set the option ``dest`` from ``flag``: one command line that sets an option twice to
+    different values (``--no-disturbance --disturbance-mode wrench``, ``--video --no-video``,
+    ``--duration 1 --duration 2``) is refused, naming both, rather than the last one winning
+    in silence."""
+    given = namespace.__dict__.setdefault(_GIVEN, {})
+    if dest in given and given[dest][1] != value:
+        parser.error(
+            f"{given[dest][0]} and {flag} both set {dest} ({_said(given[dest][1])} and "
+            f"{_said(value)}), "
+            "which cannot be both: give one of them"
+        )
+    given[dest] = (flag, value)
+    setattr(namespace, dest, value)
+
+
+class StoreOnce(argparse.Action):
+    """``--x VALUE``, given once or with the same value again (:func:`set_once`)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        set_once(parser, namespace, self.dest, f"{option_string} {values}", values)
+
+
+class StoreConstOnce(argparse.Action):
+    """A flag that sets one value (``--no-disturbance``; :func:`set_once`)."""
+
+    def __init__(self, option_strings, dest, const=None, **kwargs):
+        super().__init__(option_strings, dest, nargs=0, const=const, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        set_once(parser, namespace, self.dest, option_string, self.const)
+
+
+class StoreTrueOnce(StoreConstOnce):
+    """``action="store_true"``, given once or again (:func:`set_once`)."""
+
+    def __init__(self, option_strings, dest, default=False, required=False, help=None):
+        super().__init__(option_strings, dest, True, default=default, required=required, help=help)
+
+
+class StoreFalseOnce(StoreConstOnce):
+    """``action="store_false"``, given once or again (:func:`set_once`)."""
+
+    def __init__(self, option_strings, dest, default=True, required=False, help=None):
+        super().__init__(option_strings, dest, False, default=default, required=required, help=help)
+
+
+#: argparse's storing actions, each as one that refuses a second, different value.
+_ONCE_ACTIONS = {
+    None: StoreOnce,
+    "store": StoreOnce,
+    "store_const": StoreConstOnce,
+    "store_true": StoreTrueOnce,
+    "store_false": StoreFalseOnce,
+}
+
+
 class Parser(argparse.ArgumentParser):
     """argparse with errors raised as :class:`BadInputError`, with a hint for misspellings,
     and numbers read as the option schema reads them (:data:`_NUMBER_TYPES`)."""
@@ -64,6 +143,9 @@ class Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
         for kind, reader in _NUMBER_TYPES.items():  # argparse's own registry of types
             self.register("type", kind, reader)
+        # every option of every command: given twice, with two values, is refused
+        for name, action in _ONCE_ACTIONS.items():
+            self.register("action", name, action)
         self._negative_number_matcher = _NEGATIVE_NUMBER  # argparse reads it (3.11 to 3.13)
 
     def error(self, message: str):

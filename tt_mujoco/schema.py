@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from tt_mujoco.cliargs import StoreConstOnce, StoreOnce, set_once
 from tt_mujoco.registry import closest, shown
 from tt_mujoco.schema_values import (
     boolean,
@@ -398,14 +399,14 @@ class Schema:
                     *flags,
                     type=_cli_type(opt, opt.parse),
                     metavar=metavar,
-                    action=_StoreOnce,
+                    action=StoreOnce,
                     **common,
                 )
             for flag, const in opt.consts:
                 group.add_argument(
                     flag,
                     dest=opt.name,
-                    action=_StoreConstOnce,
+                    action=StoreConstOnce,
                     const=const,
                     default=argparse.SUPPRESS,
                     help=f"same as {flags[0]} {const}",
@@ -542,43 +543,6 @@ def _entry_type(flag: str):
         return name, value if number is None else number
 
     return convert
-
-
-#: Where a namespace keeps, per option, the flag that set it and the value (the parser's own
-#: bookkeeping: no option is named so).
-_GIVEN = "_given_by"
-
-
-def set_once(parser, namespace, dest: str, flag: str, value) -> None:
-    """Set the option ``dest`` from ``flag``: one command line that sets an option twice to
-    different values (``--no-disturbance --disturbance-mode wrench``, ``--video --no-video``,
-    ``--duration 1 --duration 2``) is refused, naming both, rather than the last one winning
-    in silence."""
-    given = namespace.__dict__.setdefault(_GIVEN, {})
-    if dest in given and given[dest][1] != value:
-        parser.error(
-            f"{given[dest][0]} and {flag} both set {dest} ({given[dest][1]!r} and {value!r}), "
-            "which cannot be both: give one of them"
-        )
-    given[dest] = (flag, value)
-    setattr(namespace, dest, value)
-
-
-class _StoreOnce(argparse.Action):
-    """``--x VALUE``, given once or with the same value again (:func:`set_once`)."""
-
-    def __call__(self, parser, namespace, values, option_string=None):
-        set_once(parser, namespace, self.dest, f"{option_string} {values}", values)
-
-
-class _StoreConstOnce(argparse.Action):
-    """A flag that sets one value (``--no-disturbance``; :func:`set_once`)."""
-
-    def __init__(self, option_strings, dest, const=None, **kwargs):
-        super().__init__(option_strings, dest, nargs=0, const=const, **kwargs)
-
-    def __call__(self, parser, namespace, values, option_string=None):
-        set_once(parser, namespace, self.dest, option_string, self.const)
 
 
 class _Switch(argparse.BooleanOptionalAction):

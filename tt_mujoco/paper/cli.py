@@ -30,6 +30,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--out",
+        type=Path,
         default=None,
         metavar="DIR",
         help="output folder, new or empty (default: renders/paper, or renders/paper-N if taken)",
