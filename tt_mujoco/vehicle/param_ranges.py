@@ -32,7 +32,7 @@ RANGES: dict[str, tuple[float, float, str]] = {
     "r": (1e-3, 10.0, "m"),
     "d": (1e-3, 50.0, "m"),
     "torque_limit": (1e-6, 1e7, "N m"),
-    "axle_slew_rate": (1e-6, 1e4, "rad/s"),
+    "axle_slew_rate": (1e-6, 1e8, "rad/s"),  # 1e6: a study's "unbounded"
     "friction": (1e-6, 100.0, ""),
     "impratio": (1e-3, 1e4, ""),
     # a flat plate has 0.5: less breaks the triangle inequality of the body inertias
