@@ -63,7 +63,12 @@ def test_a_normalised_action_is_a_fraction_of_the_torque_limit():
         gym_env.TractorTrailerEnv(action_units="nm")
 
 
-@pytest.mark.parametrize("action", [None, "abc", [1.0], [[1.0, 2.0, 3.0]], [np.nan, 0.0]])
+# a complex part, a column vector and booleans were read as numbers, dropping or guessing
+BAD_ACTIONS = [None, "abc", [1.0], [[1.0, 2.0, 3.0]], [np.nan, 0.0], [0.5 + 1j, 0.5]]
+BAD_ACTIONS += [[[0.5], [0.5]], [True, False]]
+
+
+@pytest.mark.parametrize("action", BAD_ACTIONS)
 def test_a_bad_action_is_named(action):
     env = gym_env.TractorTrailerEnv(traj="circle", duration=0.2)
     env.reset(seed=0)

@@ -230,8 +230,10 @@ def torques_of(action, shape: tuple, action_units: str, limit: float) -> np.ndar
     ValueError
         An action not of ``shape`` or not finite, named, with what is allowed.
     """
-    try:
-        torques = np.asarray(action, dtype=float).reshape(shape)
+    try:  # real numbers of the action space's shape: no complex part or column dropped
+        given = np.asarray(action)
+        real = given.dtype.kind in "iuf" and given.shape == shape
+        torques = given.astype(float) if real else None
     except (TypeError, ValueError):
         torques = None
     if torques is None or not np.all(np.isfinite(torques)):
