@@ -147,8 +147,25 @@ def draw_world(ax, world, params: Params) -> None:
         )
 
 
+def _margins(fig: Figure, rows: int = 1, top: float = 0.45) -> Figure:
+    """Margins in inches, set once, for a run's figures (tick labels and an axis label at the
+    left and bottom, a title at the ``top``): matplotlib's constrained layout draws a figure
+    twice to place them, 0.17 s of the 0.7 s a run's four figures took."""
+    width, height = fig.get_size_inches()
+    left, right, bottom, between = 0.85, 0.2, 0.55, 0.2
+    axes_height = (height - top - bottom - between * (rows - 1)) / rows
+    fig.subplots_adjust(
+        left=left / width,
+        right=1 - right / width,
+        bottom=bottom / height,
+        top=1 - top / height,
+        hspace=between / axes_height,
+    )
+    return fig
+
+
 def _path_figure(c: dict, ref: np.ndarray, world=None, params: Params | None = None) -> Figure:
-    fig = Figure(figsize=(7, 6), layout="constrained")
+    fig = Figure(figsize=(7, 6))
     ax = fig.add_subplot()
     if world is not None:
         draw_world(ax, world, Params() if params is None else params)
@@ -168,12 +185,12 @@ def _path_figure(c: dict, ref: np.ndarray, world=None, params: Params | None = N
     ax.set_title("Path: reference, tractor and trailer")
     ax.grid(True, alpha=0.3)
     ax.legend(loc="best", fontsize=9)
-    return fig
+    return _margins(fig)
 
 
 def _errors_figure(c: dict, err: dict, reverse: bool = False) -> Figure:
     t = c["t"]
-    fig = Figure(figsize=(8, 9), layout="constrained")
+    fig = Figure(figsize=(8, 9))
     axes = fig.subplots(4, 1, sharex=True)
     rows = (
         ("e_v", "e_v (m/s)", "velocity error v - v_d"),
@@ -210,7 +227,7 @@ def _errors_figure(c: dict, err: dict, reverse: bool = False) -> Figure:
         ax.grid(True, alpha=0.3)
         ax.legend(loc="upper right", fontsize=8)
     fig.suptitle("Tracking errors (lateral: positive left of the path)")
-    return fig
+    return _margins(fig, rows=4, top=0.5)
 
 
 #: Who is off-tracked against whose path (metrics.trailer_offtrack): the trailer against the
@@ -220,7 +237,7 @@ OFFTRACK_LABELS = {False: "P0 to the tractor's path", True: "tractor P to P0's p
 
 def _torques_figure(c: dict, limit: float) -> Figure:
     t = c["t"]
-    fig = Figure(figsize=(8, 5), layout="constrained")
+    fig = Figure(figsize=(8, 5))
     axes = fig.subplots(2, 1, sharex=True)
     for ax, side, color in ((axes[0], "r", "tab:red"), (axes[1], "l", "tab:green")):
         name = "right" if side == "r" else "left"
@@ -242,12 +259,12 @@ def _torques_figure(c: dict, limit: float) -> Figure:
         ax.legend(loc="upper right", fontsize=8)
     axes[1].set_xlabel("t (s)")
     fig.suptitle(f"Wheel torques (saturation +-{limit:g} N m, dotted when approached)")
-    return fig
+    return _margins(fig, rows=2, top=0.5)
 
 
 def _articulation_figure(c: dict, params: Params) -> Figure:
     t = c["t"]
-    fig = Figure(figsize=(8, 4), layout="constrained")
+    fig = Figure(figsize=(8, 4))
     ax = fig.add_subplot()
     ax.plot(t, np.degrees(c["phi"]), color=TRACTOR_COLOR, lw=1.4, label="phi = theta - theta0")
     ax.plot(t, np.degrees(c["beta"]), color=TRAILER_COLOR, lw=1.4, label="beta (trailer steer)")
@@ -273,7 +290,7 @@ def _articulation_figure(c: dict, params: Params) -> Figure:
     ax.set_title("Articulation and passive steering")
     ax.grid(True, alpha=0.3)
     ax.legend(loc="best", fontsize=8)
-    return fig
+    return _margins(fig)
 
 
 def plot_run(
@@ -387,7 +404,7 @@ def _run_figures(ts, reference_polyline, params, world, names, errors=None, reve
 def warm_up() -> None:
     """Draw a small figure with text into memory: matplotlib loads its fonts and renderer on
     the first draw, which a worker forked ahead of the run's figures does before they come."""
-    fig = Figure(figsize=(2, 1.5), layout="constrained")
+    fig = Figure(figsize=(2, 1.5))
     ax = fig.add_subplot()
     ax.plot([0.0, 1.0], [0.0, 1.0], label="warm")
     ax.set_title("warm up")
