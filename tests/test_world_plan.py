@@ -22,7 +22,9 @@ from tt_mujoco.world.part import start_problem, world_record
 from tt_mujoco.world.plan import (
     CURVE_HEADING_SHARE,
     MARGIN,
+    TIGHT_RADIUS_SHARE,
     PlanError,
+    least_radius,
     plan_path,
     planned,
     start_pose,
@@ -366,6 +368,7 @@ def test_no_plan_names_the_blocked_candidate_when_a_backing_leg_was_clear(monkey
     from tt_mujoco.world import plan as plan_module
 
     monkeypatch.setattr(plan_module, "LEAST_RADIUS", 2.5)  # turns too wide for the bay
+    monkeypatch.setattr(plan_module, "TIGHT_RADIUS_SHARE", 1.0)  # and no tighter ones
     with pytest.raises(PlanError, match="then the ") as caught:
         planned(parse_world("loading_bay"), Params().with_trailers(3), 0, reverse=True)
     assert "is clear for" in str(caught.value)
@@ -396,3 +399,36 @@ def test_a_goal_no_path_can_reach_is_named_before_any_search(goal, said):
     world = world_from_table(table, "blocked")
     with pytest.raises(WorldError, match=said):
         plan_path(world, Params(), (2.0, -1.0, 0.0), reverse=True, deadline=0.0)
+
+
+AISLE = {  # a 1.5 m aisle with a bay off it: no turn at the least radius fits
+    "bounds": [-1.0, 14.0, -3.0, 3.0],
+    "start": {"x": 1.0, "y": 0.0, "heading_deg": 0.0},
+    "goal": {
+        "x": 11.5,
+        "y": -1.6,
+        "heading_deg": 90.0,
+        "bay": {"width": 0.5, "depth": 1.0, "back": 0.25, "wall": 0.05},
+    },
+    "obstacle": [
+        {"kind": "wall", "name": "north", "start": [-1.0, 0.8], "end": [14.0, 0.8]},
+        {"kind": "wall", "name": "south west", "start": [-1.0, -0.8], "end": [10.5, -0.8]},
+        {"kind": "wall", "name": "south east", "start": [12.5, -0.8], "end": [14.0, -0.8]},
+    ],
+}
+
+
+def test_a_narrow_aisle_is_planned_with_the_tighter_turns_only_where_it_needs_them():
+    for wall in AISLE["obstacle"]:
+        wall["thickness"] = 0.1
+    world = world_from_table(AISLE, "aisle")
+    p = Params()
+    with pytest.raises(PlanError):
+        plan_path(world, p, (1.0, 0.0, 0.0), reverse=True)
+    plan = planned(world, p, 0, reverse=True)
+    radii = [leg.radius for leg in plan.legs if leg.radius]
+    least = least_radius(p)
+    assert radii and TIGHT_RADIUS_SHARE * least <= min(radii) < least
+    # a world the least radius fits keeps it
+    bay = planned(parse_world("loading_bay"), p, 0, reverse=True)
+    assert min(leg.radius for leg in bay.legs if leg.radius) >= least

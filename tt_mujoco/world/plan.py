@@ -112,6 +112,9 @@ RADII = (1.0, 1.25, 1.5, 2.0, 3.0)
 #: vehicle around R = 1.5 m (the reversing S-curve); each further trailer adds a third of it
 #: (:func:`least_radius`).
 LEAST_RADIUS = 1.5
+#: Where no plan at the least radius is clear, turns down to this share of it are tried (the
+#: cascade backs circles that tight as closely: ``benchmarks/reversing_radius.py``).
+TIGHT_RADIUS_SHARE = 0.7
 #: A cusp's place: the straight out of the goal before the arc (multiples of ``D``), the arc's
 #: turn (rad, left positive) and radius (multiples of the least radius).
 CUSP_EXITS = (0.5, 1.0, 2.0)
@@ -484,11 +487,13 @@ def plan_path(
     reverse: bool,
     margin: float = MARGIN,
     deadline: float | None = None,
+    radius_share: float = 1.0,
 ) -> Plan:
     """The shortest candidate plan (see the module) from the tractor's ``start`` pose
     ``(x, y, heading)`` (the train straight) to ``world``'s goal that keeps ``margin`` (m)
-    from every obstacle; a :class:`PlanError` when none does (or when ``deadline``, a
-    ``time.monotonic()`` value, passes first)."""
+    from every obstacle, its turns at least ``radius_share`` times :func:`least_radius`; a
+    :class:`PlanError` when none does (or when ``deadline``, a ``time.monotonic()`` value,
+    passes first)."""
     search = _Search(world, p, margin)
     goal = world.goal
     if goal is None:
@@ -496,7 +501,7 @@ def plan_path(
     check_goal(world, p)  # one outside the world or on an obstacle: said, not searched for
     d = train_length(p)
     goal_pose = (goal.x, goal.y, math.radians(goal.heading_deg))
-    base = least_radius(p)
+    base = least_radius(p) * radius_share
     direction = "reverse" if reverse else "forward"
     direct = sorted(_direct(start, goal_pose, d, base, reverse), key=lambda c: c[0])
     search.total += len(direct)
@@ -577,5 +582,17 @@ def start_pose(world: World, p: Params, seed: int) -> tuple[float, float, float]
 
 
 def planned(world: World, p: Params, seed: int, reverse: bool, deadline=None) -> Plan:
-    """The plan of a run of ``seed`` in ``world`` (its start: :func:`start_pose`)."""
-    return plan_path(world, p, start_pose(world, p, seed), reverse, deadline=deadline)
+    """The plan of a run of ``seed`` in ``world`` (its start: :func:`start_pose`); where none
+    is clear at the least radius (a narrow aisle), one with :data:`TIGHT_RADIUS_SHARE` of it."""
+    start = start_pose(world, p, seed)
+    try:
+        return plan_path(world, p, start, reverse, deadline=deadline)
+    except PlanError as err:
+        if deadline is not None and time.monotonic() >= deadline:
+            raise
+        try:
+            return plan_path(
+                world, p, start, reverse, deadline=deadline, radius_share=TIGHT_RADIUS_SHARE
+            )
+        except PlanError:
+            raise err from None
