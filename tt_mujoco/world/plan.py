@@ -46,7 +46,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -584,15 +584,16 @@ def start_pose(world: World, p: Params, seed: int) -> tuple[float, float, float]
 def planned(world: World, p: Params, seed: int, reverse: bool, deadline=None) -> Plan:
     """The plan of a run of ``seed`` in ``world`` (its start: :func:`start_pose`); where none
     is clear at the least radius (a narrow aisle), one with :data:`TIGHT_RADIUS_SHARE` of it."""
-    start = start_pose(world, p, seed)
+    start, began = start_pose(world, p, seed), time.perf_counter()
     try:
         return plan_path(world, p, start, reverse, deadline=deadline)
     except PlanError as err:
         if deadline is not None and time.monotonic() >= deadline:
             raise
         try:
-            return plan_path(
+            plan = plan_path(
                 world, p, start, reverse, deadline=deadline, radius_share=TIGHT_RADIUS_SHARE
             )
         except PlanError:
             raise err from None
+    return replace(plan, planning_time_s=time.perf_counter() - began)  # both searches
