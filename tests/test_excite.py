@@ -73,6 +73,9 @@ def test_the_command_writes_a_run_to_log(tmp_path, capsys):
         (["--rate", "1e9"], "at most as fast as the simulation's control rate, 1000 Hz"),
         (["--encoder-noise-deg", "nan"], "--encoder-noise-deg nan is not allowed"),
         (["--eta", "fast"], "eta='fast' is not allowed"),
+        # an option of the other excitation was ignored in silence (a negative length too)
+        (["--duration", "-5"], "--duration -5.0 does nothing where --fit 'L,L0,eta' plans"),
+        (["--fit", "Mr", "--rate", "10"], "--rate 10.0 does nothing where --fit 'Mr' plans"),
     ],
 )
 def test_bad_input_is_exit_2_and_writes_nothing(tmp_path, capsys, argv, says):

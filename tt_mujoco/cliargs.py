@@ -22,6 +22,7 @@ __all__ = [
     "StoreFalseOnce",
     "StoreOnce",
     "StoreTrueOnce",
+    "given",
     "integer_at_least",
     "set_once",
 ]
@@ -72,6 +73,12 @@ _NEGATIVE_NUMBER = re.compile(
 #: Where a namespace keeps, per option, the flag that set it and the value (the parser's own
 #: bookkeeping: no option is named so).
 _GIVEN = "_given_by"
+
+
+def given(namespace) -> dict[str, str]:
+    """The options the command line gave (dest -> the flag and value as given), as
+    :func:`set_once` kept them: what a command refuses where another option makes it idle."""
+    return {dest: flag for dest, (flag, _) in namespace.__dict__.get(_GIVEN, {}).items()}
 
 
 def _said(value) -> str:

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from tt_mujoco import guard
-from tt_mujoco.cliargs import Parser
+from tt_mujoco.cliargs import Parser, given
 from tt_mujoco.defaults import EXIT_BAD_INPUT, EXIT_OK
 
 __all__ = ["CANDIDATES", "JACKKNIFE_MARGIN", "Candidate", "main", "rank"]
@@ -221,6 +221,11 @@ def main(argv: list[str] | None = None) -> int:
             f"--fit {args.fit!r} is not allowed: plan the lengths ({', '.join(KINEMATIC)}) and "
             "the masses and inertias in two excitations"
         )
+    idle = ("rate", "encoder_noise_deg") if inertial else ("snr_db", "duration")
+    for dest in (d for d in idle if d in given(args)):
+        planned = "masses and inertias" if inertial else "lengths"
+        flag = given(args)[dest]
+        return fail(f"{flag} does nothing where --fit {args.fit!r} plans the {planned}: drop it")
     if inertial:
         return _main_inertial(args, tuple(fit), fail)
     for name, value in (("--rate", args.rate), ("--encoder-noise-deg", args.encoder_noise_deg)):
