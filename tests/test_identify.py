@@ -255,6 +255,15 @@ def test_a_log_without_a_column_or_with_a_bad_fit_is_exit_2(tmp_path, capsys):
     assert identify.main([str(_log(tmp_path)), "--fit", "mass", "--out", str(tmp_path / "o")]) == 2
     assert "--fit 'mass' is not allowed" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+    # what a log of this kind never reads was ignored in silence
+    for idle, says in (
+        (["--topics", "odom=/x"], "--topics is for an MCAP log"),
+        (["--wheel", "0.02,0.2"], "--wheel is for a log of the wheels' rates"),
+    ):
+        assert identify.main([str(_log(tmp_path)), *idle, "--out", str(tmp_path / "o")]) == 2
+        err = capsys.readouterr().err
+        assert says in err and len(err.strip().splitlines()) == 1, err
+        assert not (tmp_path / "o").exists()
 
 
 @pytest.mark.parametrize("kind", ["missing", "a device", "a folder without a run", "too long"])

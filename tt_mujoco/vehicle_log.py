@@ -70,12 +70,15 @@ def read_log(
     ``v`` and ``omega`` gives them from its wheels' rates (:data:`WHEEL_RATES`, with ``wheel``
     the wheels' radius and track, m; default the project's vehicle's) or from the axle's pose
     (:data:`POSE`). Raises :class:`LogError`."""
+    given_wheel = wheel
     if wheel is None:
         default = Params()
         wheel = (default.r, default.d)
     from tt_mujoco.outputs import read_timeseries
 
     file = _log_file(Path(path))
+    if topics and file.suffix != ".mcap":
+        raise LogError(f"--topics is for an MCAP log's topics; {file} is a table of columns")
     mapping = dict(columns or {})
     if file.suffix == ".mcap":  # ROS 2 messages: the joints are named, hitch_k for phi_k
         from tt_mujoco.bag import read_bag_log
@@ -133,6 +136,11 @@ def read_log(
                 "column in degrees has a name ending in _deg)"
             )
     phis = np.column_stack([data[n] for n in hitches])
+    if given_wheel is not None and ("v" in data or WHEEL_RATES[0] not in data):
+        raise LogError(  # a radius and a track read nowhere
+            f"--wheel is for a log of the wheels' rates ({', '.join(WHEEL_RATES)}) without v "
+            f"and omega; {file} has {'v and omega' if 'v' in data else 'no wheel rates'}"
+        )
     v, omega = _speeds(data, t, wheel)
     if torques:
         return t, v, omega, phis, tuple(data[name] for name in TORQUES)
