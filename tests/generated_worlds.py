@@ -139,7 +139,9 @@ def dead_end(rng: np.random.Generator, train_length: float) -> dict:
         gh = float(rng.uniform(-180.0, 180.0))
         out = 2.0 * train_length + 1.0
         ox, oy = gx + out * math.cos(math.radians(gh)), gy + out * math.sin(math.radians(gh))
-        if -8.5 <= ox <= x0 - 0.5 and -5.5 <= oy <= 5.5:
+        # the bay 1.5 m clear of the corridor: a goal on its wall is no world (refused)
+        clear = gx < x0 - 1.5 or abs(gy - cy) > half + 1.5
+        if -8.5 <= ox <= x0 - 0.5 and -5.5 <= oy <= 5.5 and clear:
             break
     walls = [
         ("corridor north", [x0, cy + half], [x1, cy + half]),
