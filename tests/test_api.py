@@ -145,3 +145,22 @@ def test_a_constructor_that_does_not_return_is_refused_at_the_time_limit(tmp_pat
     )
     with pytest.raises(ValueError, match=r"passed its time limit of 0.5 s .*hangs.py, line 6"):
         tt_mujoco.simulate(scenario)
+
+
+def test_a_path_object_names_a_file_as_its_text():
+    # Before: Scenario(traj=Path("my.csv")) was refused ("it must be a non-empty string"),
+    # and a world as a Path failed inside the check (AttributeError: no strip)
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    csv, world = (
+        root / "examples" / "weave_surge.csv",
+        root / "examples" / "worlds" / "dead_end.toml",
+    )
+    common = {"plant": "reduced", "duration": 0.3}
+    as_path = tt_mujoco.simulate(Scenario(traj=csv, **common))
+    as_text = tt_mujoco.simulate(Scenario(traj=str(csv), **common))
+    assert as_path.metrics["rmse_v"] == as_text.metrics["rmse_v"]
+    assert as_path.scenario.traj == str(csv)
+    planned = tt_mujoco.simulate(Scenario(world=world, traj="plan", reverse=True, **common))
+    assert planned.scenario.world == str(world) and planned.status == "ok"

@@ -5,6 +5,7 @@ a ``ValueError`` naming the key and what is allowed."""
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable, Mapping, Sequence
 from decimal import Decimal, InvalidOperation
 from pathlib import Path
@@ -138,7 +139,10 @@ def choice(*allowed):
 
 
 def text(value, label):
-    """A parser of a non-empty text (kept stripped)."""
+    """A parser of a non-empty text (kept stripped); a path object (``pathlib.Path``) is its
+    text, as Python code gives a file (``Scenario(traj=Path("my.csv"))``)."""
+    if isinstance(value, os.PathLike):
+        value = os.fspath(value)
     if not isinstance(value, str) or not value.strip():
         raise refuse(label, value, "it must be a non-empty string")
     return value.strip()

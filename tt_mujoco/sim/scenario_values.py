@@ -67,7 +67,7 @@ def world(value, label):
     from tt_mujoco.world.builtin import parse_world
 
     parse_world(value)  # a WorldError (a ValueError) naming what is wrong
-    return value.strip()
+    return text(value, label)
 
 
 def controller_names() -> str:

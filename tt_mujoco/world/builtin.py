@@ -9,6 +9,7 @@ obstacle for up to three trailers.
 from __future__ import annotations
 
 import functools
+import os
 from pathlib import Path
 
 from tt_mujoco.registry import shown
@@ -107,7 +108,9 @@ def kept_world_toml(world: World) -> str:
 
 def parse_world(value) -> World | None:
     """The world ``Scenario.world`` names: None for ``"none"``, a named world, or the world
-    file at that path (its contents read each time the file changes)."""
+    file at that path (its contents read each time the file changes; a path object too)."""
+    if isinstance(value, os.PathLike):
+        value = os.fspath(value)
     if not isinstance(value, str) or not value.strip():
         raise WorldError(
             f"world={shown(value)} is not allowed: use {NO_WORLD}, one of {', '.join(WORLDS)}, "
