@@ -70,10 +70,6 @@ def read_log(
     ``v`` and ``omega`` gives them from its wheels' rates (:data:`WHEEL_RATES`, with ``wheel``
     the wheels' radius and track, m; default the project's vehicle's) or from the axle's pose
     (:data:`POSE`). Raises :class:`LogError`."""
-    given_wheel = wheel
-    if wheel is None:
-        default = Params()
-        wheel = (default.r, default.d)
     from tt_mujoco.outputs import read_timeseries
 
     file = _log_file(Path(path))
@@ -136,12 +132,7 @@ def read_log(
                 "column in degrees has a name ending in _deg)"
             )
     phis = np.column_stack([data[n] for n in hitches])
-    if given_wheel is not None and ("v" in data or WHEEL_RATES[0] not in data):
-        raise LogError(  # a radius and a track read nowhere
-            f"--wheel is for a log of the wheels' rates ({', '.join(WHEEL_RATES)}) without v "
-            f"and omega; {file} has {'v and omega' if 'v' in data else 'no wheel rates'}"
-        )
-    v, omega = _speeds(data, t, wheel)
+    v, omega = _speeds(data, t, wheel, file)
     if torques:
         return t, v, omega, phis, tuple(data[name] for name in TORQUES)
     return t, v, omega, phis
@@ -184,14 +175,20 @@ def _check_times(file: Path, t: np.ndarray) -> None:
         )
 
 
-def _speeds(data: dict, t: np.ndarray, wheel: tuple[float, float]):
-    """``(v, omega)`` of the tractor's axle from what ``data`` has: themselves; the wheels'
-    rates (rad/s) with ``wheel = (radius, track)`` in m (docs/model.md Section 2); or the
-    axle's pose, by central differences (its heading unwrapped)."""
+def _speeds(data: dict, t: np.ndarray, wheel: tuple[float, float] | None, file: Path):
+    """``(v, omega)`` of the tractor's axle from what ``data`` (of ``file``) has: themselves;
+    the wheels' rates (rad/s) with ``wheel = (radius, track)`` in m (docs/model.md Section 2;
+    None: the project's vehicle's); or the axle's pose, by central differences (its heading
+    unwrapped). A ``wheel`` given for a log that has no use for it is a LogError."""
+    if wheel is not None and ("v" in data or WHEEL_RATES[0] not in data):
+        raise LogError(  # a radius and a track read nowhere
+            f"--wheel is for a log of the wheels' rates ({', '.join(WHEEL_RATES)}) without v "
+            f"and omega; {file} has {'v and omega' if 'v' in data else 'no wheel rates'}"
+        )
     if "v" in data:
         return data["v"], data["omega"]
     if WHEEL_RATES[0] in data:
-        r, d = wheel
+        r, d = wheel if wheel is not None else (Params().r, Params().d)
         right, left = data[WHEEL_RATES[0]], data[WHEEL_RATES[1]]
         return r * (right + left) / 2.0, r * (right - left) / d
     x, y, theta = data["x"], data["y"], np.unwrap(data["theta"])
