@@ -200,3 +200,20 @@ def test_a_value_in_a_message_is_shown_as_the_number_it_is():
     assert shown(np.float64(np.nan)) == "nan"
     assert shown((np.float64(1.5), "x", [np.bool_(True)])) == "(1.5, 'x', [True])"
     assert shown(np.array(1.0)) == "array(1.)"
+
+
+def test_a_failure_inside_a_library_is_named_at_the_users_line_too(tmp_path):
+    # Before: a user's json.loads("{") was placed in json/decoder.py, and a time limit that
+    # struck inside re in re/__init__.py: neither is the line the user would look at
+    from tt_mujoco.registry import describe_failure
+
+    user = tmp_path / "user_code.py"
+    user.write_text("import json\n\n\ndef parse():\n    return json.loads('{')\n")
+    namespace = {}
+    exec(compile(user.read_text(), str(user), "exec"), namespace)
+    try:
+        namespace["parse"]()
+    except ValueError as err:
+        said = describe_failure(err)
+    assert said.startswith(f"{user}, line 5 (in ") and "json" in said, said
+    assert "JSONDecodeError" in said

@@ -22,6 +22,7 @@ import hashlib
 import importlib
 import importlib.util
 import math
+import os
 import sys
 from collections.abc import Callable, Iterator
 from numbers import Real
@@ -130,6 +131,16 @@ class HookError(ValueError):
     and what was wrong."""
 
 
+def _in_library(filename: str) -> bool:
+    """Whether ``filename`` is Python's own library or an installed package's (NumPy's,
+    SciPy's): a failure there is named at the user's line that called it too."""
+    import sysconfig
+
+    paths = sysconfig.get_paths()
+    roots = {paths.get(key) for key in ("stdlib", "platstdlib", "purelib", "platlib")}
+    return any(root and filename.startswith(root + os.sep) for root in roots)
+
+
 def _inside_package(filename: str) -> bool:
     roots = [Path(__file__).resolve().parent]
     controllers = sys.modules.get("tt_mujoco.controllers")
@@ -153,6 +164,10 @@ def describe_failure(err: BaseException) -> str:
     # or C code did; the package's own line would name the wrong file
     mine = [f for f in frames if not _inside_package(f.filename)]
     place = f"{mine[-1].filename}, line {mine[-1].lineno}: " if mine else ""
+    own = [f for f in mine if not _in_library(f.filename)]
+    if own and own[-1] is not mine[-1]:  # the user's line that called the library that failed
+        place = f"{own[-1].filename}, line {own[-1].lineno} (in {mine[-1].filename}, line "
+        place += f"{mine[-1].lineno}): "
     if isinstance(err, SyntaxError) and str(err.filename).endswith(".py"):
         # the compiler raised it for the file it read: that file's line, not the import's
         place = f"{err.filename}, line {err.lineno}: "
