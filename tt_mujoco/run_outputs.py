@@ -53,8 +53,16 @@ OUTPUTS = Schema(
             "video camera",
             choice(*CAMERAS),
             choices=CAMERAS,
+            needs=("video", bool),
         ),
-        Option("fps", 30.0, "video frame rate", number(0, 240, low_open=True), unit="1/s"),
+        Option(
+            "fps",
+            30.0,
+            "video frame rate",
+            number(0, 240, low_open=True),
+            unit="1/s",
+            needs=("video", bool),
+        ),
         Option(
             "timeseries_format",
             "parquet",
@@ -84,6 +92,7 @@ OUTPUTS = Schema(
             "with --live: pace the run to real time (else as fast as it runs)",
             boolean,
             form="switch",
+            needs=("live", bool),
         ),
         Option("quiet", False, "no progress bar", boolean, form="switch"),
         Option(
