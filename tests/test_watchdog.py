@@ -13,6 +13,7 @@ import textwrap
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from tt_mujoco import guard, watchdog
@@ -208,6 +209,15 @@ def test_the_hang_site_is_the_main_threads_innermost_frame():
     )
     assert watchdog.hang_site(dump) == "/u/user.py, line 29 in compute"
     assert watchdog.hang_site("") == "an unknown place"
+    # stuck inside a library the user's code called: the user's line, then the library's
+    numpy = str(Path(np.__file__).parent / "linalg" / "_linalg.py")
+    inside = dump.replace(
+        "Current thread 0x00007e (most recent call first):\n",
+        f'Current thread 0x00007e (most recent call first):\n  File "{numpy}", line 7 in inv\n',
+    )
+    assert watchdog.hang_site(inside) == (
+        f"/u/user.py, line 29 in compute (in {numpy}, line 7 in inv)"
+    )
 
 
 def test_a_sweeps_run_that_never_returns_is_recorded_and_the_sweep_goes_on(compiled_spin, tmp_path):

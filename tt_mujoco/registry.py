@@ -131,6 +131,11 @@ class HookError(ValueError):
     and what was wrong."""
 
 
+def users_file(filename: str) -> bool:
+    """Whether ``filename`` is a user's own code: neither this package's nor a library's."""
+    return not _inside_package(filename) and not _in_library(filename)
+
+
 def _in_library(filename: str) -> bool:
     """Whether ``filename`` is Python's own library or an installed package's (NumPy's,
     SciPy's): a failure there is named at the user's line that called it too."""
@@ -164,7 +169,7 @@ def describe_failure(err: BaseException) -> str:
     # or C code did; the package's own line would name the wrong file
     mine = [f for f in frames if not _inside_package(f.filename)]
     place = f"{mine[-1].filename}, line {mine[-1].lineno}: " if mine else ""
-    own = [f for f in mine if not _in_library(f.filename)]
+    own = [f for f in mine if users_file(f.filename)]
     if own and own[-1] is not mine[-1]:  # the user's line that called the library that failed
         place = f"{own[-1].filename}, line {own[-1].lineno} (in {mine[-1].filename}, line "
         place += f"{mine[-1].lineno}): "

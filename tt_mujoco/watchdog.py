@@ -242,8 +242,17 @@ def hang_site(traceback: str) -> str:
             frames.append(line.strip().removeprefix("File ").replace('"', ""))
     for frames in blocks:
         if any(frame.endswith(" in <module>") for frame in frames):
-            return frames[0]
-    return blocks[0][0] if blocks and blocks[0] else "an unknown place"
+            return _users_site(frames)
+    return _users_site(blocks[0]) if blocks and blocks[0] else "an unknown place"
+
+
+def _users_site(frames: list[str]) -> str:
+    """The innermost frame, after the innermost of the user's own code where that is not it
+    (a user's line that called into NumPy and hung there)."""
+    from tt_mujoco.registry import users_file
+
+    own = [f for f in frames if users_file(f.split(", line ")[0])]
+    return frames[0] if not own or own[0] == frames[0] else f"{own[0]} (in {frames[0]})"
 
 
 def grace_for(limit_s: float) -> float:
