@@ -347,3 +347,30 @@ def test_the_copy_a_run_keeps_is_the_same_world(name):
 
     world = parse_world(name)
     assert world_from_table(tomllib.loads(kept_world_toml(world)), "kept") == world
+
+
+def test_a_run_of_a_world_file_replays_from_its_config_anywhere(tmp_path, monkeypatch, capsys):
+    # Before: config.toml kept the world file's name as given (relative), so the run's own
+    # config could not be run again from another folder ("there is no such file")
+    import json
+    import shutil
+
+    from tt_mujoco.world.builtin import WORLDS
+
+    work, elsewhere = tmp_path / "work", tmp_path / "elsewhere"
+    work.mkdir()
+    elsewhere.mkdir()
+    (work / "bay.toml").write_text(tomli_w.dumps({"name": "bay", **WORLDS["loading_bay"]}))
+    monkeypatch.chdir(work)
+    common = ["--traj", "plan", "--reverse", "--plant", "reduced", "--duration", "2"]
+    common += ["--no-video", "--no-plots", "--quiet"]
+    assert run.main(["--world", "bay.toml", *common, "--out", "first"]) == 0
+    config = (work / "first" / "config.toml").read_text()
+    assert f'world = "{work / "bay.toml"}"' in config
+    shutil.copy(work / "first" / "config.toml", elsewhere / "again.toml")
+    monkeypatch.chdir(elsewhere)
+    assert run.main(["--config", "again.toml", *common, "--out", "second"]) == 0
+    first = json.loads((work / "first" / "metrics.json").read_text())
+    second = json.loads((elsewhere / "second" / "metrics.json").read_text())
+    assert first["rmse_v"] == second["rmse_v"] and first["steps"] == second["steps"]
+    capsys.readouterr()

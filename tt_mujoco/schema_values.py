@@ -252,7 +252,7 @@ def resolve_file(value, base: Path | None):
         return [resolve_file(v, base) for v in value]
     if not isinstance(value, str):
         return value
-    if value.lower().endswith(".csv"):
+    if value.lower().endswith((".csv", ".toml")):  # a path's table, a world's file
         path = Path(value)
         return str(path if path.is_absolute() else ((base or Path.cwd()) / path).absolute())
     if is_hook(value):

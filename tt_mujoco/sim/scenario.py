@@ -448,6 +448,7 @@ class Scenario:
         "obstacles and a goal: none, a named world (loading_bay, alley, yard) or a world file "
         "(TOML); a unit touching an obstacle stops the run (exit code 3)",
         metavar="none|NAME|FILE.toml",
+        file=True,
     )
 
     def __post_init__(self):
