@@ -90,14 +90,14 @@ def set_once(parser, namespace, dest: str, flag: str, value) -> None:
     different values (``--no-disturbance --disturbance-mode wrench``, ``--video --no-video``,
     ``--duration 1 --duration 2``) is refused, naming both, rather than the last one winning
     in silence."""
-    given = namespace.__dict__.setdefault(_GIVEN, {})
-    if dest in given and given[dest][1] != value:
+    kept = namespace.__dict__.setdefault(_GIVEN, {})
+    if dest in kept and kept[dest][1] != value:
+        first, before = kept[dest]
         parser.error(
-            f"{given[dest][0]} and {flag} both set {dest} ({_said(given[dest][1])} and "
-            f"{_said(value)}), "
-            "which cannot be both: give one of them"
+            f"{first} and {flag} both set {dest} ({_said(before)} and {_said(value)}), which "
+            "cannot be both: give one of them"
         )
-    given[dest] = (flag, value)
+    kept[dest] = (flag, value)
     setattr(namespace, dest, value)
 
 

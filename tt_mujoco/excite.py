@@ -221,11 +221,9 @@ def main(argv: list[str] | None = None) -> int:
             f"--fit {args.fit!r} is not allowed: plan the lengths ({', '.join(KINEMATIC)}) and "
             "the masses and inertias in two excitations"
         )
-    idle = ("rate", "encoder_noise_deg") if inertial else ("snr_db", "duration")
-    for dest in (d for d in idle if d in given(args)):
-        planned = "masses and inertias" if inertial else "lengths"
-        flag = given(args)[dest]
-        return fail(f"{flag} does nothing where --fit {args.fit!r} plans the {planned}: drop it")
+    idle = _idle_option(args, bool(inertial))
+    if idle:
+        return fail(idle)
     if inertial:
         return _main_inertial(args, tuple(fit), fail)
     for name, value in (("--rate", args.rate), ("--encoder-noise-deg", args.encoder_noise_deg)):
@@ -256,6 +254,18 @@ def main(argv: list[str] | None = None) -> int:
         f"log it with: python -m tt_mujoco.run --config {out}/excitation.toml"
     )
     return EXIT_OK
+
+
+def _idle_option(args, inertial: bool) -> str:
+    """Why an option the command line gave does nothing for the excitation ``--fit`` asks
+    (the other one's: ``--duration`` for the lengths, ``--rate`` for the masses), or ""."""
+    said = given(args)
+    other_plans = ("rate", "encoder_noise_deg") if inertial else ("snr_db", "duration")
+    idle = [said[dest] for dest in other_plans if dest in said]
+    if not idle:
+        return ""
+    planned = "masses and inertias" if inertial else "lengths"
+    return f"{idle[0]} does nothing where --fit {args.fit!r} plans the {planned}: drop it"
 
 
 def _main_inertial(args, fit: tuple, fail) -> int:

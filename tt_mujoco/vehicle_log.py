@@ -188,12 +188,18 @@ def _speeds(data: dict, t: np.ndarray, wheel: tuple[float, float] | None, file: 
     if "v" in data:
         return data["v"], data["omega"]
     if WHEEL_RATES[0] in data:
-        r, d = wheel if wheel is not None else (Params().r, Params().d)
+        r, d = wheel if wheel is not None else _default_wheel()
         right, left = data[WHEEL_RATES[0]], data[WHEEL_RATES[1]]
         return r * (right + left) / 2.0, r * (right - left) / d
     x, y, theta = data["x"], data["y"], np.unwrap(data["theta"])
     vx, vy = np.gradient(x, t), np.gradient(y, t)
     return vx * np.cos(theta) + vy * np.sin(theta), np.gradient(theta, t)
+
+
+def _default_wheel() -> tuple[float, float]:
+    """The project's vehicle's wheel radius and track (m)."""
+    default = Params()
+    return default.r, default.d
 
 
 def _log_file(path: Path) -> Path:

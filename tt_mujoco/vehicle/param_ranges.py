@@ -17,7 +17,11 @@ import math
 
 import numpy as np
 
-__all__ = ["RANGES", "in_range"]
+__all__ = ["INERTIA_FIELDS", "MASS_FIELDS", "RANGES", "in_range"]
+
+# Fields that scale with --param-scale (plant parameter uncertainty, docs/model.md Section 8).
+MASS_FIELDS = ("Mf", "Mr", "Mw", "Mc1", "Mc2")
+INERTIA_FIELDS = ("Ifd", "Ird", "Iwd", "Ic1", "Ic2", "Iw")
 
 _MASS = (1e-4, 1e6, "kg")
 _INERTIA = (1e-9, 1e8, "kg m^2")
@@ -25,8 +29,8 @@ _LENGTH = (1e-3, 100.0, "m")
 
 #: Field name -> (lowest, highest, unit), both ends allowed.
 RANGES: dict[str, tuple[float, float, str]] = {
-    **{name: _MASS for name in ("Mf", "Mr", "Mw", "Mc1", "Mc2")},
-    **{name: _INERTIA for name in ("Ifd", "Ird", "Iwd", "Ic1", "Ic2", "Iw")},
+    **{name: _MASS for name in MASS_FIELDS},
+    **{name: _INERTIA for name in INERTIA_FIELDS},
     "L": _LENGTH,
     "L0": _LENGTH,
     "r": (1e-3, 10.0, "m"),

@@ -14,7 +14,7 @@ import math
 from dataclasses import dataclass, field
 
 from tt_mujoco.defaults import AXLE_SLEW_RATE, JACKKNIFE_DEG, TORQUE_LIMIT
-from tt_mujoco.vehicle.param_ranges import RANGES, in_range
+from tt_mujoco.vehicle.param_ranges import INERTIA_FIELDS, MASS_FIELDS, RANGES, in_range
 
 __all__ = [
     "MAX_TRAILERS",
@@ -35,10 +35,6 @@ STEERING_PRESETS = ("paper", "same_path")
 
 #: The paper's steering gain (Section 6.1).
 PAPER_ETA = 3.0
-
-# Fields that scale with --param-scale (plant parameter uncertainty, docs/model.md Section 8).
-MASS_FIELDS = ("Mf", "Mr", "Mw", "Mc1", "Mc2")
-INERTIA_FIELDS = ("Ifd", "Ird", "Iwd", "Ic1", "Ic2", "Iw")
 
 
 def same_path_eta(L: float, L0: float) -> float:

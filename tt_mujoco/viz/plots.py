@@ -150,7 +150,7 @@ def draw_world(ax, world, params: Params) -> None:
 def _margins(fig: Figure, rows: int = 1, top: float = 0.45) -> Figure:
     """Margins in inches, set once, for a run's figures (tick labels and an axis label at the
     left and bottom, a title at the ``top``): matplotlib's constrained layout draws a figure
-    twice to place them, 0.17 s of the 0.7 s a run's four figures took."""
+    twice to place them (``docs/performance.md``)."""
     width, height = fig.get_size_inches()
     left, right, bottom, between = 0.85, 0.2, 0.55, 0.2
     axes_height = (height - top - bottom - between * (rows - 1)) / rows

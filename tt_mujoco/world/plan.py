@@ -498,7 +498,7 @@ def plan_path(
     goal = world.goal
     if goal is None:
         raise WorldError(f"world {world.name!r} has no goal to plan a path to")
-    check_goal(world, p)  # one outside the world or on an obstacle: said, not searched for
+    check_goal(world, p, search.record)  # outside the world, on an obstacle: not searched for
     d = train_length(p)
     goal_pose = (goal.x, goal.y, math.radians(goal.heading_deg))
     base = least_radius(p) * radius_share
